@@ -1,0 +1,3 @@
+from pokerirl.cli import app
+
+app(prog_name="pokerirl")

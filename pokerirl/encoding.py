@@ -1,0 +1,82 @@
+"""Cards, actions and RLCard 1.2.0's 72-dimensional limit-holdem observation.
+
+This is the bottom layer: every other module speaks these integers.
+
+Cards are integers 0..51, suit-major in RLCard's order (S, H, D, C) and rank order
+A, 2, ..., K inside a suit, exactly as ``rlcard/games/limitholdem/card2index.json``.
+
+>>> parse_card("Qc"), card_str(50), rlcard_card_str(50)
+(50, 'Qc', 'CQ')
+>>> obs = encode_obs(np.array([[0, 13, -1, -1, -1, -1, -1]]), np.array([[1, 0, 0, 0]]))
+>>> np.flatnonzero(obs[0]).tolist()
+[0, 13, 53, 57, 62, 67]
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+SUITS = "SHDC"
+RANKS = "A23456789TJQK"
+NUM_CARDS = 52
+
+ACTIONS: tuple[str, ...] = ("call", "raise", "fold", "check")
+CALL, RAISE, FOLD, CHECK = 0, 1, 2, 3
+NUM_ACTIONS = 4
+
+NUM_ROUNDS = 4
+MAX_RAISES = 4  # RLCard's per-round raise cap; the raise-count one-hot has 5 slots (0..4)
+RAISE_OFFSET = NUM_CARDS
+OBS_SIZE = NUM_CARDS + NUM_ROUNDS * (MAX_RAISES + 1)  # 72
+BOARD_SIZE_BY_ROUND = (0, 3, 4, 5)
+
+_SUIT_INDEX = {s: i for i, s in enumerate(SUITS)}
+_RANK_INDEX = {r: i for i, r in enumerate(RANKS)}
+
+
+def parse_card(text: str) -> int:
+    """Parse a card written rank-then-suit, as in IRC logs (``"Qc"``, ``"Th"``).
+
+    Raises ``ValueError`` on anything else.
+
+    >>> parse_card("As"), parse_card("Kc")
+    (0, 51)
+    """
+    if len(text) != 2:
+        raise ValueError(f"bad card {text!r}")
+    rank = _RANK_INDEX.get(text[0].upper())
+    suit = _SUIT_INDEX.get(text[1].upper())
+    if rank is None or suit is None:
+        raise ValueError(f"bad card {text!r}")
+    return suit * 13 + rank
+
+
+def card_str(index: int) -> str:
+    """Rank-then-suit text of a card index, in IRC style (``"Qc"``)."""
+    return RANKS[index % 13] + SUITS[index // 13].lower()
+
+
+def rlcard_card_str(index: int) -> str:
+    """RLCard's suit-then-rank text of a card index (``"CQ"``)."""
+    return SUITS[index // 13] + RANKS[index % 13]
+
+
+def encode_obs(cards: np.ndarray, raise_nums: np.ndarray) -> np.ndarray:
+    """Vectorized RLCard limit-holdem ``obs``.
+
+    Args:
+        cards: (N, k) card indices visible to the player (hole cards and board), ``-1`` pads.
+        raise_nums: (N, 4) raises per round as RLCard counts them; values above 4 are capped.
+
+    Returns:
+        (N, 72) uint8: card bits, then ``52 + 5 * round + raise_nums[round]`` for every round.
+    """
+    cards = np.asarray(cards)
+    n = cards.shape[0]
+    obs = np.zeros((n, OBS_SIZE), dtype=np.uint8)
+    rows, cols = np.nonzero(cards >= 0)
+    obs[rows, cards[rows, cols]] = 1
+    capped = np.minimum(np.asarray(raise_nums, dtype=np.int64), MAX_RAISES)
+    slots = RAISE_OFFSET + (MAX_RAISES + 1) * np.arange(NUM_ROUNDS) + capped
+    obs[np.arange(n)[:, None], slots] = 1
+    return obs
