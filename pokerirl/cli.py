@@ -2,6 +2,10 @@
 
 from __future__ import annotations
 
+import json
+from pathlib import Path
+from typing import NoReturn
+
 import typer
 
 app = typer.Typer(
@@ -13,7 +17,7 @@ app = typer.Typer(
 )
 
 
-def fail(message: str, code: int = 1) -> None:
+def fail(message: str, code: int = 1) -> NoReturn:
     """Print a one-line error to stderr and exit non-zero, without a traceback."""
     typer.secho(f"error: {message}", err=True, fg=typer.colors.RED)
     raise typer.Exit(code)
@@ -25,3 +29,29 @@ def version() -> None:
     from pokerirl import __version__
 
     typer.echo(__version__)
+
+
+@app.command()
+def ingest(
+    sources: list[Path] = typer.Argument(
+        ..., help="Month folders, folders of months, month .tgz archives or IRCdata.tgz."
+    ),
+    out: Path = typer.Option(..., "--out", "-o", help="The Parquet table to write."),
+    strict: bool = typer.Option(False, "--strict", help="Stop at the first malformed line."),
+    quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bar, no summary."),
+) -> None:
+    """Turn IRC Poker Database hand histories into a Parquet state-action table.
+
+    Writes TABLE and TABLE.summary.json (where every hand went) and prints the summary.
+    """
+    from pokerirl.datasets.ingest import ingest as run_ingest
+    from pokerirl.parsers.irc import IngestError
+
+    try:
+        summary = run_ingest(sources, out, strict=strict, progress=not quiet)
+    except IngestError as error:
+        fail(str(error))
+    except OSError as error:
+        fail(f"{error.filename or out}: {error.strerror or error}")
+    if not quiet:
+        typer.echo(json.dumps(summary, indent=2))

@@ -1,0 +1,135 @@
+"""``pokerirl ingest``: IRC hand histories in, one Parquet state-action table out.
+
+>>> # ingest(["holdem/199504"], "table.parquet")  # writes table.parquet and table.summary.json
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import tempfile
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import pyarrow as pa
+import pyarrow.parquet as pq
+from tqdm import tqdm
+
+from pokerirl.datasets.table import SCHEMA, month_table
+from pokerirl.encoding import ACTIONS, FOLD
+from pokerirl.parsers.irc import (
+    DROP_REASONS,
+    KEPT,
+    IngestError,
+    IngestStats,
+    iter_months,
+    parse_month,
+)
+
+PARQUET_OPTIONS: dict[str, Any] = {"compression": "zstd", "use_dictionary": True}
+
+
+def summary_path(table_path: str | os.PathLike[str]) -> Path:
+    """``TABLE.parquet`` -> ``TABLE.summary.json``."""
+    path = Path(table_path)
+    return path.with_name(path.name.removesuffix(".parquet") + ".summary.json")
+
+
+def atomic_write_text(path: Path, text: str) -> None:
+    """Write ``text`` to ``path`` through a temporary file and a rename."""
+    handle, temporary = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
+    try:
+        with os.fdopen(handle, "w", encoding="utf-8") as stream:
+            stream.write(text)
+        os.replace(temporary, path)
+    except BaseException:
+        Path(temporary).unlink(missing_ok=True)
+        raise
+
+
+def ingest(
+    sources: Sequence[str | os.PathLike[str]],
+    out: str | os.PathLike[str],
+    *,
+    strict: bool = False,
+    progress: bool = False,
+) -> dict[str, Any]:
+    """Read IRC sources, write the table to ``out`` and its summary beside it; return the summary.
+
+    Months are parsed one at a time and spilled to temporary Parquet parts, so memory stays
+    bounded; the parts are joined in (channel, month) order at the end.
+    Nothing appears at ``out`` unless the whole ingest succeeds.
+    """
+    out_path = Path(out)
+    if not out_path.parent.is_dir():
+        raise IngestError(f"{out_path.parent}: output folder does not exist")
+    stats = IngestStats(strict=strict)
+    seen: dict[str, Any] = {}
+    work_dir = Path(tempfile.mkdtemp(prefix=f".{out_path.name}.", dir=out_path.parent))
+    parts: list[tuple[str, int, Path]] = []  # (month key, arrival order, file)
+    counts = {action: 0 for action in ACTIONS if action != ACTIONS[FOLD]}
+    try:
+        with tqdm(desc="ingest", unit=" hands", disable=not progress, smoothing=0) as bar:
+            for order, month in enumerate(iter_months(sources)):
+                hands = parse_month(month, stats, seen, on_hands=bar.update)
+                table, concealed = month_table(hands)
+                stats.decisions_concealed += concealed
+                for action, count in zip(
+                    *_value_counts(table.column("action")), strict=True
+                ):
+                    counts[action] += count
+                part = work_dir / f"part-{order:06d}.parquet"
+                pq.write_table(table, part, **PARQUET_OPTIONS)
+                parts.append((month.key, order, part))
+        table_file = work_dir / "table.parquet"
+        with pq.ParquetWriter(table_file, SCHEMA, **PARQUET_OPTIONS) as writer:
+            for _, _, part in sorted(parts):
+                writer.write_table(pq.read_table(part, schema=SCHEMA))
+                part.unlink()
+        summary = _summary(stats, sources, out_path, counts)
+        os.replace(table_file, out_path)
+        atomic_write_text(summary_path(out_path), json.dumps(summary, indent=2) + "\n")
+        return summary
+    finally:
+        shutil.rmtree(work_dir, ignore_errors=True)
+
+
+def _value_counts(column: pa.ChunkedArray) -> tuple[list[str], list[int]]:
+    counted = column.value_counts()
+    if len(counted) == 0:
+        return [], []
+    return counted.field("values").to_pylist(), counted.field("counts").to_pylist()
+
+
+def _summary(
+    stats: IngestStats,
+    sources: Sequence[str | os.PathLike[str]],
+    out_path: Path,
+    rows_per_action: dict[str, int],
+) -> dict[str, Any]:
+    hands_total = sum(stats.hands_read.values())
+    buckets = {KEPT: stats.buckets[KEPT]} | {r: stats.buckets[r] for r in DROP_REASONS}
+    return {
+        "table": str(out_path),
+        "sources": [str(s) for s in sources],
+        "months": stats.months,
+        "hands_read": dict(sorted(stats.hands_read.items())),
+        "hands_read_total": hands_total,
+        "heads_up_hands": stats.heads_up_hands,
+        "kept_hands": stats.buckets[KEPT],
+        "rows": sum(rows_per_action.values()),
+        "rows_per_action": rows_per_action,
+        "dropped": {reason: stats.buckets[reason] for reason in DROP_REASONS},
+        "buckets_total": sum(buckets.values()),
+        "buckets_add_up": sum(buckets.values()) == hands_total,
+        "inconsistent_reasons": dict(stats.inconsistent_reasons.most_common()),
+        "skipped_channels": dict(sorted(stats.skipped_channels.items())),
+        "malformed_lines": stats.malformed_lines,
+        "malformed_examples": stats.malformed_examples,
+        "decisions_dropped_concealed": stats.decisions_concealed,
+        "single_blind_hands": stats.single_blind_hands,
+        "chips_mismatch_hands": stats.chips_mismatch_hands,
+        "orphan_pdb_lines": stats.orphan_pdb_lines,
+    }
