@@ -30,8 +30,14 @@ RAISE_OFFSET = NUM_CARDS
 OBS_SIZE = NUM_CARDS + NUM_ROUNDS * (MAX_RAISES + 1)  # 72
 BOARD_SIZE_BY_ROUND = (0, 3, 4, 5)
 
-_SUIT_INDEX = {s: i for i, s in enumerate(SUITS)}
-_RANK_INDEX = {r: i for i, r in enumerate(RANKS)}
+# Rank-then-suit text of every card, IRC style ("Qc"), and its inverse in any letter case.
+CARD_TEXT: tuple[str, ...] = tuple(RANKS[i % 13] + SUITS[i // 13].lower() for i in range(52))
+CARD_INDEX: dict[str, int] = {
+    rank + suit: index
+    for index, text in enumerate(CARD_TEXT)
+    for rank in {text[0], text[0].lower()}
+    for suit in {text[1], text[1].upper()}
+}
 
 
 def parse_card(text: str) -> int:
@@ -42,18 +48,15 @@ def parse_card(text: str) -> int:
     >>> parse_card("As"), parse_card("Kc")
     (0, 51)
     """
-    if len(text) != 2:
+    index = CARD_INDEX.get(text)
+    if index is None:
         raise ValueError(f"bad card {text!r}")
-    rank = _RANK_INDEX.get(text[0].upper())
-    suit = _SUIT_INDEX.get(text[1].upper())
-    if rank is None or suit is None:
-        raise ValueError(f"bad card {text!r}")
-    return suit * 13 + rank
+    return index
 
 
 def card_str(index: int) -> str:
     """Rank-then-suit text of a card index, in IRC style (``"Qc"``)."""
-    return RANKS[index % 13] + SUITS[index // 13].lower()
+    return CARD_TEXT[index]
 
 
 def rlcard_card_str(index: int) -> str:
@@ -71,12 +74,13 @@ def encode_obs(cards: np.ndarray, raise_nums: np.ndarray) -> np.ndarray:
     Returns:
         (N, 72) uint8: card bits, then ``52 + 5 * round + raise_nums[round]`` for every round.
     """
-    cards = np.asarray(cards)
+    cards = np.asarray(cards, dtype=np.int64)
     n = cards.shape[0]
-    obs = np.zeros((n, OBS_SIZE), dtype=np.uint8)
-    rows, cols = np.nonzero(cards >= 0)
-    obs[rows, cards[rows, cols]] = 1
+    obs = np.zeros(n * OBS_SIZE, dtype=np.uint8)
+    row_start = (np.arange(n, dtype=np.int64) * OBS_SIZE)[:, None]
+    card_slots = (row_start + cards)[cards >= 0]
     capped = np.minimum(np.asarray(raise_nums, dtype=np.int64), MAX_RAISES)
-    slots = RAISE_OFFSET + (MAX_RAISES + 1) * np.arange(NUM_ROUNDS) + capped
-    obs[np.arange(n)[:, None], slots] = 1
-    return obs
+    raise_slots = row_start + RAISE_OFFSET + (MAX_RAISES + 1) * np.arange(NUM_ROUNDS) + capped
+    obs[card_slots] = 1
+    obs[raise_slots.reshape(-1)] = 1
+    return obs.reshape(n, OBS_SIZE)

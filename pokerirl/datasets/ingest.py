@@ -13,6 +13,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import pyarrow as pa
 import pyarrow.parquet as pq
 from tqdm import tqdm
@@ -24,11 +25,21 @@ from pokerirl.parsers.irc import (
     KEPT,
     IngestError,
     IngestStats,
+    check_sources,
     iter_months,
     parse_month,
 )
 
-PARQUET_OPTIONS: dict[str, Any] = {"compression": "zstd", "use_dictionary": True}
+# Dictionary encoding and statistics only where they pay: the obs and mask lists are most of
+# the bytes, and encoding them is most of the write time.
+_STRING_COLUMNS = ["hand_id", "player", "action", "hole_cards", "board", "channel"]
+PARQUET_OPTIONS: dict[str, Any] = {
+    "compression": "zstd",
+    "compression_level": 1,
+    "use_dictionary": _STRING_COLUMNS,
+    "write_statistics": ["hand_id", "timestamp", "player", "street", "action_id", "channel"],
+}
+SPILL_BYTES = 512 * 1024 * 1024  # months held in memory before they go to temporary parts
 
 
 def summary_path(table_path: str | os.PathLike[str]) -> Path:
@@ -58,17 +69,21 @@ def ingest(
 ) -> dict[str, Any]:
     """Read IRC sources, write the table to ``out`` and its summary beside it; return the summary.
 
-    Months are parsed one at a time and spilled to temporary Parquet parts, so memory stays
-    bounded; the parts are joined in (channel, month) order at the end.
+    Months are parsed one at a time; their tables are held until they pass ``SPILL_BYTES``,
+    then spilled to temporary Parquet parts, so memory stays bounded. Months are joined in
+    (channel, month) order at the end.
     Nothing appears at ``out`` unless the whole ingest succeeds.
     """
     out_path = Path(out)
     if not out_path.parent.is_dir():
         raise IngestError(f"{out_path.parent}: output folder does not exist")
+    check_sources(sources)
     stats = IngestStats(strict=strict)
-    seen: dict[str, Any] = {}
+    seen: dict[str, np.ndarray] = {}
     work_dir = Path(tempfile.mkdtemp(prefix=f".{out_path.name}.", dir=out_path.parent))
-    parts: list[tuple[str, int, Path]] = []  # (month key, arrival order, file)
+    # (month key, arrival order, table in memory or spilled part file)
+    months: list[tuple[str, int, pa.Table | Path]] = []
+    in_memory = 0
     counts = {action: 0 for action in ACTIONS if action != ACTIONS[FOLD]}
     try:
         with tqdm(desc="ingest", unit=" hands", disable=not progress, smoothing=0) as bar:
@@ -76,24 +91,34 @@ def ingest(
                 hands = parse_month(month, stats, seen, on_hands=bar.update)
                 table, concealed = month_table(hands)
                 stats.decisions_concealed += concealed
-                for action, count in zip(
-                    *_value_counts(table.column("action")), strict=True
-                ):
+                for action, count in zip(*_value_counts(table.column("action")), strict=True):
                     counts[action] += count
-                part = work_dir / f"part-{order:06d}.parquet"
-                pq.write_table(table, part, **PARQUET_OPTIONS)
-                parts.append((month.key, order, part))
+                months.append((month.key, order, table))
+                in_memory += table.nbytes
+                if in_memory > SPILL_BYTES:
+                    months = [_spill(item, work_dir) for item in months]
+                    in_memory = 0
         table_file = work_dir / "table.parquet"
         with pq.ParquetWriter(table_file, SCHEMA, **PARQUET_OPTIONS) as writer:
-            for _, _, part in sorted(parts):
-                writer.write_table(pq.read_table(part, schema=SCHEMA))
-                part.unlink()
+            for _, _, data in sorted(months, key=lambda item: item[:2]):
+                writer.write_table(data if isinstance(data, pa.Table) else pq.read_table(data))
         summary = _summary(stats, sources, out_path, counts)
         os.replace(table_file, out_path)
         atomic_write_text(summary_path(out_path), json.dumps(summary, indent=2) + "\n")
         return summary
     finally:
         shutil.rmtree(work_dir, ignore_errors=True)
+
+
+def _spill(
+    item: tuple[str, int, pa.Table | Path], work_dir: Path
+) -> tuple[str, int, pa.Table | Path]:
+    key, order, data = item
+    if isinstance(data, Path):
+        return item
+    part = work_dir / f"part-{order:06d}.parquet"
+    pq.write_table(data, part, compression="lz4")
+    return key, order, part
 
 
 def _value_counts(column: pa.ChunkedArray) -> tuple[list[str], list[int]]:

@@ -15,8 +15,8 @@ from pokerirl.encoding import (
     BOARD_SIZE_BY_ROUND,
     NUM_ACTIONS,
     NUM_ROUNDS,
+    CARD_TEXT,
     OBS_SIZE,
-    card_str,
     encode_obs,
 )
 from pokerirl.parsers.irc import MonthHands
@@ -48,6 +48,7 @@ SCHEMA = pa.schema(
     ]
 )
 REQUIRED_COLUMNS: tuple[str, ...] = tuple(SCHEMA.names[:15])
+_BOARD_TEXT_LENGTH = tuple(max(3 * n - 1, 0) for n in BOARD_SIZE_BY_ROUND)
 
 
 class _Templates:
@@ -128,14 +129,19 @@ def month_table(hands: MonthHands) -> tuple[pa.Table, int]:
     hand_ids = pa.array([prefix + str(t) for t in hands.timestamps], type=pa.string())
     players = pa.array([nick for pair in hands.players for nick in pair], type=pa.string())
     hole_text = pa.array(
-        [f"{card_str(a)} {card_str(b)}" if a >= 0 else "" for a, b in hole.reshape(-1, 2)],
+        [
+            f"{CARD_TEXT[a]} {CARD_TEXT[b]}" if a >= 0 else ""
+            for pair in hands.hole_cards
+            for a, b in ((pair[0], pair[1]), (pair[2], pair[3]))
+        ],
         type=pa.string(),
     )
+    # Streets' boards are prefixes of the river's: "Qc Ks 8s" is the first 8 characters.
     board_text = pa.array(
         [
-            " ".join(card_str(c) for c in board[: BOARD_SIZE_BY_ROUND[s]])
-            for board in hands.boards
-            for s in range(NUM_ROUNDS)
+            text[:length]
+            for text in (" ".join([CARD_TEXT[c] for c in board]) for board in hands.boards)
+            for length in _BOARD_TEXT_LENGTH
         ],
         type=pa.string(),
     )
@@ -147,7 +153,7 @@ def month_table(hands: MonthHands) -> tuple[pa.Table, int]:
         "player": players.take(seat_index),
         "position": pa.array((seat + 1).astype(np.int8)),
         "street": pa.array(street.astype(np.int8)),
-        "action": pa.array(np.array(ACTIONS, dtype=object)[action_id], type=pa.string()),
+        "action": pa.array(ACTIONS, type=pa.string()).take(pa.array(action_id)),
         "action_id": pa.array(action_id.astype(np.int8)),
         "hole_cards": hole_text.take(seat_index),
         "board": board_text.take(pa.array(hand_of_row * NUM_ROUNDS + street)),
@@ -157,7 +163,9 @@ def month_table(hands: MonthHands) -> tuple[pa.Table, int]:
         "payoff_bb": pa.array(payoff_bb),
         "reward": pa.array(reward),
         "is_last": pa.array(is_last),
-        "channel": pa.array(np.full(len(street), hands.channel, dtype=object), type=pa.string()),
+        "channel": pa.array([hands.channel], type=pa.string()).take(
+            pa.array(np.zeros(len(street), dtype=np.int32))
+        ),
         "big_blind": pa.array(np.full(len(street), hands.big_blind, dtype=np.int16)),
         "chips_in": pa.array(chips_in.astype(np.int32)),
         "chips_won": pa.array(chips_won.astype(np.int32)),

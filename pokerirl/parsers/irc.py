@@ -13,17 +13,19 @@ bucket of :class:`IngestStats`.
 
 from __future__ import annotations
 
+import gc
 import os
 import tarfile
 from collections import Counter, defaultdict
 from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path, PurePosixPath
 from typing import IO
 
 import numpy as np
 
-from pokerirl.encoding import parse_card
+from pokerirl.encoding import CARD_INDEX
 from pokerirl.parsers.replay import Replay, ReplayError, replay_actions
 
 # Big blind in chips per limit hold'em channel; bets are one big blind, doubled on turn and river.
@@ -88,10 +90,6 @@ class IngestStats:
     def drop(self, bucket: str, count: int = 1) -> None:
         self.buckets[bucket] += count
 
-    def inconsistent(self, reason: str) -> None:
-        self.buckets["inconsistent_hand"] += 1
-        self.inconsistent_reasons[reason] += 1
-
 
 @dataclass(frozen=True)
 class MonthFiles:
@@ -132,24 +130,30 @@ class MonthHands:
 # Sources
 
 
+def check_sources(sources: Sequence[str | os.PathLike[str]]) -> None:
+    """Fail early, with :class:`IngestError`, on a source that cannot be IRC data."""
+    if not sources:
+        raise IngestError("no source given")
+    for source in sources:
+        path = Path(source)
+        if not path.exists():
+            raise IngestError(f"{path}: no such file or folder")
+        if not path.is_dir() and not path.name.endswith(_ARCHIVE_SUFFIXES):
+            raise IngestError(
+                f"{path}: not IRC data (expected a month folder, a folder of months, "
+                "or a .tgz archive)"
+            )
+
+
 def iter_months(sources: Sequence[str | os.PathLike[str]]) -> Iterator[MonthFiles]:
     """Yield every month found in ``sources``, in a deterministic order.
 
     Raises :class:`IngestError` for a source that is missing, unreadable or holds no IRC data.
     """
+    check_sources(sources)
     for source in sources:
         path = Path(source)
-        if not path.exists():
-            raise IngestError(f"{path}: no such file or folder")
-        if path.is_dir():
-            yield from _iter_folder(path)
-        elif path.name.endswith(_ARCHIVE_SUFFIXES):
-            yield from _iter_archive_file(path)
-        else:
-            raise IngestError(
-                f"{path}: not IRC data (expected a month folder, a folder of months, "
-                "or a .tgz archive)"
-            )
+        yield from _iter_folder(path) if path.is_dir() else _iter_archive_file(path)
 
 
 def _iter_folder(path: Path) -> Iterator[MonthFiles]:
@@ -293,80 +297,40 @@ def _iter_tar_stream(fileobj: IO[bytes], origin: str, archive_name: str) -> Iter
 
 
 def _lines(data: bytes) -> list[str]:
-    # latin-1 never fails, and nicks may hold any byte; CRLF and LF both end lines.
-    text = data.decode("latin-1")
-    lines = text.split("\n")
+    # latin-1 never fails, and nicks may hold any byte. A CR left by CRLF endings is whitespace,
+    # which ``str.split()`` drops with the rest.
+    lines = data.decode("latin-1").split("\n")
     if lines and lines[-1] == "":
         lines.pop()
-    return [line[:-1] if line.endswith("\r") else line for line in lines]
+    return lines
 
 
-@dataclass(frozen=True, slots=True)
-class _PdbLine:
-    nick: str
-    position: int
-    actions: tuple[str, str, str, str]
-    chips_in: int
-    chips_won: int
-    cards: tuple[int, int] | None
+# A heads-up pdb line, split on whitespace, with where it came from: (fields, file, line number).
+_PdbFields = tuple[list[str], str, int]
 
 
-def _parse_pdb_line(fields: list[str]) -> _PdbLine:
-    """Parse a heads-up pdb line; raise ValueError if it is malformed."""
-    if len(fields) not in (11, 13):
-        raise ValueError(f"expected 11 or 13 fields, got {len(fields)}")
-    cards = None
-    if len(fields) == 13:
-        first, second = parse_card(fields[11]), parse_card(fields[12])
-        if first == second:
-            raise ValueError("the same hole card twice")
-        cards = (first, second)
-    chips_in, chips_won = int(fields[9]), int(fields[10])
-    int(fields[8])  # bankroll: must be a number
-    if chips_in < 0 or chips_won < 0:
-        raise ValueError("negative chips")
-    return _PdbLine(
-        nick=fields[0],
-        position=int(fields[3]),
-        actions=(fields[4], fields[5], fields[6], fields[7]),
-        chips_in=chips_in,
-        chips_won=chips_won,
-        cards=cards,
-    )
-
-
-def _read_pdb(
-    month: MonthFiles, stats: IngestStats
-) -> tuple[dict[int, list[_PdbLine]], set[int]]:
-    """Heads-up pdb lines by timestamp, and the timestamps that had a malformed heads-up line."""
-    by_hand: dict[int, list[_PdbLine]] = defaultdict(list)
-    malformed_hands: set[int] = set()
+def _read_pdb(month: MonthFiles, stats: IngestStats) -> dict[int, list[_PdbFields]]:
+    """Heads-up pdb lines by timestamp, split but not yet validated."""
+    by_hand: dict[int, list[_PdbFields]] = defaultdict(list)
     for file_name, data in month.pdb.items():
         where = f"{month.origin}/pdb/{file_name}"
         for number, line in enumerate(_lines(data), start=1):
             fields = line.split()
-            if len(fields) < 11 or not fields[1].isdigit() or not fields[2].isdigit():
+            if len(fields) >= 11 and fields[2] == "2" and fields[1].isdigit():
+                by_hand[int(fields[1])].append((fields, where, number))
+            elif len(fields) < 11 or not fields[1].isdigit() or not fields[2].isdigit():
                 stats.malformed(f"{where}:{number}", "not a pdb line")
-                continue
-            if fields[2] != "2":
-                continue
-            timestamp = int(fields[1])
-            try:
-                by_hand[timestamp].append(_parse_pdb_line(fields))
-            except ValueError as error:
-                stats.malformed(f"{where}:{number}", str(error))
-                malformed_hands.add(timestamp)
-    return by_hand, malformed_hands
+    return by_hand
 
 
-def _read_roster(month: MonthFiles, stats: IngestStats) -> dict[int, tuple[str, ...]]:
-    roster: dict[int, tuple[str, ...]] = {}
+def _read_roster(month: MonthFiles, stats: IngestStats) -> dict[int, list[str]]:
+    roster: dict[int, list[str]] = {}
     for number, line in enumerate(_lines(month.hroster), start=1):
         fields = line.split()
         if len(fields) < 2 or not fields[0].isdigit() or not fields[1].isdigit():
             stats.malformed(f"{month.origin}/hroster:{number}", "not an hroster line")
             continue
-        roster[int(fields[0])] = tuple(fields[2:])
+        roster[int(fields[0])] = fields[2:]
     return roster
 
 
@@ -394,23 +358,47 @@ def parse_month(
             on_hands(len(hdb_lines))
         return hands
 
-    pdb, malformed_pdb = _read_pdb(month, stats)
+    with _gc_paused():
+        return _parse_limit_holdem_month(month, hdb_lines, stats, seen, on_hands, hands)
+
+
+@contextmanager
+def _gc_paused() -> Iterator[None]:
+    """Pause the cyclic garbage collector: parsing allocates millions of small lists and no
+    cycles, and the collector's repeated scans of them would double the parsing time."""
+    was_enabled = gc.isenabled()
+    gc.disable()
+    try:
+        yield
+    finally:
+        if was_enabled:
+            gc.enable()
+
+
+def _parse_limit_holdem_month(
+    month: MonthFiles,
+    hdb_lines: list[str],
+    stats: IngestStats,
+    seen: dict[str, np.ndarray],
+    on_hands: Callable[[int], None] | None,
+    hands: MonthHands,
+) -> MonthHands:
+    pdb = _read_pdb(month, stats)
     roster = _read_roster(month, stats)
-    used_pdb: set[int] = set()
     hdb_where = f"{month.origin}/hdb"
     timestamps: set[int] = set(seen[month.key].tolist()) if month.key in seen else set()
 
-    parsed: list[tuple[int, list[str]]] = []
+    heads_up: list[tuple[int, int, list[str]]] = []  # (timestamp, line number, fields)
     for number, line in enumerate(hdb_lines, start=1):
         if on_hands is not None and number % _PROGRESS_EVERY == 0:
             on_hands(_PROGRESS_EVERY)
         fields = line.split()
-        board_size = len(fields) - 8
         if (
-            board_size not in (0, 3, 4, 5)
+            len(fields) - 8 not in (0, 3, 4, 5)
             or not fields[0].isdigit()
             or not fields[3].isdigit()
-            or not all("/" in pot for pot in fields[4:8])
+            or "/" not in fields[4]
+            or "/" not in fields[7]
         ):
             stats.malformed(f"{hdb_where}:{number}", "not an hdb line")
             stats.drop("malformed_line")
@@ -423,88 +411,121 @@ def parse_month(
         if fields[3] != "2":
             stats.drop("not_heads_up")
             continue
-        stats.heads_up_hands += 1
-        parsed.append((number, fields))
+        heads_up.append((timestamp, number, fields))
 
+    stats.heads_up_hands += len(heads_up)
     # Sorting by timestamp makes the table's order independent of the hdb's line order.
-    parsed.sort(key=lambda item: int(item[1][0]))
-    for number, fields in parsed:
-        timestamp = int(fields[0])
-        used_pdb.add(timestamp)
-        try:
-            board = tuple(parse_card(card) for card in fields[8:])
-        except ValueError as error:
-            stats.malformed(f"{hdb_where}:{number}", str(error))
-            stats.drop("malformed_line")
-            continue
-        _classify_hand(
-            timestamp, board, pdb.get(timestamp, []), timestamp in malformed_pdb,
+    heads_up.sort(key=lambda item: item[0])
+    for timestamp, number, fields in heads_up:
+        bucket = _classify_hand(
+            timestamp, fields, f"{hdb_where}:{number}", pdb.pop(timestamp, None),
             roster.get(timestamp), hands, stats,
         )
-    stats.orphan_pdb_lines += sum(len(v) for k, v in pdb.items() if k not in used_pdb)
+        stats.buckets[bucket] += 1
+    stats.orphan_pdb_lines += sum(len(lines) for lines in pdb.values())
     seen[month.key] = np.fromiter(timestamps, dtype=np.int64, count=len(timestamps))
     if on_hands is not None:
         on_hands(len(hdb_lines) % _PROGRESS_EVERY)
     return hands
 
 
+def _parse_cards(texts: list[str]) -> tuple[int, ...]:
+    try:
+        return tuple(map(CARD_INDEX.__getitem__, texts))
+    except KeyError as error:
+        raise ValueError(f"bad card {error.args[0]!r}") from None
+
+
+def _parse_pdb_numbers(fields: list[str]) -> tuple[int, int, int, tuple[int, ...] | None]:
+    """(position, chips in, chips won, hole cards or None); ValueError if malformed."""
+    if len(fields) == 13:
+        cards: tuple[int, ...] | None = _parse_cards(fields[11:13])
+        if cards[0] == cards[1]:  # type: ignore[index]
+            raise ValueError("the same hole card twice")
+    elif len(fields) == 11:
+        cards = None
+    else:
+        raise ValueError(f"expected 11 or 13 fields, got {len(fields)}")
+    int(fields[8])  # bankroll: must be a number
+    chips_in, chips_won = int(fields[9]), int(fields[10])
+    if chips_in < 0 or chips_won < 0:
+        raise ValueError("negative chips")
+    return int(fields[3]), chips_in, chips_won, cards
+
+
 def _classify_hand(
     timestamp: int,
-    board: tuple[int, ...],
-    lines: list[_PdbLine],
-    has_malformed_line: bool,
-    roster_names: tuple[str, ...] | None,
+    hdb_fields: list[str],
+    hdb_where: str,
+    lines: list[_PdbFields] | None,
+    roster_names: list[str] | None,
     hands: MonthHands,
     stats: IngestStats,
-) -> None:
-    """Put one heads-up hand into its bucket, appending it to ``hands`` if it is kept."""
-    if has_malformed_line:
-        stats.drop("malformed_line")
-        return
-    if len(lines) < 2:
-        stats.drop("missing_pdb_line")
-        return
-    nicks = {line.nick for line in lines}
-    if len(lines) > 2 or roster_names is None or len(nicks) != 2 or set(roster_names) != nicks:
-        stats.drop("roster_mismatch")
-        return
-    by_position = sorted(lines, key=lambda line: line.position)
-    first, second = by_position
-    if (first.position, second.position) != (1, 2):
-        stats.inconsistent("positions are not 1 and 2")
-        return
+) -> str:
+    """Return the bucket of one heads-up hand, appending the hand to ``hands`` if kept."""
     try:
-        interleaved = tuple(a for pair in zip(first.actions, second.actions) for a in pair)
-        replay = replay_actions(interleaved)  # type: ignore[arg-type]
+        board = _parse_cards(hdb_fields[8:])
+    except ValueError as error:
+        stats.malformed(hdb_where, str(error))
+        return "malformed_line"
+    if lines is None:
+        return "missing_pdb_line"
+    parsed = []
+    for fields, where, number in lines:
+        try:
+            parsed.append(_parse_pdb_numbers(fields))
+        except ValueError as error:
+            stats.malformed(f"{where}:{number}", str(error))
+            return "malformed_line"
+    if len(lines) < 2:
+        return "missing_pdb_line"
+    nick_a, nick_b = lines[0][0][0], lines[-1][0][0]
+    if (
+        len(lines) > 2
+        or roster_names is None
+        or len(roster_names) != 2
+        or nick_a == nick_b
+        or nick_a not in roster_names
+        or nick_b not in roster_names
+    ):
+        return "roster_mismatch"
+    if parsed[0][0] > parsed[1][0]:
+        lines, parsed = lines[::-1], parsed[::-1]
+    (pos_a, in_a, won_a, cards_a), (pos_b, in_b, won_b, cards_b) = parsed
+    if (pos_a, pos_b) != (1, 2):
+        stats.inconsistent_reasons["positions are not 1 and 2"] += 1
+        return "inconsistent_hand"
+    first, second = lines[0][0], lines[1][0]
+    try:
+        replay = replay_actions(
+            (first[4], second[4], first[5], second[5], first[6], second[6], first[7], second[7])
+        )
     except ReplayError as error:
-        stats.inconsistent(f"actions: {error}")
-        return
-    if not replay.showdown or (first.cards is None and second.cards is None):
-        stats.drop("cards_concealed")
-        return
+        stats.inconsistent_reasons[f"actions: {error}"] += 1
+        return "inconsistent_hand"
+    if not replay.showdown or (cards_a is None and cards_b is None):
+        return "cards_concealed"
+    reason = None
+    hole = (cards_a or (-1, -1)) + (cards_b or (-1, -1))
     if len(board) != 5:
-        stats.inconsistent("showdown without five board cards")
-        return
-    chips_in = (first.chips_in, second.chips_in)
-    chips_won = (first.chips_won, second.chips_won)
-    if sum(chips_in) != sum(chips_won):
-        stats.inconsistent("chips won differ from chips put in")
-        return
-    hole = (first.cards or (-1, -1)) + (second.cards or (-1, -1))
-    known = [card for card in hole + board if card >= 0]
-    if len(set(known)) != len(known):
-        stats.inconsistent("a card dealt twice")
-        return
+        reason = "showdown without five board cards"
+    elif in_a + in_b != won_a + won_b:
+        reason = "chips won differ from chips put in"
+    elif len({*hole, *board} - {-1}) != sum(c >= 0 for c in hole) + 5:
+        reason = "a card dealt twice"
+    if reason is not None:
+        stats.inconsistent_reasons[reason] += 1
+        return "inconsistent_hand"
     if replay.blinds_posted != (True, True):
         stats.single_blind_hands += 1
     scale = hands.big_blind // 2  # replay chips are in small blinds
-    if tuple(c * scale for c in replay.chips_in) != chips_in:
+    if (replay.chips_in[0] * scale, replay.chips_in[1] * scale) != (in_a, in_b):
         stats.chips_mismatch_hands += 1
-    stats.drop(KEPT)
     hands.timestamps.append(timestamp)
     hands.replays.append(replay)
-    hands.players.append((first.nick, second.nick))
+    hands.players.append((first[0], second[0]))
     hands.hole_cards.append(hole)  # type: ignore[arg-type]
     hands.boards.append(board)  # type: ignore[arg-type]
-    hands.chips_in.append(chips_in)
-    hands.chips_won.append(chips_won)
+    hands.chips_in.append((in_a, in_b))
+    hands.chips_won.append((won_a, won_b))
+    return KEPT
