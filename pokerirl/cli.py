@@ -55,3 +55,40 @@ def ingest(
         fail(f"{error.filename or out}: {error.strerror or error}")
     if not quiet:
         typer.echo(json.dumps(summary, indent=2))
+
+
+@app.command()
+def synth(
+    out: Path = typer.Option(..., "--out", "-o", help="Folder to write <out>/holdem/<YYYYMM>/ in."),
+    hands: int = typer.Option(10_000, "--hands", "-n", min=1, help="Number of hands."),
+    seed: int = typer.Option(0, "--seed", help="Random seed: the same seed, the same files."),
+) -> None:
+    """Write a synthetic IRC-format month of heads-up 10-20 limit hold'em between two bots."""
+    from pokerirl.game.synth import write_synthetic_month
+
+    try:
+        folder = write_synthetic_month(out, hands=hands, seed=seed)
+    except OSError as error:
+        fail(f"{error.filename or out}: {error.strerror or error}")
+    typer.echo(f"wrote {hands} hands to {folder}")
+
+
+@app.command()
+def demo(
+    out: Path = typer.Option(Path("demo-output"), "--out", "-o", help="Where the demo writes."),
+    hands: int = typer.Option(20_000, "--hands", "-n", min=1, help="Synthetic hands to play."),
+    seed: int = typer.Option(0, "--seed", help="Random seed."),
+) -> None:
+    """Run the pipeline on built-in synthetic data: synth, then ingest."""
+    from pokerirl.datasets.ingest import ingest as run_ingest
+    from pokerirl.datasets.ingest import summary_path
+    from pokerirl.game.synth import write_synthetic_month
+
+    out.mkdir(parents=True, exist_ok=True)
+    typer.echo(f"[1/2] synth: {hands} heads-up hands, seed {seed}")
+    folder = write_synthetic_month(out / "irc", hands=hands, seed=seed)
+    table = out / "expert.parquet"
+    typer.echo(f"[2/2] ingest: {folder} -> {table}")
+    summary = run_ingest([folder], table, progress=True)
+    typer.echo(json.dumps(summary, indent=2))
+    typer.echo(f"\ndone: table {table}, summary {summary_path(table)}")

@@ -93,6 +93,8 @@ def ingest(
                 stats.decisions_concealed += concealed
                 for action, count in zip(*_value_counts(table.column("action")), strict=True):
                     counts[action] += count
+                if table.num_rows == 0:
+                    continue
                 months.append((month.key, order, table))
                 in_memory += table.nbytes
                 if in_memory > SPILL_BYTES:

@@ -13,9 +13,9 @@ import pyarrow as pa
 from pokerirl.encoding import (
     ACTIONS,
     BOARD_SIZE_BY_ROUND,
+    CARD_TEXT,
     NUM_ACTIONS,
     NUM_ROUNDS,
-    CARD_TEXT,
     OBS_SIZE,
     encode_obs,
 )
