@@ -108,45 +108,47 @@ def month_table(hands: MonthHands) -> tuple[pa.Table, int]:
 
     street = templates.street[decision]
     raise_nums = templates.raise_nums[decision]
-    boards = np.array(hands.boards, dtype=np.int64)
+    boards = np.array(hands.boards, dtype=np.int64).reshape(n_hands, 5)
     visible = np.arange(5)[None, :] < np.asarray(BOARD_SIZE_BY_ROUND)[street][:, None]
     cards = np.concatenate(
         [hole[hand_of_row, seat], np.where(visible, boards[hand_of_row], -1)], axis=1
     )
     obs = encode_obs(cards, raise_nums)
 
-    chips_in = np.array(hands.chips_in, dtype=np.int64)[hand_of_row, seat]
-    chips_won = np.array(hands.chips_won, dtype=np.int64)[hand_of_row, seat]
+    player_index = hand_of_row * 2 + seat
+    chips_in = np.array(hands.chips_in, dtype=np.int64)[player_index]
+    chips_won = np.array(hands.chips_won, dtype=np.int64)[player_index]
     payoff_bb = ((chips_won - chips_in) / hands.big_blind).astype(np.float32)
     # A player's last decision is the first occurrence of (hand, seat) scanning backwards.
-    player_key = hand_of_row * 2 + seat
-    is_last = np.zeros(player_key.size, dtype=bool)
-    _, first_from_end = np.unique(player_key[::-1], return_index=True)
-    is_last[player_key.size - 1 - first_from_end] = True
+    is_last = np.zeros(player_index.size, dtype=bool)
+    _, first_from_end = np.unique(player_index[::-1], return_index=True)
+    is_last[player_index.size - 1 - first_from_end] = True
     reward = np.where(is_last, payoff_bb, np.float32(0)).astype(np.float32)
 
     prefix = f"{hands.channel}/{hands.month}/"
     hand_ids = pa.array([prefix + str(t) for t in hands.timestamps], type=pa.string())
-    players = pa.array([nick for pair in hands.players for nick in pair], type=pa.string())
+    players = pa.array(hands.players, type=pa.string())
+    flat_hole = hands.hole_cards
     hole_text = pa.array(
         [
-            f"{CARD_TEXT[a]} {CARD_TEXT[b]}" if a >= 0 else ""
-            for pair in hands.hole_cards
-            for a, b in ((pair[0], pair[1]), (pair[2], pair[3]))
+            f"{CARD_TEXT[flat_hole[i]]} {CARD_TEXT[flat_hole[i + 1]]}" if flat_hole[i] >= 0 else ""
+            for i in range(0, len(flat_hole), 2)
         ],
         type=pa.string(),
     )
     # Streets' boards are prefixes of the river's: "Qc Ks 8s" is the first 8 characters.
+    flat_board = hands.boards
     board_text = pa.array(
         [
             text[:length]
-            for text in (" ".join([CARD_TEXT[c] for c in board]) for board in hands.boards)
+            for text in (" ".join(map(CARD_TEXT.__getitem__, flat_board[i : i + 5]))
+                         for i in range(0, len(flat_board), 5))
             for length in _BOARD_TEXT_LENGTH
         ],
         type=pa.string(),
     )
     action_id = templates.action_id[decision]
-    seat_index = pa.array(hand_of_row * 2 + seat)
+    seat_index = pa.array(player_index)
     columns = {
         "hand_id": hand_ids.take(pa.array(hand_of_row)),
         "timestamp": pa.array(np.array(hands.timestamps, dtype=np.int64)[hand_of_row]),

@@ -109,18 +109,22 @@ class MonthFiles:
 
 @dataclass
 class MonthHands:
-    """The kept heads-up hands of one month, as parallel lists (one entry per hand)."""
+    """The kept heads-up hands of one month, in flat lists for fast conversion to arrays.
+
+    Per hand: one timestamp and one replay. Per hand and position (1 then 2): the nick, two hole
+    cards (``-1`` when concealed), chips put in and chips won. Per hand: five board cards.
+    """
 
     channel: str
     month: str
     big_blind: int
     timestamps: list[int] = field(default_factory=list)
     replays: list[Replay] = field(default_factory=list)
-    players: list[tuple[str, str]] = field(default_factory=list)  # by position
-    hole_cards: list[tuple[int, int, int, int]] = field(default_factory=list)  # -1: concealed
-    boards: list[tuple[int, int, int, int, int]] = field(default_factory=list)
-    chips_in: list[tuple[int, int]] = field(default_factory=list)
-    chips_won: list[tuple[int, int]] = field(default_factory=list)
+    players: list[str] = field(default_factory=list)
+    hole_cards: list[int] = field(default_factory=list)
+    boards: list[int] = field(default_factory=list)
+    chips_in: list[int] = field(default_factory=list)
+    chips_won: list[int] = field(default_factory=list)
 
     def __len__(self) -> int:
         return len(self.timestamps)
@@ -523,9 +527,9 @@ def _classify_hand(
         stats.chips_mismatch_hands += 1
     hands.timestamps.append(timestamp)
     hands.replays.append(replay)
-    hands.players.append((first[0], second[0]))
-    hands.hole_cards.append(hole)  # type: ignore[arg-type]
-    hands.boards.append(board)  # type: ignore[arg-type]
-    hands.chips_in.append((in_a, in_b))
-    hands.chips_won.append((won_a, won_b))
+    hands.players += (first[0], second[0])
+    hands.hole_cards += hole
+    hands.boards += board
+    hands.chips_in += (in_a, in_b)
+    hands.chips_won += (won_a, won_b)
     return KEPT
