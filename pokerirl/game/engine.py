@@ -1,0 +1,214 @@
+"""Many heads-up limit hold'em hands in lock-step, with RLCard 1.2.0's ``limit-holdem`` rules.
+
+Seats, not player ids: seat 0 posts the small blind (1 chip) and acts first preflop, seat 1
+posts the big blind (2 chips). RLCard draws which player id is the small blind at random; here
+the caller decides which agent sits where (see :mod:`pokerirl.game.match`). Observations carry
+no seat or player id, so they are RLCard's exactly.
+
+Betting as RLCard does it (``docs/rules.md`` lists how this differs from ACPC):
+
+* a raise is 2 chips preflop and on the flop, 4 on the turn and river, and puts the raiser
+  that much above the opponent's chips in this round; at most 4 raises per round, blinds not
+  counted;
+* call when behind, check when level, fold always; anything else raises
+  :class:`IllegalActionError` (RLCard's env silently swaps illegal actions for check or fold);
+* a round closes after two actions in a row without a raise (a raise counts as the first of
+  them); the player who did not close it acts first in the next round;
+* the hand ends on a fold or after the river; payoffs are net chips / big blind.
+
+All state lives in numpy arrays of length B; every method works on an index array of hands,
+and only unfinished hands are visited, so hands that end early cost nothing afterwards.
+
+>>> from pokerirl.game.deals import deal_cards
+>>> from pokerirl.encoding import CALL, CHECK, FOLD
+>>> game = LimitHoldemBatch(deals=deal_cards(seed=0, start=0, count=2))
+>>> game.legal_mask().astype(int).tolist()  # call, raise, fold, check for both small blinds
+[[1, 1, 1, 0], [1, 1, 1, 0]]
+>>> game.step(np.array([CALL, FOLD]))  # hand 0 limps, hand 1's small blind folds
+>>> game.active().tolist(), game.legal_mask().astype(int).tolist()
+([0], [[0, 1, 1, 1]])
+>>> game.step(np.array([CHECK]))  # the big blind checks: on to the flop, small blind first
+>>> int(game.round[0]), int(game.to_act[0]), game.payoffs[1].tolist()
+(1, 0, [-0.5, 0.5])
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from pokerirl.encoding import (
+    BOARD_SIZE_BY_ROUND,
+    CALL,
+    CHECK,
+    FOLD,
+    MAX_RAISES,
+    NUM_ACTIONS,
+    NUM_ROUNDS,
+    RAISE,
+    encode_obs,
+)
+from pokerirl.game.deals import DEAL_SIZE
+from pokerirl.game.evaluator import hand_strength
+
+SMALL_BLIND = 1
+BIG_BLIND = 2
+RAISE_SIZE_BY_ROUND = np.array([2, 2, 4, 4], dtype=np.int16)
+SHOWDOWN = NUM_ROUNDS  # value of ``round`` once the river has closed
+_HOLE_COLUMNS = np.array([[0, 1], [2, 3]])  # deal columns of each seat's hole cards
+_BOARD_COLUMNS = np.arange(4, DEAL_SIZE)
+_BOARD_VISIBLE = np.arange(5) < np.array(BOARD_SIZE_BY_ROUND + (5,))[:, None]  # (round, card)
+
+
+class IllegalActionError(ValueError):
+    """An action that is not legal for the hand it was given to."""
+
+
+class LimitHoldemBatch:
+    """B hands of heads-up limit hold'em in lock-step (seat 0 = small blind).
+
+    Public state, (B,) or (B, k) arrays, read-only for callers:
+
+    * ``cards`` (B, 9) int8 deal: seat 0 hole, seat 1 hole, board;
+    * ``round`` int8, 0 preflop .. 3 river, 4 after a showdown;
+    * ``raises`` (B, 4) int8: raises per round as RLCard counts them (big blind excluded);
+    * ``chips`` (B, 2) int16: chips each seat has put in; ``round_chips`` (B, 2): in this round;
+    * ``to_act`` int8 seat to act; ``done`` bool; ``folded`` bool, True when a fold ended it;
+    * ``payoffs`` (B, 2) float64 net big blinds per seat, set when the hand ends.
+
+    Args:
+        deals: (B, 9) card indices, e.g. from :func:`pokerirl.game.deals.deal_cards`.
+    """
+
+    def __init__(self, *, deals: np.ndarray) -> None:
+        deals = np.asarray(deals)
+        if deals.ndim != 2 or deals.shape[1] != DEAL_SIZE:
+            raise ValueError(f"deals must have shape (B, {DEAL_SIZE}), got {deals.shape}")
+        n = deals.shape[0]
+        self.cards = deals.astype(np.int8)
+        self.round = np.zeros(n, dtype=np.int8)
+        self.raises = np.zeros((n, NUM_ROUNDS), dtype=np.int8)
+        self.chips = np.tile(np.array([SMALL_BLIND, BIG_BLIND], dtype=np.int16), (n, 1))
+        self.round_chips = self.chips.copy()
+        self.to_act = np.zeros(n, dtype=np.int8)
+        self.done = np.zeros(n, dtype=bool)
+        self.folded = np.zeros(n, dtype=bool)
+        self.payoffs = np.zeros((n, 2), dtype=np.float64)
+        # Actions in a row without a raise; the round closes at two (RLCard's not_raise_num).
+        self._unraised = np.zeros(n, dtype=np.int8)
+        self._active = np.arange(n)
+
+    @property
+    def size(self) -> int:
+        """Number of hands B."""
+        return self.cards.shape[0]
+
+    def active(self) -> np.ndarray:
+        """Indices of the hands not yet finished, ascending."""
+        return self._active
+
+    def _hands(self, hands: np.ndarray | None) -> np.ndarray:
+        return self._active if hands is None else np.asarray(hands, dtype=np.int64)
+
+    def observe(
+        self, hands: np.ndarray | None = None, seat: np.ndarray | None = None
+    ) -> np.ndarray:
+        """RLCard's (n, 72) uint8 observation of ``seat`` (default: the seat to act).
+
+        Args:
+            hands: (n,) hand indices; default :meth:`active`.
+            seat: (n,) seats (0 or 1) whose view to encode; default the seat to act.
+        """
+        hands = self._hands(hands)
+        seat = self.to_act[hands] if seat is None else np.asarray(seat)
+        visible = np.empty((hands.size, 7), dtype=np.int64)
+        visible[:, :2] = self.cards[hands[:, None], _HOLE_COLUMNS[seat]]
+        board = self.cards[hands[:, None], _BOARD_COLUMNS]
+        visible[:, 2:] = np.where(_BOARD_VISIBLE[self.round[hands]], board, -1)
+        return encode_obs(visible, self.raises[hands])
+
+    def legal_mask(self, hands: np.ndarray | None = None) -> np.ndarray:
+        """(n, 4) bool mask over (call, raise, fold, check) for the seat to act."""
+        hands = self._hands(hands)
+        seat = self.to_act[hands]
+        mine = self.round_chips[hands, seat]
+        theirs = self.round_chips[hands, 1 - seat]
+        mask = np.empty((hands.size, NUM_ACTIONS), dtype=bool)
+        mask[:, CALL] = mine < theirs
+        mask[:, RAISE] = self.raises[hands, self.round[hands]] < MAX_RAISES
+        mask[:, FOLD] = True
+        mask[:, CHECK] = mine >= theirs
+        return mask
+
+    def step(self, actions: np.ndarray, hands: np.ndarray | None = None) -> None:
+        """Apply one action to each of ``hands`` (distinct, unfinished; default :meth:`active`).
+
+        Raises:
+            IllegalActionError: if any action is not legal in its hand; nothing is applied then.
+        """
+        hands = self._hands(hands)
+        actions = np.asarray(actions, dtype=np.int64)
+        if actions.shape != hands.shape:
+            raise ValueError(f"got {actions.shape[0]} actions for {hands.shape[0]} hands")
+        if self.done[hands].any():
+            raise IllegalActionError(f"hand {hands[self.done[hands]][0]} is already over")
+        self._check_legal(hands, actions)
+
+        seat = self.to_act[hands].astype(np.int64)
+        other = 1 - seat
+        rnd = self.round[hands].astype(np.int64)
+        is_raise = actions == RAISE
+        mine = self.round_chips[hands, seat]
+        theirs = self.round_chips[hands, other]
+        # A call matches the opponent; a raise goes one raise size above them.
+        target = np.where(actions == CALL, theirs, mine)
+        target = np.where(is_raise, theirs + RAISE_SIZE_BY_ROUND[rnd], target)
+        self.chips[hands, seat] += target - mine
+        self.round_chips[hands, seat] = target
+        self.raises[hands, rnd] += is_raise
+        unraised = np.where(is_raise, 1, self._unraised[hands] + (actions != FOLD))
+        self._unraised[hands] = unraised
+        self.to_act[hands] = other  # also the first to act next round: they did not close it
+
+        is_fold = actions == FOLD
+        folds = hands[is_fold]
+        self.folded[folds] = True
+        closed = hands[unraised >= 2]
+        self.round[closed] += 1
+        self.round_chips[closed] = 0
+        self._unraised[closed] = 0
+        showdowns = closed[self.round[closed] == SHOWDOWN]
+        self._settle(folds, seat[is_fold], showdowns)
+
+    def _check_legal(self, hands: np.ndarray, actions: np.ndarray) -> None:
+        in_range = (actions >= 0) & (actions < NUM_ACTIONS)
+        legal = in_range.copy()
+        legal[in_range] = self.legal_mask(hands[in_range])[
+            np.arange(in_range.sum()), actions[in_range]
+        ]
+        if not legal.all():
+            bad = np.flatnonzero(~legal)[0]
+            raise IllegalActionError(
+                f"action {actions[bad]} is illegal in hand {hands[bad]} "
+                f"(legal: {np.flatnonzero(self.legal_mask(hands[bad : bad + 1])[0]).tolist()})"
+            )
+
+    def _settle(self, folds: np.ndarray, loser: np.ndarray, showdowns: np.ndarray) -> None:
+        """Payoffs of hands that just ended (``loser``: the folding seats); drop them from play."""
+        if folds.size:
+            lost = self.chips[folds, loser] / BIG_BLIND
+            self.payoffs[folds, loser] = -lost
+            self.payoffs[folds, 1 - loser] = lost
+        if showdowns.size:
+            board = self.cards[showdowns][:, _BOARD_COLUMNS]
+            strength = [
+                hand_strength(np.hstack([self.cards[showdowns][:, _HOLE_COLUMNS[s]], board]))
+                for s in (0, 1)
+            ]
+            # Both seats have equal chips in at a showdown; a tie returns them.
+            won = np.sign(strength[0] - strength[1]) * (self.chips[showdowns, 0] / BIG_BLIND)
+            self.payoffs[showdowns, 0] = won
+            self.payoffs[showdowns, 1] = -won
+        if folds.size or showdowns.size:
+            self.done[folds] = True
+            self.done[showdowns] = True
+            self._active = self._active[~self.done[self._active]]
