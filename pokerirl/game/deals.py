@@ -30,15 +30,15 @@ def _deal_block(seed: int, block: int) -> np.ndarray:
     """(DEAL_BLOCK, 9) deals: the first nine cards of a partial Fisher-Yates shuffle."""
     sequence = np.random.SeedSequence(seed, spawn_key=(DEAL_STREAM, block))
     rng = np.random.Generator(np.random.Philox(sequence))
-    rows = np.arange(DEAL_BLOCK)
-    deck = np.tile(np.arange(NUM_CARDS, dtype=np.int8), (DEAL_BLOCK, 1))
-    # Position j swaps with a uniform position in j..51: an exact uniform draw without replacement.
-    picks = rng.integers(np.arange(DEAL_SIZE), NUM_CARDS, size=(DEAL_BLOCK, DEAL_SIZE))
+    row_start = np.arange(DEAL_BLOCK) * NUM_CARDS
+    decks = np.tile(np.arange(NUM_CARDS, dtype=np.int8), DEAL_BLOCK)  # one deck per row, flat
     for j in range(DEAL_SIZE):
-        chosen = deck[rows, picks[:, j]]
-        deck[rows, picks[:, j]] = deck[:, j]
-        deck[:, j] = chosen
-    return deck[:, :DEAL_SIZE]
+        # Position j swaps with a uniform position in j..51: exact draws without replacement.
+        pick = row_start + rng.integers(j, NUM_CARDS, size=DEAL_BLOCK, dtype=np.int16)
+        chosen = decks[pick]
+        decks[pick] = decks[row_start + j]
+        decks[row_start + j] = chosen
+    return decks.reshape(DEAL_BLOCK, NUM_CARDS)[:, :DEAL_SIZE]
 
 
 def deal_cards(*, seed: int, start: int, count: int) -> np.ndarray:

@@ -55,8 +55,8 @@ BIG_BLIND = 2
 RAISE_SIZE_BY_ROUND = np.array([2, 2, 4, 4], dtype=np.int16)
 SHOWDOWN = NUM_ROUNDS  # value of ``round`` once the river has closed
 _HOLE_COLUMNS = np.array([[0, 1], [2, 3]])  # deal columns of each seat's hole cards
-_BOARD_COLUMNS = np.arange(4, DEAL_SIZE)
-_BOARD_VISIBLE = np.arange(5) < np.array(BOARD_SIZE_BY_ROUND + (5,))[:, None]  # (round, card)
+# (round, card) -> visible, for a seat's 2 hole cards then the board; round 4 is after the river.
+_VISIBLE = np.arange(7) < 2 + np.array(BOARD_SIZE_BY_ROUND + (5,))[:, None]
 
 
 class IllegalActionError(ValueError):
@@ -96,6 +96,18 @@ class LimitHoldemBatch:
         # Actions in a row without a raise; the round closes at two (RLCard's not_raise_num).
         self._unraised = np.zeros(n, dtype=np.int8)
         self._active = np.arange(n)
+        # Flat views: one 1-D gather at hand * width + column beats 2-D fancy indexing.
+        self._chips = self.chips.reshape(-1)
+        self._round_chips = self.round_chips.reshape(-1)
+        self._raises = self.raises.reshape(-1)
+        # Row hand * 2 + seat: that seat's hole cards and the whole board, for observations.
+        self._views = np.concatenate(
+            [
+                self.cards[:, _HOLE_COLUMNS].reshape(n, 2, 2),
+                np.repeat(self.cards[:, None, 4:], 2, 1),
+            ],
+            axis=2,
+        ).reshape(2 * n, 7)
 
     @property
     def size(self) -> int:
@@ -120,21 +132,20 @@ class LimitHoldemBatch:
         """
         hands = self._hands(hands)
         seat = self.to_act[hands] if seat is None else np.asarray(seat)
-        visible = np.empty((hands.size, 7), dtype=np.int64)
-        visible[:, :2] = self.cards[hands[:, None], _HOLE_COLUMNS[seat]]
-        board = self.cards[hands[:, None], _BOARD_COLUMNS]
-        visible[:, 2:] = np.where(_BOARD_VISIBLE[self.round[hands]], board, -1)
+        visible = np.where(_VISIBLE[self.round[hands]], self._views[2 * hands + seat], -1)
         return encode_obs(visible, self.raises[hands])
 
     def legal_mask(self, hands: np.ndarray | None = None) -> np.ndarray:
-        """(n, 4) bool mask over (call, raise, fold, check) for the seat to act."""
+        """(n, 4) bool mask over (call, raise, fold, check) for the seat to act.
+
+        Only meaningful for unfinished hands.
+        """
         hands = self._hands(hands)
-        seat = self.to_act[hands]
-        mine = self.round_chips[hands, seat]
-        theirs = self.round_chips[hands, 1 - seat]
+        mine_at = 2 * hands + self.to_act[hands]
+        mine, theirs = self._round_chips[mine_at], self._round_chips[mine_at ^ 1]
         mask = np.empty((hands.size, NUM_ACTIONS), dtype=bool)
         mask[:, CALL] = mine < theirs
-        mask[:, RAISE] = self.raises[hands, self.round[hands]] < MAX_RAISES
+        mask[:, RAISE] = self._raises[NUM_ROUNDS * hands + self.round[hands]] < MAX_RAISES
         mask[:, FOLD] = True
         mask[:, CHECK] = mine >= theirs
         return mask
@@ -146,30 +157,42 @@ class LimitHoldemBatch:
             IllegalActionError: if any action is not legal in its hand; nothing is applied then.
         """
         hands = self._hands(hands)
-        actions = np.asarray(actions, dtype=np.int64)
+        actions = np.asarray(actions)
         if actions.shape != hands.shape:
-            raise ValueError(f"got {actions.shape[0]} actions for {hands.shape[0]} hands")
+            raise ValueError(f"got {actions.shape} actions for {hands.shape} hands")
         if self.done[hands].any():
             raise IllegalActionError(f"hand {hands[self.done[hands]][0]} is already over")
-        self._check_legal(hands, actions)
 
-        seat = self.to_act[hands].astype(np.int64)
-        other = 1 - seat
-        rnd = self.round[hands].astype(np.int64)
-        is_raise = actions == RAISE
-        mine = self.round_chips[hands, seat]
-        theirs = self.round_chips[hands, other]
+        seat = self.to_act[hands]
+        mine_at = 2 * hands + seat  # flat index of the actor's chips; ^ 1 is the opponent's
+        rnd = self.round[hands]
+        raises_at = NUM_ROUNDS * hands + rnd
+        mine, theirs = self._round_chips[mine_at], self._round_chips[mine_at ^ 1]
+        is_call, is_raise = actions == CALL, actions == RAISE
+        is_fold, is_check = actions == FOLD, actions == CHECK
+        legal = (
+            (is_call & (mine < theirs))
+            | (is_raise & (self._raises[raises_at] < MAX_RAISES))
+            | is_fold
+            | (is_check & (mine >= theirs))
+        )
+        if not legal.all():
+            bad = np.flatnonzero(~legal)[0]
+            allowed = np.flatnonzero(self.legal_mask(hands[bad : bad + 1])[0]).tolist()
+            raise IllegalActionError(
+                f"action {actions[bad]} is illegal in hand {hands[bad]} (legal: {allowed})"
+            )
+
         # A call matches the opponent; a raise goes one raise size above them.
-        target = np.where(actions == CALL, theirs, mine)
+        target = np.where(is_call, theirs, mine)
         target = np.where(is_raise, theirs + RAISE_SIZE_BY_ROUND[rnd], target)
-        self.chips[hands, seat] += target - mine
-        self.round_chips[hands, seat] = target
-        self.raises[hands, rnd] += is_raise
-        unraised = np.where(is_raise, 1, self._unraised[hands] + (actions != FOLD))
+        self._chips[mine_at] += target - mine
+        self._round_chips[mine_at] = target
+        self._raises[raises_at] += is_raise
+        unraised = np.where(is_raise, 1, self._unraised[hands] + is_call + is_check)
         self._unraised[hands] = unraised
-        self.to_act[hands] = other  # also the first to act next round: they did not close it
+        self.to_act[hands] = 1 - seat  # also the first to act next round: they did not close it
 
-        is_fold = actions == FOLD
         folds = hands[is_fold]
         self.folded[folds] = True
         closed = hands[unraised >= 2]
@@ -179,19 +202,6 @@ class LimitHoldemBatch:
         showdowns = closed[self.round[closed] == SHOWDOWN]
         self._settle(folds, seat[is_fold], showdowns)
 
-    def _check_legal(self, hands: np.ndarray, actions: np.ndarray) -> None:
-        in_range = (actions >= 0) & (actions < NUM_ACTIONS)
-        legal = in_range.copy()
-        legal[in_range] = self.legal_mask(hands[in_range])[
-            np.arange(in_range.sum()), actions[in_range]
-        ]
-        if not legal.all():
-            bad = np.flatnonzero(~legal)[0]
-            raise IllegalActionError(
-                f"action {actions[bad]} is illegal in hand {hands[bad]} "
-                f"(legal: {np.flatnonzero(self.legal_mask(hands[bad : bad + 1])[0]).tolist()})"
-            )
-
     def _settle(self, folds: np.ndarray, loser: np.ndarray, showdowns: np.ndarray) -> None:
         """Payoffs of hands that just ended (``loser``: the folding seats); drop them from play."""
         if folds.size:
@@ -199,11 +209,7 @@ class LimitHoldemBatch:
             self.payoffs[folds, loser] = -lost
             self.payoffs[folds, 1 - loser] = lost
         if showdowns.size:
-            board = self.cards[showdowns][:, _BOARD_COLUMNS]
-            strength = [
-                hand_strength(np.hstack([self.cards[showdowns][:, _HOLE_COLUMNS[s]], board]))
-                for s in (0, 1)
-            ]
+            strength = [hand_strength(self._views[2 * showdowns + s]) for s in (0, 1)]
             # Both seats have equal chips in at a showdown; a tie returns them.
             won = np.sign(strength[0] - strength[1]) * (self.chips[showdowns, 0] / BIG_BLIND)
             self.payoffs[showdowns, 0] = won
