@@ -19,9 +19,8 @@ Betting as RLCard does it (``docs/rules.md`` lists how this differs from ACPC):
 All state lives in numpy arrays of length B; every method works on an index array of hands,
 and only unfinished hands are visited, so hands that end early cost nothing afterwards.
 
->>> from pokerirl.game.deals import deal_cards
 >>> from pokerirl.encoding import CALL, CHECK, FOLD
->>> game = LimitHoldemBatch(deals=deal_cards(seed=0, start=0, count=2))
+>>> game = LimitHoldemBatch.from_seed(seed=0, start=0, count=2)
 >>> game.legal_mask().astype(int).tolist()  # call, raise, fold, check for both small blinds
 [[1, 1, 1, 0], [1, 1, 1, 0]]
 >>> game.step(np.array([CALL, FOLD]))  # hand 0 limps, hand 1's small blind folds
@@ -47,7 +46,7 @@ from pokerirl.encoding import (
     RAISE,
     encode_obs,
 )
-from pokerirl.game.deals import DEAL_SIZE
+from pokerirl.game.deals import DEAL_SIZE, deal_cards
 from pokerirl.game.evaluator import hand_strength
 
 SMALL_BLIND = 1
@@ -80,6 +79,15 @@ class LimitHoldemBatch:
     """
 
     def __init__(self, *, deals: np.ndarray) -> None:
+        self.reset(deals=deals)
+
+    @classmethod
+    def from_seed(cls, *, seed: int, start: int, count: int) -> LimitHoldemBatch:
+        """A batch of deals ``start .. start + count - 1`` of ``seed`` (see ``deal_cards``)."""
+        return cls(deals=deal_cards(seed=seed, start=start, count=count))
+
+    def reset(self, *, deals: np.ndarray) -> None:
+        """Start a new hand for every row of ``deals``: blinds posted, small blind to act."""
         deals = np.asarray(deals)
         if deals.ndim != 2 or deals.shape[1] != DEAL_SIZE:
             raise ValueError(f"deals must have shape (B, {DEAL_SIZE}), got {deals.shape}")
