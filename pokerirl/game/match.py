@@ -107,8 +107,12 @@ def play_match(
         raise ValueError(f"batch_size must be at least 2, got {batch_size}")
     if seed < 0:
         raise ValueError(f"seed must be non-negative, got {seed}")
-    if duplicate and (hands % 2 or batch_size % 2):
-        raise ValueError("duplicate matches play every deal twice: hands must be even")
+    if duplicate and hands % 2:
+        raise ValueError(
+            f"duplicate matches play every deal twice: hands must be even, got {hands}"
+        )
+    if duplicate and batch_size % 2:
+        raise ValueError(f"duplicate matches need an even batch_size, got {batch_size}")
 
     rngs = (_agent_rng(seed, 0), _agent_rng(seed, 1))
     results = np.empty(hands, dtype=np.float64)
