@@ -221,7 +221,7 @@ class LimitHoldemBatch:
             # Both seats have equal chips in at a showdown; a tie returns them.
             won = np.sign(strength[0] - strength[1]) * (self.chips[showdowns, 0] / BIG_BLIND)
             self.payoffs[showdowns, 0] = won
-            self.payoffs[showdowns, 1] = -won
+            self.payoffs[showdowns, 1] = 0.0 - won  # not -won: no -0.0 for split pots
         if folds.size or showdowns.size:
             self.done[folds] = True
             self.done[showdowns] = True
