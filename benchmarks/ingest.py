@@ -55,10 +55,13 @@ def main() -> None:
         rows = summary["rows"]
         rate = hands / best
         print(f"ingest: {hands:,} hands, {summary['kept_hands']:,} kept, {rows:,} rows")
-        print(f"best of {args.repeats}: {best:.2f} s = {rate:,.0f} hands/s, {rows / best:,.0f} rows/s")
+        print(
+            f"best of {args.repeats}: {best:.2f} s = {rate:,.0f} hands/s, "
+            f"{rows / best:,.0f} rows/s"
+        )
         # CPU time is what one core spent; it holds steady when other work shares the core.
-        print(f"CPU time: {best_cpu:.2f} s = {hands / best_cpu:,.0f} hands per CPU-second")
-        print(f"vs target {TARGET_HANDS_PER_SECOND:,} hands/s: {rate / TARGET_HANDS_PER_SECOND:.2f}x")
+        print(f"CPU time: {best_cpu:.2f} s = {hands / best_cpu:,.0f} hands/CPU-second")
+        print(f"vs target {TARGET_HANDS_PER_SECOND:,}/s: {rate / TARGET_HANDS_PER_SECOND:.2f}x")
         print(f"vs jcottas parser ({JCOTTAS_HANDS_PER_SECOND} hands/s): "
               f"{rate / JCOTTAS_HANDS_PER_SECOND:,.0f}x")
 

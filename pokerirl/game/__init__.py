@@ -1,0 +1,43 @@
+"""Vectorized heads-up limit hold'em with RLCard 1.2.0's rules: deals, hand strength, engine,
+agents and matches. See ``docs/rules.md`` for how the rules differ from ACPC's."""
+
+from __future__ import annotations
+
+from pokerirl.game.agents import (
+    BUILT_IN_AGENTS,
+    Agent,
+    CallAgent,
+    RaiseAgent,
+    RandomAgent,
+    make_agent,
+)
+from pokerirl.game.deals import DEAL_SIZE, deal_cards
+from pokerirl.game.engine import (
+    BIG_BLIND,
+    SMALL_BLIND,
+    IllegalActionError,
+    LimitHoldemBatch,
+)
+from pokerirl.game.evaluator import HAND_CATEGORIES, category, hand_strength
+from pokerirl.game.match import MatchResult, play_batch, play_match
+
+__all__ = [
+    "BIG_BLIND",
+    "BUILT_IN_AGENTS",
+    "DEAL_SIZE",
+    "HAND_CATEGORIES",
+    "SMALL_BLIND",
+    "Agent",
+    "CallAgent",
+    "IllegalActionError",
+    "LimitHoldemBatch",
+    "MatchResult",
+    "RaiseAgent",
+    "RandomAgent",
+    "category",
+    "deal_cards",
+    "hand_strength",
+    "make_agent",
+    "play_batch",
+    "play_match",
+]

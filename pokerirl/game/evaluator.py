@@ -156,6 +156,11 @@ def _tables() -> _Tables:
     )
 
 
+def prepare_tables() -> None:
+    """Build the lookup tables now (about 0.1 s) instead of on the first evaluation."""
+    _tables()
+
+
 def hand_strength(cards: np.ndarray) -> np.ndarray:
     """Strength of the best five of seven cards, for many hands at once.
 

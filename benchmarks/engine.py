@@ -1,0 +1,117 @@
+"""Engine speed against RLCard's own loop, and raise-vs-random from both, in the same run.
+
+    python benchmarks/engine.py [--hands 400000] [--rlcard-hands 20000] [--seed 0]
+
+Prints hands per second of random vs random in :mod:`pokerirl.game` and in
+``rlcard.utils.tournament`` with RLCard's ``RandomAgent`` (and the ratio), then always-raise
+vs random in both: mbb/h with its standard error, and the engine's wall time. Only ratios
+measured in one run are comparable; the machine may be shared.
+"""
+
+from __future__ import annotations
+
+import os
+
+os.environ.setdefault("OMP_NUM_THREADS", "1")  # one core: numpy must not fan out
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+os.environ.setdefault("MKL_NUM_THREADS", "1")
+
+import argparse  # noqa: E402
+import time  # noqa: E402
+from typing import Any  # noqa: E402
+
+import numpy as np  # noqa: E402
+
+from pokerirl.game import make_agent, play_match  # noqa: E402
+
+
+class RLCardRaiseAgent:
+    """Always-raise in RLCard's agent interface: raise if legal, else call, else check."""
+
+    use_raw = False
+
+    @staticmethod
+    def step(state: dict[str, Any]) -> int:
+        legal = state["legal_actions"]
+        return next(a for a in (1, 0, 3) if a in legal)  # raise, call, check
+
+    def eval_step(self, state: dict[str, Any]) -> tuple[int, dict[str, Any]]:
+        return self.step(state), {}
+
+
+def rlcard_env(agents: list[Any], seed: int) -> Any:
+    import rlcard
+
+    env = rlcard.make("limit-holdem", config={"seed": seed})
+    np.random.seed(seed)  # RLCard's RandomAgent draws from numpy's global generator
+    env.set_agents(agents)
+    return env
+
+
+def rlcard_random_agent() -> Any:
+    # Imported late: `import rlcard.agents` runs `pip freeze` (about 3 s) in RLCard 1.2.0.
+    from rlcard.agents import RandomAgent
+
+    return RandomAgent(num_actions=4)
+
+
+def rlcard_random_vs_random(hands: int, seed: int) -> float:
+    """Hands per second of ``rlcard.utils.tournament`` with two RandomAgents."""
+    from rlcard.utils import tournament
+
+    env = rlcard_env([rlcard_random_agent(), rlcard_random_agent()], seed)
+    started = time.perf_counter()
+    tournament(env, hands)
+    return hands / (time.perf_counter() - started)
+
+
+def rlcard_raise_vs_random(hands: int, seed: int) -> tuple[float, float, float]:
+    """(mbb/h, standard error, hands/s) of always-raise (player 0) vs random, RLCard's env.run.
+
+    RLCard draws the small blind at random each hand, so seats are random, not alternating.
+    """
+    env = rlcard_env([RLCardRaiseAgent(), rlcard_random_agent()], seed)
+    results = np.empty(hands)
+    started = time.perf_counter()
+    for i in range(hands):
+        _, payoffs = env.run(is_training=False)
+        results[i] = payoffs[0]
+    seconds = time.perf_counter() - started
+    return 1000 * results.mean(), 1000 * results.std(ddof=1) / np.sqrt(hands), hands / seconds
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--hands", type=int, default=400_000, help="engine hands per figure")
+    parser.add_argument("--rlcard-hands", type=int, default=20_000, help="RLCard hands per figure")
+    parser.add_argument("--seed", type=int, default=0)
+    args = parser.parse_args()
+    random, always_raise = make_agent("random"), make_agent("raise")
+
+    play_match(random, random, hands=10_000, seed=args.seed)  # warm up: lookup tables, caches
+    ours = play_match(random, random, hands=args.hands, seed=args.seed, duplicate=False)
+    theirs = rlcard_random_vs_random(args.rlcard_hands, args.seed)
+    print(
+        f"random vs random, engine ({args.hands:,} hands): {ours.hands_per_second:12,.0f} hands/s"
+    )
+    print(f"random vs random, RLCard tournament ({args.rlcard_hands:,}): {theirs:12,.0f} hands/s")
+    print(f"ratio engine / RLCard: {ours.hands_per_second / theirs:.0f}x")
+
+    for duplicate in (False, True):
+        match = play_match(
+            always_raise, random, hands=args.hands, seed=args.seed, duplicate=duplicate
+        )
+        mode = "duplicate" if duplicate else "alternating seats"
+        print(
+            f"raise vs random, engine, {mode} ({args.hands:,} hands): "
+            f"{match.mbb_per_hand:.1f} +- {match.std_error:.1f} mbb/h in {match.seconds:.2f} s"
+        )
+    mbb, se, speed = rlcard_raise_vs_random(args.rlcard_hands, args.seed)
+    print(
+        f"raise vs random, RLCard env.run ({args.rlcard_hands:,} hands): "
+        f"{mbb:.1f} +- {se:.1f} mbb/h ({speed:,.0f} hands/s)"
+    )
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,228 @@
+"""Many heads-up limit hold'em hands in lock-step, with RLCard 1.2.0's ``limit-holdem`` rules.
+
+Seats, not player ids: seat 0 posts the small blind (1 chip) and acts first preflop, seat 1
+posts the big blind (2 chips). RLCard draws which player id is the small blind at random; here
+the caller decides which agent sits where (see :mod:`pokerirl.game.match`). Observations carry
+no seat or player id, so they are RLCard's exactly.
+
+Betting as RLCard does it (``docs/rules.md`` lists how this differs from ACPC):
+
+* a raise is 2 chips preflop and on the flop, 4 on the turn and river, and puts the raiser
+  that much above the opponent's chips in this round; at most 4 raises per round, blinds not
+  counted;
+* call when behind, check when level, fold always; anything else raises
+  :class:`IllegalActionError` (RLCard's env silently swaps illegal actions for check or fold);
+* a round closes after two actions in a row without a raise (a raise counts as the first of
+  them); the player who did not close it acts first in the next round;
+* the hand ends on a fold or after the river; payoffs are net chips / big blind.
+
+All state lives in numpy arrays of length B; every method works on an index array of hands,
+and only unfinished hands are visited, so hands that end early cost nothing afterwards.
+
+>>> from pokerirl.encoding import CALL, CHECK, FOLD
+>>> game = LimitHoldemBatch.from_seed(seed=0, start=0, count=2)
+>>> game.legal_mask().astype(int).tolist()  # call, raise, fold, check for both small blinds
+[[1, 1, 1, 0], [1, 1, 1, 0]]
+>>> game.step(np.array([CALL, FOLD]))  # hand 0 limps, hand 1's small blind folds
+>>> game.active().tolist(), game.legal_mask().astype(int).tolist()
+([0], [[0, 1, 1, 1]])
+>>> game.step(np.array([CHECK]))  # the big blind checks: on to the flop, small blind first
+>>> int(game.round[0]), int(game.to_act[0]), game.payoffs[1].tolist()
+(1, 0, [-0.5, 0.5])
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from pokerirl.encoding import (
+    BOARD_SIZE_BY_ROUND,
+    CALL,
+    CHECK,
+    FOLD,
+    MAX_RAISES,
+    NUM_ACTIONS,
+    NUM_ROUNDS,
+    RAISE,
+    encode_obs,
+)
+from pokerirl.game.deals import DEAL_SIZE, deal_cards
+from pokerirl.game.evaluator import hand_strength
+
+SMALL_BLIND = 1
+BIG_BLIND = 2
+RAISE_SIZE_BY_ROUND = np.array([2, 2, 4, 4], dtype=np.int16)
+SHOWDOWN = NUM_ROUNDS  # value of ``round`` once the river has closed
+_HOLE_COLUMNS = np.array([[0, 1], [2, 3]])  # deal columns of each seat's hole cards
+# (round, card) -> visible, for a seat's 2 hole cards then the board; round 4 is after the river.
+_VISIBLE = np.arange(7) < 2 + np.array(BOARD_SIZE_BY_ROUND + (5,))[:, None]
+
+
+class IllegalActionError(ValueError):
+    """An action that is not legal for the hand it was given to."""
+
+
+class LimitHoldemBatch:
+    """B hands of heads-up limit hold'em in lock-step (seat 0 = small blind).
+
+    Public state, (B,) or (B, k) arrays, read-only for callers:
+
+    * ``cards`` (B, 9) int8 deal: seat 0 hole, seat 1 hole, board;
+    * ``round`` int8, 0 preflop .. 3 river, 4 after a showdown;
+    * ``raises`` (B, 4) int8: raises per round as RLCard counts them (big blind excluded);
+    * ``chips`` (B, 2) int16: chips each seat has put in; ``round_chips`` (B, 2): in this round;
+    * ``to_act`` int8 seat to act; ``done`` bool; ``folded`` bool, True when a fold ended it;
+    * ``payoffs`` (B, 2) float64 net big blinds per seat, set when the hand ends.
+
+    Args:
+        deals: (B, 9) card indices, e.g. from :func:`pokerirl.game.deals.deal_cards`.
+    """
+
+    def __init__(self, *, deals: np.ndarray) -> None:
+        self.reset(deals=deals)
+
+    @classmethod
+    def from_seed(cls, *, seed: int, start: int, count: int) -> LimitHoldemBatch:
+        """A batch of deals ``start .. start + count - 1`` of ``seed`` (see ``deal_cards``)."""
+        return cls(deals=deal_cards(seed=seed, start=start, count=count))
+
+    def reset(self, *, deals: np.ndarray) -> None:
+        """Start a new hand for every row of ``deals``: blinds posted, small blind to act."""
+        deals = np.asarray(deals)
+        if deals.ndim != 2 or deals.shape[1] != DEAL_SIZE:
+            raise ValueError(f"deals must have shape (B, {DEAL_SIZE}), got {deals.shape}")
+        n = deals.shape[0]
+        self.cards = deals.astype(np.int8)
+        self.round = np.zeros(n, dtype=np.int8)
+        self.raises = np.zeros((n, NUM_ROUNDS), dtype=np.int8)
+        self.chips = np.tile(np.array([SMALL_BLIND, BIG_BLIND], dtype=np.int16), (n, 1))
+        self.round_chips = self.chips.copy()
+        self.to_act = np.zeros(n, dtype=np.int8)
+        self.done = np.zeros(n, dtype=bool)
+        self.folded = np.zeros(n, dtype=bool)
+        self.payoffs = np.zeros((n, 2), dtype=np.float64)
+        # Actions in a row without a raise; the round closes at two (RLCard's not_raise_num).
+        self._unraised = np.zeros(n, dtype=np.int8)
+        self._active = np.arange(n)
+        # Flat views: one 1-D gather at hand * width + column beats 2-D fancy indexing.
+        self._chips = self.chips.reshape(-1)
+        self._round_chips = self.round_chips.reshape(-1)
+        self._raises = self.raises.reshape(-1)
+        # Row hand * 2 + seat: that seat's hole cards and the whole board, for observations.
+        self._views = np.concatenate(
+            [
+                self.cards[:, _HOLE_COLUMNS].reshape(n, 2, 2),
+                np.repeat(self.cards[:, None, 4:], 2, 1),
+            ],
+            axis=2,
+        ).reshape(2 * n, 7)
+
+    @property
+    def size(self) -> int:
+        """Number of hands B."""
+        return self.cards.shape[0]
+
+    def active(self) -> np.ndarray:
+        """Indices of the hands not yet finished, ascending."""
+        return self._active
+
+    def _hands(self, hands: np.ndarray | None) -> np.ndarray:
+        return self._active if hands is None else np.asarray(hands, dtype=np.int64)
+
+    def observe(
+        self, hands: np.ndarray | None = None, seat: np.ndarray | None = None
+    ) -> np.ndarray:
+        """RLCard's (n, 72) uint8 observation of ``seat`` (default: the seat to act).
+
+        Args:
+            hands: (n,) hand indices; default :meth:`active`.
+            seat: (n,) seats (0 or 1) whose view to encode; default the seat to act.
+        """
+        hands = self._hands(hands)
+        seat = self.to_act[hands] if seat is None else np.asarray(seat)
+        visible = np.where(_VISIBLE[self.round[hands]], self._views[2 * hands + seat], -1)
+        return encode_obs(visible, self.raises[hands])
+
+    def legal_mask(self, hands: np.ndarray | None = None) -> np.ndarray:
+        """(n, 4) bool mask over (call, raise, fold, check) for the seat to act.
+
+        Only meaningful for unfinished hands.
+        """
+        hands = self._hands(hands)
+        mine_at = 2 * hands + self.to_act[hands]
+        mine, theirs = self._round_chips[mine_at], self._round_chips[mine_at ^ 1]
+        mask = np.empty((hands.size, NUM_ACTIONS), dtype=bool)
+        mask[:, CALL] = mine < theirs
+        mask[:, RAISE] = self._raises[NUM_ROUNDS * hands + self.round[hands]] < MAX_RAISES
+        mask[:, FOLD] = True
+        mask[:, CHECK] = mine >= theirs
+        return mask
+
+    def step(self, actions: np.ndarray, hands: np.ndarray | None = None) -> None:
+        """Apply one action to each of ``hands`` (distinct, unfinished; default :meth:`active`).
+
+        Raises:
+            IllegalActionError: if any action is not legal in its hand; nothing is applied then.
+        """
+        hands = self._hands(hands)
+        actions = np.asarray(actions)
+        if actions.shape != hands.shape:
+            raise ValueError(f"got {actions.shape} actions for {hands.shape} hands")
+        if self.done[hands].any():
+            raise IllegalActionError(f"hand {hands[self.done[hands]][0]} is already over")
+
+        seat = self.to_act[hands]
+        mine_at = 2 * hands + seat  # flat index of the actor's chips; ^ 1 is the opponent's
+        rnd = self.round[hands]
+        raises_at = NUM_ROUNDS * hands + rnd
+        mine, theirs = self._round_chips[mine_at], self._round_chips[mine_at ^ 1]
+        is_call, is_raise = actions == CALL, actions == RAISE
+        is_fold, is_check = actions == FOLD, actions == CHECK
+        legal = (
+            (is_call & (mine < theirs))
+            | (is_raise & (self._raises[raises_at] < MAX_RAISES))
+            | is_fold
+            | (is_check & (mine >= theirs))
+        )
+        if not legal.all():
+            bad = np.flatnonzero(~legal)[0]
+            allowed = np.flatnonzero(self.legal_mask(hands[bad : bad + 1])[0]).tolist()
+            raise IllegalActionError(
+                f"action {actions[bad]} is illegal in hand {hands[bad]} (legal: {allowed})"
+            )
+
+        # A call matches the opponent; a raise goes one raise size above them.
+        target = np.where(is_call, theirs, mine)
+        target = np.where(is_raise, theirs + RAISE_SIZE_BY_ROUND[rnd], target)
+        self._chips[mine_at] += target - mine
+        self._round_chips[mine_at] = target
+        self._raises[raises_at] += is_raise
+        unraised = np.where(is_raise, 1, self._unraised[hands] + is_call + is_check)
+        self._unraised[hands] = unraised
+        self.to_act[hands] = 1 - seat  # also the first to act next round: they did not close it
+
+        folds = hands[is_fold]
+        self.folded[folds] = True
+        closed = hands[unraised >= 2]
+        self.round[closed] += 1
+        self.round_chips[closed] = 0
+        self._unraised[closed] = 0
+        showdowns = closed[self.round[closed] == SHOWDOWN]
+        self._settle(folds, seat[is_fold], showdowns)
+
+    def _settle(self, folds: np.ndarray, loser: np.ndarray, showdowns: np.ndarray) -> None:
+        """Payoffs of hands that just ended (``loser``: the folding seats); drop them from play."""
+        if folds.size:
+            lost = self.chips[folds, loser] / BIG_BLIND
+            self.payoffs[folds, loser] = -lost
+            self.payoffs[folds, 1 - loser] = lost
+        if showdowns.size:
+            strength = [hand_strength(self._views[2 * showdowns + s]) for s in (0, 1)]
+            # Both seats have equal chips in at a showdown; a tie returns them.
+            won = np.sign(strength[0] - strength[1]) * (self.chips[showdowns, 0] / BIG_BLIND)
+            self.payoffs[showdowns, 0] = won
+            self.payoffs[showdowns, 1] = 0.0 - won  # not -won: no -0.0 for split pots
+        if folds.size or showdowns.size:
+            self.done[folds] = True
+            self.done[showdowns] = True
+            self._active = self._active[~self.done[self._active]]

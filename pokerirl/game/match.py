@@ -1,0 +1,148 @@
+"""Play two agents against each other for many hands and summarise agent A's result.
+
+Hand ``i`` seats agent A as the small blind (seat 0) when ``i`` is even and as the big blind
+when ``i`` is odd. Without duplicate, hand ``i`` uses deal ``i`` of the seed; with duplicate,
+hands ``2j`` and ``2j + 1`` both use deal ``j``, so each agent plays each deal from both seats
+(with each seat's cards), and the pair's mean is the independent unit for the standard error.
+
+>>> from pokerirl.game.agents import make_agent
+>>> result = play_match(make_agent("raise"), make_agent("call"), hands=1_000, seed=1)
+>>> result.hands, result.duplicate, round(result.mbb_per_hand) == round(result.mbb_per_hand)
+(1000, True, True)
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+from tqdm import tqdm
+
+from pokerirl.game.agents import Agent
+from pokerirl.game.deals import deal_cards
+from pokerirl.game.engine import IllegalActionError, LimitHoldemBatch
+from pokerirl.game.evaluator import prepare_tables
+
+DEFAULT_BATCH_SIZE = 65_536
+AGENT_STREAM = 1  # spawn-key word for agents' randomness (deals use 0)
+
+
+@dataclass(frozen=True, kw_only=True)
+class MatchResult:
+    """Agent A's result against agent B; money in big blinds, rates in milli-big-blinds."""
+
+    agent_a: str
+    agent_b: str
+    hands: int
+    seed: int
+    duplicate: bool
+    mbb_per_hand: float  # 1000 x A's mean net big blinds per hand
+    std_error: float  # of mbb_per_hand: over duplicate pairs, or over hands
+    seconds: float
+    hands_per_second: float
+    # A's net big blinds in every hand, in hand order (duplicate pairs are adjacent).
+    results_bb: np.ndarray = field(repr=False, compare=False)
+
+
+def _agent_rng(seed: int, which: int) -> np.random.Generator:
+    return np.random.Generator(
+        np.random.PCG64(np.random.SeedSequence(seed, spawn_key=(AGENT_STREAM, which)))
+    )
+
+
+def play_batch(
+    agents: tuple[Agent, Agent],
+    deals: np.ndarray,
+    seat_of_first: np.ndarray,
+    rngs: tuple[np.random.Generator, np.random.Generator],
+) -> np.ndarray:
+    """Play one batch of hands to the end; return the first agent's net big blinds per hand.
+
+    Args:
+        agents: the two agents.
+        deals: (B, 9) deals.
+        seat_of_first: (B,) seat (0 small blind, 1 big blind) of ``agents[0]`` in each hand.
+        rngs: each agent's generator.
+    """
+    game = LimitHoldemBatch(deals=deals)
+    while game.active().size:
+        hands = game.active()
+        first_to_act = game.to_act[hands] == seat_of_first[hands]
+        # Each agent decides for all hands where it is to act: one batched call per agent.
+        for agent, rng, turn in zip(agents, rngs, (first_to_act, ~first_to_act), strict=True):
+            mine = hands[turn]
+            if mine.size == 0:
+                continue
+            actions = agent.act(game.observe(mine), game.legal_mask(mine), rng)
+            try:
+                game.step(actions, mine)
+            except IllegalActionError as error:
+                raise IllegalActionError(f"agent {agent.name!r}: {error}") from error
+    return game.payoffs[np.arange(game.size), seat_of_first]
+
+
+def play_match(
+    agent_a: Agent,
+    agent_b: Agent,
+    *,
+    hands: int,
+    seed: int,
+    duplicate: bool = True,
+    batch_size: int = DEFAULT_BATCH_SIZE,
+    progress: bool = False,
+) -> MatchResult:
+    """Play ``hands`` hands of A against B, ``batch_size`` hands in lock-step at a time.
+
+    The same arguments give the same result; deals do not depend on ``batch_size``, but the
+    agents' random draws do. ``progress`` shows a tqdm bar on stderr.
+
+    Raises:
+        ValueError: on a non-positive ``hands`` or ``batch_size``, a negative seed, or an odd
+            ``hands`` or ``batch_size`` with ``duplicate``.
+    """
+    if hands < 1:
+        raise ValueError(f"hands must be at least 1, got {hands}")
+    if batch_size < 2:
+        raise ValueError(f"batch_size must be at least 2, got {batch_size}")
+    if seed < 0:
+        raise ValueError(f"seed must be non-negative, got {seed}")
+    if duplicate and hands % 2:
+        raise ValueError(
+            f"duplicate matches play every deal twice: hands must be even, got {hands}"
+        )
+    if duplicate and batch_size % 2:
+        raise ValueError(f"duplicate matches need an even batch_size, got {batch_size}")
+
+    rngs = (_agent_rng(seed, 0), _agent_rng(seed, 1))
+    results = np.empty(hands, dtype=np.float64)
+    prepare_tables()  # one-time setup, kept out of hands_per_second
+    started = time.perf_counter()
+    with tqdm(total=hands, unit="hand", unit_scale=True, disable=not progress) as bar:
+        for start in range(0, hands, batch_size):
+            count = min(batch_size, hands - start)
+            if duplicate:
+                deals = np.repeat(
+                    deal_cards(seed=seed, start=start // 2, count=count // 2), 2, axis=0
+                )
+            else:
+                deals = deal_cards(seed=seed, start=start, count=count)
+            seat_of_a = (np.arange(start, start + count) % 2).astype(np.int8)
+            results[start : start + count] = play_batch((agent_a, agent_b), deals, seat_of_a, rngs)
+            bar.update(count)
+    seconds = time.perf_counter() - started
+
+    units = results.reshape(-1, 2).mean(axis=1) if duplicate else results
+    std_error = float(units.std(ddof=1) / np.sqrt(units.size)) if units.size > 1 else float("nan")
+    return MatchResult(
+        agent_a=agent_a.name,
+        agent_b=agent_b.name,
+        hands=hands,
+        seed=seed,
+        duplicate=duplicate,
+        mbb_per_hand=1000.0 * float(units.mean()),
+        std_error=1000.0 * std_error,
+        seconds=seconds,
+        hands_per_second=hands / seconds if seconds > 0 else float("inf"),
+        results_bb=results,
+    )
