@@ -96,8 +96,10 @@ def demo(
 
 @app.command()
 def match(
-    agent_a: str = typer.Argument(..., help="Agent A (reported): random, raise or call."),
-    agent_b: str = typer.Argument(..., help="Agent B: random, raise or call."),
+    agent_a: str = typer.Argument(
+        ..., help="Agent A (reported): random, raise, call, an agent folder or rlcard:CKPT."
+    ),
+    agent_b: str = typer.Argument(..., help="Agent B: as agent A."),
     hands: int = typer.Option(100_000, help="Hands to play (even with --duplicate)."),
     seed: int = typer.Option(0, help="Seed of the deals and of the agents' random draws."),
     duplicate: bool = typer.Option(
@@ -106,14 +108,15 @@ def match(
     output_format: str = typer.Option("text", "--format", help="text or json."),
 ) -> None:
     """Play A against B and print A's result in milli-big-blinds per hand."""
-    from pokerirl.game import make_agent, play_match
+    from pokerirl.agents import resolve_agent
+    from pokerirl.game import play_match
 
     if output_format not in ("text", "json"):
         fail(f"unknown format {output_format!r} (text or json)")
     try:
         result = play_match(
-            make_agent(agent_a),
-            make_agent(agent_b),
+            resolve_agent(agent_a),
+            resolve_agent(agent_b),
             hands=hands,
             seed=seed,
             duplicate=duplicate,
@@ -135,3 +138,76 @@ def match(
             f"+- {result.std_error:.1f} mbb/h over {result.hands:,} hands "
             f"({result.hands_per_second:,.0f} hands/s)"
         )
+
+
+agent_app = typer.Typer(help="Train DQN agents.", no_args_is_help=True)
+app.add_typer(agent_app, name="agent")
+
+
+@agent_app.command("train")
+def agent_train(
+    out: Path = typer.Option(..., "--out", "-o", help="Agent folder (with --seeds: its parent)."),
+    reward: str = typer.Option("sparse", help="sparse (the payoff) or learned (--reward-run's f)."),
+    reward_run: Path | None = typer.Option(None, help="AIRL / H-AIRL run folder (learned reward)."),
+    payoff_weight: float = typer.Option(
+        0.0, help="w in r = w * payoff + (1 - w) * f(s, a); 0: the learned reward alone."
+    ),
+    hands: int = typer.Option(50_000, "--hands", "-n", help="Training hands."),
+    seed: int = typer.Option(0, help="Seed of one agent."),
+    seeds: str | None = typer.Option(None, help="e.g. 0-19: one agent per seed, in OUT/seed-<k>."),
+    jobs: int = typer.Option(1, help="Processes training seeds at once (with --seeds)."),
+    opponent: str = typer.Option(
+        "random", help="random, raise, call, an agent folder, rlcard:CKPT, or self."
+    ),
+    eval_every: int = typer.Option(10_000, help="Evaluate every N training hands."),
+    eval_hands: int = typer.Option(20_000, help="Duplicate hands per evaluation (even)."),
+    eval_seed: int = typer.Option(1_000_003, help="Deal seed of every evaluation."),
+    train_every: int = typer.Option(16, help="Stored transitions per gradient update."),
+    concurrent_hands: int = typer.Option(256, help="Hands played in lock-step."),
+    learning_rate: float = typer.Option(5e-5, help="Adam learning rate."),
+    self_play_every: int = typer.Option(1_000, help="Updates between refreshes of 'self'."),
+    quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bar."),
+) -> None:
+    """Train a DQN agent (or one per seed) on the sparse payoff or a learned reward."""
+    from pokerirl.agents.dqn import DQNConfig
+    from pokerirl.agents.train import TrainConfig, parse_seeds, train_agent, train_seeds
+
+    try:
+        config = TrainConfig(
+            hands=hands,
+            seed=seed,
+            reward=reward,
+            reward_run=None if reward_run is None else str(reward_run),
+            payoff_weight=payoff_weight,
+            opponent=opponent,
+            eval_every=eval_every,
+            eval_hands=eval_hands,
+            eval_seed=eval_seed,
+            dqn=DQNConfig(
+                train_every=train_every,
+                concurrent_hands=concurrent_hands,
+                learning_rate=learning_rate,
+                self_play_every=self_play_every,
+            ),
+        )
+        if config.reward == "learned" and config.reward_run is None:
+            fail("--reward learned needs --reward-run RUN_DIR")
+        if seeds is None:
+            summary = train_agent(out, config, progress=not quiet)
+            lines = {seed: summary}
+        else:
+            lines = train_seeds(out, config, parse_seeds(seeds), jobs=jobs, progress=not quiet)
+    except ValueError as error:
+        fail(str(error))
+    except OSError as error:
+        fail(f"{error.filename or out}: {error.strerror or error}")
+    for agent_seed, line in lines.items():
+        folder = out if seeds is None else out / f"seed-{agent_seed}"
+        if line is None:
+            typer.echo(f"{folder}: already finished, skipped")
+            continue
+        scores = ", ".join(
+            f"vs {name} {e['mbb_per_hand']:+.0f} +- {e['std_error']:.0f} mbb/h"
+            for name, e in line["eval"].items()
+        )
+        typer.echo(f"{folder}: {line['hands']:,} hands, {scores}")

@@ -9,15 +9,9 @@ Everything but the registry needs torch and is imported on first use.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 from pokerirl.agents.registry import agent_fingerprint, resolve_agent
-
-if TYPE_CHECKING:
-    from pokerirl.agents.checkpoint import load_agent
-    from pokerirl.agents.dqn import DQNConfig, GreedyQAgent, train_dqn
-    from pokerirl.agents.rlcard_import import import_rlcard_dqn, load_rlcard_dqn
-    from pokerirl.agents.train import TrainConfig, train_agent, train_seeds
 
 _LAZY = {
     "load_agent": "checkpoint",

@@ -86,4 +86,6 @@ def load_agent(folder: str | os.PathLike[str]) -> GreedyQAgent:
     except (ValueError, KeyError, TypeError, RuntimeError, OSError) as error:
         first_line = str(error).strip().splitlines()[0] if str(error).strip() else repr(error)
         raise ValueError(f"{folder}: cannot load agent: {first_line}") from None
-    return GreedyQAgent(name=str(folder), network=network.eval(), fingerprint=folder_fingerprint(folder))
+    return GreedyQAgent(
+        name=str(folder), network=network.eval(), fingerprint=folder_fingerprint(folder)
+    )

@@ -116,7 +116,8 @@ class QNetwork(nn.Module):
 def greedy_actions(q_values: torch.Tensor, legal_mask: torch.Tensor) -> torch.Tensor:
     """Argmax of the q-values over the legal actions only (rows with none legal give 0).
 
-    >>> greedy_actions(torch.tensor([[5.0, 1.0, 2.0, 0.0]]), torch.tensor([[False, True, True, True]]))
+    >>> q, legal = torch.tensor([[5.0, 1.0, 2.0, 0.0]]), torch.tensor([[False, True, True, True]])
+    >>> greedy_actions(q, legal)
     tensor([2])
     """
     return q_values.masked_fill(~legal_mask, -torch.inf).argmax(dim=1)

@@ -23,9 +23,9 @@ import torch
 
 from pokerirl.agents.checkpoint import save_agent
 from pokerirl.agents.dqn import GreedyQAgent, QNetwork
+from pokerirl.agents.registry import RLCARD_PREFIX
 from pokerirl.encoding import NUM_ACTIONS, OBS_SIZE
 
-from pokerirl.agents.registry import RLCARD_PREFIX
 _LAYER_KEY = re.compile(r"^fc_layers\.(\d+)\.(.+)$")
 
 

@@ -37,7 +37,6 @@ from pokerirl.agents.checkpoint import (
     METRICS_FILE,
     is_finished,
     save_agent,
-    write_atomic,
 )
 from pokerirl.agents.dqn import (
     SELF_PLAY,
@@ -204,8 +203,7 @@ def train_agent(
         nonlocal next_eval
         if hands_done < next_eval:
             return
-        next_eval = min(hands_done - hands_done % config.eval_every + config.eval_every,
-                        config.hands)  # fmt: skip
+        next_eval = min((hands_done // config.eval_every + 1) * config.eval_every, config.hands)
         line = {
             "hands": hands_done,
             "transitions": learner.total_t,
@@ -247,8 +245,11 @@ def train_agent(
         },
         "seed": config.seed,
         "hands": config.hands,
-        "evaluation": {"every": config.eval_every, "hands": config.eval_hands,
-                       "seed": config.eval_seed},  # fmt: skip
+        "evaluation": {
+            "every": config.eval_every,
+            "hands": config.eval_hands,
+            "seed": config.eval_seed,
+        },
         "dqn": dataclasses.asdict(config.dqn),
         "final": metrics[-1],
     }
