@@ -20,6 +20,7 @@ from __future__ import annotations
 import dataclasses
 import hashlib
 import json
+import multiprocessing
 import os
 import re
 import time
@@ -288,7 +289,10 @@ def train_seeds(
             results[seed] = train_agent(out / f"seed-{seed}", seed_config, progress=progress)
         return results
     with (
-        ProcessPoolExecutor(max_workers=min(jobs, len(todo))) as pool,
+        # spawn, not fork: a forked child can deadlock on the parent's torch thread pools.
+        ProcessPoolExecutor(
+            max_workers=min(jobs, len(todo)), mp_context=multiprocessing.get_context("spawn")
+        ) as pool,
         tqdm(total=len(todo), unit="seed", disable=not progress) as bar,
     ):
         futures = [
