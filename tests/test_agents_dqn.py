@@ -81,11 +81,13 @@ def test_update_regresses_onto_the_masked_target_and_copies_the_target_net() -> 
     # The target network is copied at update 0 and 2, not at update 1.
     learner.update(rng)
     stale = [p.clone() for p in learner.target_net.parameters()]
-    assert any(not torch.equal(a, b) for a, b in zip(stale, learner.q_net.parameters()))
+    assert any(
+        not torch.equal(a, b) for a, b in zip(stale, learner.q_net.parameters(), strict=True)
+    )
     learner.update(rng)
     assert all(
         torch.equal(a, b)
-        for a, b in zip(learner.target_net.parameters(), learner.q_net.parameters())
+        for a, b in zip(learner.target_net.parameters(), learner.q_net.parameters(), strict=True)
     )
 
 
@@ -166,9 +168,9 @@ def test_same_seed_same_weights_and_self_play_runs() -> None:
         return list(learner.q_net.state_dict().values())
 
     first, again = weights(4, "self"), weights(4, "self")
-    assert all(torch.equal(a, b) for a, b in zip(first, again))
+    assert all(torch.equal(a, b) for a, b in zip(first, again, strict=True))
     other = weights(5, "self")
-    assert not all(torch.equal(a, b) for a, b in zip(first, other))
+    assert not all(torch.equal(a, b) for a, b in zip(first, other, strict=True))
     with pytest.raises(ValueError, match="opponent"):
         train_dqn(SMALL, hands=10, seed=0, opponent="nobody")
 
