@@ -190,8 +190,6 @@ def agent_train(
                 self_play_every=self_play_every,
             ),
         )
-        if config.reward == "learned" and config.reward_run is None:
-            fail("--reward learned needs --reward-run RUN_DIR")
         if seeds is None:
             summary = train_agent(out, config, progress=not quiet)
             lines = {seed: summary}

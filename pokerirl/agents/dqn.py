@@ -227,9 +227,8 @@ class GreedyQAgent:
             return self.network(torch.from_numpy(np.asarray(obs)).float()).numpy()
 
     def act(self, obs: np.ndarray, legal_mask: np.ndarray, rng: np.random.Generator) -> np.ndarray:
-        with torch.inference_mode():
-            q = self.network(torch.from_numpy(np.asarray(obs)).float())
-            return greedy_actions(q, torch.from_numpy(np.asarray(legal_mask, bool))).numpy()
+        q = torch.from_numpy(self.q_values(obs))
+        return greedy_actions(q, torch.from_numpy(np.asarray(legal_mask, bool))).numpy()
 
 
 @dataclass(kw_only=True)
@@ -303,7 +302,6 @@ def train_dqn(
     opponent: Agent | str,
     reward_fn: RewardFn | None = None,
     payoff_weight: float = 0.0,
-    learner: DQNLearner | None = None,
     progress: bool = False,
     on_hands: Callable[[int, DQNLearner], None] | None = None,
 ) -> DQNLearner:
@@ -319,7 +317,6 @@ def train_dqn(
         reward_fn: ``None`` for the sparse payoff; else f_θ, called once per lock-step on
             every learner decision of the step, with exactly the (obs, action) it took.
         payoff_weight: w in ``(1 - w) f(s, a) + w * payoff``; ignored when sparse.
-        learner: continue training this learner instead of a fresh one.
         progress: show a tqdm bar over hands on stderr.
         on_hands: called as ``on_hands(hands_done, learner)`` after every lock-step batch.
     """
@@ -332,8 +329,7 @@ def train_dqn(
     torch.manual_seed(seed)
     streams = np.random.SeedSequence(seed, spawn_key=(TRAIN_STREAM,)).spawn(2)
     rng, opponent_rng = (np.random.Generator(np.random.PCG64(s)) for s in streams)
-    if learner is None:
-        learner = DQNLearner.create(config)
+    learner = DQNLearner.create(config)
     self_play = opponent == SELF_PLAY
     rival = learner.greedy_agent("self") if self_play else opponent
     explore = RandomAgent()

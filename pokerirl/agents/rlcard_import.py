@@ -90,7 +90,10 @@ def load_rlcard_dqn(path: str | os.PathLike[str]) -> GreedyQAgent:
     Raises:
         ValueError: one line, for a missing, unreadable or non-limit-hold'em checkpoint.
     """
-    path = Path(path)
+    return _agent_and_checkpoint(Path(path))[0]
+
+
+def _agent_and_checkpoint(path: Path) -> tuple[GreedyQAgent, dict[str, Any]]:
     checkpoint = _read_checkpoint(path)
     estimator = checkpoint["q_estimator"]
     network = QNetwork(hidden=tuple(estimator["mlp_layers"]))
@@ -99,9 +102,10 @@ def load_rlcard_dqn(path: str | os.PathLike[str]) -> GreedyQAgent:
     except (RuntimeError, ValueError) as error:
         raise ValueError(f"{path}: q-network does not fit: {str(error).splitlines()[0]}") from None
     digest = hashlib.sha256(path.read_bytes()).hexdigest()
-    return GreedyQAgent(
+    agent = GreedyQAgent(
         name=f"{RLCARD_PREFIX}{path}", network=network.eval(), fingerprint=f"sha256:{digest}"
     )
+    return agent, checkpoint
 
 
 def import_rlcard_dqn(path: str | os.PathLike[str], out: str | os.PathLike[str]) -> Path:
@@ -110,9 +114,7 @@ def import_rlcard_dqn(path: str | os.PathLike[str], out: str | os.PathLike[str])
     The folder then loads with :func:`pokerirl.agents.load_agent` (no pickle) and works
     anywhere an agent name does. Returns ``out``.
     """
-    path = Path(path)
-    agent = load_rlcard_dqn(path)
-    checkpoint = _read_checkpoint(path)
+    agent, checkpoint = _agent_and_checkpoint(Path(path))
     config = {
         "hidden": list(checkpoint["q_estimator"]["mlp_layers"]),
         "source": {"kind": "rlcard-1.2.0-dqn", "path": str(path), "fingerprint": agent.fingerprint},

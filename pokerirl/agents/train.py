@@ -173,16 +173,16 @@ def train_agent(
 ) -> dict[str, Any]:
     """Train one agent into the folder ``out``; return the last evaluation's metrics line.
 
-    ``reward_fn`` overrides loading f_θ from ``config.reward_run`` (learned mode needs one of
-    the two). The checkpoint and ``config.json`` are written last, atomically.
+    In learned mode, ``reward_fn`` is f_θ; without it, f_θ is loaded from
+    ``config.reward_run``. The checkpoint and ``config.json`` are written last, atomically.
     """
     out = Path(out)
-    if config.reward == "learned" and reward_fn is None:
+    if config.reward == "sparse":
+        reward_fn = None
+    elif reward_fn is None:
         if config.reward_run is None:
             raise ValueError("--reward learned needs --reward-run RUN_DIR")
         reward_fn = load_reward_fn(config.reward_run)
-    if config.reward == "sparse":
-        reward_fn = None
     run_fingerprint = (
         reward_run_fingerprint(config.reward_run) if config.reward_run is not None else None
     )
@@ -274,17 +274,20 @@ def train_seeds(
     """Train one agent per seed into ``<out>/seed-<k>`` with up to ``jobs`` processes.
 
     Seeds whose folder is finished are skipped (their value is ``None``); the others map to
-    their last evaluation. With one job, the progress bar counts hands; with more, seeds.
+    their last evaluation. With one job, a progress bar per seed counts hands; with more, one
+    bar counts seeds.
     """
     if jobs < 1:
         raise ValueError(f"jobs must be at least 1, got {jobs}")
     out = Path(out)
     todo = [s for s in seeds if not is_finished(out / f"seed-{s}")]
     results: dict[int, dict[str, Any] | None] = {s: None for s in seeds if s not in todo}
-    if config.reward == "learned" and config.reward_run is not None:
-        reward_run_fingerprint(config.reward_run)  # fail before starting any process
+    if config.reward == "learned":  # fail before starting any process
+        if config.reward_run is None:
+            raise ValueError("--reward learned needs --reward-run RUN_DIR")
+        reward_run_fingerprint(config.reward_run)
     if jobs == 1 or len(todo) <= 1:
-        for seed in tqdm(todo, unit="seed", disable=not progress or len(todo) <= 1):
+        for seed in todo:
             seed_config = dataclasses.replace(config, seed=seed)
             results[seed] = train_agent(out / f"seed-{seed}", seed_config, progress=progress)
         return results
