@@ -103,6 +103,11 @@ def test_bad_agent_folders_give_one_line_errors(trained: Path, tmp_path: Path) -
     with pytest.raises(ValueError, match="cannot load agent") as error:
         load_agent(tmp_path)
     assert "\n" not in str(error.value)
+    (tmp_path / "config.json").write_text(json.dumps(record))
+    (tmp_path / "model.pt").write_bytes(b"not a torch file")
+    with pytest.raises(ValueError, match="cannot load agent") as error:
+        load_agent(tmp_path)
+    assert "\n" not in str(error.value)
 
 
 def rlcard_states(env: Any, hands: int) -> list[dict[str, Any]]:

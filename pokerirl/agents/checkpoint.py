@@ -17,9 +17,11 @@ last, so a folder with both is finished. Training also writes ``metrics.jsonl`` 
 from __future__ import annotations
 
 import hashlib
+import io
 import json
 import os
 from pathlib import Path
+from pickle import UnpicklingError
 from typing import Any
 
 import torch
@@ -37,7 +39,7 @@ def is_finished(folder: str | os.PathLike[str]) -> bool:
     return (Path(folder) / MODEL_FILE).is_file() and (Path(folder) / CONFIG_FILE).is_file()
 
 
-def write_atomic(path: Path, data: bytes) -> None:
+def _write_atomic(path: Path, data: bytes) -> None:
     """Write ``data`` to a temporary file beside ``path``, then rename it over ``path``."""
     tmp = path.with_name(f".{path.name}.tmp")
     tmp.write_bytes(data)
@@ -51,11 +53,11 @@ def save_agent(folder: str | os.PathLike[str], network: QNetwork, config: dict[s
     """
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
-    tmp = folder / f".{MODEL_FILE}.tmp"
-    torch.save({k: v.detach().cpu().clone() for k, v in network.state_dict().items()}, tmp)
-    os.replace(tmp, folder / MODEL_FILE)
+    weights = io.BytesIO()
+    torch.save({k: v.detach().cpu().clone() for k, v in network.state_dict().items()}, weights)
+    _write_atomic(folder / MODEL_FILE, weights.getvalue())
     record = {"format": FORMAT, "version": FORMAT_VERSION, **config}
-    write_atomic(folder / CONFIG_FILE, (json.dumps(record, indent=2) + "\n").encode())
+    _write_atomic(folder / CONFIG_FILE, (json.dumps(record, indent=2) + "\n").encode())
 
 
 def folder_fingerprint(folder: str | os.PathLike[str]) -> str:
@@ -83,7 +85,7 @@ def load_agent(folder: str | os.PathLike[str]) -> GreedyQAgent:
             raise ValueError(f"format is {config.get('format')!r}, not {FORMAT!r}")
         network = QNetwork(hidden=tuple(config["hidden"]))
         network.load_state_dict(torch.load(folder / MODEL_FILE, weights_only=True))
-    except (ValueError, KeyError, TypeError, RuntimeError, OSError) as error:
+    except (ValueError, KeyError, TypeError, RuntimeError, OSError, UnpicklingError) as error:
         first_line = str(error).strip().splitlines()[0] if str(error).strip() else repr(error)
         raise ValueError(f"{folder}: cannot load agent: {first_line}") from None
     return GreedyQAgent(

@@ -33,7 +33,9 @@ import numpy as np
 import torch
 from tqdm import tqdm
 
+from pokerirl import __version__
 from pokerirl.agents.checkpoint import (
+    CONFIG_FILE,
     CURVE_FILE,
     METRICS_FILE,
     is_finished,
@@ -194,8 +196,9 @@ def train_agent(
         opponents[config.opponent] = opponent
 
     out.mkdir(parents=True, exist_ok=True)
+    (out / CONFIG_FILE).unlink(missing_ok=True)  # unfinished until the new one is written
     metrics_path = out / METRICS_FILE
-    metrics_path.write_text("")  # a restarted, unfinished run starts its metrics afresh
+    metrics_path.write_text("")  # a restarted run starts its metrics afresh
     metrics: list[dict[str, Any]] = []
     started = time.perf_counter()
     next_eval = min(config.eval_every, config.hands)
@@ -210,7 +213,7 @@ def train_agent(
             "transitions": learner.total_t,
             "updates": learner.train_t,
             "epsilon": epsilon_at(config.dqn, learner.total_t),
-            "loss": learner.last_loss,
+            "loss": None if np.isnan(learner.last_loss) else learner.last_loss,  # JSON has no NaN
             "seconds": round(time.perf_counter() - started, 3),
             "eval": _evaluate(learner, opponents, config),
         }
@@ -229,8 +232,6 @@ def train_agent(
         progress=progress,
         on_hands=evaluate,
     )
-    from pokerirl import __version__
-
     record = {
         "hidden": list(config.dqn.hidden),
         "source": {"kind": "pokerirl-dqn", "version": __version__, "torch": torch.__version__},
