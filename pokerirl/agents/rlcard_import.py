@@ -37,7 +37,8 @@ def _read_checkpoint(path: Path) -> dict[str, Any]:
         # whose unpickling imports rlcard.agents, which runs `pip freeze`: about 3 s).
         checkpoint = torch.load(path, map_location="cpu", weights_only=False)
     except Exception as error:  # noqa: BLE001 - any unpickling failure is a bad file
-        raise ValueError(f"{path}: cannot read RLCard checkpoint: {error}") from None
+        reason = (str(error).strip() or repr(error)).splitlines()[0]
+        raise ValueError(f"{path}: cannot read RLCard checkpoint: {reason}") from None
     if not isinstance(checkpoint, dict) or checkpoint.get("agent_type") != "DQNAgent":
         raise ValueError(f"{path}: not an RLCard DQNAgent checkpoint")
     estimator = checkpoint["q_estimator"]
