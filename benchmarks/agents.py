@@ -8,10 +8,12 @@ Prints training decisions (stored transitions) per second of
   transition, its ``DQNAgent`` defaults (one update per transition), against its
   ``RandomAgent`` (the loop of RLCard's ``examples/run_rl.py``);
 * :func:`pokerirl.agents.dqn.train_dqn` against random, with our defaults
-  (``train_every=16``) and with RLCard's ``train_every=1`` (the same updates per decision);
+  (``train_every=16``, 1,024 concurrent hands) and with RLCard's ``train_every=1`` (the
+  same updates per decision);
 
-and each one's ratio to RLCard. Both run on one CPU thread. Only ratios measured in one run
-are comparable; the machine may be shared.
+and each one's ratio to RLCard, by wall-clock and by CPU time (the steadier of the two on a
+shared machine). Both run on one CPU thread; RLCard's hands are split before and after ours.
+Only ratios measured in one run are comparable.
 
 Then the quality check of the default run (``--hands`` sparse-reward hands against random,
 seed ``--seed``): its greedy policy and always-call, each against random over
@@ -31,7 +33,8 @@ import contextlib  # noqa: E402
 import dataclasses  # noqa: E402
 import io  # noqa: E402
 import time  # noqa: E402
-from typing import Any  # noqa: E402
+from collections.abc import Iterator  # noqa: E402
+from dataclasses import dataclass  # noqa: E402
 
 import numpy as np  # noqa: E402
 import torch  # noqa: E402
@@ -40,37 +43,53 @@ from pokerirl.agents.dqn import DQNConfig, train_dqn  # noqa: E402
 from pokerirl.game import make_agent, play_match  # noqa: E402
 
 
-def rlcard_decisions_per_second(hands: int, seed: int) -> float:
-    """RLCard's DQN training loop on limit hold'em: stored transitions per second."""
-    import rlcard
+@dataclass
+class Tally:
+    """Decisions and the wall-clock and CPU seconds they took."""
 
-    # Imported late: `import rlcard.agents` runs `pip freeze` (about 3 s) in RLCard 1.2.0.
-    from rlcard.agents import DQNAgent, RandomAgent
-    from rlcard.utils import reorganize, set_seed
+    decisions: int = 0
+    wall: float = 0.0
+    cpu: float = 0.0
 
-    env = rlcard.make("limit-holdem", config={"seed": seed})
-    set_seed(seed)
-    agent = DQNAgent(num_actions=4, state_shape=[72], mlp_layers=[64, 64], device="cpu")
-    env.set_agents([agent, RandomAgent(num_actions=4)])
-    decisions = 0
-    # DQNAgent.train prints a line per update; discard it rather than time the terminal.
-    with contextlib.redirect_stdout(io.StringIO()) as sink:
-        started = time.perf_counter()
-        for _ in range(hands):
-            trajectories, payoffs = env.run(is_training=True)
-            for transition in reorganize(trajectories, payoffs)[0]:
-                agent.feed(transition)
-                decisions += 1
-            sink.seek(0)
-            sink.truncate()
-        seconds = time.perf_counter() - started
-    return decisions / seconds
+    @contextlib.contextmanager
+    def timing(self) -> Iterator[None]:
+        wall, cpu = time.perf_counter(), time.process_time()
+        yield
+        self.wall += time.perf_counter() - wall
+        self.cpu += time.process_time() - cpu
+
+    def rates(self) -> tuple[float, float]:
+        return self.decisions / self.wall, self.decisions / self.cpu
 
 
-def ours_decisions_per_second(config: DQNConfig, hands: int, seed: int) -> tuple[float, Any]:
-    started = time.perf_counter()
-    learner = train_dqn(config, hands=hands, seed=seed, opponent=make_agent("random"))
-    return learner.total_t / (time.perf_counter() - started), learner
+class RLCardLoop:
+    """RLCard's DQN training loop on limit hold'em (``examples/run_rl.py``), resumable."""
+
+    def __init__(self, seed: int) -> None:
+        import rlcard
+
+        # Imported late: `import rlcard.agents` runs `pip freeze` (about 3 s) in RLCard 1.2.0.
+        from rlcard.agents import DQNAgent, RandomAgent
+        from rlcard.utils import set_seed
+
+        self.env = rlcard.make("limit-holdem", config={"seed": seed})
+        set_seed(seed)
+        self.agent = DQNAgent(num_actions=4, state_shape=[72], mlp_layers=[64, 64], device="cpu")
+        self.env.set_agents([self.agent, RandomAgent(num_actions=4)])
+        self.tally = Tally()
+
+    def train(self, hands: int) -> None:
+        from rlcard.utils import reorganize
+
+        # DQNAgent.train prints a line per update; discard it rather than time the terminal.
+        with contextlib.redirect_stdout(io.StringIO()) as sink, self.tally.timing():
+            for _ in range(hands):
+                trajectories, payoffs = self.env.run(is_training=True)
+                for transition in reorganize(trajectories, payoffs)[0]:
+                    self.agent.feed(transition)
+                    self.tally.decisions += 1
+                sink.seek(0)
+                sink.truncate()
 
 
 def main() -> None:
@@ -83,22 +102,37 @@ def main() -> None:
     torch.set_num_threads(1)
     np.random.seed(args.seed)
 
-    rlcard_rate = rlcard_decisions_per_second(args.rlcard_hands, args.seed)
-    print(f"RLCard DQNAgent (train_every=1): {rlcard_rate:10,.0f} decisions/s")
+    # RLCard runs half before and half after ours, so a change in machine load hits both.
+    rlcard_loop = RLCardLoop(args.seed)
+    rlcard_loop.train(args.rlcard_hands // 2)
     default = DQNConfig()
-    learners = []
+    runs = {}
     for label, config in (
         (f"pokerirl train_dqn (train_every={default.train_every})", default),
         ("pokerirl train_dqn (train_every=1)", dataclasses.replace(default, train_every=1)),
     ):
         hands = args.hands if config.train_every > 1 else args.hands // 10
-        rate, learner = ours_decisions_per_second(config, hands, args.seed)
-        learners.append(learner)
-        print(f"{label + ':':40s} {rate:10,.0f} decisions/s  ({rate / rlcard_rate:5.1f}x RLCard)")
+        tally = Tally()
+        with tally.timing():
+            learner = train_dqn(config, hands=hands, seed=args.seed, opponent=make_agent("random"))
+        tally.decisions = learner.total_t
+        runs[label] = (tally, learner)
+    rlcard_loop.train(args.rlcard_hands - args.rlcard_hands // 2)
+
+    rlcard_wall, rlcard_cpu = rlcard_loop.tally.rates()
+    print(f"{'':40s} {'wall':>10s} {'CPU':>10s}  decisions/s, ratio to RLCard (wall, CPU)")
+    print(f"{'RLCard DQNAgent (train_every=1):':40s} {rlcard_wall:10,.0f} {rlcard_cpu:10,.0f}")
+    for label, (tally, _) in runs.items():
+        wall, cpu = tally.rates()
+        print(
+            f"{label + ':':40s} {wall:10,.0f} {cpu:10,.0f}"
+            f"  {wall / rlcard_wall:5.1f}x {cpu / rlcard_cpu:5.1f}x"
+        )
 
     random = make_agent("random")
+    default_learner = next(iter(runs.values()))[1]
     for label, agent in (
-        (f"sparse DQN, {args.hands:,} hands (defaults)", learners[0].greedy_agent()),
+        (f"sparse DQN, {args.hands:,} hands (defaults)", default_learner.greedy_agent()),
         ("always-call", make_agent("call")),
     ):
         result = play_match(agent, random, hands=args.eval_hands, seed=args.seed + 1)

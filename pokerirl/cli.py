@@ -163,7 +163,7 @@ def agent_train(
     eval_hands: int = typer.Option(20_000, help="Duplicate hands per evaluation (even)."),
     eval_seed: int = typer.Option(1_000_003, help="Deal seed of every evaluation."),
     train_every: int = typer.Option(16, help="Stored transitions per gradient update."),
-    concurrent_hands: int = typer.Option(256, help="Hands played in lock-step."),
+    concurrent_hands: int = typer.Option(1024, help="Hands played in lock-step."),
     learning_rate: float = typer.Option(5e-5, help="Adam learning rate."),
     self_play_every: int = typer.Option(1_000, help="Updates between refreshes of 'self'."),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bar."),

@@ -47,11 +47,11 @@ class DQNConfig:
     """Hyper-parameters; RLCard's ``DQNAgent`` defaults except where noted.
 
     ``train_every`` (RLCard: 1) is the number of stored transitions per gradient update. A
-    32-sample update (~0.8 ms on a CPU core) costs some 40 times more than playing a decision
-    on the engine, so with RLCard's one update per transition, training would run at RLCard's
-    speed. 16 still replays each transition twice on average (batch 32 / 16), and 50,000
-    sparse-reward hands against random reach about +2,700 mbb/h, more than twice always-call's
-    +1,170 (the sweep over 1, 8, 16, 32, 128 is in ``docs/agents.md``).
+    32-sample update (~0.8 ms on a CPU core) costs a hundred times more than playing a
+    decision on the engine, so with RLCard's one update per transition, training would run
+    at RLCard's speed. 16 still replays each transition twice on average (batch 32 / 16),
+    and 50,000 sparse-reward hands against random reach about +2,700 mbb/h, more than twice
+    always-call's +1,170 (the sweep over 1, 8, 16, 32, 128 is in ``docs/agents.md``).
 
     ``concurrent_hands`` hands are played in lock-step: all decisions of one step are taken by
     one forward pass with the same network and epsilon.
@@ -68,7 +68,7 @@ class DQNConfig:
     epsilon_decay_steps: int = 20_000  # in stored transitions, as RLCard's total_t
     target_update_every: int = 1_000  # in updates
     train_every: int = 16
-    concurrent_hands: int = 256
+    concurrent_hands: int = 1024
     self_play_every: int = 1_000  # in updates: refresh of the frozen copy with opponent "self"
 
     def __post_init__(self) -> None:
