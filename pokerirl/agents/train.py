@@ -132,7 +132,9 @@ def parse_seeds(text: str) -> list[int]:
     return seeds
 
 
-def _evaluate(learner: DQNLearner, opponents: dict[str, Any], config: TrainConfig) -> dict:
+def _evaluate(
+    learner: DQNLearner, opponents: dict[str, Any], config: TrainConfig
+) -> dict[str, dict[str, float]]:
     greedy = learner.greedy_agent()
     results = {}
     for label, opponent in opponents.items():
@@ -283,15 +285,18 @@ def train_seeds(
     out = Path(out)
     todo = [s for s in seeds if not is_finished(out / f"seed-{s}")]
     results: dict[int, dict[str, Any] | None] = {s: None for s in seeds if s not in todo}
-    if config.reward == "learned":  # fail before starting any process
+    # Fail on bad input before any process starts.
+    if config.reward == "learned":
         if config.reward_run is None:
             raise ValueError("--reward learned needs --reward-run RUN_DIR")
         reward_run_fingerprint(config.reward_run)
+    if config.opponent != SELF_PLAY:
+        resolve_agent(config.opponent)
     if jobs == 1 or len(todo) <= 1:
         for seed in todo:
             seed_config = dataclasses.replace(config, seed=seed)
             results[seed] = train_agent(out / f"seed-{seed}", seed_config, progress=progress)
-        return results
+        return {s: results[s] for s in seeds}
     with (
         # spawn, not fork: a forked child can deadlock on the parent's torch thread pools.
         ProcessPoolExecutor(
@@ -307,4 +312,4 @@ def train_seeds(
             seed, summary = future.result()
             results[seed] = summary
             bar.update(1)
-    return results
+    return {s: results[s] for s in seeds}
