@@ -297,3 +297,13 @@ def test_inconsistent_hands_are_counted_with_a_reason(
     assert summary["dropped"]["inconsistent_hand"] == 1
     assert summary["inconsistent_reasons"] == {reason: 1}
     assert summary["kept_hands"] == 4 and summary["buckets_add_up"]
+
+
+def test_stakes_come_from_the_channel(tmp_path: Path) -> None:
+    folder = write_month(tmp_path / "irc", channel="holdem2")  # 20-40: big blind of 20 chips
+    out = tmp_path / "t.parquet"
+    ingest([folder], out)
+    rows = rows_of(out, ZED_FIRST)
+    assert rows["hand_id"][0] == f"holdem2/199504/{ZED_FIRST}"
+    assert rows["big_blind"][0] == 20
+    assert rows["payoff_bb"][:2] == [-2.0, 2.0]  # 40 chips lost at 20 a big blind
