@@ -38,8 +38,8 @@ import torch
 from torch import Tensor
 from tqdm.auto import tqdm
 
-from pokerirl.irl.optim import FlatAdam
 from pokerirl.irl.nets import DiscretePolicy, GaussianPolicy, Policy, RewardNet
+from pokerirl.irl.optim import FlatAdam
 
 Algo = Literal["airl", "hairl"]
 ALGOS: tuple[str, ...] = ("airl", "hairl")

@@ -32,7 +32,7 @@ import numpy as np
 import torch
 from torch import Tensor
 
-from pokerirl.irl.airl import AIRLConfig, ExpertData, TrainResult, samples_per_second, train
+from pokerirl.irl.airl import AIRLConfig, TrainResult, samples_per_second, train
 from pokerirl.irl.nets import DiscretePolicy, GaussianPolicy, Policy, RewardNet
 from pokerirl.irl.plots import plot_curves
 from pokerirl.irl.table import read_expert_table, split_by_hand
@@ -305,4 +305,3 @@ def _save_state_dict(module: torch.nn.Module, path: Path) -> None:
     tmp = path.with_name(f".{path.name}.tmp")
     torch.save(state, tmp)
     os.replace(tmp, path)
-

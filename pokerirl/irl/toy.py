@@ -1,9 +1,10 @@
 """A toy expert decision table with a known rule, for tests, benchmarks and examples.
 
 It has the schema ``pokerirl ingest`` writes, so the trainer can be exercised without real
-hand histories. The expert's rule depends on the observation only through the hole cards:
-raise with a pair or two high cards (T or better) when raising is legal; otherwise check
-when checking is legal, else call. Folds never appear, as in the real tables.
+hand histories. The expert's rule is a function of the observation (and the legal actions):
+raise when more than half of the visible cards (hole and board) are T or better and raising
+is legal; otherwise check when checking is legal, else call. Folds never appear, as in the
+real tables.
 
 >>> table = toy_expert_table(num_hands=50, seed=1)
 >>> table.num_rows > 50, table.schema.field("obs").type
@@ -22,6 +23,7 @@ from pokerirl.encoding import (
     FOLD,
     MAX_RAISES,
     NUM_ACTIONS,
+    NUM_CARDS,
     RAISE,
     encode_obs,
 )
@@ -29,17 +31,23 @@ from pokerirl.encoding import (
 HIGH_RANKS = (0, 9, 10, 11, 12)  # A, T, J, Q, K in the encoding's rank order
 
 
-def toy_expert_rule(hole_cards: np.ndarray, legal_mask: np.ndarray) -> np.ndarray:
-    """Action ids of the toy expert for (N, 2) hole cards and (N, 4) legal masks."""
-    ranks = hole_cards % 13
-    high = np.isin(ranks, HIGH_RANKS)
-    strong = (ranks[:, 0] == ranks[:, 1]) | (high[:, 0] & high[:, 1])
+def toy_expert_rule(obs: np.ndarray, legal_mask: np.ndarray) -> np.ndarray:
+    """Action ids of the toy expert for (N, 72) observations and (N, 4) legal masks."""
+    cards = obs[:, :NUM_CARDS].astype(bool)
+    high = np.isin(np.arange(NUM_CARDS) % 13, HIGH_RANKS)
+    strong = 2 * (cards & high).sum(axis=1) > cards.sum(axis=1)
     passive = np.where(legal_mask[:, CHECK], CHECK, CALL)
     return np.where(strong & legal_mask[:, RAISE], RAISE, passive).astype(np.int8)
 
 
-def toy_expert_table(*, num_hands: int, seed: int = 0, max_decisions: int = 4) -> pa.Table:
-    """``num_hands`` hands of 1..``max_decisions`` expert decisions each, as an Arrow table."""
+def toy_expert_table(
+    *, num_hands: int, seed: int = 0, max_decisions: int = 4, slip: float = 0.0
+) -> pa.Table:
+    """``num_hands`` hands of 1..``max_decisions`` expert decisions each, as an Arrow table.
+
+    With probability ``slip`` a decision is a uniformly random legal non-fold action instead
+    of the rule's, like a human expert's inconsistency.
+    """
     rng = np.random.default_rng(seed)
     decisions = rng.integers(1, max_decisions + 1, size=num_hands)
     hand = np.repeat(np.arange(num_hands), decisions)
@@ -60,7 +68,12 @@ def toy_expert_table(*, num_hands: int, seed: int = 0, max_decisions: int = 4) -
     legal[:, CALL] = facing_bet
     legal[:, CHECK] = ~facing_bet
     legal[:, RAISE] = raise_nums[np.arange(n), street] < MAX_RAISES
-    action_id = toy_expert_rule(cards[:, :2], legal)
+    action_id = toy_expert_rule(obs, legal)
+    # A random legal non-fold action: rank random keys, illegal and fold ones last.
+    keys = np.where(legal, rng.random((n, NUM_ACTIONS)), -1.0)
+    keys[:, FOLD] = -1.0
+    slipped = rng.random(n) < slip
+    action_id[slipped] = keys[slipped].argmax(axis=1)
 
     is_last = np.r_[hand[1:] != hand[:-1], True]
     payoff = np.round(rng.normal(0.0, 3.0, size=num_hands), 1).astype(np.float32)[hand]
@@ -88,4 +101,3 @@ def toy_expert_table(*, num_hands: int, seed: int = 0, max_decisions: int = 4) -
 def _fixed(matrix: np.ndarray, value_type: pa.DataType) -> pa.FixedSizeListArray:
     flat = pa.array(matrix.reshape(-1), value_type)
     return pa.FixedSizeListArray.from_arrays(flat, matrix.shape[1])
-
