@@ -86,4 +86,4 @@ def train(
         f"{last['val_alignment']:.3f} vs majority {last['majority_alignment']:.3f} "
         f"on {summary.val_rows} rows"
     )
-    typer.echo(f"wrote {summary.out_dir}/ (reward.pt, policy.pt, config.json, metrics.jsonl, *.png)")
+    typer.echo(f"wrote {summary.out_dir}: reward.pt, policy.pt, config.json, metrics, plots")
