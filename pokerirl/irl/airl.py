@@ -254,8 +254,14 @@ class TrainResult:
     config: AIRLConfig
     beta_used: float  # β actually used: 0 when the data has no rewards
     metrics: list[dict[str, Any]] = field(default_factory=list)
-    train_seconds: float = 0.0
-    samples_seen: int = 0
+    epoch_seconds: list[float] = field(default_factory=list)  # optimization only, no evaluation
+    samples_per_epoch: int = 0
+
+    @property
+    def samples_per_second(self) -> float:
+        """Training throughput: expert samples per second of optimization steps."""
+        seconds = sum(self.epoch_seconds)
+        return self.samples_per_epoch * len(self.epoch_seconds) / seconds if seconds else math.nan
 
 
 # Per-step sums kept on a tensor so the loop never syncs with .item().
@@ -328,13 +334,19 @@ def train(
     n, batch_size = len(data), min(config.batch_size, len(data))
     steps_per_epoch = n // batch_size  # drop the ragged tail; the next shuffle covers it
     full_sigma = noise_schedule(batch_size, config.sigma_start, config.sigma_end).to(device)
-    result = TrainResult(reward_net=reward_net, policy=policy, config=config, beta_used=beta)
+    result = TrainResult(
+        reward_net=reward_net,
+        policy=policy,
+        config=config,
+        beta_used=beta,
+        samples_per_epoch=steps_per_epoch * batch_size,
+    )
 
-    start = time.perf_counter()
     bar = tqdm(range(1, config.epochs + 1), desc="train", unit="epoch", disable=not progress)
     for epoch in bar:
         reward_net.train()
         policy.train()
+        start = time.perf_counter()
         sums = torch.zeros(len(_STEP_METRICS), device=device)
         # Shuffle once per epoch with one gather; batches are then contiguous slices.
         shuffled = data.subset(torch.randperm(n, generator=gen, device=device))
@@ -357,9 +369,11 @@ def train(
                 pi_detached = pi_out.detach()
                 log_pi_expert = policy.log_prob(pi_detached, expert_action)
                 log_pi_noisy = policy.log_prob(pi_detached, noisy)
-            features = reward_net.state_features(obs)  # shared by both action vectors
-            f_expert = reward_net.from_features(features, expert_action)
-            f_noisy = reward_net.from_features(features, noisy)
+            # One pass scores both action vectors; the state half of layer one is shared.
+            f_both = reward_net.from_features(
+                reward_net.state_features(obs), torch.cat((expert_action, noisy))
+            )
+            f_expert, f_noisy = f_both[:batch_size], f_both[batch_size:]
             d_loss, d_airl = discriminator_loss(
                 f_expert,
                 log_pi_expert,
@@ -392,11 +406,11 @@ def train(
                     )
                 )
 
-        means = (sums / max(steps_per_epoch, 1)).tolist()
+        means = (sums / max(steps_per_epoch, 1)).tolist()  # the epoch's only sync
+        result.epoch_seconds.append(time.perf_counter() - start)
         metrics: dict[str, Any] = {"epoch": epoch, **dict(zip(_STEP_METRICS, means, strict=True))}
         metrics.update(evaluate(policy, val, majority_from=data))
         result.metrics.append(metrics)
-        result.samples_seen += steps_per_epoch * batch_size
         if on_epoch is not None:
             on_epoch(metrics)
         if "val_alignment" in metrics:
@@ -404,7 +418,6 @@ def train(
                 align=f"{metrics['val_alignment']:.3f}", d_loss=f"{metrics['disc_loss']:.3f}"
             )
     bar.close()
-    result.train_seconds = time.perf_counter() - start
     reward_net.eval()
     policy.eval()
     return result
@@ -461,8 +474,3 @@ def resolve_device(device: str | torch.device) -> torch.device:
     if resolved.type not in ("cpu", "cuda"):
         raise ValueError(f"unsupported device {device!r}; use cpu or cuda")
     return resolved
-
-
-def samples_per_second(result: TrainResult) -> float:
-    """Training throughput of a finished run (expert samples per wall-clock second)."""
-    return result.samples_seen / result.train_seconds if result.train_seconds else math.nan

@@ -40,28 +40,35 @@ def build_mlp(in_dim: int, hidden: Sequence[int], out_dim: int) -> nn.Sequential
 class RewardNet(nn.Module):
     """f_θ(s, a): an MLP over the state concatenated with an action vector, giving a scalar.
 
-    The first layer is applied as ``W_s s + W_a a`` (the same linear map as on the
-    concatenation) so callers can share the state half between several action vectors.
+    The first layer is kept as two linear maps, ``W_s s + b`` and ``W_a a``: the same map as
+    one layer on the concatenation, but the state half can be shared between the several
+    action vectors that the discriminator scores at each state.
     """
 
     def __init__(self, *, obs_dim: int, action_dim: int, hidden: Sequence[int] = (64,)) -> None:
         super().__init__()
+        if not hidden:
+            raise ValueError("RewardNet needs at least one hidden layer")
         self.obs_dim = obs_dim
         self.action_dim = action_dim
-        self.mlp = build_mlp(obs_dim + action_dim, hidden, 1)
+        self.obs_layer = nn.Linear(obs_dim, hidden[0])
+        self.action_layer = nn.Linear(action_dim, hidden[0], bias=False)
+        self.head = build_mlp(hidden[0], hidden[1:], 1)
 
     def state_features(self, obs: Tensor) -> Tensor:
         """The state half of the first layer, ``W_s s + b`` (pre-activation)."""
-        first = self.mlp[0]
-        return F.linear(obs, first.weight[:, : self.obs_dim], first.bias)
+        return self.obs_layer(obs)
 
     def from_features(self, features: Tensor, action: Tensor) -> Tensor:
-        """Finish f from ``state_features(obs)`` and an action vector: (B,) rewards."""
-        first = self.mlp[0]
-        hidden = features + action @ first.weight[:, self.obs_dim :].T
-        if len(self.mlp) == 1:  # no hidden layer: the first layer is the output
-            return hidden.squeeze(-1)
-        return self.mlp[1:](hidden).squeeze(-1)
+        """Finish f from ``state_features(obs)`` and action vectors: (B,) rewards.
+
+        ``action`` may hold k action vectors per state stacked as (k·B, action_dim).
+        """
+        repeats = len(action) // len(features)
+        if repeats > 1:
+            features = features.repeat(repeats, 1)
+        hidden = torch.relu(features + self.action_layer(action))
+        return self.head(hidden).squeeze(-1)
 
     def forward(self, obs: Tensor, action: Tensor) -> Tensor:
         return self.from_features(self.state_features(obs), action)

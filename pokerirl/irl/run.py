@@ -32,7 +32,7 @@ import numpy as np
 import torch
 from torch import Tensor
 
-from pokerirl.irl.airl import AIRLConfig, TrainResult, samples_per_second, train
+from pokerirl.irl.airl import AIRLConfig, TrainResult, train
 from pokerirl.irl.nets import DiscretePolicy, GaussianPolicy, Policy, RewardNet
 from pokerirl.irl.plots import plot_curves
 from pokerirl.irl.table import read_expert_table, split_by_hand
@@ -138,7 +138,7 @@ def train_table(
     return RunSummary(
         out_dir=out,
         metrics=result.metrics,
-        samples_per_second=samples_per_second(result),
+        samples_per_second=result.samples_per_second,
         train_rows=len(train_rows),
         val_rows=len(val_rows),
     )
@@ -179,7 +179,7 @@ def save_run(
         "versions": package_versions(),
         "result": {
             "epochs": len(result.metrics),
-            "samples_per_second": samples_per_second(result),
+            "samples_per_second": result.samples_per_second,
             "final_metrics": result.metrics[-1] if result.metrics else None,
         },
     }
