@@ -103,17 +103,23 @@ def main() -> None:
     data = expert.to_expert_data()
     val = data.subset(torch.arange(min(10_000, len(data))))
     config = AIRLConfig.for_algo("hairl", epochs=args.epochs, batch_size=256)
-    print(f"{len(data):,} rows, batch {config.batch_size}, hidden {config.reward_hidden}, "
-          f"{torch.get_num_threads()} threads, torch {torch.__version__}")
+    print(
+        f"{len(data):,} rows, batch {config.batch_size}, hidden {config.reward_hidden}, "
+        f"{torch.get_num_threads()} threads, torch {torch.__version__}"
+    )
 
     result = train(data, val, config=config, progress=False)
     ours = [result.samples_per_epoch / s for s in result.epoch_seconds]
-    print(f"pokerirl.irl.train : best {max(ours):>9,.0f}  median {statistics.median(ours):>9,.0f}"
-          f"  samples/s  ({len(ours)} epochs of {result.samples_per_epoch:,} samples)")
+    print(
+        f"pokerirl.irl.train : best {max(ours):>9,.0f}  median {statistics.median(ours):>9,.0f}"
+        f"  samples/s  ({len(ours)} epochs of {result.samples_per_epoch:,} samples)"
+    )
 
     peer = peer_samples_per_second(data, config, args.peer_batches)
-    print(f"per-row DataLoader : best {max(peer):>9,.0f}  median {statistics.median(peer):>9,.0f}"
-          f"  samples/s  ({len(peer)} windows, {args.peer_batches} batches)")
+    print(
+        f"per-row DataLoader : best {max(peer):>9,.0f}  median {statistics.median(peer):>9,.0f}"
+        f"  samples/s  ({len(peer)} windows, {args.peer_batches} batches)"
+    )
     print(f"ratio (median)     : {statistics.median(ours) / statistics.median(peer):.1f}x")
 
 

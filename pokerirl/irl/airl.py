@@ -245,6 +245,26 @@ def policy_loss(
 # --------------------------------------------------------------------------- training
 
 
+def discriminator_grad(
+    f: Tensor, log_pi: Tensor, *, beta: float = 0.0, env_reward: Tensor | None = None
+) -> Tensor:
+    """dL/df of :func:`discriminator_loss` for ``f`` = (expert rows, then as many policy rows).
+
+    With D = σ(f − log π): d/df of −log D is D − 1, of −log(1 − D) is D.
+    """
+    batch = len(f) // 2
+    grad = torch.sigmoid(f - log_pi)
+    grad[:batch] -= 1
+    if beta == 0.0 or env_reward is None:
+        return grad / batch
+    grad *= (1 - beta) / batch
+    grad[:batch] += (2 * beta / batch) * (f[:batch] - env_reward)
+    return grad
+
+
+# --------------------------------------------------------------------------- training
+
+
 @dataclass
 class TrainResult:
     """What :func:`train` returns: the trained nets and one metrics dict per epoch."""
@@ -262,20 +282,6 @@ class TrainResult:
         """Training throughput: expert samples per second of optimization steps."""
         seconds = sum(self.epoch_seconds)
         return self.samples_per_epoch * len(self.epoch_seconds) / seconds if seconds else math.nan
-
-
-# Per-step sums kept on a tensor so the loop never syncs with .item().
-_STEP_METRICS = (
-    "disc_loss",
-    "disc_airl_loss",
-    "policy_loss",
-    "policy_adv_loss",
-    "policy_sup_loss",
-    "disc_acc_expert",
-    "disc_acc_policy",
-    "reward_expert",
-    "reward_policy",
-)
 
 
 def build_nets(data: ExpertData, config: AIRLConfig) -> tuple[RewardNet, Policy]:
@@ -299,6 +305,7 @@ def build_nets(data: ExpertData, config: AIRLConfig) -> tuple[RewardNet, Policy]
     return reward_net, policy
 
 
+@torch.no_grad()  # gradients are hand-derived (see pokerirl.irl.nets), not autograd's
 def train(
     train_data: ExpertData,
     val_data: ExpertData,
@@ -330,85 +337,58 @@ def train(
     data = train_data.to(device)
     val = val_data.to(device)
     beta = config.beta if data.rewards is not None else 0.0
-    use_noise = config.sigma_start > 0
-    n, batch_size = len(data), min(config.batch_size, len(data))
-    steps_per_epoch = n // batch_size  # drop the ragged tail; the next shuffle covers it
-    full_sigma = noise_schedule(batch_size, config.sigma_start, config.sigma_end).to(device)
+    alpha = config.alpha
+    n, batch = len(data), min(config.batch_size, len(data))
+    steps = n // batch  # drop the ragged tail; the next shuffle covers it
+    sigma = noise_schedule(batch, config.sigma_start, config.sigma_end).to(device)
     result = TrainResult(
         reward_net=reward_net,
         policy=policy,
         config=config,
         beta_used=beta,
-        samples_per_epoch=steps_per_epoch * batch_size,
+        samples_per_epoch=steps * batch,
     )
+    # Per-step values for the epoch's metrics, written in place: no .item() sync per step.
+    # Row layout: f (expert, policy), log π (expert, policy), f(s, π), log π(π), supervised.
+    record = torch.empty(steps, 7 * batch, device=device)
 
     bar = tqdm(range(1, config.epochs + 1), desc="train", unit="epoch", disable=not progress)
     for epoch in bar:
-        reward_net.train()
-        policy.train()
         start = time.perf_counter()
-        sums = torch.zeros(len(_STEP_METRICS), device=device)
         # Shuffle once per epoch with one gather; batches are then contiguous slices.
         shuffled = data.subset(torch.randperm(n, generator=gen, device=device))
-        for step in range(steps_per_epoch):
-            rows = slice(step * batch_size, (step + 1) * batch_size)
+        for step in range(steps):
+            rows = slice(step * batch, (step + 1) * batch)
             obs = shuffled.obs[rows].float()
             expert_action = shuffled.actions[rows]
             mask = None if shuffled.legal_mask is None else shuffled.legal_mask[rows]
             env_reward = None if shuffled.rewards is None else shuffled.rewards[rows]
 
-            # 1. the policy's action distribution at s (one forward serves both steps)
-            pi_out = policy(obs, mask)
-            pi_action = policy.action_vector(pi_out, gen)
+            # 1. the policy's action vector at s: π(·|s), or a reparameterized sample
+            out = policy.act(obs, mask, gen)
 
             # 2. discriminator step: expert (s, a_E) against the regularized policy (s, ã)
-            with torch.no_grad():
-                noisy = pi_action.detach()
-                if use_noise:
-                    noisy = policy.perturb(noisy, full_sigma, mask, gen)
-                pi_detached = pi_out.detach()
-                log_pi_expert = policy.log_prob(pi_detached, expert_action)
-                log_pi_noisy = policy.log_prob(pi_detached, noisy)
-            # One pass scores both action vectors; the state half of layer one is shared.
-            f_both = reward_net.from_features(
-                reward_net.state_features(obs), torch.cat((expert_action, noisy))
-            )
-            f_expert, f_noisy = f_both[:batch_size], f_both[batch_size:]
-            d_loss, d_airl = discriminator_loss(
-                f_expert,
-                log_pi_expert,
-                f_noisy,
-                log_pi_noisy,
-                beta=beta,
-                env_reward=env_reward,
-            )
-            reward_opt.step(torch.autograd.grad(d_loss, reward_opt.params))
+            noisy = out.action
+            if config.sigma_start > 0:
+                noisy = policy.perturb(noisy, sigma, mask, gen)
+            both = torch.cat((expert_action, noisy))
+            log_pi = policy.log_prob(out.dist, both.view(2, batch, -1)).view(-1)
+            f, cache = reward_net.forward_cached(obs, both)
+            grad_f = discriminator_grad(f, log_pi, beta=beta, env_reward=env_reward)
+            reward_opt.step(reward_net.backward(cache, grad_f)[0])
 
-            # 3. policy step against the updated reward; gradients only for φ, θ stays put
-            f_pi = reward_net(obs, pi_action)
-            log_pi = policy.log_prob(pi_out, pi_action)
-            supervised = policy.supervised_loss(pi_out, expert_action)
-            p_loss, p_adv = policy_loss(f_pi, log_pi, supervised, alpha=config.alpha)
-            policy_opt.step(torch.autograd.grad(p_loss, policy_opt.params))
+            # 3. policy step against the updated reward: (1−α)(−f(s, π) + log π) + α·supervised
+            f_pi, cache = reward_net.forward_cached(obs, out.action)
+            grad_f_pi = torch.full_like(f_pi, -(1 - alpha) / batch)
+            _, grad_action = reward_net.backward(cache, grad_f_pi, params=False)
+            policy_opt.step(policy.backward(out, grad_action, expert_action, alpha))
 
-            with torch.no_grad():
-                sums += torch.stack(
-                    (
-                        d_loss,
-                        d_airl,
-                        p_loss,
-                        p_adv,
-                        supervised,
-                        (f_expert > log_pi_expert).float().mean(),  # D > 1/2
-                        (f_noisy < log_pi_noisy).float().mean(),  # D < 1/2
-                        f_expert.mean(),
-                        f_noisy.mean(),
-                    )
-                )
+            supervised = policy.supervised_loss(out.dist, expert_action)
+            torch.cat((f, log_pi, f_pi, out.log_prob, supervised), out=record[step])
 
-        means = (sums / max(steps_per_epoch, 1)).tolist()  # the epoch's only sync
         result.epoch_seconds.append(time.perf_counter() - start)
-        metrics: dict[str, Any] = {"epoch": epoch, **dict(zip(_STEP_METRICS, means, strict=True))}
+        metrics: dict[str, Any] = {"epoch": epoch}
+        metrics.update(_step_metrics(record, shuffled.rewards, beta=beta, alpha=alpha))
         metrics.update(evaluate(policy, val, majority_from=data))
         result.metrics.append(metrics)
         if on_epoch is not None:
@@ -421,6 +401,33 @@ def train(
     reward_net.eval()
     policy.eval()
     return result
+
+
+def _step_metrics(
+    record: Tensor, rewards: Tensor | None, *, beta: float, alpha: float
+) -> dict[str, float]:
+    """Epoch means of the training losses and discriminator accuracies, from ``record``."""
+    steps, width = record.shape
+    f_expert, f_policy, log_pi_expert, log_pi_policy, f_pi, log_pi_pi, supervised = (
+        part.reshape(-1) for part in record.view(steps, 7, width // 7).unbind(dim=1)
+    )
+    env_reward = None if rewards is None else rewards[: len(f_expert)]
+    d_loss, d_airl = discriminator_loss(
+        f_expert, log_pi_expert, f_policy, log_pi_policy, beta=beta, env_reward=env_reward
+    )
+    p_loss, p_adv = policy_loss(f_pi, log_pi_pi, supervised.mean(), alpha=alpha)
+    values = {
+        "disc_loss": d_loss,
+        "disc_airl_loss": d_airl,
+        "policy_loss": p_loss,
+        "policy_adv_loss": p_adv,
+        "policy_sup_loss": supervised.mean(),
+        "disc_acc_expert": (f_expert > log_pi_expert).float().mean(),  # D > 1/2
+        "disc_acc_policy": (f_policy < log_pi_policy).float().mean(),  # D < 1/2
+        "reward_expert": f_expert.mean(),
+        "reward_policy": f_policy.mean(),
+    }
+    return dict(zip(values, torch.stack(list(values.values())).tolist(), strict=True))
 
 
 @torch.inference_mode()

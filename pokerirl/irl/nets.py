@@ -5,12 +5,17 @@ discrete actions, the action itself for continuous ones. The reward net reads th
 concatenated with such a vector, so one reward net serves expert actions, policy action
 distributions and noisy versions of them alike.
 
->>> import torch
+The nets are plain ``nn.Module``s (their ``forward`` is for inference and checkpoints), but
+training does not go through autograd: for nets this small, on CPU, building and walking
+the autograd graph costs several times the arithmetic. Each net therefore also has a cached
+forward pass and a hand-derived backward pass (``forward_cached`` / ``backward``), checked
+against autograd in ``tests/test_irl_core.py``.
+
 >>> reward = RewardNet(obs_dim=3, action_dim=2, hidden=(8,))
 >>> reward(torch.zeros(5, 3), torch.ones(5, 2)).shape
 torch.Size([5])
 >>> policy = DiscretePolicy(obs_dim=3, num_actions=2, hidden=(8,))
->>> policy.action_vector(policy(torch.zeros(5, 3))).sum(dim=1)
+>>> policy(torch.zeros(5, 3)).exp().sum(dim=1)
 tensor([1., 1., 1., 1., 1.], grad_fn=<SumBackward1>)
 """
 
@@ -18,9 +23,9 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from typing import NamedTuple
 
 import torch
-import torch.nn.functional as F
 from torch import Tensor, nn
 
 # Finite stand-in for log(0) on illegal actions: 0 * MASKED_LOGIT is 0, 0 * -inf would be NaN.
@@ -35,6 +40,53 @@ def build_mlp(in_dim: int, hidden: Sequence[int], out_dim: int) -> nn.Sequential
         in_dim = width
     layers.append(nn.Linear(in_dim, out_dim))
     return nn.Sequential(*layers)
+
+
+def mlp_forward(mlp: nn.Sequential, x: Tensor) -> list[Tensor]:
+    """Run a :func:`build_mlp` net, keeping what its backward pass needs.
+
+    Returns the input of every linear layer (hidden ones after ReLU), then the output.
+    """
+    linears = mlp[::2]
+    acts = [x]
+    for i, layer in enumerate(linears):
+        y = torch.addmm(layer.bias, acts[-1], layer.weight.T)
+        acts.append(y.relu_() if i < len(linears) - 1 else y)
+    return acts
+
+
+def mlp_backward(
+    mlp: nn.Sequential,
+    acts: list[Tensor],
+    grad_out: Tensor,
+    *,
+    params: bool = True,
+    input_grad: bool = False,
+) -> tuple[list[Tensor], Tensor | None]:
+    """Backpropagate ``grad_out`` (dL/d output) through a :func:`build_mlp` net.
+
+    Returns the parameter gradients in ``mlp.parameters()`` order (empty if not ``params``)
+    and dL/d input (None if not ``input_grad``).
+    """
+    linears = mlp[::2]
+    grads: list[Tensor] = []
+    grad = grad_out
+    for i in reversed(range(len(linears))):
+        if params:
+            grads += [grad.sum(dim=0), grad.T @ acts[i]]  # bias, weight (reversed below)
+        if i == 0 and not input_grad:
+            return grads[::-1], None
+        grad = grad @ linears[i].weight
+        if i > 0:
+            grad = grad * (acts[i] > 0)  # ReLU: acts[i] is the post-activation input
+    return grads[::-1], grad
+
+
+class RewardCache(NamedTuple):
+    obs: Tensor
+    actions: Tensor
+    hidden: Tensor  # first hidden layer, after ReLU
+    head_acts: list[Tensor]
 
 
 class RewardNet(nn.Module):
@@ -55,29 +107,59 @@ class RewardNet(nn.Module):
         self.action_layer = nn.Linear(action_dim, hidden[0], bias=False)
         self.head = build_mlp(hidden[0], hidden[1:], 1)
 
-    def state_features(self, obs: Tensor) -> Tensor:
-        """The state half of the first layer, ``W_s s + b`` (pre-activation)."""
-        return self.obs_layer(obs)
+    def forward(self, obs: Tensor, action: Tensor) -> Tensor:
+        return self.forward_cached(obs, action)[0]
 
-    def from_features(self, features: Tensor, action: Tensor) -> Tensor:
-        """Finish f from ``state_features(obs)`` and action vectors: (B,) rewards.
+    def forward_cached(self, obs: Tensor, actions: Tensor) -> tuple[Tensor, RewardCache]:
+        """f for (B, obs_dim) states and (k·B, action_dim) action vectors, k per state.
 
-        ``action`` may hold k action vectors per state stacked as (k·B, action_dim).
+        Returns the (k·B,) rewards and what :meth:`backward` needs.
         """
-        repeats = len(action) // len(features)
+        features = torch.addmm(self.obs_layer.bias, obs, self.obs_layer.weight.T)
+        repeats = len(actions) // len(obs)
         if repeats > 1:
             features = features.repeat(repeats, 1)
-        hidden = torch.relu(features + self.action_layer(action))
-        return self.head(hidden).squeeze(-1)
+        hidden = torch.addmm(features, actions, self.action_layer.weight.T).relu_()
+        head_acts = mlp_forward(self.head, hidden)
+        return head_acts[-1].squeeze(-1), RewardCache(obs, actions, hidden, head_acts)
 
-    def forward(self, obs: Tensor, action: Tensor) -> Tensor:
-        return self.from_features(self.state_features(obs), action)
+    def backward(
+        self, cache: RewardCache, grad_f: Tensor, *, params: bool = True
+    ) -> tuple[list[Tensor], Tensor]:
+        """Parameter gradients (``parameters()`` order; empty if not ``params``) and dL/d action."""
+        head_grads, grad_hidden = mlp_backward(
+            self.head, cache.head_acts, grad_f[:, None], params=params, input_grad=True
+        )
+        assert grad_hidden is not None
+        grad_pre = grad_hidden * (cache.hidden > 0)
+        grad_actions = grad_pre @ self.action_layer.weight
+        if not params:
+            return [], grad_actions
+        batch = len(cache.obs)
+        grad_features = grad_pre.reshape(-1, batch, grad_pre.shape[1]).sum(dim=0)
+        grads = [
+            grad_features.T @ cache.obs,
+            grad_features.sum(dim=0),
+            grad_pre.T @ cache.actions,
+            *head_grads,
+        ]
+        return grads, grad_actions
+
+
+class PolicyOutput(NamedTuple):
+    """One policy pass over a batch, as the trainer uses it."""
+
+    acts: list[Tensor]  # MLP activations, for the backward pass
+    dist: Tensor  # discrete: masked log-probabilities; continuous: mean action
+    action: Tensor  # the policy's action vector: π(·|s), or a sample μ + σε
+    log_prob: Tensor  # (B,) log π of ``action``: Σ π log π, or the Gaussian log-density
+    noise: Tensor | None  # continuous: the ε of the sample
 
 
 class DiscretePolicy(nn.Module):
     """Categorical π_φ(a|s) over ``num_actions``; illegal actions get probability zero.
 
-    ``forward`` returns masked log-probabilities; the other methods take that output.
+    ``forward`` returns masked log-probabilities (the policy's ``dist``).
     """
 
     discrete = True
@@ -89,25 +171,48 @@ class DiscretePolicy(nn.Module):
         self.mlp = build_mlp(obs_dim, hidden, num_actions)
 
     def forward(self, obs: Tensor, legal_mask: Tensor | None = None) -> Tensor:
-        logits = self.mlp(obs)
+        return self._log_probs(self.mlp(obs), legal_mask)
+
+    @staticmethod
+    def _log_probs(logits: Tensor, legal_mask: Tensor | None) -> Tensor:
         if legal_mask is not None:
             logits = logits.masked_fill(~legal_mask, MASKED_LOGIT)
         return torch.log_softmax(logits, dim=-1)
 
-    def action_vector(self, log_probs: Tensor, generator: torch.Generator | None = None) -> Tensor:
-        """The policy's action vector: its action distribution, differentiable."""
-        return log_probs.exp()
+    def act(
+        self, obs: Tensor, legal_mask: Tensor | None, generator: torch.Generator | None = None
+    ) -> PolicyOutput:
+        """The action distribution π(·|s) as the action vector (no sampling)."""
+        acts = mlp_forward(self.mlp, obs)
+        log_probs = self._log_probs(acts[-1], legal_mask)
+        probs = log_probs.exp()
+        return PolicyOutput(acts, log_probs, probs, self.log_prob(log_probs, probs), None)
 
     def log_prob(self, log_probs: Tensor, action: Tensor) -> Tensor:
-        """log π(a|s) of a point on the simplex: Σ_a a_k log π(k|s) (exact for one-hots).
+        """log π(a|s) of a point on the simplex: Σ_k a_k log π(k|s) (exact for one-hots).
 
         For the policy's own distribution this is Σ π log π, the negative entropy.
         """
         return (action * log_probs).sum(dim=-1)
 
     def supervised_loss(self, log_probs: Tensor, expert_action: Tensor) -> Tensor:
-        """Cross-entropy CE(π(·|s), a_E), with ``expert_action`` one-hot."""
-        return -(expert_action * log_probs).sum(dim=-1).mean()
+        """Per-sample cross-entropy CE(π(·|s), a_E), with ``expert_action`` one-hot."""
+        return -(expert_action * log_probs).sum(dim=-1)
+
+    def backward(
+        self, out: PolicyOutput, grad_action: Tensor, expert_action: Tensor, alpha: float
+    ) -> list[Tensor]:
+        """Gradients of (1−α)·mean(−f(s, π) + Σ π log π) + α·mean(CE) for the parameters.
+
+        ``grad_action`` is the first term's gradient through f: −(1−α)/B · ∂f/∂a at a = π.
+        """
+        probs, log_probs = out.action, out.dist
+        scale = (1 - alpha) / len(probs)
+        # Softmax Jacobian applied to grad_action; then d(Σ π log π)/d logits and d CE/d logits.
+        grad_logits = probs * (grad_action - (probs * grad_action).sum(dim=-1, keepdim=True))
+        grad_logits += scale * probs * (log_probs - out.log_prob[:, None])
+        grad_logits += (alpha / len(probs)) * (probs - expert_action)
+        return mlp_backward(self.mlp, out.acts, grad_logits)[0]
 
     def perturb(
         self,
@@ -121,7 +226,7 @@ class DiscretePolicy(nn.Module):
         One-hot vectors live in [0, 1], so σ is already normalized to the action range.
         """
         noise = torch.randn(action.shape, generator=generator, device=action.device)
-        return project_to_simplex(action + sigma[:, None] * noise, legal_mask)
+        return project_to_simplex(torch.addcmul(action, sigma[:, None], noise), legal_mask)
 
     def predict(self, log_probs: Tensor) -> Tensor:
         """Greedy action ids (B,)."""
@@ -132,7 +237,7 @@ class GaussianPolicy(nn.Module):
     """Diagonal Gaussian π_φ(a|s) for actions in the box [low, high].
 
     The mean is squashed into the box with tanh; the log standard deviation is a free
-    parameter per action dimension. ``forward`` returns the mean.
+    parameter per action dimension. ``forward`` returns the mean (the policy's ``dist``).
     """
 
     discrete = False
@@ -156,13 +261,20 @@ class GaussianPolicy(nn.Module):
         self.register_buffer("high", torch.tensor(high, dtype=torch.float32))
 
     def forward(self, obs: Tensor, legal_mask: Tensor | None = None) -> Tensor:
-        half_range = (self.high - self.low) / 2
-        return self.low + half_range * (torch.tanh(self.mlp(obs)) + 1)
+        return self._mean(self.mlp(obs))
 
-    def action_vector(self, mean: Tensor, generator: torch.Generator | None = None) -> Tensor:
-        """A reparameterized sample a = μ + σ ε, differentiable in φ."""
+    def _mean(self, raw: Tensor) -> Tensor:
+        return self.low + (self.high - self.low) / 2 * (torch.tanh(raw) + 1)
+
+    def act(
+        self, obs: Tensor, legal_mask: Tensor | None, generator: torch.Generator | None = None
+    ) -> PolicyOutput:
+        """A reparameterized sample a = μ(s) + σ ε as the action vector."""
+        acts = mlp_forward(self.mlp, obs)
+        mean = self._mean(acts[-1])
         noise = torch.randn(mean.shape, generator=generator, device=mean.device)
-        return mean + self.log_std.exp() * noise
+        action = mean + self.log_std.exp() * noise
+        return PolicyOutput(acts, mean, action, self.log_prob(mean, action), noise)
 
     def log_prob(self, mean: Tensor, action: Tensor) -> Tensor:
         """Gaussian log-density log π(a|s), summed over action dimensions."""
@@ -171,8 +283,24 @@ class GaussianPolicy(nn.Module):
         return (-0.5 * z.square() - log_std - 0.5 * math.log(2 * math.pi)).sum(dim=-1)
 
     def supervised_loss(self, mean: Tensor, expert_action: Tensor) -> Tensor:
-        """MSE between the policy's mean action and the expert's."""
-        return (mean - expert_action).square().sum(dim=-1).mean()
+        """Per-sample squared error between the policy's mean action and the expert's."""
+        return (mean - expert_action).square().sum(dim=-1)
+
+    def backward(
+        self, out: PolicyOutput, grad_action: Tensor, expert_action: Tensor, alpha: float
+    ) -> list[Tensor]:
+        """Gradients of (1−α)·mean(−f(s, a) + log π(a|s)) + α·mean(MSE), a = μ + σε.
+
+        ``grad_action`` is the first term's gradient through f: −(1−α)/B · ∂f/∂a.
+        With a reparameterized, log π(a|s) = Σ(−ε²/2 − log σ) − const: it moves only log σ.
+        """
+        batch = len(out.action)
+        std = self.log_std.exp()
+        grad_mean = grad_action + (2 * alpha / batch) * (out.dist - expert_action)
+        grad_log_std = (grad_action * std * out.noise).sum(dim=0) - (1 - alpha)
+        squash = (self.high - self.low) / 2 * (1 - torch.tanh(out.acts[-1]).square())
+        grads = mlp_backward(self.mlp, out.acts, grad_mean * squash)[0]
+        return [grad_log_std, *grads]  # parameters() lists a module's own before its children
 
     def perturb(
         self,
@@ -210,7 +338,7 @@ def project_to_simplex(v: Tensor, mask: Tensor | None = None) -> Tensor:
     sorted_v, _ = torch.sort(v, dim=-1, descending=True)
     cumsum = sorted_v.cumsum(dim=-1) - 1
     k = torch.arange(1, v.shape[-1] + 1, device=v.device, dtype=v.dtype)
-    # rho = the largest k with sorted_v[k] > (cumsum[k]) / k; the condition holds for a prefix.
+    # rho = the largest k with sorted_v[k] > cumsum[k] / k; the condition holds on a prefix.
     support = (sorted_v * k > cumsum).sum(dim=-1, keepdim=True)
     theta = cumsum.gather(-1, support - 1) / support.to(v.dtype)
     return (v - theta).clamp_min(0)

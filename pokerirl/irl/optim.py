@@ -50,6 +50,10 @@ class FlatAdam:
     @torch.no_grad()
     def step(self, grads: Sequence[Tensor]) -> None:
         """One update from gradients given in the order of ``self.params``."""
+        if self.steps == 0:  # a gradient list in the wrong order would cat to the right size
+            shapes = [tuple(g.shape) for g in grads]
+            if shapes != [tuple(p.shape) for p in self.params]:
+                raise ValueError(f"gradient shapes {shapes} do not match the parameters")
         grad = torch.cat([g.reshape(-1) for g in grads])
         if self.weight_decay:
             grad.add_(self.flat, alpha=self.weight_decay)
