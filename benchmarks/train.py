@@ -52,7 +52,7 @@ def peer_samples_per_second(data: ExpertData, config: AIRLConfig, batches: int) 
     window, rates, start, seen = max(batches // 4, 1), [], time.perf_counter(), 0
     for step, (obs, expert_action, mask, env_reward) in enumerate(loader, start=1):
         out = policy(obs, mask)
-        pi_action = policy.action_vector(out)
+        pi_action = out.exp()  # the discrete policy's action vector: its distribution
         with torch.no_grad():
             noisy = policy.perturb(pi_action.detach(), sigma[: len(obs)], mask)
             log_pi_expert = policy.log_prob(out.detach(), expert_action)
@@ -68,7 +68,7 @@ def peer_samples_per_second(data: ExpertData, config: AIRLConfig, batches: int) 
         reward_opt.zero_grad()
         d_loss.backward()
         reward_opt.step()
-        supervised = policy.supervised_loss(out, expert_action)
+        supervised = policy.supervised_loss(out, expert_action).mean()
         p_loss, _ = policy_loss(
             reward_net(obs, pi_action),
             policy.log_prob(out, pi_action),

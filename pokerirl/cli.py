@@ -46,10 +46,17 @@ def train(
     sigma_start: float | None = typer.Option(None, "--sigma-start"),
     sigma_end: float | None = typer.Option(None, "--sigma-end"),
     val_fraction: float | None = typer.Option(None, "--val-fraction", help="Share of hands."),
+    threads: int = typer.Option(1, "--threads", help="CPU threads; small nets train best on 1."),
     quiet: bool = typer.Option(False, "--quiet", help="No progress bar."),
 ) -> None:
     """Learn a reward function with AIRL or Hybrid-AIRL from an expert decision table."""
+    import torch
+
     from pokerirl.irl import load_config, train_table
+
+    if threads < 1:
+        fail("--threads must be at least 1")
+    torch.set_num_threads(threads)
 
     widths = None
     if hidden is not None:

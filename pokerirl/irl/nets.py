@@ -47,7 +47,7 @@ def mlp_forward(mlp: nn.Sequential, x: Tensor) -> list[Tensor]:
 
     Returns the input of every linear layer (hidden ones after ReLU), then the output.
     """
-    linears = mlp[::2]
+    linears = _linears(mlp)
     acts = [x]
     for i, layer in enumerate(linears):
         y = torch.addmm(layer.bias, acts[-1], layer.weight.T)
@@ -68,7 +68,7 @@ def mlp_backward(
     Returns the parameter gradients in ``mlp.parameters()`` order (empty if not ``params``)
     and dL/d input (None if not ``input_grad``).
     """
-    linears = mlp[::2]
+    linears = _linears(mlp)
     grads: list[Tensor] = []
     grad = grad_out
     for i in reversed(range(len(linears))):
@@ -78,8 +78,17 @@ def mlp_backward(
             return grads[::-1], None
         grad = grad @ linears[i].weight
         if i > 0:
-            grad = grad * (acts[i] > 0)  # ReLU: acts[i] is the post-activation input
+            grad = relu_backward(grad, acts[i])
     return grads[::-1], grad
+
+
+def _linears(mlp: nn.Sequential) -> list[nn.Linear]:
+    return [layer for layer in mlp if isinstance(layer, nn.Linear)]
+
+
+def relu_backward(grad: Tensor, relu_output: Tensor) -> Tensor:
+    """``grad`` where the ReLU was active, else 0 (one fused kernel, as autograd uses)."""
+    return torch.ops.aten.threshold_backward(grad, relu_output, 0.0)
 
 
 class RewardCache(NamedTuple):
@@ -116,10 +125,8 @@ class RewardNet(nn.Module):
         Returns the (k·B,) rewards and what :meth:`backward` needs.
         """
         features = torch.addmm(self.obs_layer.bias, obs, self.obs_layer.weight.T)
-        repeats = len(actions) // len(obs)
-        if repeats > 1:
-            features = features.repeat(repeats, 1)
-        hidden = torch.addmm(features, actions, self.action_layer.weight.T).relu_()
+        action_part = (actions @ self.action_layer.weight.T).view(-1, *features.shape)
+        hidden = (action_part + features).relu_().view(len(actions), -1)  # broadcast over k
         head_acts = mlp_forward(self.head, hidden)
         return head_acts[-1].squeeze(-1), RewardCache(obs, actions, hidden, head_acts)
 
@@ -131,7 +138,7 @@ class RewardNet(nn.Module):
             self.head, cache.head_acts, grad_f[:, None], params=params, input_grad=True
         )
         assert grad_hidden is not None
-        grad_pre = grad_hidden * (cache.hidden > 0)
+        grad_pre = relu_backward(grad_hidden, cache.hidden)
         grad_actions = grad_pre @ self.action_layer.weight
         if not params:
             return [], grad_actions

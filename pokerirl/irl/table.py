@@ -54,7 +54,8 @@ class ExpertTable:
 
     def to_expert_data(self, rows: np.ndarray | None = None) -> ExpertData:
         """Tensors for the trainer (all rows, or ``rows``)."""
-        pick = (lambda a: a) if rows is None else (lambda a: a[rows])
+        # Arrow's zero-copy arrays are read-only; torch wants writable ones, so copy.
+        pick = (lambda a: a.copy()) if rows is None else (lambda a: a[rows])
         rewards = None if self.rewards is None else torch.from_numpy(pick(self.rewards))
         return ExpertData.from_action_ids(
             torch.from_numpy(pick(self.obs)),
