@@ -2,11 +2,12 @@
 
 The core (:mod:`pokerirl.irl.airl`) works on tensors of states, action vectors, legal masks
 and rewards, for discrete and continuous actions; :mod:`pokerirl.irl.table` reads the poker
-Parquet tables; :mod:`pokerirl.irl.run` writes and reads run directories.
+Parquet tables; :mod:`pokerirl.irl.run` writes and reads run directories. For example::
 
->>> from pokerirl.irl import load_reward                       # doctest: +SKIP
->>> reward = load_reward("runs/hairl")                          # doctest: +SKIP
->>> reward(obs_uint8_b72, action_ids_b)  # -> (B,) float32      # doctest: +SKIP
+    from pokerirl.irl import load_reward
+
+    reward = load_reward("runs/hairl")
+    rewards = reward(obs, action_ids)  # (B, 72) uint8 and (B,) ints -> (B,) float32
 """
 
 from __future__ import annotations

@@ -1,18 +1,24 @@
 """AIRL and Hybrid-AIRL, offline over an expert table, on plain tensors.
 
-The whole algorithm is :func:`train`, top to bottom; the losses and the noise schedule are
-small pure functions above it so they can be checked by hand.
+The whole algorithm is :func:`train`, top to bottom; the losses, their gradient and the
+noise schedule are small pure functions above it so they can be checked by hand.
 
-Per mini-batch of expert rows (s, a_E):
+Per shuffled mini-batch of expert rows (s, a_E):
 
-1. the policy gives its action distribution π(·|s) (its *action vector*);
+1. the policy gives its *action vector* at s: its distribution π(·|s) for discrete actions,
+   a reparameterized sample μ(s) + σε for continuous ones;
 2. discriminator step: D(s, a) = exp f(s,a) / (exp f(s,a) + π(a|s)) learns to call
    (s, a_E) expert and (s, ã) policy, ã being the policy's action vector plus Gaussian
-   noise whose σ decays along the (shuffled) batch, projected back onto the simplex;
-   H-AIRL adds β·(f(s, a_E) − r_env)²;
-3. policy step: minimize (1−α)·E[−f(s, π) + log π] + α·CE(π(·|s), a_E).
+   noise whose σ decays along the batch (projected back onto the simplex, or clipped to
+   the box); H-AIRL mixes in β·(f(s, a_E) − r_env)². For a point ã of the simplex,
+   log π(ã|s) = Σ_k ã_k log π(k|s), exact on one-hots;
+3. policy step, against the just-updated reward:
+   (1−α)·E[−f(s, a_π) + log π(a_π|s)] + α·(CE(π(·|s), a_E) or MSE(μ(s), a_E)).
 
-AIRL is α = 0, β = 0 and no noise; ``AIRLConfig.for_algo`` only picks defaults.
+AIRL is α = 0, β = 0 and no noise; ``AIRLConfig.for_algo`` only picks defaults, both run
+this same code. Gradients are hand-derived (see :mod:`pokerirl.irl.nets`), which makes the
+loop several times faster than autograd for nets this small; tests check them against
+autograd on the loss functions below.
 
 >>> import torch
 >>> g = torch.Generator().manual_seed(0)
@@ -32,7 +38,7 @@ import math
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import Any, Literal
+from typing import Any
 
 import torch
 from torch import Tensor
@@ -41,7 +47,6 @@ from tqdm.auto import tqdm
 from pokerirl.irl.nets import DiscretePolicy, GaussianPolicy, Policy, RewardNet
 from pokerirl.irl.optim import FlatAdam
 
-Algo = Literal["airl", "hairl"]
 ALGOS: tuple[str, ...] = ("airl", "hairl")
 
 
@@ -119,6 +124,15 @@ class ExpertData:
     discrete: bool = True
     action_low: tuple[float, ...] | None = None  # continuous bounds
     action_high: tuple[float, ...] | None = None
+
+    def __post_init__(self) -> None:
+        n = len(self.obs)
+        if self.obs.ndim != 2 or self.actions.ndim != 2 or len(self.actions) != n:
+            raise ValueError("ExpertData needs obs (N, d) and action vectors (N, k)")
+        for name in ("legal_mask", "rewards"):
+            value = getattr(self, name)
+            if value is not None and len(value) != n:
+                raise ValueError(f"ExpertData.{name} has {len(value)} rows, obs has {n}")
 
     @classmethod
     def from_action_ids(
@@ -242,15 +256,13 @@ def policy_loss(
     return (1 - alpha) * adversarial + alpha * supervised, adversarial
 
 
-# --------------------------------------------------------------------------- training
-
-
 def discriminator_grad(
     f: Tensor, log_pi: Tensor, *, beta: float = 0.0, env_reward: Tensor | None = None
 ) -> Tensor:
     """dL/df of :func:`discriminator_loss` for ``f`` = (expert rows, then as many policy rows).
 
-    With D = σ(f − log π): d/df of −log D is D − 1, of −log(1 − D) is D.
+    With D = σ(f − log π) (the log-space form of the ratio): d/df of −log D is D − 1 and
+    of −log(1 − D) is D.
     """
     batch = len(f) // 2
     grad = torch.sigmoid(f - log_pi)
@@ -260,6 +272,9 @@ def discriminator_grad(
     grad *= (1 - beta) / batch
     grad[:batch] += (2 * beta / batch) * (f[:batch] - env_reward)
     return grad
+
+
+# --------------------------------------------------------------------------- training
 
 
 # --------------------------------------------------------------------------- training

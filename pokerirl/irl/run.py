@@ -32,7 +32,7 @@ import numpy as np
 import torch
 from torch import Tensor
 
-from pokerirl.irl.airl import AIRLConfig, TrainResult, train
+from pokerirl.irl.airl import AIRLConfig, TrainResult, resolve_device, train
 from pokerirl.irl.nets import DiscretePolicy, GaussianPolicy, Policy, RewardNet
 from pokerirl.irl.plots import plot_curves
 from pokerirl.irl.table import read_expert_table, split_by_hand
@@ -103,6 +103,7 @@ def train_table(
     Validation is a seeded share of the *hands* (``config.val_fraction``), never of rows.
     """
     config = config or AIRLConfig.for_algo(algo)
+    resolve_device(device)  # fail before reading a large table
     expert = read_expert_table(table)
     train_rows, val_rows = split_by_hand(
         expert.hand_index, expert.num_hands, val_fraction=config.val_fraction, seed=config.seed
