@@ -227,6 +227,8 @@ def test_reward_net_backward_matches_autograd(hidden: tuple[int, ...]) -> None:
     assert torch.allclose(f_manual, f.detach())
     _close([*grads, grad_actions], expected)
     assert torch.equal(only_actions, grad_actions)
+    only_params, none = net.backward(cache, weights, actions=False)
+    assert none is None and all(torch.equal(a, b) for a, b in zip(only_params, grads, strict=True))
 
 
 def _policy_reference(policy, reward, obs, mask, expert, alpha, noise=None):

@@ -390,12 +390,13 @@ def train(
             log_pi = policy.log_prob(out.dist, both.view(2, batch, -1)).view(-1)
             f, cache = reward_net.forward_cached(obs, both)
             grad_f = discriminator_grad(f, log_pi, beta=beta, env_reward=env_reward)
-            reward_opt.step(reward_net.backward(cache, grad_f)[0])
+            reward_opt.step(reward_net.backward(cache, grad_f, actions=False)[0])
 
             # 3. policy step against the updated reward: (1−α)(−f(s, π) + log π) + α·supervised
             f_pi, cache = reward_net.forward_cached(obs, out.action)
             grad_f_pi = torch.full_like(f_pi, -(1 - alpha) / batch)
             _, grad_action = reward_net.backward(cache, grad_f_pi, params=False)
+            assert grad_action is not None
             policy_opt.step(policy.backward(out, grad_action, expert_action, alpha))
 
             supervised = policy.supervised_loss(out.dist, expert_action)

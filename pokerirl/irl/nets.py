@@ -131,15 +131,18 @@ class RewardNet(nn.Module):
         return head_acts[-1].squeeze(-1), RewardCache(obs, actions, hidden, head_acts)
 
     def backward(
-        self, cache: RewardCache, grad_f: Tensor, *, params: bool = True
-    ) -> tuple[list[Tensor], Tensor]:
-        """Parameter gradients (``parameters()`` order; empty if not ``params``) and dL/d action."""
+        self, cache: RewardCache, grad_f: Tensor, *, params: bool = True, actions: bool = True
+    ) -> tuple[list[Tensor], Tensor | None]:
+        """Parameter gradients (``parameters()`` order) and dL/d action vectors.
+
+        Either can be skipped (an empty list, None) when the caller does not need it.
+        """
         head_grads, grad_hidden = mlp_backward(
             self.head, cache.head_acts, grad_f[:, None], params=params, input_grad=True
         )
         assert grad_hidden is not None
         grad_pre = relu_backward(grad_hidden, cache.hidden)
-        grad_actions = grad_pre @ self.action_layer.weight
+        grad_actions = grad_pre @ self.action_layer.weight if actions else None
         if not params:
             return [], grad_actions
         batch = len(cache.obs)
