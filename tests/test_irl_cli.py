@@ -186,3 +186,15 @@ def test_bad_input_in_a_real_process(tmp_path: Path) -> None:
         env=env,
     )
     _assert_one_line_error(done.returncode, done.stderr, "unknown algo")
+
+
+def test_mismatched_checkpoint_is_a_clear_error(run_dir: Path, tmp_path: Path) -> None:
+    import shutil
+
+    broken = tmp_path / "broken"
+    shutil.copytree(run_dir, broken)
+    torch.save({"mlp.0.weight": torch.zeros(2, 2)}, broken / "reward.pt")
+    with pytest.raises(ValueError, match="does not match"):
+        load_reward(broken)
+    with pytest.raises(FileNotFoundError, match="config.json"):
+        load_reward(tmp_path)

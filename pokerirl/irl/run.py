@@ -35,7 +35,7 @@ from torch import Tensor
 from pokerirl.irl.airl import AIRLConfig, TrainResult, resolve_device, train
 from pokerirl.irl.nets import DiscretePolicy, GaussianPolicy, Policy, RewardNet
 from pokerirl.irl.plots import plot_curves
-from pokerirl.irl.table import read_expert_table, split_by_hand
+from pokerirl.irl.table import first_line, read_expert_table, split_by_hand
 
 FORMAT_VERSION = 1
 REWARD_FILE, POLICY_FILE, CONFIG_FILE, METRICS_FILE = (
@@ -238,7 +238,12 @@ def _build_from_record(record: Mapping[str, Any]) -> tuple[RewardNet, Policy]:
 
 
 def _load_state(module: torch.nn.Module, path: Path) -> None:
-    module.load_state_dict(torch.load(path, map_location="cpu", weights_only=True))
+    if not path.is_file():
+        raise FileNotFoundError(f"checkpoint not found: {path}")
+    try:
+        module.load_state_dict(torch.load(path, map_location="cpu", weights_only=True))
+    except RuntimeError as error:  # e.g. a checkpoint from an older layout of the nets
+        raise ValueError(f"{path} does not match its {CONFIG_FILE}: {first_line(error)}") from None
     module.eval()
 
 

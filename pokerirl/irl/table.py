@@ -78,7 +78,7 @@ def read_expert_table(path: str | os.PathLike[str]) -> ExpertTable:
     try:
         schema = pq.read_schema(path)
     except (pa.ArrowException, OSError) as error:
-        raise ValueError(f"cannot read {path} as Parquet: {_first_line(error)}") from None
+        raise ValueError(f"cannot read {path} as Parquet: {first_line(error)}") from None
     missing = [name for name in REQUIRED_COLUMNS if name not in schema.names]
     if missing:
         raise ValueError(f"{path} lacks required column(s): {', '.join(missing)}")
@@ -86,7 +86,7 @@ def read_expert_table(path: str | os.PathLike[str]) -> ExpertTable:
     try:
         table = pq.read_table(path, columns=columns)
     except (pa.ArrowException, OSError) as error:
-        raise ValueError(f"cannot read {path}: {_first_line(error)}") from None
+        raise ValueError(f"cannot read {path}: {first_line(error)}") from None
     return expert_table_from_arrow(table, source=str(path))
 
 
@@ -176,6 +176,6 @@ def split_by_hand(
     return np.flatnonzero(~is_val_row), np.flatnonzero(is_val_row)
 
 
-def _first_line(error: BaseException) -> str:
+def first_line(error: BaseException) -> str:
     text = str(error).strip()
     return text.splitlines()[0] if text else type(error).__name__
