@@ -402,6 +402,8 @@ def train(
             supervised = policy.supervised_loss(out.dist, expert_action)
             torch.cat((f, log_pi, f_pi, out.log_prob, supervised), out=record[step])
 
+        if device.type == "cuda":
+            torch.cuda.synchronize(device)  # time the work, not its queueing
         result.epoch_seconds.append(time.perf_counter() - start)
         metrics: dict[str, Any] = {"epoch": epoch}
         metrics.update(_step_metrics(record, shuffled.rewards, beta=beta, alpha=alpha))
