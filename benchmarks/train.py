@@ -1,12 +1,13 @@
 """Training throughput of `pokerirl.irl.train` on a synthesized 300k-row table.
 
-Prints expert samples per second of optimization (batch 256, hidden 64, 2 threads) for our
-tensor-based trainer and, in the same run, for a peer: the same model and losses driven by
-a per-row ``torch.utils.data.DataLoader`` and ``torch.optim.Adam``, the way reference
-implementations are usually written. The machine may be shared, so each figure is the best
-and the median of several timed windows.
+Prints expert samples per second of optimization (batch 256, hidden 64) for our trainer and,
+in the same run, for a peer: the same model and losses driven by a per-row
+``torch.utils.data.DataLoader``, autograd and ``torch.optim.Adam``, the way reference
+implementations are usually written. Threads default to 1, as in `pokerirl train`; pass
+``--threads 2`` for the reference's setting. The machine may be shared, so each figure is
+the best and the median of several timed windows.
 
-    python benchmarks/train.py [--rows 300000] [--epochs 3] [--peer-batches 200]
+    python benchmarks/train.py [--rows 300000] [--epochs 3] [--threads 1] [--peer-batches 200]
 """
 
 from __future__ import annotations
@@ -93,7 +94,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--rows", type=int, default=300_000)
     parser.add_argument("--epochs", type=int, default=3)
-    parser.add_argument("--threads", type=int, default=2)
+    parser.add_argument("--threads", type=int, default=1, help="as `pokerirl train` (default 1)")
     parser.add_argument("--peer-batches", type=int, default=200)
     args = parser.parse_args()
     torch.set_num_threads(args.threads)
