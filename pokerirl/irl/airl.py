@@ -86,6 +86,7 @@ class AIRLConfig:
             "learning rates > 0": self.reward_lr > 0 and self.policy_lr > 0,
             "reward_weight_decay >= 0": self.reward_weight_decay >= 0,
             "hidden widths >= 1": all(w >= 1 for w in self.reward_hidden + self.policy_hidden),
+            "a reward hidden layer": len(self.reward_hidden) >= 1,
         }
         broken = [name for name, ok in checks.items() if not ok]
         if broken:
