@@ -55,7 +55,7 @@ def toy_expert_table(
     # Per hand: 2 hole cards and 5 board cards, all distinct.
     deck = np.argsort(rng.random((num_hands, 52)), axis=1)[:, :7]
     cards = deck[hand]
-    street = np.minimum(rng.integers(0, 4, size=n), 3)
+    street = rng.integers(0, 4, size=n)  # a toy: drawn per decision, not in hand order
     visible = 2 + np.asarray(BOARD_SIZE_BY_ROUND)[street]
     cards = np.where(np.arange(7) < visible[:, None], cards, -1)
     raise_nums = rng.integers(0, MAX_RAISES + 1, size=(n, 4))
