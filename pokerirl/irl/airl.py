@@ -357,6 +357,7 @@ def train(
     n, batch = len(data), min(config.batch_size, len(data))
     steps = n // batch  # drop the ragged tail; the next shuffle covers it
     sigma = noise_schedule(batch, config.sigma_start, config.sigma_end).to(device)
+    grad_f_pi = torch.full((batch,), -(1 - alpha) / batch, device=device)  # d policy loss/d f
     result = TrainResult(
         reward_net=reward_net,
         policy=policy,
@@ -395,7 +396,6 @@ def train(
 
             # 3. policy step against the updated reward: (1−α)(−f(s, π) + log π) + α·supervised
             f_pi, cache = reward_net.forward_cached(obs, out.action)
-            grad_f_pi = torch.full_like(f_pi, -(1 - alpha) / batch)
             _, grad_action = reward_net.backward(cache, grad_f_pi, params=False)
             assert grad_action is not None
             policy_opt.step(policy.backward(out, grad_action, expert_action, alpha))

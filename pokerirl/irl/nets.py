@@ -217,11 +217,11 @@ class DiscretePolicy(nn.Module):
         ``grad_action`` is the first term's gradient through f: −(1−α)/B · ∂f/∂a at a = π.
         """
         probs, log_probs = out.action, out.dist
-        scale = (1 - alpha) / len(probs)
-        # Softmax Jacobian applied to grad_action; then d(Σ π log π)/d logits and d CE/d logits.
-        grad_logits = probs * (grad_action - (probs * grad_action).sum(dim=-1, keepdim=True))
-        grad_logits += scale * probs * (log_probs - out.log_prob[:, None])
-        grad_logits += (alpha / len(probs)) * (probs - expert_action)
+        # d/d logits of Σ π·(g + s·log π) is π ⊙ (h − Σ π h) with h = g + s·log π: the softmax
+        # Jacobian applied to g, plus the entropy term (its "+1" cancels, Σ π = 1). Then CE.
+        h = torch.add(grad_action, log_probs, alpha=(1 - alpha) / len(probs))
+        grad_logits = probs * (h - (probs * h).sum(dim=-1, keepdim=True))
+        grad_logits.add_(probs - expert_action, alpha=alpha / len(probs))
         return mlp_backward(self.mlp, out.acts, grad_logits)[0]
 
     def perturb(
@@ -346,9 +346,8 @@ def project_to_simplex(v: Tensor, mask: Tensor | None = None) -> Tensor:
         # Masked entries sort last and fall below any threshold, so they project to 0.
         v = v.masked_fill(~mask, MASKED_LOGIT)
     sorted_v, _ = torch.sort(v, dim=-1, descending=True)
-    cumsum = sorted_v.cumsum(dim=-1) - 1
     k = torch.arange(1, v.shape[-1] + 1, device=v.device, dtype=v.dtype)
-    # rho = the largest k with sorted_v[k] > cumsum[k] / k; the condition holds on a prefix.
-    support = (sorted_v * k > cumsum).sum(dim=-1, keepdim=True)
-    theta = cumsum.gather(-1, support - 1) / support.to(v.dtype)
+    # The threshold is max_k (Σ_{i≤k} sorted_v_i − 1) / k: the sequence rises while
+    # sorted_v_k is in the support and falls after, so its maximum is at the support's end.
+    theta = ((sorted_v.cumsum(dim=-1) - 1) / k).amax(dim=-1, keepdim=True)
     return (v - theta).clamp_min(0)
