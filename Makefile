@@ -26,3 +26,4 @@ lint: install-dev
 
 bench: install
 	$(BIN)/python benchmarks/ingest.py
+	$(BIN)/python benchmarks/engine.py

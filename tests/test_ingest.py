@@ -275,3 +275,35 @@ def test_cli_ingest_prints_summary(month: Path, tmp_path: Path) -> None:
     assert result.exit_code == 0, result.output
     printed = json.loads(result.stdout[result.stdout.index("{"):])
     assert printed == json.loads(summary_path(out).read_text())
+
+
+@pytest.mark.parametrize(
+    ("amy_line", "reason"),
+    [
+        ("Bk  b     c     k         1000   40   80 As Qc", "a card dealt twice"),
+        ("Bk  b     c     k         1000   40   70 Kc Qc", "chips won differ from chips put in"),
+        ("Bk  b     k     k         1000   40   80 Kc Qc", "actions: check facing a bet"),
+    ],
+)
+def test_inconsistent_hands_are_counted_with_a_reason(
+    tmp_path: Path, amy_line: str, reason: str
+) -> None:
+    from irc_fixtures import PDB
+
+    pdb = dict(PDB)
+    pdb["pdb.Amy"] = [f"Amy       {ZED_FIRST}  2  2 {amy_line}", *PDB["pdb.Amy"][1:]]
+    folder = write_month(tmp_path / "irc", pdb=pdb)
+    summary = ingest([folder], tmp_path / "t.parquet")
+    assert summary["dropped"]["inconsistent_hand"] == 1
+    assert summary["inconsistent_reasons"] == {reason: 1}
+    assert summary["kept_hands"] == 4 and summary["buckets_add_up"]
+
+
+def test_stakes_come_from_the_channel(tmp_path: Path) -> None:
+    folder = write_month(tmp_path / "irc", channel="holdem2")  # 20-40: big blind of 20 chips
+    out = tmp_path / "t.parquet"
+    ingest([folder], out)
+    rows = rows_of(out, ZED_FIRST)
+    assert rows["hand_id"][0] == f"holdem2/199504/{ZED_FIRST}"
+    assert rows["big_blind"][0] == 20
+    assert rows["payoff_bb"][:2] == [-2.0, 2.0]  # 40 chips lost at 20 a big blind

@@ -515,7 +515,7 @@ def _classify_hand(
         reason = "showdown without five board cards"
     elif in_a + in_b != won_a + won_b:
         reason = "chips won differ from chips put in"
-    elif len({*hole, *board} - {-1}) != sum(c >= 0 for c in hole) + 5:
+    elif len({*hole, *board}) != (9 if cards_a and cards_b else 8):  # a concealed pair is -1, -1
         reason = "a card dealt twice"
     if reason is not None:
         stats.inconsistent_reasons[reason] += 1
