@@ -10,9 +10,10 @@ import pytest
 import torch
 from typer.testing import CliRunner
 
-from pokerirl.agents.dqn import DQNConfig
+from pokerirl.agents.dqn import DQNConfig, train_dqn
 from pokerirl.agents.train import TrainConfig, parse_seeds, reward_run_fingerprint, train_agent
 from pokerirl.cli import app
+from pokerirl.game import make_agent
 
 torch.set_num_threads(1)
 FAST = ["--hands", "512", "--eval-every", "512", "--eval-hands", "200", "--concurrent-hands", "128"]
@@ -111,3 +112,34 @@ def test_learned_reward_training_records_the_run(tmp_path: Path) -> None:
         "payoff_weight": 0.5,
     }
     assert sum(calls) == record["final"]["transitions"]
+
+
+def test_learned_reward_from_a_real_irl_run_end_to_end(tmp_path: Path) -> None:
+    import pyarrow.parquet as pq
+
+    from pokerirl.irl import load_config, load_reward, train_table
+    from pokerirl.irl.toy import toy_expert_table
+
+    pq.write_table(toy_expert_table(num_hands=200), tmp_path / "table.parquet")
+    settings = load_config("hairl", overrides={"epochs": 1, "batch_size": 64})
+    train_table(tmp_path / "table.parquet", tmp_path / "run", algo="hairl", config=settings)
+    out = tmp_path / "agent"
+    code, output = invoke(
+        "agent", "train", "--reward", "learned", "--reward-run", str(tmp_path / "run"),
+        "--payoff-weight", "0.3", "--out", str(out), "-q", *FAST,
+    )  # fmt: skip
+    assert code == 0, output
+    record = json.loads((out / "config.json").read_text())
+    assert record["reward"]["fingerprint"] == reward_run_fingerprint(tmp_path / "run")
+    assert record["reward"]["payoff_weight"] == 0.3
+    # The run's real f_theta in the trainer: non-terminal rewards are (1 - w) f(s, a).
+    f = load_reward(tmp_path / "run")
+    learner = train_dqn(
+        DQNConfig(concurrent_hands=64), hands=128, seed=0, opponent=make_agent("random"),
+        reward_fn=f, payoff_weight=0.3,
+    )  # fmt: skip
+    replay, n = learner.replay, learner.replay.size
+    steps = ~replay.done[:n]
+    expected = 0.7 * f(replay.obs[:n][steps], replay.actions[:n][steps])
+    np.testing.assert_allclose(replay.rewards[:n][steps], expected, rtol=1e-5, atol=1e-6)
+    assert steps.sum() > 20 and np.unique(expected).size > 1

@@ -108,10 +108,8 @@ def reward_run_fingerprint(run_dir: str | os.PathLike[str]) -> str:
 def load_reward_fn(run_dir: str | os.PathLike[str]) -> RewardFn:
     """f_θ of a learned-reward run, via ``pokerirl.irl.load_reward`` (imported here only)."""
     reward_run_fingerprint(run_dir)  # a clear error before the irl package is touched
-    try:
-        from pokerirl.irl import load_reward
-    except ImportError:
-        raise ValueError("learned rewards need pokerirl.irl.load_reward (not installed)") from None
+    from pokerirl.irl import load_reward
+
     return load_reward(run_dir)
 
 
