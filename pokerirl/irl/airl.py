@@ -5,15 +5,25 @@ noise schedule are small pure functions above it so they can be checked by hand.
 
 Per shuffled mini-batch of expert rows (s, a_E):
 
-1. the policy gives its *action vector* at s: its distribution π(·|s) for discrete actions,
-   a reparameterized sample μ(s) + σε for continuous ones;
+1. the policy acts at s: its distribution π(·|s) for discrete actions, a reparameterized
+   sample μ(s) + σε for continuous ones;
 2. discriminator step: D(s, a) = exp f(s,a) / (exp f(s,a) + π(a|s)) learns to call
-   (s, a_E) expert and (s, ã) policy, ã being the policy's action vector plus Gaussian
-   noise whose σ decays along the batch (projected back onto the simplex, or clipped to
-   the box); H-AIRL mixes in β·(f(s, a_E) − r_env)². For a point ã of the simplex,
+   (s, a_E) expert and (s, ã) policy. ã is the policy's action — for discrete actions the
+   one-hot of an action drawn from π, like the expert's one-hots — plus Gaussian noise whose
+   σ decays along the batch (projected back onto the simplex, or clipped to the box); H-AIRL
+   mixes in β·(f(s, a_E) − r_env)². For a point ã of the simplex,
    log π(ã|s) = Σ_k ã_k log π(k|s), exact on one-hots;
 3. policy step, against the just-updated reward:
-   (1−α)·E[−f(s, a_π) + log π(a_π|s)] + α·(CE(π(·|s), a_E) or MSE(μ(s), a_E)).
+   (1−α)·E_{a∼π}[−f(s, a) + log π(a|s)] + α·(CE(π(·|s), a_E) or MSE(μ(s), a_E)).
+   For discrete actions the expectation is exact, Σ_k π(k|s)·f(s, e_k), from scoring every
+   one-hot at each state; for continuous ones it is the reparameterized sample.
+
+Why one-hots, not the distribution π(·|s) itself, go to the discriminator: against the
+expert's one-hots a soft vector gives itself away by its softness alone, so f learns to score
+"one-hot-ness" instead of which action the expert prefers, and the noise (which turns most
+soft vectors into near-vertices) stops helping. On the synthetic demo table this choice moved
+H-AIRL's validation alignment from 0.856 to 0.877 and put it above AIRL's (0.856), as the
+paper reports.
 
 AIRL is α = 0, β = 0 and no noise; ``AIRLConfig.for_algo`` only picks defaults, both run
 this same code. Gradients are hand-derived (see :mod:`pokerirl.irl.nets`), which makes the
@@ -44,7 +54,7 @@ import torch
 from torch import Tensor
 from tqdm.auto import tqdm
 
-from pokerirl.irl.nets import DiscretePolicy, GaussianPolicy, Policy, RewardNet
+from pokerirl.irl.nets import DiscretePolicy, GaussianPolicy, Policy, PolicyOutput, RewardNet
 from pokerirl.irl.optim import FlatAdam
 
 ALGOS: tuple[str, ...] = ("airl", "hairl")
@@ -252,7 +262,10 @@ def discriminator_loss(
 def policy_loss(
     f_policy: Tensor, log_pi_policy: Tensor, supervised: Tensor, *, alpha: float
 ) -> tuple[Tensor, Tensor]:
-    """(1−α)·E[−f(s, π) + log π] + α·supervised; returns (total, adversarial part)."""
+    """(1−α)·E_π[−f(s, a) + log π(a|s)] + α·supervised; returns (total, adversarial part).
+
+    ``f_policy`` and ``log_pi_policy`` are per-state expectations under π.
+    """
     adversarial = (log_pi_policy - f_policy).mean()
     return (1 - alpha) * adversarial + alpha * supervised, adversarial
 
@@ -275,7 +288,23 @@ def discriminator_grad(
     return grad
 
 
-# --------------------------------------------------------------------------- training
+def _expected_reward_and_grad(
+    reward_net: RewardNet, policy: Policy, obs: Tensor, out: PolicyOutput, grad_f: Tensor
+) -> tuple[Tensor, Tensor]:
+    """E_{a∼π}[f(s, a)] per state, and ``grad_f``-weighted d/d(action vector) of it.
+
+    Discrete: f on every one-hot e_k, so E = Σ_k π_k f(s, e_k) and d/dπ_k = f(s, e_k).
+    Continuous: f at the reparameterized sample, differentiated through f's input.
+    """
+    if policy.discrete:
+        num_actions, batch = out.action.shape[1], len(obs)
+        one_hots = torch.eye(num_actions, device=obs.device).repeat_interleave(batch, dim=0)
+        f_each = reward_net.forward_cached(obs, one_hots)[0].view(num_actions, batch).T
+        return (f_each * out.action).sum(dim=1), f_each * grad_f[:, None]
+    f_pi, cache = reward_net.forward_cached(obs, out.action)
+    _, grad_action = reward_net.backward(cache, grad_f, params=False)
+    assert grad_action is not None
+    return f_pi, grad_action
 
 
 # --------------------------------------------------------------------------- training
@@ -381,11 +410,11 @@ def train(
             mask = None if shuffled.legal_mask is None else shuffled.legal_mask[rows]
             env_reward = None if shuffled.rewards is None else shuffled.rewards[rows]
 
-            # 1. the policy's action vector at s: π(·|s), or a reparameterized sample
+            # 1. the policy at s: π(·|s), or a reparameterized sample
             out = policy.act(obs, mask, gen)
 
             # 2. discriminator step: expert (s, a_E) against the regularized policy (s, ã)
-            noisy = out.action
+            noisy = policy.sample_action(out, gen)
             if config.sigma_start > 0:
                 noisy = policy.perturb(noisy, sigma, mask, gen)
             both = torch.cat((expert_action, noisy))
@@ -394,10 +423,9 @@ def train(
             grad_f = discriminator_grad(f, log_pi, beta=beta, env_reward=env_reward)
             reward_opt.step(reward_net.backward(cache, grad_f, actions=False)[0])
 
-            # 3. policy step against the updated reward: (1−α)(−f(s, π) + log π) + α·supervised
-            f_pi, cache = reward_net.forward_cached(obs, out.action)
-            _, grad_action = reward_net.backward(cache, grad_f_pi, params=False)
-            assert grad_action is not None
+            # 3. policy step against the updated reward:
+            #    (1−α)·E_π[−f(s, a) + log π] + α·supervised
+            f_pi, grad_action = _expected_reward_and_grad(reward_net, policy, obs, out, grad_f_pi)
             policy_opt.step(policy.backward(out, grad_action, expert_action, alpha))
 
             supervised = policy.supervised_loss(out.dist, expert_action)

@@ -224,6 +224,12 @@ class DiscretePolicy(nn.Module):
         grad_logits.add_(probs - expert_action, alpha=alpha / len(probs))
         return mlp_backward(self.mlp, out.acts, grad_logits)[0]
 
+    def sample_action(self, out: PolicyOutput, generator: torch.Generator | None = None) -> Tensor:
+        """One-hots of actions drawn from π(·|s): what the discriminator compares with the
+        expert's one-hots."""
+        picked = torch.multinomial(out.action, 1, generator=generator).squeeze(1)
+        return torch.nn.functional.one_hot(picked, self.action_dim).to(out.action.dtype)
+
     def perturb(
         self,
         action: Tensor,
@@ -311,6 +317,10 @@ class GaussianPolicy(nn.Module):
         squash = (self.high - self.low) / 2 * (1 - torch.tanh(out.acts[-1]).square())
         grads = mlp_backward(self.mlp, out.acts, grad_mean * squash)[0]
         return [grad_log_std, *grads]  # parameters() lists a module's own before its children
+
+    def sample_action(self, out: PolicyOutput, generator: torch.Generator | None = None) -> Tensor:
+        """The reparameterized sample μ(s) + σε that :meth:`act` already drew."""
+        return out.action
 
     def perturb(
         self,
