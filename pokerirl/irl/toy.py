@@ -16,7 +16,9 @@ from __future__ import annotations
 import numpy as np
 import pyarrow as pa
 
+from pokerirl.datasets.table import fixed_size_list
 from pokerirl.encoding import (
+    ACTIONS,
     BOARD_SIZE_BY_ROUND,
     CALL,
     CHECK,
@@ -78,7 +80,7 @@ def toy_expert_table(
     is_last = np.r_[hand[1:] != hand[:-1], True]
     payoff = np.round(rng.normal(0.0, 3.0, size=num_hands), 1).astype(np.float32)[hand]
     reward = np.where(is_last, payoff, 0.0).astype(np.float32)
-    names = np.array(["call", "raise", "fold", "check"])
+    names = np.array(ACTIONS)
     return pa.table(
         {
             "hand_id": pa.array([f"toy-{seed}-{h}" for h in hand], pa.string()),
@@ -87,17 +89,12 @@ def toy_expert_table(
             "position": pa.array(rng.integers(0, 2, size=n), pa.int8()),
             "street": pa.array(street, pa.int8()),
             "action": pa.array(names[action_id], pa.string()),
-            "raise_nums": _fixed(raise_nums.astype(np.int8), pa.int8()),
+            "raise_nums": fixed_size_list(raise_nums.astype(np.int8), pa.int8()),
             "payoff_bb": pa.array(payoff, pa.float32()),
             "is_last": pa.array(is_last, pa.bool_()),
-            "obs": _fixed(obs, pa.uint8()),
+            "obs": fixed_size_list(obs, pa.uint8()),
             "action_id": pa.array(action_id, pa.int8()),
-            "legal_mask": _fixed(legal, pa.bool_()),
+            "legal_mask": fixed_size_list(legal, pa.bool_()),
             "reward": pa.array(reward, pa.float32()),
         }
     )
-
-
-def _fixed(matrix: np.ndarray, value_type: pa.DataType) -> pa.FixedSizeListArray:
-    flat = pa.array(matrix.reshape(-1), value_type)
-    return pa.FixedSizeListArray.from_arrays(flat, matrix.shape[1])
