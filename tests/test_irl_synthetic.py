@@ -62,3 +62,16 @@ def test_expected_reward_gradient_matches_autograd() -> None:
     (reference * weight).sum().backward()
     torch.testing.assert_close(expected, reference.detach())
     torch.testing.assert_close(grad, probs.grad)
+
+
+def test_sampled_actions_are_legal_one_hots_with_the_policy_frequencies() -> None:
+    torch.manual_seed(0)
+    policy = DiscretePolicy(obs_dim=5, num_actions=4, hidden=(8,))
+    obs = torch.rand(1, 5).expand(40_000, 5)
+    mask = torch.tensor([True, True, False, True]).expand(40_000, 4)
+    out = policy.act(obs, mask)
+    sampled = policy.sample_action(out, torch.Generator().manual_seed(1))
+    assert ((sampled == 0) | (sampled == 1)).all() and (sampled.sum(dim=1) == 1).all()
+    assert (sampled[:, 2] == 0).all()  # the illegal action is never drawn
+    frequencies = sampled.mean(dim=0)
+    torch.testing.assert_close(frequencies, out.action[0], atol=0.01, rtol=0)

@@ -297,9 +297,7 @@ def _expected_reward_and_grad(
     Continuous: f at the reparameterized sample, differentiated through f's input.
     """
     if policy.discrete:
-        num_actions, batch = out.action.shape[1], len(obs)
-        one_hots = torch.eye(num_actions, device=obs.device).repeat_interleave(batch, dim=0)
-        f_each = reward_net.forward_cached(obs, one_hots)[0].view(num_actions, batch).T
+        f_each = reward_net.forward_each_action(obs)
         return (f_each * out.action).sum(dim=1), f_each * grad_f[:, None]
     f_pi, cache = reward_net.forward_cached(obs, out.action)
     _, grad_action = reward_net.backward(cache, grad_f, params=False)

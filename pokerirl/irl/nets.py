@@ -130,6 +130,16 @@ class RewardNet(nn.Module):
         head_acts = mlp_forward(self.head, hidden)
         return head_acts[-1].squeeze(-1), RewardCache(obs, actions, hidden, head_acts)
 
+    def forward_each_action(self, obs: Tensor) -> Tensor:
+        """(B, action_dim): f(s, e_k) for every one-hot e_k, sharing the state half."""
+        features = torch.addmm(self.obs_layer.bias, obs, self.obs_layer.weight.T)
+        # W_a e_k is column k of W_a: broadcast it instead of multiplying by one-hots, into a
+        # contiguous (k, B, H) buffer (a broadcast's own output layout is several times slower).
+        hidden = features.new_empty(self.action_dim, *features.shape)
+        torch.add(features, self.action_layer.weight.T[:, None, :], out=hidden).relu_()
+        f = mlp_forward(self.head, hidden.view(-1, features.shape[1]))[-1]
+        return f.view(self.action_dim, len(obs)).T
+
     def backward(
         self, cache: RewardCache, grad_f: Tensor, *, params: bool = True, actions: bool = True
     ) -> tuple[list[Tensor], Tensor | None]:
@@ -226,9 +236,18 @@ class DiscretePolicy(nn.Module):
 
     def sample_action(self, out: PolicyOutput, generator: torch.Generator | None = None) -> Tensor:
         """One-hots of actions drawn from π(·|s): what the discriminator compares with the
-        expert's one-hots."""
-        picked = torch.multinomial(out.action, 1, generator=generator).squeeze(1)
-        return torch.nn.functional.one_hot(picked, self.action_dim).to(out.action.dtype)
+        expert's one-hots.
+
+        Inverse-CDF sampling, three times faster than ``multinomial`` + ``one_hot`` here. With
+        u < the last cumulative probability, the pick is always an action of positive
+        probability, so never an illegal one.
+        """
+        cumulative = out.action.cumsum(dim=1)
+        u = torch.rand(
+            (len(cumulative), 1), generator=generator, device=cumulative.device
+        ).mul_(cumulative[:, -1:])
+        picked = (cumulative <= u).sum(dim=1, keepdim=True)
+        return torch.zeros_like(out.action).scatter_(1, picked, 1.0)
 
     def perturb(
         self,
