@@ -21,6 +21,7 @@ tensor([1., 1., 1., 1., 1.], grad_fn=<SumBackward1>)
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Sequence
 from typing import NamedTuple
@@ -136,7 +137,7 @@ class RewardNet(nn.Module):
         # W_a e_k is column k of W_a: broadcast it instead of multiplying by one-hots, into a
         # contiguous (k, B, H) buffer (a broadcast's own output layout is several times slower).
         hidden = features.new_empty(self.action_dim, *features.shape)
-        torch.add(features, self.action_layer.weight.T[:, None, :], out=hidden).relu_()
+        torch.add(features, self.action_layer.weight.T.contiguous()[:, None, :], out=hidden).relu_()
         f = mlp_forward(self.head, hidden.view(-1, features.shape[1]))[-1]
         return f.view(self.action_dim, len(obs)).T
 
@@ -375,8 +376,14 @@ def project_to_simplex(v: Tensor, mask: Tensor | None = None) -> Tensor:
         # Masked entries sort last and fall below any threshold, so they project to 0.
         v = v.masked_fill(~mask, MASKED_LOGIT)
     sorted_v, _ = torch.sort(v, dim=-1, descending=True)
-    k = torch.arange(1, v.shape[-1] + 1, device=v.device, dtype=v.dtype)
+    k = _one_to(v.shape[-1], v.device, v.dtype)
     # The threshold is max_k (Σ_{i≤k} sorted_v_i − 1) / k: the sequence rises while
     # sorted_v_k is in the support and falls after, so its maximum is at the support's end.
     theta = ((sorted_v.cumsum(dim=-1) - 1) / k).amax(dim=-1, keepdim=True)
     return (v - theta).clamp_min(0)
+
+
+@functools.cache
+def _one_to(n: int, device: torch.device, dtype: torch.dtype) -> Tensor:
+    """1, 2, ..., n, made once per size (this runs every training step)."""
+    return torch.arange(1, n + 1, device=device, dtype=dtype)
