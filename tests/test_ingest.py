@@ -91,10 +91,15 @@ def test_kth_character_is_kth_pass(ingested: tuple[Path, dict]) -> None:
     rows = rows_of(ingested[0], ZED_FIRST)
     sequence = list(zip(rows["player"], rows["street"], rows["action"], strict=True))
     assert sequence == [
-        ("Zed", 0, "call"), ("Amy", 0, "check"),
-        ("Zed", 1, "check"), ("Amy", 1, "raise"), ("Zed", 1, "call"),
-        ("Zed", 2, "raise"), ("Amy", 2, "call"),
-        ("Zed", 3, "check"), ("Amy", 3, "check"),
+        ("Zed", 0, "call"),
+        ("Amy", 0, "check"),
+        ("Zed", 1, "check"),
+        ("Amy", 1, "raise"),
+        ("Zed", 1, "call"),
+        ("Zed", 2, "raise"),
+        ("Amy", 2, "call"),
+        ("Zed", 3, "check"),
+        ("Amy", 3, "check"),
     ]
     assert rows["board"][:3] == ["", "", "2c 7d 9h"]
     assert rows["board"][-1] == "2c 7d 9h Ts Js"
@@ -122,7 +127,10 @@ def test_all_in_facing_a_bet_is_a_call_and_ends_the_betting(
     out, summary = ingested
     rows = rows_of(out, ALL_IN)
     assert list(zip(rows["player"], rows["action"], strict=True)) == [
-        ("Zed", "call"), ("Amy", "check"), ("Zed", "raise"), ("Amy", "call"),
+        ("Zed", "call"),
+        ("Amy", "check"),
+        ("Zed", "raise"),
+        ("Amy", "call"),
     ]
     # Zed put in 20 and got 5 back; Amy put in 15 and won 30.
     assert rows["payoff_bb"] == [-1.5, 1.5, -1.5, 1.5]
@@ -221,9 +229,7 @@ def test_month_archive_and_nested_archive_match_the_folder(month: Path, tmp_path
     assert summary["dropped"]["skipped_channel"] == 1 and summary["buckets_add_up"]
 
 
-def test_archive_without_folders_takes_channel_from_its_name(
-    month: Path, tmp_path: Path
-) -> None:
+def test_archive_without_folders_takes_channel_from_its_name(month: Path, tmp_path: Path) -> None:
     (tmp_path / "holdem.199504.tgz").write_bytes(_tgz(_month_members(month, "./")))
     summary = ingest([tmp_path / "holdem.199504.tgz"], tmp_path / "t.parquet")
     assert summary["months"] == ["holdem/199504"] and summary["kept_hands"] == 5
@@ -273,7 +279,7 @@ def test_cli_ingest_prints_summary(month: Path, tmp_path: Path) -> None:
     out = tmp_path / "t.parquet"
     result = CliRunner().invoke(app, ["ingest", str(month), "--out", str(out)])
     assert result.exit_code == 0, result.output
-    printed = json.loads(result.stdout[result.stdout.index("{"):])
+    printed = json.loads(result.stdout[result.stdout.index("{") :])
     assert printed == json.loads(summary_path(out).read_text())
 
 

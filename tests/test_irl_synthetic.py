@@ -36,8 +36,12 @@ def test_hairl_beats_majority_and_airl_on_synthetic_demo_data(
         for algo in alignment:
             config = load_config(algo, overrides={"epochs": 8, "seed": seed})
             summary = train_table(
-                str(table), str(tmp_path / f"{algo}{seed}"), algo=algo, config=config,
-                device="cpu", progress=False,
+                str(table),
+                str(tmp_path / f"{algo}{seed}"),
+                algo=algo,
+                config=config,
+                device="cpu",
+                progress=False,
             )
             alignment[algo].append(summary.metrics[-1]["val_alignment"])
         majority.append(summary.metrics[-1]["majority_alignment"])

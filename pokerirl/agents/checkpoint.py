@@ -27,6 +27,7 @@ from typing import Any
 import torch
 
 from pokerirl.agents.dqn import GreedyQAgent, QNetwork
+from pokerirl.atomic import write_bytes
 
 MODEL_FILE, CONFIG_FILE = "model.pt", "config.json"
 METRICS_FILE, CURVE_FILE = "metrics.jsonl", "learning_curve.png"
@@ -39,13 +40,6 @@ def is_finished(folder: str | os.PathLike[str]) -> bool:
     return (Path(folder) / MODEL_FILE).is_file() and (Path(folder) / CONFIG_FILE).is_file()
 
 
-def _write_atomic(path: Path, data: bytes) -> None:
-    """Write ``data`` to a temporary file beside ``path``, then rename it over ``path``."""
-    tmp = path.with_name(f".{path.name}.tmp")
-    tmp.write_bytes(data)
-    os.replace(tmp, path)
-
-
 def save_agent(folder: str | os.PathLike[str], network: QNetwork, config: dict[str, Any]) -> None:
     """Write ``network``'s weights and ``config`` (JSON-able; ``hidden`` is required).
 
@@ -55,9 +49,9 @@ def save_agent(folder: str | os.PathLike[str], network: QNetwork, config: dict[s
     folder.mkdir(parents=True, exist_ok=True)
     weights = io.BytesIO()
     torch.save({k: v.detach().cpu().clone() for k, v in network.state_dict().items()}, weights)
-    _write_atomic(folder / MODEL_FILE, weights.getvalue())
+    write_bytes(folder / MODEL_FILE, weights.getvalue())
     record = {"format": FORMAT, "version": FORMAT_VERSION, **config}
-    _write_atomic(folder / CONFIG_FILE, (json.dumps(record, indent=2) + "\n").encode())
+    write_bytes(folder / CONFIG_FILE, (json.dumps(record, indent=2) + "\n").encode())
 
 
 def folder_fingerprint(folder: str | os.PathLike[str]) -> str:

@@ -50,6 +50,7 @@ from pokerirl.agents.dqn import (
     train_dqn,
 )
 from pokerirl.agents.registry import agent_fingerprint, resolve_agent
+from pokerirl.atomic import atomic_path
 from pokerirl.game import make_agent, play_match
 
 REWARD_MODES = ("sparse", "learned")
@@ -160,10 +161,9 @@ def plot_learning_curve(metrics: list[dict[str, Any]], path: Path) -> None:
     axes.set_ylabel("mbb/hand (greedy, duplicate)")
     axes.legend()
     figure.tight_layout()
-    tmp = path.with_name(f".{path.name}.tmp")
-    figure.savefig(tmp, format="png", dpi=100)
+    with atomic_path(path) as temporary:
+        figure.savefig(temporary, format="png", dpi=100)
     plt.close(figure)
-    os.replace(tmp, path)
 
 
 def train_agent(

@@ -67,8 +67,14 @@ class _Templates:
                 offsets.append(len(rows))
                 lengths.append(len(replay.decisions))
                 rows.extend(
-                    (d.position, d.street, d.action_id, *d.raise_nums, *d.legal_mask,
-                     d.raises_uncapped)
+                    (
+                        d.position,
+                        d.street,
+                        d.action_id,
+                        *d.raise_nums,
+                        *d.legal_mask,
+                        d.raises_uncapped,
+                    )
                     for d in replay.decisions
                 )
             self.hand_template[hand] = template
@@ -143,8 +149,10 @@ def month_table(hands: MonthHands) -> tuple[pa.Table, int]:
     board_text = pa.array(
         [
             text[:length]
-            for text in (" ".join(map(CARD_TEXT.__getitem__, flat_board[i : i + 5]))
-                         for i in range(0, len(flat_board), 5))
+            for text in (
+                " ".join(map(CARD_TEXT.__getitem__, flat_board[i : i + 5]))
+                for i in range(0, len(flat_board), 5)
+            )
             for length in _BOARD_TEXT_LENGTH
         ],
         type=pa.string(),

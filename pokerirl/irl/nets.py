@@ -244,9 +244,9 @@ class DiscretePolicy(nn.Module):
         probability, so never an illegal one.
         """
         cumulative = out.action.cumsum(dim=1)
-        u = torch.rand(
-            (len(cumulative), 1), generator=generator, device=cumulative.device
-        ).mul_(cumulative[:, -1:])
+        u = torch.rand((len(cumulative), 1), generator=generator, device=cumulative.device).mul_(
+            cumulative[:, -1:]
+        )
         picked = (cumulative <= u).sum(dim=1, keepdim=True)
         return torch.zeros_like(out.action).scatter_(1, picked, 1.0)
 

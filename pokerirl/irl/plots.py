@@ -10,6 +10,8 @@ from typing import Any
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
+from pokerirl.atomic import atomic_path
+
 # file name -> (title, y label, [(metric key, legend label)])
 CURVES: dict[str, tuple[str, str, list[tuple[str, str]]]] = {
     "alignment.png": (
@@ -53,8 +55,7 @@ def plot_curves(metrics: Sequence[dict[str, Any]], out_dir: str | os.PathLike[st
         axes.legend()
         figure.tight_layout()
         path = out_dir / name
-        tmp = path.with_name(f".{name}.tmp")
-        figure.savefig(tmp, format="png")
-        os.replace(tmp, path)
+        with atomic_path(path) as temporary:
+            figure.savefig(temporary, format="png")
         written.append(path)
     return written

@@ -32,6 +32,7 @@ import numpy as np
 import torch
 from torch import Tensor
 
+from pokerirl.atomic import atomic_path, write_text
 from pokerirl.irl.airl import AIRLConfig, TrainResult, resolve_device, train
 from pokerirl.irl.nets import DiscretePolicy, GaussianPolicy, Policy, RewardNet
 from pokerirl.irl.plots import plot_curves
@@ -124,7 +125,7 @@ def train_table(
     def log_epoch(metrics: dict[str, Any]) -> None:
         # Rewrite the whole (small) file each epoch: readable live, never half-written.
         metrics_lines.append(json.dumps(metrics))
-        _write_text(out / METRICS_FILE, "\n".join(metrics_lines) + "\n")
+        write_text(out / METRICS_FILE, "\n".join(metrics_lines) + "\n")
 
     result = train(
         expert.to_expert_data(train_rows),
@@ -184,7 +185,7 @@ def save_run(
             "final_metrics": result.metrics[-1] if result.metrics else None,
         },
     }
-    _write_text(out / CONFIG_FILE, json.dumps(record, indent=2) + "\n")
+    write_text(out / CONFIG_FILE, json.dumps(record, indent=2) + "\n")
 
 
 def package_versions() -> dict[str, str]:
@@ -299,15 +300,8 @@ def load_reward(run_dir: str | os.PathLike[str]) -> RewardFunction:
 # --------------------------------------------------------------------------- files
 
 
-def _write_text(path: Path, text: str) -> None:
-    tmp = path.with_name(f".{path.name}.tmp")
-    tmp.write_text(text)
-    os.replace(tmp, path)
-
-
 def _save_state_dict(module: torch.nn.Module, path: Path) -> None:
     # Clone: FlatAdam keeps parameters as views of one buffer; save each on its own.
     state = {k: v.detach().cpu().clone() for k, v in module.state_dict().items()}
-    tmp = path.with_name(f".{path.name}.tmp")
-    torch.save(state, tmp)
-    os.replace(tmp, path)
+    with atomic_path(path) as temporary:
+        torch.save(state, temporary)
