@@ -310,8 +310,9 @@ def render_png(report: TournamentReport) -> bytes:
     for i, m in enumerate(report.matchups):
         x = [s.seed + (i - (len(report.matchups) - 1) / 2) * width for s in m.seeds]
         y = [s.mbb_per_hand for s in m.seeds]
-        errors = [[s.mbb_per_hand - s.ci95[0] for s in m.seeds],
-                  [s.ci95[1] - s.mbb_per_hand for s in m.seeds]]  # fmt: skip
+        # Clipped at 0: rounding can put a zero-width CI a hair off its mean.
+        errors = [[max(0.0, s.mbb_per_hand - s.ci95[0]) for s in m.seeds],
+                  [max(0.0, s.ci95[1] - s.mbb_per_hand) for s in m.seeds]]  # fmt: skip
         bars = axes.errorbar(x, y, yerr=errors, fmt="o", capsize=3, markersize=4,
                              label=f"{m.agent_a} vs {m.agent_b}")  # fmt: skip
         axes.axhline(m.pooled.mbb_per_hand, linestyle="--", linewidth=1, color=bars[0].get_color())
