@@ -201,8 +201,8 @@ def _fingerprints(spec: str, seeds: Sequence[int]) -> dict[int, str]:
         if resolved not in cache:
             try:
                 cache[resolved] = agent_fingerprint(resolve_agent(resolved))
-            except (ValueError, OSError) as error:
-                raise TournamentError(f"{resolved}: cannot load the agent ({error})") from None
+            except (ValueError, OSError) as error:  # resolve_agent's messages name the spec
+                raise TournamentError(str(error)) from None
         prints[seed] = cache[resolved]
     return prints
 
@@ -314,9 +314,9 @@ def run_tournament(
             or a saved seed from another configuration.
 
     >>> import tempfile
-    >>> report = run_tournament([("raise", "call")], hands=1000, seeds=[0, 1],
-    ...                         out=tempfile.mkdtemp())
-    >>> [round(s.mbb_per_hand, 6) for s in report.matchups[0].seeds]  # duplicate: exactly even
+    >>> with tempfile.TemporaryDirectory() as out:
+    ...     report = run_tournament([("raise", "call")], hands=1000, seeds=[0, 1], out=out)
+    >>> [s.mbb_per_hand for s in report.matchups[0].seeds]  # duplicate: exactly even here
     [0.0, 0.0]
     """
     seeds = sorted(set(seeds))
