@@ -262,8 +262,13 @@ def render_markdown(report: TournamentReport) -> str:
     out += ["", "## Run", ""]
     for m in report.matchups:
         for side, spec, key in (("A", m.spec_a, "fingerprint_a"), ("B", m.spec_b, "fingerprint_b")):
-            prints = sorted({getattr(s, key) for s in m.seeds})
-            out.append(f"- {m.agent_a} vs {m.agent_b}, {side} = `{spec}`: {', '.join(prints)}")
+            prints = {getattr(s, key) for s in m.seeds}
+            shown = (
+                prints.pop()
+                if len(prints) == 1
+                else f"{len(prints)} agents, one per seed (fingerprints in per_seed.csv)"
+            )
+            out.append(f"- {m.agent_a} vs {m.agent_b}, {side} = `{spec}`: {shown}")
     versions = ", ".join(f"{name} {version}" for name, version in report.versions.items())
     timing = report.timing
     out += [

@@ -26,7 +26,6 @@ from __future__ import annotations
 import contextlib
 import json
 import multiprocessing
-import os
 import platform
 import re
 import sys
@@ -90,13 +89,28 @@ class _SeedTask:
     spec_a: str
     spec_b: str
     key: SeedKey
-    torch_threads: int | None  # set in worker processes only
 
 
-def _inference_mode() -> contextlib.AbstractContextManager[Any]:
-    # Only agents that loaded torch need it; importing torch for built-ins would cost seconds.
+@contextlib.contextmanager
+def _torch_for_play() -> Iterator[None]:
+    """Inference mode on one torch thread, restored afterwards.
+
+    One thread whatever ``jobs`` is: the parallelism is the processes, and a network's sums
+    could otherwise be split differently with another thread count, changing a near-tie
+    argmax and so the result. Only agents that loaded torch need any of it; importing torch
+    for built-ins would cost seconds.
+    """
     torch = sys.modules.get("torch")
-    return torch.inference_mode() if torch is not None else contextlib.nullcontext()
+    if torch is None:
+        yield
+        return
+    threads = torch.get_num_threads()
+    torch.set_num_threads(1)
+    try:
+        with torch.inference_mode():
+            yield
+    finally:
+        torch.set_num_threads(threads)
 
 
 def _play_seed(task: _SeedTask) -> SeedResult:
@@ -107,10 +121,7 @@ def _play_seed(task: _SeedTask) -> SeedResult:
     found = (agent_fingerprint(agent_a), agent_fingerprint(agent_b))
     if found != (key.fingerprint_a, key.fingerprint_b):
         raise TournamentError(f"seed {key.seed}: an agent changed on disk during the run")
-    torch = sys.modules.get("torch")
-    if torch is not None and task.torch_threads is not None:
-        torch.set_num_threads(task.torch_threads)  # jobs x threads must not oversubscribe
-    with _inference_mode():
+    with _torch_for_play():
         result = play_match(
             agent_a,
             agent_b,
@@ -329,7 +340,6 @@ def run_tournament(
     done: dict[Cell, SeedResult] = {}
     tasks: dict[Cell, _SeedTask] = {}
     workers = min(jobs, len(matchups) * len(seeds))
-    threads = max(1, (os.cpu_count() or 1) // workers) if workers > 1 else None
     for m, (a, b) in enumerate(matchups):
         for seed in seeds:
             key = SeedKey(seed=seed, fingerprint_a=prints[a][seed], fingerprint_b=prints[b][seed],
@@ -338,7 +348,7 @@ def run_tournament(
             if saved is not None:
                 done[m, seed] = saved
             else:
-                tasks[m, seed] = _SeedTask(spec_a=a, spec_b=b, key=key, torch_threads=threads)
+                tasks[m, seed] = _SeedTask(spec_a=a, spec_b=b, key=key)
 
     started = time.perf_counter()
     with tqdm(total=len(tasks) * hands, unit="hand", unit_scale=True, disable=not progress,
