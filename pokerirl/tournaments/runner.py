@@ -214,6 +214,11 @@ def _fingerprints(spec: str, seeds: Sequence[int]) -> dict[int, str]:
                 cache[resolved] = agent_fingerprint(resolve_agent(resolved))
             except (ValueError, OSError) as error:  # resolve_agent's messages name the spec
                 raise TournamentError(str(error)) from None
+            except Exception as error:  # e.g. a corrupt checkpoint: still one line, no traceback
+                first = (str(error).strip().splitlines() or [""])[0]
+                raise TournamentError(
+                    f"{resolved}: cannot load the agent ({type(error).__name__}: {first})"
+                ) from None
         prints[seed] = cache[resolved]
     return prints
 
