@@ -68,14 +68,16 @@ def test_retrained_agent_is_not_mixed_with_saved_results(agent_sets: Path) -> No
     _save(agent_sets / "hairl-dqn" / "seed-1", 999)  # seed 1 retrained: new weights
     with pytest.raises(TournamentError, match=r"seed-1\.json .*fingerprint_a 'sha256:"):
         run_tournament(matchup, hands=HANDS, seeds=[0, 1], out=agent_sets / "r")
-    redone = run_tournament(matchup, hands=HANDS, seeds=[0, 1], out=agent_sets / "r",
-                            overwrite=True)  # fmt: skip
+    redone = run_tournament(
+        matchup, hands=HANDS, seeds=[0, 1], out=agent_sets / "r", overwrite=True
+    )
     assert redone.timing["seeds_reused"] == 1
 
 
 def test_broken_agent_folder_is_a_one_line_error(agent_sets: Path) -> None:
     (agent_sets / "dqn" / "seed-2" / "model.pt").write_bytes(b"not a checkpoint")
     with pytest.raises(TournamentError, match="seed-2: cannot load") as error:
-        run_tournament([(str(agent_sets / "dqn"), "call")], hands=HANDS, seeds=[2],
-                       out=agent_sets / "r")  # fmt: skip
+        run_tournament(
+            [(str(agent_sets / "dqn"), "call")], hands=HANDS, seeds=[2], out=agent_sets / "r"
+        )
     assert "\n" not in str(error.value)

@@ -28,8 +28,20 @@ def _tournament(*args: str) -> dict:
 @pytest.fixture(scope="module")
 def two_matchups(tmp_path_factory: pytest.TempPathFactory) -> Path:
     out = tmp_path_factory.mktemp("report")
-    _tournament("--vs", "random", "raise", "call", "--hands", "2000", "--seeds", "0-2",
-                "--out", str(out), "--jobs", "1")  # fmt: skip
+    _tournament(
+        "--vs",
+        "random",
+        "raise",
+        "call",
+        "--hands",
+        "2000",
+        "--seeds",
+        "0-2",
+        "--out",
+        str(out),
+        "--jobs",
+        "1",
+    )
     return out
 
 
@@ -38,11 +50,22 @@ def test_vs_plays_each_agent_against_the_base(two_matchups: Path) -> None:
     pairs = [(m["agent_a"], m["agent_b"]) for m in data["matchups"]]
     assert pairs == [("raise", "random"), ("call", "random")]
     assert data["family"]["per_seed_tests"] == 6 and data["family"]["pooled_tests"] == 2
-    assert data["config"] == {"hands": 2000, "seeds": [0, 1, 2], "duplicate": True,
-                              "batch_size": 65536, "alpha": 0.05}  # fmt: skip
+    assert data["config"] == {
+        "hands": 2000,
+        "seeds": [0, 1, 2],
+        "duplicate": True,
+        "batch_size": 65536,
+        "alpha": 0.05,
+    }
     assert data["versions"]["rlcard"] == "1.2.0"
-    for key in ("mbb_per_hand", "std_error", "ci95", "p_value", "p_value_bonferroni",
-                "p_value_holm"):  # fmt: skip
+    for key in (
+        "mbb_per_hand",
+        "std_error",
+        "ci95",
+        "p_value",
+        "p_value_bonferroni",
+        "p_value_holm",
+    ):
         assert key in data["matchups"][0]["pooled"] and key in data["matchups"][0]["seeds"][0]
 
 
@@ -69,9 +92,11 @@ def test_markdown_json_and_csv_agree(two_matchups: Path) -> None:
     assert len(rows) == len(seeds) == 6
     for row, (m, s) in zip(rows, seeds, strict=True):
         assert (row["agent_a"], row["agent_b"], int(row["seed"])) == (
-            m["agent_a"], m["agent_b"], s["seed"])  # fmt: skip
-        for key in ("mbb_per_hand", "std_error", "p_value", "p_value_bonferroni",
-                    "p_value_holm"):  # fmt: skip
+            m["agent_a"],
+            m["agent_b"],
+            s["seed"],
+        )
+        for key in ("mbb_per_hand", "std_error", "p_value", "p_value_bonferroni", "p_value_holm"):
             assert float(row[key]) == s[key]  # full precision in both
         assert [float(row["ci95_low"]), float(row["ci95_high"])] == s["ci95"]
         assert row["significant_bonferroni"] == str(s["significant_bonferroni"])
@@ -109,12 +134,43 @@ def test_report_prints_markdown_and_json(two_matchups: Path) -> None:
 
 
 def test_tournament_agrees_with_match_and_reruns_identically(tmp_path: Path) -> None:
-    first = _tournament("random", "call", "--hands", "2000", "--seeds", "4",
-                        "--no-duplicate", "--out", str(tmp_path / "a"))  # fmt: skip
-    again = _tournament("random", "call", "--hands", "2000", "--seeds", "4",
-                        "--no-duplicate", "--out", str(tmp_path / "b"))  # fmt: skip
-    match = runner.invoke(app, ["match", "random", "call", "--hands", "2000", "--seed", "4",
-                                "--no-duplicate", "--format", "json"])  # fmt: skip
+    first = _tournament(
+        "random",
+        "call",
+        "--hands",
+        "2000",
+        "--seeds",
+        "4",
+        "--no-duplicate",
+        "--out",
+        str(tmp_path / "a"),
+    )
+    again = _tournament(
+        "random",
+        "call",
+        "--hands",
+        "2000",
+        "--seeds",
+        "4",
+        "--no-duplicate",
+        "--out",
+        str(tmp_path / "b"),
+    )
+    match = runner.invoke(
+        app,
+        [
+            "match",
+            "random",
+            "call",
+            "--hands",
+            "2000",
+            "--seed",
+            "4",
+            "--no-duplicate",
+            "--format",
+            "json",
+        ],
+    )
     summary = json.loads(match.stdout.strip().splitlines()[-1])
     seed = first["matchups"][0]["seeds"][0]
     assert seed["mbb_per_hand"] == pytest.approx(summary["mbb_per_hand"], rel=1e-12)

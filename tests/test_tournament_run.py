@@ -31,9 +31,12 @@ def test_each_seed_is_play_match_with_that_seed(tmp_path: Path, duplicate: bool)
     )
     for line in report.matchups[0].seeds:
         match = play_match(
-            make_agent("raise"), make_agent("random"), hands=HANDS, seed=line.seed,
+            make_agent("raise"),
+            make_agent("random"),
+            hands=HANDS,
+            seed=line.seed,
             duplicate=duplicate,
-        )  # fmt: skip
+        )
         assert line.mbb_per_hand == pytest.approx(match.mbb_per_hand, rel=1e-12)
         assert line.std_error == pytest.approx(match.std_error, rel=1e-9)
         assert line.n == (HANDS // 2 if duplicate else HANDS)
@@ -75,8 +78,9 @@ def test_pooled_test_is_over_seed_means_and_families_are_corrected(tmp_path: Pat
     assert [s.significant_bonferroni for s in lines] == [x < 0.05 / 8 for x in p]
     pooled = [m.pooled for m in report.matchups]
     assert report.family["pooled_tests"] == 2
-    np.testing.assert_allclose([x.p_value_bonferroni for x in pooled],
-                               bonferroni([x.p_value for x in pooled]))  # fmt: skip
+    np.testing.assert_allclose(
+        [x.p_value_bonferroni for x in pooled], bonferroni([x.p_value for x in pooled])
+    )
     # call beats random by about 1.2 bb/h, 80 standard errors on every seed.
     assert report.matchups[0].pooled.significant_bonferroni
     assert report.matchups[0].seeds_significant_bonferroni == 4
@@ -86,8 +90,10 @@ def test_one_seed_pools_over_its_own_units(tmp_path: Path) -> None:
     m = run_tournament([("call", "random")], hands=HANDS, seeds=[2], out=tmp_path).matchups[0]
     assert m.pooled_over == "units of the only seed"
     assert (m.pooled.mbb_per_hand, m.pooled.p_value, m.pooled.n) == (
-        m.seeds[0].mbb_per_hand, m.seeds[0].p_value, HANDS // 2,
-    )  # fmt: skip
+        m.seeds[0].mbb_per_hand,
+        m.seeds[0].p_value,
+        HANDS // 2,
+    )
 
 
 def test_same_seeds_same_numbers_whatever_the_number_of_processes(tmp_path: Path) -> None:
@@ -118,8 +124,7 @@ def test_rerun_with_another_config_refuses_unless_overwrite(tmp_path: Path) -> N
     with pytest.raises(TournamentError, match=r"hands 2000 -> 4000.*--overwrite"):
         run_tournament([("call", "random")], hands=2 * HANDS, seeds=[0], out=tmp_path)
     with pytest.raises(TournamentError, match="duplicate True -> False"):
-        run_tournament([("call", "random")], hands=HANDS, seeds=[0], out=tmp_path,
-                       duplicate=False)  # fmt: skip
+        run_tournament([("call", "random")], hands=HANDS, seeds=[0], out=tmp_path, duplicate=False)
     redone = run_tournament(
         [("call", "random")], hands=2 * HANDS, seeds=[0], out=tmp_path, overwrite=True
     )

@@ -282,10 +282,25 @@ def render_markdown(report: TournamentReport) -> str:
 
 
 CSV_COLUMNS = (
-    "agent_a", "agent_b", "seed", "hands", "n", "mbb_per_hand", "std_error", "ci95_low",
-    "ci95_high", "p_value", "p_value_bonferroni", "p_value_holm", "significant_bonferroni",
-    "significant_holm", "fingerprint_a", "fingerprint_b", "seconds", "hands_per_second",
-)  # fmt: skip
+    "agent_a",
+    "agent_b",
+    "seed",
+    "hands",
+    "n",
+    "mbb_per_hand",
+    "std_error",
+    "ci95_low",
+    "ci95_high",
+    "p_value",
+    "p_value_bonferroni",
+    "p_value_holm",
+    "significant_bonferroni",
+    "significant_holm",
+    "fingerprint_a",
+    "fingerprint_b",
+    "seconds",
+    "hands_per_second",
+)
 
 
 def render_csv(report: TournamentReport) -> str:
@@ -296,8 +311,9 @@ def render_csv(report: TournamentReport) -> str:
     for m in report.matchups:
         for s in m.seeds:
             row = {k: v for k, v in asdict(s).items() if k in CSV_COLUMNS}
-            row.update(agent_a=m.agent_a, agent_b=m.agent_b, ci95_low=s.ci95[0],
-                       ci95_high=s.ci95[1])  # fmt: skip
+            row.update(
+                agent_a=m.agent_a, agent_b=m.agent_b, ci95_low=s.ci95[0], ci95_high=s.ci95[1]
+            )
             writer.writerow({k: repr(v) if isinstance(v, float) else v for k, v in row.items()})
     return buffer.getvalue()
 
@@ -316,10 +332,13 @@ def render_png(report: TournamentReport) -> bytes:
         x = [s.seed + (i - (len(report.matchups) - 1) / 2) * width for s in m.seeds]
         y = [s.mbb_per_hand for s in m.seeds]
         # Clipped at 0: rounding can put a zero-width CI a hair off its mean.
-        errors = [[max(0.0, s.mbb_per_hand - s.ci95[0]) for s in m.seeds],
-                  [max(0.0, s.ci95[1] - s.mbb_per_hand) for s in m.seeds]]  # fmt: skip
-        bars = axes.errorbar(x, y, yerr=errors, fmt="o", capsize=3, markersize=4,
-                             label=f"{m.agent_a} vs {m.agent_b}")  # fmt: skip
+        errors = [
+            [max(0.0, s.mbb_per_hand - s.ci95[0]) for s in m.seeds],
+            [max(0.0, s.ci95[1] - s.mbb_per_hand) for s in m.seeds],
+        ]
+        bars = axes.errorbar(
+            x, y, yerr=errors, fmt="o", capsize=3, markersize=4, label=f"{m.agent_a} vs {m.agent_b}"
+        )
         axes.axhline(m.pooled.mbb_per_hand, linestyle="--", linewidth=1, color=bars[0].get_color())
     axes.axhline(0.0, color="black", linewidth=0.8)
     axes.set_xlabel("seed")

@@ -224,9 +224,14 @@ def _fingerprints(spec: str, seeds: Sequence[int]) -> dict[int, str]:
 
 
 def _validate(
-    matchups: Sequence[tuple[str, str]], hands: int, seeds: Sequence[int], duplicate: bool,
-    alpha: float, jobs: int, batch_size: int,
-) -> None:  # fmt: skip
+    matchups: Sequence[tuple[str, str]],
+    hands: int,
+    seeds: Sequence[int],
+    duplicate: bool,
+    alpha: float,
+    jobs: int,
+    batch_size: int,
+) -> None:
     if not matchups:
         raise TournamentError("no matchups: give two agents, or --vs BASE and one or more")
     if len(set(matchups)) < len(matchups):
@@ -241,7 +246,7 @@ def _validate(
         raise TournamentError(f"hands must be at least {least} {mode}, got {hands}")
     if duplicate and hands % 2:
         raise TournamentError(f"duplicate deals are played twice: hands must be even, got {hands}")
-    if duplicate and batch_size % 2 or batch_size < 2:
+    if batch_size < 2 or (duplicate and batch_size % 2):
         raise TournamentError(f"batch size must be even and at least 2, got {batch_size}")
     if not 0 < alpha < 1:
         raise TournamentError(f"alpha must be between 0 and 1, got {alpha}")
@@ -347,8 +352,14 @@ def run_tournament(
     workers = min(jobs, len(matchups) * len(seeds))
     for m, (a, b) in enumerate(matchups):
         for seed in seeds:
-            key = SeedKey(seed=seed, fingerprint_a=prints[a][seed], fingerprint_b=prints[b][seed],
-                          hands=hands, duplicate=duplicate, batch_size=batch_size)  # fmt: skip
+            key = SeedKey(
+                seed=seed,
+                fingerprint_a=prints[a][seed],
+                fingerprint_b=prints[b][seed],
+                hands=hands,
+                duplicate=duplicate,
+                batch_size=batch_size,
+            )
             saved = _load_seed(_seed_path(out, folders[m], seed), key, overwrite=overwrite)
             if saved is not None:
                 done[m, seed] = saved
@@ -356,8 +367,13 @@ def run_tournament(
                 tasks[m, seed] = _SeedTask(spec_a=a, spec_b=b, key=key)
 
     started = time.perf_counter()
-    with tqdm(total=len(tasks) * hands, unit="hand", unit_scale=True, disable=not progress,
-              desc="tournament") as bar:  # fmt: skip
+    with tqdm(
+        total=len(tasks) * hands,
+        unit="hand",
+        unit_scale=True,
+        disable=not progress,
+        desc="tournament",
+    ) as bar:
         for (m, seed), result in _run_tasks(tasks, workers):
             _save_seed(_seed_path(out, folders[m], seed), result)  # resumable from here
             done[m, seed] = result
@@ -365,21 +381,36 @@ def run_tournament(
     wall = time.perf_counter() - started
 
     report = _build_report(
-        matchups, seeds, done, hands=hands, duplicate=duplicate, alpha=alpha,
+        matchups,
+        seeds,
+        done,
+        hands=hands,
+        duplicate=duplicate,
+        alpha=alpha,
         batch_size=batch_size,
-        timing={"wall_seconds": wall, "hands_played": len(tasks) * hands,
-                "hands_per_second": len(tasks) * hands / wall if wall > 0 else 0.0,
-                "seeds_reused": len(matchups) * len(seeds) - len(tasks), "jobs": jobs},
-    )  # fmt: skip
+        timing={
+            "wall_seconds": wall,
+            "hands_played": len(tasks) * hands,
+            "hands_per_second": len(tasks) * hands / wall if wall > 0 else 0.0,
+            "seeds_reused": len(matchups) * len(seeds) - len(tasks),
+            "jobs": jobs,
+        },
+    )
     write_report(report, out)
     return report
 
 
 def _build_report(
-    matchups: Sequence[tuple[str, str]], seeds: Sequence[int],
-    done: dict[Cell, SeedResult], *, hands: int, duplicate: bool, alpha: float,
-    batch_size: int, timing: dict[str, Any],
-) -> TournamentReport:  # fmt: skip
+    matchups: Sequence[tuple[str, str]],
+    seeds: Sequence[int],
+    done: dict[Cell, SeedResult],
+    *,
+    hands: int,
+    duplicate: bool,
+    alpha: float,
+    batch_size: int,
+    timing: dict[str, Any],
+) -> TournamentReport:
     cells = [(m, seed) for m in range(len(matchups)) for seed in seeds]
     per_seed = dict(zip(cells, _corrected([done[c].estimate for c in cells], alpha), strict=True))
     if len(seeds) > 1:
@@ -407,18 +438,30 @@ def _build_report(
         )
         reports.append(
             MatchupReport(
-                agent_a=agent_label(a), agent_b=agent_label(b), spec_a=a, spec_b=b,
+                agent_a=agent_label(a),
+                agent_b=agent_label(b),
+                spec_a=a,
+                spec_b=b,
                 pooled=Line(**pooled[m]),
                 pooled_over="seeds" if len(seeds) > 1 else "units of the only seed",
                 seeds=lines,
-            )  # fmt: skip
+            )
         )
     return TournamentReport(
-        config={"hands": hands, "seeds": list(seeds), "duplicate": duplicate,
-                "batch_size": batch_size, "alpha": alpha},
-        family={"per_seed_tests": len(cells), "per_seed_threshold": alpha / len(cells),
-                "pooled_tests": len(matchups), "pooled_threshold": alpha / len(matchups)},
+        config={
+            "hands": hands,
+            "seeds": list(seeds),
+            "duplicate": duplicate,
+            "batch_size": batch_size,
+            "alpha": alpha,
+        },
+        family={
+            "per_seed_tests": len(cells),
+            "per_seed_threshold": alpha / len(cells),
+            "pooled_tests": len(matchups),
+            "pooled_threshold": alpha / len(matchups),
+        },
         matchups=tuple(reports),
         versions=_versions(),
         timing=timing,
-    )  # fmt: skip
+    )
