@@ -46,12 +46,21 @@ def parse_seeds(text: str) -> tuple[int, ...]:
     return tuple(sorted(seeds))
 
 
-def is_agent_set(spec: str) -> bool:
-    """Whether ``spec`` is a folder with at least one ``seed-<k>`` subfolder."""
+def _set_seeds(spec: str) -> list[int]:
+    """The k of every ``seed-<k>`` subfolder of ``spec``, sorted; [] if it is not a folder."""
     path = Path(spec)
     if spec in BUILT_IN_AGENTS or not path.is_dir():
-        return False
-    return any(_SEED_FOLDER.fullmatch(child.name) and child.is_dir() for child in path.iterdir())
+        return []
+    return sorted(
+        int(match[1])
+        for child in path.iterdir()
+        if (match := _SEED_FOLDER.fullmatch(child.name)) and child.is_dir()
+    )
+
+
+def is_agent_set(spec: str) -> bool:
+    """Whether ``spec`` is a folder with at least one ``seed-<k>`` subfolder."""
+    return bool(_set_seeds(spec))
 
 
 def agent_spec_for_seed(spec: str, seed: int) -> str:
@@ -80,12 +89,8 @@ def check_specs(specs: Sequence[str], seeds: Sequence[int]) -> None:
             )
         if not path.is_dir():
             raise TournamentError(f"{spec}: not an agent folder")
-        if is_agent_set(spec):
-            have = sorted(
-                int(m[1])
-                for child in path.iterdir()
-                if (m := _SEED_FOLDER.fullmatch(child.name)) and child.is_dir()
-            )
+        have = _set_seeds(spec)
+        if have:
             missing = [seed for seed in seeds if seed not in have]
             if missing:
                 raise TournamentError(
