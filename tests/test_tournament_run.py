@@ -4,6 +4,10 @@ correction families, reproducibility across processes, resuming, and bad input."
 from __future__ import annotations
 
 import json
+import signal
+import subprocess
+import sys
+import time
 from pathlib import Path
 
 import numpy as np
@@ -174,3 +178,25 @@ def test_agent_set_missing_a_seed_is_refused_before_anything_loads(tmp_path: Pat
     a_file.write_bytes(b"")
     with pytest.raises(TournamentError, match="not an agent folder"):
         run_tournament([(str(a_file), "call")], hands=100, seeds=[0], out=tmp_path / "r")
+
+
+def test_a_killed_run_leaves_whole_seed_files_and_resumes(tmp_path: Path) -> None:
+    args = ["call", "random", "--hands", "100000", "--seeds", "0-7", "--jobs", "1"]
+    command = [sys.executable, "-m", "pokerirl", "tournament", *args, "--out", str(tmp_path), "-q"]
+    process = subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    folder = tmp_path / "seeds" / "call-vs-random"
+    deadline = time.monotonic() + 60
+    while not (folder.exists() and list(folder.glob("seed-*.json"))):
+        assert process.poll() is None and time.monotonic() < deadline
+        time.sleep(0.02)
+    process.send_signal(signal.SIGKILL)
+    process.wait()
+    saved = {path.name: json.loads(path.read_text()) for path in folder.glob("seed-*.json")}
+    assert 1 <= len(saved) < 8 and not (tmp_path / "report.json").exists()
+    resumed = run_tournament(
+        [("call", "random")], hands=100_000, seeds=range(8), out=tmp_path, jobs=1
+    )
+    assert resumed.timing["seeds_reused"] >= len(saved)
+    for line in resumed.matchups[0].seeds:
+        if f"seed-{line.seed}.json" in saved:
+            assert saved[f"seed-{line.seed}.json"]["estimate"]["mbb_per_hand"] == line.mbb_per_hand
