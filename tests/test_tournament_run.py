@@ -181,7 +181,7 @@ def test_agent_set_missing_a_seed_is_refused_before_anything_loads(tmp_path: Pat
 
 
 def test_a_killed_run_leaves_whole_seed_files_and_resumes(tmp_path: Path) -> None:
-    args = ["call", "random", "--hands", "100000", "--seeds", "0-7", "--jobs", "1"]
+    args = ["call", "random", "--hands", "100000", "--seeds", "0-39", "--jobs", "1"]
     command = [sys.executable, "-m", "pokerirl", "tournament", *args, "--out", str(tmp_path), "-q"]
     process = subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     folder = tmp_path / "seeds" / "call-vs-random"
@@ -191,12 +191,14 @@ def test_a_killed_run_leaves_whole_seed_files_and_resumes(tmp_path: Path) -> Non
         time.sleep(0.02)
     process.send_signal(signal.SIGKILL)
     process.wait()
-    saved = {path.name: json.loads(path.read_text()) for path in folder.glob("seed-*.json")}
-    assert 1 <= len(saved) < 8 and not (tmp_path / "report.json").exists()
-    resumed = run_tournament(
-        [("call", "random")], hands=100_000, seeds=range(8), out=tmp_path, jobs=1
-    )
-    assert resumed.timing["seeds_reused"] >= len(saved)
+    saved = {
+        int(path.stem.removeprefix("seed-")): json.loads(path.read_text())  # whole JSON files
+        for path in folder.glob("seed-*.json")
+    }
+    assert 1 <= len(saved) < 40 and not (tmp_path / "report.json").exists()
+    seeds = range(max(saved) + 2)  # the saved seeds, any gaps, and one more
+    resumed = run_tournament([("call", "random")], hands=100_000, seeds=seeds, out=tmp_path)
+    assert resumed.timing["seeds_reused"] == len(saved)
     for line in resumed.matchups[0].seeds:
-        if f"seed-{line.seed}.json" in saved:
-            assert saved[f"seed-{line.seed}.json"]["estimate"]["mbb_per_hand"] == line.mbb_per_hand
+        if line.seed in saved:
+            assert saved[line.seed]["estimate"]["mbb_per_hand"] == line.mbb_per_hand
