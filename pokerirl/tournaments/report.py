@@ -245,7 +245,8 @@ def render_markdown(report: TournamentReport) -> str:
         f"Unit: one {unit}; standard errors, CIs and two-sided t-tests are over the units of "
         f"each seed. Bonferroni and Holm over all {family['per_seed_tests']} per-seed tests "
         f"({len(seeds)} seeds x {len(report.matchups)} matchup(s)): significant if "
-        f"{per_seed_rule}.",
+        f"{per_seed_rule} (the paper's 0.05/20 is this threshold for one matchup and 20 "
+        "seeds).",
         "",
         "| Model | Opponent | Seed | Payoff (mbb/h) ± SE | 95% CI | p-value | Bonferroni p "
         "| Holm p | Significant after Bonferroni |",
