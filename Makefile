@@ -26,3 +26,6 @@ lint: install-dev
 
 bench: install
 	$(BIN)/python benchmarks/ingest.py
+	$(BIN)/python benchmarks/engine.py
+	$(BIN)/python benchmarks/train.py
+	$(BIN)/python benchmarks/agents.py

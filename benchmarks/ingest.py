@@ -56,14 +56,15 @@ def main() -> None:
         rate = hands / best
         print(f"ingest: {hands:,} hands, {summary['kept_hands']:,} kept, {rows:,} rows")
         print(
-            f"best of {args.repeats}: {best:.2f} s = {rate:,.0f} hands/s, "
-            f"{rows / best:,.0f} rows/s"
+            f"best of {args.repeats}: {best:.2f} s = {rate:,.0f} hands/s, {rows / best:,.0f} rows/s"
         )
         # CPU time is what one core spent; it holds steady when other work shares the core.
         print(f"CPU time: {best_cpu:.2f} s = {hands / best_cpu:,.0f} hands/CPU-second")
         print(f"vs target {TARGET_HANDS_PER_SECOND:,}/s: {rate / TARGET_HANDS_PER_SECOND:.2f}x")
-        print(f"vs jcottas parser ({JCOTTAS_HANDS_PER_SECOND} hands/s): "
-              f"{rate / JCOTTAS_HANDS_PER_SECOND:,.0f}x")
+        print(
+            f"vs jcottas parser ({JCOTTAS_HANDS_PER_SECOND} hands/s): "
+            f"{rate / JCOTTAS_HANDS_PER_SECOND:,.0f}x"
+        )
 
         stages = {}
         started = time.perf_counter()

@@ -96,8 +96,10 @@ def demo(
 
 @app.command()
 def match(
-    agent_a: str = typer.Argument(..., help="Agent A (reported): random, raise or call."),
-    agent_b: str = typer.Argument(..., help="Agent B: random, raise or call."),
+    agent_a: str = typer.Argument(
+        ..., help="Agent A (reported): random, raise, call, an agent folder or rlcard:CKPT."
+    ),
+    agent_b: str = typer.Argument(..., help="Agent B: as agent A."),
     hands: int = typer.Option(100_000, help="Hands to play (even with --duplicate)."),
     seed: int = typer.Option(0, help="Seed of the deals and of the agents' random draws."),
     duplicate: bool = typer.Option(
@@ -106,14 +108,15 @@ def match(
     output_format: str = typer.Option("text", "--format", help="text or json."),
 ) -> None:
     """Play A against B and print A's result in milli-big-blinds per hand."""
-    from pokerirl.game import make_agent, play_match
+    from pokerirl.agents import resolve_agent
+    from pokerirl.game import play_match
 
     if output_format not in ("text", "json"):
         fail(f"unknown format {output_format!r} (text or json)")
     try:
         result = play_match(
-            make_agent(agent_a),
-            make_agent(agent_b),
+            resolve_agent(agent_a),
+            resolve_agent(agent_b),
             hands=hands,
             seed=seed,
             duplicate=duplicate,
@@ -222,3 +225,143 @@ def report(
         typer.echo(render_report(load_report(folder), output_format), nl=False)
     except ValueError as error:
         fail(str(error))
+
+
+@app.command()
+def train(
+    table: str = typer.Argument(..., help="Parquet decision table written by `pokerirl ingest`."),
+    out: str = typer.Option(..., "--out", help="Run directory for checkpoints, metrics and plots."),
+    algo: str = typer.Option("hairl", "--algo", help="hairl or airl (picks the defaults)."),
+    epochs: int | None = typer.Option(None, "--epochs", help="Training epochs [default: 50]."),
+    seed: int | None = typer.Option(None, "--seed", help="Seed for init, split, shuffle, noise."),
+    device: str = typer.Option("cpu", "--device", help="cpu or cuda."),
+    config: str | None = typer.Option(None, "--config", help="TOML file of hyperparameters."),
+    batch_size: int | None = typer.Option(None, "--batch-size"),
+    hidden: str | None = typer.Option(None, "--hidden", help="Widths for both nets, e.g. 64,64."),
+    reward_lr: float | None = typer.Option(None, "--reward-lr"),
+    policy_lr: float | None = typer.Option(None, "--policy-lr"),
+    reward_weight_decay: float | None = typer.Option(None, "--reward-weight-decay"),
+    alpha: float | None = typer.Option(None, "--alpha", help="Supervised weight in policy loss."),
+    beta: float | None = typer.Option(None, "--beta", help="Env-reward weight in disc. loss."),
+    sigma_start: float | None = typer.Option(None, "--sigma-start"),
+    sigma_end: float | None = typer.Option(None, "--sigma-end"),
+    val_fraction: float | None = typer.Option(None, "--val-fraction", help="Share of hands."),
+    threads: int = typer.Option(1, "--threads", help="CPU threads; small nets train best on 1."),
+    quiet: bool = typer.Option(False, "--quiet", help="No progress bar."),
+) -> None:
+    """Learn a reward function with AIRL or Hybrid-AIRL from an expert decision table."""
+    import torch
+
+    from pokerirl.irl import load_config, train_table
+
+    if threads < 1:
+        fail("--threads must be at least 1")
+    torch.set_num_threads(threads)
+
+    widths = None
+    if hidden is not None:
+        try:
+            widths = tuple(int(w) for w in hidden.split(",") if w.strip())
+        except ValueError:
+            fail(f"--hidden must be comma-separated integers, got {hidden!r}")
+    overrides = {
+        "epochs": epochs,
+        "seed": seed,
+        "batch_size": batch_size,
+        "reward_hidden": widths,
+        "policy_hidden": widths,
+        "reward_lr": reward_lr,
+        "policy_lr": policy_lr,
+        "reward_weight_decay": reward_weight_decay,
+        "alpha": alpha,
+        "beta": beta,
+        "sigma_start": sigma_start,
+        "sigma_end": sigma_end,
+        "val_fraction": val_fraction,
+    }
+    try:
+        settings = load_config(algo, config_file=config, overrides=overrides)
+        summary = train_table(
+            table, out, algo=algo, config=settings, device=device, progress=not quiet
+        )
+    except (ValueError, OSError) as error:
+        fail(str(error))
+    last = summary.metrics[-1]
+    typer.echo(
+        f"{algo}: {len(summary.metrics)} epochs on {summary.train_rows} rows "
+        f"({summary.samples_per_second:,.0f} samples/s); validation alignment "
+        f"{last['val_alignment']:.3f} vs majority {last['majority_alignment']:.3f} "
+        f"on {summary.val_rows} rows"
+    )
+    typer.echo(f"wrote {summary.out_dir}: reward.pt, policy.pt, config.json, metrics, plots")
+
+
+agent_app = typer.Typer(help="Train DQN agents.", no_args_is_help=True)
+app.add_typer(agent_app, name="agent")
+
+
+@agent_app.command("train")
+def agent_train(
+    out: Path = typer.Option(..., "--out", "-o", help="Agent folder (with --seeds: its parent)."),
+    reward: str = typer.Option("sparse", help="sparse (the payoff) or learned (--reward-run's f)."),
+    reward_run: Path | None = typer.Option(None, help="AIRL / H-AIRL run folder (learned reward)."),
+    payoff_weight: float = typer.Option(
+        0.0, help="w in r = w * payoff + (1 - w) * f(s, a); 0: the learned reward alone."
+    ),
+    hands: int = typer.Option(50_000, "--hands", "-n", help="Training hands."),
+    seed: int = typer.Option(0, help="Seed of one agent."),
+    seeds: str | None = typer.Option(None, help="e.g. 0-19: one agent per seed, in OUT/seed-<k>."),
+    jobs: int = typer.Option(1, help="Processes training seeds at once (with --seeds)."),
+    opponent: str = typer.Option(
+        "random", help="random, raise, call, an agent folder, rlcard:CKPT, or self."
+    ),
+    eval_every: int = typer.Option(10_000, help="Evaluate every N training hands."),
+    eval_hands: int = typer.Option(20_000, help="Duplicate hands per evaluation (even)."),
+    eval_seed: int = typer.Option(1_000_003, help="Deal seed of every evaluation."),
+    train_every: int = typer.Option(16, help="Stored transitions per gradient update."),
+    concurrent_hands: int = typer.Option(1024, help="Hands played in lock-step."),
+    learning_rate: float = typer.Option(5e-5, help="Adam learning rate."),
+    self_play_every: int = typer.Option(1_000, help="Updates between refreshes of 'self'."),
+    quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bar."),
+) -> None:
+    """Train a DQN agent (or one per seed) on the sparse payoff or a learned reward."""
+    from pokerirl.agents.dqn import DQNConfig
+    from pokerirl.agents.train import TrainConfig, parse_seeds, train_agent, train_seeds
+
+    try:
+        config = TrainConfig(
+            hands=hands,
+            seed=seed,
+            reward=reward,
+            reward_run=None if reward_run is None else str(reward_run),
+            payoff_weight=payoff_weight,
+            opponent=opponent,
+            eval_every=eval_every,
+            eval_hands=eval_hands,
+            eval_seed=eval_seed,
+            dqn=DQNConfig(
+                train_every=train_every,
+                concurrent_hands=concurrent_hands,
+                learning_rate=learning_rate,
+                self_play_every=self_play_every,
+            ),
+        )
+        if seeds is None:
+            summary = train_agent(out, config, progress=not quiet)
+            lines = {seed: summary}
+        else:
+            lines = train_seeds(out, config, parse_seeds(seeds), jobs=jobs, progress=not quiet)
+    except ValueError as error:
+        fail(str(error))
+    except OSError as error:
+        fail(f"{error.filename or out}: {error.strerror or error}")
+    for agent_seed, line in lines.items():
+        folder = out if seeds is None else out / f"seed-{agent_seed}"
+        if line is None:
+            typer.echo(f"{folder}: already finished, skipped")
+            continue
+        scores = ", ".join(
+            f"vs {name} {e['mbb_per_hand']:+.0f} +- {e['std_error']:.0f} mbb/h"
+            for name, e in line["eval"].items()
+        )
+        typer.echo(f"{folder}: {line['hands']:,} hands, {scores}")

@@ -91,10 +91,15 @@ def test_kth_character_is_kth_pass(ingested: tuple[Path, dict]) -> None:
     rows = rows_of(ingested[0], ZED_FIRST)
     sequence = list(zip(rows["player"], rows["street"], rows["action"], strict=True))
     assert sequence == [
-        ("Zed", 0, "call"), ("Amy", 0, "check"),
-        ("Zed", 1, "check"), ("Amy", 1, "raise"), ("Zed", 1, "call"),
-        ("Zed", 2, "raise"), ("Amy", 2, "call"),
-        ("Zed", 3, "check"), ("Amy", 3, "check"),
+        ("Zed", 0, "call"),
+        ("Amy", 0, "check"),
+        ("Zed", 1, "check"),
+        ("Amy", 1, "raise"),
+        ("Zed", 1, "call"),
+        ("Zed", 2, "raise"),
+        ("Amy", 2, "call"),
+        ("Zed", 3, "check"),
+        ("Amy", 3, "check"),
     ]
     assert rows["board"][:3] == ["", "", "2c 7d 9h"]
     assert rows["board"][-1] == "2c 7d 9h Ts Js"
@@ -122,7 +127,10 @@ def test_all_in_facing_a_bet_is_a_call_and_ends_the_betting(
     out, summary = ingested
     rows = rows_of(out, ALL_IN)
     assert list(zip(rows["player"], rows["action"], strict=True)) == [
-        ("Zed", "call"), ("Amy", "check"), ("Zed", "raise"), ("Amy", "call"),
+        ("Zed", "call"),
+        ("Amy", "check"),
+        ("Zed", "raise"),
+        ("Amy", "call"),
     ]
     # Zed put in 20 and got 5 back; Amy put in 15 and won 30.
     assert rows["payoff_bb"] == [-1.5, 1.5, -1.5, 1.5]
@@ -221,9 +229,7 @@ def test_month_archive_and_nested_archive_match_the_folder(month: Path, tmp_path
     assert summary["dropped"]["skipped_channel"] == 1 and summary["buckets_add_up"]
 
 
-def test_archive_without_folders_takes_channel_from_its_name(
-    month: Path, tmp_path: Path
-) -> None:
+def test_archive_without_folders_takes_channel_from_its_name(month: Path, tmp_path: Path) -> None:
     (tmp_path / "holdem.199504.tgz").write_bytes(_tgz(_month_members(month, "./")))
     summary = ingest([tmp_path / "holdem.199504.tgz"], tmp_path / "t.parquet")
     assert summary["months"] == ["holdem/199504"] and summary["kept_hands"] == 5
@@ -273,5 +279,37 @@ def test_cli_ingest_prints_summary(month: Path, tmp_path: Path) -> None:
     out = tmp_path / "t.parquet"
     result = CliRunner().invoke(app, ["ingest", str(month), "--out", str(out)])
     assert result.exit_code == 0, result.output
-    printed = json.loads(result.stdout[result.stdout.index("{"):])
+    printed = json.loads(result.stdout[result.stdout.index("{") :])
     assert printed == json.loads(summary_path(out).read_text())
+
+
+@pytest.mark.parametrize(
+    ("amy_line", "reason"),
+    [
+        ("Bk  b     c     k         1000   40   80 As Qc", "a card dealt twice"),
+        ("Bk  b     c     k         1000   40   70 Kc Qc", "chips won differ from chips put in"),
+        ("Bk  b     k     k         1000   40   80 Kc Qc", "actions: check facing a bet"),
+    ],
+)
+def test_inconsistent_hands_are_counted_with_a_reason(
+    tmp_path: Path, amy_line: str, reason: str
+) -> None:
+    from irc_fixtures import PDB
+
+    pdb = dict(PDB)
+    pdb["pdb.Amy"] = [f"Amy       {ZED_FIRST}  2  2 {amy_line}", *PDB["pdb.Amy"][1:]]
+    folder = write_month(tmp_path / "irc", pdb=pdb)
+    summary = ingest([folder], tmp_path / "t.parquet")
+    assert summary["dropped"]["inconsistent_hand"] == 1
+    assert summary["inconsistent_reasons"] == {reason: 1}
+    assert summary["kept_hands"] == 4 and summary["buckets_add_up"]
+
+
+def test_stakes_come_from_the_channel(tmp_path: Path) -> None:
+    folder = write_month(tmp_path / "irc", channel="holdem2")  # 20-40: big blind of 20 chips
+    out = tmp_path / "t.parquet"
+    ingest([folder], out)
+    rows = rows_of(out, ZED_FIRST)
+    assert rows["hand_id"][0] == f"holdem2/199504/{ZED_FIRST}"
+    assert rows["big_blind"][0] == 20
+    assert rows["payoff_bb"][:2] == [-2.0, 2.0]  # 40 chips lost at 20 a big blind

@@ -26,8 +26,18 @@ def real(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, dict, dict[str
     table = pq.read_table(out)
     columns = {
         name: np.asarray(table.column(name))
-        for name in ("timestamp", "position", "street", "action_id", "payoff_bb", "chips_in",
-                     "chips_won", "is_last", "reward", "raises_uncapped")
+        for name in (
+            "timestamp",
+            "position",
+            "street",
+            "action_id",
+            "payoff_bb",
+            "chips_in",
+            "chips_won",
+            "is_last",
+            "reward",
+            "raises_uncapped",
+        )
     }
     columns["obs"] = np.asarray(table.column("obs").combine_chunks().flatten()).reshape(-1, 72)
     columns["legal_mask"] = np.asarray(
@@ -139,8 +149,7 @@ def test_rlcard_replays_the_same_obs_and_legal_actions(real: tuple[Path, dict, d
     for rows in hands:
         first = rows[0]
         hole = {
-            int(c["position"][r]): [parse_card(t) for t in c["hole_cards"][r].split()]
-            for r in rows
+            int(c["position"][r]): [parse_card(t) for t in c["hole_cards"][r].split()] for r in rows
         }
         board = [parse_card(t) for t in c["board"][rows[-1]].split()]
         game.init_game()

@@ -5,12 +5,10 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
+import torch
 
+from pokerirl.agents import checkpoint, dqn
 from pokerirl.tournaments import TournamentError, run_tournament
-
-checkpoint = pytest.importorskip("pokerirl.agents.checkpoint")
-torch = pytest.importorskip("torch")
-dqn = pytest.importorskip("pokerirl.agents.dqn")
 
 HANDS = 2_000
 
@@ -81,3 +79,23 @@ def test_broken_agent_folder_is_a_one_line_error(agent_sets: Path) -> None:
             [(str(agent_sets / "dqn"), "call")], hands=HANDS, seeds=[2], out=agent_sets / "r"
         )
     assert "\n" not in str(error.value)
+
+
+def test_rlcard_checkpoint_is_one_agent_for_every_seed(tmp_path: Path) -> None:
+    from rlcard.agents import DQNAgent  # imported here: it runs `pip freeze` (seconds)
+
+    from pokerirl.agents import resolve_agent
+
+    DQNAgent(
+        num_actions=4, state_shape=[72], mlp_layers=[16], device=torch.device("cpu")
+    ).save_checkpoint(str(tmp_path))
+    spec = f"rlcard:{tmp_path / 'checkpoint_dqn.pt'}"
+    report = run_tournament(
+        [(spec, "call"), (spec, spec)], hands=HANDS, seeds=[0, 1], out=tmp_path / "r"
+    )
+    against_call, mirror = report.matchups
+    assert against_call.agent_a == "checkpoint_dqn.pt"
+    assert {s.fingerprint_a for s in against_call.seeds} == {resolve_agent(spec).fingerprint}
+    assert [s.mbb_per_hand for s in mirror.seeds] == [0.0, 0.0]
+    with pytest.raises(TournamentError, match="no such RLCard checkpoint"):
+        run_tournament([("rlcard:/no/such.pt", "call")], hands=HANDS, seeds=[0], out=tmp_path)

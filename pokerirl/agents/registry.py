@@ -1,4 +1,4 @@
-"""Resolve agent specs: built-in names or saved agent folders.
+"""Resolve agent specs: built-in names, saved agent folders or RLCard DQN checkpoints.
 
 >>> resolve_agent("raise").name, agent_fingerprint(resolve_agent("raise"))
 ('raise', 'builtin:raise')
@@ -10,14 +10,22 @@ from pathlib import Path
 
 from pokerirl.game.agents import BUILT_IN_AGENTS, Agent, make_agent
 
+RLCARD_PREFIX = "rlcard:"
+
 
 def resolve_agent(spec: str) -> Agent:
-    """A built-in agent by name, or the agent saved in the folder ``spec``.
+    """A built-in agent by name, the agent saved in the folder ``spec``, or, for
+    ``rlcard:PATH``, the greedy policy of an RLCard ``DQNAgent`` checkpoint file (which is
+    unpickled: trusted files only).
 
-    Raises ``ValueError`` with a one-line message when ``spec`` is neither.
+    Raises ``ValueError`` with a one-line message when ``spec`` is none of these.
     """
     if spec in BUILT_IN_AGENTS:
         return make_agent(spec)
+    if spec.startswith(RLCARD_PREFIX):
+        from pokerirl.agents.rlcard_import import load_rlcard_dqn
+
+        return load_rlcard_dqn(spec.removeprefix(RLCARD_PREFIX))
     path = Path(spec)
     if path.is_dir():
         from pokerirl.agents.checkpoint import load_agent  # torch is only needed here

@@ -18,6 +18,7 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 from tqdm import tqdm
 
+from pokerirl.atomic import write_text
 from pokerirl.datasets.table import SCHEMA, month_table
 from pokerirl.encoding import ACTIONS, FOLD
 from pokerirl.parsers.irc import (
@@ -46,18 +47,6 @@ def summary_path(table_path: str | os.PathLike[str]) -> Path:
     """``TABLE.parquet`` -> ``TABLE.summary.json``."""
     path = Path(table_path)
     return path.with_name(path.name.removesuffix(".parquet") + ".summary.json")
-
-
-def atomic_write_text(path: Path, text: str) -> None:
-    """Write ``text`` to ``path`` through a temporary file and a rename."""
-    handle, temporary = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
-    try:
-        with os.fdopen(handle, "w", encoding="utf-8") as stream:
-            stream.write(text)
-        os.replace(temporary, path)
-    except BaseException:
-        Path(temporary).unlink(missing_ok=True)
-        raise
 
 
 def ingest(
@@ -106,7 +95,7 @@ def ingest(
                 writer.write_table(data if isinstance(data, pa.Table) else pq.read_table(data))
         summary = _summary(stats, sources, out_path, counts)
         os.replace(table_file, out_path)
-        atomic_write_text(summary_path(out_path), json.dumps(summary, indent=2) + "\n")
+        write_text(summary_path(out_path), json.dumps(summary, indent=2) + "\n")
         return summary
     finally:
         shutil.rmtree(work_dir, ignore_errors=True)

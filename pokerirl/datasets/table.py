@@ -67,8 +67,14 @@ class _Templates:
                 offsets.append(len(rows))
                 lengths.append(len(replay.decisions))
                 rows.extend(
-                    (d.position, d.street, d.action_id, *d.raise_nums, *d.legal_mask,
-                     d.raises_uncapped)
+                    (
+                        d.position,
+                        d.street,
+                        d.action_id,
+                        *d.raise_nums,
+                        *d.legal_mask,
+                        d.raises_uncapped,
+                    )
                     for d in replay.decisions
                 )
             self.hand_template[hand] = template
@@ -83,9 +89,11 @@ class _Templates:
         self.lengths = np.array(lengths, dtype=np.int64)
 
 
-def _fixed_list(values: np.ndarray, width: int, value_type: pa.DataType) -> pa.Array:
-    flat = pa.array(values.reshape(-1), type=value_type)
-    return pa.FixedSizeListArray.from_arrays(flat, width)
+def fixed_size_list(matrix: np.ndarray, value_type: pa.DataType) -> pa.FixedSizeListArray:
+    """An (N, k) matrix as an Arrow ``fixed_size_list<value_type>[k]`` column, without copies
+    per row."""
+    flat = pa.array(matrix.reshape(-1), type=value_type)
+    return pa.FixedSizeListArray.from_arrays(flat, matrix.shape[1])
 
 
 def month_table(hands: MonthHands) -> tuple[pa.Table, int]:
@@ -141,8 +149,10 @@ def month_table(hands: MonthHands) -> tuple[pa.Table, int]:
     board_text = pa.array(
         [
             text[:length]
-            for text in (" ".join(map(CARD_TEXT.__getitem__, flat_board[i : i + 5]))
-                         for i in range(0, len(flat_board), 5))
+            for text in (
+                " ".join(map(CARD_TEXT.__getitem__, flat_board[i : i + 5]))
+                for i in range(0, len(flat_board), 5)
+            )
             for length in _BOARD_TEXT_LENGTH
         ],
         type=pa.string(),
@@ -159,9 +169,9 @@ def month_table(hands: MonthHands) -> tuple[pa.Table, int]:
         "action_id": pa.array(action_id.astype(np.int8)),
         "hole_cards": hole_text.take(seat_index),
         "board": board_text.take(pa.array(hand_of_row * NUM_ROUNDS + street)),
-        "raise_nums": _fixed_list(raise_nums.astype(np.int8), NUM_ROUNDS, pa.int8()),
-        "obs": _fixed_list(obs, OBS_SIZE, pa.uint8()),
-        "legal_mask": _fixed_list(templates.legal_mask[decision], NUM_ACTIONS, pa.bool_()),
+        "raise_nums": fixed_size_list(raise_nums.astype(np.int8), pa.int8()),
+        "obs": fixed_size_list(obs, pa.uint8()),
+        "legal_mask": fixed_size_list(templates.legal_mask[decision], pa.bool_()),
         "payoff_bb": pa.array(payoff_bb),
         "reward": pa.array(reward),
         "is_last": pa.array(is_last),

@@ -69,20 +69,21 @@ def visible_strength(hole: np.ndarray, board: np.ndarray) -> np.ndarray:
     pocket = hole_ranks[:, 0] == hole_ranks[:, 1]
     suited = hole[:, 0] // 13 == hole[:, 1] // 13
     strength = np.empty((hole.shape[0], 4))
-    strength[:, 0] = np.where(
-        pocket, 0.55 + 0.45 * high, 0.35 * high + 0.2 * low + 0.08 * suited
-    )
+    strength[:, 0] = np.where(pocket, 0.55 + 0.45 * high, 0.35 * high + 0.2 * low + 0.08 * suited)
     for street, shown in ((1, 3), (2, 4), (3, 5)):
         visible = board_ranks[:, :shown]
         hits = (visible[:, None, :] == hole_ranks[:, :, None]).sum(axis=2)  # (N, 2)
         paired = (hits > 0).sum(axis=1)
         trips = (hits >= 2).any(axis=1) | (pocket & (hits[:, 0] > 0))
-        top_pair = (hits > 0).any(axis=1) & (
-            hole_ranks.max(axis=1) >= visible.max(axis=1)
-        )
+        top_pair = (hits > 0).any(axis=1) & (hole_ranks.max(axis=1) >= visible.max(axis=1))
         strength[:, street] = np.clip(
-            0.1 + 0.3 * (paired >= 1) + 0.2 * (paired == 2) + 0.3 * trips + 0.15 * top_pair
-            + 0.3 * pocket + 0.1 * high,
+            0.1
+            + 0.3 * (paired >= 1)
+            + 0.2 * (paired == 2)
+            + 0.3 * trips
+            + 0.15 * top_pair
+            + 0.3 * pocket
+            + 0.1 * high,
             0.0,
             1.0,
         )
@@ -139,9 +140,7 @@ def write_synthetic_month(
         won = [0, 0]
         for w in winners:
             won[w] = pot // len(winners)
-        street_fields = [
-            f"2/{pot_at[s]}" if s < streets_seen else "0/0" for s in (1, 2, 3)
-        ]
+        street_fields = [f"2/{pot_at[s]}" if s < streets_seen else "0/0" for s in (1, 2, 3)]
         showdown_field = f"2/{pot}" if outcome.folder is None else f"1/{pot}"
         board_text = " ".join(card_str(c) for c in boards[hand, :board_shown])
         hdb_lines.append(

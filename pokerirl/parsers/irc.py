@@ -226,9 +226,7 @@ def _hint_from_archive_name(name: str) -> tuple[str | None, str | None]:
     return None, None
 
 
-def _member_key(
-    name: str, hint: tuple[str | None, str | None]
-) -> tuple[str, str, str] | None:
+def _member_key(name: str, hint: tuple[str | None, str | None]) -> tuple[str, str, str] | None:
     """Map an archive member to (channel, month, file name), or None if it is not IRC data."""
     parts = [p for p in PurePosixPath(name).parts if p not in (".", "/")]
     if not parts:
@@ -422,8 +420,13 @@ def _parse_limit_holdem_month(
     heads_up.sort(key=lambda item: item[0])
     for timestamp, number, fields in heads_up:
         bucket = _classify_hand(
-            timestamp, fields, f"{hdb_where}:{number}", pdb.pop(timestamp, None),
-            roster.get(timestamp), hands, stats,
+            timestamp,
+            fields,
+            f"{hdb_where}:{number}",
+            pdb.pop(timestamp, None),
+            roster.get(timestamp),
+            hands,
+            stats,
         )
         stats.buckets[bucket] += 1
     stats.orphan_pdb_lines += sum(len(lines) for lines in pdb.values())
@@ -515,7 +518,7 @@ def _classify_hand(
         reason = "showdown without five board cards"
     elif in_a + in_b != won_a + won_b:
         reason = "chips won differ from chips put in"
-    elif len({*hole, *board} - {-1}) != sum(c >= 0 for c in hole) + 5:
+    elif len({*hole, *board}) != (9 if cards_a and cards_b else 8):  # a concealed pair is -1, -1
         reason = "a card dealt twice"
     if reason is not None:
         stats.inconsistent_reasons[reason] += 1

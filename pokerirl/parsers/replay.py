@@ -166,7 +166,7 @@ def replay_actions(strings: tuple[str, str, str, str, str, str, str, str]) -> Re
         # Left over: quits may trail a fold, and an ``A`` after a closed round marks a player
         # whose last call put them all-in. Nothing else may trail.
         for seat_index in (0, 1):
-            rest = texts[seat_index][cursor[seat_index]:]
+            rest = texts[seat_index][cursor[seat_index] :]
             if not rest or (hand_over and set(rest) <= _FOLDS):
                 continue
             if rest == "A" and not hand_over:

@@ -1,9 +1,9 @@
 """What the user typed, turned into seeds and per-seed agents.
 
 An agent spec is a built-in name (``random``, ``raise``, ``call``), an agent folder saved by
-``pokerirl agent train``, or an *agent set*: a folder with one ``seed-<k>`` subfolder per
-training seed. Seed ``k`` of a tournament uses ``<set>/seed-<k>``; built-in agents and single
-agent folders are the same agent for every seed.
+``pokerirl agent train``, an RLCard DQN checkpoint (``rlcard:PATH``), or an *agent set*: a
+folder with one ``seed-<k>`` subfolder per training seed. Seed ``k`` of a tournament uses
+``<set>/seed-<k>``; every other spec is the same agent for every seed.
 
 >>> parse_seeds("0-3,7,10-11")
 (0, 1, 2, 3, 7, 10, 11)
@@ -17,6 +17,7 @@ import re
 from collections.abc import Sequence
 from pathlib import Path
 
+from pokerirl.agents.registry import RLCARD_PREFIX
 from pokerirl.game.agents import BUILT_IN_AGENTS
 
 _SEED_FOLDER = re.compile(r"seed-(\d+)")
@@ -69,8 +70,10 @@ def agent_spec_for_seed(spec: str, seed: int) -> str:
 
 
 def agent_label(spec: str) -> str:
-    """A short name for reports: the built-in name, or the folder's own name."""
-    return spec if spec in BUILT_IN_AGENTS else Path(spec).name or spec
+    """A short name for reports: the built-in name, or the folder's (or file's) own name."""
+    if spec in BUILT_IN_AGENTS:
+        return spec
+    return Path(spec.removeprefix(RLCARD_PREFIX)).name or spec
 
 
 def check_specs(specs: Sequence[str], seeds: Sequence[int]) -> None:
@@ -80,8 +83,8 @@ def check_specs(specs: Sequence[str], seeds: Sequence[int]) -> None:
     """
     for spec in specs:
         path = Path(spec)
-        if spec in BUILT_IN_AGENTS:
-            continue
+        if spec in BUILT_IN_AGENTS or spec.startswith(RLCARD_PREFIX):
+            continue  # checkpoint files are checked when they load
         if not path.exists():
             known = ", ".join(sorted(BUILT_IN_AGENTS))
             raise TournamentError(

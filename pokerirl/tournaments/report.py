@@ -2,7 +2,7 @@
 ``per_seed.csv``, ``per_seed.png``) and its text.
 
 Every number lives in :class:`TournamentReport`; the files are renderings of it, written
-atomically (temp file, then ``os.replace``), so the numbers agree across them: Markdown shows
+atomically (:mod:`pokerirl.atomic`), so the numbers agree across them: Markdown shows
 them rounded, JSON and CSV in full (``repr``) precision.
 
 >>> render_p(0.000123456), render_p(0.5), render_p(0.0)
@@ -14,12 +14,11 @@ from __future__ import annotations
 import csv
 import io
 import json
-import os
-import secrets
 from dataclasses import asdict, dataclass, fields
 from pathlib import Path
 from typing import Any, Literal
 
+from pokerirl import atomic
 from pokerirl.tournaments.lineup import TournamentError, format_seeds
 
 REPORT_FORMAT = "pokerirl-tournament/1"
@@ -126,28 +125,13 @@ def _line(kind: type[Line], data: dict[str, Any]) -> Line:
 # --- writing and reading -------------------------------------------------------------------
 
 
-def write_atomic(path: Path, data: bytes | str) -> None:
-    """Write ``path`` through a temp file in the same folder and ``os.replace``."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    # A name of our own in the same folder (so os.replace is atomic); "x" mode keeps the umask.
-    temp = path.with_name(f".{path.name}.{os.getpid()}.{secrets.token_hex(4)}.tmp")
-    try:
-        with open(temp, "xb") as file:
-            file.write(data.encode() if isinstance(data, str) else data)
-            file.flush()
-            os.fsync(file.fileno())
-        os.replace(temp, path)
-    except BaseException:
-        Path(temp).unlink(missing_ok=True)
-        raise
-
-
 def write_report(report: TournamentReport, out: Path) -> None:
     """Write the four report files into ``out``; report.json last, so it marks a whole run."""
-    write_atomic(out / "report.md", render_markdown(report))
-    write_atomic(out / "per_seed.csv", render_csv(report))
-    write_atomic(out / "per_seed.png", render_png(report))
-    write_atomic(out / "report.json", render_json(report))
+    out.mkdir(parents=True, exist_ok=True)
+    atomic.write_text(out / "report.md", render_markdown(report))
+    atomic.write_text(out / "per_seed.csv", render_csv(report))
+    atomic.write_bytes(out / "per_seed.png", render_png(report))
+    atomic.write_text(out / "report.json", render_json(report))
 
 
 def load_report(out: Path | str) -> TournamentReport:

@@ -40,6 +40,7 @@ from typing import Any
 import numpy as np
 from tqdm import tqdm
 
+from pokerirl import atomic
 from pokerirl.agents import agent_fingerprint, resolve_agent
 from pokerirl.game.match import DEFAULT_BATCH_SIZE, play_match
 from pokerirl.tournaments.lineup import (
@@ -53,7 +54,6 @@ from pokerirl.tournaments.report import (
     MatchupReport,
     SeedLine,
     TournamentReport,
-    write_atomic,
     write_report,
 )
 from pokerirl.tournaments.stats import Estimate, bonferroni, estimate, holm
@@ -149,7 +149,8 @@ def _seed_path(out: Path, folder: str, seed: int) -> Path:
 
 def _save_seed(path: Path, result: SeedResult) -> None:
     data = {"format": SEED_FORMAT, **asdict(result)}
-    write_atomic(path, json.dumps(data, indent=2) + "\n")
+    path.parent.mkdir(parents=True, exist_ok=True)
+    atomic.write_text(path, json.dumps(data, indent=2) + "\n")
 
 
 def _load_seed(path: Path, key: SeedKey, *, overwrite: bool) -> SeedResult | None:

@@ -1,0 +1,125 @@
+"""Play agents trained in RLCard 1.2.0: load a ``DQNAgent.save_checkpoint`` file.
+
+RLCard's checkpoint is a pickle of the whole agent state (replay memory included), so it is
+loaded with ``torch.load(..., weights_only=False)``, which can run arbitrary code: **load only
+files you trust**. Its q-network (``EstimatorNetwork``: batch norm, tanh MLP) has the same
+layers as :class:`pokerirl.agents.dqn.QNetwork`, so the weights carry over exactly.
+
+RLCard 1.2.0 saves ``epsilon_start = min(epsilons)`` and ``epsilon_end = max(epsilons)``:
+for its decaying schedule the two are swapped (and ``from_checkpoint`` then resumes with an
+increasing epsilon). :func:`rlcard_checkpoint_config` reports them the right way round.
+The greedy agent does not use epsilon, so only the record is affected.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import re
+from pathlib import Path
+from typing import Any
+
+import torch
+
+from pokerirl.agents.checkpoint import save_agent
+from pokerirl.agents.dqn import GreedyQAgent, QNetwork
+from pokerirl.agents.registry import RLCARD_PREFIX
+from pokerirl.encoding import NUM_ACTIONS, OBS_SIZE
+
+_LAYER_KEY = re.compile(r"^fc_layers\.(\d+)\.(.+)$")
+
+
+def _read_checkpoint(path: Path) -> dict[str, Any]:
+    if not path.is_file():
+        raise ValueError(f"{path}: no such RLCard checkpoint file")
+    try:
+        # Trusted files only: RLCard pickles its agent (and its replay memory's namedtuples,
+        # whose unpickling imports rlcard.agents, which runs `pip freeze`: about 3 s).
+        checkpoint = torch.load(path, map_location="cpu", weights_only=False)
+    except Exception as error:  # noqa: BLE001 - any unpickling failure is a bad file
+        reason = (str(error).strip() or repr(error)).splitlines()[0]
+        raise ValueError(f"{path}: cannot read RLCard checkpoint: {reason}") from None
+    if not isinstance(checkpoint, dict) or checkpoint.get("agent_type") != "DQNAgent":
+        raise ValueError(f"{path}: not an RLCard DQNAgent checkpoint")
+    estimator = checkpoint["q_estimator"]
+    shape = list(estimator["state_shape"] or [])
+    if shape != [OBS_SIZE] or checkpoint["num_actions"] != NUM_ACTIONS:
+        raise ValueError(
+            f"{path}: state_shape {shape} and num_actions {checkpoint['num_actions']} are not "
+            f"limit hold'em's [{OBS_SIZE}] and {NUM_ACTIONS}"
+        )
+    return checkpoint
+
+
+def _convert_state_dict(qnet_state: dict[str, torch.Tensor]) -> dict[str, torch.Tensor]:
+    """RLCard's ``fc_layers.{i}`` (0 Flatten, 1 BatchNorm, 2.. MLP) to QNetwork's keys."""
+    converted = {}
+    for key, value in qnet_state.items():
+        match = _LAYER_KEY.match(key)
+        if match is None:
+            raise ValueError(f"unexpected RLCard q-network key {key!r}")
+        index, rest = int(match.group(1)), match.group(2)
+        converted[f"norm.{rest}" if index == 1 else f"mlp.{index - 2}.{rest}"] = value
+    return converted
+
+
+def rlcard_checkpoint_config(checkpoint: dict[str, Any]) -> dict[str, Any]:
+    """The hyper-parameters of an RLCard checkpoint, with its epsilon fields un-swapped."""
+    estimator = checkpoint["q_estimator"]
+    low, high = checkpoint["epsilon_start"], checkpoint["epsilon_end"]  # min, max: see above
+    return {
+        "replay_size": checkpoint["memory"]["memory_size"],
+        "batch_size": checkpoint["batch_size"],
+        "learning_rate": estimator["learning_rate"],
+        "gamma": checkpoint["discount_factor"],
+        "epsilon_start": float(high),
+        "epsilon_end": float(low),
+        "epsilon_decay_steps": checkpoint["epsilon_decay_steps"],
+        "target_update_every": checkpoint["update_target_estimator_every"],
+        "train_every": checkpoint["train_every"],
+        "total_t": checkpoint["total_t"],
+        "train_t": checkpoint["train_t"],
+    }
+
+
+def load_rlcard_dqn(path: str | os.PathLike[str]) -> GreedyQAgent:
+    """A greedy engine agent from an RLCard 1.2.0 ``DQNAgent`` checkpoint (trusted files only).
+
+    Its q-values equal RLCard's ``predict`` on the same ``obs``; its ``name`` is
+    ``rlcard:<path>`` and its ``fingerprint`` the sha256 of the file.
+
+    Raises:
+        ValueError: one line, for a missing, unreadable or non-limit-hold'em checkpoint.
+    """
+    return _agent_and_checkpoint(Path(path))[0]
+
+
+def _agent_and_checkpoint(path: Path) -> tuple[GreedyQAgent, dict[str, Any]]:
+    checkpoint = _read_checkpoint(path)
+    estimator = checkpoint["q_estimator"]
+    network = QNetwork(hidden=tuple(estimator["mlp_layers"]))
+    try:
+        network.load_state_dict(_convert_state_dict(estimator["qnet"]))
+    except (RuntimeError, ValueError) as error:
+        raise ValueError(f"{path}: q-network does not fit: {str(error).splitlines()[0]}") from None
+    digest = hashlib.sha256(path.read_bytes()).hexdigest()
+    agent = GreedyQAgent(
+        name=f"{RLCARD_PREFIX}{path}", network=network.eval(), fingerprint=f"sha256:{digest}"
+    )
+    return agent, checkpoint
+
+
+def import_rlcard_dqn(path: str | os.PathLike[str], out: str | os.PathLike[str]) -> Path:
+    """Convert an RLCard ``DQNAgent`` checkpoint (trusted files only) into an agent folder.
+
+    The folder then loads with :func:`pokerirl.agents.load_agent` (no pickle) and works
+    anywhere an agent name does. Returns ``out``.
+    """
+    agent, checkpoint = _agent_and_checkpoint(Path(path))
+    config = {
+        "hidden": list(checkpoint["q_estimator"]["mlp_layers"]),
+        "source": {"kind": "rlcard-1.2.0-dqn", "path": str(path), "fingerprint": agent.fingerprint},
+        "dqn": rlcard_checkpoint_config(checkpoint),
+    }
+    save_agent(out, agent.network, config)
+    return Path(out)

@@ -1,0 +1,145 @@
+"""``pokerirl agent train`` and ``pokerirl match`` with agent folders, through the CLI."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+import torch
+from typer.testing import CliRunner
+
+from pokerirl.agents.dqn import DQNConfig, train_dqn
+from pokerirl.agents.train import TrainConfig, parse_seeds, reward_run_fingerprint, train_agent
+from pokerirl.cli import app
+from pokerirl.game import make_agent
+
+torch.set_num_threads(1)
+FAST = ["--hands", "512", "--eval-every", "512", "--eval-hands", "200", "--concurrent-hands", "128"]
+
+
+def invoke(*args: str) -> tuple[int, str]:
+    result = CliRunner().invoke(app, list(args))
+    return result.exit_code, result.output
+
+
+def stdout_of(*args: str) -> str:
+    result = CliRunner().invoke(app, list(args))
+    assert result.exit_code == 0, result.output
+    return result.stdout
+
+
+def test_train_then_match_the_folder(tmp_path: Path) -> None:
+    out = tmp_path / "agent"
+    code, output = invoke("agent", "train", "--out", str(out), "--seed", "3", "--quiet", *FAST)
+    assert code == 0, output
+    assert "vs random" in output and json.loads((out / "config.json").read_text())["seed"] == 3
+    output = stdout_of("match", str(out), "random", "--hands", "2000", "--format", "json")
+    assert json.loads(output)["hands"] == 2000
+
+
+def test_seeds_train_in_processes_and_resume_past_finished_ones(tmp_path: Path) -> None:
+    out = tmp_path / "many"
+    code, output = invoke("agent", "train", "--out", str(out), "--seeds", "0-1", "-q", *FAST)
+    assert code == 0, output
+    weights = (out / "seed-0" / "model.pt").read_bytes()
+    (out / "seed-1" / "config.json").unlink()  # seed 1 looks interrupted before its last write
+    code, output = invoke(
+        "agent", "train", "--out", str(out), "--seeds", "0-2", "--jobs", "2", "-q", *FAST
+    )
+    assert code == 0, output
+    assert "seed-0: already finished, skipped" in output
+    assert "seed-1: 512 hands" in output and "seed-2: 512 hands" in output
+    assert (out / "seed-0" / "model.pt").read_bytes() == weights
+    seeds = [json.loads((out / f"seed-{k}" / "config.json").read_text())["seed"] for k in range(3)]
+    assert seeds == [0, 1, 2]
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["--reward", "learned"], "--reward learned needs --reward-run"),
+        (["--reward", "shaped"], "unknown reward mode"),
+        (["--reward-run", "."], "--reward-run needs --reward learned"),
+        (["--reward", "learned", "--reward-run", "."], "not a reward run"),
+        (["--seeds", "5-2"], "bad seed list"),
+        (["--opponent", "nobody"], "unknown agent 'nobody'"),
+        (["--eval-hands", "3"], "eval_hands must be even"),
+        (["--train-every", "0"], "train_every must be at least 1"),
+    ],
+)
+def test_bad_input_is_a_one_line_error(tmp_path: Path, args: list[str], message: str) -> None:
+    code, output = invoke("agent", "train", "--out", str(tmp_path / "x"), "-q", *args)
+    assert code == 1
+    assert message in output and output.count("\n") == 1 and "Traceback" not in output
+
+
+def test_parse_seeds_and_reward_run_fingerprint(tmp_path: Path) -> None:
+    assert parse_seeds("0-2,7") == [0, 1, 2, 7]
+    for name, data in (("reward.pt", b"weights"), ("config.json", b"{}")):
+        (tmp_path / name).write_bytes(data)
+    before = reward_run_fingerprint(tmp_path)
+    (tmp_path / "config.json").write_bytes(b'{"x": 1}')
+    assert reward_run_fingerprint(tmp_path) != before and before.startswith("sha256:")
+
+
+def test_learned_reward_training_records_the_run(tmp_path: Path) -> None:
+    for name, data in (("reward.pt", b"weights"), ("config.json", b"{}")):
+        (tmp_path / name).write_bytes(data)
+    calls = []
+
+    def reward_fn(obs: np.ndarray, actions: np.ndarray) -> np.ndarray:
+        calls.append(len(actions))
+        return obs[:, :52].sum(axis=1).astype(np.float32) - actions
+
+    config = TrainConfig(
+        hands=256,
+        seed=1,
+        reward="learned",
+        reward_run=str(tmp_path),
+        payoff_weight=0.5,
+        eval_every=256,
+        eval_hands=100,
+        dqn=DQNConfig(concurrent_hands=128),
+    )
+    train_agent(tmp_path / "agent", config, reward_fn=reward_fn)
+    record = json.loads((tmp_path / "agent" / "config.json").read_text())
+    assert record["reward"] == {
+        "mode": "learned",
+        "run": str(tmp_path),
+        "fingerprint": reward_run_fingerprint(tmp_path),
+        "payoff_weight": 0.5,
+    }
+    assert sum(calls) == record["final"]["transitions"]
+
+
+def test_learned_reward_from_a_real_irl_run_end_to_end(tmp_path: Path) -> None:
+    import pyarrow.parquet as pq
+
+    from pokerirl.irl import load_config, load_reward, train_table
+    from pokerirl.irl.toy import toy_expert_table
+
+    pq.write_table(toy_expert_table(num_hands=200), tmp_path / "table.parquet")
+    settings = load_config("hairl", overrides={"epochs": 1, "batch_size": 64})
+    train_table(tmp_path / "table.parquet", tmp_path / "run", algo="hairl", config=settings)
+    out = tmp_path / "agent"
+    code, output = invoke(
+        "agent", "train", "--reward", "learned", "--reward-run", str(tmp_path / "run"),
+        "--payoff-weight", "0.3", "--out", str(out), "-q", *FAST,
+    )  # fmt: skip
+    assert code == 0, output
+    record = json.loads((out / "config.json").read_text())
+    assert record["reward"]["fingerprint"] == reward_run_fingerprint(tmp_path / "run")
+    assert record["reward"]["payoff_weight"] == 0.3
+    # The run's real f_theta in the trainer: non-terminal rewards are (1 - w) f(s, a).
+    f = load_reward(tmp_path / "run")
+    learner = train_dqn(
+        DQNConfig(concurrent_hands=64), hands=128, seed=0, opponent=make_agent("random"),
+        reward_fn=f, payoff_weight=0.3,
+    )  # fmt: skip
+    replay, n = learner.replay, learner.replay.size
+    steps = ~replay.done[:n]
+    expected = 0.7 * f(replay.obs[:n][steps], replay.actions[:n][steps])
+    np.testing.assert_allclose(replay.rewards[:n][steps], expected, rtol=1e-5, atol=1e-6)
+    assert steps.sum() > 20 and np.unique(expected).size > 1
