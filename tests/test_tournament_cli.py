@@ -126,6 +126,8 @@ def test_png_is_an_image(two_matchups: Path) -> None:
 
 
 def test_report_prints_markdown_and_json(two_matchups: Path) -> None:
+    xml = runner.invoke(app, ["report", str(two_matchups), "--format", "xml"])
+    assert xml.exit_code == 1 and "unknown format 'xml'" in xml.stderr
     text = runner.invoke(app, ["report", str(two_matchups)])
     assert text.exit_code == 0 and text.output == (two_matchups / "report.md").read_text()
     as_json = runner.invoke(app, ["report", str(two_matchups), "--format", "json"])

@@ -22,7 +22,6 @@ from pokerirl import atomic
 from pokerirl.tournaments.lineup import TournamentError, format_seeds
 
 REPORT_FORMAT = "pokerirl-tournament/1"
-REPORT_FILES = ("report.md", "report.json", "per_seed.csv", "per_seed.png")
 
 
 @dataclass(frozen=True, kw_only=True)
