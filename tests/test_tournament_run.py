@@ -17,6 +17,7 @@ from scipy import stats
 from pokerirl.game import make_agent, play_match
 from pokerirl.tournaments import (
     TournamentError,
+    TournamentReport,
     bonferroni,
     holm,
     load_report,
@@ -26,12 +27,8 @@ from pokerirl.tournaments import (
 HANDS = 2_000
 
 
-def _numbers(report: object) -> list[tuple[float, float, float]]:
-    return [
-        (s.mbb_per_hand, s.std_error, s.p_value)
-        for m in report.matchups  # type: ignore[attr-defined]
-        for s in m.seeds
-    ]
+def _numbers(report: TournamentReport) -> list[tuple[float, float, float]]:
+    return [(s.mbb_per_hand, s.std_error, s.p_value) for m in report.matchups for s in m.seeds]
 
 
 @pytest.mark.parametrize("duplicate", [True, False])
