@@ -141,6 +141,93 @@ def match(
 
 
 @app.command()
+def tournament(
+    agents: list[str] = typer.Argument(
+        None,
+        help="A B (one matchup, A's payoff), or with --vs the agents to play against BASE. "
+        "Each: a built-in (random, raise, call), an agent folder, or an agent set (a folder "
+        "of seed-<k> agent folders: seed k plays seed-k).",
+        show_default=False,
+    ),
+    vs: str | None = typer.Option(
+        None, "--vs", metavar="BASE", help="Play every AGENT against BASE (several matchups)."
+    ),
+    hands: int = typer.Option(1_000_000, "--hands", "-n", help="Hands per seed."),
+    seeds: str = typer.Option("0-19", "--seeds", help="Seeds, e.g. 0-19 or 0-4,10."),
+    out: Path = typer.Option(..., "--out", "-o", help="Report folder (resumes what it holds)."),
+    duplicate: bool = typer.Option(
+        True, "--duplicate/--no-duplicate", help="Play every deal from both seats, paired."
+    ),
+    jobs: int = typer.Option(2, "--jobs", "-j", help="Worker processes (results do not change)."),
+    alpha: float = typer.Option(0.05, help="Family-wise error rate (Bonferroni, Holm)."),
+    batch_size: int = typer.Option(65_536, help="Hands in lock-step (part of the config)."),
+    overwrite: bool = typer.Option(
+        False, "--overwrite", help="Recompute saved seeds from another configuration."
+    ),
+    quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bar, no report."),
+) -> None:
+    """Multi-seed head-to-head evaluation: mbb/h, duplicate deals, Bonferroni and Holm.
+
+    \b
+    One matchup:      pokerirl tournament A B --hands N --seeds 0-19 --out DIR
+    Several matchups: pokerirl tournament --vs dqn hairl-dqn airl-dqn --out DIR
+                      (hairl-dqn vs dqn and airl-dqn vs dqn, corrected together)
+
+    Writes DIR/report.md, report.json, per_seed.csv, per_seed.png; prints the report.
+
+    \b
+    Resumable: each seed is saved when it finishes. A rerun reuses saved seeds
+    whose agents, hands, duplicate mode and batch size match, and refuses the
+    others (--overwrite recomputes them). pokerirl report DIR prints it again.
+    """
+    from pokerirl.tournaments import parse_seeds, render_report, run_tournament
+
+    agents = agents or []
+    if vs is not None:
+        if not agents:
+            fail("--vs BASE needs at least one agent to play against it")
+        matchups = [(agent, vs) for agent in agents]
+    elif len(agents) == 2:
+        matchups = [(agents[0], agents[1])]
+    else:
+        fail(f"give two agents (A B) or --vs BASE and agents; got {len(agents)} agent(s)")
+    try:
+        report = run_tournament(
+            matchups,
+            hands=hands,
+            seeds=parse_seeds(seeds),
+            out=out,
+            duplicate=duplicate,
+            alpha=alpha,
+            jobs=jobs,
+            batch_size=batch_size,
+            overwrite=overwrite,
+            progress=not quiet,
+        )
+    except ValueError as error:  # TournamentError, or an agent's illegal move
+        fail(str(error))
+    except OSError as error:
+        fail(f"{error.filename or out}: {error.strerror or error}")
+    if not quiet:
+        typer.echo(render_report(report))
+        typer.echo(f"wrote {out}/report.md, report.json, per_seed.csv, per_seed.png")
+
+
+@app.command()
+def report(
+    folder: Path = typer.Argument(..., help="A folder written by pokerirl tournament."),
+    output_format: str = typer.Option("markdown", "--format", help="markdown or json."),
+) -> None:
+    """Print a tournament report (Markdown, or JSON for scripts)."""
+    from pokerirl.tournaments import load_report, render_report
+
+    try:
+        typer.echo(render_report(load_report(folder), output_format), nl=False)
+    except ValueError as error:
+        fail(str(error))
+
+
+@app.command()
 def train(
     table: str = typer.Argument(..., help="Parquet decision table written by `pokerirl ingest`."),
     out: str = typer.Option(..., "--out", help="Run directory for checkpoints, metrics and plots."),

@@ -1,0 +1,44 @@
+"""Multi-seed head-to-head tournaments: mbb/h per seed and pooled, t-tests, Bonferroni and
+Holm corrections, and the report files (``pokerirl tournament``, ``pokerirl report``).
+
+>>> import tempfile
+>>> with tempfile.TemporaryDirectory() as out:
+...     report = run_tournament([("raise", "random")], hands=2_000, seeds=parse_seeds("0-2"),
+...                             out=out)
+>>> m = report.matchups[0]
+>>> (m.agent_a, m.agent_b, len(m.seeds), m.pooled.n, report.family["per_seed_tests"])
+('raise', 'random', 3, 3, 3)
+"""
+
+from __future__ import annotations
+
+from pokerirl.tournaments.lineup import TournamentError, format_seeds, parse_seeds
+from pokerirl.tournaments.report import (
+    Line,
+    MatchupReport,
+    SeedLine,
+    TournamentReport,
+    load_report,
+    render_report,
+    write_report,
+)
+from pokerirl.tournaments.runner import run_tournament
+from pokerirl.tournaments.stats import Estimate, bonferroni, estimate, holm
+
+__all__ = [
+    "Estimate",
+    "Line",
+    "MatchupReport",
+    "SeedLine",
+    "TournamentError",
+    "TournamentReport",
+    "bonferroni",
+    "estimate",
+    "format_seeds",
+    "holm",
+    "load_report",
+    "parse_seeds",
+    "render_report",
+    "run_tournament",
+    "write_report",
+]

@@ -1,0 +1,335 @@
+"""The tournament report: its data, its files (``report.md``, ``report.json``,
+``per_seed.csv``, ``per_seed.png``) and its text.
+
+Every number lives in :class:`TournamentReport`; the files are renderings of it, written
+atomically (:mod:`pokerirl.atomic`), so the numbers agree across them: Markdown shows
+them rounded, JSON and CSV in full (``repr``) precision.
+
+>>> render_p(0.000123456), render_p(0.5), render_p(0.0)
+('0.000123', '0.5', '< 1e-300')
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+from dataclasses import asdict, dataclass, fields
+from pathlib import Path
+from typing import Any, Literal
+
+from pokerirl import atomic
+from pokerirl.tournaments.lineup import TournamentError, format_seeds
+
+REPORT_FORMAT = "pokerirl-tournament/1"
+
+
+@dataclass(frozen=True, kw_only=True)
+class Line:
+    """One test: estimate in mbb/h (from A's side), its p-value and the corrected ones.
+
+    ``n`` is the number of independent units (duplicate pairs, hands, or seeds for the pooled
+    line). Significance is ``p_value < alpha / m`` (Bonferroni) and ``p_value_holm < alpha``.
+    """
+
+    mbb_per_hand: float
+    std_error: float
+    ci95: tuple[float, float]
+    p_value: float
+    n: int
+    p_value_bonferroni: float
+    p_value_holm: float
+    significant_bonferroni: bool
+    significant_holm: bool
+
+
+@dataclass(frozen=True, kw_only=True)
+class SeedLine(Line):
+    """One seed of one matchup, with the agents that played it and how long it took."""
+
+    seed: int
+    hands: int
+    fingerprint_a: str
+    fingerprint_b: str
+    seconds: float
+    hands_per_second: float
+
+
+@dataclass(frozen=True, kw_only=True)
+class MatchupReport:
+    """A against B over every seed; ``pooled_over`` says what the pooled line's units are."""
+
+    agent_a: str
+    agent_b: str
+    spec_a: str
+    spec_b: str
+    pooled: Line
+    pooled_over: Literal["seeds", "units of the only seed"]
+    seeds: tuple[SeedLine, ...]
+
+    @property
+    def seeds_significant_bonferroni(self) -> int:
+        return sum(line.significant_bonferroni for line in self.seeds)
+
+
+@dataclass(frozen=True, kw_only=True)
+class TournamentReport:
+    """Everything ``pokerirl tournament`` found, ready to write or print.
+
+    ``config``: hands per seed, seeds, duplicate, batch_size, alpha. ``family``: the size and
+    Bonferroni threshold of the per-seed family (seeds x matchups) and of the pooled family
+    (matchups). ``timing``: this run's wall time and hands/s (not part of the results: a rerun
+    that reuses saved seeds is faster and reports the same numbers).
+    """
+
+    config: dict[str, Any]
+    family: dict[str, Any]
+    matchups: tuple[MatchupReport, ...]
+    versions: dict[str, str | None]
+    timing: dict[str, float | int]
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain JSON-ready data (tuples become lists)."""
+        data = asdict(self)
+        for matchup, original in zip(data["matchups"], self.matchups, strict=True):
+            matchup["seeds_significant_bonferroni"] = original.seeds_significant_bonferroni
+        return {"format": REPORT_FORMAT, **json.loads(json.dumps(data))}
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> TournamentReport:
+        """The inverse of :meth:`to_dict`."""
+        if data.get("format") != REPORT_FORMAT:
+            raise TournamentError(f"not a {REPORT_FORMAT} report (format {data.get('format')!r})")
+        matchups = tuple(
+            MatchupReport(
+                **{
+                    **_pick(MatchupReport, m),
+                    "pooled": _line(Line, m["pooled"]),
+                    "seeds": tuple(_line(SeedLine, s) for s in m["seeds"]),
+                }
+            )
+            for m in data["matchups"]
+        )
+        return cls(**{**_pick(cls, data), "matchups": matchups})
+
+
+def _pick(kind: type, data: dict[str, Any]) -> dict[str, Any]:
+    return {f.name: data[f.name] for f in fields(kind) if f.name in data}
+
+
+def _line(kind: type[Line], data: dict[str, Any]) -> Line:
+    return kind(**{**_pick(kind, data), "ci95": tuple(data["ci95"])})
+
+
+# --- writing and reading -------------------------------------------------------------------
+
+
+def write_report(report: TournamentReport, out: Path) -> None:
+    """Write the four report files into ``out``; report.json last, so it marks a whole run."""
+    out.mkdir(parents=True, exist_ok=True)
+    atomic.write_text(out / "report.md", render_markdown(report))
+    atomic.write_text(out / "per_seed.csv", render_csv(report))
+    atomic.write_bytes(out / "per_seed.png", render_png(report))
+    atomic.write_text(out / "report.json", render_json(report))
+
+
+def load_report(out: Path | str) -> TournamentReport:
+    """The report saved in ``out`` by ``pokerirl tournament``."""
+    path = Path(out) / "report.json"
+    try:
+        data = json.loads(path.read_text())
+    except FileNotFoundError:
+        raise TournamentError(f"{out}: no report.json (run pokerirl tournament first)") from None
+    except (OSError, json.JSONDecodeError) as error:
+        raise TournamentError(f"{path}: cannot read the report ({error})") from None
+    try:
+        return TournamentReport.from_dict(data)
+    except (KeyError, TypeError) as error:
+        raise TournamentError(f"{path}: malformed report ({error!r})") from None
+
+
+# --- renderings ----------------------------------------------------------------------------
+
+
+def render_report(report: TournamentReport, output_format: str = "markdown") -> str:
+    """The report as ``"markdown"`` (what ``report.md`` holds) or ``"json"``."""
+    if output_format == "json":
+        return render_json(report)
+    if output_format in ("markdown", "text"):
+        return render_markdown(report)
+    raise TournamentError(f"unknown format {output_format!r} (markdown or json)")
+
+
+def render_json(report: TournamentReport) -> str:
+    return json.dumps(report.to_dict(), indent=2) + "\n"
+
+
+def render_p(p: float) -> str:
+    """A p-value with three significant digits."""
+    return "< 1e-300" if p == 0.0 else f"{p:.3g}"
+
+
+def _mbb(value: float) -> str:
+    return f"{value:+.2f}"
+
+
+def _ci(ci: tuple[float, float]) -> str:
+    return f"[{ci[0]:+.2f}, {ci[1]:+.2f}]"
+
+
+def _yes(flag: bool) -> str:
+    return "yes" if flag else "no"
+
+
+def _threshold(alpha: float, tests: int) -> str:
+    return f"p < {alpha:g}/{tests} = {alpha / tests:.4g}"
+
+
+def render_markdown(report: TournamentReport) -> str:
+    config, family = report.config, report.family
+    alpha, seeds = config["alpha"], config["seeds"]
+    per_seed_rule = _threshold(alpha, family["per_seed_tests"])
+    pooled_rule = _threshold(alpha, family["pooled_tests"])
+    names = ", ".join(f"{m.agent_a} vs {m.agent_b}" for m in report.matchups)
+    unit = "duplicate pair (a deal played from both seats)" if config["duplicate"] else "hand"
+    seating = "duplicate deals" if config["duplicate"] else "seats alternating, no duplicate"
+    pooled_how = (
+        f"the mean of the {len(seeds)} per-seed means, with its standard error and a t-test "
+        f"over those {len(seeds)} values (df {len(seeds) - 1}): seeds are the replicates"
+        if len(seeds) > 1
+        else "with a single seed, the pooled line is that seed's own test"
+    )
+    out = [
+        f"# Tournament: {names}",
+        "",
+        f"{config['hands']:,} hands per seed, seeds {format_seeds(seeds)} ({len(seeds)}), "
+        f"{seating}. Payoffs are the first agent's, in milli-big-blinds per hand (mbb/h).",
+        "",
+        "## Results",
+        "",
+        f"| Model | Opponent | Payoff (mbb/h) ± SE | 95% CI | p-value | Significant after "
+        f"Bonferroni ({pooled_rule}) | Holm p | Seeds significant ({per_seed_rule}) |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
+    for m in report.matchups:
+        p = m.pooled
+        out.append(
+            f"| {m.agent_a} | {m.agent_b} | {_mbb(p.mbb_per_hand)} ± {p.std_error:.2f} | "
+            f"{_ci(p.ci95)} | {render_p(p.p_value)} | {_yes(p.significant_bonferroni)} | "
+            f"{render_p(p.p_value_holm)} | {m.seeds_significant_bonferroni}/{len(m.seeds)} |"
+        )
+    out += [
+        "",
+        f"Pooled: {pooled_how}. Bonferroni and Holm over the {family['pooled_tests']} pooled "
+        f"test(s), one per matchup.",
+        "",
+        "## Per seed",
+        "",
+        f"Unit: one {unit}; standard errors, CIs and two-sided t-tests are over the units of "
+        f"each seed. Bonferroni and Holm over all {family['per_seed_tests']} per-seed tests "
+        f"({len(seeds)} seeds x {len(report.matchups)} matchup(s)): significant if "
+        f"{per_seed_rule} (the paper's 0.05/20 is this threshold for one matchup and 20 "
+        "seeds).",
+        "",
+        "| Model | Opponent | Seed | Payoff (mbb/h) ± SE | 95% CI | p-value | Bonferroni p "
+        "| Holm p | Significant after Bonferroni |",
+        "|---|---|---|---|---|---|---|---|---|",
+    ]
+    for m in report.matchups:
+        for s in m.seeds:
+            out.append(
+                f"| {m.agent_a} | {m.agent_b} | {s.seed} | {_mbb(s.mbb_per_hand)} ± "
+                f"{s.std_error:.2f} | {_ci(s.ci95)} | {render_p(s.p_value)} | "
+                f"{render_p(s.p_value_bonferroni)} | {render_p(s.p_value_holm)} | "
+                f"{_yes(s.significant_bonferroni)} |"
+            )
+    out += ["", "## Run", ""]
+    for m in report.matchups:
+        for side, spec, key in (("A", m.spec_a, "fingerprint_a"), ("B", m.spec_b, "fingerprint_b")):
+            prints = {getattr(s, key) for s in m.seeds}
+            shown = (
+                prints.pop()
+                if len(prints) == 1
+                else f"{len(prints)} agents, one per seed (fingerprints in per_seed.csv)"
+            )
+            out.append(f"- {m.agent_a} vs {m.agent_b}, {side} = `{spec}`: {shown}")
+    versions = ", ".join(f"{name} {version}" for name, version in report.versions.items())
+    timing = report.timing
+    out += [
+        f"- batch size {config['batch_size']}; versions: {versions}",
+        f"- this run: {timing['hands_played']:,} hands played in {timing['wall_seconds']:.1f} s "
+        f"({timing['hands_per_second']:,.0f} hands/s), {timing['seeds_reused']} seed result(s) "
+        "reused from an earlier run",
+        "",
+    ]
+    return "\n".join(out)
+
+
+CSV_COLUMNS = (
+    "agent_a",
+    "agent_b",
+    "seed",
+    "hands",
+    "n",
+    "mbb_per_hand",
+    "std_error",
+    "ci95_low",
+    "ci95_high",
+    "p_value",
+    "p_value_bonferroni",
+    "p_value_holm",
+    "significant_bonferroni",
+    "significant_holm",
+    "fingerprint_a",
+    "fingerprint_b",
+    "seconds",
+    "hands_per_second",
+)
+
+
+def render_csv(report: TournamentReport) -> str:
+    """One row per (matchup, seed); floats in full precision."""
+    buffer = io.StringIO()
+    writer = csv.DictWriter(buffer, fieldnames=CSV_COLUMNS, lineterminator="\n")
+    writer.writeheader()
+    for m in report.matchups:
+        for s in m.seeds:
+            row = {k: v for k, v in asdict(s).items() if k in CSV_COLUMNS}
+            row.update(
+                agent_a=m.agent_a, agent_b=m.agent_b, ci95_low=s.ci95[0], ci95_high=s.ci95[1]
+            )
+            writer.writerow({k: repr(v) if isinstance(v, float) else v for k, v in row.items()})
+    return buffer.getvalue()
+
+
+def render_png(report: TournamentReport) -> bytes:
+    """Per-seed mbb/h with 95% CIs, one colour per matchup, pooled means dashed.
+
+    Drawn on a bare ``Figure`` (Agg canvas, no pyplot): no display, no global state.
+    """
+    from matplotlib.figure import Figure
+
+    figure = Figure(figsize=(max(6.0, 0.35 * len(report.config["seeds"]) + 3), 4.0))
+    axes = figure.subplots()
+    width = 0.6 / max(1, len(report.matchups))
+    for i, m in enumerate(report.matchups):
+        x = [s.seed + (i - (len(report.matchups) - 1) / 2) * width for s in m.seeds]
+        y = [s.mbb_per_hand for s in m.seeds]
+        # Clipped at 0: rounding can put a zero-width CI a hair off its mean.
+        errors = [
+            [max(0.0, s.mbb_per_hand - s.ci95[0]) for s in m.seeds],
+            [max(0.0, s.ci95[1] - s.mbb_per_hand) for s in m.seeds],
+        ]
+        bars = axes.errorbar(
+            x, y, yerr=errors, fmt="o", capsize=3, markersize=4, label=f"{m.agent_a} vs {m.agent_b}"
+        )
+        axes.axhline(m.pooled.mbb_per_hand, linestyle="--", linewidth=1, color=bars[0].get_color())
+    axes.axhline(0.0, color="black", linewidth=0.8)
+    axes.set_xlabel("seed")
+    axes.set_ylabel("mbb/h (first agent), 95% CI")
+    axes.set_title(f"{report.config['hands']:,} hands per seed; dashed: pooled mean")
+    axes.legend(fontsize="small")
+    figure.tight_layout()
+    buffer = io.BytesIO()
+    figure.savefig(buffer, format="png", dpi=120)
+    return buffer.getvalue()

@@ -1,0 +1,468 @@
+"""Multi-seed tournaments: every matchup on every seed, saved seed by seed, then tested.
+
+Seed ``k`` of matchup (A, B) is ``play_match(A_k, B_k, hands=N, seed=k)``: the deals and both
+agents' random draws depend only on ``k`` (and the batch size), so a seed's result is the same
+whichever process plays it and in whatever order; every matchup plays the same deals on seed k.
+
+Statistics (see :mod:`pokerirl.tournaments.stats`):
+
+* per seed: mean mbb/h from A's side over the seed's independent units (duplicate pairs, or
+  hands without duplicate), standard error, 95% t CI, two-sided one-sample t-test;
+* pooled, per matchup: the same over the per-seed means (n = seeds, df = seeds - 1), so seeds
+  are the replicates, which with agent sets includes the spread between training runs. With one
+  seed the pooled line is that seed's own test;
+* Bonferroni and Holm over the family of all per-seed tests (seeds x matchups), and separately
+  over the pooled tests (one per matchup). The paper's threshold p < 0.05/20 (one matchup, 20
+  seeds) is the per-seed family's; its payoff ± SE is the pooled line.
+
+Resuming: each seed's result is saved to ``<out>/seeds/<A>-vs-<B>/seed-<k>.json`` as soon as
+it finishes, with the agents' fingerprints, hands, duplicate mode and batch size. A rerun reuses
+a saved seed when those match; when they do not it refuses (:class:`TournamentError`), unless
+``overwrite=True``, which recomputes that seed.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import multiprocessing
+import platform
+import re
+import sys
+import time
+from collections.abc import Iterator, Sequence
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from dataclasses import asdict, dataclass
+from importlib import metadata
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from tqdm import tqdm
+
+from pokerirl import atomic
+from pokerirl.agents import agent_fingerprint, resolve_agent
+from pokerirl.game.match import DEFAULT_BATCH_SIZE, play_match
+from pokerirl.tournaments.lineup import (
+    TournamentError,
+    agent_label,
+    agent_spec_for_seed,
+    check_specs,
+)
+from pokerirl.tournaments.report import (
+    Line,
+    MatchupReport,
+    SeedLine,
+    TournamentReport,
+    write_report,
+)
+from pokerirl.tournaments.stats import Estimate, bonferroni, estimate, holm
+
+SEED_FORMAT = "pokerirl-tournament-seed/1"
+VERSIONED_PACKAGES = ("pokerirl", "numpy", "scipy", "torch", "rlcard")
+
+
+@dataclass(frozen=True, kw_only=True)
+class SeedKey:
+    """What a saved seed result must match to be reused."""
+
+    seed: int
+    fingerprint_a: str
+    fingerprint_b: str
+    hands: int
+    duplicate: bool
+    batch_size: int
+
+
+@dataclass(frozen=True, kw_only=True)
+class SeedResult:
+    """One seed of one matchup before corrections: what is saved and reused."""
+
+    key: SeedKey
+    estimate: Estimate
+    seconds: float
+    hands_per_second: float
+
+
+@dataclass(frozen=True, kw_only=True)
+class _SeedTask:
+    spec_a: str
+    spec_b: str
+    key: SeedKey
+
+
+@contextlib.contextmanager
+def _torch_for_play() -> Iterator[None]:
+    """Inference mode on one torch thread, restored afterwards.
+
+    One thread whatever ``jobs`` is: the parallelism is the processes, and a network's sums
+    could otherwise be split differently with another thread count, changing a near-tie
+    argmax and so the result. Only agents that loaded torch need any of it; importing torch
+    for built-ins would cost seconds.
+    """
+    torch = sys.modules.get("torch")
+    if torch is None:
+        yield
+        return
+    threads = torch.get_num_threads()
+    torch.set_num_threads(1)
+    try:
+        with torch.inference_mode():
+            yield
+    finally:
+        torch.set_num_threads(threads)
+
+
+def _play_seed(task: _SeedTask) -> SeedResult:
+    """Play one seed (in this process or a worker)."""
+    key = task.key
+    agent_a = resolve_agent(agent_spec_for_seed(task.spec_a, key.seed))
+    agent_b = resolve_agent(agent_spec_for_seed(task.spec_b, key.seed))
+    found = (agent_fingerprint(agent_a), agent_fingerprint(agent_b))
+    if found != (key.fingerprint_a, key.fingerprint_b):
+        raise TournamentError(f"seed {key.seed}: an agent changed on disk during the run")
+    with _torch_for_play():
+        result = play_match(
+            agent_a,
+            agent_b,
+            hands=key.hands,
+            seed=key.seed,
+            duplicate=key.duplicate,
+            batch_size=key.batch_size,
+        )
+    per_hand = result.results_bb
+    units = per_hand.reshape(-1, 2).mean(axis=1) if key.duplicate else per_hand
+    return SeedResult(
+        key=key,
+        estimate=estimate(1000.0 * units),
+        seconds=result.seconds,
+        hands_per_second=result.hands_per_second,
+    )
+
+
+# --- saved seeds ---------------------------------------------------------------------------
+
+
+def _seed_path(out: Path, folder: str, seed: int) -> Path:
+    return out / "seeds" / folder / f"seed-{seed}.json"
+
+
+def _save_seed(path: Path, result: SeedResult) -> None:
+    data = {"format": SEED_FORMAT, **asdict(result)}
+    path.parent.mkdir(parents=True, exist_ok=True)
+    atomic.write_text(path, json.dumps(data, indent=2) + "\n")
+
+
+def _load_seed(path: Path, key: SeedKey, *, overwrite: bool) -> SeedResult | None:
+    """The saved result for ``key``, or None to (re)compute; refuses a mismatch."""
+    if not path.exists():
+        return None
+    try:
+        data = json.loads(path.read_text())
+        if data.get("format") != SEED_FORMAT:
+            raise ValueError(f"format {data.get('format')!r}")
+        saved = SeedKey(**data["key"])
+        result = SeedResult(
+            key=saved,
+            estimate=Estimate(**{**data["estimate"], "ci95": tuple(data["estimate"]["ci95"])}),
+            seconds=data["seconds"],
+            hands_per_second=data["hands_per_second"],
+        )
+    except (OSError, ValueError, KeyError, TypeError) as error:
+        if overwrite:
+            return None
+        raise TournamentError(
+            f"{path}: unreadable saved seed ({error}); use --overwrite to recompute it"
+        ) from None
+    if saved == key:
+        return result
+    if overwrite:
+        return None
+    changed = ", ".join(
+        f"{name} {getattr(saved, name)!r} -> {getattr(key, name)!r}"
+        for name in ("fingerprint_a", "fingerprint_b", "hands", "duplicate", "batch_size")
+        if getattr(saved, name) != getattr(key, name)
+    )
+    raise TournamentError(
+        f"{path} was played with another configuration ({changed}); "
+        "use another --out, or --overwrite to recompute"
+    )
+
+
+def _folder_names(matchups: Sequence[tuple[str, str]]) -> list[str]:
+    """``<A>-vs-<B>`` per matchup, file-safe, numbered when two labels collide."""
+    names: list[str] = []
+    for a, b in matchups:
+        base = re.sub(r"[^A-Za-z0-9._-]+", "_", f"{agent_label(a)}-vs-{agent_label(b)}")
+        name, k = base, 2
+        while name in names:
+            name, k = f"{base}-{k}", k + 1
+        names.append(name)
+    return names
+
+
+# --- the run -------------------------------------------------------------------------------
+
+
+def _fingerprints(spec: str, seeds: Sequence[int]) -> dict[int, str]:
+    """Each seed's agent fingerprint; one load for agents that are the same on every seed."""
+    cache: dict[str, str] = {}
+    prints = {}
+    for seed in seeds:
+        resolved = agent_spec_for_seed(spec, seed)
+        if resolved not in cache:
+            try:
+                cache[resolved] = agent_fingerprint(resolve_agent(resolved))
+            except (ValueError, OSError) as error:  # resolve_agent's messages name the spec
+                raise TournamentError(str(error)) from None
+            except Exception as error:  # e.g. a corrupt checkpoint: still one line, no traceback
+                first = (str(error).strip().splitlines() or [""])[0]
+                raise TournamentError(
+                    f"{resolved}: cannot load the agent ({type(error).__name__}: {first})"
+                ) from None
+        prints[seed] = cache[resolved]
+    return prints
+
+
+def _validate(
+    matchups: Sequence[tuple[str, str]],
+    hands: int,
+    seeds: Sequence[int],
+    duplicate: bool,
+    alpha: float,
+    jobs: int,
+    batch_size: int,
+) -> None:
+    if not matchups:
+        raise TournamentError("no matchups: give two agents, or --vs BASE and one or more")
+    if len(set(matchups)) < len(matchups):
+        raise TournamentError("the same matchup is listed twice")
+    if not seeds:
+        raise TournamentError("no seeds: the seed range is empty")
+    if min(seeds) < 0:
+        raise TournamentError(f"seeds must be non-negative, got {min(seeds)}")
+    least = 4 if duplicate else 2  # two units for a standard error
+    if hands < least:
+        mode = "with duplicate deals (two pairs)" if duplicate else "(two hands)"
+        raise TournamentError(f"hands must be at least {least} {mode}, got {hands}")
+    if duplicate and hands % 2:
+        raise TournamentError(f"duplicate deals are played twice: hands must be even, got {hands}")
+    if batch_size < 2 or (duplicate and batch_size % 2):
+        raise TournamentError(f"batch size must be even and at least 2, got {batch_size}")
+    if not 0 < alpha < 1:
+        raise TournamentError(f"alpha must be between 0 and 1, got {alpha}")
+    if jobs < 1:
+        raise TournamentError(f"jobs must be at least 1, got {jobs}")
+
+
+Cell = tuple[int, int]  # (matchup index, seed)
+
+
+def _run_tasks(tasks: dict[Cell, _SeedTask], jobs: int) -> Iterator[tuple[Cell, SeedResult]]:
+    """Results as they finish: in this process for one job, else in spawned workers."""
+    if jobs == 1 or len(tasks) <= 1:
+        for cell, task in tasks.items():
+            yield cell, _play_seed(task)
+        return
+    # Spawn, not fork: forking a process that holds torch threads can deadlock.
+    context = multiprocessing.get_context("spawn")
+    with ProcessPoolExecutor(max_workers=jobs, mp_context=context) as pool:
+        futures = {pool.submit(_play_seed, task): cell for cell, task in tasks.items()}
+        try:
+            for future in as_completed(futures):
+                yield futures[future], future.result()
+        finally:
+            for future in futures:
+                future.cancel()
+
+
+def _versions() -> dict[str, str | None]:
+    versions: dict[str, str | None] = {"python": platform.python_version()}
+    for package in VERSIONED_PACKAGES:
+        try:
+            versions[package] = metadata.version(package)
+        except metadata.PackageNotFoundError:
+            versions[package] = None
+    return versions
+
+
+def _corrected(estimates: list[Estimate], alpha: float) -> list[dict[str, Any]]:
+    """Each estimate's fields with Bonferroni and Holm over the whole list (one family)."""
+    p = np.array([e.p_value for e in estimates])
+    p_bonferroni, p_holm = bonferroni(p), holm(p)
+    threshold = alpha / len(estimates)
+    return [
+        {
+            **asdict(e),
+            "p_value_bonferroni": float(p_bonferroni[i]),
+            "p_value_holm": float(p_holm[i]),
+            "significant_bonferroni": bool(e.p_value < threshold),
+            "significant_holm": bool(p_holm[i] < alpha),
+        }
+        for i, e in enumerate(estimates)
+    ]
+
+
+def run_tournament(
+    matchups: Sequence[tuple[str, str]],
+    *,
+    hands: int,
+    seeds: Sequence[int],
+    out: Path | str,
+    duplicate: bool = True,
+    alpha: float = 0.05,
+    jobs: int = 1,
+    batch_size: int = DEFAULT_BATCH_SIZE,
+    overwrite: bool = False,
+    progress: bool = False,
+) -> TournamentReport:
+    """Play every (A, B) matchup on every seed, write the report files to ``out``, return it.
+
+    Args:
+        matchups: (A, B) agent specs; results are A's. Each spec is a built-in name, an agent
+            folder, or an agent set (a folder of ``seed-<k>`` agent folders).
+        hands: hands per seed (even with duplicate deals).
+        seeds: the seeds; seed k plays deals of seed k between each set's seed-k agents.
+        out: the report folder; saved seeds found there are reused when they match.
+        duplicate: play each deal from both seats and pair the two results.
+        alpha: family-wise error rate for Bonferroni and Holm.
+        jobs: worker processes (results do not depend on it).
+        batch_size: hands in lock-step; part of the result (agents' random draws depend on it).
+        overwrite: recompute saved seeds that do not match instead of refusing.
+        progress: a tqdm bar on stderr with hands/s.
+
+    Raises:
+        TournamentError: bad input, a missing ``seed-<k>`` folder, an agent that does not load,
+            or a saved seed from another configuration.
+
+    >>> import tempfile
+    >>> with tempfile.TemporaryDirectory() as out:
+    ...     report = run_tournament([("raise", "call")], hands=1000, seeds=[0, 1], out=out)
+    >>> [s.mbb_per_hand for s in report.matchups[0].seeds]  # duplicate: exactly even here
+    [0.0, 0.0]
+    """
+    seeds = sorted(set(seeds))
+    _validate(matchups, hands, seeds, duplicate, alpha, jobs, batch_size)
+    check_specs(sorted({spec for pair in matchups for spec in pair}), seeds)
+    out = Path(out)
+    prints = {spec: _fingerprints(spec, seeds) for spec in {s for pair in matchups for s in pair}}
+
+    folders = _folder_names(matchups)
+    done: dict[Cell, SeedResult] = {}
+    tasks: dict[Cell, _SeedTask] = {}
+    workers = min(jobs, len(matchups) * len(seeds))
+    for m, (a, b) in enumerate(matchups):
+        for seed in seeds:
+            key = SeedKey(
+                seed=seed,
+                fingerprint_a=prints[a][seed],
+                fingerprint_b=prints[b][seed],
+                hands=hands,
+                duplicate=duplicate,
+                batch_size=batch_size,
+            )
+            saved = _load_seed(_seed_path(out, folders[m], seed), key, overwrite=overwrite)
+            if saved is not None:
+                done[m, seed] = saved
+            else:
+                tasks[m, seed] = _SeedTask(spec_a=a, spec_b=b, key=key)
+
+    started = time.perf_counter()
+    with tqdm(
+        total=len(tasks) * hands,
+        unit="hand",
+        unit_scale=True,
+        disable=not progress,
+        desc="tournament",
+    ) as bar:
+        for (m, seed), result in _run_tasks(tasks, workers):
+            _save_seed(_seed_path(out, folders[m], seed), result)  # resumable from here
+            done[m, seed] = result
+            bar.update(hands)
+    wall = time.perf_counter() - started
+
+    report = _build_report(
+        matchups,
+        seeds,
+        done,
+        hands=hands,
+        duplicate=duplicate,
+        alpha=alpha,
+        batch_size=batch_size,
+        timing={
+            "wall_seconds": wall,
+            "hands_played": len(tasks) * hands,
+            "hands_per_second": len(tasks) * hands / wall if wall > 0 else 0.0,
+            "seeds_reused": len(matchups) * len(seeds) - len(tasks),
+            "jobs": jobs,
+        },
+    )
+    write_report(report, out)
+    return report
+
+
+def _build_report(
+    matchups: Sequence[tuple[str, str]],
+    seeds: Sequence[int],
+    done: dict[Cell, SeedResult],
+    *,
+    hands: int,
+    duplicate: bool,
+    alpha: float,
+    batch_size: int,
+    timing: dict[str, Any],
+) -> TournamentReport:
+    cells = [(m, seed) for m in range(len(matchups)) for seed in seeds]
+    per_seed = dict(zip(cells, _corrected([done[c].estimate for c in cells], alpha), strict=True))
+    if len(seeds) > 1:
+        pooled_estimates = [
+            estimate(np.array([done[m, seed].estimate.mbb_per_hand for seed in seeds]))
+            for m in range(len(matchups))
+        ]
+    else:
+        pooled_estimates = [done[m, seeds[0]].estimate for m in range(len(matchups))]
+    pooled = _corrected(pooled_estimates, alpha)
+
+    reports = []
+    for m, (a, b) in enumerate(matchups):
+        lines = tuple(
+            SeedLine(
+                **per_seed[m, seed],
+                seed=seed,
+                hands=hands,
+                fingerprint_a=done[m, seed].key.fingerprint_a,
+                fingerprint_b=done[m, seed].key.fingerprint_b,
+                seconds=done[m, seed].seconds,
+                hands_per_second=done[m, seed].hands_per_second,
+            )
+            for seed in seeds
+        )
+        reports.append(
+            MatchupReport(
+                agent_a=agent_label(a),
+                agent_b=agent_label(b),
+                spec_a=a,
+                spec_b=b,
+                pooled=Line(**pooled[m]),
+                pooled_over="seeds" if len(seeds) > 1 else "units of the only seed",
+                seeds=lines,
+            )
+        )
+    return TournamentReport(
+        config={
+            "hands": hands,
+            "seeds": list(seeds),
+            "duplicate": duplicate,
+            "batch_size": batch_size,
+            "alpha": alpha,
+        },
+        family={
+            "per_seed_tests": len(cells),
+            "per_seed_threshold": alpha / len(cells),
+            "pooled_tests": len(matchups),
+            "pooled_threshold": alpha / len(matchups),
+        },
+        matchups=tuple(reports),
+        versions=_versions(),
+        timing=timing,
+    )
