@@ -29,3 +29,4 @@ bench: install
 	$(BIN)/python benchmarks/engine.py
 	$(BIN)/python benchmarks/train.py
 	$(BIN)/python benchmarks/agents.py
+	$(BIN)/python benchmarks/tournament.py

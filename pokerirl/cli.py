@@ -76,22 +76,33 @@ def synth(
 @app.command()
 def demo(
     out: Path = typer.Option(Path("demo-output"), "--out", "-o", help="Where the demo writes."),
-    hands: int = typer.Option(20_000, "--hands", "-n", min=1, help="Synthetic hands to play."),
-    seed: int = typer.Option(0, "--seed", help="Random seed."),
+    seed: int = typer.Option(0, "--seed", help="Seed of the synthetic data and of the IRL runs."),
+    jobs: int = typer.Option(2, "--jobs", min=1, help="Processes for agent training and play."),
+    quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bars."),
 ) -> None:
-    """Run the pipeline on built-in synthetic data: synth, then ingest."""
-    from pokerirl.datasets.ingest import ingest as run_ingest
-    from pokerirl.datasets.ingest import summary_path
-    from pokerirl.game.synth import write_synthetic_month
+    """Run the whole study on built-in synthetic data, in a few minutes on a CPU.
 
-    out.mkdir(parents=True, exist_ok=True)
-    typer.echo(f"[1/2] synth: {hands} heads-up hands, seed {seed}")
-    folder = write_synthetic_month(out / "irc", hands=hands, seed=seed)
-    table = out / "expert.parquet"
-    typer.echo(f"[2/2] ingest: {folder} -> {table}")
-    summary = run_ingest([folder], table, progress=True)
-    typer.echo(json.dumps(summary, indent=2))
-    typer.echo(f"\ndone: table {table}, summary {summary_path(table)}")
+    synth -> ingest -> train hairl and airl -> agent train (sparse, hairl, airl; 3 seeds)
+    -> tournament of each reward-shaped DQN against the sparse-reward DQN -> report.
+    """
+    from pokerirl.demo import DemoConfig, run_demo
+    from pokerirl.tournaments import render_report
+
+    try:
+        result = run_demo(out, DemoConfig(seed=seed, jobs=jobs), say=typer.echo, progress=not quiet)
+    except (ValueError, OSError) as error:
+        fail(str(error))
+    summary = result.ingest_summary
+    typer.echo(
+        f"\ningest: {summary['hands_read_total']:,} hands, {summary['kept_hands']:,} kept, "
+        f"{summary['rows']:,} decisions"
+    )
+    for algo, (alignment, majority) in result.irl_alignment.items():
+        typer.echo(f"{algo}: validation alignment {alignment:.3f} (majority {majority:.3f})")
+    typer.echo("")
+    typer.echo(render_report(result.report))
+    typer.echo(f"files: table {result.table}, reward runs {out / 'runs'}, agents {out / 'agents'},")
+    typer.echo(f"       report {result.report_dir}/report.md (pokerirl report {result.report_dir})")
 
 
 @app.command()
@@ -180,7 +191,8 @@ def tournament(
     whose agents, hands, duplicate mode and batch size match, and refuses the
     others (--overwrite recomputes them). pokerirl report DIR prints it again.
     """
-    from pokerirl.tournaments import parse_seeds, render_report, run_tournament
+    from pokerirl.seeds import parse_seeds
+    from pokerirl.tournaments import render_report, run_tournament
 
     agents = agents or []
     if vs is not None:
@@ -326,7 +338,8 @@ def agent_train(
 ) -> None:
     """Train a DQN agent (or one per seed) on the sparse payoff or a learned reward."""
     from pokerirl.agents.dqn import DQNConfig
-    from pokerirl.agents.train import TrainConfig, parse_seeds, train_agent, train_seeds
+    from pokerirl.agents.train import TrainConfig, train_agent, train_seeds
+    from pokerirl.seeds import parse_seeds
 
     try:
         config = TrainConfig(
@@ -350,7 +363,9 @@ def agent_train(
             summary = train_agent(out, config, progress=not quiet)
             lines = {seed: summary}
         else:
-            lines = train_seeds(out, config, parse_seeds(seeds), jobs=jobs, progress=not quiet)
+            lines = train_seeds(
+                out, config, list(parse_seeds(seeds)), jobs=jobs, progress=not quiet
+            )
     except ValueError as error:
         fail(str(error))
     except OSError as error:

@@ -11,9 +11,10 @@ import torch
 from typer.testing import CliRunner
 
 from pokerirl.agents.dqn import DQNConfig, train_dqn
-from pokerirl.agents.train import TrainConfig, parse_seeds, reward_run_fingerprint, train_agent
+from pokerirl.agents.train import TrainConfig, reward_run_fingerprint, train_agent
 from pokerirl.cli import app
 from pokerirl.game import make_agent
+from pokerirl.seeds import parse_seeds
 
 torch.set_num_threads(1)
 FAST = ["--hands", "512", "--eval-every", "512", "--eval-hands", "200", "--concurrent-hands", "128"]
@@ -76,7 +77,7 @@ def test_bad_input_is_a_one_line_error(tmp_path: Path, args: list[str], message:
 
 
 def test_parse_seeds_and_reward_run_fingerprint(tmp_path: Path) -> None:
-    assert parse_seeds("0-2,7") == [0, 1, 2, 7]
+    assert parse_seeds("0-2,7") == (0, 1, 2, 7)
     for name, data in (("reward.pt", b"weights"), ("config.json", b"{}")):
         (tmp_path / name).write_bytes(data)
     before = reward_run_fingerprint(tmp_path)

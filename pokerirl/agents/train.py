@@ -22,7 +22,6 @@ import hashlib
 import json
 import multiprocessing
 import os
-import re
 import time
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass, field
@@ -112,23 +111,6 @@ def load_reward_fn(run_dir: str | os.PathLike[str]) -> RewardFn:
     from pokerirl.irl import load_reward
 
     return load_reward(run_dir)
-
-
-def parse_seeds(text: str) -> list[int]:
-    """Seeds from ``"0-19"``, ``"3"`` or ``"0-3,8,10-11"``, in order, without repeats.
-
-    >>> parse_seeds("0-3,8,2")
-    [0, 1, 2, 3, 8]
-    """
-    seeds: list[int] = []
-    for part in text.split(","):
-        match = re.fullmatch(r"\s*(\d+)\s*(?:-\s*(\d+)\s*)?", part)
-        if match is None or (match.group(2) and int(match.group(2)) < int(match.group(1))):
-            raise ValueError(f"bad seed list {text!r} (e.g. 0-19 or 0,3,5-7)")
-        low = int(match.group(1))
-        high = int(match.group(2)) if match.group(2) else low
-        seeds += [s for s in range(low, high + 1) if s not in seeds]
-    return seeds
 
 
 def _evaluate(

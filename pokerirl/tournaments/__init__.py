@@ -12,7 +12,8 @@ Holm corrections, and the report files (``pokerirl tournament``, ``pokerirl repo
 
 from __future__ import annotations
 
-from pokerirl.tournaments.lineup import TournamentError, format_seeds, parse_seeds
+from pokerirl.seeds import format_seeds, parse_seeds
+from pokerirl.tournaments.lineup import TournamentError
 from pokerirl.tournaments.report import (
     Line,
     MatchupReport,

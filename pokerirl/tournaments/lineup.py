@@ -5,8 +5,6 @@ An agent spec is a built-in name (``random``, ``raise``, ``call``), an agent fol
 folder with one ``seed-<k>`` subfolder per training seed. Seed ``k`` of a tournament uses
 ``<set>/seed-<k>``; every other spec is the same agent for every seed.
 
->>> parse_seeds("0-3,7,10-11")
-(0, 1, 2, 3, 7, 10, 11)
 >>> agent_spec_for_seed("raise", 5), agent_label("runs/hairl-dqn/")
 ('raise', 'hairl-dqn')
 """
@@ -19,32 +17,13 @@ from pathlib import Path
 
 from pokerirl.agents.registry import RLCARD_PREFIX
 from pokerirl.game.agents import BUILT_IN_AGENTS
+from pokerirl.seeds import format_seeds
 
 _SEED_FOLDER = re.compile(r"seed-(\d+)")
 
 
 class TournamentError(ValueError):
     """Bad tournament input or a result folder that does not fit; the message is one line."""
-
-
-def parse_seeds(text: str) -> tuple[int, ...]:
-    """Seeds from ``"0-19"``, ``"3"`` or ``"0-4,10,12-13"``: sorted, without repeats.
-
-    Raises :class:`TournamentError` on an empty range (``"5-3"``), a negative seed or junk.
-    """
-    seeds: set[int] = set()
-    for part in text.split(","):
-        match = re.fullmatch(r"\s*(\d+)\s*(?:-\s*(\d+)\s*)?", part)
-        if match is None:
-            raise TournamentError(
-                f"bad seed range {text!r}: use non-negative integers like 0-19 or 0-4,10"
-            )
-        first = int(match[1])
-        last = int(match[2]) if match[2] is not None else first
-        if last < first:
-            raise TournamentError(f"empty seed range {part.strip()!r}")
-        seeds.update(range(first, last + 1))
-    return tuple(sorted(seeds))
 
 
 def _set_seeds(spec: str) -> list[int]:
@@ -101,21 +80,3 @@ def check_specs(specs: Sequence[str], seeds: Sequence[int]) -> None:
                     f"({len(missing)} requested seed(s) missing; it has seeds "
                     f"{format_seeds(have)})"
                 )
-
-
-def format_seeds(seeds: Sequence[int]) -> str:
-    """The inverse of :func:`parse_seeds`, with ranges collapsed.
-
-    >>> format_seeds([0, 1, 2, 3, 7, 10, 11])
-    '0-3,7,10-11'
-    """
-    parts: list[str] = []
-    ordered = sorted(set(seeds))
-    i = 0
-    while i < len(ordered):
-        j = i
-        while j + 1 < len(ordered) and ordered[j + 1] == ordered[j] + 1:
-            j += 1
-        parts.append(str(ordered[i]) if i == j else f"{ordered[i]}-{ordered[j]}")
-        i = j + 1
-    return ",".join(parts)

@@ -19,7 +19,8 @@ from pathlib import Path
 from typing import Any, Literal
 
 from pokerirl import atomic
-from pokerirl.tournaments.lineup import TournamentError, format_seeds
+from pokerirl.seeds import format_seeds
+from pokerirl.tournaments.lineup import TournamentError
 
 REPORT_FORMAT = "pokerirl-tournament/1"
 
