@@ -64,7 +64,7 @@ def test_seeds_train_in_processes_and_resume_past_finished_ones(tmp_path: Path) 
         (["--reward", "shaped"], "unknown reward mode"),
         (["--reward-run", "."], "--reward-run needs --reward learned"),
         (["--reward", "learned", "--reward-run", "."], "not a reward run"),
-        (["--seeds", "5-2"], "bad seed list"),
+        (["--seeds", "5-2"], "empty seed range"),
         (["--opponent", "nobody"], "unknown agent 'nobody'"),
         (["--eval-hands", "3"], "eval_hands must be even"),
         (["--train-every", "0"], "train_every must be at least 1"),
