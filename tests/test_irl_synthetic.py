@@ -79,3 +79,16 @@ def test_sampled_actions_are_legal_one_hots_with_the_policy_frequencies() -> Non
     assert (sampled[:, 2] == 0).all()  # the illegal action is never drawn
     frequencies = sampled.mean(dim=0)
     torch.testing.assert_close(frequencies, out.action[0], atol=0.01, rtol=0)
+
+
+def test_trained_nets_stay_usable_by_autograd() -> None:
+    from pokerirl.irl.airl import AIRLConfig, ExpertData, train
+
+    torch.manual_seed(0)
+    obs = torch.rand(300, 6)
+    data = ExpertData.from_action_ids(obs, (obs[:, 0] > 0.5).long(), num_actions=2)
+    result = train(data, data, config=AIRLConfig.for_algo("hairl", epochs=2), progress=False)
+    assert not any(p.is_inference() for p in result.reward_net.parameters())
+    loss = result.reward_net(obs, torch.eye(2)[(obs[:, 1] > 0.5).long()]).sum()
+    loss.backward()  # fine-tuning after training must work
+    assert all(p.grad is not None for p in result.reward_net.parameters())

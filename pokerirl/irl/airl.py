@@ -396,52 +396,58 @@ def train(
     # Row layout: f (expert, policy), log π (expert, policy), f(s, π), log π(π), supervised.
     record = torch.empty(steps, 7 * batch, device=device)
 
-    bar = tqdm(range(1, config.epochs + 1), desc="train", unit="epoch", disable=not progress)
-    for epoch in bar:
-        start = time.perf_counter()
-        # Shuffle once per epoch with one gather; batches are then contiguous slices.
-        shuffled = data.subset(torch.randperm(n, generator=gen, device=device))
-        for step in range(steps):
-            rows = slice(step * batch, (step + 1) * batch)
-            obs = shuffled.obs[rows].float()
-            expert_action = shuffled.actions[rows]
-            mask = None if shuffled.legal_mask is None else shuffled.legal_mask[rows]
-            env_reward = None if shuffled.rewards is None else shuffled.rewards[rows]
+    # Inference mode skips autograd's bookkeeping on every small op (about 15% faster here).
+    # The nets, the optimizer buffers and ``record`` were made outside it, so they stay
+    # ordinary tensors, updated in place, that autograd can still use after training.
+    with torch.inference_mode():
+        bar = tqdm(range(1, config.epochs + 1), desc="train", unit="epoch", disable=not progress)
+        for epoch in bar:
+            start = time.perf_counter()
+            # Shuffle once per epoch with one gather; batches are then contiguous slices.
+            shuffled = data.subset(torch.randperm(n, generator=gen, device=device))
+            for step in range(steps):
+                rows = slice(step * batch, (step + 1) * batch)
+                obs = shuffled.obs[rows].float()
+                expert_action = shuffled.actions[rows]
+                mask = None if shuffled.legal_mask is None else shuffled.legal_mask[rows]
+                env_reward = None if shuffled.rewards is None else shuffled.rewards[rows]
 
-            # 1. the policy at s: π(·|s), or a reparameterized sample
-            out = policy.act(obs, mask, gen)
+                # 1. the policy at s: π(·|s), or a reparameterized sample
+                out = policy.act(obs, mask, gen)
 
-            # 2. discriminator step: expert (s, a_E) against the regularized policy (s, ã)
-            noisy = policy.sample_action(out, gen)
-            if config.sigma_start > 0:
-                noisy = policy.perturb(noisy, sigma, mask, gen)
-            both = torch.cat((expert_action, noisy))
-            log_pi = policy.log_prob(out.dist, both.view(2, batch, -1)).view(-1)
-            f, cache = reward_net.forward_cached(obs, both)
-            grad_f = discriminator_grad(f, log_pi, beta=beta, env_reward=env_reward)
-            reward_opt.step(reward_net.backward(cache, grad_f, actions=False)[0])
+                # 2. discriminator step: expert (s, a_E) against the regularized policy (s, ã)
+                noisy = policy.sample_action(out, gen)
+                if config.sigma_start > 0:
+                    noisy = policy.perturb(noisy, sigma, mask, gen)
+                both = torch.cat((expert_action, noisy))
+                log_pi = policy.log_prob(out.dist, both.view(2, batch, -1)).view(-1)
+                f, cache = reward_net.forward_cached(obs, both)
+                grad_f = discriminator_grad(f, log_pi, beta=beta, env_reward=env_reward)
+                reward_opt.step(reward_net.backward(cache, grad_f, actions=False)[0])
 
-            # 3. policy step against the updated reward:
-            #    (1−α)·E_π[−f(s, a) + log π] + α·supervised
-            f_pi, grad_action = _expected_reward_and_grad(reward_net, policy, obs, out, grad_f_pi)
-            policy_opt.step(policy.backward(out, grad_action, expert_action, alpha))
+                # 3. policy step against the updated reward:
+                #    (1−α)·E_π[−f(s, a) + log π] + α·supervised
+                f_pi, grad_action = _expected_reward_and_grad(
+                    reward_net, policy, obs, out, grad_f_pi
+                )
+                policy_opt.step(policy.backward(out, grad_action, expert_action, alpha))
 
-            supervised = policy.supervised_loss(out.dist, expert_action)
-            torch.cat((f, log_pi, f_pi, out.log_prob, supervised), out=record[step])
+                supervised = policy.supervised_loss(out.dist, expert_action)
+                torch.cat((f, log_pi, f_pi, out.log_prob, supervised), out=record[step])
 
-        if device.type == "cuda":
-            torch.cuda.synchronize(device)  # time the work, not its queueing
-        result.epoch_seconds.append(time.perf_counter() - start)
-        metrics: dict[str, Any] = {"epoch": epoch}
-        metrics.update(_step_metrics(record, shuffled.rewards, beta=beta, alpha=alpha))
-        metrics.update(evaluate(policy, val, majority_from=data))
-        result.metrics.append(metrics)
-        if on_epoch is not None:
-            on_epoch(metrics)
-        if "val_alignment" in metrics:
-            bar.set_postfix(
-                align=f"{metrics['val_alignment']:.3f}", d_loss=f"{metrics['disc_loss']:.3f}"
-            )
+            if device.type == "cuda":
+                torch.cuda.synchronize(device)  # time the work, not its queueing
+            result.epoch_seconds.append(time.perf_counter() - start)
+            metrics: dict[str, Any] = {"epoch": epoch}
+            metrics.update(_step_metrics(record, shuffled.rewards, beta=beta, alpha=alpha))
+            metrics.update(evaluate(policy, val, majority_from=data))
+            result.metrics.append(metrics)
+            if on_epoch is not None:
+                on_epoch(metrics)
+            if "val_alignment" in metrics:
+                bar.set_postfix(
+                    align=f"{metrics['val_alignment']:.3f}", d_loss=f"{metrics['disc_loss']:.3f}"
+                )
     bar.close()
     reward_net.eval()
     policy.eval()
