@@ -313,3 +313,10 @@ def test_stakes_come_from_the_channel(tmp_path: Path) -> None:
     assert rows["hand_id"][0] == f"holdem2/199504/{ZED_FIRST}"
     assert rows["big_blind"][0] == 20
     assert rows["payoff_bb"][:2] == [-2.0, 2.0]  # 40 chips lost at 20 a big blind
+
+
+def test_cli_output_that_is_a_folder_is_one_line_error(month: Path, tmp_path: Path) -> None:
+    result = CliRunner().invoke(app, ["ingest", str(month), "--out", str(tmp_path)])
+    assert result.exit_code == 1
+    assert "is a folder" in result.output and "Traceback" not in result.output
+    assert not list(tmp_path.glob(".*"))  # no temporary files left behind

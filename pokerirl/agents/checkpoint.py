@@ -79,7 +79,12 @@ def load_agent(folder: str | os.PathLike[str]) -> GreedyQAgent:
             raise ValueError(f"format is {config.get('format')!r}, not {FORMAT!r}")
         network = QNetwork(hidden=tuple(config["hidden"]))
         network.load_state_dict(torch.load(folder / MODEL_FILE, weights_only=True))
-    except (ValueError, KeyError, TypeError, RuntimeError, OSError, UnpicklingError) as error:
+    except UnpicklingError:
+        # torch's own message suggests weights_only=False: wrong advice for a corrupt file.
+        raise ValueError(
+            f"{folder}: cannot load agent: {MODEL_FILE} is not a state_dict saved by pokerirl"
+        ) from None
+    except (ValueError, KeyError, TypeError, RuntimeError, OSError) as error:
         first_line = str(error).strip().splitlines()[0] if str(error).strip() else repr(error)
         raise ValueError(f"{folder}: cannot load agent: {first_line}") from None
     return GreedyQAgent(

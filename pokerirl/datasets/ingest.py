@@ -64,6 +64,8 @@ def ingest(
     Nothing appears at ``out`` unless the whole ingest succeeds.
     """
     out_path = Path(out)
+    if out_path.is_dir():
+        raise IngestError(f"{out_path}: is a folder; give a file name such as table.parquet")
     if not out_path.parent.is_dir():
         raise IngestError(f"{out_path.parent}: output folder does not exist")
     check_sources(sources)
