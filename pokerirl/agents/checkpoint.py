@@ -54,12 +54,17 @@ def save_agent(folder: str | os.PathLike[str], network: QNetwork, config: dict[s
     write_bytes(folder / CONFIG_FILE, (json.dumps(record, indent=2) + "\n").encode())
 
 
-def folder_fingerprint(folder: str | os.PathLike[str]) -> str:
-    """``sha256:<hex>`` over the checkpoint's and the config's bytes."""
+def files_fingerprint(folder: str | os.PathLike[str], names: tuple[str, ...]) -> str:
+    """``sha256:<hex>`` over the bytes of the files ``names`` in ``folder``, in that order."""
     digest = hashlib.sha256()
-    for name in (MODEL_FILE, CONFIG_FILE):
+    for name in names:
         digest.update((Path(folder) / name).read_bytes())
     return f"sha256:{digest.hexdigest()}"
+
+
+def folder_fingerprint(folder: str | os.PathLike[str]) -> str:
+    """``sha256:<hex>`` over the checkpoint's and the config's bytes."""
+    return files_fingerprint(folder, (MODEL_FILE, CONFIG_FILE))
 
 
 def load_agent(folder: str | os.PathLike[str]) -> GreedyQAgent:

@@ -18,7 +18,6 @@ per seed into ``<out>/seed-<k>``, skipping seeds already finished.
 from __future__ import annotations
 
 import dataclasses
-import hashlib
 import json
 import multiprocessing
 import os
@@ -37,6 +36,7 @@ from pokerirl.agents.checkpoint import (
     CONFIG_FILE,
     CURVE_FILE,
     METRICS_FILE,
+    files_fingerprint,
     is_finished,
     save_agent,
 )
@@ -96,13 +96,10 @@ class TrainConfig:
 
 def reward_run_fingerprint(run_dir: str | os.PathLike[str]) -> str:
     """``sha256:<hex>`` over a reward run's ``reward.pt`` and ``config.json``."""
-    digest = hashlib.sha256()
     for name in REWARD_RUN_FILES:
-        path = Path(run_dir) / name
-        if not path.is_file():
+        if not (Path(run_dir) / name).is_file():
             raise ValueError(f"{run_dir}: not a reward run (no {name})")
-        digest.update(path.read_bytes())
-    return f"sha256:{digest.hexdigest()}"
+    return files_fingerprint(run_dir, REWARD_RUN_FILES)
 
 
 def load_reward_fn(run_dir: str | os.PathLike[str]) -> RewardFn:

@@ -21,7 +21,6 @@ from __future__ import annotations
 import dataclasses
 import json
 import os
-import platform
 import tomllib
 from collections.abc import Mapping
 from dataclasses import dataclass
@@ -37,6 +36,7 @@ from pokerirl.irl.airl import AIRLConfig, TrainResult, resolve_device, train
 from pokerirl.irl.nets import DiscretePolicy, GaussianPolicy, Policy, RewardNet
 from pokerirl.irl.plots import plot_curves
 from pokerirl.irl.table import first_line, read_expert_table, split_by_hand
+from pokerirl.versions import package_versions
 
 FORMAT_VERSION = 1
 REWARD_FILE, POLICY_FILE, CONFIG_FILE, METRICS_FILE = (
@@ -186,20 +186,6 @@ def save_run(
         },
     }
     write_text(out / CONFIG_FILE, json.dumps(record, indent=2) + "\n")
-
-
-def package_versions() -> dict[str, str]:
-    import pyarrow
-
-    from pokerirl import __version__
-
-    return {
-        "pokerirl": __version__,
-        "python": platform.python_version(),
-        "torch": torch.__version__,
-        "numpy": np.__version__,
-        "pyarrow": pyarrow.__version__,
-    }
 
 
 # --------------------------------------------------------------------------- loading

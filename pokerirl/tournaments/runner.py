@@ -26,14 +26,12 @@ from __future__ import annotations
 import contextlib
 import json
 import multiprocessing
-import platform
 import re
 import sys
 import time
 from collections.abc import Iterator, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import asdict, dataclass
-from importlib import metadata
 from pathlib import Path
 from typing import Any
 
@@ -57,9 +55,9 @@ from pokerirl.tournaments.report import (
     write_report,
 )
 from pokerirl.tournaments.stats import Estimate, bonferroni, estimate, holm
+from pokerirl.versions import package_versions
 
 SEED_FORMAT = "pokerirl-tournament-seed/1"
-VERSIONED_PACKAGES = ("pokerirl", "numpy", "scipy", "torch", "rlcard")
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -276,16 +274,6 @@ def _run_tasks(tasks: dict[Cell, _SeedTask], jobs: int) -> Iterator[tuple[Cell, 
                 future.cancel()
 
 
-def _versions() -> dict[str, str | None]:
-    versions: dict[str, str | None] = {"python": platform.python_version()}
-    for package in VERSIONED_PACKAGES:
-        try:
-            versions[package] = metadata.version(package)
-        except metadata.PackageNotFoundError:
-            versions[package] = None
-    return versions
-
-
 def _corrected(estimates: list[Estimate], alpha: float) -> list[dict[str, Any]]:
     """Each estimate's fields with Bonferroni and Holm over the whole list (one family)."""
     p = np.array([e.p_value for e in estimates])
@@ -463,6 +451,6 @@ def _build_report(
             "pooled_threshold": alpha / len(matchups),
         },
         matchups=tuple(reports),
-        versions=_versions(),
+        versions=package_versions(),
         timing=timing,
     )
