@@ -44,6 +44,16 @@ class MatchResult:
     # A's net big blinds in every hand, in hand order (duplicate pairs are adjacent).
     results_bb: np.ndarray = field(repr=False, compare=False)
 
+    @property
+    def units_bb(self) -> np.ndarray:
+        """The independent units of A's result: duplicate pairs' means, or single hands."""
+        return independent_units(self.results_bb, duplicate=self.duplicate)
+
+
+def independent_units(results_bb: np.ndarray, *, duplicate: bool) -> np.ndarray:
+    """Per-hand results as independent units: each duplicate pair's mean, or the hands."""
+    return results_bb.reshape(-1, 2).mean(axis=1) if duplicate else results_bb
+
 
 def _agent_rng(seed: int, which: int) -> np.random.Generator:
     return np.random.Generator(
@@ -132,7 +142,7 @@ def play_match(
             bar.update(count)
     seconds = time.perf_counter() - started
 
-    units = results.reshape(-1, 2).mean(axis=1) if duplicate else results
+    units = independent_units(results, duplicate=duplicate)
     std_error = float(units.std(ddof=1) / np.sqrt(units.size)) if units.size > 1 else float("nan")
     return MatchResult(
         agent_a=agent_a.name,

@@ -128,11 +128,9 @@ def _play_seed(task: _SeedTask) -> SeedResult:
             duplicate=key.duplicate,
             batch_size=key.batch_size,
         )
-    per_hand = result.results_bb
-    units = per_hand.reshape(-1, 2).mean(axis=1) if key.duplicate else per_hand
     return SeedResult(
         key=key,
-        estimate=estimate(1000.0 * units),
+        estimate=estimate(1000.0 * result.units_bb),
         seconds=result.seconds,
         hands_per_second=result.hands_per_second,
     )
