@@ -27,12 +27,20 @@ def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
         prefix=f".{target.name}.", suffix=".tmp", dir=target.parent
     )
     os.close(handle)
+    # mkstemp creates 0600; give the file the mode a plain open() would (0666 less the umask).
+    os.chmod(temporary, 0o666 & ~_umask())
     try:
         yield Path(temporary)
         os.replace(temporary, target)
     except BaseException:
         Path(temporary).unlink(missing_ok=True)
         raise
+
+
+def _umask() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
 
 
 def write_bytes(path: str | os.PathLike[str], data: bytes) -> None:
@@ -45,3 +53,18 @@ def write_text(path: str | os.PathLike[str], text: str) -> None:
     """Atomically write ``text`` (UTF-8) to ``path``."""
     with atomic_path(path) as temporary:
         temporary.write_text(text, encoding="utf-8")
+
+
+def write_torch(path: str | os.PathLike[str], obj: object) -> None:
+    """Atomically ``torch.save`` ``obj`` to ``path``, with the same bytes for the same ``obj``.
+
+    ``torch.save`` to a file names the zip's inner folder after the file, and a temporary
+    file's name is random; saving to memory first keeps the inner name fixed (``archive``).
+    """
+    import io
+
+    import torch
+
+    buffer = io.BytesIO()
+    torch.save(obj, buffer)
+    write_bytes(path, buffer.getvalue())

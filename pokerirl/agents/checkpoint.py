@@ -17,7 +17,6 @@ last, so a folder with both is finished. Training also writes ``metrics.jsonl`` 
 from __future__ import annotations
 
 import hashlib
-import io
 import json
 import os
 from pathlib import Path
@@ -27,7 +26,7 @@ from typing import Any
 import torch
 
 from pokerirl.agents.dqn import GreedyQAgent, QNetwork
-from pokerirl.atomic import write_bytes
+from pokerirl.atomic import write_bytes, write_torch
 
 MODEL_FILE, CONFIG_FILE = "model.pt", "config.json"
 METRICS_FILE, CURVE_FILE = "metrics.jsonl", "learning_curve.png"
@@ -47,9 +46,9 @@ def save_agent(folder: str | os.PathLike[str], network: QNetwork, config: dict[s
     """
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
-    weights = io.BytesIO()
-    torch.save({k: v.detach().cpu().clone() for k, v in network.state_dict().items()}, weights)
-    write_bytes(folder / MODEL_FILE, weights.getvalue())
+    write_torch(
+        folder / MODEL_FILE, {k: v.detach().cpu().clone() for k, v in network.state_dict().items()}
+    )
     record = {"format": FORMAT, "version": FORMAT_VERSION, **config}
     write_bytes(folder / CONFIG_FILE, (json.dumps(record, indent=2) + "\n").encode())
 

@@ -31,7 +31,7 @@ import numpy as np
 import torch
 from torch import Tensor
 
-from pokerirl.atomic import atomic_path, write_text
+from pokerirl.atomic import write_text, write_torch
 from pokerirl.irl.airl import AIRLConfig, TrainResult, resolve_device, train
 from pokerirl.irl.nets import DiscretePolicy, GaussianPolicy, Policy, RewardNet
 from pokerirl.irl.plots import plot_curves
@@ -288,6 +288,4 @@ def load_reward(run_dir: str | os.PathLike[str]) -> RewardFunction:
 
 def _save_state_dict(module: torch.nn.Module, path: Path) -> None:
     # Clone: FlatAdam keeps parameters as views of one buffer; save each on its own.
-    state = {k: v.detach().cpu().clone() for k, v in module.state_dict().items()}
-    with atomic_path(path) as temporary:
-        torch.save(state, temporary)
+    write_torch(path, {k: v.detach().cpu().clone() for k, v in module.state_dict().items()})
