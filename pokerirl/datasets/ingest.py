@@ -9,7 +9,8 @@ import json
 import os
 import shutil
 import tempfile
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
@@ -18,7 +19,6 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 from tqdm import tqdm
 
-from pokerirl.atomic import write_text
 from pokerirl.datasets.table import SCHEMA, month_table
 from pokerirl.encoding import ACTIONS, FOLD
 from pokerirl.parsers.irc import (
@@ -61,7 +61,10 @@ def ingest(
     Months are parsed one at a time; their tables are held until they pass ``SPILL_BYTES``,
     then spilled to temporary Parquet parts, so memory stays bounded. Months are joined in
     (channel, month) order at the end.
-    Nothing appears at ``out`` unless the whole ingest succeeds.
+    Nothing appears at ``out`` unless the whole ingest succeeds. A summary beside the table
+    always describes that table: the old summary is removed before the new table is renamed
+    into place, and the new summary follows it, so a kill in between leaves a table without a
+    summary, never a table with another run's summary.
     """
     out_path = Path(out)
     if out_path.is_dir():
@@ -69,38 +72,101 @@ def ingest(
     if not out_path.parent.is_dir():
         raise IngestError(f"{out_path.parent}: output folder does not exist")
     check_sources(sources)
+    with _work_dir(out_path) as work_dir:
+        return _ingest(sources, out_path, work_dir, strict=strict, progress=progress)
+
+
+_WORK_DIR_INFIX = ".ingest-"
+
+
+@contextmanager
+def _work_dir(out_path: Path) -> Iterator[Path]:
+    """A hidden folder beside ``out_path`` for the temporary files, locked while in use.
+
+    A killed ingest cannot remove its folder; the next ingest into the same folder removes
+    every such folder whose lock is free (its owner is gone). Errors name ``out_path``, not
+    the temporary path.
+    """
+    prefix = f".{out_path.name}{_WORK_DIR_INFIX}"
+    for stale in sorted(out_path.parent.iterdir()):
+        if stale.name.startswith(prefix) and stale.is_dir() and (lock := _lock(stale)) is not None:
+            shutil.rmtree(stale, ignore_errors=True)
+            os.close(lock)
+    try:
+        work_dir = Path(tempfile.mkdtemp(prefix=prefix, dir=out_path.parent))
+    except OSError as error:
+        raise IngestError(f"{out_path}: cannot write ({error.strerror or error})") from None
+    lock = _lock(work_dir)
+    try:
+        yield work_dir
+    finally:
+        shutil.rmtree(work_dir, ignore_errors=True)
+        if lock is not None:
+            os.close(lock)
+
+
+def _lock(folder: Path) -> int | None:
+    """An exclusive ``flock`` on ``folder`` (released when the process ends, even when killed),
+    as an open descriptor; None if another process holds it or locks are unavailable."""
+    try:
+        import fcntl
+    except ImportError:  # not POSIX: no stale folders are removed
+        return None
+    try:
+        descriptor = os.open(folder, os.O_RDONLY)
+    except OSError:
+        return None
+    try:
+        fcntl.flock(descriptor, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except OSError:
+        os.close(descriptor)
+        return None
+    return descriptor
+
+
+def _ingest(
+    sources: Sequence[str | os.PathLike[str]],
+    out_path: Path,
+    work_dir: Path,
+    *,
+    strict: bool,
+    progress: bool,
+) -> dict[str, Any]:
     stats = IngestStats(strict=strict)
     seen: dict[str, np.ndarray] = {}
-    work_dir = Path(tempfile.mkdtemp(prefix=f".{out_path.name}.", dir=out_path.parent))
     # (month key, arrival order, table in memory or spilled part file)
     months: list[tuple[str, int, pa.Table | Path]] = []
     in_memory = 0
     counts = {action: 0 for action in ACTIONS if action != ACTIONS[FOLD]}
+    with tqdm(desc="ingest", unit=" hands", disable=not progress, smoothing=0) as bar:
+        for order, month in enumerate(iter_months(sources)):
+            hands = parse_month(month, stats, seen, on_hands=bar.update)
+            table, concealed = month_table(hands)
+            stats.decisions_concealed += concealed
+            for action, count in zip(*_value_counts(table.column("action")), strict=True):
+                counts[action] += count
+            if table.num_rows == 0:
+                continue
+            months.append((month.key, order, table))
+            in_memory += table.nbytes
+            if in_memory > SPILL_BYTES:
+                months = [_spill(item, work_dir) for item in months]
+                in_memory = 0
+    summary = _summary(stats, sources, out_path, counts)
+    table_file, summary_file = work_dir / "table.parquet", work_dir / "summary.json"
     try:
-        with tqdm(desc="ingest", unit=" hands", disable=not progress, smoothing=0) as bar:
-            for order, month in enumerate(iter_months(sources)):
-                hands = parse_month(month, stats, seen, on_hands=bar.update)
-                table, concealed = month_table(hands)
-                stats.decisions_concealed += concealed
-                for action, count in zip(*_value_counts(table.column("action")), strict=True):
-                    counts[action] += count
-                if table.num_rows == 0:
-                    continue
-                months.append((month.key, order, table))
-                in_memory += table.nbytes
-                if in_memory > SPILL_BYTES:
-                    months = [_spill(item, work_dir) for item in months]
-                    in_memory = 0
-        table_file = work_dir / "table.parquet"
         with pq.ParquetWriter(table_file, SCHEMA, **PARQUET_OPTIONS) as writer:
             for _, _, data in sorted(months, key=lambda item: item[:2]):
                 writer.write_table(data if isinstance(data, pa.Table) else pq.read_table(data))
-        summary = _summary(stats, sources, out_path, counts)
+        summary_file.write_text(json.dumps(summary, indent=2) + "\n", encoding="utf-8")
+        # Files in the work folder are 0666 less the umask already (mkdtemp only restricts
+        # the folder). Old summary out, new table in, new summary in: see ingest().
+        summary_path(out_path).unlink(missing_ok=True)
         os.replace(table_file, out_path)
-        write_text(summary_path(out_path), json.dumps(summary, indent=2) + "\n")
-        return summary
-    finally:
-        shutil.rmtree(work_dir, ignore_errors=True)
+        os.replace(summary_file, summary_path(out_path))
+    except OSError as error:
+        raise IngestError(f"{out_path}: cannot write ({error.strerror or error})") from None
+    return summary
 
 
 def _spill(

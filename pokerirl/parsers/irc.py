@@ -4,7 +4,9 @@ A month of a channel is three things: ``hdb`` (one line per hand), ``hroster`` (
 each hand, in name order) and ``pdb/pdb.<nick>`` (one line per player and hand). Sources may be
 month folders, folders of month folders, month archives (``holdem.199504.tgz``) or the whole
 ``IRCdata.tgz`` (archives inside an archive). Archives are streamed member by member and never
-extracted; only one month is held in memory at a time.
+extracted; only one month is held in memory at a time, and a month's files are capped
+(:data:`MAX_FILE_BYTES` each, :data:`MAX_MONTH_BYTES` together), so memory stays bounded even
+for a small archive that inflates to a huge member.
 
 :func:`iter_months` yields the raw files of each month; :func:`parse_month` turns one month into
 the heads-up hands that can be learned from, and puts every hand of ``hdb`` into exactly one
@@ -52,6 +54,15 @@ DROP_REASONS: tuple[str, ...] = (
     "inconsistent_hand",
 )
 MAX_MALFORMED_EXAMPLES = 10
+# Real months are a few MB (holdem/199504: 0.9 MB of hdb, 6.9 MB in all); a file or month far
+# beyond these caps is not IRC data, and reading it whole would take several times its size.
+MAX_FILE_BYTES = 64 * 1024 * 1024
+MAX_MONTH_BYTES = 256 * 1024 * 1024
+# Largest values the table's columns hold (timestamp int64, chips int32, raises int16): a line
+# beyond them is malformed, not silently wrapped.
+_MAX_TIMESTAMP = 2**63 - 1
+_MAX_CHIPS = 2**31 - 1
+_MAX_RAISES = 2**15 - 1
 _PROGRESS_EVERY = 8192
 _ARCHIVE_SUFFIXES = (".tgz", ".tar.gz", ".tar")
 
@@ -157,7 +168,12 @@ def iter_months(sources: Sequence[str | os.PathLike[str]]) -> Iterator[MonthFile
     check_sources(sources)
     for source in sources:
         path = Path(source)
-        yield from _iter_folder(path) if path.is_dir() else _iter_archive_file(path)
+        found = False
+        for month in _iter_folder(path) if path.is_dir() else _iter_archive_file(path):
+            found = True
+            yield month
+        if not found:
+            raise IngestError(f"{path}: no IRC data here (no <channel>/<month>/hdb inside)")
 
 
 def _iter_folder(path: Path) -> Iterator[MonthFiles]:
@@ -184,8 +200,25 @@ def _iter_folder(path: Path) -> Iterator[MonthFiles]:
             yield from _iter_archive_file(item)
 
 
-def _read_bytes(path: Path) -> bytes:
+def _check_size(where: str, size: int, month_total: int) -> None:
+    """Raise :class:`IngestError` for a file or month larger than IRC data ever is."""
+    if size > MAX_FILE_BYTES:
+        raise IngestError(
+            f"{where}: {size:,} bytes, more than the {MAX_FILE_BYTES:,} an IRC file may hold "
+            "(not IRC data?)"
+        )
+    if month_total > MAX_MONTH_BYTES:
+        raise IngestError(
+            f"{where}: its month holds {month_total:,} bytes, more than the "
+            f"{MAX_MONTH_BYTES:,} an IRC month may hold (not IRC data?)"
+        )
+
+
+def _read_bytes(path: Path, month_total: int = 0) -> bytes:
+    """The bytes of ``path``, checked against the caps given the month's bytes read so far."""
     try:
+        size = path.stat().st_size
+        _check_size(str(path), size, month_total + size)
         return path.read_bytes()
     except OSError as error:
         raise IngestError(f"{path}: cannot read ({error.strerror})") from error
@@ -195,14 +228,17 @@ def _read_month_folder(path: Path) -> MonthFiles:
     resolved = path.resolve()
     channel, month = resolved.parent.name, resolved.name
     pdb_dir = path / "pdb"
+    hdb = _read_bytes(path / "hdb")
+    roster_path = path / "hroster"
+    roster = _read_bytes(roster_path, len(hdb)) if roster_path.is_file() else b""
+    total = len(hdb) + len(roster)
     pdb: dict[str, bytes] = {}
     if channel in BIG_BLIND_BY_CHANNEL and pdb_dir.is_dir():
         for pdb_file in sorted(pdb_dir.iterdir()):
             if pdb_file.name.startswith("pdb.") and pdb_file.is_file():
-                pdb[pdb_file.name] = _read_bytes(pdb_file)
-    roster_path = path / "hroster"
-    roster = _read_bytes(roster_path) if roster_path.is_file() else b""
-    return MonthFiles(channel, month, str(path), _read_bytes(path / "hdb"), roster, pdb)
+                pdb[pdb_file.name] = data = _read_bytes(pdb_file, total)
+                total += len(data)
+    return MonthFiles(channel, month, str(path), hdb, roster, pdb)
 
 
 def _iter_archive_file(path: Path) -> Iterator[MonthFiles]:
@@ -249,6 +285,7 @@ def _iter_tar_stream(fileobj: IO[bytes], origin: str, archive_name: str) -> Iter
     hint = _hint_from_archive_name(archive_name)
     current: tuple[str, str] | None = None
     files: dict[str, bytes] = {}
+    month_total = 0  # bytes of the current month's files
 
     def flush() -> Iterator[MonthFiles]:
         if current is not None and "hdb" in files:
@@ -271,7 +308,7 @@ def _iter_tar_stream(fileobj: IO[bytes], origin: str, archive_name: str) -> Iter
                     continue
                 if member.name.endswith(_ARCHIVE_SUFFIXES):
                     yield from flush()
-                    current, files = None, {}
+                    current, files, month_total = None, {}, 0
                     inner = tar.extractfile(member)
                     if inner is not None:
                         inner_name = PurePosixPath(member.name).name
@@ -283,9 +320,12 @@ def _iter_tar_stream(fileobj: IO[bytes], origin: str, archive_name: str) -> Iter
                 channel, month, leaf = key
                 if (channel, month) != current:
                     yield from flush()
-                    current, files = (channel, month), {}
+                    current, files, month_total = (channel, month), {}, 0
                 if leaf.startswith("pdb.") and channel not in BIG_BLIND_BY_CHANNEL:
                     continue  # skipped channels only need their hdb, to count the hands
+                # The header gives the size: check it before reading a byte of the member.
+                month_total += member.size
+                _check_size(f"{origin}:{member.name}", member.size, month_total)
                 extracted = tar.extractfile(member)
                 if extracted is not None:
                     files[leaf] = extracted.read()
@@ -311,6 +351,23 @@ def _lines(data: bytes) -> list[str]:
 _PdbFields = tuple[list[str], str, int]
 
 
+def _is_number(text: str) -> bool:
+    """At most 19 ASCII digits (an int64). ``str.isdigit()`` alone is true for ``²``, ``³``
+    and ``¹`` (which byte flips of the logs produce), and ``int()`` then fails on them; and
+    ``int()`` refuses numbers of more than 4,300 digits."""
+    return len(text) <= 19 and text.isascii() and text.isdigit()
+
+
+def _number(text: str, what: str, limit: int = _MAX_TIMESTAMP) -> int:
+    """``text`` as an integer in [0, ``limit``]; ValueError (one line) otherwise."""
+    if not _is_number(text):
+        raise ValueError(f"{what} {text[:30]!r} is not a number")
+    value = int(text)
+    if value > limit:
+        raise ValueError(f"{what} {value} is beyond the table's limit of {limit}")
+    return value
+
+
 def _read_pdb(month: MonthFiles, stats: IngestStats) -> dict[int, list[_PdbFields]]:
     """Heads-up pdb lines by timestamp, split but not yet validated."""
     by_hand: dict[int, list[_PdbFields]] = defaultdict(list)
@@ -318,9 +375,9 @@ def _read_pdb(month: MonthFiles, stats: IngestStats) -> dict[int, list[_PdbField
         where = f"{month.origin}/pdb/{file_name}"
         for number, line in enumerate(_lines(data), start=1):
             fields = line.split()
-            if len(fields) >= 11 and fields[2] == "2" and fields[1].isdigit():
+            if len(fields) >= 11 and fields[2] == "2" and _is_number(fields[1]):
                 by_hand[int(fields[1])].append((fields, where, number))
-            elif len(fields) < 11 or not fields[1].isdigit() or not fields[2].isdigit():
+            elif len(fields) < 11 or not _is_number(fields[1]) or not _is_number(fields[2]):
                 stats.malformed(f"{where}:{number}", "not a pdb line")
     return by_hand
 
@@ -329,7 +386,7 @@ def _read_roster(month: MonthFiles, stats: IngestStats) -> dict[int, list[str]]:
     roster: dict[int, list[str]] = {}
     for number, line in enumerate(_lines(month.hroster), start=1):
         fields = line.split()
-        if len(fields) < 2 or not fields[0].isdigit() or not fields[1].isdigit():
+        if len(fields) < 2 or not _is_number(fields[0]) or not _is_number(fields[1]):
             stats.malformed(f"{month.origin}/hroster:{number}", "not an hroster line")
             continue
         roster[int(fields[0])] = fields[2:]
@@ -397,7 +454,10 @@ def _parse_limit_holdem_month(
         fields = line.split()
         if (
             len(fields) - 8 not in (0, 3, 4, 5)
+            or len(fields[0]) > 19
+            or not fields[0].isascii()
             or not fields[0].isdigit()
+            or not fields[3].isascii()
             or not fields[3].isdigit()
             or "/" not in fields[4]
             or "/" not in fields[7]
@@ -406,6 +466,10 @@ def _parse_limit_holdem_month(
             stats.drop("malformed_line")
             continue
         timestamp = int(fields[0])
+        if timestamp > _MAX_TIMESTAMP:
+            stats.malformed(f"{hdb_where}:{number}", f"timestamp {timestamp} beyond int64")
+            stats.drop("malformed_line")
+            continue
         if timestamp in timestamps:
             stats.drop("duplicate_hand")
             continue
@@ -453,11 +517,11 @@ def _parse_pdb_numbers(fields: list[str]) -> tuple[int, int, int, tuple[int, ...
         cards = None
     else:
         raise ValueError(f"expected 11 or 13 fields, got {len(fields)}")
-    int(fields[8])  # bankroll: must be a number
-    chips_in, chips_won = int(fields[9]), int(fields[10])
-    if chips_in < 0 or chips_won < 0:
-        raise ValueError("negative chips")
-    return int(fields[3]), chips_in, chips_won, cards
+    if not _is_number(fields[8].removeprefix("-")):  # bankroll: not kept, may be negative
+        raise ValueError(f"bankroll {fields[8][:30]!r} is not a number")
+    chips_in = _number(fields[9], "chips in", _MAX_CHIPS)
+    chips_won = _number(fields[10], "chips won", _MAX_CHIPS)
+    return _number(fields[3], "position"), chips_in, chips_won, cards
 
 
 def _classify_hand(
@@ -510,6 +574,9 @@ def _classify_hand(
     except ReplayError as error:
         stats.inconsistent_reasons[f"actions: {error}"] += 1
         return "inconsistent_hand"
+    if replay.max_raises > _MAX_RAISES:
+        stats.malformed(hdb_where, f"{replay.max_raises} raises in a round, beyond int16")
+        return "malformed_line"
     if not replay.showdown or (cards_a is None and cards_b is None):
         return "cards_concealed"
     reason = None
