@@ -3,14 +3,72 @@
 from __future__ import annotations
 
 import json
+import sys
+from collections.abc import Sequence
 from pathlib import Path
-from typing import NoReturn
+from typing import Any, NoReturn
 
 import typer
+from typer.core import TyperGroup
+
+try:  # typer >= 0.2x vendors click; its usage errors derive from TyperException
+    from typer import TyperException as _CommandLineError
+except ImportError:  # older typer on click
+    from click import ClickException as _CommandLineError
+
+
+class OneLineErrors(TyperGroup):
+    """The command group, with usage errors as one ``error: ...`` line (exit code 2) instead of
+    click's usage text or typer's boxed panel. Help (``--help``, or no arguments) is unchanged.
+
+    Works wherever the group's ``main`` runs: the ``pokerirl`` script (``pokerirl.cli:app``),
+    ``python -m pokerirl`` and typer's ``CliRunner``.
+    """
+
+    def main(
+        self,
+        args: Sequence[str] | None = None,
+        prog_name: str | None = None,
+        complete_var: str | None = None,
+        standalone_mode: bool = True,
+        windows_expand_args: bool = True,
+        **extra: Any,
+    ) -> Any:
+        if not standalone_mode:
+            return super().main(args, prog_name, complete_var, False, windows_expand_args, **extra)
+        try:
+            # Not standalone: click errors come here instead of being printed; typer.Exit(code)
+            # and --help come back as the exit code, a command's normal end as its result.
+            result = super().main(
+                args, prog_name, complete_var, False, windows_expand_args, **extra
+            )
+        except _CommandLineError as error:
+            if type(error).__name__ == "NoArgsIsHelpError":
+                # No arguments: show the help, as typer does (rerun standalone).
+                return super().main(
+                    args, prog_name, complete_var, True, windows_expand_args, **extra
+                )
+            typer.secho(f"error: {_one_line(error)}", err=True, fg=typer.colors.RED)
+            sys.exit(getattr(error, "exit_code", 2))
+        except typer.Abort:
+            typer.secho("error: aborted", err=True, fg=typer.colors.RED)
+            sys.exit(1)
+        sys.exit(result if isinstance(result, int) else 0)
+
+
+def _one_line(error: _CommandLineError) -> str:
+    """``pokerirl ingest: Missing option '--out' / '-o' (see pokerirl ingest --help)``"""
+    message = " ".join(error.format_message().split())
+    ctx = getattr(error, "ctx", None)
+    if ctx is None:
+        return message
+    return f"{ctx.command_path}: {message.rstrip('.')} (see {ctx.command_path} --help)"
+
 
 app = typer.Typer(
     name="pokerirl",
     help="Learn reward functions from real poker play (AIRL / Hybrid-AIRL on IRC hand histories).",
+    cls=OneLineErrors,
     no_args_is_help=True,
     add_completion=False,
     pretty_exceptions_enable=False,
@@ -68,6 +126,8 @@ def synth(
 
     try:
         folder = write_synthetic_month(out, hands=hands, seed=seed)
+    except ValueError as error:
+        fail(str(error))
     except OSError as error:
         fail(f"{error.filename or out}: {error.strerror or error}")
     typer.echo(f"wrote {hands} hands to {folder}")

@@ -19,7 +19,7 @@ from pokerirl.game.engine import (
     LimitHoldemBatch,
 )
 from pokerirl.game.evaluator import HAND_CATEGORIES, category, hand_strength
-from pokerirl.game.match import MatchResult, play_batch, play_match
+from pokerirl.game.match import MatchResult, check_match_size, play_batch, play_match
 
 __all__ = [
     "BIG_BLIND",
@@ -35,6 +35,7 @@ __all__ = [
     "RaiseAgent",
     "RandomAgent",
     "category",
+    "check_match_size",
     "deal_cards",
     "hand_strength",
     "make_agent",

@@ -25,6 +25,10 @@ from pokerirl.game.engine import IllegalActionError, LimitHoldemBatch
 from pokerirl.game.evaluator import prepare_tables
 
 DEFAULT_BATCH_SIZE = 65_536
+# A match keeps 8 bytes per hand (results_bb) and a batch about 1 KB per hand in lock-step;
+# these caps keep both under about 1 GB. 10^8 hands give a standard error near 0.5 mbb/h.
+MAX_HANDS = 100_000_000
+MAX_BATCH_SIZE = 1_048_576
 AGENT_STREAM = 1  # spawn-key word for agents' randomness (deals use 0)
 
 
@@ -92,6 +96,30 @@ def play_batch(
     return game.payoffs[np.arange(game.size), seat_of_first]
 
 
+def check_match_size(hands: int, *, duplicate: bool, batch_size: int = DEFAULT_BATCH_SIZE) -> None:
+    """Check a match's sizes before anything is allocated; ValueError (one line) if bad.
+
+    ``hands`` must lie in [1, :data:`MAX_HANDS`] and ``batch_size`` in [2,
+    :data:`MAX_BATCH_SIZE`]; with ``duplicate`` both must be even.
+
+    >>> check_match_size(99_999_999_999_998, duplicate=True)
+    Traceback (most recent call last):
+    ValueError: hands must be at most 100,000,000 per match, got 99,999,999,999,998
+    """
+    if hands < 1:
+        raise ValueError(f"hands must be at least 1, got {hands}")
+    if hands > MAX_HANDS:
+        raise ValueError(f"hands must be at most {MAX_HANDS:,} per match, got {hands:,}")
+    if not 2 <= batch_size <= MAX_BATCH_SIZE:
+        raise ValueError(f"batch_size must be between 2 and {MAX_BATCH_SIZE:,}, got {batch_size:,}")
+    if duplicate and hands % 2:
+        raise ValueError(
+            f"duplicate matches play every deal twice: hands must be even, got {hands}"
+        )
+    if duplicate and batch_size % 2:
+        raise ValueError(f"duplicate matches need an even batch_size, got {batch_size}")
+
+
 def play_match(
     agent_a: Agent,
     agent_b: Agent,
@@ -108,21 +136,11 @@ def play_match(
     agents' random draws do. ``progress`` shows a tqdm bar on stderr.
 
     Raises:
-        ValueError: on a non-positive ``hands`` or ``batch_size``, a negative seed, or an odd
-            ``hands`` or ``batch_size`` with ``duplicate``.
+        ValueError: as :func:`check_match_size`, or on a negative seed.
     """
-    if hands < 1:
-        raise ValueError(f"hands must be at least 1, got {hands}")
-    if batch_size < 2:
-        raise ValueError(f"batch_size must be at least 2, got {batch_size}")
+    check_match_size(hands, duplicate=duplicate, batch_size=batch_size)
     if seed < 0:
         raise ValueError(f"seed must be non-negative, got {seed}")
-    if duplicate and hands % 2:
-        raise ValueError(
-            f"duplicate matches play every deal twice: hands must be even, got {hands}"
-        )
-    if duplicate and batch_size % 2:
-        raise ValueError(f"duplicate matches need an even batch_size, got {batch_size}")
 
     rngs = (_agent_rng(seed, 0), _agent_rng(seed, 1))
     results = np.empty(hands, dtype=np.float64)

@@ -33,6 +33,9 @@ BET_BY_STREET = (10, 10, 20, 20)
 FIRST_TIMESTAMP = 978_307_200  # 2001-01-01 00:00 UTC
 SECONDS_PER_HAND = 60
 STARTING_BANKROLL = 1000
+# One month is built in memory (about 1.7 GB at this size) and must stay within ingest's caps
+# (pokerirl.parsers.irc.MAX_FILE_BYTES: 1M hands make a 68 MB hdb).
+MAX_HANDS = 1_000_000
 
 
 @dataclass(frozen=True)
@@ -97,9 +100,15 @@ def write_synthetic_month(
     seed: int,
     players: tuple[ScriptedPlayer, ScriptedPlayer] = DEFAULT_PLAYERS,
 ) -> Path:
-    """Write ``hands`` heads-up hands as ``out_dir/holdem/<YYYYMM>/``; return that folder."""
-    if hands < 1:
-        raise ValueError("hands must be at least 1")
+    """Write ``hands`` heads-up hands as ``out_dir/holdem/<YYYYMM>/``; return that folder.
+
+    Raises:
+        ValueError: one line, for ``hands`` outside [1, :data:`MAX_HANDS`] or a negative seed.
+    """
+    if not 1 <= hands <= MAX_HANDS:
+        raise ValueError(f"hands must be between 1 and {MAX_HANDS:,} (one month), got {hands}")
+    if seed < 0:
+        raise ValueError(f"seed must be non-negative, got {seed}")
     rng = np.random.default_rng(seed)
     deals = rng.random((hands, 52)).argsort(axis=1)[:, :9].astype(np.int64)
     # Player 0 of the pair sits in position 1 on even hands; the button alternates.

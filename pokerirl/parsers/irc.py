@@ -54,10 +54,11 @@ DROP_REASONS: tuple[str, ...] = (
     "inconsistent_hand",
 )
 MAX_MALFORMED_EXAMPLES = 10
-# Real months are a few MB (holdem/199504: 0.9 MB of hdb, 6.9 MB in all); a file or month far
-# beyond these caps is not IRC data, and reading it whole would take several times its size.
-MAX_FILE_BYTES = 64 * 1024 * 1024
-MAX_MONTH_BYTES = 256 * 1024 * 1024
+# Real months are a few MB (holdem/199504: 0.9 MB of hdb, 6.9 MB in all) and the largest
+# synthetic one (1M hands) 242 MB; a file or month beyond these caps is not IRC data, and
+# reading it whole would take several times its size in memory.
+MAX_FILE_BYTES = 128 * 1024 * 1024
+MAX_MONTH_BYTES = 512 * 1024 * 1024
 # Largest values the table's columns hold (timestamp int64, chips int32, raises int16): a line
 # beyond them is malformed, not silently wrapped.
 _MAX_TIMESTAMP = 2**63 - 1
