@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import sys
+import warnings
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any, NoReturn
@@ -19,7 +20,9 @@ except ImportError:  # older typer on click
 
 class OneLineErrors(TyperGroup):
     """The command group, with usage errors as one ``error: ...`` line (exit code 2) instead of
-    click's usage text or typer's boxed panel. Help (``--help``, or no arguments) is unchanged.
+    click's usage text or typer's boxed panel, and warnings (such as the library's warning
+    before it unpickles an ``rlcard:`` checkpoint) as one ``warning: ...`` line on stderr.
+    Help (``--help``, or no arguments) is unchanged.
 
     Works wherever the group's ``main`` runs: the ``pokerirl`` script (``pokerirl.cli:app``),
     ``python -m pokerirl`` and typer's ``CliRunner``.
@@ -39,9 +42,11 @@ class OneLineErrors(TyperGroup):
         try:
             # Not standalone: click errors come here instead of being printed; typer.Exit(code)
             # and --help come back as the exit code, a command's normal end as its result.
-            result = super().main(
-                args, prog_name, complete_var, False, windows_expand_args, **extra
-            )
+            with warnings.catch_warnings():
+                warnings.showwarning = _one_line_warning
+                result = super().main(
+                    args, prog_name, complete_var, False, windows_expand_args, **extra
+                )
         except _CommandLineError as error:
             if type(error).__name__ == "NoArgsIsHelpError":
                 # No arguments: show the help, as typer does (rerun standalone).
@@ -54,6 +59,10 @@ class OneLineErrors(TyperGroup):
             typer.secho("error: aborted", err=True, fg=typer.colors.RED)
             sys.exit(1)
         sys.exit(result if isinstance(result, int) else 0)
+
+
+def _one_line_warning(message: Warning | str, *_: Any, **__: Any) -> None:
+    typer.secho(f"warning: {message}", err=True, fg=typer.colors.YELLOW)
 
 
 def _one_line(error: _CommandLineError) -> str:
@@ -168,7 +177,10 @@ def demo(
 @app.command()
 def match(
     agent_a: str = typer.Argument(
-        ..., help="Agent A (reported): random, raise, call, an agent folder or rlcard:CKPT."
+        ...,
+        help="Agent A (reported): random, raise, call, an agent folder or rlcard:CKPT "
+        "(an RLCard checkpoint: it is unpickled, which runs any code it holds; trusted "
+        "files only).",
     ),
     agent_b: str = typer.Argument(..., help="Agent B: as agent A."),
     hands: int = typer.Option(100_000, help="Hands to play (even with --duplicate)."),

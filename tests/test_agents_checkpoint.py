@@ -121,6 +121,7 @@ def rlcard_states(env: Any, hands: int) -> list[dict[str, Any]]:
     return states
 
 
+@pytest.mark.filterwarnings("ignore::pokerirl.agents.rlcard_import.UntrustedCheckpointWarning")
 def test_rlcard_checkpoint_plays_here_as_it_does_in_rlcard(tmp_path: Path) -> None:
     import rlcard
     from rlcard.agents import DQNAgent, RandomAgent

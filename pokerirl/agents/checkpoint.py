@@ -20,7 +20,6 @@ import hashlib
 import json
 import os
 from pathlib import Path
-from pickle import UnpicklingError
 from typing import Any
 
 import torch
@@ -72,25 +71,73 @@ def load_agent(folder: str | os.PathLike[str]) -> GreedyQAgent:
     Its ``name`` is the folder as given and ``fingerprint`` the sha256 of its two files.
 
     Raises:
-        ValueError: one line, if the folder is not a finished agent or its files are bad.
+        ValueError: one line naming the bad file, if the folder is not a finished agent or
+            its files are bad.
     """
     folder = Path(folder)
     if not is_finished(folder):
         raise ValueError(f"{folder}: not an agent folder (needs {MODEL_FILE} and {CONFIG_FILE})")
+    hidden = _read_hidden(folder / CONFIG_FILE)
+    state = _read_state_dict(folder / MODEL_FILE)
+    network = QNetwork(hidden=hidden)
     try:
-        config = json.loads((folder / CONFIG_FILE).read_text())
-        if config.get("format") != FORMAT:
-            raise ValueError(f"format is {config.get('format')!r}, not {FORMAT!r}")
-        network = QNetwork(hidden=tuple(config["hidden"]))
-        network.load_state_dict(torch.load(folder / MODEL_FILE, weights_only=True))
-    except UnpicklingError:
-        # torch's own message suggests weights_only=False: wrong advice for a corrupt file.
-        raise ValueError(
-            f"{folder}: cannot load agent: {MODEL_FILE} is not a state_dict saved by pokerirl"
+        network.load_state_dict(state)
+    except (RuntimeError, ValueError, TypeError) as error:
+        raise _bad(
+            folder / MODEL_FILE,
+            f"does not fit {CONFIG_FILE}'s hidden {list(hidden)}: {_first_line(error)}",
         ) from None
-    except (ValueError, KeyError, TypeError, RuntimeError, OSError) as error:
-        first_line = str(error).strip().splitlines()[0] if str(error).strip() else repr(error)
-        raise ValueError(f"{folder}: cannot load agent: {first_line}") from None
     return GreedyQAgent(
         name=str(folder), network=network.eval(), fingerprint=folder_fingerprint(folder)
     )
+
+
+def _bad(path: Path, reason: str) -> ValueError:
+    return ValueError(f"{path}: cannot load agent: {reason}")
+
+
+def _first_line(error: BaseException) -> str:
+    text = str(error).strip()
+    return text.splitlines()[0] if text else type(error).__name__
+
+
+def _read_hidden(path: Path) -> tuple[int, ...]:
+    """The hidden widths in an agent's ``config.json``; ValueError naming ``path`` if bad."""
+    try:
+        config = json.loads(path.read_text(encoding="utf-8"))
+    except OSError as error:
+        raise _bad(path, f"cannot read ({error.strerror or error})") from None
+    except (UnicodeDecodeError, json.JSONDecodeError) as error:
+        raise _bad(path, f"not JSON ({_first_line(error)})") from None
+    if not isinstance(config, dict):
+        raise _bad(path, f"not an agent config (a JSON object), got {type(config).__name__}")
+    if config.get("format") != FORMAT:
+        raise _bad(path, f"format is {config.get('format')!r}, not {FORMAT!r}")
+    hidden = config.get("hidden")
+    if (
+        not isinstance(hidden, list)
+        or not hidden
+        or not all(type(width) is int and width > 0 for width in hidden)
+    ):
+        raise _bad(path, f"hidden must be a list of positive integers, got {str(hidden)[:60]}")
+    return tuple(hidden)
+
+
+def _read_state_dict(path: Path) -> dict[str, torch.Tensor]:
+    """The ``state_dict`` in ``path``, loaded without unpickling code; ValueError naming
+    ``path`` if it is not one. torch's own messages are not passed on: for a corrupt file they
+    suggest ``weights_only=False``, which is the wrong advice."""
+    try:
+        empty = path.stat().st_size == 0
+        state = None if empty else torch.load(path, map_location="cpu", weights_only=True)
+    except OSError as error:
+        raise _bad(path, f"cannot read ({error.strerror or error})") from None
+    except Exception:  # noqa: BLE001 - UnpicklingError, EOFError, RuntimeError from zip, ...
+        raise _bad(path, "corrupt or truncated (not a model saved by pokerirl)") from None
+    if empty:
+        raise _bad(path, "empty file (not a model saved by pokerirl)")
+    if not isinstance(state, dict) or not all(
+        isinstance(key, str) and isinstance(value, torch.Tensor) for key, value in state.items()
+    ):
+        raise _bad(path, "not a state_dict (a mapping of names to tensors)")
+    return state

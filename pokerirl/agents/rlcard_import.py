@@ -16,6 +16,7 @@ from __future__ import annotations
 import hashlib
 import os
 import re
+import warnings
 from pathlib import Path
 from typing import Any
 
@@ -29,9 +30,19 @@ from pokerirl.encoding import NUM_ACTIONS, OBS_SIZE
 _LAYER_KEY = re.compile(r"^fc_layers\.(\d+)\.(.+)$")
 
 
+class UntrustedCheckpointWarning(UserWarning):
+    """An RLCard checkpoint is about to be unpickled: it can run any code it holds."""
+
+
 def _read_checkpoint(path: Path) -> dict[str, Any]:
     if not path.is_file():
         raise ValueError(f"{path}: no such RLCard checkpoint file")
+    warnings.warn(
+        f"{RLCARD_PREFIX}{path}: unpickling an RLCard checkpoint runs any code it holds; "
+        "load only files you trust",
+        UntrustedCheckpointWarning,
+        stacklevel=4,  # the caller of load_rlcard_dqn or import_rlcard_dqn
+    )
     try:
         # Trusted files only: RLCard pickles its agent (and its replay memory's namedtuples,
         # whose unpickling imports rlcard.agents, which runs `pip freeze`: about 3 s).
@@ -41,13 +52,26 @@ def _read_checkpoint(path: Path) -> dict[str, Any]:
         raise ValueError(f"{path}: cannot read RLCard checkpoint: {reason}") from None
     if not isinstance(checkpoint, dict) or checkpoint.get("agent_type") != "DQNAgent":
         raise ValueError(f"{path}: not an RLCard DQNAgent checkpoint")
-    estimator = checkpoint["q_estimator"]
-    shape = list(estimator["state_shape"] or [])
+    estimator = checkpoint.get("q_estimator")
+    missing = [key for key in ("q_estimator", "num_actions") if key not in checkpoint] or [
+        f"q_estimator.{key}"
+        for key in ("state_shape", "mlp_layers", "qnet")
+        if not isinstance(estimator, dict) or key not in estimator
+    ]
+    if missing:
+        raise ValueError(f"{path}: not an RLCard DQNAgent checkpoint (no {missing[0]})")
+    try:
+        shape = list(estimator["state_shape"] or [])
+        hidden = [int(width) for width in estimator["mlp_layers"]]
+    except (TypeError, ValueError):
+        raise ValueError(f"{path}: not an RLCard DQNAgent checkpoint (bad q_estimator)") from None
     if shape != [OBS_SIZE] or checkpoint["num_actions"] != NUM_ACTIONS:
         raise ValueError(
             f"{path}: state_shape {shape} and num_actions {checkpoint['num_actions']} are not "
             f"limit hold'em's [{OBS_SIZE}] and {NUM_ACTIONS}"
         )
+    if not hidden or min(hidden) < 1 or not isinstance(estimator["qnet"], dict):
+        raise ValueError(f"{path}: not an RLCard DQNAgent checkpoint (bad q_estimator)")
     return checkpoint
 
 
@@ -97,10 +121,10 @@ def load_rlcard_dqn(path: str | os.PathLike[str]) -> GreedyQAgent:
 def _agent_and_checkpoint(path: Path) -> tuple[GreedyQAgent, dict[str, Any]]:
     checkpoint = _read_checkpoint(path)
     estimator = checkpoint["q_estimator"]
-    network = QNetwork(hidden=tuple(estimator["mlp_layers"]))
+    network = QNetwork(hidden=tuple(int(width) for width in estimator["mlp_layers"]))
     try:
         network.load_state_dict(_convert_state_dict(estimator["qnet"]))
-    except (RuntimeError, ValueError) as error:
+    except (RuntimeError, ValueError, TypeError, AttributeError) as error:
         raise ValueError(f"{path}: q-network does not fit: {str(error).splitlines()[0]}") from None
     digest = hashlib.sha256(path.read_bytes()).hexdigest()
     agent = GreedyQAgent(
@@ -116,10 +140,14 @@ def import_rlcard_dqn(path: str | os.PathLike[str], out: str | os.PathLike[str])
     anywhere an agent name does. Returns ``out``.
     """
     agent, checkpoint = _agent_and_checkpoint(Path(path))
+    try:
+        dqn = rlcard_checkpoint_config(checkpoint)
+    except (KeyError, TypeError, ValueError) as error:
+        raise ValueError(f"{path}: RLCard checkpoint without its settings ({error!r})") from None
     config = {
-        "hidden": list(checkpoint["q_estimator"]["mlp_layers"]),
+        "hidden": [int(width) for width in checkpoint["q_estimator"]["mlp_layers"]],
         "source": {"kind": "rlcard-1.2.0-dqn", "path": str(path), "fingerprint": agent.fingerprint},
-        "dqn": rlcard_checkpoint_config(checkpoint),
+        "dqn": dqn,
     }
     save_agent(out, agent.network, config)
     return Path(out)
