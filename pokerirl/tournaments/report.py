@@ -135,7 +135,12 @@ def write_report(report: TournamentReport, out: Path) -> None:
 
 
 def load_report(out: Path | str) -> TournamentReport:
-    """The report saved in ``out`` by ``pokerirl tournament``."""
+    """The report saved in ``out`` by ``pokerirl tournament``.
+
+    Raises:
+        TournamentError: one line naming ``report.json`` if it is missing, not JSON, or not a
+            whole report.
+    """
     path = Path(out) / "report.json"
     try:
         data = json.loads(path.read_text())
@@ -143,10 +148,21 @@ def load_report(out: Path | str) -> TournamentReport:
         raise TournamentError(f"{out}: no report.json (run pokerirl tournament first)") from None
     except (OSError, json.JSONDecodeError) as error:
         raise TournamentError(f"{path}: cannot read the report ({error})") from None
+    if not isinstance(data, dict):
+        raise TournamentError(f"{path}: not a tournament report (a JSON object), got {_kind(data)}")
     try:
-        return TournamentReport.from_dict(data)
-    except (KeyError, TypeError) as error:
+        report = TournamentReport.from_dict(data)
+        render_markdown(report)  # a report that loads can be printed: check every field once
+    except TournamentError as error:
+        raise TournamentError(f"{path}: {error}") from None
+    except (KeyError, IndexError, TypeError, ValueError, AttributeError, ArithmeticError) as error:
         raise TournamentError(f"{path}: malformed report ({error!r})") from None
+    return report
+
+
+def _kind(data: object) -> str:
+    """A JSON value's kind for messages: ``list``, ``str``, ``null``..."""
+    return "null" if data is None else type(data).__name__
 
 
 # --- renderings ----------------------------------------------------------------------------
