@@ -125,7 +125,7 @@ def test_cli_strict_corrupt_chips_is_one_line(tmp_path: Path) -> None:
     folder = write_minimal(tmp_path / "irc", "pdb/pdb.MrX", b" 80 0 ", b" 4294967376 0 ")
     code, lines = run_cli("ingest", str(folder), "--out", str(tmp_path / "t.parquet"), "--strict")
     assert code == 1
-    assert "pdb.MrX:1: chips in 4294967376 is beyond" in one_error_line(lines)
+    assert "pdb.MrX:1: chips 4294967376 and 0 not within 0 and 2147483647" in one_error_line(lines)
 
 
 def test_raises_beyond_int16_are_a_malformed_line(tmp_path: Path) -> None:

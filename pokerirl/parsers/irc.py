@@ -258,7 +258,7 @@ def _hint_from_archive_name(name: str) -> tuple[str | None, str | None]:
             stem = stem[: -len(suffix)]
             break
     channel, _, month = stem.rpartition(".")
-    if channel and month.isdigit():
+    if channel and month.isdecimal():
         return channel, month
     return None, None
 
@@ -352,21 +352,11 @@ def _lines(data: bytes) -> list[str]:
 _PdbFields = tuple[list[str], str, int]
 
 
-def _is_number(text: str) -> bool:
-    """At most 19 ASCII digits (an int64). ``str.isdigit()`` alone is true for ``²``, ``³``
-    and ``¹`` (which byte flips of the logs produce), and ``int()`` then fails on them; and
-    ``int()`` refuses numbers of more than 4,300 digits."""
-    return len(text) <= 19 and text.isascii() and text.isdigit()
-
-
-def _number(text: str, what: str, limit: int = _MAX_TIMESTAMP) -> int:
-    """``text`` as an integer in [0, ``limit``]; ValueError (one line) otherwise."""
-    if not _is_number(text):
-        raise ValueError(f"{what} {text[:30]!r} is not a number")
-    value = int(text)
-    if value > limit:
-        raise ValueError(f"{what} {value} is beyond the table's limit of {limit}")
-    return value
+# Numbers are checked with str.isdecimal(), never str.isdigit(): isdigit() is true for the
+# Latin-1 "²", "³" and "¹" (which byte flips of the logs produce), and int() then fails. On
+# Latin-1 text isdecimal() is exactly an ASCII-digit check. Timestamps are at most 19 digits,
+# which also keeps int() within its 4,300-digit limit.
+_MAX_DIGITS = 19
 
 
 def _read_pdb(month: MonthFiles, stats: IngestStats) -> dict[int, list[_PdbFields]]:
@@ -376,9 +366,19 @@ def _read_pdb(month: MonthFiles, stats: IngestStats) -> dict[int, list[_PdbField
         where = f"{month.origin}/pdb/{file_name}"
         for number, line in enumerate(_lines(data), start=1):
             fields = line.split()
-            if len(fields) >= 11 and fields[2] == "2" and _is_number(fields[1]):
+            if (
+                len(fields) >= 11
+                and fields[2] == "2"
+                and fields[1].isdecimal()
+                and len(fields[1]) <= _MAX_DIGITS
+            ):
                 by_hand[int(fields[1])].append((fields, where, number))
-            elif len(fields) < 11 or not _is_number(fields[1]) or not _is_number(fields[2]):
+            elif (
+                len(fields) < 11
+                or not fields[1].isdecimal()
+                or not fields[2].isdecimal()
+                or len(fields[1]) > _MAX_DIGITS
+            ):
                 stats.malformed(f"{where}:{number}", "not a pdb line")
     return by_hand
 
@@ -387,7 +387,12 @@ def _read_roster(month: MonthFiles, stats: IngestStats) -> dict[int, list[str]]:
     roster: dict[int, list[str]] = {}
     for number, line in enumerate(_lines(month.hroster), start=1):
         fields = line.split()
-        if len(fields) < 2 or not _is_number(fields[0]) or not _is_number(fields[1]):
+        if (
+            len(fields) < 2
+            or len(fields[0]) > _MAX_DIGITS
+            or not fields[0].isdecimal()
+            or not fields[1].isdecimal()
+        ):
             stats.malformed(f"{month.origin}/hroster:{number}", "not an hroster line")
             continue
         roster[int(fields[0])] = fields[2:]
@@ -455,11 +460,9 @@ def _parse_limit_holdem_month(
         fields = line.split()
         if (
             len(fields) - 8 not in (0, 3, 4, 5)
-            or len(fields[0]) > 19
-            or not fields[0].isascii()
-            or not fields[0].isdigit()
-            or not fields[3].isascii()
-            or not fields[3].isdigit()
+            or len(fields[0]) > _MAX_DIGITS
+            or not fields[0].isdecimal()
+            or not fields[3].isdecimal()
             or "/" not in fields[4]
             or "/" not in fields[7]
         ):
@@ -518,11 +521,12 @@ def _parse_pdb_numbers(fields: list[str]) -> tuple[int, int, int, tuple[int, ...
         cards = None
     else:
         raise ValueError(f"expected 11 or 13 fields, got {len(fields)}")
-    if not _is_number(fields[8].removeprefix("-")):  # bankroll: not kept, may be negative
-        raise ValueError(f"bankroll {fields[8][:30]!r} is not a number")
-    chips_in = _number(fields[9], "chips in", _MAX_CHIPS)
-    chips_won = _number(fields[10], "chips won", _MAX_CHIPS)
-    return _number(fields[3], "position"), chips_in, chips_won, cards
+    # int() raises ValueError, which the caller counts as malformed, on "²" and the like.
+    int(fields[8])  # bankroll: must be a number
+    chips_in, chips_won = int(fields[9]), int(fields[10])
+    if not (0 <= chips_in <= _MAX_CHIPS and 0 <= chips_won <= _MAX_CHIPS):
+        raise ValueError(f"chips {chips_in} and {chips_won} not within 0 and {_MAX_CHIPS}")
+    return int(fields[3]), chips_in, chips_won, cards
 
 
 def _classify_hand(
