@@ -73,7 +73,10 @@ def ingest(
         raise IngestError(f"{out_path.parent}: output folder does not exist")
     check_sources(sources)
     with _work_dir(out_path) as work_dir:
-        return _ingest(sources, out_path, work_dir, strict=strict, progress=progress)
+        try:
+            return _ingest(sources, out_path, work_dir, strict=strict, progress=progress)
+        except OSError as error:  # sources' read errors are IngestErrors: this is a write
+            raise IngestError(f"{out_path}: cannot write ({error.strerror or error})") from None
 
 
 _WORK_DIR_INFIX = ".ingest-"
@@ -88,8 +91,12 @@ def _work_dir(out_path: Path) -> Iterator[Path]:
     the temporary path.
     """
     prefix = f".{out_path.name}{_WORK_DIR_INFIX}"
-    for stale in sorted(out_path.parent.iterdir()):
-        if stale.name.startswith(prefix) and stale.is_dir() and (lock := _lock(stale)) is not None:
+    try:
+        candidates = sorted(p for p in out_path.parent.iterdir() if p.name.startswith(prefix))
+    except OSError:  # an unlistable folder: nothing to clean, and mkdtemp below tells the rest
+        candidates = []
+    for stale in candidates:
+        if stale.is_dir() and (lock := _lock(stale)) is not None:
             shutil.rmtree(stale, ignore_errors=True)
             os.close(lock)
     try:
@@ -154,18 +161,15 @@ def _ingest(
                 in_memory = 0
     summary = _summary(stats, sources, out_path, counts)
     table_file, summary_file = work_dir / "table.parquet", work_dir / "summary.json"
-    try:
-        with pq.ParquetWriter(table_file, SCHEMA, **PARQUET_OPTIONS) as writer:
-            for _, _, data in sorted(months, key=lambda item: item[:2]):
-                writer.write_table(data if isinstance(data, pa.Table) else pq.read_table(data))
-        summary_file.write_text(json.dumps(summary, indent=2) + "\n", encoding="utf-8")
-        # Files in the work folder are 0666 less the umask already (mkdtemp only restricts
-        # the folder). Old summary out, new table in, new summary in: see ingest().
-        summary_path(out_path).unlink(missing_ok=True)
-        os.replace(table_file, out_path)
-        os.replace(summary_file, summary_path(out_path))
-    except OSError as error:
-        raise IngestError(f"{out_path}: cannot write ({error.strerror or error})") from None
+    with pq.ParquetWriter(table_file, SCHEMA, **PARQUET_OPTIONS) as writer:
+        for _, _, data in sorted(months, key=lambda item: item[:2]):
+            writer.write_table(data if isinstance(data, pa.Table) else pq.read_table(data))
+    summary_file.write_text(json.dumps(summary, indent=2) + "\n", encoding="utf-8")
+    # Files in the work folder are 0666 less the umask already (mkdtemp only restricts the
+    # folder). Old summary out, new table in, new summary in: see ingest().
+    summary_path(out_path).unlink(missing_ok=True)
+    os.replace(table_file, out_path)
+    os.replace(summary_file, summary_path(out_path))
     return summary
 
 
