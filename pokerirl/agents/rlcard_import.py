@@ -52,14 +52,14 @@ def _read_checkpoint(path: Path) -> dict[str, Any]:
         raise ValueError(f"{path}: cannot read RLCard checkpoint: {reason}") from None
     if not isinstance(checkpoint, dict) or checkpoint.get("agent_type") != "DQNAgent":
         raise ValueError(f"{path}: not an RLCard DQNAgent checkpoint")
-    estimator = checkpoint.get("q_estimator")
-    missing = [key for key in ("q_estimator", "num_actions") if key not in checkpoint] or [
-        f"q_estimator.{key}"
-        for key in ("state_shape", "mlp_layers", "qnet")
-        if not isinstance(estimator, dict) or key not in estimator
-    ]
-    if missing:
-        raise ValueError(f"{path}: not an RLCard DQNAgent checkpoint (no {missing[0]})")
+    for key in ("q_estimator", "num_actions"):
+        if key not in checkpoint:
+            raise ValueError(f"{path}: not an RLCard DQNAgent checkpoint (no {key})")
+    estimator = checkpoint["q_estimator"]
+    if not isinstance(estimator, dict) or not {"state_shape", "mlp_layers", "qnet"} <= set(
+        estimator
+    ):
+        raise ValueError(f"{path}: not an RLCard DQNAgent checkpoint (bad q_estimator)")
     try:
         shape = list(estimator["state_shape"] or [])
         hidden = [int(width) for width in estimator["mlp_layers"]]

@@ -64,6 +64,11 @@ MAX_MONTH_BYTES = 512 * 1024 * 1024
 _MAX_TIMESTAMP = 2**63 - 1
 _MAX_CHIPS = 2**31 - 1
 _MAX_RAISES = 2**15 - 1
+# Numbers are checked with str.isdecimal(), never str.isdigit(): isdigit() is true for the
+# Latin-1 "²", "³" and "¹" (which byte flips of the logs produce), and int() then fails. On
+# Latin-1 text isdecimal() is exactly an ASCII-digit check. Timestamps are at most 19 digits,
+# which also keeps int() within its 4,300-digit limit.
+_MAX_DIGITS = 19
 _PROGRESS_EVERY = 8192
 _ARCHIVE_SUFFIXES = (".tgz", ".tar.gz", ".tar")
 
@@ -350,13 +355,6 @@ def _lines(data: bytes) -> list[str]:
 
 # A heads-up pdb line, split on whitespace, with where it came from: (fields, file, line number).
 _PdbFields = tuple[list[str], str, int]
-
-
-# Numbers are checked with str.isdecimal(), never str.isdigit(): isdigit() is true for the
-# Latin-1 "²", "³" and "¹" (which byte flips of the logs produce), and int() then fails. On
-# Latin-1 text isdecimal() is exactly an ASCII-digit check. Timestamps are at most 19 digits,
-# which also keeps int() within its 4,300-digit limit.
-_MAX_DIGITS = 19
 
 
 def _read_pdb(month: MonthFiles, stats: IngestStats) -> dict[int, list[_PdbFields]]:
