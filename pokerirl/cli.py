@@ -12,10 +12,23 @@ from typing import Any, NoReturn
 import typer
 from typer.core import TyperGroup
 
-try:  # typer >= 0.2x vendors click; its usage errors derive from TyperException
-    from typer import TyperException as _CommandLineError
-except ImportError:  # older typer on click
-    from click import ClickException as _CommandLineError
+
+def _command_line_errors() -> tuple[type[Exception], ...]:
+    """Usage-error base classes: typer's own (recent typer vendors click, and its errors derive
+    from TyperException) and click's (older typer runs on click)."""
+    bases: list[type[Exception]] = []
+    if hasattr(typer, "TyperException"):
+        bases.append(typer.TyperException)
+    try:
+        import click
+    except ImportError:
+        pass
+    else:
+        bases.append(click.ClickException)
+    return tuple(bases)
+
+
+_COMMAND_LINE_ERRORS = _command_line_errors()
 
 
 class OneLineErrors(TyperGroup):
@@ -47,7 +60,7 @@ class OneLineErrors(TyperGroup):
                 result = super().main(
                     args, prog_name, complete_var, False, windows_expand_args, **extra
                 )
-        except _CommandLineError as error:
+        except _COMMAND_LINE_ERRORS as error:
             if type(error).__name__ == "NoArgsIsHelpError":
                 # No arguments: show the help, as typer does (rerun standalone).
                 return super().main(
@@ -65,9 +78,9 @@ def _one_line_warning(message: Warning | str, *_: Any, **__: Any) -> None:
     typer.secho(f"warning: {message}", err=True, fg=typer.colors.YELLOW)
 
 
-def _one_line(error: _CommandLineError) -> str:
+def _one_line(error: Exception) -> str:
     """``pokerirl ingest: Missing option '--out' / '-o' (see pokerirl ingest --help)``"""
-    message = " ".join(error.format_message().split())
+    message = " ".join(getattr(error, "format_message", error.__str__)().split())
     ctx = getattr(error, "ctx", None)
     if ctx is None:
         return message
