@@ -398,6 +398,17 @@ def test_huge_match_is_refused_before_allocating() -> None:
     check_match_size(MAX_HANDS, duplicate=True)
 
 
+def test_huge_tournament_is_one_line_and_writes_nothing(tmp_path: Path) -> None:
+    out = tmp_path / "report"
+    code, lines = run_cli(
+        "tournament", "raise", "call", "--hands", "99999999999998", "--seeds", "0-1",
+        "--out", str(out), "--jobs", "1", "-q",
+    )  # fmt: skip
+    assert code == 1
+    assert one_error_line(lines).startswith(f"error: hands must be at most {MAX_HANDS:,}")
+    assert not out.exists()
+
+
 @pytest.fixture
 def agent(tmp_path: Path) -> Path:
     folder = tmp_path / "agent"
