@@ -409,7 +409,11 @@ class _Loop:
     # ------------------------------------------------------------------ one batch
 
     def step(self, rows: Tensor, draw: dict[str, Tensor], step: int) -> Tensor:
-        """One discriminator and one policy update on rows (R, B); returns per-run stats."""
+        """One discriminator and one policy update on rows (R, B).
+
+        Returns (R, 4B + 3): f on expert and policy rows, log π of both, then the policy
+        loss, its adversarial and its supervised part.
+        """
         obs = self.obs[rows]
         expert = self.action_vectors[rows]
         mask = None if self.mask is None else self.mask[rows]
@@ -460,18 +464,10 @@ class _Loop:
             self.reward_opt.zero_grad(set_to_none=True)
             d_loss.sum().backward()
             self.reward_opt.step()
-            f = f.detach()
-            d_stats = [
-                d_loss.detach(),
-                d_airl.detach(),
-                d_env.detach(),
-                (f[:, 0] > log_pi_expert).float().mean(-1),  # D > 1/2 on expert rows
-                (f[:, 1] < log_pi_seen).float().mean(-1),  # D < 1/2 on policy rows
-                f[:, 0].mean(-1),
-                f[:, 1].mean(-1),
-            ]
+            # What the epoch's metrics need, computed once per epoch from these rows.
+            disc_record = torch.cat((f.detach().flatten(1), log_pi_expert, log_pi_seen), dim=1)
         else:
-            d_stats = [zero] * 7
+            disc_record = obs.new_zeros(self.runs, 4 * self.batch)
 
         # 3. policy step against the updated reward
         if self.discrete:
@@ -493,7 +489,33 @@ class _Loop:
         self.policy_opt.zero_grad(set_to_none=True)
         p_loss.sum().backward(inputs=self.policies.params)
         self.policy_opt.step()
-        return torch.stack([*d_stats, p_loss.detach(), adversarial.detach(), supervised.detach()])
+        policy_record = torch.stack((p_loss, adversarial, supervised), dim=1).detach()
+        return torch.cat((disc_record, policy_record), dim=1)
+
+    def epoch_stats(self, record: Tensor, perm: Tensor) -> dict[str, list[float]]:
+        """Epoch means per run of the losses and discriminator accuracies."""
+        b = self.batch
+        f_expert, f_seen, lp_expert, lp_seen = record[..., : 4 * b].split(b, dim=-1)
+        env = None if self.env is None else self.env[perm]  # (steps, R, B)
+        d_loss, d_airl, d_env = discriminator_loss(
+            f_expert, lp_expert, f_seen, lp_seen, beta=self.beta, env_reward=env
+        )
+        values = {
+            "disc_loss": d_loss.mean(0),
+            "disc_airl_loss": d_airl.mean(0),
+            "disc_env_loss": d_env.mean(0),
+            "disc_acc_expert": (f_expert > lp_expert).float().mean((0, 2)),  # D > 1/2
+            "disc_acc_policy": (f_seen < lp_seen).float().mean((0, 2)),  # D < 1/2
+            "reward_expert": f_expert.mean((0, 2)),
+            "reward_policy": f_seen.mean((0, 2)),
+            "policy_loss": record[..., -3].mean(0),
+            "policy_adv_loss": record[..., -2].mean(0),
+            "policy_sup_loss": record[..., -1].mean(0),
+        }
+        if not self.adversarial:
+            for key in list(values)[:7]:
+                values[key] = torch.zeros(self.runs)
+        return {key: value.tolist() for key, value in values.items()}
 
     # ------------------------------------------------------------------ the loop
 
@@ -521,7 +543,7 @@ class _Loop:
         for epoch in bar:
             start = time.perf_counter()
             draw = self.draw_epoch()
-            record = torch.empty(self.steps, 10, self.runs, device=self.device)
+            record = torch.empty(self.steps, self.runs, 4 * self.batch + 3, device=self.device)
             for step in range(self.steps):
                 record[step] = self.step(draw["perm"][step], draw, step)
             if self.device.type == "cuda":
@@ -530,11 +552,11 @@ class _Loop:
             many.epoch_seconds.append(seconds)
             self.rewards.write_back()
             self.policies.write_back()
-            stats = record.mean(dim=0).T.tolist()  # (R, 10)
+            stats = self.epoch_stats(record, draw["perm"])
             epoch_metrics = []
             for r, result in enumerate(results):
                 metrics: dict[str, Any] = {"epoch": epoch}
-                metrics.update(zip(_STAT_KEYS, stats[r], strict=True))
+                metrics.update({key: values[r] for key, values in stats.items()})
                 metrics.update(evaluate(result.reward, result.policy, self.val))
                 result.metrics.append(metrics)
                 result.epoch_seconds.append(seconds / self.runs)
@@ -553,18 +575,6 @@ class _Loop:
         return many
 
 
-_STAT_KEYS = (
-    "disc_loss",
-    "disc_airl_loss",
-    "disc_env_loss",
-    "disc_acc_expert",
-    "disc_acc_policy",
-    "reward_expert",
-    "reward_policy",
-    "policy_loss",
-    "policy_adv_loss",
-    "policy_sup_loss",
-)
 
 
 # --------------------------------------------------------------------------- evaluation
