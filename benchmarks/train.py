@@ -151,7 +151,9 @@ def main() -> None:
         f"  authors' loop (peer)        : median {statistics.median(peer):>9,.0f}  "
         f"best {max(peer):>9,.0f} samples/s ({len(peer)} windows)"
     )
-    print(f"  ratio (median)              : {statistics.median(ours) / statistics.median(peer):.1f}x")
+    print(
+        f"  ratio (median)              : {statistics.median(ours) / statistics.median(peer):.1f}x"
+    )
 
     # 3. Gymnasium config, R runs in lock-step, against R sequential peer runs
     gym = gym_like(max(args.rows // 3, 2_000))
@@ -165,13 +167,9 @@ def main() -> None:
         noise_schedule="authors",
         noise_decay=0.01,
     )
-    many = train_many(
-        gym, gym_val, config=gym_config, seeds=range(args.runs), progress=False
-    )
+    many = train_many(gym, gym_val, config=gym_config, seeds=range(args.runs), progress=False)
     lock_step = [many.samples_per_epoch / s for s in many.epoch_seconds]
-    peer_batch = statistics.median(
-        peer_seconds_per_batch(gym, gym_config, args.peer_batches)
-    )
+    peer_batch = statistics.median(peer_seconds_per_batch(gym, gym_config, args.peer_batches))
     sequential = gym_config.batch_size / peer_batch  # R runs one after another: same rate
     single = train(gym, gym_val, config=gym_config, progress=False)
     print(f"\nGymnasium config: {len(gym):,} rows, batch 64, hidden (64, 64), 6-dim actions")

@@ -201,8 +201,8 @@ def test_toml_type_errors_are_one_line_naming_key_and_file(
 def test_toml_config_of_the_issue_is_accepted(tmp_path: Path) -> None:
     path = tmp_path / "c.toml"
     path.write_text(
-        "reward_hidden = [64, 64]\npolicy_hidden = [64, 64]\nactivation = \"tanh\"\n"
-        "layer_norm = true\nreward_family = \"shaped\"\ngamma = 0.99\nalpha = 1\n"
+        'reward_hidden = [64, 64]\npolicy_hidden = [64, 64]\nactivation = "tanh"\n'
+        'layer_norm = true\nreward_family = "shaped"\ngamma = 0.99\nalpha = 1\n'
     )
     config = load_config("hairl", config_file=path)
     assert (config.reward_hidden, config.policy_hidden) == ((64, 64), (64, 64))
@@ -246,3 +246,47 @@ def test_shaped_family_needs_next_obs() -> None:
     config = AIRLConfig.for_algo("hairl", epochs=1, reward_family="shaped")
     with pytest.raises(ValueError, match="next_obs"):
         train(data, data, config=config, progress=False)
+
+
+class ConcatReward(torch.nn.Module):
+    """A reward net the lock-step stacking does not know: runs go through vmap instead."""
+
+    def __init__(self, obs_dim: int, action_dim: int) -> None:
+        super().__init__()
+        self.net = torch.nn.Sequential(
+            torch.nn.Linear(obs_dim + action_dim, 8), torch.nn.ELU(), torch.nn.Linear(8, 1)
+        )
+
+    def forward(self, obs, action, next_obs=None, done=None):  # noqa: ANN001, ANN201
+        rows = torch.broadcast_shapes(obs.shape[:-1], action.shape[:-1])
+        both = (obs.expand(*rows, obs.shape[-1]), action.expand(*rows, action.shape[-1]))
+        return self.net(torch.cat(both, dim=-1)).squeeze(-1)
+
+
+def test_lock_step_with_an_unknown_architecture_uses_vmap_and_matches() -> None:
+    from pokerirl.irl import default_nets
+    from pokerirl.irl.airl import stack_modules
+
+    rng = np.random.default_rng(1)
+    obs = rng.random((128, 4)).astype(np.float32)
+    data = Transitions.from_arrays(obs, (obs[:, 0] > 0.5).astype(np.int64), groups=np.arange(128))
+    config = AIRLConfig.for_algo("hairl", epochs=2, batch_size=32)
+
+    def nets(seed: int) -> tuple[torch.nn.Module, torch.nn.Module]:
+        torch.manual_seed(seed)
+        return ConcatReward(4, 2), default_nets(data, config, seed)[1]
+
+    assert stack_modules([nets(0)[0], nets(1)[0]]) is None  # ELU is not a known layer
+    pairs = [nets(s) for s in (0, 1)]
+    many = train_many(
+        data, data, config=config, seeds=[0, 1], rewards=[p[0] for p in pairs],
+        policies=[p[1] for p in pairs], progress=False,
+    )  # fmt: skip
+    for run, seed in zip(many.runs, [0, 1], strict=True):
+        reward, policy = nets(seed)
+        alone = train(
+            data, data, config=AIRLConfig(**{**config.to_dict(), "seed": seed}),
+            reward=reward, policy=policy, progress=False,
+        )  # fmt: skip
+        for a, b in zip(run.reward.parameters(), alone.reward.parameters(), strict=True):
+            torch.testing.assert_close(a, b, atol=1e-4, rtol=1e-4)

@@ -24,9 +24,7 @@ def test_reward_argmax_beats_the_legal_majority_rule_on_a_known_expert() -> None
     data = transitions_from_arrow(toy_expert_table(num_hands=1500, seed=7))
     train_data, val_data, _ = data.split(val_fraction=0.25, seed=0)
     rules = baselines(train_data, val_data)
-    config = AIRLConfig.for_algo(
-        "hairl", epochs=15, batch_size=64, reward_lr=3e-3, policy_lr=3e-3
-    )
+    config = AIRLConfig.for_algo("hairl", epochs=15, batch_size=64, reward_lr=3e-3, policy_lr=3e-3)
     result = train(train_data, val_data, config=config, progress=False)
     reward_alignment = result.metrics[-1]["val_reward_alignment"]
     assert reward_alignment > rules["legal_majority"] + 0.05, (reward_alignment, rules)

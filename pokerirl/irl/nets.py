@@ -222,8 +222,10 @@ class GaussianPolicy(nn.Module):
         self.register_buffer("high", torch.tensor(high, dtype=torch.float32))
 
     def forward(self, obs: Tensor, legal_mask: Tensor | None = None) -> tuple[Tensor, Tensor]:
-        mean = self.low + (self.high - self.low) / 2 * (torch.tanh(self.mlp(obs)) + 1)
-        return mean, self.log_std.expand_as(mean)
+        # unsqueeze(-2): broadcast over the batch, also when parameters carry a run dimension
+        low, high = self.low.unsqueeze(-2), self.high.unsqueeze(-2)
+        mean = low + (high - low) / 2 * (torch.tanh(self.mlp(obs)) + 1)
+        return mean, self.log_std.unsqueeze(-2).expand_as(mean)
 
 
 def build_nets(
