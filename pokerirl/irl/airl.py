@@ -636,7 +636,7 @@ class _Loop:
                 beta_used=self.beta,
                 samples_per_epoch=self.steps * self.batch,
             )
-            for r, p, s in zip(self.rewards.modules, self.policies.modules, self.seeds)
+            for r, p, s in zip(self.rewards.modules, self.policies.modules, self.seeds, strict=True)
         ]
         many = ManyResult(runs=results, epoch_seconds=[], samples_per_epoch=0)
         many.samples_per_epoch = self.runs * self.steps * self.batch

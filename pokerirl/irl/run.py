@@ -461,14 +461,7 @@ def _architecture_problem(arch: Mapping[str, Any]) -> str | None:
         return "'action_space.num_actions' must be an integer"
     if space["type"] == "box":
         low, high = space.get("low"), space.get("high")
-        numbers = lambda v: (
-            isinstance(v, list)
-            and v
-            and all(  # noqa: E731
-                isinstance(x, int | float) and not isinstance(x, bool) for x in v
-            )
-        )
-        if not (numbers(low) and numbers(high) and len(low) == len(high)):
+        if not (_numbers(low) and _numbers(high) and len(low) == len(high)):
             return "'action_space.low' and 'high' must be equal-length lists of numbers"
     for key in ("reward_hidden", "policy_hidden"):
         if not widths(arch.get(key)):
@@ -483,6 +476,14 @@ def _architecture_problem(arch: Mapping[str, Any]) -> str | None:
     if not isinstance(gamma, int | float) or isinstance(gamma, bool):
         return "'gamma' must be a number"
     return None
+
+
+def _numbers(value: Any) -> bool:
+    return (
+        isinstance(value, list)
+        and bool(value)
+        and all(isinstance(x, int | float) and not isinstance(x, bool) for x in value)
+    )
 
 
 def _build_from_record(record: Mapping[str, Any]) -> tuple[nn.Module, nn.Module]:
