@@ -290,3 +290,25 @@ def test_lock_step_with_an_unknown_architecture_uses_vmap_and_matches() -> None:
         )  # fmt: skip
         for a, b in zip(run.reward.parameters(), alone.reward.parameters(), strict=True):
             torch.testing.assert_close(a, b, atol=1e-4, rtol=1e-4)
+
+
+def test_flat_adam_matches_torch_adam_with_autograd_gradients() -> None:
+    from pokerirl.irl.optim import FlatAdam
+
+    torch.manual_seed(0)
+    net_a = torch.nn.Sequential(torch.nn.Linear(4, 8), torch.nn.ReLU(), torch.nn.Linear(8, 2))
+    net_b = torch.nn.Sequential(torch.nn.Linear(4, 8), torch.nn.ReLU(), torch.nn.Linear(8, 2))
+    net_b.load_state_dict(net_a.state_dict())
+    reference = torch.optim.Adam(net_a.parameters(), lr=0.01, weight_decay=5e-3)
+    flat = FlatAdam(net_b.parameters(), lr=0.01, weight_decay=5e-3)
+    for step in range(5):
+        x = torch.randn(16, 4, generator=torch.Generator().manual_seed(step))
+        reference.zero_grad()
+        net_a(x).square().mean().backward()
+        reference.step()
+        flat.zero_grad()
+        net_b(x).square().mean().backward()  # accumulates into the flat gradient buffer
+        flat.step()
+    for a, b in zip(net_a.parameters(), net_b.parameters(), strict=True):
+        torch.testing.assert_close(a, b, atol=1e-6, rtol=1e-5)
+    assert not torch.allclose(net_a[0].weight, net_b[0].weight.detach() * 0)

@@ -47,6 +47,7 @@ from tqdm.auto import tqdm
 
 from pokerirl.irl.config import AIRLConfig
 from pokerirl.irl.nets import build_nets, project_to_simplex
+from pokerirl.irl.optim import FlatAdam
 from pokerirl.irl.transitions import Transitions
 
 LOG_2PI = math.log(2 * math.pi)
@@ -473,16 +474,14 @@ class _Loop:
         else:
             self.low = torch.tensor(data.action_low, device=device)
             self.high = torch.tensor(data.action_high, device=device)
-        # One Adam over stacked parameters is R independent Adams (it is elementwise). The
-        # fused kernel is about twice as fast as foreach for nets this small.
-        adam = {"fused": True}
-        self.reward_opt = torch.optim.Adam(
-            rewards.params,
-            lr=config.reward_lr,
-            weight_decay=config.reward_weight_decay,
-            **adam,
+        # One Adam over stacked parameters is R independent Adams (it is elementwise).
+        self.reward_opt = FlatAdam(
+            rewards.params, lr=config.reward_lr, weight_decay=config.reward_weight_decay
         )
-        self.policy_opt = torch.optim.Adam(policies.params, lr=config.policy_lr, **adam)
+        self.policy_opt = FlatAdam(policies.params, lr=config.policy_lr)
+        # Gather a whole epoch's batches at once when that is small (one index per tensor
+        # per epoch instead of per step); else per step.
+        self.gather_epoch = self.runs * len(data) * (data.obs_dim + 8) <= 2**25
 
     # ------------------------------------------------------------------ one epoch's randomness
 
@@ -508,16 +507,23 @@ class _Loop:
 
     # ------------------------------------------------------------------ one batch
 
-    def step(self, rows: Tensor, draw: dict[str, Tensor], step: int) -> Tensor:
-        """One discriminator and one policy update on rows (R, B).
+    def gather(self, rows: Tensor) -> dict[str, Tensor]:
+        """The training tensors at ``rows`` (any shape of indices)."""
+        batch = {"obs": self.obs[rows], "expert": self.action_vectors[rows]}
+        for name in ("mask", "env", "next_obs", "dones"):
+            value = getattr(self, name)
+            if value is not None:
+                batch[name] = value[rows]
+        return batch
+
+    def step(self, batch: dict[str, Tensor], draw: dict[str, Tensor], step: int) -> Tensor:
+        """One discriminator and one policy update on a batch of (R, B) rows.
 
         Returns (R, 4B + 3): f on expert and policy rows, log π of both, then the policy
         loss, its adversarial and its supervised part.
         """
-        obs = self.obs[rows]
-        expert = self.action_vectors[rows]
-        mask = None if self.mask is None else self.mask[rows]
-        env = None if self.env is None else self.env[rows]
+        obs, expert = batch["obs"], batch["expert"]
+        mask, env = batch.get("mask"), batch.get("env")
         zero = obs.new_zeros(self.runs)
 
         # 1. the policy at s (kept with its graph for step 3)
@@ -556,14 +562,14 @@ class _Loop:
             both = torch.stack((expert, seen), dim=1)  # (R, 2, B, k)
             if self.shaped:
                 f = self.rewards(
-                    obs[:, None], both, self.next_obs[rows][:, None], self.dones[rows][:, None]
+                    obs[:, None], both, batch["next_obs"][:, None], batch["dones"][:, None]
                 )
             else:
                 f = self.rewards(obs[:, None], both)
             d_loss, d_airl, d_env = discriminator_loss(
                 f[:, 0], log_pi_expert, f[:, 1], log_pi_seen, beta=self.beta, env_reward=env
             )
-            self.reward_opt.zero_grad(set_to_none=True)
+            self.reward_opt.zero_grad()
             d_loss.sum().backward()
             self.reward_opt.step()
             # What the epoch's metrics need, computed once per epoch from these rows.
@@ -589,7 +595,7 @@ class _Loop:
             else:
                 adversarial = zero
         p_loss = (1 - self.alpha) * adversarial + self.alpha * supervised
-        self.policy_opt.zero_grad(set_to_none=True)
+        self.policy_opt.zero_grad()
         p_loss.sum().backward(inputs=self.policies.params)
         self.policy_opt.step()
         policy_record = torch.stack((p_loss, adversarial, supervised), dim=1).detach()
@@ -647,8 +653,13 @@ class _Loop:
             start = time.perf_counter()
             draw = self.draw_epoch()
             record = torch.empty(self.steps, self.runs, 4 * self.batch + 3, device=self.device)
+            batches = self.gather(draw["perm"]) if self.gather_epoch else None
             for step in range(self.steps):
-                record[step] = self.step(draw["perm"][step], draw, step)
+                if batches is not None:
+                    batch = {name: value[step] for name, value in batches.items()}
+                else:
+                    batch = self.gather(draw["perm"][step])
+                record[step] = self.step(batch, draw, step)
             if self.device.type == "cuda":
                 torch.cuda.synchronize(self.device)  # time the work, not its queueing
             seconds = time.perf_counter() - start

@@ -210,7 +210,9 @@ def save_run(
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     for module, name in ((result.reward, REWARD_FILE), (result.policy, POLICY_FILE)):
-        write_torch(out / name, {k: v.detach().cpu() for k, v in module.state_dict().items()})
+        # Clone: training keeps parameters as views of one flat buffer; save each on its own.
+        state = {k: v.detach().cpu().clone() for k, v in module.state_dict().items()}
+        write_torch(out / name, state)
     policy = result.policy
     if isinstance(getattr(policy, "low", None), Tensor):
         space: dict[str, Any] = {
