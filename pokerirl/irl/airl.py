@@ -363,7 +363,8 @@ def train(
     """
     if reward is None or policy is None:
         default_reward, default_policy = default_nets(train_data, config)
-        reward, policy = reward or default_reward, policy or default_policy
+        reward = default_reward if reward is None else reward
+        policy = default_policy if policy is None else policy
     many = train_many(
         train_data,
         val_data,
@@ -406,8 +407,8 @@ def train_many(
         raise ValueError("train_many needs at least one seed")
     if rewards is None or policies is None:
         built = [default_nets(train_data, config, seed) for seed in seeds]
-        rewards = rewards or [b[0] for b in built]
-        policies = policies or [b[1] for b in built]
+        rewards = [b[0] for b in built] if rewards is None else rewards
+        policies = [b[1] for b in built] if policies is None else policies
     if not len(rewards) == len(policies) == len(seeds):
         raise ValueError("give one reward net and one policy per seed")
     if config.reward_family == "shaped" and train_data.next_obs is None:
