@@ -81,7 +81,7 @@ def noise_schedule(
     >>> noise_schedule(5, 1.0, 0.2)
     tensor([1.0000, 0.8000, 0.6000, 0.4000, 0.2000])
     >>> noise_schedule(3, 1.0, 0.5, kind="authors", decay=1.0)
-    tensor([1.0000, 0.8571, 0.7500])
+    tensor([1.0000, 0.7500, 0.6000])
     """
     if sigma_start == 0:
         return torch.zeros(batch_size)

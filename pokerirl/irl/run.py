@@ -12,6 +12,7 @@ beside it and renamed into place at the end (replacing an old run only with ``ov
 
 >>> import tempfile, pyarrow.parquet as pq
 >>> from pokerirl.irl.toy import toy_expert_table
+>>> from pokerirl.irl.config import load_config
 >>> tmp = Path(tempfile.mkdtemp())
 >>> pq.write_table(toy_expert_table(num_hands=200), tmp / "table.parquet")
 >>> config = load_config("hairl", overrides={"epochs": 2, "batch_size": 64})
