@@ -3,7 +3,8 @@
 Prints, in one run, expert samples per second of optimization:
 
 1. poker config (batch 256, hidden 64, 72-dim observations, 4 masked actions), one run:
-   ``pokerirl.irl.train``, whose gradients are autograd's (the only path there is);
+   ``pokerirl.irl.train`` as it runs (the hand-derived path of ``pokerirl.irl.fast``), and
+   with ``fast_path=False`` (autograd only);
 2. the peer, the authors' style of loop: a per-row ``Dataset`` behind a ``DataLoader`` that
    collates every batch, autograd, ``torch.optim.Adam``, a ``.item()`` per step, one run at
    a time, same nets and losses;
@@ -139,14 +140,18 @@ def main() -> None:
     data = transitions_from_arrow(table)
     val = data.subset(np.arange(min(5_000, len(data))))
     config = AIRLConfig.for_algo("hairl", epochs=args.epochs, batch_size=256)
-    result = train(data, val, config=config, progress=False)
-    ours = [result.samples_per_epoch / s for s in result.epoch_seconds]
+    rates = {}
+    for fast_path in (True, False):
+        result = train(data, val, config=config, fast_path=fast_path, progress=False)
+        rates[result.gradients] = [result.samples_per_epoch / s for s in result.epoch_seconds]
     peer = [config.batch_size / s for s in peer_seconds_per_batch(data, config, args.peer_batches)]
     print(f"\npoker config: {len(data):,} rows, batch 256, hidden (64,), one run")
-    print(
-        f"  pokerirl.irl.train (autograd): median {statistics.median(ours):>9,.0f}  "
-        f"best {max(ours):>9,.0f} samples/s ({len(ours)} epochs)"
-    )
+    for name, ours in rates.items():
+        print(
+            f"  pokerirl.irl.train ({name:>12}): median {statistics.median(ours):>9,.0f}  "
+            f"best {max(ours):>9,.0f} samples/s ({len(ours)} epochs), "
+            f"{statistics.median(ours) / statistics.median(peer):.1f}x the peer"
+        )
     print(
         f"  authors' loop (peer)        : median {statistics.median(peer):>9,.0f}  "
         f"best {max(peer):>9,.0f} samples/s ({len(peer)} windows)"

@@ -2,7 +2,8 @@
 
 The trainer takes any modules with these call signatures; :func:`build_nets` makes the
 defaults from a :class:`NetSpec` (hidden sizes, activation, optional layer norm, reward family).
-Gradients are autograd's, always.
+Gradients are autograd's (plus a tested hand-derived path for the default poker nets only,
+:mod:`pokerirl.irl.fast`).
 
 * A **reward** module is called ``reward(obs, action, next_obs, done) -> f``; without
   ``next_obs`` and ``done`` it returns the transferable reward g (f for ``state_action``).

@@ -57,6 +57,11 @@ class FlatAdam:
         self.grad.zero_()
 
     @torch.no_grad()
+    def set_grad(self, grads: list[torch.Tensor]) -> None:
+        """Write gradients given in parameter order (the hand-derived path's)."""
+        torch.cat([g.reshape(-1) for g in grads], out=self.grad)
+
+    @torch.no_grad()
     def step(self) -> None:
         """One update from the gradients autograd accumulated since :meth:`zero_grad`."""
         grad = self.grad

@@ -239,6 +239,7 @@ def save_run(
         },
         "hyperparameters": config.to_dict(),
         "beta_used": result.beta_used,
+        "gradients": result.gradients,
         "data": dict(data),
         "device": str(device),
         "versions": package_versions(),
