@@ -153,11 +153,8 @@ def main() -> None:
             f"{statistics.median(ours) / statistics.median(peer):.1f}x the peer"
         )
     print(
-        f"  authors' loop (peer)        : median {statistics.median(peer):>9,.0f}  "
+        f"  authors' loop (peer)              : median {statistics.median(peer):>9,.0f}  "
         f"best {max(peer):>9,.0f} samples/s ({len(peer)} windows)"
-    )
-    print(
-        f"  ratio (median)              : {statistics.median(ours) / statistics.median(peer):.1f}x"
     )
 
     # 3. Gymnasium config, R runs in lock-step, against R sequential peer runs
