@@ -1,4 +1,4 @@
-"""AIRL and Hybrid-AIRL on :class:`Transitions`, with autograd, for one run or R in lock-step.
+"""AIRL and Hybrid-AIRL on :class:`Transitions`, for one run or R runs in lock-step.
 
 Per shuffled mini-batch of expert rows (s, a_E[, s', done, r_env]):
 
@@ -21,9 +21,10 @@ Gradients are autograd's, except on the one architecture :mod:`pokerirl.irl.fast
 (the default poker nets, one run on CPU), where hand-derived gradients, tested against
 autograd, make a step about twice as fast; ``fast_path=False`` turns that off.
 
-R runs in lock-step (:func:`train_many`) stack the R nets' parameters and call them through
-``torch.func.vmap``; every run has its own seed, shuffle and noise, and its own Adam state
-(Adam is elementwise, so one optimizer over stacked parameters is R independent ones).
+R runs in lock-step (:func:`train_many`) stack the R nets' parameters (batched products for
+the default nets' layers, ``torch.func.vmap`` for other architectures); every run has its
+own seed, shuffle and noise, and its own Adam state (Adam is elementwise, so one optimizer
+over stacked parameters is R independent ones).
 
 >>> import numpy as np
 >>> rng = np.random.default_rng(0)
