@@ -323,6 +323,8 @@ def test_several_runs_write_run_folders_a_summary_and_a_band_plot(
     assert set(summary["baselines"]) == {"majority", "legal_majority", "bc"}
     assert (out / "alignment_bands.png").read_bytes()[:4] == b"\x89PNG"
     load_reward(out / "run-1")  # each run loads like a single run
+    with pytest.raises(RunError, match="several runs"):
+        load_reward(out)
 
 
 def _snapshot(folder: Path) -> dict[str, bytes]:

@@ -429,6 +429,8 @@ def staged_folder(out: Path, *, overwrite: bool) -> Iterator[Path]:
 def load_run_config(run_dir: str | os.PathLike[str]) -> dict[str, Any]:
     """The ``config.json`` of a run (format 1 or 2), checked; ``RunError`` naming the file."""
     path = Path(run_dir) / CONFIG_FILE
+    if not path.is_file() and (Path(run_dir) / SUMMARY_FILE).is_file():
+        raise RunError(f"{run_dir} holds several runs: choose one, e.g. {run_dir}/run-0")
     if not path.is_file():
         raise RunError(f"no {CONFIG_FILE} in {run_dir}: not a training run folder")
     try:
