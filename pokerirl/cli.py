@@ -327,8 +327,12 @@ def report(
 @app.command()
 def train(
     table: str = typer.Argument(..., help="Parquet decision table written by `pokerirl ingest`."),
-    out: str = typer.Option(..., "--out", help="Run directory for checkpoints, metrics and plots."),
+    out: str = typer.Option(..., "--out", help="Run folder (with --runs > 1: a folder of runs)."),
     algo: str = typer.Option("hairl", "--algo", help="hairl or airl (picks the defaults)."),
+    runs: int = typer.Option(
+        1, "--runs", help="Runs with seeds seed..seed+runs-1, in OUT/run-<k>."
+    ),
+    overwrite: bool = typer.Option(False, "--overwrite", help="Replace a finished run at OUT."),
     epochs: int | None = typer.Option(None, "--epochs", help="Training epochs [default: 50]."),
     seed: int | None = typer.Option(None, "--seed", help="Seed for init, split, shuffle, noise."),
     device: str = typer.Option("cpu", "--device", help="cpu or cuda."),
@@ -346,10 +350,15 @@ def train(
     threads: int = typer.Option(1, "--threads", help="CPU threads; small nets train best on 1."),
     quiet: bool = typer.Option(False, "--quiet", help="No progress bar."),
 ) -> None:
-    """Learn a reward function with AIRL or Hybrid-AIRL from an expert decision table."""
+    """Learn a reward function with AIRL or Hybrid-AIRL from an expert decision table.
+
+    Writes OUT/reward.pt, policy.pt, config.json, timings.json, metrics.jsonl,
+    baselines.json, split.json and plots; with --runs N, OUT/run-<k> and OUT/summary.json.
+    A finished OUT is replaced only with --overwrite, and only once the new run is complete.
+    """
     import torch
 
-    from pokerirl.irl import load_config, train_table
+    from pokerirl.irl import load_config, train_runs
 
     if threads < 1:
         fail("--threads must be at least 1")
@@ -358,7 +367,7 @@ def train(
     widths = None
     if hidden is not None:
         try:
-            widths = tuple(int(w) for w in hidden.split(",") if w.strip())
+            widths = [int(w) for w in hidden.split(",") if w.strip()]
         except ValueError:
             fail(f"--hidden must be comma-separated integers, got {hidden!r}")
     overrides = {
@@ -378,19 +387,33 @@ def train(
     }
     try:
         settings = load_config(algo, config_file=config, overrides=overrides)
-        summary = train_table(
-            table, out, algo=algo, config=settings, device=device, progress=not quiet
+        summary = train_runs(
+            table,
+            out,
+            runs=runs,
+            algo=algo,
+            config=settings,
+            device=device,
+            progress=not quiet,
+            overwrite=overwrite,
         )
-    except (ValueError, OSError) as error:
+    except ValueError as error:
         fail(str(error))
-    last = summary.metrics[-1]
-    typer.echo(
-        f"{algo}: {len(summary.metrics)} epochs on {summary.train_rows} rows "
-        f"({summary.samples_per_second:,.0f} samples/s); validation alignment "
-        f"{last['val_alignment']:.3f} vs majority {last['majority_alignment']:.3f} "
-        f"on {summary.val_rows} rows"
-    )
-    typer.echo(f"wrote {summary.out_dir}: reward.pt, policy.pt, config.json, metrics, plots")
+    except OSError as error:
+        fail(f"{error.filename or out}: {error.strerror or error}")
+    single = {"metrics": summary.metrics, "baselines": summary.baselines}
+    for run in summary.runs or (single,):
+        last, base = run["metrics"][-1], run["baselines"]
+        name = f"{algo} {Path(run['out']).name}" if "out" in run else algo
+        rows = run.get("train_rows", summary.train_rows), run.get("val_rows", summary.val_rows)
+        typer.echo(
+            f"{name}: {len(run['metrics'])} epochs on {rows[0]} rows; validation "
+            f"alignment {last['val_alignment']:.3f}, reward alignment "
+            f"{last['val_reward_alignment']:.3f}; baselines "
+            + ", ".join(f"{k} {v:.3f}" for k, v in base.items())
+            + f" on {rows[1]} rows"
+        )
+    typer.echo(f"{summary.samples_per_second:,.0f} samples/s; wrote {summary.out_dir}")
 
 
 agent_app = typer.Typer(help="Train DQN agents.", no_args_is_help=True)

@@ -75,9 +75,10 @@ def run_demo(
         run_dir = root / "runs" / algo
         say(f"[3/5] train {algo}: {config.irl_epochs} epochs -> {run_dir}")
         settings = load_config(algo, overrides={"epochs": config.irl_epochs, "seed": config.seed})
-        result = train_table(table, run_dir, algo=algo, config=settings, progress=progress)
-        last = result.metrics[-1]
-        alignment[algo] = (last["val_alignment"], last["majority_alignment"])
+        result = train_table(
+            table, run_dir, algo=algo, config=settings, progress=progress, overwrite=True
+        )
+        alignment[algo] = (result.metrics[-1]["val_alignment"], result.baselines["majority"])
         reward_runs[algo] = run_dir
 
     agent_sets: dict[str, Path] = {}

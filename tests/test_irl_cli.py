@@ -15,8 +15,9 @@ import torch
 from typer.testing import CliRunner
 
 from pokerirl.cli import app
-from pokerirl.irl import load_config, load_policy, load_reward, load_run_config
-from pokerirl.irl.table import read_expert_table, split_by_hand
+from pokerirl.irl import RunError, load_config, load_policy, load_reward, load_run_config
+from pokerirl.irl.airl import LOSS_KEYS
+from pokerirl.irl.table import read_table
 from pokerirl.irl.toy import toy_expert_table
 
 torch.set_num_threads(1)
@@ -49,17 +50,21 @@ def test_run_directory_has_metrics_plots_checkpoints_and_config(
     metrics = [json.loads(line) for line in lines]
     assert [m["epoch"] for m in metrics] == [1, 2, 3]  # --epochs beats the TOML file
     for key in (
-        "disc_loss",
-        "policy_adv_loss",
-        "policy_sup_loss",
+        *LOSS_KEYS,
         "val_alignment",
-        "majority_alignment",
+        "val_reward_alignment",
         "disc_acc_expert",
         "disc_acc_policy",
         "val_policy_dist",
         "val_expert_dist",
     ):
         assert key in metrics[-1]
+    baselines = json.loads((run_dir / "baselines.json").read_text())
+    assert set(baselines) == {"majority", "legal_majority", "bc"}
+    assert all(0 <= v <= 1 for v in baselines.values())
+    split = json.loads((run_dir / "split.json").read_text())
+    hands = set(pq.read_table(table_path, columns=["hand_id"]).column(0).to_pylist())
+    assert split["validation_groups"] and set(split["validation_groups"]) <= hands
     for png in ("alignment.png", "losses.png", "disc_accuracy.png"):
         assert (run_dir / png).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     config = load_run_config(run_dir)
@@ -67,23 +72,28 @@ def test_run_directory_has_metrics_plots_checkpoints_and_config(
     assert (hyper["batch_size"], hyper["sigma_end"], hyper["epochs"]) == (64, 0.2, 3)
     assert (hyper["seed"], hyper["alpha"], hyper["reward_hidden"]) == (11, 0.33, [64])
     assert config["architecture"]["action_space"] == {"type": "discrete", "num_actions": 4}
-    assert config["data"]["sha256"] == read_expert_table(table_path).fingerprint()
+    assert config["data"]["sha256"] == read_table(table_path).fingerprint()
     assert config["data"]["train_rows"] + config["data"]["val_rows"] == config["data"]["rows"]
     assert {"torch", "numpy", "pyarrow", "pokerirl", "python"} <= set(config["versions"])
     assert config["result"]["final_metrics"] == metrics[-1]
-    assert not [p for p in run_dir.iterdir() if p.name.endswith(".tmp")]
+    assert config["result"]["baselines"] == baselines
+    # Wall-clock timings live apart from what the fingerprints hash.
+    text = (run_dir / "config.json").read_text()
+    assert "seconds" not in text and "samples_per_second" not in text
+    assert json.loads((run_dir / "timings.json").read_text())["samples_per_second"] > 0
+    assert not [p for p in run_dir.parent.iterdir() if p.name.startswith(".")]
 
 
 def test_checkpoints_are_state_dicts_and_round_trip(run_dir: Path, table_path: Path) -> None:
     state = torch.load(run_dir / "policy.pt", weights_only=True)
     assert all(isinstance(v, torch.Tensor) for v in state.values())
     policy = load_policy(run_dir)
-    expert = read_expert_table(table_path)
-    _, val_rows = split_by_hand(expert.hand_index, expert.num_hands, val_fraction=0.1, seed=11)
-    val = expert.to_expert_data(val_rows)
+    data = read_table(table_path)
+    held_out = set(json.loads((run_dir / "split.json").read_text())["validation_groups"])
+    val = data.subset(np.array([g in held_out for g in data.groups]))
     with torch.inference_mode():
-        predicted = policy(val.obs.float(), val.legal_mask).argmax(1)
-    alignment = (predicted == val.actions.argmax(1)).float().mean().item()
+        predicted = policy(val.obs, val.legal_mask).argmax(1)
+    alignment = (predicted == val.actions).float().mean().item()
     final = load_run_config(run_dir)["result"]["final_metrics"]
     assert alignment == pytest.approx(final["val_alignment"])
 
@@ -149,6 +159,9 @@ def _assert_one_line_error(exit_code: int, stderr: str, needle: str) -> None:
         ("bad_algo", "unknown algo"),
         ("cuda", "cuda"),
         ("bad_hidden", "--hidden"),
+        ("out_is_file", "exists and is not a folder"),
+        ("out_is_a_run", "--overwrite"),
+        ("toml_float_epochs", "epochs must be an integer, got 1.5"),
     ],
 )
 def test_bad_input_gives_one_line_errors(
@@ -172,9 +185,20 @@ def test_bad_input_gives_one_line_errors(
         args["extra"] = ["--device", "cuda"]
     elif case == "bad_hidden":
         args["extra"] = ["--hidden", "64,x"]
+    elif case == "out_is_file":
+        (tmp_path / "run").write_text("precious")
+    elif case == "out_is_a_run":
+        (tmp_path / "run").mkdir()
+        (tmp_path / "run" / "config.json").write_text("{}")
+    elif case == "toml_float_epochs":
+        (tmp_path / "c.toml").write_text("epochs = 1.5\n")
+        args["extra"] = ["--config", str(tmp_path / "c.toml")]
     command = ["train", args["table"], "--out", str(tmp_path / "run"), "--algo", args["algo"]]
-    result = CliRunner().invoke(app, [*command, "--epochs", "1", *args["extra"]])
+    epochs = [] if case == "toml_float_epochs" else ["--epochs", "1"]
+    result = CliRunner().invoke(app, [*command, *epochs, *args["extra"]])
     _assert_one_line_error(result.exit_code, result.stderr, needle)
+    if case == "out_is_file":
+        assert (tmp_path / "run").read_text() == "precious"
 
 
 def test_bad_input_in_a_real_process(tmp_path: Path) -> None:
@@ -197,5 +221,150 @@ def test_mismatched_checkpoint_is_a_clear_error(run_dir: Path, tmp_path: Path) -
     torch.save({"mlp.0.weight": torch.zeros(2, 2)}, broken / "reward.pt")
     with pytest.raises(ValueError, match="does not match"):
         load_reward(broken)
-    with pytest.raises(FileNotFoundError, match="config.json"):
+    with pytest.raises(RunError, match="config.json"):
         load_reward(tmp_path)
+
+
+def _corrupt(run_dir: Path, tmp_path: Path, case: str) -> tuple[Path, str]:
+    """A copy of ``run_dir`` broken in one way, and the file the error must name."""
+    import shutil
+
+    bad = tmp_path / f"bad-{case}"
+    shutil.copytree(run_dir, bad)
+    reward, config = bad / "reward.pt", bad / "config.json"
+    record = json.loads(config.read_text())
+    if case == "random_bytes":
+        reward.write_bytes(np.random.default_rng(0).bytes(4096))
+    elif case == "empty":
+        reward.write_bytes(b"")
+    elif case == "truncated":
+        reward.write_bytes(reward.read_bytes()[:1000])
+    elif case == "config_list":
+        config.write_text("[]")
+    elif case == "no_architecture":
+        del record["architecture"]
+        config.write_text(json.dumps(record))
+    elif case == "string_hidden":
+        record["architecture"]["reward_hidden"] = "64"
+        config.write_text(json.dumps(record))
+    return bad, str(config if case.startswith(("config", "no_", "string")) else reward)
+
+
+BAD_RUNS = [
+    "random_bytes",
+    "empty",
+    "truncated",
+    "config_list",
+    "no_architecture",
+    "string_hidden",
+]
+
+
+@pytest.mark.parametrize("case", BAD_RUNS)
+def test_bad_reward_runs_give_one_line_errors_naming_the_file(
+    run_dir: Path, tmp_path: Path, case: str
+) -> None:
+    bad, named = _corrupt(run_dir, tmp_path, case)
+    with pytest.raises(RunError) as info:
+        load_reward(bad)
+    text = str(info.value)
+    assert isinstance(info.value, ValueError) and "\n" not in text
+    assert named in text and "weights_only" not in text
+    # Through the agent trainer's command line, which calls load_reward.
+    command = ["agent", "train", "--reward", "learned", "--reward-run", str(bad)]
+    result = CliRunner().invoke(app, [*command, "--out", str(tmp_path / "agent"), "-q"])
+    _assert_one_line_error(result.exit_code, result.stderr, named)
+    assert "weights_only" not in result.output + result.stderr
+
+
+def test_format_version_1_runs_still_load(run_dir: Path, tmp_path: Path) -> None:
+    """A run as the first trainer wrote it (ReLU, no layer norm, fewer keys) loads as is."""
+    import shutil
+
+    old = tmp_path / "v1"
+    shutil.copytree(run_dir, old)
+    record = json.loads((old / "config.json").read_text())
+    record["format_version"] = 1
+    for key in ("reward_family", "layer_norm", "gamma"):
+        del record["architecture"][key]
+    (old / "config.json").write_text(json.dumps(record))
+    obs, actions = np.zeros((3, 72), np.uint8), np.array([0, 1, 3])
+    assert np.array_equal(load_reward(old)(obs, actions), load_reward(run_dir)(obs, actions))
+
+
+def test_same_seed_same_bytes(table_path: Path, tmp_path: Path) -> None:
+    for name in ("a", "b"):
+        args = ["train", str(table_path), "--out", str(tmp_path / name), "--epochs", "1"]
+        result = CliRunner().invoke(app, [*args, "--batch-size", "64", "--quiet"])
+        assert result.exit_code == 0, result.output
+    for file in ("reward.pt", "policy.pt", "config.json", "metrics.jsonl", "split.json"):
+        assert (tmp_path / "a" / file).read_bytes() == (tmp_path / "b" / file).read_bytes(), file
+
+
+def test_several_runs_write_run_folders_a_summary_and_a_band_plot(
+    table_path: Path, tmp_path: Path
+) -> None:
+    out = tmp_path / "runs"
+    args = ["train", str(table_path), "--out", str(out), "--runs", "2", "--epochs", "2"]
+    result = CliRunner().invoke(app, [*args, "--batch-size", "64", "--seed", "5", "--quiet"])
+    assert result.exit_code == 0, result.output
+    assert "run-0" in result.output and "run-1" in result.output
+    configs = [load_run_config(out / f"run-{k}") for k in (0, 1)]
+    assert [c["hyperparameters"]["seed"] for c in configs] == [5, 6]
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["runs"] == 2 and summary["seeds"] == [5, 6] and summary["epochs"] == [1, 2]
+    per_run = [
+        [json.loads(line)["val_alignment"] for line in (out / f"run-{k}" / "metrics.jsonl").open()]
+        for k in (0, 1)
+    ]
+    band = summary["metrics"]["val_alignment"]
+    assert band["mean"] == pytest.approx(np.mean(per_run, axis=0).tolist())
+    assert band["std"] == pytest.approx(np.std(per_run, axis=0, ddof=1).tolist())
+    assert set(summary["baselines"]) == {"majority", "legal_majority", "bc"}
+    assert (out / "alignment_bands.png").read_bytes()[:4] == b"\x89PNG"
+    load_reward(out / "run-1")  # each run loads like a single run
+    with pytest.raises(RunError, match="several runs"):
+        load_reward(out)
+
+
+def _snapshot(folder: Path) -> dict[str, bytes]:
+    return {p.name: p.read_bytes() for p in sorted(folder.iterdir())}
+
+
+@pytest.mark.slow
+def test_a_killed_overwrite_leaves_the_finished_run_byte_for_byte(
+    run_dir: Path, table_path: Path, tmp_path: Path
+) -> None:
+    import shutil
+    import signal
+    import time
+
+    target = tmp_path / "run"
+    shutil.copytree(run_dir, target)
+    before = _snapshot(target)
+    env = {**os.environ, "PYTHONPATH": str(REPO)}
+    command = [sys.executable, "-m", "pokerirl", "train", str(table_path), "--out", str(target)]
+    process = subprocess.Popen(
+        [*command, "--overwrite", "--epochs", "500", "--batch-size", "64", "--quiet"],
+        env=env,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )
+    try:
+        deadline = time.monotonic() + 120
+        while time.monotonic() < deadline:  # wait until the new run is writing epochs
+            staged = list(tmp_path.glob(".run.*.tmp/metrics.jsonl"))
+            if staged and staged[0].read_text().count("\n") >= 2:
+                break
+            assert process.poll() is None, "the run ended before it could be killed"
+            time.sleep(0.1)
+        else:
+            pytest.fail("the new run never started writing")
+        process.send_signal(signal.SIGKILL)
+        process.wait(timeout=30)
+    finally:
+        if process.poll() is None:
+            process.kill()
+            process.wait()
+    assert _snapshot(target) == before
+    load_reward(target)  # still a consistent, loadable run

@@ -1,4 +1,4 @@
-"""Reading and validating the Parquet decision table; the split by hand."""
+"""Expert data: the poker decision table and environment rollouts as Transitions; the split."""
 
 from __future__ import annotations
 
@@ -8,8 +8,10 @@ import numpy as np
 import pyarrow as pa
 import pyarrow.parquet as pq
 import pytest
+import torch
 
-from pokerirl.irl import read_expert_table, split_by_hand
+from pokerirl.irl import Transitions, read_table
+from pokerirl.irl.table import transitions_from_arrow
 from pokerirl.irl.toy import toy_expert_rule, toy_expert_table
 
 
@@ -21,36 +23,99 @@ def write(table: pa.Table, path: Path, **kwargs: object) -> Path:
 def test_round_trip_through_parquet_with_many_row_groups(tmp_path: Path) -> None:
     table = toy_expert_table(num_hands=300, seed=3)
     path = write(table, tmp_path / "t.parquet", row_group_size=97)  # several chunks
-    expert = read_expert_table(path)
-    obs = np.array(table.column("obs").to_pylist(), dtype=np.uint8)
-    assert expert.obs.dtype == np.uint8 and np.array_equal(expert.obs, obs)
-    assert np.array_equal(expert.action_ids, table.column("action_id").to_numpy())
-    assert np.array_equal(expert.legal_mask, np.array(table.column("legal_mask").to_pylist()))
-    assert np.array_equal(expert.rewards, table.column("reward").to_numpy())
-    assert expert.num_hands == 300
-    hands = table.column("hand_id").to_pylist()
-    same_name = np.array(hands[1:]) == np.array(hands[:-1])
-    assert np.array_equal(same_name, expert.hand_index[1:] == expert.hand_index[:-1])
+    expert = read_table(path)
+    obs = np.array(table.column("obs").to_pylist(), dtype=np.float32)
+    assert expert.obs.dtype == torch.float32 and np.array_equal(expert.obs.numpy(), obs)
+    assert np.array_equal(expert.actions.numpy(), table.column("action_id").to_numpy())
+    mask = np.array(table.column("legal_mask").to_pylist())
+    assert np.array_equal(expert.legal_mask.numpy(), mask)
+    assert np.array_equal(expert.rewards.numpy(), table.column("reward").to_numpy())
+    assert expert.discrete and expert.action_dim == 4 and expert.obs_dim == 72
+    assert list(expert.groups) == table.column("hand_id").to_pylist()
     # The toy expert really follows its rule on what the trainer sees.
-    assert np.array_equal(toy_expert_rule(expert.obs, expert.legal_mask), expert.action_ids)
-    assert expert.fingerprint() == read_expert_table(path).fingerprint()
-    other = read_expert_table(write(toy_expert_table(num_hands=300, seed=4), tmp_path / "o.pq"))
+    rule = toy_expert_rule(expert.obs.numpy().astype(np.uint8), mask)
+    assert np.array_equal(rule, expert.actions.numpy())
+    assert expert.fingerprint() == read_table(path).fingerprint()
+    other = read_table(write(toy_expert_table(num_hands=300, seed=4), tmp_path / "o.pq"))
     assert other.fingerprint() != expert.fingerprint()
+
+
+def test_next_obs_is_the_same_players_next_decision_in_the_hand() -> None:
+    obs = np.zeros((6, 72), np.uint8)
+    obs[:, 0] = np.arange(6)  # tag each row
+    table = pa.table(
+        {
+            "hand_id": ["a", "a", "a", "a", "b", "b"],
+            "player": ["x", "y", "x", "y", "x", "y"],
+            "obs": pa.FixedSizeListArray.from_arrays(pa.array(obs.reshape(-1)), 72),
+            "action_id": pa.array([1] * 6, pa.int8()),
+            "legal_mask": pa.FixedSizeListArray.from_arrays(pa.array([True] * 24), 4),
+        }
+    )
+    t = transitions_from_arrow(table)
+    assert t.dones.tolist() == [False, False, True, True, True, True]
+    assert t.next_obs[:2, 0].tolist() == [2, 3]  # x's next decision, then y's
+    without_player = transitions_from_arrow(table.drop_columns(["player"]))
+    assert without_player.next_obs is None and without_player.dones is None
+
+
+def env_rollouts(n: int, *, continuous: bool) -> pa.Table:
+    rng = np.random.default_rng(0)
+    obs = rng.random((n, 3), dtype=np.float32)
+    episode = np.arange(n) // 5
+    done = np.r_[episode[1:] != episode[:-1], True]
+    next_obs = np.roll(obs, -1, axis=0)
+    vectors = lambda a, k: pa.FixedSizeListArray.from_arrays(  # noqa: E731
+        pa.array(a.reshape(-1), pa.float32()), k
+    )
+    if continuous:
+        action = vectors(rng.uniform(-1, 1, (n, 2)).astype(np.float32), 2)
+    else:
+        action = pa.array(rng.integers(0, 3, n), pa.int64())
+    return pa.table(
+        {
+            "obs": vectors(obs, 3),
+            "action": action,
+            "reward": pa.array(rng.random(n), pa.float32()),
+            "next_obs": vectors(next_obs, 3),
+            "done": pa.array(done),
+            "episode": pa.array(episode, pa.int64()),
+        }
+    )
+
+
+@pytest.mark.parametrize("continuous", [False, True])
+def test_environment_rollouts_parquet_as_written_by_gym_collect(
+    tmp_path: Path, continuous: bool
+) -> None:
+    table = env_rollouts(40, continuous=continuous)
+    t = Transitions.from_parquet(write(table, tmp_path / "rollouts.parquet"))
+    assert len(t) == 40 and t.obs.shape == (40, 3) and t.next_obs.shape == (40, 3)
+    assert t.discrete != continuous
+    if continuous:
+        assert t.actions.shape == (40, 2) and t.actions.dtype == torch.float32
+        assert all(lo < hi for lo, hi in zip(t.action_low, t.action_high, strict=True))
+    else:
+        assert t.actions.dtype == torch.int64 and t.action_dim == 3
+    assert t.dones.sum() == 8 and t.groups.tolist() == table.column("episode").to_pylist()
+    train, val, val_groups = t.split(val_fraction=0.25, seed=0)
+    assert len(val_groups) == 2 and set(val.groups.tolist()) == set(val_groups)
+    assert not set(train.groups.tolist()) & set(val_groups)
+    with pytest.raises(ValueError, match="lacks required column.*done"):
+        Transitions.from_parquet(write(table.drop_columns(["done"]), tmp_path / "bad.parquet"))
 
 
 def test_sliced_table_is_read_from_its_offset(tmp_path: Path) -> None:
     table = toy_expert_table(num_hands=50, seed=1)
-    expert = read_expert_table(write(table, tmp_path / "full.parquet"))
-    from pokerirl.irl.table import expert_table_from_arrow
-
-    sliced = expert_table_from_arrow(table.slice(10, 20))
-    assert np.array_equal(sliced.obs, expert.obs[10:30])
-    assert np.array_equal(sliced.legal_mask, expert.legal_mask[10:30])
+    expert = read_table(write(table, tmp_path / "full.parquet"))
+    sliced = transitions_from_arrow(table.slice(10, 20))
+    assert torch.equal(sliced.obs, expert.obs[10:30])
+    assert torch.equal(sliced.legal_mask, expert.legal_mask[10:30])
 
 
 def test_reward_column_is_optional(tmp_path: Path) -> None:
     table = toy_expert_table(num_hands=20).drop_columns(["reward"])
-    assert read_expert_table(write(table, tmp_path / "t.parquet")).rewards is None
+    assert read_table(write(table, tmp_path / "t.parquet")).rewards is None
 
 
 @pytest.mark.parametrize(
@@ -95,31 +160,31 @@ def test_reward_column_is_optional(tmp_path: Path) -> None:
 def test_bad_tables_raise_one_line_value_errors(tmp_path: Path, mutate, message: str) -> None:
     path = write(mutate(toy_expert_table(num_hands=10)), tmp_path / "bad.parquet")
     with pytest.raises(ValueError, match=message) as info:
-        read_expert_table(path)
+        read_table(path)
     assert "\n" not in str(info.value)
 
 
 def test_missing_and_non_parquet_files(tmp_path: Path) -> None:
     with pytest.raises(FileNotFoundError, match="not found"):
-        read_expert_table(tmp_path / "nope.parquet")
+        read_table(tmp_path / "nope.parquet")
     junk = tmp_path / "junk.parquet"
     junk.write_text("hand_id,obs\n1,2\n")
     with pytest.raises(ValueError, match="Parquet") as info:
-        read_expert_table(junk)
+        read_table(junk)
     assert "\n" not in str(info.value)
 
 
-def test_split_by_hand_never_straddles_and_is_seeded() -> None:
+def test_split_never_cuts_a_group_and_is_seeded() -> None:
     rng = np.random.default_rng(0)
-    hand_index = np.sort(rng.integers(0, 500, size=2000))
-    hand_index = np.unique(hand_index, return_inverse=True)[1]
-    num_hands = hand_index.max() + 1
-    train, val = split_by_hand(hand_index, num_hands, val_fraction=0.2, seed=5)
-    assert len(train) + len(val) == len(hand_index)
-    assert not set(hand_index[train]) & set(hand_index[val])
-    assert len(set(hand_index[val])) == round(0.2 * num_hands)
-    again, _ = split_by_hand(hand_index, num_hands, val_fraction=0.2, seed=5)
-    other, _ = split_by_hand(hand_index, num_hands, val_fraction=0.2, seed=6)
-    assert np.array_equal(train, again) and not np.array_equal(train, other)
-    with pytest.raises(ValueError, match="two hands"):
-        split_by_hand(np.zeros(5, dtype=np.int64), 1, val_fraction=0.2, seed=0)
+    groups = np.sort(rng.integers(0, 500, size=2000))
+    t = Transitions.from_arrays(np.zeros((2000, 2)), np.zeros(2000, np.int64), groups=groups)
+    train, val, val_groups = t.split(val_fraction=0.2, seed=5)
+    assert len(train) + len(val) == len(t)
+    assert not set(train.groups.tolist()) & set(val.groups.tolist())
+    assert sorted(set(val.groups.tolist())) == sorted(val_groups)
+    assert len(val_groups) == round(0.2 * len(np.unique(groups)))
+    again = t.split(val_fraction=0.2, seed=5)[2]
+    other = t.split(val_fraction=0.2, seed=6)[2]
+    assert again == val_groups and other != val_groups
+    with pytest.raises(ValueError, match="two groups"):
+        t.subset(np.flatnonzero(groups == groups[0])).split(val_fraction=0.2, seed=0)

@@ -2,23 +2,24 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 import torch
 
-from pokerirl.irl import AIRLConfig, ExpertData, split_by_hand, train
-from pokerirl.irl.table import expert_table_from_arrow
+from pokerirl.irl import AIRLConfig, Transitions, baselines, train
+from pokerirl.irl.airl import LOSS_KEYS
+from pokerirl.irl.table import transitions_from_arrow
 from pokerirl.irl.toy import toy_expert_table
 
 torch.set_num_threads(1)
 
 
-def toy_split(num_hands: int, *, slip: float = 0.0) -> tuple[ExpertData, ExpertData]:
-    table = expert_table_from_arrow(toy_expert_table(num_hands=num_hands, seed=7, slip=slip))
-    train_rows, val_rows = split_by_hand(
-        table.hand_index, table.num_hands, val_fraction=0.25, seed=0
-    )
-    return table.to_expert_data(train_rows), table.to_expert_data(val_rows)
+def toy_split(num_hands: int, *, slip: float = 0.0) -> tuple[Transitions, Transitions]:
+    data = transitions_from_arrow(toy_expert_table(num_hands=num_hands, seed=7, slip=slip))
+    train_data, val_data, _ = data.split(val_fraction=0.25, seed=0)
+    return train_data, val_data
 
 
 def test_pure_supervision_learns_the_deterministic_toy_expert() -> None:
@@ -27,7 +28,7 @@ def test_pure_supervision_learns_the_deterministic_toy_expert() -> None:
     result = train(train_data, val_data, config=config, progress=False)
     last = result.metrics[-1]
     assert last["val_alignment"] > 0.95
-    assert last["val_alignment"] > last["majority_alignment"] + 0.3
+    assert last["val_alignment"] > baselines(train_data, val_data)["majority"] + 0.3
     # The policy's greedy action shares track the expert's.
     assert np.allclose(last["val_policy_argmax_dist"], last["val_expert_dist"], atol=0.05)
 
@@ -44,7 +45,7 @@ def test_toy_rule_hairl_beats_majority_and_airl_early_in_training() -> None:
         config = AIRLConfig.for_algo(algo, epochs=2, batch_size=128)
         result = train(train_data, val_data, config=config, progress=False)
         curves[algo] = [m["val_alignment"] for m in result.metrics]
-        majority = result.metrics[-1]["majority_alignment"]
+    majority = baselines(train_data, val_data)["majority"]
     assert np.mean(curves["hairl"]) > majority + 0.2
     assert np.mean(curves["hairl"]) > np.mean(curves["airl"]) + 0.05
 
@@ -62,7 +63,7 @@ def test_same_seed_same_metrics_and_other_seed_differs() -> None:
     ]
     assert runs[0].metrics == runs[1].metrics
     assert runs[0].metrics != runs[2].metrics
-    for a, b in zip(runs[0].reward_net.parameters(), runs[1].reward_net.parameters(), strict=True):
+    for a, b in zip(runs[0].reward.parameters(), runs[1].reward.parameters(), strict=True):
         assert torch.equal(a, b)
 
 
@@ -77,19 +78,15 @@ def test_metrics_have_the_documented_fields() -> None:
     assert result.beta_used == 0.5  # the toy table has rewards
     for epoch, m in enumerate(result.metrics, start=1):
         assert m["epoch"] == epoch
-        for key in ("disc_loss", "policy_adv_loss", "policy_sup_loss", "policy_loss"):
+        for key in LOSS_KEYS:
             assert np.isfinite(m[key])
-        for key in ("val_alignment", "majority_alignment", "disc_acc_expert", "disc_acc_policy"):
+        assert m["disc_env_loss"] > 0  # β > 0 and the table has rewards
+        for key in ("val_alignment", "val_reward_alignment", "disc_acc_expert", "disc_acc_policy"):
             assert 0.0 <= m[key] <= 1.0
         for key in ("val_policy_dist", "val_policy_argmax_dist", "val_expert_dist"):
             assert len(m[key]) == 4 and sum(m[key]) == pytest.approx(1.0, abs=1e-5)
     no_reward = train(
-        ExpertData.from_action_ids(
-            train_data.obs,
-            train_data.actions.argmax(1),
-            num_actions=4,
-            legal_mask=train_data.legal_mask,
-        ),
+        dataclasses.replace(train_data, rewards=None),
         val_data,
         config=AIRLConfig.for_algo("hairl", epochs=1, batch_size=32, beta=0.5),
         progress=False,
@@ -101,8 +98,10 @@ def test_continuous_toy_gaussian_policy_imitates_a_linear_expert() -> None:
     generator = torch.Generator().manual_seed(0)
     obs = torch.rand(1200, 4, generator=generator) * 2 - 1
     actions = (0.8 * obs[:, :2]).clamp(-1, 1)  # expert: a = 0.8 s[:2], box [-1, 1]^2
-    data = ExpertData.from_continuous(obs, actions, low=[-1, -1], high=[1, 1])
-    train_data, val_data = data.subset(torch.arange(1000)), data.subset(torch.arange(1000, 1200))
+    data = Transitions.from_arrays(
+        obs.numpy(), actions.numpy(), groups=np.arange(1200), low=[-1, -1], high=[1, 1]
+    )
+    train_data, val_data = data.subset(np.arange(1000)), data.subset(np.arange(1000, 1200))
     baseline = (val_data.actions - train_data.actions.mean(0)).square().sum(1).mean().item()
     results = {
         algo: train(
@@ -126,10 +125,36 @@ def test_empty_data_and_cuda_without_cuda_raise_clear_errors() -> None:
     with pytest.raises(ValueError, match="non-empty"):
         train(
             train_data,
-            val_data.subset(torch.zeros(len(val_data), dtype=torch.bool)),
+            val_data.subset(np.zeros(len(val_data), dtype=bool)),
             config=config,
             progress=False,
         )
     if not torch.cuda.is_available():
         with pytest.raises(ValueError, match="CUDA is not available"):
             train(train_data, val_data, config=config, device="cuda", progress=False)
+
+
+@pytest.mark.parametrize("discrete", [True, False])
+def test_authors_options_train_and_change_the_run(discrete: bool) -> None:
+    """The two documented options of the authors' code: their noise schedule, and the
+    discriminator seeing π's (noisy) distribution instead of a sampled action."""
+    if discrete:
+        train_data, val_data = toy_split(200)
+    else:
+        rng = np.random.default_rng(0)
+        obs = rng.uniform(-1, 1, (400, 3)).astype(np.float32)
+        data = Transitions.from_arrays(
+            obs, 0.5 * obs[:, :2], groups=np.arange(400), low=[-1, -1], high=[1, 1]
+        )
+        train_data, val_data, _ = data.split(val_fraction=0.25, seed=0)
+    results = {}
+    for options in (
+        {},
+        {"noise_schedule": "authors", "noise_decay": 0.01},
+        {"disc_action": "distribution"},
+    ):
+        config = AIRLConfig.for_algo("hairl", epochs=2, batch_size=32, **options)
+        result = train(train_data, val_data, config=config, progress=False)
+        assert all(np.isfinite(m["disc_loss"]) for m in result.metrics)
+        results[tuple(options)] = result.metrics[-1]["disc_loss"]
+    assert len(set(results.values())) == 3  # each option changes what the discriminator sees

@@ -1,8 +1,8 @@
-"""AIRL / Hybrid-AIRL reward learning from expert decision tables.
+"""AIRL / Hybrid-AIRL reward learning on expert :class:`Transitions` (poker or environments).
 
-The core (:mod:`pokerirl.irl.airl`) works on tensors of states, action vectors, legal masks
-and rewards, for discrete and continuous actions; :mod:`pokerirl.irl.table` reads the poker
-Parquet tables; :mod:`pokerirl.irl.run` writes and reads run directories. For example::
+:mod:`pokerirl.irl.airl` is the trainer (one run, or R in lock-step), :mod:`~.nets` the
+default networks, :mod:`~.transitions` and :mod:`~.table` the data, :mod:`~.run` the run
+folders (``pokerirl train``) and :func:`load_reward`. For example::
 
     from pokerirl.irl import load_reward
 
@@ -13,54 +13,68 @@ Parquet tables; :mod:`pokerirl.irl.run` writes and reads run directories. For ex
 from __future__ import annotations
 
 from pokerirl.irl.airl import (
-    ALGOS,
-    AIRLConfig,
-    ExpertData,
+    ManyResult,
     TrainResult,
-    discriminator_grad,
+    baselines,
+    default_nets,
     discriminator_loss,
-    log_discriminator,
+    evaluate,
     noise_schedule,
-    policy_loss,
     train,
+    train_many,
 )
-from pokerirl.irl.nets import DiscretePolicy, GaussianPolicy, RewardNet, project_to_simplex
+from pokerirl.irl.config import ALGOS, AIRLConfig, ConfigError, load_config
+from pokerirl.irl.nets import (
+    DiscretePolicy,
+    GaussianPolicy,
+    NetSpec,
+    ShapedReward,
+    StateActionReward,
+    build_nets,
+    project_to_simplex,
+)
 from pokerirl.irl.run import (
     RewardFunction,
+    RunError,
     RunSummary,
-    load_config,
     load_policy,
     load_reward,
     load_run_config,
-    save_run,
+    train_runs,
     train_table,
 )
-from pokerirl.irl.table import ExpertTable, read_expert_table, split_by_hand
+from pokerirl.irl.table import read_table
+from pokerirl.irl.transitions import Transitions
 
 __all__ = [
     "ALGOS",
     "AIRLConfig",
+    "ConfigError",
     "DiscretePolicy",
-    "ExpertData",
-    "ExpertTable",
     "GaussianPolicy",
+    "ManyResult",
+    "NetSpec",
     "RewardFunction",
-    "RewardNet",
+    "RunError",
     "RunSummary",
+    "ShapedReward",
+    "StateActionReward",
     "TrainResult",
-    "discriminator_grad",
+    "Transitions",
+    "baselines",
+    "build_nets",
+    "default_nets",
     "discriminator_loss",
+    "evaluate",
     "load_config",
     "load_policy",
     "load_reward",
     "load_run_config",
-    "log_discriminator",
     "noise_schedule",
-    "policy_loss",
     "project_to_simplex",
-    "read_expert_table",
-    "save_run",
-    "split_by_hand",
+    "read_table",
     "train",
+    "train_many",
+    "train_runs",
     "train_table",
 ]

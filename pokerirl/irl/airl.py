@@ -1,40 +1,35 @@
-"""AIRL and Hybrid-AIRL, offline over an expert table, on plain tensors.
+"""AIRL and Hybrid-AIRL on :class:`Transitions`, for one run or R runs in lock-step.
 
-The whole algorithm is :func:`train`, top to bottom; the losses, their gradient and the
-noise schedule are small pure functions above it so they can be checked by hand.
+Per shuffled mini-batch of expert rows (s, a_E[, s', done, r_env]):
 
-Per shuffled mini-batch of expert rows (s, a_E):
+1. the policy acts at s: π(·|s) for discrete actions, a reparameterized sample μ(s) + σε
+   for continuous ones (one forward pass, kept for step 3);
+2. discriminator step: D = exp f / (exp f + π) learns to call (s, a_E) expert and (s, ã)
+   policy, with loss (1−β)·L_AIRL + β·mean (f(s, a_E) − r_env)². ã is what the discriminator
+   sees of the policy (``disc_action``): a one-hot drawn from π (default), or π itself; then
+   Gaussian noise with σ_i along the batch (``noise_schedule``), projected back onto the
+   legal simplex (or clipped to the box). log π(ã|s) = Σ_k ã_k log π(k|s), exact on one-hots;
+3. policy step against the just-updated reward:
+   (1−α)·E_{a∼π}[log π(a|s) − g(s, a)] + α·(CE(π, a_E) or ‖μ(s) − a_E‖²). For discrete
+   actions the expectation is exact, Σ_k π_k (log π_k − g(s, e_k)); for continuous ones it is
+   the reparameterized sample. g is the reward's action-dependent part: all of f for the
+   ``state_action`` family; for ``shaped`` the γh(s') − h(s) terms do not depend on a.
 
-1. the policy acts at s: its distribution π(·|s) for discrete actions, a reparameterized
-   sample μ(s) + σε for continuous ones;
-2. discriminator step: D(s, a) = exp f(s,a) / (exp f(s,a) + π(a|s)) learns to call
-   (s, a_E) expert and (s, ã) policy. ã is the policy's action — for discrete actions the
-   one-hot of an action drawn from π, like the expert's one-hots — plus Gaussian noise whose
-   σ decays along the batch (projected back onto the simplex, or clipped to the box); H-AIRL
-   mixes in β·(f(s, a_E) − r_env)². For a point ã of the simplex,
-   log π(ã|s) = Σ_k ã_k log π(k|s), exact on one-hots;
-3. policy step, against the just-updated reward:
-   (1−α)·E_{a∼π}[−f(s, a) + log π(a|s)] + α·(CE(π(·|s), a_E) or MSE(μ(s), a_E)).
-   For discrete actions the expectation is exact, Σ_k π(k|s)·f(s, e_k), from scoring every
-   one-hot at each state; for continuous ones it is the reparameterized sample.
+AIRL is α = β = 0 and no noise. ``docs/method.md`` says which choice comes from where.
 
-Why one-hots, not the distribution π(·|s) itself, go to the discriminator: against the
-expert's one-hots a soft vector gives itself away by its softness alone, so f learns to score
-"one-hot-ness" instead of which action the expert prefers, and the noise (which turns most
-soft vectors into near-vertices) stops helping. On the synthetic demo table this choice moved
-H-AIRL's validation alignment from 0.856 to 0.877 and put it above AIRL's (0.856), as the
-paper reports.
+Gradients are autograd's, except on the one architecture :mod:`pokerirl.irl.fast` covers
+(the default poker nets, one run on CPU), where hand-derived gradients, tested against
+autograd, make a step about twice as fast; ``fast_path=False`` turns that off.
 
-AIRL is α = 0, β = 0 and no noise; ``AIRLConfig.for_algo`` only picks defaults, both run
-this same code. Gradients are hand-derived (see :mod:`pokerirl.irl.nets`), which makes the
-loop several times faster than autograd for nets this small; tests check them against
-autograd on the loss functions below.
+R runs in lock-step (:func:`train_many`) stack the R nets' parameters (batched products for
+the default nets' layers, ``torch.func.vmap`` for other architectures); every run has its
+own seed, shuffle and noise, and its own Adam state (Adam is elementwise, so one optimizer
+over stacked parameters is R independent ones).
 
->>> import torch
->>> g = torch.Generator().manual_seed(0)
->>> obs = torch.rand(512, 6, generator=g)
->>> actions = (obs[:, 0] > 0.5).long()            # a toy expert: act 1 when s_0 > 1/2
->>> data = ExpertData.from_action_ids(obs, actions, num_actions=2)
+>>> import numpy as np
+>>> rng = np.random.default_rng(0)
+>>> obs = rng.random((512, 6)).astype(np.float32)
+>>> data = Transitions.from_arrays(obs, (obs[:, 0] > 0.5).astype(np.int64), groups=np.arange(512))
 >>> config = AIRLConfig.for_algo("hairl", epochs=20, batch_size=64, alpha=1.0)
 >>> result = train(data, data, config=config, progress=False)
 >>> result.metrics[-1]["val_alignment"] > 0.9
@@ -43,198 +38,65 @@ True
 
 from __future__ import annotations
 
-import dataclasses
+import copy
 import math
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import torch
-from torch import Tensor
+import torch.nn.functional as F
+from torch import Tensor, nn
 from tqdm.auto import tqdm
 
-from pokerirl.irl.nets import DiscretePolicy, GaussianPolicy, Policy, PolicyOutput, RewardNet
+from pokerirl.irl import fast
+from pokerirl.irl.config import AIRLConfig
+from pokerirl.irl.nets import MASKED_LOGIT, build_nets, project_to_simplex
 from pokerirl.irl.optim import FlatAdam
+from pokerirl.irl.transitions import Transitions
 
-ALGOS: tuple[str, ...] = ("airl", "hairl")
-
-
-@dataclass(frozen=True, kw_only=True)
-class AIRLConfig:
-    """Hyperparameters. The defaults are the H-AIRL paper's reference poker settings.
-
-    >>> AIRLConfig.for_algo("airl").alpha, AIRLConfig.for_algo("hairl").alpha
-    (0.0, 0.33)
-    """
-
-    reward_hidden: tuple[int, ...] = (64,)
-    policy_hidden: tuple[int, ...] = (64,)
-    reward_lr: float = 1e-3
-    policy_lr: float = 1e-3
-    reward_weight_decay: float = 5e-3
-    batch_size: int = 256
-    epochs: int = 50
-    alpha: float = 0.33  # weight of the supervised term in the policy loss
-    beta: float = 0.0  # weight of the (f - r_env)² term in the discriminator loss
-    sigma_start: float = 1.0  # noise σ on the first sample of a batch (in action ranges)
-    sigma_end: float = 0.1  # ... and on the last
-    val_fraction: float = 0.1  # share of hands held out (used by the table front end)
-    seed: int = 0
-
-    def __post_init__(self) -> None:
-        # TOML and JSON give lists; keep the dataclass hashable and comparable.
-        object.__setattr__(self, "reward_hidden", tuple(int(w) for w in self.reward_hidden))
-        object.__setattr__(self, "policy_hidden", tuple(int(w) for w in self.policy_hidden))
-        checks = {
-            "batch_size >= 1": self.batch_size >= 1,
-            "epochs >= 1": self.epochs >= 1,
-            "0 <= alpha <= 1": 0 <= self.alpha <= 1,
-            "0 <= beta <= 1": 0 <= self.beta <= 1,
-            "sigma_start >= sigma_end >= 0": self.sigma_start >= self.sigma_end >= 0,
-            "0 < val_fraction < 1": 0 < self.val_fraction < 1,
-            "learning rates > 0": self.reward_lr > 0 and self.policy_lr > 0,
-            "reward_weight_decay >= 0": self.reward_weight_decay >= 0,
-            "hidden widths >= 1": all(w >= 1 for w in self.reward_hidden + self.policy_hidden),
-            "a reward hidden layer": len(self.reward_hidden) >= 1,
-        }
-        broken = [name for name, ok in checks.items() if not ok]
-        if broken:
-            raise ValueError(f"invalid AIRL config: need {', '.join(broken)}")
-
-    @classmethod
-    def for_algo(cls, algo: str, **overrides: Any) -> AIRLConfig:
-        """Defaults for ``"airl"`` (α = β = 0, no noise) or ``"hairl"``, then ``overrides``.
-
-        Unknown keys raise ``ValueError`` naming them.
-        """
-        if algo not in ALGOS:
-            raise ValueError(f"unknown algo {algo!r}; choose one of {', '.join(ALGOS)}")
-        known = {f.name for f in dataclasses.fields(cls)}
-        unknown = sorted(set(overrides) - known)
-        if unknown:
-            raise ValueError(f"unknown setting(s) {', '.join(unknown)}; known: {sorted(known)}")
-        base: dict[str, Any] = {}
-        if algo == "airl":
-            base = {"alpha": 0.0, "beta": 0.0, "sigma_start": 0.0, "sigma_end": 0.0}
-        return cls(**{**base, **overrides})
+LOG_2PI = math.log(2 * math.pi)
+LOSS_KEYS = (
+    "disc_loss",
+    "disc_airl_loss",
+    "disc_env_loss",
+    "policy_loss",
+    "policy_adv_loss",
+    "policy_sup_loss",
+)
 
 
-@dataclass(frozen=True, kw_only=True)
-class ExpertData:
-    """Expert rows as tensors: the trainer knows nothing about poker.
-
-    ``actions`` are action *vectors*: one-hots for discrete actions, values for continuous
-    ones. ``legal_mask`` (discrete only) and ``rewards`` are optional.
-    """
-
-    obs: Tensor  # (N, obs_dim), any dtype; converted to float per batch
-    actions: Tensor  # (N, action_dim) float
-    legal_mask: Tensor | None = None  # (N, num_actions) bool
-    rewards: Tensor | None = None  # (N,) float
-    discrete: bool = True
-    action_low: tuple[float, ...] | None = None  # continuous bounds
-    action_high: tuple[float, ...] | None = None
-
-    def __post_init__(self) -> None:
-        n = len(self.obs)
-        if self.obs.ndim != 2 or self.actions.ndim != 2 or len(self.actions) != n:
-            raise ValueError("ExpertData needs obs (N, d) and action vectors (N, k)")
-        for name in ("legal_mask", "rewards"):
-            value = getattr(self, name)
-            if value is not None and len(value) != n:
-                raise ValueError(f"ExpertData.{name} has {len(value)} rows, obs has {n}")
-
-    @classmethod
-    def from_action_ids(
-        cls,
-        obs: Tensor,
-        action_ids: Tensor,
-        *,
-        num_actions: int,
-        legal_mask: Tensor | None = None,
-        rewards: Tensor | None = None,
-    ) -> ExpertData:
-        """Discrete actions given as ids (N,)."""
-        one_hot = torch.nn.functional.one_hot(action_ids.long(), num_actions).float()
-        return cls(obs=obs, actions=one_hot, legal_mask=legal_mask, rewards=rewards)
-
-    @classmethod
-    def from_continuous(
-        cls,
-        obs: Tensor,
-        actions: Tensor,
-        *,
-        low: Sequence[float],
-        high: Sequence[float],
-        rewards: Tensor | None = None,
-    ) -> ExpertData:
-        """Continuous actions (N, k) inside the box [low, high]."""
-        return cls(
-            obs=obs,
-            actions=actions.float().reshape(len(actions), -1),
-            rewards=rewards,
-            discrete=False,
-            action_low=tuple(float(x) for x in low),
-            action_high=tuple(float(x) for x in high),
-        )
-
-    def __len__(self) -> int:
-        return len(self.obs)
-
-    @property
-    def obs_dim(self) -> int:
-        return self.obs.shape[1]
-
-    @property
-    def action_dim(self) -> int:
-        return self.actions.shape[1]
-
-    def subset(self, index: Tensor) -> ExpertData:
-        """Rows ``index`` (a long tensor or bool mask)."""
-        pick = lambda t: None if t is None else t[index]  # noqa: E731
-        return dataclasses.replace(
-            self,
-            obs=self.obs[index],
-            actions=self.actions[index],
-            legal_mask=pick(self.legal_mask),
-            rewards=pick(self.rewards),
-        )
-
-    def to(self, device: torch.device | str) -> ExpertData:
-        move = lambda t: None if t is None else t.to(device)  # noqa: E731
-        return dataclasses.replace(
-            self,
-            obs=self.obs.to(device),
-            actions=self.actions.to(device),
-            legal_mask=move(self.legal_mask),
-            rewards=move(self.rewards),
-        )
+# --------------------------------------------------------------------------- pure pieces
 
 
-# --------------------------------------------------------------------------- losses
+def noise_schedule(
+    batch_size: int,
+    sigma_start: float,
+    sigma_end: float,
+    *,
+    kind: str = "linear",
+    decay: float = 0.1,
+) -> Tensor:
+    """σ_i for the i-th sample of a batch.
 
-
-def noise_schedule(batch_size: int, sigma_start: float, sigma_end: float) -> Tensor:
-    """σ_i for the i-th sample of a shuffled batch: linear from σ_start down to σ_end.
+    ``linear`` (the paper): from σ_start on the first sample to σ_end on the last.
+    ``authors`` (their code): σ_i = σ_start / (1 + k·b·i), b = (σ_start − σ_end)/(σ_end·B);
+    the trainer shuffles these across the batch.
 
     >>> noise_schedule(5, 1.0, 0.2)
     tensor([1.0000, 0.8000, 0.6000, 0.4000, 0.2000])
+    >>> noise_schedule(3, 1.0, 0.5, kind="authors", decay=1.0)
+    tensor([1.0000, 0.7500, 0.6000])
     """
+    if sigma_start == 0:
+        return torch.zeros(batch_size)
+    if kind == "authors":
+        b = (sigma_start - sigma_end) / (sigma_end * batch_size)
+        return sigma_start / (1 + decay * b * torch.arange(batch_size, dtype=torch.float32))
     if batch_size == 1:
         return torch.tensor([sigma_start])
     return torch.linspace(sigma_start, sigma_end, batch_size)
-
-
-def log_discriminator(f: Tensor, log_pi: Tensor) -> tuple[Tensor, Tensor]:
-    """(log D, log(1 − D)) for D = e^f / (e^f + π), via a two-term logsumexp.
-
-    >>> log_d, log_not_d = log_discriminator(torch.tensor([0.0]), torch.tensor([0.0]))
-    >>> round(log_d.exp().item(), 3), round(log_not_d.exp().item(), 3)
-    (0.5, 0.5)
-    """
-    log_norm = torch.logaddexp(f, log_pi)
-    return f - log_norm, log_pi - log_norm
 
 
 def discriminator_loss(
@@ -245,79 +107,206 @@ def discriminator_loss(
     *,
     beta: float = 0.0,
     env_reward: Tensor | None = None,
-) -> tuple[Tensor, Tensor]:
-    """(1−β)·L_AIRL + β·E_E[(f(s, a_E) − r_env)²]; returns (total, L_AIRL).
+) -> tuple[Tensor, Tensor, Tensor]:
+    """(total, L_AIRL, env MSE), means over the last dimension.
 
-    L_AIRL = −E_E[log D(s, a_E)] − E_π[log(1 − D(s, ã))].
+    L_AIRL = −E_E[log D(s, a_E)] − E_π[log(1 − D(s, ã))] with D = σ(f − log π), the
+    log-space form of exp f / (exp f + π). total = (1−β)·L_AIRL + β·E_E[(f − r_env)²].
+
+    >>> zero = torch.zeros(1)
+    >>> round(discriminator_loss(zero, zero, zero, zero)[0].item(), 4)  # D = 1/2: 2 ln 2
+    1.3863
     """
-    log_d_expert, _ = log_discriminator(f_expert, log_pi_expert)
-    _, log_not_d_policy = log_discriminator(f_policy, log_pi_policy)
-    airl = -log_d_expert.mean() - log_not_d_policy.mean()
-    if beta == 0.0 or env_reward is None:
-        return airl, airl
-    regression = (f_expert - env_reward).square().mean()
-    return (1 - beta) * airl + beta * regression, airl
+    airl = -(
+        F.logsigmoid(f_expert - log_pi_expert).mean(-1)
+        + F.logsigmoid(log_pi_policy - f_policy).mean(-1)
+    )
+    if env_reward is None:
+        return airl, airl, torch.zeros_like(airl)
+    env = (f_expert - env_reward).square().mean(-1)
+    return (1 - beta) * airl + beta * env, airl, env
 
 
-def policy_loss(
-    f_policy: Tensor, log_pi_policy: Tensor, supervised: Tensor, *, alpha: float
-) -> tuple[Tensor, Tensor]:
-    """(1−α)·E_π[−f(s, a) + log π(a|s)] + α·supervised; returns (total, adversarial part).
+def gaussian_log_prob(action: Tensor, mean: Tensor, log_std: Tensor) -> Tensor:
+    """Diagonal Gaussian log-density, summed over the last dimension."""
+    z = (action - mean) * torch.exp(-log_std)
+    return (-0.5 * z.square() - log_std - 0.5 * LOG_2PI).sum(-1)
 
-    ``f_policy`` and ``log_pi_policy`` are per-state expectations under π.
+
+def sample_one_hot(probs: Tensor, u: Tensor) -> Tensor:
+    """One-hots of actions drawn from ``probs`` (..., K) by inverse CDF with uniforms ``u``.
+
+    With u below the last cumulative probability the pick always has positive probability,
+    so it is never an illegal action.
     """
-    adversarial = (log_pi_policy - f_policy).mean()
-    return (1 - alpha) * adversarial + alpha * supervised, adversarial
+    cumulative = probs.cumsum(-1)
+    picked = (cumulative <= u[..., None] * cumulative[..., -1:]).sum(-1, keepdim=True)
+    return torch.zeros_like(probs).scatter_(-1, picked.clamp_max(probs.shape[-1] - 1), 1.0)
 
 
-def discriminator_grad(
-    f: Tensor, log_pi: Tensor, *, beta: float = 0.0, env_reward: Tensor | None = None
-) -> Tensor:
-    """dL/df of :func:`discriminator_loss` for ``f`` = (expert rows, then as many policy rows).
+# --------------------------------------------------------------------------- stacked nets
 
-    With D = σ(f − log π) (the log-space form of the ratio): d/df of −log D is D − 1 and
-    of −log(1 − D) is D.
+
+class _Nets:
+    """R copies of a (reward or policy) architecture, called with a leading run dimension.
+
+    Inputs carry the run dimension first (or none where ``shared``); a reward's state
+    arguments also carry an action-row axis of size 1, so that they broadcast against the
+    (M, B, k) action rows both inside one run and across runs.
+
+    One run calls the module itself. Several runs made of the default nets' layers (Linear,
+    LayerNorm, activations) become one module whose parameters have a leading run dimension
+    (``stack_modules``: batched matrix products, one kernel per layer for all runs); any
+    other architecture goes through ``vmap(functional_call)`` over stacked parameters.
+    Either way ``params`` are the leaves the optimizer updates.
     """
-    batch = len(f) // 2
-    grad = torch.sigmoid(f - log_pi)
-    grad[:batch] -= 1
-    if beta == 0.0 or env_reward is None:
-        return grad / batch
-    grad *= (1 - beta) / batch
-    grad[:batch] += (2 * beta / batch) * (f[:batch] - env_reward)
-    return grad
+
+    def __init__(self, modules: Sequence[nn.Module]) -> None:
+        self.modules = list(modules)
+        self.stacked: nn.Module | None = None
+        if len(self.modules) == 1:
+            self.params = list(self.modules[0].parameters())
+            return
+        self.stacked = stack_modules(self.modules)
+        if self.stacked is not None:
+            self.params = list(self.stacked.parameters())
+            return
+        self.base = copy.deepcopy(self.modules[0]).to("meta")
+        params, self.buffers = torch.func.stack_module_state(self.modules)
+        self.vmapped = params
+        self.params = list(params.values())
+
+    def __call__(self, *args: Tensor | None, shared: Sequence[bool] = ()) -> Any:
+        """Call with args of (R, ...) (or without R where ``shared[i]``)."""
+        shared = tuple(shared) + (False,) * (len(args) - len(shared))
+        runs = len(self.modules)
+        if runs == 1:
+            inner = (a if s or a is None else a[0] for a, s in zip(args, shared, strict=True))
+            return _unsqueeze(self.modules[0](*inner))
+        if self.stacked is not None:
+            return self.stacked(
+                *(a.expand(runs, *a.shape) if s and a is not None else a
+                  for a, s in zip(args, shared, strict=True))
+            )  # fmt: skip
+        dims = tuple(None if s or a is None else 0 for a, s in zip(args, shared, strict=True))
+
+        def call(params: dict, buffers: dict, *inner: Tensor | None) -> Any:
+            return torch.func.functional_call(self.base, (params, buffers), inner)
+
+        return torch.func.vmap(call, in_dims=(0, 0, *dims))(self.vmapped, self.buffers, *args)
+
+    @torch.no_grad()
+    def write_back(self) -> None:
+        """Copy the runs' parameters into the R modules (no-op for one run)."""
+        if len(self.modules) == 1:
+            return
+        source = dict(self.stacked.named_parameters()) if self.stacked is not None else self.vmapped
+        for r, module in enumerate(self.modules):
+            for name, value in module.named_parameters():
+                value.copy_(source[name][r])
 
 
-def _expected_reward_and_grad(
-    reward_net: RewardNet, policy: Policy, obs: Tensor, out: PolicyOutput, grad_f: Tensor
-) -> tuple[Tensor, Tensor]:
-    """E_{a∼π}[f(s, a)] per state, and ``grad_f``-weighted d/d(action vector) of it.
+class StackedLinear(nn.Module):
+    """R linear maps applied run by run to x of (R, ..., in): one batched product."""
 
-    Discrete: f on every one-hot e_k, so E = Σ_k π_k f(s, e_k) and d/dπ_k = f(s, e_k).
-    Continuous: f at the reparameterized sample, differentiated through f's input.
+    def __init__(self, layers: Sequence[nn.Linear]) -> None:
+        super().__init__()
+        self.weight = nn.Parameter(torch.stack([m.weight.detach() for m in layers]))
+        self.bias = (
+            None
+            if layers[0].bias is None
+            else nn.Parameter(torch.stack([m.bias.detach() for m in layers]))  # type: ignore[union-attr]
+        )
+
+    def forward(self, x: Tensor) -> Tensor:
+        runs, out_dim = self.weight.shape[:2]
+        flat = x.reshape(runs, -1, x.shape[-1])
+        weight = self.weight.transpose(1, 2)
+        if self.bias is None:
+            y = torch.bmm(flat, weight)
+        else:
+            y = torch.baddbmm(self.bias[:, None, :], flat, weight)
+        return y.view(*x.shape[:-1], out_dim)
+
+
+class StackedLayerNorm(nn.Module):
+    """R layer norms (with their own affine parameters) over x of (R, ..., H)."""
+
+    def __init__(self, layers: Sequence[nn.LayerNorm]) -> None:
+        super().__init__()
+        self.shape, self.eps = layers[0].normalized_shape, layers[0].eps
+        self.weight = nn.Parameter(torch.stack([m.weight.detach() for m in layers]))
+        self.bias = nn.Parameter(torch.stack([m.bias.detach() for m in layers]))
+
+    def forward(self, x: Tensor) -> Tensor:
+        view = (x.shape[0],) + (1,) * (x.ndim - 2) + (x.shape[-1],)
+        normed = F.layer_norm(x, self.shape, eps=self.eps)
+        return torch.addcmul(self.bias.view(view), normed, self.weight.view(view))
+
+
+_STACKABLE = (nn.Sequential, nn.Identity, nn.ReLU, nn.Tanh, nn.LeakyReLU)
+
+
+def stack_modules(modules: Sequence[nn.Module]) -> nn.Module | None:
+    """One module computing all R ``modules`` (same architecture) on inputs with a leading
+    run dimension, or None when an architecture is not made of known layers.
+
+    Known: the default nets (whose forward code broadcasts over leading dimensions),
+    Sequential, Linear, LayerNorm (elementwise affine) and parameter-free activations.
     """
-    if policy.discrete:
-        f_each = reward_net.forward_each_action(obs)
-        return (f_each * out.action).sum(dim=1), f_each * grad_f[:, None]
-    f_pi, cache = reward_net.forward_cached(obs, out.action)
-    _, grad_action = reward_net.backward(cache, grad_f, params=False)
-    assert grad_action is not None
-    return f_pi, grad_action
+    from pokerirl.irl.nets import DiscretePolicy, GaussianPolicy, ShapedReward, StateActionReward
+
+    known = (*_STACKABLE, DiscretePolicy, GaussianPolicy, ShapedReward, StateActionReward)
+    for module in modules[0].modules():
+        if (
+            isinstance(module, nn.LayerNorm)
+            and module.elementwise_affine
+            and module.bias is not None
+        ):
+            continue
+        if type(module) is not nn.Linear and type(module) not in known:
+            return None
+    stacked = copy.deepcopy(modules[0])
+
+    def convert(target: nn.Module, sources: list[nn.Module]) -> None:
+        for name, child in list(target.named_children()):
+            originals = [getattr(source, name) for source in sources]
+            if type(child) is nn.Linear:
+                setattr(target, name, StackedLinear(originals))
+            elif isinstance(child, nn.LayerNorm):
+                setattr(target, name, StackedLayerNorm(originals))
+            else:
+                convert(child, originals)
+        for name, _ in list(target.named_parameters(recurse=False)):
+            value = torch.stack([getattr(source, name).detach() for source in sources])
+            setattr(target, name, nn.Parameter(value))
+        for name, _ in list(target.named_buffers(recurse=False)):
+            target.register_buffer(name, torch.stack([getattr(s, name) for s in sources]))
+
+    convert(stacked, list(modules))
+    return stacked
 
 
-# --------------------------------------------------------------------------- training
+def _unsqueeze(out: Any) -> Any:
+    if isinstance(out, tuple):
+        return tuple(o.unsqueeze(0) for o in out)
+    return out.unsqueeze(0)
+
+
+# --------------------------------------------------------------------------- results
 
 
 @dataclass
 class TrainResult:
-    """What :func:`train` returns: the trained nets and one metrics dict per epoch."""
+    """One run: the trained nets and one metrics dict per epoch."""
 
-    reward_net: RewardNet
-    policy: Policy
+    reward: nn.Module
+    policy: nn.Module
     config: AIRLConfig
     beta_used: float  # β actually used: 0 when the data has no rewards
+    gradients: str = "autograd"  # or "hand-derived" (pokerirl.irl.fast)
     metrics: list[dict[str, Any]] = field(default_factory=list)
-    epoch_seconds: list[float] = field(default_factory=list)  # optimization only, no evaluation
+    epoch_seconds: list[float] = field(default_factory=list)  # optimization only
     samples_per_epoch: int = 0
 
     @property
@@ -327,198 +316,528 @@ class TrainResult:
         return self.samples_per_epoch * len(self.epoch_seconds) / seconds if seconds else math.nan
 
 
-def build_nets(data: ExpertData, config: AIRLConfig) -> tuple[RewardNet, Policy]:
-    """A fresh reward net and a policy matching ``data``'s action space."""
-    reward_net = RewardNet(
-        obs_dim=data.obs_dim, action_dim=data.action_dim, hidden=config.reward_hidden
-    )
-    policy: Policy
-    if data.discrete:
-        policy = DiscretePolicy(
-            obs_dim=data.obs_dim, num_actions=data.action_dim, hidden=config.policy_hidden
-        )
-    else:
-        assert data.action_low is not None and data.action_high is not None
-        policy = GaussianPolicy(
+@dataclass
+class ManyResult:
+    """R runs trained in lock-step: one :class:`TrainResult` per seed."""
+
+    runs: list[TrainResult]
+    epoch_seconds: list[float]  # all runs together
+    samples_per_epoch: int  # all runs together
+
+    @property
+    def samples_per_second(self) -> float:
+        seconds = sum(self.epoch_seconds)
+        return self.samples_per_epoch * len(self.epoch_seconds) / seconds if seconds else math.nan
+
+
+# --------------------------------------------------------------------------- training
+
+
+def default_nets(
+    data: Transitions, config: AIRLConfig, seed: int | None = None
+) -> tuple[nn.Module, nn.Module]:
+    """The default (reward, policy) for ``data``'s spaces, initialized from ``seed``
+    (default ``config.seed``) without touching torch's global generator."""
+    with torch.random.fork_rng(devices=[]):
+        torch.manual_seed(config.seed if seed is None else seed)
+        return build_nets(
+            config.net_spec(),
             obs_dim=data.obs_dim,
+            action_dim=data.action_dim,
+            discrete=data.discrete,
             low=data.action_low,
             high=data.action_high,
-            hidden=config.policy_hidden,
         )
-    return reward_net, policy
 
 
-@torch.no_grad()  # gradients are hand-derived (see pokerirl.irl.nets), not autograd's
 def train(
-    train_data: ExpertData,
-    val_data: ExpertData,
+    train_data: Transitions,
+    val_data: Transitions,
     *,
     config: AIRLConfig,
+    reward: nn.Module | None = None,
+    policy: nn.Module | None = None,
+    adversarial: bool = True,
+    fast_path: bool = True,
     device: str | torch.device = "cpu",
     progress: bool = True,
     on_epoch: Callable[[dict[str, Any]], None] | None = None,
 ) -> TrainResult:
-    """Train a reward net and a policy on ``train_data``; evaluate on ``val_data`` each epoch.
+    """Train ``reward`` and ``policy`` (default: :func:`default_nets`) on ``train_data``;
+    evaluate on ``val_data`` each epoch. Deterministic on CPU for a given seed and data.
 
-    Deterministic on CPU for a given config (seed) and data. ``on_epoch`` gets each epoch's
-    metrics dict as soon as it is ready (for live logging).
+    ``adversarial=False`` skips the discriminator (behaviour cloning when α = 1).
+    ``fast_path``: use the hand-derived gradients of :mod:`pokerirl.irl.fast` where they
+    cover the nets (the default poker nets, one run, on CPU); autograd otherwise.
+    ``on_epoch`` gets each epoch's metrics dict as soon as it is ready.
+    """
+    if reward is None or policy is None:
+        default_reward, default_policy = default_nets(train_data, config)
+        reward = default_reward if reward is None else reward
+        policy = default_policy if policy is None else policy
+    many = train_many(
+        train_data,
+        val_data,
+        config=config,
+        seeds=[config.seed],
+        rewards=[reward],
+        policies=[policy],
+        adversarial=adversarial,
+        fast_path=fast_path,
+        device=device,
+        progress=progress,
+        on_epoch=None if on_epoch is None else (lambda ms: on_epoch(ms[0])),
+    )
+    return many.runs[0]
+
+
+def train_many(
+    train_data: Transitions,
+    val_data: Transitions,
+    *,
+    config: AIRLConfig,
+    seeds: Sequence[int],
+    rewards: Sequence[nn.Module] | None = None,
+    policies: Sequence[nn.Module] | None = None,
+    adversarial: bool = True,
+    fast_path: bool = True,
+    device: str | torch.device = "cpu",
+    progress: bool = True,
+    on_epoch: Callable[[list[dict[str, Any]]], None] | None = None,
+) -> ManyResult:
+    """R = len(seeds) runs of ``config`` on the same data, in lock-step.
+
+    Run r uses ``seeds[r]`` for its shuffles and noise (and, with default nets, its
+    initialization), so it is the run ``train`` would make with that seed, up to floating
+    point. The nets must share one architecture. ``on_epoch`` gets the R metrics dicts.
     """
     device = resolve_device(device)
     if len(train_data) == 0 or len(val_data) == 0:
         raise ValueError("training and validation data must both be non-empty")
-    torch.manual_seed(config.seed)  # network initialization
-    gen = torch.Generator(device=device).manual_seed(config.seed)  # shuffling and noise
-    reward_net, policy = build_nets(train_data, config)
-    reward_net.to(device)
-    policy.to(device)
-    # Created after .to(device): FlatAdam moves the parameters into one buffer.
-    reward_opt = FlatAdam(
-        reward_net.parameters(), lr=config.reward_lr, weight_decay=config.reward_weight_decay
-    )
-    policy_opt = FlatAdam(policy.parameters(), lr=config.policy_lr)
-
-    data = train_data.to(device)
-    val = val_data.to(device)
-    beta = config.beta if data.rewards is not None else 0.0
-    alpha = config.alpha
-    n, batch = len(data), min(config.batch_size, len(data))
-    steps = n // batch  # drop the ragged tail; the next shuffle covers it
-    sigma = noise_schedule(batch, config.sigma_start, config.sigma_end).to(device)
-    grad_f_pi = torch.full((batch,), -(1 - alpha) / batch, device=device)  # d policy loss/d f
-    result = TrainResult(
-        reward_net=reward_net,
-        policy=policy,
+    seeds = [int(s) for s in seeds]
+    if not seeds:
+        raise ValueError("train_many needs at least one seed")
+    if rewards is None or policies is None:
+        built = [default_nets(train_data, config, seed) for seed in seeds]
+        rewards = [b[0] for b in built] if rewards is None else rewards
+        policies = [b[1] for b in built] if policies is None else policies
+    if not len(rewards) == len(policies) == len(seeds):
+        raise ValueError("give one reward net and one policy per seed")
+    if config.reward_family == "shaped" and train_data.next_obs is None:
+        raise ValueError("the shaped reward family needs transitions with next_obs and done")
+    for module in (*rewards, *policies):
+        module.to(device).train()
+    return _Loop(
+        train_data,
+        val_data,
         config=config,
-        beta_used=beta,
-        samples_per_epoch=steps * batch,
-    )
-    # Per-step values for the epoch's metrics, written in place: no .item() sync per step.
-    # Row layout: f (expert, policy), log π (expert, policy), f(s, π), log π(π), supervised.
-    record = torch.empty(steps, 7 * batch, device=device)
+        seeds=seeds,
+        rewards=_Nets(rewards),
+        policies=_Nets(policies),
+        adversarial=adversarial,
+        device=device,
+        fast_path=fast_path,
+    ).run(progress=progress, on_epoch=on_epoch)
 
-    # Inference mode skips autograd's bookkeeping on every small op (about 15% faster here).
-    # The nets, the optimizer buffers and ``record`` were made outside it, so they stay
-    # ordinary tensors, updated in place, that autograd can still use after training.
-    with torch.inference_mode():
-        bar = tqdm(range(1, config.epochs + 1), desc="train", unit="epoch", disable=not progress)
+
+class _Loop:
+    """The training loop's state; :meth:`run` is the algorithm, :meth:`step` one batch."""
+
+    def __init__(
+        self,
+        data: Transitions,
+        val: Transitions,
+        *,
+        config: AIRLConfig,
+        seeds: list[int],
+        rewards: _Nets,
+        policies: _Nets,
+        adversarial: bool,
+        device: torch.device,
+        fast_path: bool = False,
+    ) -> None:
+        self.data, self.val, self.config, self.device = data, val, config, device
+        self.rewards, self.policies, self.adversarial = rewards, policies, adversarial
+        self.runs = len(seeds)
+        self.seeds = seeds
+        self.generators = [torch.Generator(device=device).manual_seed(s) for s in seeds]
+        self.discrete = data.discrete
+        self.beta = config.beta if data.rewards is not None else 0.0
+        self.alpha = config.alpha
+        self.shaped = config.reward_family == "shaped"
+        self.batch = min(config.batch_size, len(data))
+        self.steps = len(data) // self.batch  # drop the ragged tail; the next shuffle covers it
+        self.noisy = config.sigma_start > 0 and adversarial
+        sigma = noise_schedule(
+            self.batch,
+            config.sigma_start,
+            config.sigma_end,
+            kind=config.noise_schedule,
+            decay=config.noise_decay,
+        )
+        self.sigma = sigma.to(device)
+        self.obs = data.obs.to(device)
+        self.actions = data.actions.to(device)
+        self.action_vectors = data.action_vectors().to(device)
+        self.mask = None if data.legal_mask is None else data.legal_mask.to(device)
+        self.env = None if data.rewards is None else data.rewards.to(device)
+        self.next_obs = None if data.next_obs is None else data.next_obs.to(device)
+        self.dones = None if data.dones is None else data.dones.to(device)
+        if self.discrete:
+            eye = torch.eye(data.action_dim, device=device)
+            self.each_action = eye[:, None, :]  # (K, 1, K): every one-hot, broadcast over B
+        else:
+            self.low = torch.tensor(data.action_low, device=device)
+            self.high = torch.tensor(data.action_high, device=device)
+        # One Adam over stacked parameters is R independent Adams (it is elementwise).
+        self.reward_opt = FlatAdam(
+            rewards.params, lr=config.reward_lr, weight_decay=config.reward_weight_decay
+        )
+        self.policy_opt = FlatAdam(policies.params, lr=config.policy_lr)
+        # Gather a whole epoch's batches at once when that is small (one index per tensor
+        # per epoch instead of per step); else per step.
+        self.gather_epoch = self.runs * len(data) * (data.obs_dim + 8) <= 2**25
+        self.fast = (
+            fast_path
+            and self.runs == 1
+            and device.type == "cpu"
+            and config.reward_family == "state_action"
+            and fast.supports(rewards.modules[0], policies.modules[0])
+        )
+
+    # ------------------------------------------------------------------ one epoch's randomness
+
+    def draw_epoch(self) -> dict[str, Tensor]:
+        """All of an epoch's random numbers, per run from its own generator."""
+        n, steps, batch = len(self.obs), self.steps, self.batch
+        width = self.action_vectors.shape[1]
+        draws: dict[str, list[Tensor]] = {"perm": [], "u": [], "eps": [], "pi_eps": [], "sig": []}
+        for gen in self.generators:
+            kw = {"generator": gen, "device": self.device}
+            draws["perm"].append(torch.randperm(n, **kw)[: steps * batch].view(steps, batch))
+            if self.discrete:
+                if self.adversarial:  # behaviour cloning draws its shuffles only
+                    draws["u"].append(torch.rand(steps, batch, **kw))
+            else:
+                draws["pi_eps"].append(torch.randn(steps, batch, width, **kw))
+            if self.noisy:
+                draws["eps"].append(torch.randn(steps, batch, width, **kw))
+                if self.config.noise_schedule == "authors":
+                    order = torch.rand(steps, batch, **kw).argsort(dim=1)
+                    draws["sig"].append(self.sigma[order])
+        return {k: torch.stack(v, dim=1) for k, v in draws.items() if v}  # (steps, R, ...)
+
+    # ------------------------------------------------------------------ one batch
+
+    def gather(self, rows: Tensor) -> dict[str, Tensor]:
+        """The training tensors at ``rows`` (any shape of indices)."""
+        batch = {"obs": self.obs[rows], "expert": self.action_vectors[rows]}
+        for name in ("mask", "env", "next_obs", "dones"):
+            value = getattr(self, name)
+            if value is not None:
+                batch[name] = value[rows]
+        return batch
+
+    def step(self, batch: dict[str, Tensor], draw: dict[str, Tensor], step: int) -> Tensor:
+        """One discriminator and one policy update on a batch of (R, B) rows.
+
+        Returns (R, 4B + 3): f on expert and policy rows, log π of both, then the policy
+        loss, its adversarial and its supervised part.
+        """
+        obs, expert = batch["obs"], batch["expert"]
+        mask, env = batch.get("mask"), batch.get("env")
+        zero = obs.new_zeros(self.runs)
+
+        # 1. the policy at s (kept with its graph for step 3)
+        if self.discrete:
+            log_pi = self.policies(obs, mask)
+            probs = log_pi.exp()
+        else:
+            mean, log_std = self.policies(obs)
+            sample = mean + log_std.exp() * draw["pi_eps"][step]
+
+        # 2. discriminator step
+        if self.adversarial:
+            with torch.no_grad():
+                if self.discrete:
+                    lp = log_pi.detach()
+                    seen = self.discrete_seen(probs.detach(), mask, draw, step)
+                    log_pi_expert = (expert * lp).sum(-1)
+                    log_pi_seen = (seen * lp).sum(-1)
+                else:
+                    m, ls = mean.detach(), log_std.detach()
+                    seen = sample.detach() if self.config.disc_action == "sample" else m
+                    if self.noisy:
+                        sigma = draw["sig"][step] if "sig" in draw else self.sigma
+                        noise = sigma[..., None] * (self.high - self.low) * draw["eps"][step]
+                        seen = torch.maximum(torch.minimum(seen + noise, self.high), self.low)
+                    log_pi_expert = gaussian_log_prob(expert, m, ls)
+                    log_pi_seen = gaussian_log_prob(seen, m, ls)
+            both = torch.stack((expert, seen), dim=1)  # (R, 2, B, k)
+            if self.shaped:
+                f = self.rewards(
+                    obs[:, None], both, batch["next_obs"][:, None], batch["dones"][:, None]
+                )
+            else:
+                f = self.rewards(obs[:, None], both)
+            d_loss, d_airl, d_env = discriminator_loss(
+                f[:, 0], log_pi_expert, f[:, 1], log_pi_seen, beta=self.beta, env_reward=env
+            )
+            self.reward_opt.zero_grad()
+            d_loss.sum().backward()
+            self.reward_opt.step()
+            # What the epoch's metrics need, computed once per epoch from these rows.
+            disc_record = torch.cat((f.detach().flatten(1), log_pi_expert, log_pi_seen), dim=1)
+        else:
+            disc_record = obs.new_zeros(self.runs, 4 * self.batch)
+
+        # 3. policy step against the updated reward
+        if self.discrete:
+            supervised = -(expert * log_pi).sum(-1).mean(-1)
+            if self.alpha < 1:
+                with torch.no_grad():
+                    g = self.rewards(obs[:, None], self.each_action, shared=(False, True))
+                    g = g.transpose(1, 2)
+                adversarial = (probs * (log_pi - g)).sum(-1).mean(-1)
+            else:
+                adversarial = zero
+        else:
+            supervised = (mean - expert).square().sum(-1).mean(-1)
+            if self.alpha < 1:
+                g = self.rewards(obs[:, None], sample[:, None])[:, 0]
+                adversarial = (gaussian_log_prob(sample, mean, log_std) - g).mean(-1)
+            else:
+                adversarial = zero
+        p_loss = (1 - self.alpha) * adversarial + self.alpha * supervised
+        self.policy_opt.zero_grad()
+        p_loss.sum().backward(inputs=self.policies.params)
+        self.policy_opt.step()
+        policy_record = torch.stack((p_loss, adversarial, supervised), dim=1).detach()
+        return torch.cat((disc_record, policy_record), dim=1)
+
+    def discrete_seen(
+        self, probs: Tensor, mask: Tensor | None, draw: dict[str, Tensor], step: int
+    ) -> Tensor:
+        """What the discriminator sees of a discrete policy: a sample (or π), plus noise."""
+        if self.config.disc_action == "sample":
+            seen = sample_one_hot(probs, draw["u"][step])
+        else:
+            seen = probs
+        if self.noisy:
+            sigma = draw["sig"][step] if "sig" in draw else self.sigma
+            seen = project_to_simplex(seen + sigma[..., None] * draw["eps"][step], mask)
+        return seen
+
+    def fast_step(self, batch: dict[str, Tensor], draw: dict[str, Tensor], step: int) -> Tensor:
+        """:meth:`step` with the hand-derived gradients of :mod:`pokerirl.irl.fast`."""
+        reward, policy = self.rewards.modules[0], self.policies.modules[0]
+        obs, expert = batch["obs"][0], batch["expert"][0]
+        mask = batch["mask"][0] if "mask" in batch else None
+        env = batch["env"][0] if "env" in batch else None
+        acts = fast.mlp_forward(policy.mlp, obs)
+        logits = acts[-1] if mask is None else acts[-1].masked_fill(~mask, MASKED_LOGIT)
+        log_pi = torch.log_softmax(logits, dim=-1)
+        probs = log_pi.exp()
+        if self.adversarial:
+            seen = self.discrete_seen(probs[None], None if mask is None else mask[None], draw,
+                                      step)[0]  # fmt: skip
+            lp = torch.cat(((expert * log_pi).sum(-1), (seen * log_pi).sum(-1)))
+            cache = fast.reward_forward(reward, obs, torch.stack((expert, seen)))
+            f = cache.head_acts[-1].view(-1)
+            grad_f = fast.discriminator_grad(f, lp, beta=self.beta, env_reward=env)
+            self.reward_opt.set_grad(fast.reward_backward(reward, cache, grad_f))
+            self.reward_opt.step()
+            disc_record = torch.cat((f, lp))
+        else:
+            disc_record = obs.new_zeros(4 * self.batch)
+        if self.alpha < 1:
+            each = fast.reward_forward(reward, obs, self.each_action).head_acts[-1]
+            g = each.view(-1, len(obs)).T
+        else:
+            g = torch.zeros_like(log_pi)
+        self.policy_opt.set_grad(fast.policy_backward(policy, acts, log_pi, g, expert, self.alpha))
+        self.policy_opt.step()
+        supervised = -(expert * log_pi).sum(-1).mean()
+        adversarial = (probs * (log_pi - g)).sum(-1).mean() if self.alpha < 1 else g[0, 0]
+        p_loss = (1 - self.alpha) * adversarial + self.alpha * supervised
+        return torch.cat((disc_record, torch.stack((p_loss, adversarial, supervised))))[None]
+
+    def epoch_stats(self, record: Tensor, perm: Tensor) -> dict[str, list[float]]:
+        """Epoch means per run of the losses and discriminator accuracies."""
+        b = self.batch
+        f_expert, f_seen, lp_expert, lp_seen = record[..., : 4 * b].split(b, dim=-1)
+        env = None if self.env is None else self.env[perm]  # (steps, R, B)
+        d_loss, d_airl, d_env = discriminator_loss(
+            f_expert, lp_expert, f_seen, lp_seen, beta=self.beta, env_reward=env
+        )
+        values = {
+            "disc_loss": d_loss.mean(0),
+            "disc_airl_loss": d_airl.mean(0),
+            "disc_env_loss": d_env.mean(0),
+            "disc_acc_expert": (f_expert > lp_expert).float().mean((0, 2)),  # D > 1/2
+            "disc_acc_policy": (f_seen < lp_seen).float().mean((0, 2)),  # D < 1/2
+            "reward_expert": f_expert.mean((0, 2)),
+            "reward_policy": f_seen.mean((0, 2)),
+            "policy_loss": record[..., -3].mean(0),
+            "policy_adv_loss": record[..., -2].mean(0),
+            "policy_sup_loss": record[..., -1].mean(0),
+        }
+        if not self.adversarial:
+            for key in list(values)[:7]:
+                values[key] = torch.zeros(self.runs)
+        return {key: value.tolist() for key, value in values.items()}
+
+    # ------------------------------------------------------------------ the loop
+
+    def run(
+        self,
+        *,
+        progress: bool,
+        on_epoch: Callable[[list[dict[str, Any]]], None] | None,
+    ) -> ManyResult:
+        results = [
+            TrainResult(
+                reward=r,
+                policy=p,
+                config=replace(self.config, seed=s),
+                beta_used=self.beta,
+                gradients="hand-derived" if self.fast else "autograd",
+                samples_per_epoch=self.steps * self.batch,
+            )
+            for r, p, s in zip(self.rewards.modules, self.policies.modules, self.seeds, strict=True)
+        ]
+        many = ManyResult(runs=results, epoch_seconds=[], samples_per_epoch=0)
+        many.samples_per_epoch = self.runs * self.steps * self.batch
+        bar = tqdm(
+            range(1, self.config.epochs + 1), desc="train", unit="epoch", disable=not progress
+        )
         for epoch in bar:
             start = time.perf_counter()
-            # Shuffle once per epoch with one gather; batches are then contiguous slices.
-            shuffled = data.subset(torch.randperm(n, generator=gen, device=device))
-            for step in range(steps):
-                rows = slice(step * batch, (step + 1) * batch)
-                obs = shuffled.obs[rows].float()
-                expert_action = shuffled.actions[rows]
-                mask = None if shuffled.legal_mask is None else shuffled.legal_mask[rows]
-                env_reward = None if shuffled.rewards is None else shuffled.rewards[rows]
-
-                # 1. the policy at s: π(·|s), or a reparameterized sample
-                out = policy.act(obs, mask, gen)
-
-                # 2. discriminator step: expert (s, a_E) against the regularized policy (s, ã)
-                noisy = policy.sample_action(out, gen)
-                if config.sigma_start > 0:
-                    noisy = policy.perturb(noisy, sigma, mask, gen)
-                both = torch.cat((expert_action, noisy))
-                log_pi = policy.log_prob(out.dist, both.view(2, batch, -1)).view(-1)
-                f, cache = reward_net.forward_cached(obs, both)
-                grad_f = discriminator_grad(f, log_pi, beta=beta, env_reward=env_reward)
-                reward_opt.step(reward_net.backward(cache, grad_f, actions=False)[0])
-
-                # 3. policy step against the updated reward:
-                #    (1−α)·E_π[−f(s, a) + log π] + α·supervised
-                f_pi, grad_action = _expected_reward_and_grad(
-                    reward_net, policy, obs, out, grad_f_pi
-                )
-                policy_opt.step(policy.backward(out, grad_action, expert_action, alpha))
-
-                supervised = policy.supervised_loss(out.dist, expert_action)
-                torch.cat((f, log_pi, f_pi, out.log_prob, supervised), out=record[step])
-
-            if device.type == "cuda":
-                torch.cuda.synchronize(device)  # time the work, not its queueing
-            result.epoch_seconds.append(time.perf_counter() - start)
-            metrics: dict[str, Any] = {"epoch": epoch}
-            metrics.update(_step_metrics(record, shuffled.rewards, beta=beta, alpha=alpha))
-            metrics.update(evaluate(policy, val, majority_from=data))
-            result.metrics.append(metrics)
+            draw = self.draw_epoch()
+            record = torch.empty(self.steps, self.runs, 4 * self.batch + 3, device=self.device)
+            batches = self.gather(draw["perm"]) if self.gather_epoch else None
+            for step in range(self.steps):
+                if batches is not None:
+                    batch = {name: value[step] for name, value in batches.items()}
+                else:
+                    batch = self.gather(draw["perm"][step])
+                if self.fast:
+                    with torch.no_grad():
+                        record[step] = self.fast_step(batch, draw, step)
+                else:
+                    record[step] = self.step(batch, draw, step)
+            if self.device.type == "cuda":
+                torch.cuda.synchronize(self.device)  # time the work, not its queueing
+            seconds = time.perf_counter() - start
+            many.epoch_seconds.append(seconds)
+            self.rewards.write_back()
+            self.policies.write_back()
+            stats = self.epoch_stats(record, draw["perm"])
+            epoch_metrics = []
+            for r, result in enumerate(results):
+                metrics: dict[str, Any] = {"epoch": epoch}
+                metrics.update({key: values[r] for key, values in stats.items()})
+                metrics.update(evaluate(result.reward, result.policy, self.val))
+                result.metrics.append(metrics)
+                result.epoch_seconds.append(seconds / self.runs)
+                epoch_metrics.append(metrics)
             if on_epoch is not None:
-                on_epoch(metrics)
-            if "val_alignment" in metrics:
+                on_epoch(epoch_metrics)
+            first = epoch_metrics[0]
+            if "val_alignment" in first:
                 bar.set_postfix(
-                    align=f"{metrics['val_alignment']:.3f}", d_loss=f"{metrics['disc_loss']:.3f}"
+                    align=f"{first['val_alignment']:.3f}", d_loss=f"{first['disc_loss']:.3f}"
                 )
-    bar.close()
-    reward_net.eval()
-    policy.eval()
-    return result
+        bar.close()
+        for result in results:
+            result.reward.eval()
+            result.policy.eval()
+        return many
 
 
-def _step_metrics(
-    record: Tensor, rewards: Tensor | None, *, beta: float, alpha: float
-) -> dict[str, float]:
-    """Epoch means of the training losses and discriminator accuracies, from ``record``."""
-    steps, width = record.shape
-    f_expert, f_policy, log_pi_expert, log_pi_policy, f_pi, log_pi_pi, supervised = (
-        part.reshape(-1) for part in record.view(steps, 7, width // 7).unbind(dim=1)
-    )
-    env_reward = None if rewards is None else rewards[: len(f_expert)]
-    d_loss, d_airl = discriminator_loss(
-        f_expert, log_pi_expert, f_policy, log_pi_policy, beta=beta, env_reward=env_reward
-    )
-    p_loss, p_adv = policy_loss(f_pi, log_pi_pi, supervised.mean(), alpha=alpha)
-    values = {
-        "disc_loss": d_loss,
-        "disc_airl_loss": d_airl,
-        "policy_loss": p_loss,
-        "policy_adv_loss": p_adv,
-        "policy_sup_loss": supervised.mean(),
-        "disc_acc_expert": (f_expert > log_pi_expert).float().mean(),  # D > 1/2
-        "disc_acc_policy": (f_policy < log_pi_policy).float().mean(),  # D < 1/2
-        "reward_expert": f_expert.mean(),
-        "reward_policy": f_policy.mean(),
-    }
-    return dict(zip(values, torch.stack(list(values.values())).tolist(), strict=True))
+# --------------------------------------------------------------------------- evaluation
 
 
-@torch.inference_mode()
+@torch.no_grad()
 def evaluate(
-    policy: Policy, val: ExpertData, *, majority_from: ExpertData, chunk: int = 65536
+    reward: nn.Module, policy: nn.Module, val: Transitions, *, chunk: int = 65536
 ) -> dict[str, Any]:
-    """Validation metrics.
+    """Validation metrics of one run.
 
-    Discrete: ``val_alignment`` (share of states where argmax π is the expert's action),
-    ``majority_alignment`` (always the training set's most common expert action), and the
-    validation action distributions: ``val_policy_dist`` (mean π), ``val_policy_argmax_dist``
-    and ``val_expert_dist``. Continuous: ``val_mse`` of the mean action.
+    Discrete: ``val_alignment`` (argmax π over legal actions = the expert's action),
+    ``val_reward_alignment`` (argmax over legal actions of the reward g(s, ·) = the expert's),
+    ``val_policy_dist`` (mean π), ``val_policy_argmax_dist`` and ``val_expert_dist``
+    (action histograms). Continuous: ``val_mse`` of the mean action.
     """
+    was_training = reward.training, policy.training
+    reward.eval()
     policy.eval()
-    outs = [
-        policy(
-            val.obs[i : i + chunk].float(),
-            None if val.legal_mask is None else val.legal_mask[i : i + chunk],
-        )
-        for i in range(0, len(val), chunk)
-    ]
-    out = torch.cat(outs)
-    if not policy.discrete:
-        mse = (policy.predict(out) - val.actions).square().sum(dim=-1).mean()
-        return {"val_mse": mse.item()}
-    num_actions = val.actions.shape[1]
-    expert_ids = val.actions.argmax(dim=-1)
-    predicted = policy.predict(out)
-    majority = majority_from.actions.sum(dim=0).argmax()
-    return {
-        "val_alignment": (predicted == expert_ids).float().mean().item(),
-        "majority_alignment": (expert_ids == majority).float().mean().item(),
-        "val_policy_dist": out.exp().mean(dim=0).tolist(),
-        "val_policy_argmax_dist": _histogram(predicted, num_actions),
-        "val_expert_dist": _histogram(expert_ids, num_actions),
-    }
+    device = next(policy.parameters()).device
+    try:
+        if not val.discrete:
+            errors = []
+            for i in range(0, len(val), chunk):
+                mean, _ = policy(val.obs[i : i + chunk].to(device))
+                errors.append((mean - val.actions[i : i + chunk].to(device)).square().sum(-1))
+            return {"val_mse": torch.cat(errors).mean().item()}
+        k = val.action_dim
+        eye = torch.eye(k, device=device)[:, None, :]
+        log_probs, reward_ids = [], []
+        for i in range(0, len(val), chunk):
+            obs = val.obs[i : i + chunk].to(device)
+            mask = None if val.legal_mask is None else val.legal_mask[i : i + chunk].to(device)
+            log_probs.append(policy(obs, mask))
+            g = reward(obs, eye).T  # (B, K)
+            if mask is not None:
+                g = g.masked_fill(~mask, -math.inf)
+            reward_ids.append(g.argmax(-1))
+        log_pi = torch.cat(log_probs)
+        expert = val.actions.to(device)
+        predicted = log_pi.argmax(-1)
+        return {
+            "val_alignment": (predicted == expert).float().mean().item(),
+            "val_reward_alignment": (torch.cat(reward_ids) == expert).float().mean().item(),
+            "val_policy_dist": log_pi.exp().mean(0).tolist(),
+            "val_policy_argmax_dist": _histogram(predicted, k),
+            "val_expert_dist": _histogram(expert, k),
+        }
+    finally:
+        reward.train(was_training[0])
+        policy.train(was_training[1])
 
 
 def _histogram(ids: Tensor, num_actions: int) -> list[float]:
     return (torch.bincount(ids, minlength=num_actions).float() / max(len(ids), 1)).tolist()
+
+
+def baselines(train_data: Transitions, val_data: Transitions) -> dict[str, float]:
+    """Validation alignment of the rule baselines (discrete actions).
+
+    ``majority``: always the most frequent training action. ``legal_majority``: for each set
+    of legal actions, the most frequent expert action among training rows with that set
+    (the overall majority among legal actions for a set never seen in training).
+    """
+    k = train_data.action_dim
+    counts = torch.bincount(train_data.actions, minlength=k).float()
+    expert = val_data.actions
+    result = {"majority": (expert == counts.argmax()).float().mean().item()}
+    if train_data.legal_mask is None or val_data.legal_mask is None:
+        result["legal_majority"] = result["majority"]
+        return result
+    weights = 2 ** torch.arange(k)
+    train_key = (train_data.legal_mask.long() * weights).sum(-1)
+    val_key = (val_data.legal_mask.long() * weights).sum(-1)
+    table = torch.zeros(2**k, k)
+    table.index_put_((train_key, train_data.actions), torch.ones(len(train_key)), accumulate=True)
+    table += counts * 1e-6  # unseen sets fall back to the overall counts; ties to majority
+    table = table.masked_fill(~_mask_of(torch.arange(2**k), k), -1.0)
+    predicted = table[val_key].argmax(-1)
+    result["legal_majority"] = (predicted == expert).float().mean().item()
+    return result
+
+
+def _mask_of(keys: Tensor, k: int) -> Tensor:
+    return (keys[:, None] >> torch.arange(k)) & 1 == 1
 
 
 def resolve_device(device: str | torch.device) -> torch.device:

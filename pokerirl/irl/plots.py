@@ -1,9 +1,9 @@
-"""PNG learning curves for a training run (matplotlib's Agg canvas, no global pyplot state)."""
+"""PNG learning curves for training runs (matplotlib's Agg canvas, no global pyplot state)."""
 
 from __future__ import annotations
 
 import os
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -17,7 +17,10 @@ CURVES: dict[str, tuple[str, str, list[tuple[str, str]]]] = {
     "alignment.png": (
         "Validation action alignment",
         "share of states",
-        [("val_alignment", "policy argmax = expert"), ("majority_alignment", "majority action")],
+        [
+            ("val_alignment", "policy argmax = expert"),
+            ("val_reward_alignment", "reward argmax = expert"),
+        ],
     ),
     "losses.png": (
         "Training losses",
@@ -34,10 +37,38 @@ CURVES: dict[str, tuple[str, str, list[tuple[str, str]]]] = {
         [("disc_acc_expert", "on expert samples"), ("disc_acc_policy", "on policy samples")],
     ),
 }
+BANDS_FILE = "alignment_bands.png"
 
 
-def plot_curves(metrics: Sequence[dict[str, Any]], out_dir: str | os.PathLike[str]) -> list[Path]:
-    """Write the curves in :data:`CURVES` that ``metrics`` has data for; return their paths."""
+def _figure() -> tuple[Figure, Any]:
+    figure = Figure(figsize=(6, 4), dpi=100)
+    FigureCanvasAgg(figure)
+    return figure, figure.add_subplot()
+
+
+def _save(figure: Figure, axes: Any, path: Path, title: str, ylabel: str) -> Path:
+    axes.set(title=title, xlabel="epoch", ylabel=ylabel)
+    axes.grid(alpha=0.3)
+    axes.legend(fontsize="small")
+    figure.tight_layout()
+    with atomic_path(path) as temporary:
+        figure.savefig(temporary, format="png")
+    return path
+
+
+def _baseline_lines(axes: Any, baselines: Mapping[str, float]) -> None:
+    for i, (name, value) in enumerate(sorted(baselines.items())):
+        axes.axhline(value, linestyle="--", linewidth=1, color=f"C{i + 3}", label=name)
+
+
+def plot_curves(
+    metrics: Sequence[dict[str, Any]],
+    out_dir: str | os.PathLike[str],
+    *,
+    baselines: Mapping[str, float] | None = None,
+) -> list[Path]:
+    """Write the curves in :data:`CURVES` that ``metrics`` has data for; the alignment plot
+    draws ``baselines`` as horizontal lines. Returns the paths written."""
     out_dir = Path(out_dir)
     epochs = [m["epoch"] for m in metrics]
     written = []
@@ -45,17 +76,30 @@ def plot_curves(metrics: Sequence[dict[str, Any]], out_dir: str | os.PathLike[st
         present = [(key, label) for key, label in series if metrics and key in metrics[0]]
         if not present:
             continue
-        figure = Figure(figsize=(6, 4), dpi=100)
-        FigureCanvasAgg(figure)
-        axes = figure.add_subplot()
+        figure, axes = _figure()
         for key, label in present:
             axes.plot(epochs, [m[key] for m in metrics], marker=".", label=label)
-        axes.set(title=title, xlabel="epoch", ylabel=ylabel)
-        axes.grid(alpha=0.3)
-        axes.legend()
-        figure.tight_layout()
-        path = out_dir / name
-        with atomic_path(path) as temporary:
-            figure.savefig(temporary, format="png")
-        written.append(path)
+        if name == "alignment.png" and baselines:
+            _baseline_lines(axes, baselines)
+        written.append(_save(figure, axes, out_dir / name, title, ylabel))
     return written
+
+
+def plot_bands(summary: Mapping[str, Any], out_dir: str | os.PathLike[str]) -> Path | None:
+    """Mean ± std over runs of the alignment metrics, with the baselines' means as lines."""
+    epochs = summary["epochs"]
+    series = [
+        (key, label) for key, label in CURVES["alignment.png"][2] if key in summary["metrics"]
+    ]
+    if not series:
+        return None
+    figure, axes = _figure()
+    for i, (key, label) in enumerate(series):
+        mean, std = summary["metrics"][key]["mean"], summary["metrics"][key]["std"]
+        axes.plot(epochs, mean, color=f"C{i}", label=f"{label} (mean)")
+        low = [m - s for m, s in zip(mean, std, strict=True)]
+        high = [m + s for m, s in zip(mean, std, strict=True)]
+        axes.fill_between(epochs, low, high, color=f"C{i}", alpha=0.25, label="± 1 std")
+    _baseline_lines(axes, {k: v["mean"] for k, v in summary["baselines"].items()})
+    title = f"Validation alignment over {summary['runs']} runs"
+    return _save(figure, axes, Path(out_dir) / BANDS_FILE, title, "share of states")

@@ -1,0 +1,189 @@
+"""Hyperparameters of a run (:class:`AIRLConfig`), checked field by field, and TOML loading.
+
+The TOML file is flat, with the field names as keys::
+
+    epochs = 20
+    reward_hidden = [64, 64]
+    policy_hidden = [64, 64]
+    activation = "tanh"
+    layer_norm = true
+    reward_family = "shaped"
+    gamma = 0.99
+
+>>> AIRLConfig.for_algo("airl").alpha, AIRLConfig.for_algo("hairl").alpha
+(0.0, 0.33)
+>>> AIRLConfig(epochs=True)
+Traceback (most recent call last):
+...
+pokerirl.irl.config.ConfigError: epochs must be an integer, got True
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import os
+import tomllib
+import typing
+from collections.abc import Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from pokerirl.irl.nets import ACTIVATIONS, REWARD_FAMILIES, NetSpec
+
+ALGOS: tuple[str, ...] = ("airl", "hairl")
+NOISE_SCHEDULES: tuple[str, ...] = ("linear", "authors")
+DISC_ACTIONS: tuple[str, ...] = ("sample", "distribution")
+
+
+class ConfigError(ValueError):
+    """A bad setting: one line naming the key (and the file, when there is one)."""
+
+
+@dataclass(frozen=True, kw_only=True)
+class AIRLConfig:
+    """Hyperparameters. The defaults are the H-AIRL paper's reference poker settings."""
+
+    # the nets (see pokerirl.irl.nets.NetSpec)
+    reward_hidden: tuple[int, ...] = (64,)
+    policy_hidden: tuple[int, ...] = (64,)
+    activation: str = "relu"
+    layer_norm: bool = False
+    reward_family: str = "state_action"
+    gamma: float = 0.99
+    # optimization
+    reward_lr: float = 1e-3
+    policy_lr: float = 1e-3
+    reward_weight_decay: float = 5e-3
+    batch_size: int = 256
+    epochs: int = 50
+    # H-AIRL
+    alpha: float = 0.33  # weight of the supervised term in the policy loss
+    beta: float = 0.0  # weight of the (f - r_env)² term in the discriminator loss
+    sigma_start: float = 1.0  # noise σ on the first sample of a batch (in action ranges)
+    sigma_end: float = 0.1  # ... and on the last
+    noise_schedule: str = "linear"  # "linear" (the paper) or "authors" (their code)
+    noise_decay: float = 0.1  # k of the authors' schedule: 0.1 poker, 0.01 Gymnasium
+    disc_action: str = "sample"  # what the discriminator sees of π: "sample" or "distribution"
+    # data
+    val_fraction: float = 0.1  # share of groups (hands, episodes) held out
+    seed: int = 0
+
+    def __post_init__(self) -> None:
+        for item in dataclasses.fields(self):
+            value = _checked(item.name, _HINTS[item.name], getattr(self, item.name))
+            object.__setattr__(self, item.name, value)
+        checks = {
+            "batch_size >= 1": self.batch_size >= 1,
+            "epochs >= 1": self.epochs >= 1,
+            "0 <= alpha <= 1": 0 <= self.alpha <= 1,
+            "0 <= beta <= 1": 0 <= self.beta <= 1,
+            "sigma_start >= sigma_end >= 0": self.sigma_start >= self.sigma_end >= 0,
+            "sigma_end > 0 for the authors' schedule": self.noise_schedule != "authors"
+            or self.sigma_end > 0
+            or self.sigma_start == 0,
+            "noise_decay > 0": self.noise_decay > 0,
+            "0 < val_fraction < 1": 0 < self.val_fraction < 1,
+            "0 <= gamma <= 1": 0 <= self.gamma <= 1,
+            "learning rates > 0": self.reward_lr > 0 and self.policy_lr > 0,
+            "reward_weight_decay >= 0": self.reward_weight_decay >= 0,
+            "hidden widths >= 1": all(w >= 1 for w in self.reward_hidden + self.policy_hidden),
+            "a reward hidden layer": len(self.reward_hidden) >= 1,
+            f"activation in {', '.join(ACTIVATIONS)}": self.activation in ACTIVATIONS,
+            f"reward_family in {', '.join(REWARD_FAMILIES)}": self.reward_family in REWARD_FAMILIES,
+            f"noise_schedule in {', '.join(NOISE_SCHEDULES)}": self.noise_schedule
+            in NOISE_SCHEDULES,
+            f"disc_action in {', '.join(DISC_ACTIONS)}": self.disc_action in DISC_ACTIONS,
+        }
+        broken = [name for name, ok in checks.items() if not ok]
+        if broken:
+            raise ConfigError(f"invalid AIRL config: need {'; '.join(broken)}")
+
+    @classmethod
+    def for_algo(cls, algo: str, **overrides: Any) -> AIRLConfig:
+        """Defaults for ``"airl"`` (α = β = 0, no noise) or ``"hairl"``, then ``overrides``.
+
+        Unknown keys raise ``ConfigError`` naming them.
+        """
+        if algo not in ALGOS:
+            raise ConfigError(f"unknown algo {algo!r}; choose one of {', '.join(ALGOS)}")
+        unknown = sorted(set(overrides) - set(_HINTS))
+        if unknown:
+            raise ConfigError(f"unknown setting(s) {', '.join(unknown)}; known: {sorted(_HINTS)}")
+        base: dict[str, Any] = {}
+        if algo == "airl":
+            base = {"alpha": 0.0, "beta": 0.0, "sigma_start": 0.0, "sigma_end": 0.0}
+        return cls(**{**base, **overrides})
+
+    def net_spec(self) -> NetSpec:
+        return NetSpec(
+            reward_hidden=self.reward_hidden,
+            policy_hidden=self.policy_hidden,
+            activation=self.activation,
+            layer_norm=self.layer_norm,
+            reward_family=self.reward_family,
+            gamma=self.gamma,
+        )
+
+    def to_dict(self) -> dict[str, Any]:
+        return {k: list(v) if isinstance(v, tuple) else v for k, v in vars(self).items()}
+
+
+_HINTS: dict[str, Any] = typing.get_type_hints(AIRLConfig)
+
+
+def _checked(name: str, hint: Any, value: Any) -> Any:
+    """``value`` if it has the field's type (ints for floats too, never bools for numbers)."""
+    if hint is bool:
+        if isinstance(value, bool):
+            return value
+        raise ConfigError(f"{name} must be true or false, got {value!r}")
+    if hint is int:
+        if isinstance(value, int) and not isinstance(value, bool):
+            return value
+        raise ConfigError(f"{name} must be an integer, got {value!r}")
+    if hint is float:
+        if isinstance(value, int | float) and not isinstance(value, bool):
+            return float(value)
+        raise ConfigError(f"{name} must be a number, got {value!r}")
+    if hint is str:
+        if isinstance(value, str):
+            return value
+        raise ConfigError(f"{name} must be a string, got {value!r}")
+    # tuple[int, ...]: hidden widths
+    if isinstance(value, list | tuple) and all(
+        isinstance(w, int) and not isinstance(w, bool) for w in value
+    ):
+        return tuple(value)
+    raise ConfigError(f"{name} must be a list of integers, got {value!r}")
+
+
+def load_config(
+    algo: str,
+    *,
+    config_file: str | os.PathLike[str] | None = None,
+    overrides: Mapping[str, Any] | None = None,
+) -> AIRLConfig:
+    """The algorithm's defaults, then a TOML file's settings, then ``overrides`` (CLI flags).
+
+    Overrides that are None are ignored. Every problem is a ``ConfigError`` of one line,
+    naming the file when the file is at fault.
+    """
+    settings: dict[str, Any] = {}
+    path: Path | None = None
+    if config_file is not None:
+        path = Path(config_file)
+        if not path.is_file():
+            raise ConfigError(f"config file not found: {path}")
+        try:
+            settings = tomllib.loads(path.read_text(encoding="utf-8"))
+        except (tomllib.TOMLDecodeError, UnicodeDecodeError) as error:
+            raise ConfigError(f"cannot parse {path} as TOML: {error}") from None
+        if "algo" in settings:
+            raise ConfigError(f"{path}: choose the algorithm with --algo, not in the config file")
+        try:
+            AIRLConfig.for_algo(algo, **settings)  # blame the file for the file's mistakes
+        except ConfigError as error:
+            raise ConfigError(f"{path}: {error}") from None
+    settings.update({k: v for k, v in (overrides or {}).items() if v is not None})
+    return AIRLConfig.for_algo(algo, **settings)

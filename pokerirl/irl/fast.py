@@ -1,0 +1,148 @@
+"""Hand-derived gradients for one architecture: the default poker nets, one run.
+
+Autograd is the reference; this path exists only because, for nets this small on one CPU
+core, building and walking autograd's graph costs more than the arithmetic (see
+``benchmarks/train.py``). It covers exactly: a :class:`StateActionReward` and a
+:class:`DiscretePolicy` whose layers are Linear and ReLU only (no layer norm, no other
+activation), one run, discrete actions. :func:`supports` says whether a pair is covered;
+the functions below raise ``ValueError`` for anything else. ``tests/test_irl_fast.py``
+compares every gradient here with autograd on the documented losses.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import torch
+from torch import Tensor, nn
+
+from pokerirl.irl.nets import DiscretePolicy, StateActionReward
+
+
+def _plain_relu_mlp(mlp: nn.Sequential) -> bool:
+    kinds = [type(layer) for layer in mlp]
+    return all(k in (nn.Linear, nn.ReLU) for k in kinds) and kinds[-1] is nn.Linear
+
+
+def supports(reward: nn.Module, policy: nn.Module) -> bool:
+    """True for the one architecture this path covers (see the module docstring)."""
+    return (
+        type(reward) is StateActionReward
+        and type(policy) is DiscretePolicy
+        and type(reward.first_norm) is nn.Identity
+        and type(reward.first_activation) is nn.ReLU
+        and _plain_relu_mlp(reward.head)
+        and _plain_relu_mlp(policy.mlp)
+    )
+
+
+def check(reward: nn.Module, policy: nn.Module) -> None:
+    """Raise a clear ``ValueError`` unless :func:`supports` the pair."""
+    if not supports(reward, policy):
+        raise ValueError(
+            "the hand-derived gradient path covers only StateActionReward and DiscretePolicy "
+            "with ReLU and no layer norm; use autograd (fast_path=False) for "
+            f"{type(reward).__name__} / {type(policy).__name__} as configured"
+        )
+
+
+def _linears(mlp: nn.Sequential) -> list[nn.Linear]:
+    return [layer for layer in mlp if isinstance(layer, nn.Linear)]
+
+
+def mlp_forward(mlp: nn.Sequential, x: Tensor) -> list[Tensor]:
+    """The input of every linear layer (hidden ones after ReLU), then the output."""
+    linears = _linears(mlp)
+    acts = [x]
+    for i, layer in enumerate(linears):
+        y = torch.addmm(layer.bias, acts[-1], layer.weight.T)
+        acts.append(y.relu_() if i < len(linears) - 1 else y)
+    return acts
+
+
+def mlp_backward(
+    mlp: nn.Sequential, acts: list[Tensor], grad_out: Tensor, *, input_grad: bool = False
+) -> tuple[list[Tensor], Tensor | None]:
+    """Parameter gradients in ``mlp.parameters()`` order, and dL/d input if asked."""
+    linears = _linears(mlp)
+    grads: list[Tensor] = []
+    grad = grad_out
+    for i in reversed(range(len(linears))):
+        grads += [grad.sum(dim=0), grad.T @ acts[i]]  # bias, weight (reversed below)
+        if i == 0 and not input_grad:
+            return grads[::-1], None
+        grad = grad @ linears[i].weight
+        if i > 0:
+            grad = torch.ops.aten.threshold_backward(grad, acts[i], 0.0)
+    return grads[::-1], grad
+
+
+class RewardCache(NamedTuple):
+    obs: Tensor  # (B, d)
+    actions: Tensor  # (M·B, K)
+    hidden: Tensor  # (M·B, H) first hidden layer after ReLU
+    head_acts: list[Tensor]
+
+
+def reward_forward(reward: StateActionReward, obs: Tensor, actions: Tensor) -> RewardCache:
+    """f for (B, d) states and (M, B or 1, K) action vectors: ``head_acts[-1]`` is (M·B, 1)."""
+    features = torch.addmm(reward.obs_layer.bias, obs, reward.obs_layer.weight.T)
+    hidden = (actions @ reward.action_layer.weight.T + features).relu_()  # (M, B, H)
+    flat = actions.expand(*hidden.shape[:2], actions.shape[-1]).reshape(-1, actions.shape[-1])
+    hidden = hidden.view(-1, hidden.shape[-1])
+    return RewardCache(obs, flat, hidden, mlp_forward(reward.head, hidden))
+
+
+def reward_backward(reward: StateActionReward, cache: RewardCache, grad_f: Tensor) -> list[Tensor]:
+    """Parameter gradients (``reward.parameters()`` order) for dL/df ``grad_f`` (M·B,)."""
+    head_grads, grad_hidden = mlp_backward(
+        reward.head, cache.head_acts, grad_f[:, None], input_grad=True
+    )
+    assert grad_hidden is not None
+    grad_pre = torch.ops.aten.threshold_backward(grad_hidden, cache.hidden, 0.0)
+    batch = len(cache.obs)
+    grad_features = grad_pre.view(-1, batch, grad_pre.shape[1]).sum(dim=0)
+    return [
+        grad_features.T @ cache.obs,
+        grad_features.sum(dim=0),
+        grad_pre.T @ cache.actions,
+        *head_grads,
+    ]
+
+
+def discriminator_grad(
+    f: Tensor, log_pi: Tensor, *, beta: float, env_reward: Tensor | None
+) -> Tensor:
+    """dL/df of ``discriminator_loss`` for f = (expert rows, then policy rows), both (B,).
+
+    With D = σ(f − log π): d/df of −log D is D − 1, of −log(1 − D) is D.
+    """
+    batch = len(f) // 2
+    grad = torch.sigmoid(f - log_pi)
+    grad[:batch] -= 1
+    if env_reward is None:
+        return grad / batch
+    grad *= (1 - beta) / batch
+    grad[:batch] += (2 * beta / batch) * (f[:batch] - env_reward)
+    return grad
+
+
+def policy_backward(
+    policy: DiscretePolicy,
+    acts: list[Tensor],
+    log_probs: Tensor,
+    g: Tensor,
+    expert: Tensor,
+    alpha: float,
+) -> list[Tensor]:
+    """Gradients of (1−α)·mean Σ_k π_k (log π_k − g_k) + α·mean CE(π, a_E).
+
+    d/d logits of Σ π·h with h = (1−α)/B·(log π − g) is π ⊙ (h − Σ π h) (the entropy's "+1"
+    cancels, Σ π = 1); the cross-entropy adds α/B·(π − a_E). Masked logits get zero.
+    """
+    probs = log_probs.exp()
+    batch = len(probs)
+    h = (log_probs - g) * ((1 - alpha) / batch)
+    grad_logits = probs * (h - (probs * h).sum(dim=-1, keepdim=True))
+    grad_logits.add_(probs - expert, alpha=alpha / batch)
+    return mlp_backward(policy.mlp, acts, grad_logits)[0]

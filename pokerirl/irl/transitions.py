@@ -1,0 +1,250 @@
+"""``Transitions``: the one type of expert data the trainer reads, for poker and environments.
+
+Rows are expert decisions (s, a) with, optionally, the next state s', whether the episode
+ended there, the environment's reward and the legal actions. Every row has a group id (a
+poker hand, an environment episode): the train/validation split never cuts a group.
+
+Poker tables come in through :func:`pokerirl.irl.table.read_table` (``Transitions.from_table``);
+environment rollouts through :meth:`Transitions.from_parquet` (the schema ``pokerirl gym
+collect`` writes) or :meth:`Transitions.from_arrays`.
+
+>>> t = Transitions.from_arrays(np.eye(4, 3), np.array([0, 1, 2, 0]), groups=np.array([0, 0, 1, 1]))
+>>> t.discrete, t.action_dim, len(t)
+(True, 3, 4)
+>>> train, val, val_groups = t.split(val_fraction=0.5, seed=0)
+>>> len(train), len(val), len(val_groups)
+(2, 2, 1)
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import os
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import torch
+from torch import Tensor
+
+ENV_COLUMNS = ("obs", "action", "reward", "next_obs", "done", "episode")
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class Transitions:
+    """Expert transitions as tensors (``groups`` is numpy: strings or integers)."""
+
+    obs: Tensor  # (N, d) float32
+    actions: Tensor  # (N,) int64 for discrete actions, (N, k) float32 for continuous ones
+    groups: np.ndarray  # (N,) group id per row: hand_id strings, episode numbers
+    next_obs: Tensor | None = None  # (N, d) float32
+    dones: Tensor | None = None  # (N,) bool: the group's (player's) last decision
+    rewards: Tensor | None = None  # (N,) float32 environment reward
+    legal_mask: Tensor | None = None  # (N, K) bool, discrete only
+    num_actions: int | None = None  # K, discrete only
+    action_low: tuple[float, ...] | None = None  # box bounds, continuous only
+    action_high: tuple[float, ...] | None = None
+
+    def __post_init__(self) -> None:
+        n = len(self.obs)
+        if self.obs.ndim != 2:
+            raise ValueError(f"Transitions.obs must be (N, d), got {tuple(self.obs.shape)}")
+        if self.discrete:
+            if self.actions.ndim != 1 or self.num_actions is None:
+                raise ValueError("discrete Transitions need action ids (N,) and num_actions")
+        elif self.actions.ndim != 2 or self.action_low is None or self.action_high is None:
+            raise ValueError("continuous Transitions need actions (N, k) and the box bounds")
+        for name in ("actions", "groups", "next_obs", "dones", "rewards", "legal_mask"):
+            value = getattr(self, name)
+            if value is not None and len(value) != n:
+                raise ValueError(f"Transitions.{name} has {len(value)} rows, obs has {n}")
+        if (self.next_obs is None) != (self.dones is None):
+            raise ValueError("Transitions need next_obs and dones together")
+
+    @classmethod
+    def from_arrays(
+        cls,
+        obs: Any,
+        actions: Any,
+        *,
+        groups: Any,
+        next_obs: Any = None,
+        dones: Any = None,
+        rewards: Any = None,
+        legal_mask: Any = None,
+        num_actions: int | None = None,
+        low: Sequence[float] | None = None,
+        high: Sequence[float] | None = None,
+    ) -> Transitions:
+        """From numpy arrays (or tensors). Integer ``actions`` (N,) are discrete (``num_actions``
+        defaults to the legal mask's width, else max + 1); float ones (N, k) are continuous
+        (bounds default to the actions' range)."""
+        actions_t = torch.tensor(np.asarray(actions))
+        discrete = not actions_t.is_floating_point()
+        opt = lambda x, dtype: None if x is None else torch.tensor(np.asarray(x), dtype=dtype)  # noqa: E731
+        mask = opt(legal_mask, torch.bool)
+        if discrete:
+            actions_t = actions_t.long().reshape(-1)
+            if num_actions is None:
+                num_actions = mask.shape[1] if mask is not None else int(actions_t.max()) + 1
+            bounds: dict[str, Any] = {"num_actions": num_actions}
+        else:
+            actions_t = actions_t.float().reshape(len(actions_t), -1)
+            lo = actions_t.min(dim=0).values if low is None else torch.as_tensor(low)
+            hi = actions_t.max(dim=0).values if high is None else torch.as_tensor(high)
+            hi = torch.where(hi > lo, hi, lo + 1)  # a constant dimension still needs a box
+            bounds = {"action_low": tuple(lo.tolist()), "action_high": tuple(hi.tolist())}
+        return cls(
+            obs=torch.tensor(np.asarray(obs), dtype=torch.float32),
+            actions=actions_t,
+            groups=np.asarray(groups),
+            next_obs=opt(next_obs, torch.float32),
+            dones=opt(dones, torch.bool),
+            rewards=opt(rewards, torch.float32),
+            legal_mask=mask,
+            **bounds,
+        )
+
+    @classmethod
+    def from_parquet(
+        cls,
+        path: str | os.PathLike[str],
+        *,
+        low: Sequence[float] | None = None,
+        high: Sequence[float] | None = None,
+    ) -> Transitions:
+        """Environment rollouts: columns ``obs`` and ``next_obs`` (fixed_size_list<float>[d]),
+        ``action`` (int64, or fixed_size_list<float>[k]), ``reward`` (float), ``done`` (bool),
+        ``episode`` (int). Bad files raise ``ValueError`` naming the file."""
+        import pyarrow as pa
+        import pyarrow.parquet as pq
+
+        from pokerirl.irl.table import first_line, fixed_width
+
+        path = Path(path)
+        if not path.is_file():
+            raise FileNotFoundError(f"rollouts not found: {path}")
+        try:
+            table = pq.read_table(path)
+        except (pa.ArrowException, OSError) as error:
+            raise ValueError(f"cannot read {path} as Parquet: {first_line(error)}") from None
+        missing = [c for c in ENV_COLUMNS if c not in table.column_names]
+        if missing:
+            raise ValueError(f"{path} lacks required column(s): {', '.join(missing)}")
+        if table.num_rows == 0:
+            raise ValueError(f"{path} is empty: no transitions")
+        for name in ENV_COLUMNS:
+            if table.column(name).null_count:
+                raise ValueError(f"{path}: column {name!r} has null values")
+        obs = fixed_width(table, "obs", None, str(path), floating=True)
+        next_obs = fixed_width(table, "next_obs", obs.shape[1], str(path), floating=True)
+        action_type = table.column("action").type
+        if pa.types.is_integer(action_type):
+            actions: np.ndarray = table.column("action").to_numpy().astype(np.int64)
+        elif pa.types.is_fixed_size_list(action_type):
+            actions = fixed_width(table, "action", None, str(path), floating=True)
+            actions = actions.astype(np.float32)
+        else:
+            raise ValueError(f"{path}: column 'action' must be int64 or fixed_size_list<float>")
+        if not pa.types.is_boolean(table.column("done").type):
+            raise ValueError(f"{path}: column 'done' must be bool")
+        for name in ("reward", "episode"):
+            kind = table.column(name).type
+            if not (pa.types.is_floating(kind) or pa.types.is_integer(kind)):
+                raise ValueError(f"{path}: column {name!r} must be numeric, got {kind}")
+        return cls.from_arrays(
+            obs,
+            actions,
+            groups=table.column("episode").to_numpy().astype(np.int64),
+            next_obs=next_obs,
+            dones=table.column("done").to_numpy(zero_copy_only=False),
+            rewards=table.column("reward").to_numpy().astype(np.float32),
+            low=low,
+            high=high,
+        )
+
+    @classmethod
+    def from_table(cls, path: str | os.PathLike[str]) -> Transitions:
+        """A poker decision table (see :func:`pokerirl.irl.table.read_table`)."""
+        from pokerirl.irl.table import read_table
+
+        return read_table(path)
+
+    # ------------------------------------------------------------------ properties
+
+    @property
+    def discrete(self) -> bool:
+        return not self.actions.is_floating_point()
+
+    @property
+    def obs_dim(self) -> int:
+        return self.obs.shape[1]
+
+    @property
+    def action_dim(self) -> int:
+        """K for discrete actions, k for continuous ones."""
+        return int(self.num_actions) if self.discrete else self.actions.shape[1]  # type: ignore[arg-type]
+
+    def __len__(self) -> int:
+        return len(self.obs)
+
+    def action_vectors(self) -> Tensor:
+        """What the reward net reads: one-hots (N, K), or the continuous actions."""
+        if self.discrete:
+            return torch.nn.functional.one_hot(self.actions, self.action_dim).float()
+        return self.actions
+
+    def subset(self, index: np.ndarray | Tensor) -> Transitions:
+        """Rows ``index`` (integer indices or a bool mask)."""
+        index_t = torch.as_tensor(np.asarray(index)) if isinstance(index, np.ndarray) else index
+        index_np = index_t.cpu().numpy()
+        pick = lambda t: None if t is None else t[index_t]  # noqa: E731
+        return dataclasses.replace(
+            self,
+            obs=self.obs[index_t],
+            actions=self.actions[index_t],
+            groups=self.groups[index_np],
+            next_obs=pick(self.next_obs),
+            dones=pick(self.dones),
+            rewards=pick(self.rewards),
+            legal_mask=pick(self.legal_mask),
+        )
+
+    def split(self, *, val_fraction: float, seed: int) -> tuple[Transitions, Transitions, list]:
+        """(train, validation, validation group ids), never cutting a group.
+
+        A seeded permutation of the groups (in order of first appearance) picks
+        ``round(val_fraction · groups)`` of them, at least one, leaving at least one.
+        """
+        _, first, inverse = np.unique(self.groups, return_index=True, return_inverse=True)
+        order = np.argsort(first, kind="stable")  # unique's sorted ids -> appearance order
+        rank = np.empty_like(order)
+        rank[order] = np.arange(len(order))
+        group_index = rank[inverse.reshape(-1)]
+        num_groups = len(first)
+        if num_groups < 2:
+            raise ValueError("need at least two groups (hands, episodes) to split")
+        num_val = min(max(round(val_fraction * num_groups), 1), num_groups - 1)
+        is_val_group = np.zeros(num_groups, dtype=bool)
+        is_val_group[np.random.default_rng(seed).permutation(num_groups)[:num_val]] = True
+        is_val = is_val_group[group_index]
+        val_groups = self.groups[np.sort(first[order][is_val_group])].tolist()
+        return (
+            self.subset(np.flatnonzero(~is_val)),
+            self.subset(np.flatnonzero(is_val)),
+            val_groups,
+        )
+
+    def fingerprint(self) -> str:
+        """SHA-256 over every array the trainer sees."""
+        digest = hashlib.sha256()
+        for value in (self.obs, self.actions, self.next_obs, self.dones, self.rewards):
+            if value is not None:
+                digest.update(value.cpu().contiguous().numpy().tobytes())
+        if self.legal_mask is not None:
+            digest.update(self.legal_mask.cpu().contiguous().numpy().tobytes())
+        digest.update("\0".join(map(str, self.groups.tolist())).encode())
+        return digest.hexdigest()
