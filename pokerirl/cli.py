@@ -169,7 +169,16 @@ def tournament(
     duplicate: bool = typer.Option(
         True, "--duplicate/--no-duplicate", help="Play every deal from both seats, paired."
     ),
-    jobs: int = typer.Option(2, "--jobs", "-j", help="Worker processes (results do not change)."),
+    jobs: int = typer.Option(
+        2, "--jobs", "-j", help="Local worker processes (results do not change)."
+    ),
+    ray: str | None = typer.Option(
+        None,
+        "--ray",
+        metavar="ADDRESS",
+        help="Play the seeds on the Ray cluster at ADDRESS (default: $RAY_ADDRESS when set), "
+        "or 'local' for a private single-machine Ray. Results do not change.",
+    ),
     alpha: float = typer.Option(0.05, help="Family-wise error rate (Bonferroni, Holm)."),
     batch_size: int = typer.Option(65_536, help="Hands in lock-step (part of the config)."),
     overwrite: bool = typer.Option(
@@ -189,8 +198,10 @@ def tournament(
     \b
     Resumable: each seed is saved when it finishes. A rerun reuses saved seeds
     whose agents, hands, duplicate mode and batch size match, and refuses the
-    others (--overwrite recomputes them). pokerirl report DIR prints it again.
+    others (--overwrite recomputes them); a corrupt saved seed is recomputed.
+    pokerirl report DIR prints it again.
     """
+    from pokerirl.execution import ExecutionError
     from pokerirl.seeds import parse_seeds
     from pokerirl.tournaments import render_report, run_tournament
 
@@ -203,6 +214,7 @@ def tournament(
         matchups = [(agents[0], agents[1])]
     else:
         fail(f"give two agents (A B) or --vs BASE and agents; got {len(agents)} agent(s)")
+    backend = _backend(jobs, ray)
     try:
         report = run_tournament(
             matchups,
@@ -215,9 +227,12 @@ def tournament(
             batch_size=batch_size,
             overwrite=overwrite,
             progress=not quiet,
+            backend=backend,
         )
-    except ValueError as error:  # TournamentError, or an agent's illegal move
+    except (ValueError, ExecutionError) as error:  # TournamentError, an agent's illegal move
         fail(str(error))
+    except KeyboardInterrupt:
+        fail(INTERRUPTED, code=130)
     except OSError as error:
         fail(f"{error.filename or out}: {error.strerror or error}")
     if not quiet:
