@@ -173,6 +173,7 @@ def map_units(
     desc: str = "units",
     reused: int = 0,
     on_result: Callable[[int, R], None] | None = None,
+    labels: Sequence[str] | None = None,
 ) -> list[R]:
     """``[fn(*args) for args in units]``, run on ``backend``, in unit order.
 
@@ -180,7 +181,7 @@ def map_units(
     runs in this process: one unit, or one local job). ``on_result(i, result)`` is called in
     this process as each unit finishes, in completion order: save results there to make the
     run resumable. ``reused``: units the caller already had, shown on the progress bar (one
-    bar over units: done, reused, failed, ETA).
+    bar over units: done, reused, failed, ETA). ``labels`` name the units in messages.
 
     Raises:
         ExecutionError: a unit's worker died more than ``backend.retries`` times, or Ray
@@ -190,6 +191,7 @@ def map_units(
     results: list[Any] = [None] * len(units)
     if not units:
         return results
+    names = list(labels) if labels is not None else [f"unit {i}" for i in range(len(units))]
     with _Bar(len(units), reused=reused, desc=desc, enabled=progress) as bar:
 
         def finished(index: int, result: Any) -> None:
@@ -199,12 +201,12 @@ def map_units(
             bar.done()
 
         if backend.kind == "ray":
-            _map_ray(fn, units, backend, finished, bar)
+            _map_ray(fn, units, backend, finished, bar, names)
         elif backend.jobs == 1 or len(units) == 1:
             for index, args in enumerate(units):
                 finished(index, run_unit(fn, args, backend.threads))
         else:
-            _map_local(fn, units, backend, finished, bar)
+            _map_local(fn, units, backend, finished, bar, names)
     return results
 
 
@@ -312,6 +314,7 @@ def _map_local(
     backend: Backend,
     finished: Callable[[int, Any], None],
     bar: _Bar,
+    names: list[str],
 ) -> None:
     import multiprocessing
     from multiprocessing.connection import wait
@@ -363,7 +366,7 @@ def _map_local(
                         bar.fail()
                         if deaths[unit] > backend.retries:
                             raise ExecutionError(
-                                f"unit {unit}: its worker died {deaths[unit]} times "
+                                f"{names[unit]}: its worker died {deaths[unit]} times "
                                 f"(last exit code {slot.process.exitcode}); giving up"
                             )
                         queue.appendleft(unit)
@@ -398,6 +401,7 @@ def _map_ray(
     backend: Backend,
     finished: Callable[[int, Any], None],
     bar: _Bar,
+    names: list[str],
 ) -> None:
     try:
         import ray
@@ -422,7 +426,7 @@ def _map_ray(
                 except RayError as error:
                     bar.fail()
                     raise ExecutionError(
-                        f"unit {index}: failed on Ray after {backend.retries} retries "
+                        f"{names[index]}: failed on Ray after {backend.retries} retries "
                         f"({type(error).__name__}: {_first_line(error)})"
                     ) from None
                 finished(index, value)

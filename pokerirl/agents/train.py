@@ -327,6 +327,7 @@ def _train_many(
         desc="agents",
         reused=len(results),
         on_result=save,
+        labels=[str(folder) for _, folder, _, _ in todo],
     )
     return {key: results[key] for key in units}
 

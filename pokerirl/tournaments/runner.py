@@ -354,6 +354,7 @@ def run_tournament(
         desc="tournament seeds",
         reused=len(done),
         on_result=save,
+        labels=[f"{folders[m]} seed {seed}" for m, seed in cells],
     )
     wall = time.perf_counter() - started
 
