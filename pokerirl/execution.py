@@ -264,6 +264,9 @@ def _worker(connection: Any, parent: int, threads: int) -> None:
     """A local worker: run the units the driver sends until it sends None or goes away."""
     _die_with(parent)
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the driver's to handle
+    # tqdm's default lock is a multiprocessing semaphore: a worker killed mid-unit would leak
+    # it and the resource tracker would complain. Workers draw no bars; a thread lock does.
+    tqdm.set_lock(threading.RLock())
     for variable in ("OMP_NUM_THREADS", "MKL_NUM_THREADS"):
         os.environ[variable] = str(threads)
     home = tempfile.mkdtemp(prefix="pokerirl-worker-")
