@@ -192,7 +192,9 @@ def map_units(
     if not units:
         return results
     names = list(labels) if labels is not None else [f"unit {i}" for i in range(len(units))]
-    with _Bar(len(units), reused=reused, desc=desc, enabled=progress) as bar:
+    with contextlib.ExitStack() as stack:
+        ray = stack.enter_context(_ray_session(backend)) if backend.kind == "ray" else None
+        bar = stack.enter_context(_Bar(len(units), reused=reused, desc=desc, enabled=progress))
 
         def finished(index: int, result: Any) -> None:
             results[index] = result
@@ -200,8 +202,8 @@ def map_units(
                 on_result(index, result)
             bar.done()
 
-        if backend.kind == "ray":
-            _map_ray(fn, units, backend, finished, bar, names)
+        if ray is not None:
+            _map_ray(ray, fn, units, backend, finished, bar, names)
         elif backend.jobs == 1 or len(units) == 1:
             for index, args in enumerate(units):
                 finished(index, run_unit(fn, args, backend.threads))
@@ -398,7 +400,25 @@ def _stop(slots: list[_Slot]) -> None:
 # --- Ray -----------------------------------------------------------------------------------
 
 
+@contextlib.contextmanager
+def _ray_session(backend: Backend) -> Iterator[Any]:
+    """``ray``, connected to the backend's cluster (unless this process already is)."""
+    try:
+        import ray
+    except ImportError:
+        raise ExecutionError("the Ray backend needs ray: pip install 'pokerirl[ray]'") from None
+    connect_here = not ray.is_initialized()
+    if connect_here:
+        _ray_init(ray, backend.address or LOCAL_RAY)
+    try:
+        yield ray
+    finally:
+        if connect_here:
+            ray.shutdown()
+
+
 def _map_ray(
+    ray: Any,
     fn: Callable[..., Any],
     units: Sequence[tuple[Any, ...]],
     backend: Backend,
@@ -406,45 +426,36 @@ def _map_ray(
     bar: _Bar,
     names: list[str],
 ) -> None:
+    from ray.exceptions import RayError, RayTaskError
+
+    task = ray.remote(num_cpus=1, max_retries=backend.retries)(run_unit)
+    pending = {task.remote(fn, args, backend.threads): i for i, args in enumerate(units)}
     try:
-        import ray
-        from ray.exceptions import RayError, RayTaskError
-    except ImportError:
-        raise ExecutionError("the Ray backend needs ray: pip install 'pokerirl[ray]'") from None
-    connected_here = not ray.is_initialized()
-    if connected_here:
-        _ray_init(ray, backend.address or LOCAL_RAY)
-    try:
-        task = ray.remote(num_cpus=1, max_retries=backend.retries)(run_unit)
-        pending = {task.remote(fn, args, backend.threads): i for i, args in enumerate(units)}
-        try:
-            while pending:
-                ready, _ = ray.wait(list(pending), num_returns=1)
-                index = pending.pop(ready[0])
-                try:
-                    value = ray.get(ready[0])
-                except RayTaskError as error:  # the unit raised: re-raise what it raised
-                    cause = error.cause if isinstance(error.cause, Exception) else None
-                    raise (cause or ExecutionError(_first_line(error))) from None
-                except RayError as error:
-                    bar.fail()
-                    raise ExecutionError(
-                        f"{names[index]}: failed on Ray after {backend.retries} retries "
-                        f"({type(error).__name__}: {_first_line(error)})"
-                    ) from None
-                finished(index, value)
-        finally:
-            for ref in pending:
-                with contextlib.suppress(Exception):
-                    ray.cancel(ref, force=True)
+        while pending:
+            ready, _ = ray.wait(list(pending), num_returns=1)
+            index = pending.pop(ready[0])
+            try:
+                value = ray.get(ready[0])
+            except RayTaskError as error:  # the unit raised: re-raise what it raised
+                cause = error.cause if isinstance(error.cause, Exception) else None
+                raise (cause or ExecutionError(_first_line(error))) from None
+            except RayError as error:
+                bar.fail()
+                raise ExecutionError(
+                    f"{names[index]}: failed on Ray after {backend.retries} retries "
+                    f"({type(error).__name__}: {_first_line(error)})"
+                ) from None
+            finished(index, value)
     finally:
-        if connected_here:
-            ray.shutdown()
+        for ref in pending:
+            with contextlib.suppress(Exception):
+                ray.cancel(ref, force=True)
 
 
 def _ray_init(ray: Any, address: str) -> None:
     import logging
 
+    _check_reachable(address)
     options: dict[str, Any] = {"log_to_driver": False, "logging_level": logging.WARNING}
     if address == LOCAL_RAY:
         options["include_dashboard"] = False
@@ -452,6 +463,110 @@ def _ray_init(ray: Any, address: str) -> None:
         ray.init(address=address, **options)
     except (ConnectionError, RuntimeError, ValueError) as error:
         raise ExecutionError(f"cannot connect to Ray at {address}: {_first_line(error)}") from None
+
+
+def _check_reachable(address: str, timeout: float = 10.0) -> None:
+    """Fail in one line when nothing listens at a ``HOST:PORT`` address: ``ray.init`` would
+    otherwise retry for ever."""
+    import socket
+
+    host, _, port = address.rpartition(":")
+    if "://" in address or not host or not port.isdigit():
+        return  # ray://, auto, local: Ray's own checks
+    try:
+        socket.create_connection((host.strip("[]"), int(port)), timeout=timeout).close()
+    except OSError as error:
+        reason = error.strerror or type(error).__name__
+        raise ExecutionError(f"cannot reach the Ray cluster at {address}: {reason}") from None
+
+
+@contextlib.contextmanager
+def ray_head(*, num_cpus: int = 2, timeout: float = 120.0) -> Iterator[str]:
+    """A private single-node Ray cluster, started with Ray's own ``ray start --head``; yields
+    its address (for ``--ray``).
+
+    For tests and benchmarks. It owns everything it starts: a temporary folder of its own (a
+    short path: Ray's socket paths must fit in 107 characters), free ports, workers whose
+    working directory is an empty folder of their own, this ``pokerirl`` importable on them.
+    It stops only its own processes, by the process ids it recorded: never ``ray stop``,
+    which ends every Ray process on the machine.
+
+    Raises:
+        ExecutionError: Ray did not start (with the reason from its log).
+    """
+    import socket
+    import subprocess
+
+    executable = Path(sys.executable).with_name("ray")
+    if not executable.exists():
+        executable = Path(shutil.which("ray") or "ray")
+    home = Path(tempfile.mkdtemp(prefix="ray", dir="/tmp" if os.path.isdir("/tmp") else None))
+    sockets = [socket.socket() for _ in range(9)]
+    for sock in sockets:
+        sock.bind(("127.0.0.1", 0))
+    port, *others = [sock.getsockname()[1] for sock in sockets]
+    for sock in sockets:
+        sock.close()
+    options = (
+        "ray-client-server-port", "dashboard-port", "dashboard-agent-listen-port",
+        "dashboard-agent-grpc-port", "metrics-export-port", "runtime-env-agent-port",
+        "node-manager-port", "object-manager-port",
+    )  # fmt: skip
+    command = [
+        str(executable), "start", "--head", "--block", f"--port={port}",
+        "--node-ip-address=127.0.0.1", f"--num-cpus={num_cpus}", f"--temp-dir={home / 't'}",
+        "--include-dashboard=false", "--disable-usage-stats",
+        *(f"--{option}={value}" for option, value in zip(options, others, strict=True)),
+    ]  # fmt: skip
+    package_root = str(Path(__file__).resolve().parents[1])
+    path = os.environ.get("PYTHONPATH")
+    environment = {
+        **os.environ,
+        "PYTHONPATH": package_root + (os.pathsep + path if path else ""),
+        "RAY_DISABLE_USAGE_STATS": "1",
+    }
+    environment.pop("RAY_ADDRESS", None)
+    (home / "cwd").mkdir()
+    log = home / "head.log"
+    with log.open("wb") as stream:
+        head = subprocess.Popen(
+            command, cwd=home / "cwd", env=environment, stdout=stream, stderr=subprocess.STDOUT
+        )
+    owned: set[int] = set()
+    try:
+        deadline = time.monotonic() + timeout
+        while b"Ray runtime started" not in log.read_bytes():
+            if head.poll() is not None or time.monotonic() > deadline:
+                tail = log.read_text(errors="replace").strip().splitlines()[-3:]
+                raise ExecutionError(f"ray start --head failed: {' | '.join(tail)}")
+            time.sleep(0.2)
+        yield f"127.0.0.1:{port}"
+    finally:
+        owned = _descendants(head.pid)
+        head.terminate()  # ray start --block stops what it started on SIGTERM
+        try:
+            head.wait(timeout=20)
+        except subprocess.TimeoutExpired:
+            head.kill()
+            head.wait()
+        for pid in owned | _descendants(head.pid):
+            with contextlib.suppress(OSError):
+                os.kill(pid, signal.SIGKILL)
+        shutil.rmtree(home, ignore_errors=True)
+
+
+def _descendants(pid: int) -> set[int]:
+    """Every process below ``pid`` (Linux ``/proc``; empty elsewhere)."""
+    found: set[int] = set()
+    todo = [pid]
+    while todo:
+        for task in Path(f"/proc/{todo.pop()}/task").glob("*"):
+            with contextlib.suppress(OSError, ValueError):
+                for child in map(int, (task / "children").read_text().split()):
+                    if child not in found:
+                        found.add(child)
+                        todo.append(child)
+    return found
 
 
 # --- unit records and fingerprints ---------------------------------------------------------
