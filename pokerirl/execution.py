@@ -408,13 +408,18 @@ def _ray_session(backend: Backend) -> Iterator[Any]:
     except ImportError:
         raise ExecutionError("the Ray backend needs ray: pip install 'pokerirl[ray]'") from None
     connect_here = not ray.is_initialized()
+    private = None
     if connect_here:
-        _ray_init(ray, backend.address or LOCAL_RAY)
+        if backend.address == LOCAL_RAY:  # its own short folder: never /tmp/ray, shared
+            private = tempfile.mkdtemp(prefix="ray", dir="/tmp" if os.path.isdir("/tmp") else None)
+        _ray_init(ray, backend.address or LOCAL_RAY, private)
     try:
         yield ray
     finally:
         if connect_here:
             ray.shutdown()
+        if private is not None:
+            shutil.rmtree(private, ignore_errors=True)
 
 
 def _map_ray(
@@ -452,13 +457,13 @@ def _map_ray(
                 ray.cancel(ref, force=True)
 
 
-def _ray_init(ray: Any, address: str) -> None:
+def _ray_init(ray: Any, address: str, temp_dir: str | None) -> None:
     import logging
 
     _check_reachable(address)
     options: dict[str, Any] = {"log_to_driver": False, "logging_level": logging.WARNING}
     if address == LOCAL_RAY:
-        options["include_dashboard"] = False
+        options.update(include_dashboard=False, _temp_dir=temp_dir)
     try:
         ray.init(address=address, **options)
     except (ConnectionError, RuntimeError, ValueError) as error:

@@ -62,8 +62,16 @@ def read_relative(name: str) -> bool:
 
 
 def test_results_in_unit_order_whatever_the_jobs_and_threads_pinned() -> None:
+    import torch
+
     units = [(k,) for k in range(5)]
-    one = map_units(describe, units, backend=Backend())
+    before = torch.get_num_threads()
+    torch.set_num_threads(2)  # the driver's own setting: units must not inherit it
+    try:
+        one = map_units(describe, units, backend=Backend())
+        assert torch.get_num_threads() == 2  # and it is given back
+    finally:
+        torch.set_num_threads(before)
     two = map_units(describe, units, backend=TWO)
     assert [r[0] for r in one] == [r[0] for r in two] == [0, 1, 4, 9, 16]
     assert {r[1] for r in one} == {r[1] for r in two} == {1}  # one torch thread per unit

@@ -120,6 +120,36 @@ def test_killing_the_driver_kills_its_workers_and_a_rerun_completes_the_set(
     assert not [p for p in out.iterdir() if p.name.startswith(".")]  # nothing half-written
 
 
+def test_workers_busy_with_long_units_die_with_the_driver(tmp_path: Path) -> None:
+    script = (
+        "import time\n"
+        "from pokerirl.execution import Backend, map_units\n"
+        "map_units(time.sleep, [(120,)] * 4, backend=Backend(jobs=2))\n"
+    )
+    driver = subprocess.Popen([sys.executable, "-c", script], env=_environment())
+    workers: set[int] = set()
+
+    def two_workers() -> bool:
+        workers.update(p for p in descendants(driver.pid) if b"spawn_main" in _cmdline(p))
+        return len(workers) >= 2
+
+    _wait_for(two_workers, driver, seconds=60)
+    time.sleep(1)  # both are inside their two-minute unit now
+    driver.send_signal(signal.SIGKILL)
+    driver.wait()
+    deadline = time.monotonic() + 5
+    while any(alive(pid) for pid in workers) and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert not [pid for pid in workers if alive(pid)], "a busy worker outlived its driver"
+
+
+def _cmdline(pid: int) -> bytes:
+    try:
+        return Path(f"/proc/{pid}/cmdline").read_bytes()
+    except OSError:
+        return b""
+
+
 def test_ctrl_c_stops_cleanly_and_keeps_finished_seeds(tmp_path: Path) -> None:
     out = tmp_path / "set"
     args = ["agent", "train", "--out", str(out), "--seeds", "0-7", "--jobs", "2", *SET]
