@@ -101,7 +101,7 @@ def main() -> None:
             )
             numbers[name] = [(s.mbb_per_hand, s.std_error) for s in report.matchups[0].seeds]
             rows.append(("tournament seeds", name, args.tournament_seeds, wall, cpu))
-            print(f"  tournament on {name}: {wall:.1f} s", flush=True)
+            print(f"  tournament on {name}: {wall:.1f} s, {cpu:.1f} CPU s", flush=True)
             out = root / f"agents-{tag}"
             wall, cpu, _ = timed(
                 lambda backend=backend, out=out: train_seeds(
@@ -110,15 +110,17 @@ def main() -> None:
             )
             weights[name] = {p.parent.name: p.read_bytes() for p in out.glob("seed-*/model.pt")}
             rows.append(("agent seeds", name, args.agent_seeds, wall, cpu))
-            print(f"  agent set on {name}: {wall:.1f} s", flush=True)
+            print(f"  agent set on {name}: {wall:.1f} s, {cpu:.1f} CPU s", flush=True)
 
     print()
-    print(f"{'workload':<18}{'backend':<16}{'units':>6}{'wall s':>9}{'units/s':>9}  vs jobs 1")
-    walls = {(w, b): s for w, b, _, s in rows}
-    for workload, backend, units, wall in rows:
+    header = f"{'workload':<18}{'backend':<16}{'units':>6}{'wall s':>9}{'units/s':>9}"
+    print(f"{header}{'vs jobs 1':>11}{'CPU s':>8}{'cores used':>12}")
+    walls = {(w, b): s for w, b, _, s, _ in rows}
+    for workload, backend, units, wall, cpu in rows:
         ratio = walls[workload, "local --jobs 1"] / wall
         print(
-            f"{workload:<18}{backend:<16}{units:>6}{wall:>9.1f}{units / wall:>9.3f}  {ratio:.2f}x"
+            f"{workload:<18}{backend:<16}{units:>6}{wall:>9.1f}{units / wall:>9.3f}"
+            f"{ratio:>10.2f}x{cpu:>8.1f}{cpu / wall:>12.2f}"
         )
     print()
     for workload in ("tournament seeds", "agent seeds"):

@@ -3,7 +3,9 @@
 :func:`map_units` maps a top-level function over a list of argument tuples and returns the
 results in unit order, whatever the backend:
 
-* **local processes** (the default, ``--jobs N``): up to N spawned workers. Each worker dies
+* **local processes** (the default, ``--jobs N``): up to N workers, forked from a
+  ``multiprocessing`` fork server that imported the unit's module (torch) once, so starting
+  a worker costs no second import. Each worker dies
   with the driver (``PR_SET_PDEATHSIG`` on Linux, and a watchdog on the parent's pid
   everywhere), ignores Ctrl-C (the driver stops them), and works in a private empty folder, so
   no unit can depend on the driver's working directory. One unit, or one job, runs in the
@@ -243,8 +245,12 @@ class _Bar:
 # --- local processes -----------------------------------------------------------------------
 
 
-def _die_with(parent: int) -> None:
-    """End this process when ``parent`` dies, even while a unit is computing."""
+def _die_with(driver: int) -> None:
+    """End this process when the driver dies, even while a unit is computing.
+
+    The immediate parent is the driver (spawn) or its fork server, which exits with it.
+    """
+    parent = os.getppid()
     if sys.platform.startswith("linux"):
         import ctypes
 
@@ -252,12 +258,21 @@ def _die_with(parent: int) -> None:
         with contextlib.suppress(OSError, AttributeError):
             ctypes.CDLL(None, use_errno=True).prctl(PR_SET_PDEATHSIG, signal.SIGKILL)
 
+    def driver_alive() -> bool:
+        try:
+            os.kill(driver, 0)
+        except ProcessLookupError:
+            return False
+        except PermissionError:
+            pass
+        return True
+
     def watch() -> None:  # elsewhere, and for a parent that died before prctl
-        while os.getppid() == parent:
+        while os.getppid() == parent and driver_alive():
             time.sleep(0.5)
         os._exit(1)
 
-    if os.getppid() != parent:
+    if not driver_alive():
         os._exit(1)
     threading.Thread(target=watch, daemon=True).start()
 
@@ -324,8 +339,14 @@ def _map_local(
     import multiprocessing
     from multiprocessing.connection import wait
 
-    # spawn, not fork: a forked child can deadlock on the parent's torch thread pools.
-    context = multiprocessing.get_context("spawn")
+    # Not a plain fork: a forked child can deadlock on the driver's torch thread pools. A fork
+    # server is a clean process that imports the unit's module once; workers fork from it.
+    # (It exits when the driver dies, and its workers with it.)
+    context = multiprocessing.get_context(
+        "forkserver" if "forkserver" in multiprocessing.get_all_start_methods() else "spawn"
+    )
+    if context.get_start_method() == "forkserver" and fn.__module__ not in ("__main__", None):
+        context.set_forkserver_preload([__name__, fn.__module__])
     queue = deque(range(len(units)))
     deaths = [0] * len(units)
     slots: list[_Slot] = []

@@ -5,6 +5,7 @@ completes a set with the bytes of an uninterrupted run, Ctrl-C stops cleanly, an
 from __future__ import annotations
 
 import json
+import multiprocessing
 import os
 import signal
 import subprocess
@@ -129,9 +130,14 @@ def test_workers_busy_with_long_units_die_with_the_driver(tmp_path: Path) -> Non
     driver = subprocess.Popen([sys.executable, "-c", script], env=_environment())
     workers: set[int] = set()
 
+    # Two workers, and with the fork server the server itself (it has the same command line).
+    need = 3 if "forkserver" in multiprocessing.get_all_start_methods() else 2
+
     def two_workers() -> bool:
-        workers.update(p for p in descendants(driver.pid) if b"spawn_main" in _cmdline(p))
-        return len(workers) >= 2
+        for pid in descendants(driver.pid):
+            if any(word in _cmdline(pid) for word in (b"spawn_main", b"forkserver")):
+                workers.add(pid)
+        return len(workers) >= need
 
     _wait_for(two_workers, driver, seconds=60)
     time.sleep(1)  # both are inside their two-minute unit now
@@ -171,6 +177,9 @@ def test_ctrl_c_stops_cleanly_and_keeps_finished_seeds(tmp_path: Path) -> None:
     _, stderr = driver.communicate(timeout=60)
     assert driver.returncode == 130
     assert stderr.strip().splitlines()[-1].startswith("error: interrupted: finished units")
+    deadline = time.monotonic() + 5  # the fork server and resource tracker leave on EOF
+    while any(alive(pid) for pid in workers) and time.monotonic() < deadline:
+        time.sleep(0.05)
     assert not [pid for pid in workers if alive(pid)]
     config = json.loads((_finished_seeds(out)[0] / "unit.json").read_text())["config"]
     for folder in _finished_seeds(out):
