@@ -41,17 +41,10 @@ from pokerirl.execution import Backend, ray_head  # noqa: E402
 from pokerirl.tournaments import run_tournament  # noqa: E402
 
 
-def timed(run: Callable[[], object]) -> tuple[float, float, object]:
-    """Wall seconds, CPU seconds of this process and its finished children, the result.
-
-    On a shared machine CPU / wall shows how many cores the run actually got. Ray's workers
-    are not this process's children: their CPU is not counted (shown as 0).
-    """
-    before, started = os.times(), time.perf_counter()
+def timed(run: Callable[[], object]) -> tuple[float, object]:
+    started = time.perf_counter()
     result = run()
-    wall, after = time.perf_counter() - started, os.times()
-    cpu = sum(after[:4]) - sum(before[:4])  # user, system, children's user and system
-    return wall, cpu, result
+    return time.perf_counter() - started, result
 
 
 def main() -> None:
@@ -85,12 +78,12 @@ def main() -> None:
             print(f"ray start --head --num-cpus 2: up in {time.perf_counter() - started:.1f} s")
             backends["ray, 2 CPUs"] = Backend(kind="ray", address=address)
 
-        rows: list[tuple[str, str, int, float, float]] = []
+        rows: list[tuple[str, str, int, float]] = []
         numbers: dict[str, object] = {}
         weights: dict[str, dict[str, bytes]] = {}
         for name, backend in backends.items():
             tag = name.split()[0] + name.split()[-1]
-            wall, cpu, report = timed(
+            wall, report = timed(
                 lambda backend=backend, tag=tag: run_tournament(
                     matchup,
                     hands=args.tournament_hands,
@@ -100,27 +93,26 @@ def main() -> None:
                 )
             )
             numbers[name] = [(s.mbb_per_hand, s.std_error) for s in report.matchups[0].seeds]
-            rows.append(("tournament seeds", name, args.tournament_seeds, wall, cpu))
-            print(f"  tournament on {name}: {wall:.1f} s, {cpu:.1f} CPU s", flush=True)
+            rows.append(("tournament seeds", name, args.tournament_seeds, wall))
+            print(f"  tournament on {name}: {wall:.1f} s", flush=True)
             out = root / f"agents-{tag}"
-            wall, cpu, _ = timed(
+            wall, _ = timed(
                 lambda backend=backend, out=out: train_seeds(
                     out, agent_config, list(range(args.agent_seeds)), backend=backend
                 )
             )
             weights[name] = {p.parent.name: p.read_bytes() for p in out.glob("seed-*/model.pt")}
-            rows.append(("agent seeds", name, args.agent_seeds, wall, cpu))
-            print(f"  agent set on {name}: {wall:.1f} s, {cpu:.1f} CPU s", flush=True)
+            rows.append(("agent seeds", name, args.agent_seeds, wall))
+            print(f"  agent set on {name}: {wall:.1f} s", flush=True)
 
     print()
     header = f"{'workload':<18}{'backend':<16}{'units':>6}{'wall s':>9}{'units/s':>9}"
-    print(f"{header}{'vs jobs 1':>11}{'CPU s':>8}{'cores used':>12}")
-    walls = {(w, b): s for w, b, _, s, _ in rows}
-    for workload, backend, units, wall, cpu in rows:
+    print(f"{header}{'vs jobs 1':>11}")
+    walls = {(w, b): s for w, b, _, s in rows}
+    for workload, backend, units, wall in rows:
         ratio = walls[workload, "local --jobs 1"] / wall
         print(
-            f"{workload:<18}{backend:<16}{units:>6}{wall:>9.1f}{units / wall:>9.3f}"
-            f"{ratio:>10.2f}x{cpu:>8.1f}{cpu / wall:>12.2f}"
+            f"{workload:<18}{backend:<16}{units:>6}{wall:>9.1f}{units / wall:>9.3f}{ratio:>10.2f}x"
         )
     print()
     for workload in ("tournament seeds", "agent seeds"):
