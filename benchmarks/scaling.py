@@ -11,8 +11,9 @@ Two workloads, each through the real entry points (``run_tournament``, ``train_s
 2. an agent set: ``--agent-seeds`` DQN seeds of ``--agent-hands`` training hands each, with
    the default evaluation (every 10,000 hands, 20,000 duplicate hands).
 
-For each backend it prints units per second and total wall time (from the call to the last
-result: worker start-up, or connecting to Ray and its workers' start-up, included), the
+For each backend it prints units per second, total wall time (from the call to the last
+result: worker start-up, or connecting to Ray and its workers' start-up, included), the mean
+time a unit measured inside itself (it grows when workers share a core), the
 speed-up from 1 to 2 local workers (target >= 1.8x) and Ray's overhead over 2 local workers
 as a share of wall time (target <= 10%). The Ray cluster is started first with
 ``ray start --head --num-cpus 2`` (:func:`pokerirl.execution.ray_head`, untimed), as a
@@ -27,6 +28,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import json
 import os
 import tempfile
 import time
@@ -79,6 +81,7 @@ def main() -> None:
             backends["ray, 2 CPUs"] = Backend(kind="ray", address=address)
 
         rows: list[tuple[str, str, int, float]] = []
+        inside: dict[tuple[str, str], float] = {}  # mean seconds a unit took, inside the unit
         numbers: dict[str, object] = {}
         weights: dict[str, dict[str, bytes]] = {}
         for name, backend in backends.items():
@@ -94,6 +97,8 @@ def main() -> None:
             )
             numbers[name] = [(s.mbb_per_hand, s.std_error) for s in report.matchups[0].seeds]
             rows.append(("tournament seeds", name, args.tournament_seeds, wall))
+            seconds = [s.seconds for s in report.matchups[0].seeds]
+            inside["tournament seeds", name] = sum(seconds) / len(seconds)
             print(f"  tournament on {name}: {wall:.1f} s", flush=True)
             out = root / f"agents-{tag}"
             wall, _ = timed(
@@ -103,17 +108,24 @@ def main() -> None:
             )
             weights[name] = {p.parent.name: p.read_bytes() for p in out.glob("seed-*/model.pt")}
             rows.append(("agent seeds", name, args.agent_seeds, wall))
+            seconds = [json.loads(p.read_text())["seconds"] for p in out.glob("*/timings.json")]
+            inside["agent seeds", name] = sum(seconds) / len(seconds)
             print(f"  agent set on {name}: {wall:.1f} s", flush=True)
 
     print()
     header = f"{'workload':<18}{'backend':<16}{'units':>6}{'wall s':>9}{'units/s':>9}"
-    print(f"{header}{'vs jobs 1':>11}")
+    print(f"{header}{'vs jobs 1':>11}{'s/unit inside':>15}")
     walls = {(w, b): s for w, b, _, s in rows}
     for workload, backend, units, wall in rows:
         ratio = walls[workload, "local --jobs 1"] / wall
         print(
             f"{workload:<18}{backend:<16}{units:>6}{wall:>9.1f}{units / wall:>9.3f}{ratio:>10.2f}x"
+            f"{inside[workload, backend]:>15.2f}"
         )
+    print(
+        "(s/unit inside: the mean time a unit measured for itself. If it grows with 2 workers,\n"
+        " the 2 workers did not get 2 free cores: the machine is shared, not the backend slow.)"
+    )
     print()
     for workload in ("tournament seeds", "agent seeds"):
         speedup = walls[workload, "local --jobs 1"] / walls[workload, "local --jobs 2"]
