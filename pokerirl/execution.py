@@ -299,9 +299,10 @@ def _worker(connection: Any, parent: int, threads: int) -> None:
             index, fn, args = message
             try:
                 reply = (index, True, run_unit(fn, args, threads))
-            except Exception as error:
-                reply = (index, False, _portable(error))
-            connection.send(reply)
+                data = pickle.dumps(reply)
+            except Exception as error:  # the unit raised, or its result does not pickle
+                data = pickle.dumps((index, False, _portable(error)))
+            connection.send_bytes(data)
     finally:
         os.chdir(tempfile.gettempdir())
         shutil.rmtree(home, ignore_errors=True)
@@ -377,7 +378,7 @@ def _map_local(
                     reply = None
                     with contextlib.suppress(EOFError, OSError):
                         if slot.connection.poll():
-                            reply = slot.connection.recv()
+                            reply = pickle.loads(slot.connection.recv_bytes())
                     if reply is not None:
                         index, ok, value = reply
                         slot.unit = None

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import json
 import os
+import pickle
 import signal
 from pathlib import Path
 
@@ -207,3 +208,27 @@ def test_file_units_keep_their_result(tmp_path: Path) -> None:
     for damage in ("", "{", '"text"', "[]", '{"format": "pokerirl-unit/1"}'):
         path.write_text(damage)
         assert load_unit(path, CONFIG) is None
+
+
+def not_picklable(k: int) -> object:
+    return lambda: k
+
+
+def test_a_result_that_does_not_pickle_is_one_error_not_a_dying_worker() -> None:
+    with pytest.raises((AttributeError, pickle.PicklingError), match="pickle"):
+        map_units(not_picklable, [(1,), (2,)], backend=TWO)
+
+
+def test_an_unreachable_ray_address_is_one_line() -> None:
+    from typer.testing import CliRunner
+
+    from pokerirl.cli import app
+
+    result = CliRunner().invoke(
+        app, ["tournament", "raise", "call", "--hands", "100", "--seeds", "0",
+              "--ray", "127.0.0.1:1", "--out", "unused", "-q"],
+    )  # fmt: skip
+    assert result.exit_code == 1 and result.stdout == ""
+    assert (
+        result.stderr == "error: cannot reach the Ray cluster at 127.0.0.1:1: Connection refused\n"
+    )

@@ -275,6 +275,8 @@ def _train_many(
     progress: bool,
 ) -> dict[int, dict[str, Any] | None]:
     """Train the agents not already finished, each into its folder; reused ones map to None."""
+    if not units:
+        return {}
     first = next(iter(units.values()))[1]  # every unit shares these settings but the seed
     # Bad input fails here, in one line, before any worker starts.
     reward_files: dict[str, bytes] = {}
