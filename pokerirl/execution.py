@@ -5,10 +5,10 @@ results in unit order, whatever the backend:
 
 * **local processes** (the default, ``--jobs N``): up to N workers, forked from a
   ``multiprocessing`` fork server that imported the unit's module (torch) once, so starting
-  a worker costs no second import. Each worker dies
-  with the driver (``PR_SET_PDEATHSIG`` on Linux, and a watchdog on the parent's pid
-  everywhere), ignores Ctrl-C (the driver stops them), and works in a private empty folder, so
-  no unit can depend on the driver's working directory. One unit, or one job, runs in the
+  a worker costs no second import. Each worker dies with the driver (the fork server exits
+  with it; ``PR_SET_PDEATHSIG`` on Linux, and a watchdog on the parent's and the driver's
+  pids everywhere), ignores Ctrl-C (the driver stops them), and works in a private empty
+  folder, so no unit can depend on the driver's working directory. One unit, or one job, runs in the
   driver itself, with the same thread pinning.
 * **Ray** (``--ray ADDRESS``, or ``RAY_ADDRESS`` set; ``--ray local`` starts a private
   single-machine instance): one task per unit with one CPU. ``ray`` is imported only then
