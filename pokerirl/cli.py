@@ -254,7 +254,16 @@ def tournament(
     duplicate: bool = typer.Option(
         True, "--duplicate/--no-duplicate", help="Play every deal from both seats, paired."
     ),
-    jobs: int = typer.Option(2, "--jobs", "-j", help="Worker processes (results do not change)."),
+    jobs: int = typer.Option(
+        2, "--jobs", "-j", help="Local worker processes (results do not change)."
+    ),
+    ray: str | None = typer.Option(
+        None,
+        "--ray",
+        metavar="ADDRESS",
+        help="Play the seeds on the Ray cluster at ADDRESS (default: $RAY_ADDRESS when set), "
+        "or 'local' for a private single-machine Ray. Results do not change.",
+    ),
     alpha: float = typer.Option(0.05, help="Family-wise error rate (Bonferroni, Holm)."),
     batch_size: int = typer.Option(65_536, help="Hands in lock-step (part of the config)."),
     overwrite: bool = typer.Option(
@@ -274,8 +283,10 @@ def tournament(
     \b
     Resumable: each seed is saved when it finishes. A rerun reuses saved seeds
     whose agents, hands, duplicate mode and batch size match, and refuses the
-    others (--overwrite recomputes them). pokerirl report DIR prints it again.
+    others (--overwrite recomputes them); a corrupt saved seed is recomputed.
+    pokerirl report DIR prints it again.
     """
+    from pokerirl.execution import ExecutionError
     from pokerirl.seeds import parse_seeds
     from pokerirl.tournaments import render_report, run_tournament
 
@@ -288,6 +299,7 @@ def tournament(
         matchups = [(agents[0], agents[1])]
     else:
         fail(f"give two agents (A B) or --vs BASE and agents; got {len(agents)} agent(s)")
+    backend = _backend(jobs, ray)
     try:
         report = run_tournament(
             matchups,
@@ -300,9 +312,12 @@ def tournament(
             batch_size=batch_size,
             overwrite=overwrite,
             progress=not quiet,
+            backend=backend,
         )
-    except ValueError as error:  # TournamentError, or an agent's illegal move
+    except (ValueError, ExecutionError) as error:  # TournamentError, an agent's illegal move
         fail(str(error))
+    except KeyboardInterrupt:
+        fail(INTERRUPTED, code=130)
     except OSError as error:
         fail(f"{error.filename or out}: {error.strerror or error}")
     if not quiet:
@@ -416,6 +431,23 @@ def train(
     typer.echo(f"{summary.samples_per_second:,.0f} samples/s; wrote {summary.out_dir}")
 
 
+from pokerirl import execution  # noqa: E402  (light: tqdm only; ray loads when chosen)
+
+
+def _backend(jobs: int, ray: str | None, threads: int = 1) -> execution.Backend:
+    """The execution backend of a fan-out command: --ray, else $RAY_ADDRESS, else --jobs."""
+    try:
+        return execution.choose_backend(jobs=jobs, ray=ray, threads=threads)
+    except ValueError as error:
+        fail(str(error))
+
+
+RAY_HELP = (
+    "Run the units on the Ray cluster at ADDRESS (default: $RAY_ADDRESS when set), or 'local' "
+    "for a private single-machine Ray. Results do not change."
+)
+INTERRUPTED = "interrupted: finished units are kept; rerun the same command to resume"
+
 agent_app = typer.Typer(help="Train DQN agents.", no_args_is_help=True)
 app.add_typer(agent_app, name="agent")
 
@@ -431,7 +463,14 @@ def agent_train(
     hands: int = typer.Option(50_000, "--hands", "-n", help="Training hands."),
     seed: int = typer.Option(0, help="Seed of one agent."),
     seeds: str | None = typer.Option(None, help="e.g. 0-19: one agent per seed, in OUT/seed-<k>."),
-    jobs: int = typer.Option(1, help="Processes training seeds at once (with --seeds)."),
+    jobs: int = typer.Option(1, "--jobs", "-j", help="Local processes training seeds at once."),
+    ray: str | None = typer.Option(None, "--ray", metavar="ADDRESS", help=RAY_HELP),
+    threads: int = typer.Option(
+        1, "--threads", help="torch threads per agent (part of the result: the weights change)."
+    ),
+    overwrite: bool = typer.Option(
+        False, "--overwrite", help="Retrain finished agents of other settings (else refused)."
+    ),
     opponent: str = typer.Option(
         "random", help="random, raise, call, an agent folder, rlcard:CKPT, or self."
     ),
@@ -444,11 +483,20 @@ def agent_train(
     self_play_every: int = typer.Option(1_000, help="Updates between refreshes of 'self'."),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bar."),
 ) -> None:
-    """Train a DQN agent (or one per seed) on the sparse payoff or a learned reward."""
+    """Train a DQN agent (or one per seed) on the sparse payoff or a learned reward.
+
+    \b
+    A finished agent folder is never changed: a rerun with the same settings reuses it,
+    one with other settings is refused (--overwrite retrains it). New folders are
+    written beside the old and swapped in at the end, so a killed run loses nothing.
+    With --seeds, seeds run as units (--jobs or --ray); a rerun resumes the set.
+    """
     from pokerirl.agents.dqn import DQNConfig
     from pokerirl.agents.train import TrainConfig, train_agent, train_seeds
+    from pokerirl.execution import ExecutionError
     from pokerirl.seeds import parse_seeds
 
+    backend = _backend(jobs, ray, threads)
     try:
         config = TrainConfig(
             hands=hands,
@@ -468,20 +516,30 @@ def agent_train(
             ),
         )
         if seeds is None:
-            summary = train_agent(out, config, progress=not quiet)
+            summary = train_agent(
+                out, config, progress=not quiet, overwrite=overwrite, backend=backend
+            )
             lines = {seed: summary}
         else:
             lines = train_seeds(
-                out, config, list(parse_seeds(seeds)), jobs=jobs, progress=not quiet
+                out,
+                config,
+                list(parse_seeds(seeds)),
+                jobs=jobs,
+                progress=not quiet,
+                overwrite=overwrite,
+                backend=backend,
             )
-    except ValueError as error:
+    except (ValueError, ExecutionError) as error:
         fail(str(error))
+    except KeyboardInterrupt:
+        fail(INTERRUPTED, code=130)
     except OSError as error:
         fail(f"{error.filename or out}: {error.strerror or error}")
     for agent_seed, line in lines.items():
         folder = out if seeds is None else out / f"seed-{agent_seed}"
         if line is None:
-            typer.echo(f"{folder}: already finished, skipped")
+            typer.echo(f"{folder}: already finished with these settings, reused")
             continue
         scores = ", ".join(
             f"vs {name} {e['mbb_per_hand']:+.0f} +- {e['std_error']:.0f} mbb/h"

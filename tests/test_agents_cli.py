@@ -40,21 +40,82 @@ def test_train_then_match_the_folder(tmp_path: Path) -> None:
     assert json.loads(output)["hands"] == 2000
 
 
-def test_seeds_train_in_processes_and_resume_past_finished_ones(tmp_path: Path) -> None:
+def _tree(folder: Path) -> dict[str, bytes]:
+    return {str(p.relative_to(folder)): p.read_bytes() for p in folder.rglob("*") if p.is_file()}
+
+
+def test_seeds_resume_reuse_retrain_corrupt_and_refuse_other_settings(tmp_path: Path) -> None:
     out = tmp_path / "many"
     code, output = invoke("agent", "train", "--out", str(out), "--seeds", "0-1", "-q", *FAST)
     assert code == 0, output
-    weights = (out / "seed-0" / "model.pt").read_bytes()
-    (out / "seed-1" / "config.json").unlink()  # seed 1 looks interrupted before its last write
+    weights = {k: (out / f"seed-{k}" / "model.pt").read_bytes() for k in (0, 1)}
+    assert weights[0] != weights[1]
+    (out / "seed-1" / "model.pt").write_bytes(b"\0" * 100)  # corrupt: retrained, not reused
     code, output = invoke(
         "agent", "train", "--out", str(out), "--seeds", "0-2", "--jobs", "2", "-q", *FAST
     )
     assert code == 0, output
-    assert "seed-0: already finished, skipped" in output
+    assert "seed-0: already finished with these settings, reused" in output
     assert "seed-1: 512 hands" in output and "seed-2: 512 hands" in output
-    assert (out / "seed-0" / "model.pt").read_bytes() == weights
+    # The same bytes as the first run: jobs, processes and resuming do not change weights.
+    assert {k: (out / f"seed-{k}" / "model.pt").read_bytes() for k in (0, 1)} == weights
     seeds = [json.loads((out / f"seed-{k}" / "config.json").read_text())["seed"] for k in range(3)]
     assert seeds == [0, 1, 2]
+    before = _tree(out)
+    # A set never mixes settings: other settings are refused in one line, nothing changes.
+    code, output = invoke(
+        "agent", "train", "--out", str(out), "--seeds", "0-3", "-q", *FAST[:-2],
+        "--concurrent-hands", "64",
+    )  # fmt: skip
+    assert code == 1 and output.count("\n") == 1
+    assert "seed-0 was made with another configuration (dqn.concurrent_hands 128 -> 64)" in output
+    assert _tree(out) == before and not (out / "seed-3").exists()
+
+
+def test_a_finished_agent_is_reused_refused_or_overwritten_never_damaged(tmp_path: Path) -> None:
+    out = tmp_path / "agent"
+    assert invoke("agent", "train", "--out", str(out), "-q", *FAST)[0] == 0
+    before = _tree(out)
+    timings = json.loads((out / "timings.json").read_text())
+    assert timings["seconds"] > 0 and "seconds" not in (out / "config.json").read_text()
+    code, output = invoke("agent", "train", "--out", str(out), "-q", *FAST)
+    assert code == 0 and "already finished with these settings, reused" in output
+    code, output = invoke("agent", "train", "--out", str(out), "--seed", "1", "-q", *FAST)
+    assert code == 1 and "seed 0 -> 1" in output and "--overwrite" in output
+    assert _tree(out) == before
+    code, output = invoke(
+        "agent", "train", "--out", str(out), "--seed", "1", "--overwrite", "-q", *FAST
+    )
+    assert code == 0, output
+    assert json.loads((out / "config.json").read_text())["seed"] == 1
+    assert not [p for p in tmp_path.iterdir() if p.name.startswith(".")]  # no leftovers
+    # A folder of someone else's files is never replaced without --overwrite.
+    mine = tmp_path / "notes"
+    mine.mkdir()
+    (mine / "todo.txt").write_text("keep me")
+    code, output = invoke("agent", "train", "--out", str(mine), "-q", *FAST)
+    assert code == 1 and "no unit.json" in output and (mine / "todo.txt").exists()
+
+
+def test_same_seed_same_bytes_and_threads_are_explicit(tmp_path: Path) -> None:
+    torch.set_num_threads(2)  # the caller's setting must not leak into the weights
+    try:
+        code, output = invoke("agent", "train", "--out", str(tmp_path / "a"), "-q", *FAST)
+    finally:
+        torch.set_num_threads(1)
+    assert code == 0, output
+    assert invoke("agent", "train", "--out", str(tmp_path / "b"), "-q", *FAST)[0] == 0
+    for name in ("model.pt", "config.json", "metrics.jsonl", "unit.json"):
+        assert (tmp_path / "a" / name).read_bytes() == (tmp_path / "b" / name).read_bytes()
+    from pokerirl.agents.checkpoint import folder_fingerprint
+
+    assert folder_fingerprint(tmp_path / "a") == folder_fingerprint(tmp_path / "b")
+    assert json.loads((tmp_path / "a" / "config.json").read_text())["threads"] == 1
+    code, output = invoke(
+        "agent", "train", "--out", str(tmp_path / "a"), "--threads", "2", "-q", *FAST
+    )
+    assert code == 1 and "threads 1 -> 2" in output
+    assert invoke("agent", "train", "--out", str(tmp_path / "x"), "--threads", "0")[0] == 1
 
 
 @pytest.mark.parametrize(

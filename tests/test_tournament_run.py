@@ -118,7 +118,7 @@ def test_rerun_reuses_saved_seeds(tmp_path: Path) -> None:
     saved = tmp_path / "seeds" / "call-vs-random" / "seed-1.json"
     data = json.loads(saved.read_text())
     # Proof that a rerun reads the file rather than replaying: it reports what the file says.
-    data["estimate"]["mbb_per_hand"] = 123.25
+    data["result"]["estimate"]["mbb_per_hand"] = 123.25
     saved.write_text(json.dumps(data))
     again = run_tournament([("call", "random")], hands=HANDS, seeds=[0, 1, 2], out=tmp_path)
     assert again.timing["seeds_reused"] == 2 and again.timing["hands_played"] == HANDS
@@ -137,10 +137,23 @@ def test_rerun_with_another_config_refuses_unless_overwrite(tmp_path: Path) -> N
         [("call", "random")], hands=2 * HANDS, seeds=[0], out=tmp_path, overwrite=True
     )
     assert redone.timing["seeds_reused"] == 0 and redone.matchups[0].seeds[0].n == HANDS
+
+
+@pytest.mark.parametrize("damage", ["{not json", "[]", '"a string"', '{"format": 1}', ""])
+def test_a_corrupt_saved_seed_is_recomputed(tmp_path: Path, damage: str) -> None:
+    first = run_tournament([("call", "random")], hands=HANDS, seeds=[0, 1], out=tmp_path)
     saved = tmp_path / "seeds" / "call-vs-random" / "seed-0.json"
-    saved.write_text("{not json")
-    with pytest.raises(TournamentError, match="unreadable saved seed"):
-        run_tournament([("call", "random")], hands=2 * HANDS, seeds=[0], out=tmp_path)
+
+    def without_timings() -> dict:
+        record = json.loads(saved.read_text())
+        del record["result"]["seconds"], record["result"]["hands_per_second"]
+        return record
+
+    intact = without_timings()
+    saved.write_text(damage)  # an atomic write never leaves this: damage, so recompute
+    again = run_tournament([("call", "random")], hands=HANDS, seeds=[0, 1], out=tmp_path)
+    assert again.timing["seeds_reused"] == 1 and _numbers(again) == _numbers(first)
+    assert without_timings() == intact
 
 
 @pytest.mark.parametrize(
@@ -198,4 +211,4 @@ def test_a_killed_run_leaves_whole_seed_files_and_resumes(tmp_path: Path) -> Non
     assert resumed.timing["seeds_reused"] == len(saved)
     for line in resumed.matchups[0].seeds:
         if line.seed in saved:
-            assert saved[line.seed]["estimate"]["mbb_per_hand"] == line.mbb_per_hand
+            assert saved[line.seed]["result"]["estimate"]["mbb_per_hand"] == line.mbb_per_hand

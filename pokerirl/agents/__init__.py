@@ -4,14 +4,65 @@
 name (``random``, ``raise``, ``call``), an agent folder written by ``pokerirl agent train``,
 or ``rlcard:PATH`` for an RLCard DQN checkpoint.
 
+:func:`ship_agent` and :func:`land_agent` carry an agent to a worker as bytes (see
+:mod:`pokerirl.execution`): the driver reads the files, the worker writes them into a private
+folder and loads them there, so workers need no shared filesystem.
+
 Everything but the registry needs torch and is imported on first use.
+
+>>> import tempfile
+>>> land_agent(ship_agent("raise"), tempfile.mkdtemp()).name
+'raise'
 """
 
 from __future__ import annotations
 
+import os
+from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
-from pokerirl.agents.registry import agent_fingerprint, resolve_agent
+from pokerirl.agents.registry import RLCARD_PREFIX, agent_fingerprint, resolve_agent
+from pokerirl.game.agents import BUILT_IN_AGENTS, Agent
+
+AGENT_FILES = ("model.pt", "config.json")  # what an agent folder's agent is made of
+
+
+@dataclass(frozen=True, kw_only=True)
+class ShippedAgent:
+    """An agent spec and the bytes of its files (none for a built-in)."""
+
+    spec: str
+    files: tuple[tuple[str, bytes], ...] = ()
+
+
+def ship_agent(spec: str) -> ShippedAgent:
+    """``spec`` with the bytes a worker needs to load it (read here, once)."""
+    if spec in BUILT_IN_AGENTS:
+        return ShippedAgent(spec=spec)
+    if spec.startswith(RLCARD_PREFIX):
+        path = Path(spec.removeprefix(RLCARD_PREFIX))
+        return ShippedAgent(spec=spec, files=(("checkpoint.pt", path.read_bytes()),))
+    return ShippedAgent(
+        spec=spec, files=tuple((name, (Path(spec) / name).read_bytes()) for name in AGENT_FILES)
+    )
+
+
+def land_agent(shipped: ShippedAgent, folder: str | os.PathLike[str]) -> Agent:
+    """Write a shipped agent's files into ``folder`` (empty, private) and load it from there.
+
+    Its fingerprint is that of the bytes, so it equals the driver's.
+    """
+    if not shipped.files:
+        return resolve_agent(shipped.spec)
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    for name, data in shipped.files:
+        (folder / name).write_bytes(data)
+    if shipped.spec.startswith(RLCARD_PREFIX):
+        return resolve_agent(f"{RLCARD_PREFIX}{folder / shipped.files[0][0]}")
+    return resolve_agent(str(folder))
+
 
 _LAZY = {
     "load_agent": "checkpoint",
@@ -25,7 +76,14 @@ _LAZY = {
     "train_seeds": "train",
 }
 
-__all__ = ["agent_fingerprint", "resolve_agent", *_LAZY]
+__all__ = [
+    "ShippedAgent",
+    "agent_fingerprint",
+    "land_agent",
+    "resolve_agent",
+    "ship_agent",
+    *_LAZY,
+]
 
 
 def __getattr__(name: str) -> Any:

@@ -15,31 +15,42 @@ Statistics (see :mod:`pokerirl.tournaments.stats`):
   over the pooled tests (one per matchup). The paper's threshold p < 0.05/20 (one matchup, 20
   seeds) is the per-seed family's; its payoff ± SE is the pooled line.
 
+Execution: each (matchup, seed) is a unit of :func:`pokerirl.execution.map_units`, on local
+processes or Ray; the units get the agents' bytes (read here once), so workers need no shared
+filesystem, and play on one torch thread, so results do not depend on the backend.
+
 Resuming: each seed's result is saved to ``<out>/seeds/<A>-vs-<B>/seed-<k>.json`` as soon as
-it finishes, with the agents' fingerprints, hands, duplicate mode and batch size. A rerun reuses
-a saved seed when those match; when they do not it refuses (:class:`TournamentError`), unless
-``overwrite=True``, which recomputes that seed.
+it finishes: a unit record (:mod:`pokerirl.execution`) whose fingerprint covers the agents'
+fingerprints, hands, duplicate mode and batch size. A rerun reuses a saved seed when those
+match; when they do not it refuses (:class:`TournamentError`), unless ``overwrite=True``,
+which recomputes that seed. A saved seed that is not a valid record (corrupt, truncated,
+``[]``, a string, an older format) cannot have come from a finished write, which is atomic:
+it is recomputed, which gives the same numbers.
 """
 
 from __future__ import annotations
 
 import contextlib
-import json
-import multiprocessing
 import re
 import sys
+import tempfile
 import time
 from collections.abc import Iterator, Sequence
-from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
-from tqdm import tqdm
 
-from pokerirl import atomic
-from pokerirl.agents import agent_fingerprint, resolve_agent
+from pokerirl.agents import ShippedAgent, agent_fingerprint, land_agent, resolve_agent, ship_agent
+from pokerirl.execution import (
+    Backend,
+    UnitConflict,
+    load_unit,
+    make_record,
+    map_units,
+    save_record,
+)
 from pokerirl.game.match import DEFAULT_BATCH_SIZE, play_match
 from pokerirl.tournaments.lineup import (
     TournamentError,
@@ -57,7 +68,7 @@ from pokerirl.tournaments.report import (
 from pokerirl.tournaments.stats import Estimate, bonferroni, estimate, holm
 from pokerirl.versions import package_versions
 
-SEED_FORMAT = "pokerirl-tournament-seed/1"
+SEED_KIND = "pokerirl-tournament-seed"
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -82,13 +93,6 @@ class SeedResult:
     hands_per_second: float
 
 
-@dataclass(frozen=True, kw_only=True)
-class _SeedTask:
-    spec_a: str
-    spec_b: str
-    key: SeedKey
-
-
 @contextlib.contextmanager
 def _torch_for_play() -> Iterator[None]:
     """Inference mode on one torch thread, restored afterwards.
@@ -111,11 +115,11 @@ def _torch_for_play() -> Iterator[None]:
         torch.set_num_threads(threads)
 
 
-def _play_seed(task: _SeedTask) -> SeedResult:
-    """Play one seed (in this process or a worker)."""
-    key = task.key
-    agent_a = resolve_agent(agent_spec_for_seed(task.spec_a, key.seed))
-    agent_b = resolve_agent(agent_spec_for_seed(task.spec_b, key.seed))
+def _play_seed(key: SeedKey, shipped_a: ShippedAgent, shipped_b: ShippedAgent) -> SeedResult:
+    """Play one seed (a unit: in this process or a worker) from the agents' bytes."""
+    with tempfile.TemporaryDirectory(prefix="pokerirl-seed-") as private:
+        agent_a = land_agent(shipped_a, Path(private, "a"))
+        agent_b = land_agent(shipped_b, Path(private, "b"))
     found = (agent_fingerprint(agent_a), agent_fingerprint(agent_b))
     if found != (key.fingerprint_a, key.fingerprint_b):
         raise TournamentError(f"seed {key.seed}: an agent changed on disk during the run")
@@ -143,46 +147,39 @@ def _seed_path(out: Path, folder: str, seed: int) -> Path:
     return out / "seeds" / folder / f"seed-{seed}.json"
 
 
+def _seed_config(key: SeedKey) -> dict[str, Any]:
+    return {"kind": SEED_KIND, **asdict(key)}
+
+
 def _save_seed(path: Path, result: SeedResult) -> None:
-    data = {"format": SEED_FORMAT, **asdict(result)}
-    path.parent.mkdir(parents=True, exist_ok=True)
-    atomic.write_text(path, json.dumps(data, indent=2) + "\n")
+    outcome = {
+        "estimate": asdict(result.estimate),
+        "seconds": result.seconds,
+        "hands_per_second": result.hands_per_second,
+    }
+    save_record(path, make_record(_seed_config(result.key), result=outcome))
 
 
 def _load_seed(path: Path, key: SeedKey, *, overwrite: bool) -> SeedResult | None:
-    """The saved result for ``key``, or None to (re)compute; refuses a mismatch."""
-    if not path.exists():
+    """The saved result for ``key``, or None to (re)compute; refuses another configuration."""
+    try:
+        record = load_unit(path, _seed_config(key), overwrite=overwrite)
+    except UnitConflict as error:
+        raise TournamentError(str(error)) from None
+    if record is None:
         return None
     try:
-        data = json.loads(path.read_text())
-        if data.get("format") != SEED_FORMAT:
-            raise ValueError(f"format {data.get('format')!r}")
-        saved = SeedKey(**data["key"])
-        result = SeedResult(
-            key=saved,
-            estimate=Estimate(**{**data["estimate"], "ci95": tuple(data["estimate"]["ci95"])}),
-            seconds=data["seconds"],
-            hands_per_second=data["hands_per_second"],
+        outcome = record["result"]
+        return SeedResult(
+            key=key,
+            estimate=Estimate(
+                **{**outcome["estimate"], "ci95": tuple(outcome["estimate"]["ci95"])}
+            ),
+            seconds=float(outcome["seconds"]),
+            hands_per_second=float(outcome["hands_per_second"]),
         )
-    except (OSError, ValueError, KeyError, TypeError) as error:
-        if overwrite:
-            return None
-        raise TournamentError(
-            f"{path}: unreadable saved seed ({error}); use --overwrite to recompute it"
-        ) from None
-    if saved == key:
-        return result
-    if overwrite:
-        return None
-    changed = ", ".join(
-        f"{name} {getattr(saved, name)!r} -> {getattr(key, name)!r}"
-        for name in ("fingerprint_a", "fingerprint_b", "hands", "duplicate", "batch_size")
-        if getattr(saved, name) != getattr(key, name)
-    )
-    raise TournamentError(
-        f"{path} was played with another configuration ({changed}); "
-        "use another --out, or --overwrite to recompute"
-    )
+    except (KeyError, TypeError, ValueError):
+        return None  # a record without a usable result: recompute it
 
 
 def _folder_names(matchups: Sequence[tuple[str, str]]) -> list[str]:
@@ -200,15 +197,17 @@ def _folder_names(matchups: Sequence[tuple[str, str]]) -> list[str]:
 # --- the run -------------------------------------------------------------------------------
 
 
-def _fingerprints(spec: str, seeds: Sequence[int]) -> dict[int, str]:
-    """Each seed's agent fingerprint; one load for agents that are the same on every seed."""
-    cache: dict[str, str] = {}
+def _fingerprints(spec: str, seeds: Sequence[int]) -> dict[int, tuple[str, ShippedAgent]]:
+    """Each seed's agent fingerprint and bytes; one load for agents that are the same on
+    every seed. Loading here checks every agent before any unit starts."""
+    cache: dict[str, tuple[str, ShippedAgent]] = {}
     prints = {}
     for seed in seeds:
         resolved = agent_spec_for_seed(spec, seed)
         if resolved not in cache:
             try:
-                cache[resolved] = agent_fingerprint(resolve_agent(resolved))
+                found = agent_fingerprint(resolve_agent(resolved))
+                cache[resolved] = (found, ship_agent(resolved))  # a change after: caught
             except (ValueError, OSError) as error:  # resolve_agent's messages name the spec
                 raise TournamentError(str(error)) from None
             except Exception as error:  # e.g. a corrupt checkpoint: still one line, no traceback
@@ -254,24 +253,6 @@ def _validate(
 Cell = tuple[int, int]  # (matchup index, seed)
 
 
-def _run_tasks(tasks: dict[Cell, _SeedTask], jobs: int) -> Iterator[tuple[Cell, SeedResult]]:
-    """Results as they finish: in this process for one job, else in spawned workers."""
-    if jobs == 1 or len(tasks) <= 1:
-        for cell, task in tasks.items():
-            yield cell, _play_seed(task)
-        return
-    # Spawn, not fork: forking a process that holds torch threads can deadlock.
-    context = multiprocessing.get_context("spawn")
-    with ProcessPoolExecutor(max_workers=jobs, mp_context=context) as pool:
-        futures = {pool.submit(_play_seed, task): cell for cell, task in tasks.items()}
-        try:
-            for future in as_completed(futures):
-                yield futures[future], future.result()
-        finally:
-            for future in futures:
-                future.cancel()
-
-
 def _corrected(estimates: list[Estimate], alpha: float) -> list[dict[str, Any]]:
     """Each estimate's fields with Bonferroni and Holm over the whole list (one family)."""
     p = np.array([e.p_value for e in estimates])
@@ -301,6 +282,7 @@ def run_tournament(
     batch_size: int = DEFAULT_BATCH_SIZE,
     overwrite: bool = False,
     progress: bool = False,
+    backend: Backend | None = None,
 ) -> TournamentReport:
     """Play every (A, B) matchup on every seed, write the report files to ``out``, return it.
 
@@ -312,10 +294,12 @@ def run_tournament(
         out: the report folder; saved seeds found there are reused when they match.
         duplicate: play each deal from both seats and pair the two results.
         alpha: family-wise error rate for Bonferroni and Holm.
-        jobs: worker processes (results do not depend on it).
+        jobs: local worker processes (results do not depend on it).
         batch_size: hands in lock-step; part of the result (agents' random draws depend on it).
         overwrite: recompute saved seeds that do not match instead of refusing.
-        progress: a tqdm bar on stderr with hands/s.
+        progress: a tqdm bar over seeds on stderr (done, reused, failed, ETA).
+        backend: where the seeds run (:mod:`pokerirl.execution`); default ``jobs`` local
+            processes. Results do not depend on it.
 
     Raises:
         TournamentError: bad input, a missing ``seed-<k>`` folder, an agent that does not load,
@@ -333,16 +317,18 @@ def run_tournament(
     out = Path(out)
     prints = {spec: _fingerprints(spec, seeds) for spec in {s for pair in matchups for s in pair}}
 
+    backend = backend or Backend(jobs=jobs)
     folders = _folder_names(matchups)
     done: dict[Cell, SeedResult] = {}
-    tasks: dict[Cell, _SeedTask] = {}
-    workers = min(jobs, len(matchups) * len(seeds))
+    cells: list[Cell] = []
+    units: list[tuple[SeedKey, ShippedAgent, ShippedAgent]] = []
     for m, (a, b) in enumerate(matchups):
         for seed in seeds:
+            (print_a, shipped_a), (print_b, shipped_b) = prints[a][seed], prints[b][seed]
             key = SeedKey(
                 seed=seed,
-                fingerprint_a=prints[a][seed],
-                fingerprint_b=prints[b][seed],
+                fingerprint_a=print_a,
+                fingerprint_b=print_b,
                 hands=hands,
                 duplicate=duplicate,
                 batch_size=batch_size,
@@ -351,20 +337,25 @@ def run_tournament(
             if saved is not None:
                 done[m, seed] = saved
             else:
-                tasks[m, seed] = _SeedTask(spec_a=a, spec_b=b, key=key)
+                cells.append((m, seed))
+                units.append((key, shipped_a, shipped_b))
+
+    def save(index: int, result: SeedResult) -> None:
+        m, seed = cells[index]
+        _save_seed(_seed_path(out, folders[m], seed), result)  # resumable from here
+        done[m, seed] = result
 
     started = time.perf_counter()
-    with tqdm(
-        total=len(tasks) * hands,
-        unit="hand",
-        unit_scale=True,
-        disable=not progress,
-        desc="tournament",
-    ) as bar:
-        for (m, seed), result in _run_tasks(tasks, workers):
-            _save_seed(_seed_path(out, folders[m], seed), result)  # resumable from here
-            done[m, seed] = result
-            bar.update(hands)
+    map_units(
+        _play_seed,
+        units,
+        backend=backend,
+        progress=progress,
+        desc="tournament seeds",
+        reused=len(done),
+        on_result=save,
+        labels=[f"{folders[m]} seed {seed}" for m, seed in cells],
+    )
     wall = time.perf_counter() - started
 
     report = _build_report(
@@ -377,10 +368,11 @@ def run_tournament(
         batch_size=batch_size,
         timing={
             "wall_seconds": wall,
-            "hands_played": len(tasks) * hands,
-            "hands_per_second": len(tasks) * hands / wall if wall > 0 else 0.0,
-            "seeds_reused": len(matchups) * len(seeds) - len(tasks),
+            "hands_played": len(units) * hands,
+            "hands_per_second": len(units) * hands / wall if wall > 0 else 0.0,
+            "seeds_reused": len(matchups) * len(seeds) - len(units),
             "jobs": jobs,
+            "backend": backend.describe(),
         },
     )
     write_report(report, out)
