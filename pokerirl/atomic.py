@@ -28,7 +28,7 @@ def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
     )
     os.close(handle)
     # mkstemp creates 0600; give the file the mode a plain open() would (0666 less the umask).
-    os.chmod(temporary, 0o666 & ~_umask())
+    os.chmod(temporary, 0o666 & ~current_umask())
     try:
         yield Path(temporary)
         os.replace(temporary, target)
@@ -37,7 +37,8 @@ def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
         raise
 
 
-def _umask() -> int:
+def current_umask() -> int:
+    """The process umask (reading it means setting it; it is put back at once)."""
     mask = os.umask(0)
     os.umask(mask)
     return mask
@@ -68,3 +69,8 @@ def write_torch(path: str | os.PathLike[str], obj: object) -> None:
     buffer = io.BytesIO()
     torch.save(obj, buffer)
     write_bytes(path, buffer.getvalue())
+
+
+def make_shareable(folder: str | os.PathLike[str]) -> None:
+    """Give a folder made by ``tempfile.mkdtemp`` (0700) the mode ``mkdir`` would give it."""
+    os.chmod(folder, 0o777 & ~current_umask())

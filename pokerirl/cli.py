@@ -12,6 +12,8 @@ from typing import Any, NoReturn
 import typer
 from typer.core import TyperGroup
 
+from pokerirl import execution  # light: tqdm only; ray loads when chosen
+
 
 def _command_line_errors() -> tuple[type[Exception], ...]:
     """Usage-error base classes: typer's own (recent typer vendors click, and its errors derive
@@ -101,6 +103,21 @@ def fail(message: str, code: int = 1) -> NoReturn:
     """Print a one-line error to stderr and exit non-zero, without a traceback."""
     typer.secho(f"error: {message}", err=True, fg=typer.colors.RED)
     raise typer.Exit(code)
+
+
+def _backend(jobs: int, ray: str | None, threads: int = 1) -> execution.Backend:
+    """The execution backend of a fan-out command: --ray, else $RAY_ADDRESS, else --jobs."""
+    try:
+        return execution.choose_backend(jobs=jobs, ray=ray, threads=threads)
+    except ValueError as error:
+        fail(str(error))
+
+
+RAY_HELP = (
+    "Run the units on the Ray cluster at ADDRESS (default: $RAY_ADDRESS when set), or 'local' "
+    "for a private single-machine Ray. Results do not change."
+)
+INTERRUPTED = "interrupted: finished units are kept; rerun the same command to resume"
 
 
 @app.command()
@@ -242,7 +259,8 @@ def tournament(
         None,
         help="A B (one matchup, A's payoff), or with --vs the agents to play against BASE. "
         "Each: a built-in (random, raise, call), an agent folder, or an agent set (a folder "
-        "of seed-<k> agent folders: seed k plays seed-k).",
+        "of seed-<k> agent folders: seed k plays seed-k). An rlcard:CKPT agent is unpickled, "
+        "which runs any code it holds (trusted files only).",
         show_default=False,
     ),
     vs: str | None = typer.Option(
@@ -347,7 +365,11 @@ def train(
     runs: int = typer.Option(
         1, "--runs", help="Runs with seeds seed..seed+runs-1, in OUT/run-<k>."
     ),
-    overwrite: bool = typer.Option(False, "--overwrite", help="Replace a finished run at OUT."),
+    overwrite: bool = typer.Option(
+        False, "--overwrite", help="Replace a finished run (with --runs: runs of other settings)."
+    ),
+    jobs: int = typer.Option(1, "--jobs", "-j", help="Processes running --runs at once."),
+    ray: str | None = typer.Option(None, "--ray", metavar="ADDRESS", help=RAY_HELP),
     epochs: int | None = typer.Option(None, "--epochs", help="Training epochs [default: 50]."),
     seed: int | None = typer.Option(None, "--seed", help="Seed for init, split, shuffle, noise."),
     device: str = typer.Option("cpu", "--device", help="cpu or cuda."),
@@ -411,11 +433,14 @@ def train(
             device=device,
             progress=not quiet,
             overwrite=overwrite,
+            backend=_backend(jobs, ray),
         )
-    except ValueError as error:
+    except (ValueError, execution.ExecutionError) as error:
         fail(str(error))
     except OSError as error:
         fail(f"{error.filename or out}: {error.strerror or error}")
+    except KeyboardInterrupt:
+        fail(INTERRUPTED, 130)
     single = {"metrics": summary.metrics, "baselines": summary.baselines}
     for run in summary.runs or (single,):
         last, base = run["metrics"][-1], run["baselines"]
@@ -430,23 +455,6 @@ def train(
         )
     typer.echo(f"{summary.samples_per_second:,.0f} samples/s; wrote {summary.out_dir}")
 
-
-from pokerirl import execution  # noqa: E402  (light: tqdm only; ray loads when chosen)
-
-
-def _backend(jobs: int, ray: str | None, threads: int = 1) -> execution.Backend:
-    """The execution backend of a fan-out command: --ray, else $RAY_ADDRESS, else --jobs."""
-    try:
-        return execution.choose_backend(jobs=jobs, ray=ray, threads=threads)
-    except ValueError as error:
-        fail(str(error))
-
-
-RAY_HELP = (
-    "Run the units on the Ray cluster at ADDRESS (default: $RAY_ADDRESS when set), or 'local' "
-    "for a private single-machine Ray. Results do not change."
-)
-INTERRUPTED = "interrupted: finished units are kept; rerun the same command to resume"
 
 agent_app = typer.Typer(help="Train DQN agents.", no_args_is_help=True)
 app.add_typer(agent_app, name="agent")
@@ -472,7 +480,9 @@ def agent_train(
         False, "--overwrite", help="Retrain finished agents of other settings (else refused)."
     ),
     opponent: str = typer.Option(
-        "random", help="random, raise, call, an agent folder, rlcard:CKPT, or self."
+        "random",
+        help="random, raise, call, an agent folder, rlcard:CKPT (unpickled: runs any code it "
+        "holds; trusted files only), or self.",
     ),
     eval_every: int = typer.Option(10_000, help="Evaluate every N training hands."),
     eval_hands: int = typer.Option(20_000, help="Duplicate hands per evaluation (even)."),

@@ -725,7 +725,7 @@ def save_unit_folder(
     tidy_folder(folder)
     staging = Path(tempfile.mkdtemp(prefix=f".{folder.name}.new-", dir=folder.parent))
     try:
-        os.chmod(staging, 0o777 & ~_umask())
+        atomic.make_shareable(staging)
         write_files(staging, {**files, **(unhashed or {})})
         record = make_record(config, files=files)
         (staging / RECORD_FILE).write_text(json.dumps(record, indent=2, sort_keys=True) + "\n")
@@ -753,12 +753,6 @@ def tidy_folder(folder: str | os.PathLike[str]) -> None:
         shutil.rmtree(leftover, ignore_errors=True)
     for leftover in folder.parent.glob(f".{folder.name}.new-*"):
         shutil.rmtree(leftover, ignore_errors=True)
-
-
-def _umask() -> int:
-    mask = os.umask(0)
-    os.umask(mask)
-    return mask
 
 
 def load_unit_folder(

@@ -327,6 +327,34 @@ def test_several_runs_write_run_folders_a_summary_and_a_band_plot(
         load_reward(out)
 
 
+@pytest.mark.slow
+def test_several_runs_are_resumable_units_whatever_the_job_count(
+    table_path: Path, tmp_path: Path
+) -> None:
+    base = ["train", str(table_path), "--epochs", "1", "--batch-size", "64", "--quiet"]
+    weights = ("reward.pt", "policy.pt", "config.json", "metrics.jsonl", "split.json")
+    for jobs in ("1", "2"):
+        out = tmp_path / f"jobs{jobs}"
+        result = CliRunner().invoke(app, [*base, "--out", str(out), "--runs", "2", "-j", jobs])
+        assert result.exit_code == 0, result.output
+    for k in (0, 1):
+        for name in weights:
+            one, two = (tmp_path / f"jobs{j}" / f"run-{k}" / name for j in (1, 2))
+            assert one.read_bytes() == two.read_bytes(), (k, name)
+    out = tmp_path / "jobs1"
+    finished = (out / "run-0" / "reward.pt").stat().st_mtime_ns
+    (out / "run-1" / "reward.pt").write_bytes(b"corrupt")  # recomputed, not trusted
+    result = CliRunner().invoke(app, [*base, "--out", str(out), "--runs", "2"])
+    assert result.exit_code == 0, result.output
+    assert (out / "run-0" / "reward.pt").stat().st_mtime_ns == finished  # reused
+    twin = tmp_path / "jobs2" / "run-1" / "reward.pt"
+    assert (out / "run-1" / "reward.pt").read_bytes() == twin.read_bytes()
+    changed = [*base[:3], "2", *base[4:], "--out", str(out), "--runs", "2"]
+    result = CliRunner().invoke(app, changed)
+    assert result.exit_code == 1 and "another configuration" in result.output
+    assert (out / "run-0" / "reward.pt").stat().st_mtime_ns == finished
+
+
 def _snapshot(folder: Path) -> dict[str, bytes]:
     return {p.name: p.read_bytes() for p in sorted(folder.iterdir())}
 

@@ -18,6 +18,7 @@ Everything but the registry needs torch and is imported on first use.
 from __future__ import annotations
 
 import os
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -60,7 +61,12 @@ def land_agent(shipped: ShippedAgent, folder: str | os.PathLike[str]) -> Agent:
     for name, data in shipped.files:
         (folder / name).write_bytes(data)
     if shipped.spec.startswith(RLCARD_PREFIX):
-        return resolve_agent(f"{RLCARD_PREFIX}{folder / shipped.files[0][0]}")
+        from pokerirl.agents.rlcard_import import UntrustedCheckpointWarning
+
+        # The driver warned when it read these bytes; a worker's copy needs no second warning.
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", UntrustedCheckpointWarning)
+            return resolve_agent(f"{RLCARD_PREFIX}{folder / shipped.files[0][0]}")
     return resolve_agent(str(folder))
 
 

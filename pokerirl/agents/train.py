@@ -286,6 +286,7 @@ def _train_many(
             raise ValueError("--reward learned needs --reward-run RUN_DIR")
         reward_print = reward_run_fingerprint(first.reward_run)
         if reward_fn is None:
+            load_reward_fn(first.reward_run)  # errors name the user's files, not a worker's copy
             reward_files = read_files(first.reward_run, REWARD_RUN_FILES)
     if first.opponent == SELF_PLAY:
         opponent, opponent_print = None, SELF_PLAY

@@ -31,17 +31,25 @@ import os
 import shutil
 import tempfile
 import uuid
-from collections.abc import Callable, Iterator, Mapping, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Any, TypeVar
+from typing import Any
 
 import numpy as np
 import torch
 from torch import Tensor, nn
 
-from pokerirl.atomic import write_text, write_torch
+from pokerirl.atomic import make_shareable, write_text, write_torch
+from pokerirl.execution import (
+    Backend,
+    UnitConflict,
+    bytes_fingerprint,
+    load_unit_folder,
+    map_units,
+    save_unit_folder,
+)
 from pokerirl.irl.airl import (
     TrainResult,
     baselines,
@@ -60,9 +68,6 @@ FORMAT_VERSION = 2
 REWARD_FILE, POLICY_FILE, CONFIG_FILE = "reward.pt", "policy.pt", "config.json"
 METRICS_FILE, BASELINES_FILE, SPLIT_FILE = "metrics.jsonl", "baselines.json", "split.json"
 TIMINGS_FILE, SUMMARY_FILE = "timings.json", "summary.json"
-
-T = TypeVar("T")
-Mapper = Callable[[Callable[..., T], Sequence[tuple[Any, ...]]], list[T]]
 
 
 class RunError(ValueError):
@@ -262,36 +267,52 @@ def save_run(
 
 
 def train_unit(
-    table: str, out: str, algo: str, settings: dict[str, Any], device: str
+    table: bytes, table_path: str, algo: str, settings: dict[str, Any], device: str
 ) -> dict[str, Any]:
     """One run of a fan-out: a top-level, picklable function of plain arguments.
 
-    Pins torch to one thread (restored after) and seeds from ``settings["seed"]``.
+    The table arrives as bytes and the run folder leaves as bytes (``files``; the driver
+    writes them), so a worker needs no shared filesystem. Pins torch to one thread
+    (restored after) and seeds from ``settings["seed"]``.
     """
     threads = torch.get_num_threads()
     torch.set_num_threads(1)
     try:
-        torch.manual_seed(settings["seed"])
-        config = AIRLConfig(**settings)
-        summary = train_into(
-            read_table(table), Path(out), algo=algo, config=config, device=device, table=table
-        )
+        with tempfile.TemporaryDirectory(prefix="pokerirl-run-") as scratch:
+            path = Path(scratch) / "table.parquet"
+            path.write_bytes(table)
+            torch.manual_seed(settings["seed"])
+            run = Path(scratch) / "run"
+            train_into(
+                read_table(path),
+                run,
+                algo=algo,
+                config=AIRLConfig(**settings),
+                device=device,
+                table=table_path,
+            )
+            files = {f.name: f.read_bytes() for f in sorted(run.iterdir()) if f.is_file()}
     finally:
         torch.set_num_threads(threads)
+    return {"files": files}
+
+
+def _run_result(folder: Path) -> dict[str, Any]:
+    """What :func:`summarize` needs of a finished run folder."""
+    record = json.loads((folder / CONFIG_FILE).read_text(encoding="utf-8"))
+    timings_path = folder / TIMINGS_FILE
+    timings = json.loads(timings_path.read_text()) if timings_path.is_file() else {}
     return {
-        "out": out,
-        "seed": config.seed,
-        "metrics": summary.metrics,
-        "baselines": summary.baselines,
-        "samples_per_second": summary.samples_per_second,
-        "train_rows": summary.train_rows,
-        "val_rows": summary.val_rows,
+        "out": str(folder),
+        "seed": record["hyperparameters"]["seed"],
+        "metrics": [
+            json.loads(line) for line in (folder / METRICS_FILE).read_text().splitlines() if line
+        ],
+        "baselines": json.loads((folder / BASELINES_FILE).read_text()),
+        "samples_per_second": timings.get("samples_per_second", float("nan")),
+        "train_rows": record["data"]["train_rows"],
+        "val_rows": record["data"]["val_rows"],
     }
-
-
-def in_process(function: Callable[..., T], units: Sequence[tuple[Any, ...]]) -> list[T]:
-    """The default mapper: the units one after another, in this process."""
-    return [function(*unit) for unit in units]
 
 
 def train_runs(
@@ -304,13 +325,15 @@ def train_runs(
     device: str = "cpu",
     progress: bool = True,
     overwrite: bool = False,
-    mapper: Mapper[dict[str, Any]] | None = None,
+    backend: Backend | None = None,
 ) -> RunSummary:
     """``runs`` runs of ``config`` with seeds ``seed + k`` into ``out_dir/run-<k>``, then
     ``summary.json`` and ``alignment_bands.png``. One run keeps the single-folder layout.
 
-    ``mapper(train_unit, units)`` runs the units (default :func:`in_process`); each unit is
-    a tuple of plain values, so a process pool or a cluster can run them.
+    Each run is a unit of :func:`pokerirl.execution.map_units` on ``backend`` (default: in
+    this process): written atomically with a record of its settings and table, reused by a
+    rerun with the same ones, recomputed when corrupt, refused when made with other
+    settings unless ``overwrite``. Results do not depend on the backend.
     """
     if runs < 1:
         raise ValueError("--runs must be at least 1")
@@ -327,32 +350,59 @@ def train_runs(
         )
     resolve_device(device)
     out = Path(out_dir)
-    check_destination(out, overwrite=overwrite)
+    if out.exists() and not out.is_dir():
+        raise RunError(f"{out} exists and is not a folder; choose another --out")
+    if (out / CONFIG_FILE).is_file():
+        raise RunError(f"{out} holds a single run; choose another --out for --runs {runs}")
     read_table(table)  # a bad table fails once, before any unit starts
-    with staged_folder(out, overwrite=overwrite) as folder:
-        units = [
-            (
-                str(table),
-                str(folder / f"run-{k}"),
-                algo,
-                {**config.to_dict(), "seed": config.seed + k},
-                device,
-            )
+    table_bytes = Path(table).read_bytes()
+    shared = {"algo": algo, "device": device, "table": bytes_fingerprint(table_bytes)}
+    unit_configs = [
+        {**shared, "settings": {**config.to_dict(), "seed": config.seed + k}} for k in range(runs)
+    ]
+    folders = [out / f"run-{k}" for k in range(runs)]
+    try:
+        todo = [
+            k
             for k in range(runs)
+            if load_unit_folder(folders[k], unit_configs[k], overwrite=overwrite) is None
         ]
-        results = (mapper or in_process)(train_unit, units)
-        summary = summarize(results)
-        write_text(folder / SUMMARY_FILE, json.dumps(summary, indent=2) + "\n")
-        plot_bands(summary, folder)
+    except UnitConflict as error:
+        raise RunError(str(error)) from None
+
+    def save(index: int, result: dict[str, Any]) -> None:
+        k = todo[index]
+        files = dict(result["files"])
+        timings = {TIMINGS_FILE: files.pop(TIMINGS_FILE)}
+        save_unit_folder(folders[k], files, unit_configs[k], unhashed=timings)
+
+    units = [
+        (table_bytes, str(Path(table).resolve()), algo, unit_configs[k]["settings"], device)
+        for k in todo
+    ]
+    map_units(
+        train_unit,
+        units,
+        backend=backend or Backend(),
+        progress=progress,
+        desc=f"{algo} runs",
+        reused=runs - len(todo),
+        on_result=save,
+        labels=[f"run-{k}" for k in todo],
+    )
+    results = [_run_result(folder) for folder in folders]
+    summary = summarize(results)
+    write_text(out / SUMMARY_FILE, json.dumps(summary, indent=2) + "\n")
+    plot_bands(summary, out)
     first = results[0]
     return RunSummary(
         out_dir=out,
         metrics=first["metrics"],
         baselines=first["baselines"],
-        samples_per_second=float(np.mean([r["samples_per_second"] for r in results])),
+        samples_per_second=float(np.nanmean([r["samples_per_second"] for r in results])),
         train_rows=first["train_rows"],
         val_rows=first["val_rows"],
-        runs=tuple({**r, "out": str(out / Path(r["out"]).name)} for r in results),
+        runs=tuple(results),
     )
 
 
@@ -406,9 +456,7 @@ def staged_folder(out: Path, *, overwrite: bool) -> Iterator[Path]:
         folder = Path(tempfile.mkdtemp(prefix=f".{out.name}.", suffix=".tmp", dir=out.parent))
     except OSError as error:
         raise RunError(f"{out}: cannot write there ({error.strerror or error})") from None
-    mask = os.umask(0)
-    os.umask(mask)
-    os.chmod(folder, 0o777 & ~mask)  # mkdtemp makes 0700; a run folder is shareable
+    make_shareable(folder)
     try:
         yield folder
         if out.is_dir() and any(out.iterdir()):

@@ -51,7 +51,7 @@ from pokerirl.execution import (
     map_units,
     save_record,
 )
-from pokerirl.game.match import DEFAULT_BATCH_SIZE, play_match
+from pokerirl.game.match import DEFAULT_BATCH_SIZE, check_match_size, play_match
 from pokerirl.tournaments.lineup import (
     TournamentError,
     agent_label,
@@ -240,10 +240,10 @@ def _validate(
     if hands < least:
         mode = "with duplicate deals (two pairs)" if duplicate else "(two hands)"
         raise TournamentError(f"hands must be at least {least} {mode}, got {hands}")
-    if duplicate and hands % 2:
-        raise TournamentError(f"duplicate deals are played twice: hands must be even, got {hands}")
-    if batch_size < 2 or (duplicate and batch_size % 2):
-        raise TournamentError(f"batch size must be even and at least 2, got {batch_size}")
+    try:
+        check_match_size(hands, duplicate=duplicate, batch_size=batch_size)
+    except ValueError as error:
+        raise TournamentError(str(error)) from None
     if not 0 < alpha < 1:
         raise TournamentError(f"alpha must be between 0 and 1, got {alpha}")
     if jobs < 1:
