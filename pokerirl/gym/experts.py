@@ -234,8 +234,7 @@ def train_expert(
     ``final_episodes`` episodes on fresh seeds.
     """
     require_gym()
-    from stable_baselines3.common.callbacks import BaseCallback, EvalCallback
-    from stable_baselines3.common.monitor import Monitor
+    from stable_baselines3.common.callbacks import BaseCallback
 
     settings = expert_settings(env_id, hyper=hyper)
     timesteps = timesteps or settings.timesteps
@@ -246,38 +245,32 @@ def train_expert(
     out.mkdir(parents=True, exist_ok=True)
 
     model = make_model(env_id, settings, seed=seed)
+    history: list[dict[str, float]] = []
     best: dict[str, torch.Tensor] = {}
 
-    class KeepBest(BaseCallback):  # EvalCallback calls this on each new best mean return.
-        def _on_step(self) -> bool:
+    def evaluate_and_keep() -> None:
+        # The same episode seeds every time, so checkpoints are compared on the same starts.
+        result = evaluate(model.policy, env_id, episodes=eval_episodes, seed=seed + 10_000)
+        if not history or result.mean > max(h["return_mean"] for h in history):
             best.clear()
             best.update({k: v.detach().clone() for k, v in model.policy.state_dict().items()})
+        history.append(
+            {"timesteps": model.num_timesteps, "return_mean": result.mean, "return_std": result.std}
+        )
+
+    class PeriodicEvaluation(BaseCallback):  # one env: num_timesteps counts single steps
+        def _on_step(self) -> bool:
+            if self.num_timesteps % eval_every == 0:
+                evaluate_and_keep()
             return True
 
-    eval_env = Monitor(make_env(env_id))
-    eval_env.reset(seed=seed + 10_000)
-    evaluations = EvalCallback(
-        eval_env,
-        callback_on_new_best=KeepBest(),
-        n_eval_episodes=eval_episodes,
-        eval_freq=eval_every,
-        deterministic=True,
-        verbose=0,
-    )
-    model.learn(total_timesteps=timesteps, callback=evaluations)
-    eval_env.close()
-    if not best:  # budget shorter than one evaluation period: keep the last state
-        best = {k: v.detach().clone() for k, v in model.policy.state_dict().items()}
+    model.learn(total_timesteps=timesteps, callback=PeriodicEvaluation())
+    if not history or history[-1]["timesteps"] != model.num_timesteps:
+        evaluate_and_keep()  # the final state competes too
     model.policy.load_state_dict(best)
     model.policy.set_training_mode(False)
     final = evaluate(model.policy, env_id, episodes=final_episodes, seed=FINAL_EVAL_SEED)
 
-    history = [
-        {"timesteps": int(t), "return_mean": float(np.mean(r)), "return_std": float(np.std(r))}
-        for t, r in zip(
-            evaluations.evaluations_timesteps, evaluations.evaluations_results, strict=True
-        )
-    ]
     algo = settings.algo
     record = {
         "env": env_id,
@@ -294,12 +287,12 @@ def train_expert(
         "evaluation": {
             "periodic_every": eval_every,
             "periodic_episodes": eval_episodes,
-            "best_periodic_return": max((h["return_mean"] for h in history), default=None),
+            "best_periodic_return": max(h["return_mean"] for h in history),
             "final_seed": FINAL_EVAL_SEED,
             "deterministic": True,
             "returns": list(final.returns),
         },
-        "versions": _versions(),
+        "versions": gym_versions(),
     }
     write_text(out / METRICS_FILE, "".join(json.dumps(h) + "\n" for h in history))
     write_torch(out / MODEL_FILE, best)
@@ -307,7 +300,7 @@ def train_expert(
     return record
 
 
-def _versions() -> dict[str, str | None]:
+def gym_versions() -> dict[str, str | None]:
     from importlib import metadata
 
     from pokerirl.versions import package_versions
@@ -330,8 +323,14 @@ def shipped_dir() -> Path:
 
 
 def shipped_manifest() -> list[dict[str, Any]]:
-    """The shipped experts' manifest: one object per expert with :data:`MANIFEST_KEYS`."""
-    return json.loads((shipped_dir() / MANIFEST_FILE).read_text())
+    """The shipped experts' manifest: one object per expert with :data:`MANIFEST_KEYS`.
+
+    Each object also holds ``settings`` (the hyper-parameters it was trained with).
+    """
+    path = shipped_dir() / MANIFEST_FILE
+    if not path.is_file():
+        raise ValueError(f"{path}: no shipped experts in this installation")
+    return json.loads(path.read_text())
 
 
 def resolve_expert_dir(expert: str | os.PathLike[str], env_id: str) -> Path:
@@ -371,3 +370,18 @@ def manifest_entry(record: dict[str, Any]) -> dict[str, Any]:
     entry = {key: record[key] for key in MANIFEST_KEYS}
     entry["settings"] = {"hyper": record["hyper"], **record["settings"]}
     return entry
+
+
+def write_manifest(folder: str | os.PathLike[str]) -> list[dict[str, Any]]:
+    """Write ``folder/manifest.json`` from the expert folders inside it, in task order."""
+    from pokerirl.gym.presets import TASK_ORDER
+
+    folder = Path(folder)
+    records = [
+        json.loads((folder / env_id / CONFIG_FILE).read_text())
+        for env_id in TASK_ORDER
+        if (folder / env_id / CONFIG_FILE).is_file()
+    ]
+    manifest = [manifest_entry(record) for record in records]
+    write_text(folder / MANIFEST_FILE, json.dumps(manifest, indent=2) + "\n")
+    return manifest
