@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import json
 import os
+import pickle
 from dataclasses import asdict, dataclass, replace
 from importlib import resources
 from pathlib import Path
@@ -359,7 +360,13 @@ def load_expert(folder: str | os.PathLike[str]) -> Expert:
         raise ValueError(
             f"{folder}: not an expert folder ({Path(error.filename).name} missing)"
         ) from None
-    except (json.JSONDecodeError, KeyError, RuntimeError, TypeError) as error:
+    except (
+        json.JSONDecodeError,
+        pickle.UnpicklingError,
+        KeyError,
+        RuntimeError,
+        TypeError,
+    ) as error:
         raise ValueError(f"{folder}: bad expert files: {str(error).splitlines()[0]}") from None
     policy.set_training_mode(False)
     return Expert(env_id=record["env"], algo=record["algo"], policy=policy, record=record)
