@@ -87,8 +87,36 @@ def test_rl_on_a_learned_reward_records_the_true_return(tmp_path: Path) -> None:
     assert len(result.train_episode_returns) == 2 and all(
         r < 0 for r in result.train_episode_returns
     )
-    assert len(seen) == 512 and all(a.shape == (1, 1) and np.abs(a).max() <= 2 for a in seen)
+    # One call to check that the reward fits the env, then one per step.
+    assert len(seen) == 1 + 512 and all(a.shape == (1, 1) and np.abs(a).max() <= 2 for a in seen)
     record = json.loads((tmp_path / "run" / "config.json").read_text())
     assert record["final_return"] == result.final_return and record["reward"] == "mlp"
     metrics = (tmp_path / "run" / "metrics.jsonl").read_text().splitlines()
     assert [json.loads(m)["timesteps"] for m in metrics] == [256, 512]
+
+
+@pytest.mark.slow
+def test_rl_command_trains_on_the_env_reward_and_refuses_a_reward_that_does_not_fit(
+    tmp_path: Path,
+) -> None:
+    from typer.testing import CliRunner
+
+    from pokerirl.cli import app
+
+    args = ["gym", "rl", "MountainCar-v0", "--out", str(tmp_path / "env")]
+    small = ["--runs", "2", "--timesteps", "1100", "--evaluations", "1", "--eval-episodes", "1"]
+    result = CliRunner().invoke(app, [*args, "--env-reward", *small])
+    assert result.exit_code == 0, result.output
+    assert "final true return -200.0 +- 0.0 over 2 runs" in result.output
+    for k in range(2):
+        record = json.loads((tmp_path / "env" / f"run-{k}" / "config.json").read_text())
+        assert (record["algo"], record["reward"], record["seed"]) == ("dqn", "env", k)
+    assert CliRunner().invoke(app, [*args, *small]).exit_code != 0  # neither reward given
+
+    def poker_reward(obs: np.ndarray, actions: np.ndarray) -> np.ndarray:
+        if obs.shape[1] != 72:
+            raise ValueError(f"obs must be (B, 72), got {obs.shape}")
+        return np.zeros(len(obs))
+
+    with pytest.raises(ValueError, match="does not fit MountainCar-v0: obs must be"):
+        train_rl("MountainCar-v0", reward=poker_reward, reward_name="poker", seed=0, timesteps=10)

@@ -14,7 +14,7 @@ anything or imports Gymnasium.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, replace
 from typing import Literal
 
 Algo = Literal["ppo", "dqn"]
@@ -426,12 +426,9 @@ class StudyPreset:
     eval_episodes: int | None = None
     rl_timesteps: int | None = None
     notes: str = ""
-    overrides: dict[str, str] = field(default_factory=dict)
 
     def irl(self, env_id: str) -> IRLSettings:
         """The task's IRL settings with this preset's budget overrides applied."""
-        from dataclasses import replace
-
         base = TASKS[env_id].irl
         return replace(
             base,
@@ -442,8 +439,6 @@ class StudyPreset:
 
     def rl(self, env_id: str) -> RLSettings:
         """The task's RL settings with this preset's budget override applied."""
-        from dataclasses import replace
-
         base = TASKS[env_id].rl
         return replace(base, timesteps=self.rl_timesteps or base.timesteps)
 

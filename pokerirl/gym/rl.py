@@ -84,7 +84,7 @@ def train_rl(
     timesteps = timesteps or settings.timesteps
     if timesteps < 1 or evaluations < 1 or eval_episodes < 1:
         raise ValueError("timesteps, evaluations and eval_episodes must be positive")
-    make_env(env_id).close()  # a clear error for an unknown id before anything else
+    _check_reward(env_id, reward)
     venv = DummyVecEnv([lambda: Monitor(make_env(env_id))])
     if reward is not None:
         venv = learned_reward_env(venv, reward)
@@ -122,6 +122,25 @@ def train_rl(
     if out is not None:
         _save(Path(out), result, settings, model)
     return result
+
+
+def _check_reward(env_id: str, reward: RewardCallable | None) -> None:
+    """Fail in one line, before training, on an unknown env or a reward that does not fit it."""
+    env = make_env(env_id)
+    try:
+        obs, _ = env.reset(seed=0)
+        if reward is None:
+            return
+        obs = np.asarray(obs, dtype=np.float32)[None]
+        action = np.asarray(env.action_space.sample())[None]
+        try:
+            values = np.asarray(reward(obs, action))
+        except (ValueError, RuntimeError, IndexError) as error:
+            raise ValueError(f"the reward does not fit {env_id}: {error}") from None
+        if values.shape != (1,):
+            raise ValueError(f"the reward gives shape {values.shape} on {env_id}, not (1,)")
+    finally:
+        env.close()
 
 
 def _save(out: Path, result: RLResult, settings: RLSettings, model: Any) -> None:
