@@ -61,6 +61,9 @@ def test_expert_folder_records_its_training_and_reloads_to_the_same_returns(acro
     replay = evaluate(expert.policy, "Acrobot-v1", episodes=2, seed=FINAL_EVAL_SEED)
     assert list(replay.returns) == record["evaluation"]["returns"]
     assert record["return_mean"] == pytest.approx(replay.mean)
+    # The saved weights are the best periodic ones: they replay that evaluation's score.
+    periodic = evaluate(expert.policy, "Acrobot-v1", episodes=1, seed=3 + 10_000)
+    assert periodic.mean == record["evaluation"]["best_periodic_return"]
 
 
 @pytest.mark.slow
