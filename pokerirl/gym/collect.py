@@ -71,12 +71,10 @@ def rollout(
     envs = [make_env(expert.env_id) for _ in range(LOCKSTEP_ENVS)]
     finished: dict[int, Episode] = {}
     slots: list[dict | None] = [None] * len(envs)  # per env: its episode's id and lists
-    opened = 0
+    opened, finished_steps = 0, 0
 
     def steps() -> int:  # steps finished or under way
-        return sum(len(e.rewards) for e in finished.values()) + sum(
-            len(s["rewards"]) for s in slots if s is not None
-        )
+        return finished_steps + sum(len(s["rewards"]) for s in slots if s is not None)
 
     try:
         with torch.random.fork_rng():
@@ -103,6 +101,7 @@ def rollout(
                     slot["next"].append(obs)
                     if terminated or truncated:
                         finished[slot["id"]] = _episode(slot, terminated, truncated)
+                        finished_steps += len(slot["rewards"])
                         slots[i] = None
                     else:
                         slot["obs"].append(obs)
