@@ -41,3 +41,17 @@ def test_quick_preset_shrinks_budgets_and_keeps_the_authors_method_settings() ->
     assert quick.rl("MountainCar-v0").dqn == TASKS["MountainCar-v0"].rl.dqn
     for env_id in paper.tasks:
         assert paper.irl(env_id) == TASKS[env_id].irl and paper.rl(env_id) == TASKS[env_id].rl
+
+
+def test_importing_the_gym_package_and_the_cli_does_not_import_gymnasium_or_sb3() -> None:
+    # A poker-only user must not pay for the gym extra (nor need it installed).
+    import subprocess
+    import sys
+
+    code = (
+        "import sys, pokerirl.cli, pokerirl.gym.presets, pokerirl.gym.experts, "
+        "pokerirl.gym.collect, pokerirl.gym.rewards, pokerirl.gym.rl\n"
+        "loaded = {'gymnasium', 'stable_baselines3', 'mujoco'} & set(sys.modules)\n"
+        "assert not loaded, loaded"
+    )
+    subprocess.run([sys.executable, "-c", code], check=True)
