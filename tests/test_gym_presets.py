@@ -2,13 +2,18 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import pytest
 
 from pokerirl.gym.presets import PRESETS, TASK_ORDER, TASKS, PPOSettings, RLSettings
 
 
-def test_every_task_is_a_registered_environment_with_the_declared_action_space() -> None:
+def test_every_task_is_a_registered_environment_with_the_declared_action_space(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
     pytest.importorskip("gymnasium")
+    monkeypatch.chdir(tmp_path)  # MuJoCo writes its warnings to MUJOCO_LOG.TXT in the cwd
     from pokerirl.gym.experts import make_env
 
     assert sorted(TASK_ORDER) == sorted(TASKS)
