@@ -18,6 +18,7 @@ from __future__ import annotations
 import json
 import os
 import pickle
+import warnings
 from dataclasses import asdict, dataclass, replace
 from importlib import resources
 from pathlib import Path
@@ -88,7 +89,12 @@ def make_env(env_id: str) -> gymnasium.Env:
     import gymnasium
 
     try:
-        return gymnasium.make(env_id)
+        with warnings.catch_warnings():
+            # Ant-v4 and HalfCheetah-v4 are kept on purpose (the paper's versions).
+            warnings.filterwarnings(
+                "ignore", message=".*is out of date", category=DeprecationWarning
+            )
+            return gymnasium.make(env_id)
     except gymnasium.error.Error as error:
         raise ValueError(f"unknown environment {env_id!r}: {error}") from None
 
