@@ -109,7 +109,10 @@ def test_shipped_manifest_matches_the_shipped_files() -> None:
 
 
 @pytest.mark.slow
-def test_each_shipped_expert_replays_its_recorded_first_episode() -> None:
+def test_each_shipped_expert_replays_its_recorded_first_episode(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.chdir(tmp_path)  # MuJoCo writes its warnings to MUJOCO_LOG.TXT in the cwd
     # Guards the shipped weights against the manifest's claims: a deterministic replay.
     for entry in shipped_manifest():
         expert = load_expert(shipped_dir() / entry["env"])
