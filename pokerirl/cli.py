@@ -556,3 +556,159 @@ def agent_train(
             for name, e in line["eval"].items()
         )
         typer.echo(f"{folder}: {line['hands']:,} hands, {scores}")
+
+
+gym_app = typer.Typer(
+    help="The paper's Gymnasium tasks: SB3 experts, expert data, RL on a learned reward.",
+    no_args_is_help=True,
+)
+app.add_typer(gym_app, name="gym")
+
+
+def _gym_threads(threads: int) -> None:
+    # SB3's small MLPs run fastest on one thread; more only contend with other work.
+    import torch
+
+    torch.set_num_threads(threads)
+
+
+@gym_app.command("expert")
+def gym_expert(
+    env: str = typer.Argument(..., help="Acrobot-v1, MountainCar-v0, LunarLander-v3, ..."),
+    out: Path = typer.Option(..., "--out", "-o", help="Expert folder to write."),
+    seed: int = typer.Option(0, help="Training seed."),
+    timesteps: int | None = typer.Option(None, help="Budget (default: the authors')."),
+    hyper: str = typer.Option("paper", help="paper (the authors' settings) or zoo (rl-zoo's)."),
+    eval_every: int | None = typer.Option(None, help="Steps between evaluations (budget/20)."),
+    eval_episodes: int = typer.Option(5, help="Episodes per periodic evaluation."),
+    final_episodes: int = typer.Option(20, help="Episodes of the best policy's final evaluation."),
+    threads: int = typer.Option(1, help="torch threads."),
+) -> None:
+    """Train an SB3 expert (PPO; DQN for MountainCar), keeping the best evaluated checkpoint."""
+    from pokerirl.gym.experts import train_expert
+
+    _gym_threads(threads)
+    try:
+        record = train_expert(
+            out,
+            env,
+            seed=seed,
+            timesteps=timesteps,
+            hyper=hyper,
+            eval_every=eval_every,
+            eval_episodes=eval_episodes,
+            final_episodes=final_episodes,
+        )
+    except (ValueError, ImportError) as error:
+        fail(str(error))
+    except OSError as error:
+        fail(f"{error.filename or out}: {error.strerror or error}")
+    typer.echo(
+        f"{env}: {record['algo']} expert, return {record['return_mean']:.1f} "
+        f"+- {record['return_std']:.1f} over {record['episodes']} episodes "
+        f"(target {record['target']:g}); wrote {out}"
+    )
+
+
+@gym_app.command("experts")
+def gym_experts(
+    format: str = typer.Option("text", "--format", help="json or text."),
+) -> None:
+    """Print the manifest of the experts shipped with pokerirl."""
+    from pokerirl.gym.experts import MANIFEST_KEYS, shipped_manifest
+
+    if format not in ("json", "text"):
+        fail(f"--format must be json or text, got {format!r}")
+    try:
+        manifest = [{key: entry[key] for key in MANIFEST_KEYS} for entry in shipped_manifest()]
+    except ValueError as error:
+        fail(str(error))
+    if format == "json":
+        typer.echo(json.dumps(manifest, indent=2))
+        return
+    for e in manifest:
+        typer.echo(
+            f"{e['env']:<16} {e['algo']:<4} {e['return_mean']:>9.1f} +- {e['return_std']:<7.1f}"
+            f" ({e['episodes']} episodes; seed {e['seed']}, {e['timesteps']:,} steps)"
+        )
+
+
+@gym_app.command("collect")
+def gym_collect(
+    env: str = typer.Argument(..., help="The expert's environment."),
+    expert: str = typer.Option("shipped", help="An expert folder, or 'shipped'."),
+    transitions: int = typer.Option(..., "--transitions", "-n", min=1, help="Rows to write."),
+    seed: int = typer.Option(0, help="Episode k starts from reset(seed=seed + k)."),
+    out: Path = typer.Option(..., "--out", "-o", help="The Parquet table to write."),
+    stochastic: bool = typer.Option(False, help="Sample the expert's actions (else its mode)."),
+) -> None:
+    """Write the expert's play as a Parquet transition table (same seed, same bytes)."""
+    from pokerirl.gym.collect import collect
+    from pokerirl.gym.experts import load_expert, resolve_expert_dir
+
+    try:
+        loaded = load_expert(resolve_expert_dir(expert, env))
+        if loaded.env_id != env:
+            fail(f"{expert}: an expert for {loaded.env_id}, not {env}")
+        summary = collect(
+            loaded, out, transitions=transitions, seed=seed, deterministic=not stochastic
+        )
+    except (ValueError, ImportError) as error:
+        fail(str(error))
+    except OSError as error:
+        fail(f"{error.filename or out}: {error.strerror or error}")
+    typer.echo(
+        f"wrote {summary.transitions:,} transitions ({summary.episodes} episodes) to {out}; "
+        f"expert return {summary.return_mean:.1f} +- {summary.return_std:.1f} "
+        f"over {summary.complete_episodes} complete episodes"
+    )
+
+
+@gym_app.command("rl")
+def gym_rl(
+    env: str = typer.Argument(..., help="The environment."),
+    reward_run: Path | None = typer.Option(
+        None, help="IRL run folder whose learned reward replaces the env reward."
+    ),
+    env_reward: bool = typer.Option(False, help="Train on the env reward (the baseline)."),
+    runs: int = typer.Option(10, min=1, help="Runs (seeds 0..runs-1), in OUT/run-<k>."),
+    out: Path = typer.Option(..., "--out", "-o", help="Folder of the runs."),
+    timesteps: int | None = typer.Option(None, help="Budget (default: the authors')."),
+    evaluations: int = typer.Option(10, help="Points on the true-return curve."),
+    eval_episodes: int = typer.Option(5, help="Episodes per point."),
+    threads: int = typer.Option(1, help="torch threads."),
+) -> None:
+    """Train SB3 PPO (DQN for MountainCar) on a learned reward; the curve is the true return."""
+    from pokerirl.gym.rl import summarize, train_rl
+
+    if (reward_run is None) == (not env_reward):
+        fail("give exactly one of --reward-run DIR and --env-reward")
+    _gym_threads(threads)
+    try:
+        reward = None
+        if reward_run is not None:
+            from pokerirl.irl import load_reward
+
+            reward = load_reward(reward_run)
+        results = [
+            train_rl(
+                env,
+                reward=reward,
+                reward_name="env" if reward is None else str(reward_run),
+                seed=k,
+                timesteps=timesteps,
+                evaluations=evaluations,
+                eval_episodes=eval_episodes,
+                out=out / f"run-{k}",
+            )
+            for k in range(runs)
+        ]
+    except (ValueError, ImportError, KeyError) as error:
+        fail(str(error))
+    except OSError as error:
+        fail(f"{error.filename or out}: {error.strerror or error}")
+    final = summarize(results)
+    typer.echo(
+        f"{env}: final true return {final['mean']:.1f} +- {final['std']:.1f} over {runs} runs; "
+        f"wrote {out}"
+    )

@@ -1,0 +1,169 @@
+"""The RL phase: SB3 PPO (DQN for MountainCar) on a learned reward or on the env reward.
+
+The learning curve is always the environment's true return: periodic deterministic
+evaluations on a plain environment, plus Monitor's returns of the training episodes. A run
+folder holds ``config.json``, ``metrics.jsonl`` (the curve) and ``model.pt`` (the final
+policy's ``state_dict``).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from pokerirl.atomic import write_text, write_torch
+from pokerirl.gym.experts import (
+    CONFIG_FILE,
+    METRICS_FILE,
+    MODEL_FILE,
+    gym_versions,
+    make_env,
+    make_model,
+    policy_kwargs,
+    require_gym,
+)
+from pokerirl.gym.presets import TASKS, RLSettings
+from pokerirl.gym.rewards import RewardCallable, learned_reward_env
+
+EVAL_SEED = 2_000_000  # evaluation episodes' seeds, apart from the experts' and the data's
+
+
+@dataclass(frozen=True, kw_only=True)
+class CurvePoint:
+    timesteps: int
+    return_mean: float
+    return_std: float
+
+
+@dataclass(frozen=True, kw_only=True)
+class RLResult:
+    """One RL run: its true-return curve and the final point."""
+
+    env: str
+    reward: str
+    seed: int
+    timesteps: int
+    curve: tuple[CurvePoint, ...]
+    train_episode_returns: tuple[float, ...]
+
+    @property
+    def final_return(self) -> float:
+        return self.curve[-1].return_mean
+
+
+def train_rl(
+    env_id: str,
+    *,
+    reward: RewardCallable | None,
+    reward_name: str,
+    seed: int,
+    settings: RLSettings | None = None,
+    timesteps: int | None = None,
+    evaluations: int = 10,
+    eval_episodes: int = 5,
+    out: str | os.PathLike[str] | None = None,
+) -> RLResult:
+    """Train on ``reward`` (``None``: the env reward) and measure the true return.
+
+    ``evaluations`` periodic evaluations of ``eval_episodes`` deterministic episodes each are
+    spread over the budget, the last at its end.
+    """
+    require_gym()
+    from stable_baselines3.common.callbacks import BaseCallback
+    from stable_baselines3.common.monitor import Monitor
+    from stable_baselines3.common.vec_env import DummyVecEnv
+
+    from pokerirl.gym.experts import evaluate
+
+    settings = settings or TASKS[env_id].rl
+    timesteps = timesteps or settings.timesteps
+    if timesteps < 1 or evaluations < 1 or eval_episodes < 1:
+        raise ValueError("timesteps, evaluations and eval_episodes must be positive")
+    _check_reward(env_id, reward)
+    venv = DummyVecEnv([lambda: Monitor(make_env(env_id))])
+    if reward is not None:
+        venv = learned_reward_env(venv, reward)
+    model = make_model(env_id, settings, seed=seed, env=venv)
+    every = max(timesteps // evaluations, 1)
+    curve: list[CurvePoint] = []
+    train_returns: list[float] = []
+
+    def evaluate_now() -> None:
+        model.policy.set_training_mode(False)
+        result = evaluate(model.policy, env_id, episodes=eval_episodes, seed=EVAL_SEED)
+        curve.append(CurvePoint(timesteps=model.num_timesteps, return_mean=result.mean,
+                                return_std=result.std))  # fmt: skip
+
+    class Curve(BaseCallback):
+        def _on_step(self) -> bool:
+            for info in self.locals["infos"]:
+                if "episode" in info:  # Monitor: the true env return of a training episode
+                    train_returns.append(float(info["episode"]["r"]))
+            if self.num_timesteps % every == 0 and self.num_timesteps < timesteps:
+                evaluate_now()
+            return True
+
+    model.learn(total_timesteps=timesteps, callback=Curve())
+    evaluate_now()
+    venv.close()
+    result = RLResult(
+        env=env_id,
+        reward=reward_name,
+        seed=seed,
+        timesteps=timesteps,
+        curve=tuple(curve),
+        train_episode_returns=tuple(train_returns),
+    )
+    if out is not None:
+        _save(Path(out), result, settings, model)
+    return result
+
+
+def _check_reward(env_id: str, reward: RewardCallable | None) -> None:
+    """Fail in one line, before training, on an unknown env or a reward that does not fit it."""
+    env = make_env(env_id)
+    try:
+        obs, _ = env.reset(seed=0)
+        if reward is None:
+            return
+        obs = np.asarray(obs, dtype=np.float32)[None]
+        action = np.asarray(env.action_space.sample())[None]
+        try:
+            values = np.asarray(reward(obs, action))
+        except (ValueError, RuntimeError, IndexError) as error:
+            raise ValueError(f"the reward does not fit {env_id}: {error}") from None
+        if values.shape != (1,):
+            raise ValueError(f"the reward gives shape {values.shape} on {env_id}, not (1,)")
+    finally:
+        env.close()
+
+
+def _save(out: Path, result: RLResult, settings: RLSettings, model: Any) -> None:
+    out.mkdir(parents=True, exist_ok=True)
+    record = {
+        "env": result.env,
+        "algo": settings.algo,
+        "reward": result.reward,
+        "seed": result.seed,
+        "timesteps": result.timesteps,
+        "final_return": result.final_return,
+        "settings": asdict(settings.dqn if settings.algo == "dqn" else settings.ppo),
+        "policy_kwargs": policy_kwargs(settings),
+        "train_episode_returns": list(result.train_episode_returns),
+        "versions": gym_versions(),
+    }
+    state = {k: v.detach().cpu().clone() for k, v in model.policy.state_dict().items()}
+    write_text(out / METRICS_FILE, "".join(json.dumps(asdict(p)) + "\n" for p in result.curve))
+    write_torch(out / MODEL_FILE, state)
+    write_text(out / CONFIG_FILE, json.dumps(record, indent=2) + "\n")
+
+
+def summarize(results: list[RLResult]) -> dict[str, float]:
+    """Mean and std over runs of the final true return."""
+    finals = np.array([r.final_return for r in results])
+    return {"mean": float(finals.mean()), "std": float(finals.std()), "runs": len(finals)}

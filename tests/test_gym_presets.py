@@ -1,0 +1,62 @@
+"""Task presets: consistent data, real environment ids, and the study presets' budgets."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from pokerirl.gym.presets import PRESETS, TASK_ORDER, TASKS, PPOSettings, RLSettings
+
+
+def test_every_task_is_a_registered_environment_with_the_declared_action_space(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    pytest.importorskip("gymnasium")
+    monkeypatch.chdir(tmp_path)  # MuJoCo writes its warnings to MUJOCO_LOG.TXT in the cwd
+    from pokerirl.gym.experts import make_env
+
+    assert sorted(TASK_ORDER) == sorted(TASKS)
+    for env_id, task in TASKS.items():
+        env = make_env(env_id)
+        assert hasattr(env.action_space, "n") == task.discrete, env_id
+        env.close()
+    # The paper's versions where Gymnasium 1.x still has them (LunarLander-v2 is gone).
+    assert {"Ant-v4", "HalfCheetah-v4", "LunarLander-v3"} <= set(TASKS)
+
+
+def test_rl_settings_need_exactly_their_algorithms_settings() -> None:
+    ppo = TASKS["Acrobot-v1"].rl.ppo
+    with pytest.raises(ValueError, match="exactly its own settings"):
+        RLSettings(algo="dqn", timesteps=1, ppo=ppo)
+    with pytest.raises(ValueError, match="exactly its own settings"):
+        RLSettings(algo="ppo", timesteps=1)
+    assert isinstance(ppo, PPOSettings) and ppo.n_epochs == 20
+
+
+def test_quick_preset_shrinks_budgets_and_keeps_the_authors_method_settings() -> None:
+    quick, paper = PRESETS["quick"], PRESETS["paper"]
+    assert quick.tasks == ("MountainCar-v0",) and quick.runs == 3
+    irl, authors = quick.irl("MountainCar-v0"), TASKS["MountainCar-v0"].irl
+    assert irl.transitions < authors.transitions and irl.epochs < authors.epochs
+    assert (irl.alpha, irl.beta, irl.sigma_start, irl.sigma_end, irl.learning_rate) == (
+        authors.alpha, authors.beta, authors.sigma_start, authors.sigma_end, authors.learning_rate,
+    )  # fmt: skip
+    assert quick.rl("MountainCar-v0").timesteps < TASKS["MountainCar-v0"].rl.timesteps
+    assert quick.rl("MountainCar-v0").dqn == TASKS["MountainCar-v0"].rl.dqn
+    for env_id in paper.tasks:
+        assert paper.irl(env_id) == TASKS[env_id].irl and paper.rl(env_id) == TASKS[env_id].rl
+
+
+def test_importing_the_gym_package_and_the_cli_does_not_import_gymnasium_or_sb3() -> None:
+    # A poker-only user must not pay for the gym extra (nor need it installed).
+    import subprocess
+    import sys
+
+    code = (
+        "import sys, pokerirl.cli, pokerirl.gym.presets, pokerirl.gym.experts, "
+        "pokerirl.gym.collect, pokerirl.gym.rewards, pokerirl.gym.rl\n"
+        "loaded = {'gymnasium', 'stable_baselines3', 'mujoco'} & set(sys.modules)\n"
+        "assert not loaded, loaded"
+    )
+    subprocess.run([sys.executable, "-c", code], check=True)
