@@ -133,6 +133,22 @@ class Task:
 _BIG = dict(net_arch=(256, 256), activation="leaky_relu", log_std_init=-2.0, ortho_init=False)
 
 
+# Ant-v4 and HalfCheetah-v4 share the authors' IRL settings.
+_MUJOCO_IRL = IRLSettings(
+    policy_hidden=(64, 64),
+    reward_hidden=(64, 64),
+    epochs=30,
+    learning_rate=2e-4,
+    transitions=300_000,
+    eval_episodes=10,
+    batch_size=64,
+    alpha=0.33,
+    beta=0.25,
+    sigma_start=1.0,
+    sigma_end=0.02,
+)
+
+
 def _ms(mean: float, std: float | None = None) -> MeanStd:
     return MeanStd(mean=mean, std=std)
 
@@ -308,19 +324,7 @@ TASKS: dict[str, Task] = {
         Task(
             env_id="Ant-v4",
             discrete=False,
-            irl=IRLSettings(
-                policy_hidden=(64, 64),
-                reward_hidden=(64, 64),
-                epochs=30,
-                learning_rate=2e-4,
-                transitions=300_000,
-                eval_episodes=10,
-                batch_size=64,
-                alpha=0.33,
-                beta=0.25,
-                sigma_start=1.0,
-                sigma_end=0.02,
-            ),
+            irl=_MUJOCO_IRL,
             rl=RLSettings(
                 algo="ppo",
                 timesteps=600_000,
@@ -355,19 +359,7 @@ TASKS: dict[str, Task] = {
         Task(
             env_id="HalfCheetah-v4",
             discrete=False,
-            irl=IRLSettings(
-                policy_hidden=(64, 64),
-                reward_hidden=(64, 64),
-                epochs=30,
-                learning_rate=2e-4,
-                transitions=300_000,
-                eval_episodes=10,
-                batch_size=64,
-                alpha=0.33,
-                beta=0.25,
-                sigma_start=1.0,
-                sigma_end=0.02,
-            ),
+            irl=_MUJOCO_IRL,
             rl=RLSettings(
                 algo="ppo",
                 timesteps=1_000_000,
