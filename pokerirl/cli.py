@@ -712,3 +712,79 @@ def gym_rl(
         f"{env}: final true return {final['mean']:.1f} +- {final['std']:.1f} over {runs} runs; "
         f"wrote {out}"
     )
+
+
+@gym_app.command("irl")
+def gym_irl(
+    env: str = typer.Argument(..., help="The task, e.g. MountainCar-v0."),
+    data: Path | None = typer.Option(
+        None,
+        help="Expert Parquet (gym collect); default: collect the preset's from the "
+        "shipped expert into OUT/expert.parquet.",
+    ),
+    algo: str = typer.Option("hairl", help="airl or hairl."),
+    runs: int | None = typer.Option(None, min=1, help="Runs in lock-step (default: preset's)."),
+    preset: str = typer.Option("paper", help="quick or paper: the budgets."),
+    seed: int = typer.Option(0, help="Run k uses seed + k; the data split uses seed."),
+    epochs: int | None = typer.Option(None, min=1, help="Override the preset's epochs."),
+    out: Path = typer.Option(..., "--out", "-o", help="Folder of run-<k> and summary.json."),
+    overwrite: bool = typer.Option(False, help="Replace earlier runs in OUT."),
+    threads: int = typer.Option(1, help="torch threads."),
+) -> None:
+    """AIRL or H-AIRL on a task's expert data; each epoch's policy is evaluated in the env."""
+    from dataclasses import replace
+
+    from pokerirl.gym.presets import PRESETS, TASKS
+
+    if preset not in PRESETS:
+        fail(f"--preset must be one of {', '.join(PRESETS)}, got {preset!r}")
+    if algo not in ("airl", "hairl"):
+        fail(f"--algo must be airl or hairl, got {algo!r}")
+    if env not in TASKS:
+        fail(f"unknown task {env!r}; choose one of {', '.join(TASKS)}")
+    settings = PRESETS[preset].irl(env)
+    if epochs is not None:
+        settings = replace(settings, epochs=epochs)
+    _gym_threads(threads)
+    try:
+        from pokerirl.gym.irl import train_gym_irl
+
+        if data is None:
+            from pokerirl.gym.collect import collect
+            from pokerirl.gym.experts import load_expert, resolve_expert_dir
+
+            data = out / "expert.parquet"
+            if not data.is_file():
+                out.mkdir(parents=True, exist_ok=True)
+                collect(
+                    load_expert(resolve_expert_dir("shipped", env)),
+                    data,
+                    transitions=settings.transitions,
+                    seed=seed,
+                )
+                typer.echo(f"collected {settings.transitions:,} expert transitions into {data}")
+        result = train_gym_irl(
+            env,
+            data,
+            algo=algo,
+            runs=runs or PRESETS[preset].runs,
+            settings=settings,
+            seed=seed,
+            out=out,
+            overwrite=overwrite,
+        )
+    except (ValueError, ImportError) as error:
+        fail(str(error))
+    except KeyboardInterrupt:
+        fail(INTERRUPTED, code=130)
+    except OSError as error:
+        fail(f"{error.filename or out}: {error.strerror or error}")
+    final = result.final_return
+    line = (
+        f"{env} {algo}: final return {final['mean']:.1f} +- {final['std']:.1f} over "
+        f"{result.runs} runs (expert {result.expert_return:.1f}, "
+        f"random {result.baselines['random']:.1f})"
+    )
+    if result.final_alignment is not None:
+        line += f", alignment {100 * result.final_alignment['mean']:.1f}%"
+    typer.echo(f"{line}; wrote {out}")

@@ -1,0 +1,384 @@
+"""The IRL phase on a Gymnasium task: AIRL or H-AIRL runs in lock-step on expert rollouts,
+each epoch's policy evaluated in the real environment.
+
+``train_gym_irl`` writes into ``out``:
+
+- ``run-<k>``: one IRL run folder per seed ``seed + k`` (the core's convention, see
+  :mod:`pokerirl.irl.run`: ``reward.pt``, ``policy.pt``, ``config.json``, ``metrics.jsonl``,
+  ``baselines.json``, ``split.json``, curves), readable by :func:`pokerirl.irl.load_reward`;
+  each epoch's metrics add ``eval_return`` and ``eval_return_std`` (deterministic policy:
+  argmax for discrete actions, the mean action clipped to the box for continuous ones;
+  evaluation episode k starts from ``reset(seed=EVAL_SEED + k)``);
+- ``summary.json``: mean and std over runs per metric per epoch (:func:`pokerirl.irl.run.summarize`)
+  plus ``env``, ``algo``, ``expert_return``, ``irl_final_return`` and, for discrete tasks,
+  ``final_alignment``;
+- ``returns_bands.png`` (mean ± std of the return, the expert's and a random policy's
+  returns as lines) and, for discrete tasks, ``alignment_bands.png``.
+
+Baselines are the core's (``majority``, ``legal_majority``, ``bc``) plus ``random`` (a
+uniformly random policy's return on the evaluation episodes) and ``expert`` (the expert's
+return, measured once: from the data's complete episodes, else the shipped manifest).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import shutil
+import tempfile
+from collections.abc import Callable
+from dataclasses import dataclass, replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import torch
+from torch import nn
+
+from pokerirl.atomic import atomic_path, make_shareable, write_text
+from pokerirl.gym.experts import make_env, shipped_manifest
+from pokerirl.gym.presets import TASKS, IRLSettings
+from pokerirl.gym.rl import EVAL_SEED
+from pokerirl.irl.airl import default_nets, train_many
+from pokerirl.irl.config import AIRLConfig
+from pokerirl.irl.plots import plot_bands, plot_curves
+from pokerirl.irl.run import (
+    BASELINES_FILE,
+    METRICS_FILE,
+    SPLIT_FILE,
+    SUMMARY_FILE,
+    RunError,
+    save_run,
+    summarize,
+)
+from pokerirl.irl.transitions import Transitions
+
+RETURNS_FILE = "returns_bands.png"
+ALIGNMENT_BASELINES = ("majority", "legal_majority", "bc")  # shares of states, not returns
+
+
+@dataclass(frozen=True, kw_only=True)
+class GymIRLResult:
+    """What :func:`train_gym_irl` wrote: the summary and the headline finals."""
+
+    out: Path
+    env: str
+    algo: str
+    runs: int
+    summary: dict[str, Any]
+    baselines: dict[str, float]
+    expert_return: float
+    final_return: dict[str, float]  # mean, std over runs of the last epoch's eval_return
+    final_alignment: dict[str, float] | None  # discrete tasks only
+
+
+def irl_config(algo: str, settings: IRLSettings, *, seed: int) -> AIRLConfig:
+    """The task's IRL settings as an :class:`AIRLConfig`: nets, epochs, one learning rate for
+    both nets, batch, the authors' noise schedule with decay k; α, β, σ for H-AIRL only
+    (``airl`` keeps α = β = 0 and no noise)."""
+    overrides: dict[str, Any] = {
+        "policy_hidden": settings.policy_hidden,
+        "reward_hidden": settings.reward_hidden,
+        "epochs": settings.epochs,
+        "reward_lr": settings.learning_rate,
+        "policy_lr": settings.learning_rate,
+        "batch_size": settings.batch_size,
+        "noise_schedule": "authors",
+        "noise_decay": settings.sigma_decay,
+        "seed": seed,
+    }
+    if algo == "hairl":
+        overrides.update(
+            alpha=settings.alpha,
+            beta=settings.beta,
+            sigma_start=settings.sigma_start,
+            sigma_end=settings.sigma_end,
+        )
+    return AIRLConfig.for_algo(algo, **overrides)
+
+
+def load_env_transitions(env_id: str, data_path: str | os.PathLike[str]) -> Transitions:
+    """The expert Parquet as :class:`Transitions` with the *env's* action space: K from
+    ``Discrete.n`` (not the largest action in the data), or the box's low and high."""
+    env = make_env(env_id)
+    try:
+        space, obs_space = env.action_space, env.observation_space
+    finally:
+        env.close()
+    if hasattr(space, "n"):
+        data = Transitions.from_parquet(data_path)
+        if not data.discrete:
+            raise ValueError(f"{data_path}: continuous actions, but {env_id} has discrete ones")
+        if int(data.actions.max()) >= int(space.n) or int(data.actions.min()) < 0:
+            raise ValueError(f"{data_path}: action ids outside {env_id}'s 0..{int(space.n) - 1}")
+        data = replace(data, num_actions=int(space.n))
+    else:
+        low, high = space.low.astype(float).tolist(), space.high.astype(float).tolist()
+        data = Transitions.from_parquet(data_path, low=low, high=high)
+        if data.discrete or data.action_dim != len(low):
+            raise ValueError(f"{data_path}: actions do not fit {env_id}'s box of {len(low)} dims")
+    if data.obs_dim != int(np.prod(obs_space.shape)):
+        raise ValueError(
+            f"{data_path}: observations have {data.obs_dim} dims, {env_id} has {obs_space.shape}"
+        )
+    return data
+
+
+# --------------------------------------------------------------------------- evaluation
+
+
+def policy_actions(policy: nn.Module, obs: np.ndarray, *, discrete: bool) -> np.ndarray:
+    """The deterministic policy's actions for a batch: argmax, or the mean clipped to the box."""
+    with torch.no_grad():
+        obs_t = torch.as_tensor(obs, dtype=torch.float32)
+        if discrete:
+            return policy(obs_t, None).argmax(-1).numpy()
+        mean, _ = policy(obs_t)
+        return torch.minimum(torch.maximum(mean, policy.low), policy.high).numpy()
+
+
+def episode_returns(
+    env_id: str,
+    act: Callable[[np.ndarray], np.ndarray],
+    *,
+    episodes: int,
+    seed: int = EVAL_SEED,
+) -> np.ndarray:
+    """Returns of ``episodes`` episodes played in lock-step (episode k from ``seed + k``);
+    ``act`` maps a batch of observations (the episodes still running) to actions."""
+    envs = [make_env(env_id) for _ in range(episodes)]
+    try:
+        obs = [env.reset(seed=seed + k)[0] for k, env in enumerate(envs)]
+        totals = np.zeros(episodes)
+        running = list(range(episodes))
+        while running:
+            actions = act(np.stack([obs[k] for k in running]).astype(np.float32))
+            still = []
+            for row, k in enumerate(running):
+                obs[k], reward, terminated, truncated, _ = envs[k].step(actions[row])
+                totals[k] += float(reward)
+                if not (terminated or truncated):
+                    still.append(k)
+            running = still
+    finally:
+        for env in envs:
+            env.close()
+    return totals
+
+
+def random_return(env_id: str, *, episodes: int, seed: int = EVAL_SEED) -> float:
+    """A uniformly random policy's mean return on the evaluation episodes (seeded)."""
+    env = make_env(env_id)
+    space = env.action_space
+    env.close()
+    space.seed(seed)
+    return float(
+        episode_returns(
+            env_id,
+            lambda obs: np.stack([space.sample() for _ in obs]),
+            episodes=episodes,
+            seed=seed,
+        ).mean()
+    )
+
+
+def expert_return(env_id: str, data_path: str | os.PathLike[str]) -> float:
+    """The expert's mean return over the data's complete episodes (ended by termination or
+    time limit); the shipped manifest's when the data has none; NaN when neither exists."""
+    import pyarrow.parquet as pq
+
+    table = pq.read_table(data_path)
+    names = [n for n in ("reward", "episode", "done", "truncated") if n in table.column_names]
+    columns = {n: table.column(n).to_numpy(zero_copy_only=False) for n in names}
+    ended = columns["done"] | columns.get("truncated", np.zeros_like(columns["done"]))
+    episodes = np.unique(columns["episode"][ended])
+    if len(episodes):
+        keep = np.isin(columns["episode"], episodes)
+        sums = np.bincount(
+            np.searchsorted(episodes, columns["episode"][keep]),
+            weights=columns["reward"][keep].astype(float),
+        )
+        return float(sums.mean())
+    try:
+        entries = [e for e in shipped_manifest() if e["env"] == env_id]
+    except ValueError:
+        entries = []
+    return float(entries[0]["return_mean"]) if entries else math.nan
+
+
+# --------------------------------------------------------------------------- training
+
+
+def train_gym_irl(
+    env_id: str,
+    data_path: str | os.PathLike[str],
+    *,
+    algo: str,
+    runs: int,
+    settings: IRLSettings | None = None,
+    seed: int = 0,
+    out: str | os.PathLike[str],
+    device: str = "cpu",
+    progress: bool = True,
+    overwrite: bool = False,
+) -> GymIRLResult:
+    """``runs`` IRL runs (seeds ``seed + k``) of ``algo`` on ``data_path`` in lock-step.
+
+    ``settings`` default to the task's (the authors'); a preset's come from
+    ``PRESETS[name].irl(env_id)``. ``out`` may already hold other files (the expert data);
+    run folders and the summary are built in a hidden folder inside it and moved into place
+    at the end, refusing to replace earlier results unless ``overwrite``.
+    """
+    if env_id not in TASKS:
+        raise ValueError(f"unknown task {env_id!r}; choose one of {', '.join(TASKS)}")
+    if runs < 1:
+        raise ValueError("runs must be at least 1")
+    settings = settings or TASKS[env_id].irl
+    out = Path(out)
+    products = [f"run-{k}" for k in range(runs)] + [SUMMARY_FILE, RETURNS_FILE]
+    if out.exists() and not out.is_dir():
+        raise RunError(f"{out} exists and is not a folder; choose another --out")
+    taken = [p for p in products if (out / p).exists()] if out.is_dir() else []
+    if taken and not overwrite:
+        raise RunError(f"{out} already holds {taken[0]}; pass --overwrite to replace")
+    config = irl_config(algo, settings, seed=seed)
+    data = load_env_transitions(env_id, data_path)
+    discrete = data.discrete
+    train_data, val_data, val_groups = data.split(val_fraction=config.val_fraction, seed=seed)
+
+    from pokerirl.irl.run import run_baselines
+
+    found = run_baselines(train_data, val_data, config=config, device=device, progress=progress)
+    found["random"] = random_return(env_id, episodes=settings.eval_episodes)
+    found["expert"] = expert_return(env_id, data_path)
+
+    seeds = [seed + k for k in range(runs)]
+    nets = [default_nets(train_data, config, s) for s in seeds]
+    policies = [p for _, p in nets]
+
+    out.mkdir(parents=True, exist_ok=True)
+    stage = Path(tempfile.mkdtemp(prefix=".irl.", suffix=".tmp", dir=out))
+    make_shareable(stage)
+    try:
+        folders = [stage / f"run-{k}" for k in range(runs)]
+        lines: list[list[str]] = [[] for _ in range(runs)]
+        for folder in folders:
+            folder.mkdir()
+            write_text(folder / SPLIT_FILE, json.dumps({"validation_groups": val_groups}) + "\n")
+            write_text(folder / BASELINES_FILE, json.dumps(found, indent=2) + "\n")
+
+        def on_epoch(all_metrics: list[dict[str, Any]]) -> None:
+            # The nets' parameters were written back: evaluate each policy in the env.
+            for k, (policy, metrics) in enumerate(zip(policies, all_metrics, strict=True)):
+                was_training = policy.training
+                policy.eval()
+                returns = episode_returns(
+                    env_id,
+                    lambda obs, p=policy: policy_actions(p, obs, discrete=discrete),
+                    episodes=settings.eval_episodes,
+                )
+                policy.train(was_training)
+                metrics["eval_return"] = float(returns.mean())
+                metrics["eval_return_std"] = float(returns.std())
+                lines[k].append(json.dumps(metrics))
+                write_text(folders[k] / METRICS_FILE, "\n".join(lines[k]) + "\n")
+
+        many = train_many(
+            train_data,
+            val_data,
+            config=config,
+            seeds=seeds,
+            rewards=[r for r, _ in nets],
+            policies=policies,
+            device=device,
+            progress=progress,
+            on_epoch=on_epoch,
+        )
+        data_info = {
+            "env": env_id,
+            "path": str(Path(data_path).resolve()),
+            "sha256": data.fingerprint(),
+            "rows": len(data),
+            "groups": len(np.unique(data.groups)),
+            "train_rows": len(train_data),
+            "val_rows": len(val_data),
+            "has_reward": data.rewards is not None,
+            "has_next_obs": data.next_obs is not None,
+        }
+        shares = {k: v for k, v in found.items() if k in ALIGNMENT_BASELINES and discrete}
+        results = []
+        for k, result in enumerate(many.runs):
+            save_run(result, folders[k], algo=algo, data=data_info, baselines=found, device=device)
+            plot_curves(result.metrics, folders[k], baselines=shares)
+            results.append({"seed": seeds[k], "metrics": result.metrics, "baselines": found})
+        summary = summarize(results)
+        finals = {
+            name: {
+                "mean": summary["metrics"][key]["mean"][-1],
+                "std": summary["metrics"][key]["std"][-1],
+            }
+            for name, key in (
+                ("irl_final_return", "eval_return"),
+                ("final_alignment", "val_alignment"),
+            )
+            if key in summary["metrics"]
+        }
+        summary = {
+            "env": env_id,
+            "algo": algo,
+            "expert_return": found["expert"],
+            **finals,
+            **summary,
+        }
+        write_text(stage / SUMMARY_FILE, json.dumps(summary, indent=2) + "\n")
+        plot_returns(summary, stage / RETURNS_FILE)
+        if discrete:
+            plot_bands(
+                {**summary, "baselines": {k: summary["baselines"][k] for k in shares}}, stage
+            )
+            products.append("alignment_bands.png")
+        for name in products:
+            if (out / name).is_dir():
+                shutil.rmtree(out / name)
+            os.replace(stage / name, out / name)
+    finally:
+        shutil.rmtree(stage, ignore_errors=True)
+    return GymIRLResult(
+        out=out,
+        env=env_id,
+        algo=algo,
+        runs=runs,
+        summary=summary,
+        baselines=found,
+        expert_return=found["expert"],
+        final_return=finals["irl_final_return"],
+        final_alignment=finals.get("final_alignment"),
+    )
+
+
+def plot_returns(summary: dict[str, Any], path: Path) -> Path:
+    """Mean ± std over runs of the evaluation return per epoch, the expert and random lines."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    figure = Figure(figsize=(6, 4), dpi=100)
+    FigureCanvasAgg(figure)
+    axes = figure.add_subplot()
+    epochs = summary["epochs"]
+    mean = np.array(summary["metrics"]["eval_return"]["mean"])
+    std = np.array(summary["metrics"]["eval_return"]["std"])
+    label = f"{summary['algo']} policy (mean of {summary['runs']} runs)"
+    axes.plot(epochs, mean, color="C0", label=label)
+    axes.fill_between(epochs, mean - std, mean + std, color="C0", alpha=0.25, label="± 1 std")
+    for i, name in enumerate(("expert", "random")):
+        value = summary["baselines"][name]["mean"]
+        if math.isfinite(value):
+            axes.axhline(value, linestyle="--", linewidth=1, color=f"C{i + 1}", label=name)
+    axes.set(title=f"{summary['env']}: IRL-phase return", xlabel="epoch", ylabel="return")
+    axes.grid(alpha=0.3)
+    axes.legend(fontsize="small")
+    figure.tight_layout()
+    with atomic_path(path) as temporary:
+        figure.savefig(temporary, format="png")
+    return path
