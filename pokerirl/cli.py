@@ -742,6 +742,8 @@ def gym_irl(
         fail(f"--algo must be airl or hairl, got {algo!r}")
     if env not in TASKS:
         fail(f"unknown task {env!r}; choose one of {', '.join(TASKS)}")
+    if data is not None and not data.is_file():
+        fail(f"--data {data}: no such file")
     settings = PRESETS[preset].irl(env)
     if epochs is not None:
         settings = replace(settings, epochs=epochs)
@@ -763,6 +765,8 @@ def gym_irl(
                     seed=seed,
                 )
                 typer.echo(f"collected {settings.transitions:,} expert transitions into {data}")
+            else:
+                typer.echo(f"reusing the expert data in {data}")
         result = train_gym_irl(
             env,
             data,

@@ -142,6 +142,21 @@ def test_discrete_action_count_comes_from_the_env_not_the_data(tmp_path: Path) -
         load_env_transitions("MountainCar-v0", _pendulum(tmp_path))
 
 
+def test_bad_inputs_fail_in_one_line(tmp_path: Path) -> None:
+    base = ["gym", "irl", "MountainCar-v0", "--out", str(tmp_path / "irl")]
+    cases = {
+        "no such file": ["--data", str(tmp_path / "missing.parquet")],
+        "--algo must be": ["--algo", "gail"],
+        "--preset must be": ["--preset", "huge"],
+        "continuous actions": ["--data", str(_pendulum(tmp_path))],
+    }
+    for message, extra in cases.items():
+        result = CliRunner().invoke(app, [*base, *extra])
+        assert result.exit_code == 1 and message in result.output, (extra, result.output)
+        assert len(result.output.strip().splitlines()) == 1
+    assert not list((tmp_path / "irl").glob("run-*"))
+
+
 def _pendulum(tmp_path: Path) -> Path:
     path = tmp_path / "pendulum.parquet"
     shipped_data("Pendulum-v1", path, 200)

@@ -49,6 +49,7 @@ from pokerirl.irl.run import (
     SPLIT_FILE,
     SUMMARY_FILE,
     RunError,
+    run_baselines,
     save_run,
     summarize,
 )
@@ -246,8 +247,6 @@ def train_gym_irl(
     data = load_env_transitions(env_id, data_path)
     discrete = data.discrete
     train_data, val_data, val_groups = data.split(val_fraction=config.val_fraction, seed=seed)
-
-    from pokerirl.irl.run import run_baselines
 
     found = run_baselines(train_data, val_data, config=config, device=device, progress=progress)
     found["random"] = random_return(env_id, episodes=settings.eval_episodes)
