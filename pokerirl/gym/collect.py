@@ -188,6 +188,7 @@ def collect(
         "deterministic": deterministic,
     }
     table = table.replace_schema_metadata({"pokerirl.gym": json.dumps(meta, sort_keys=True)})
+    Path(out).parent.mkdir(parents=True, exist_ok=True)
     with atomic_path(out) as temporary:
         pq.write_table(table, temporary)
     return summary
