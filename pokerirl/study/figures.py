@@ -9,10 +9,10 @@ from typing import Any
 import numpy as np
 
 from pokerirl.atomic import write_bytes
+from pokerirl.encoding import ACTIONS
 
 ALGO_LABELS = {"airl": "AIRL", "hairl": "H-AIRL"}
 KIND_LABELS = {"dqn": "DQN", "airl_dqn": "AIRL-DQN", "hairl_dqn": "H-AIRL-DQN"}
-ACTIONS = ("fold", "check/call", "raise", "all-in")
 
 
 def _pyplot() -> Any:

@@ -184,7 +184,7 @@ def _read_jsonl(path: Path) -> list[dict[str, Any]]:
     return [json.loads(line) for line in path.read_text().splitlines() if line.strip()]
 
 
-def _mean_std(values: Sequence[float] | np.ndarray, axis: int | None = None) -> dict[str, Any]:
+def mean_std(values: Sequence[float] | np.ndarray, axis: int | None = None) -> dict[str, Any]:
     """Mean and sample std (ddof 1; 0 for one value), as floats or lists."""
     array = np.asarray(values, dtype=float)
     count = array.shape[0] if axis == 0 else array.size
@@ -205,22 +205,22 @@ def summarize_irl(out: Path, runs: int) -> dict[str, Any]:
     for key in ("val_alignment", "disc_acc_expert", "disc_acc_policy", "val_reward_alignment"):
         if key in metrics[0][0]:
             values = [[line[key] for line in run[:epochs]] for run in metrics]
-            curves[key] = _mean_std(values, axis=0)
+            curves[key] = mean_std(values, axis=0)
     final = {key: [run[epochs - 1][key] for run in metrics] for key in curves}
     dists = {}
     for key in ("val_expert_dist", "val_policy_dist"):
         if key in metrics[0][-1]:
-            dists[key] = _mean_std([run[epochs - 1][key] for run in metrics], axis=0)
+            dists[key] = mean_std([run[epochs - 1][key] for run in metrics], axis=0)
     return {
         "runs": runs,
         "epochs": epochs,
         "curves": curves,
-        "final": {key: {"values": v, **_mean_std(v)} for key, v in final.items()},
+        "final": {key: {"values": v, **mean_std(v)} for key, v in final.items()},
         "action_dist": dists,
         "baselines": {
             key: {
                 "values": [b[key] for b in found_baselines],
-                **_mean_std([b[key] for b in found_baselines]),
+                **mean_std([b[key] for b in found_baselines]),
             }
             for key in found_baselines[0]
         },
@@ -268,7 +268,7 @@ def _curve(agent_set: Path, seeds: Sequence[int]) -> dict[str, Any]:
     lines = [_read_jsonl(agent_set / f"seed-{s}" / "metrics.jsonl") for s in seeds]
     points = min(len(line) for line in lines)
     values = [[line[i]["eval"]["random"]["mbb_per_hand"] for i in range(points)] for line in lines]
-    return {"hands": [lines[0][i]["hands"] for i in range(points)], **_mean_std(values, axis=0)}
+    return {"hands": [lines[0][i]["hands"] for i in range(points)], **mean_std(values, axis=0)}
 
 
 def agents_stage(study: Study, irl: dict[str, Any]) -> dict[str, Any]:
@@ -313,7 +313,7 @@ def agents_stage(study: Study, irl: dict[str, Any]) -> dict[str, Any]:
         for name in ("call", "raise"):
             result = play_match(
                 make_agent(name), make_agent("random"), hands=config.eval_hands,
-                seed=TrainConfig(hands=1, seed=0).eval_seed,
+                seed=TrainConfig.eval_seed,
             )  # fmt: skip
             references[name] = {"mbb_per_hand": result.mbb_per_hand, "std_error": result.std_error}
         return {

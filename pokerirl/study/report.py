@@ -7,11 +7,10 @@ import json
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 from pokerirl import atomic
 from pokerirl.study import paper
 from pokerirl.study.config import AGENT_KINDS, IRL_ALGOS, StudyConfig, StudyError
+from pokerirl.study.pipeline import mean_std
 
 REPORT_FORMAT = "pokerirl-study-report/1"
 FIGURES = {
@@ -23,12 +22,6 @@ FIGURES = {
 }
 PANEL_CSV = "panel.csv"
 LABELS = {"dqn": "DQN", "airl_dqn": "AIRL-DQN", "hairl_dqn": "H-AIRL-DQN"}
-
-
-def _ms(values: list[float]) -> dict[str, float]:
-    array = np.asarray(values, dtype=float)
-    std = float(array.std(ddof=1)) if len(array) > 1 else 0.0
-    return {"mean": float(array.mean()), "std": std}
 
 
 def build_report(
@@ -68,7 +61,7 @@ def build_report(
     irl_part["runs"] = config.runs
     irl_part["epochs"] = irl["hairl"]["epochs"]
     rl = {
-        kind: {**_ms(agents["final_vs_random"][kind]), "paper": paper.RL_VS_RANDOM[kind]}
+        kind: {**mean_std(agents["final_vs_random"][kind]), "paper": paper.RL_VS_RANDOM[kind]}
         for kind in AGENT_KINDS
     }
     rl["references"] = agents["references"]
@@ -91,8 +84,8 @@ def build_report(
         "irl": irl_part,
         "rl_vs_random": rl,
         "training_length": {
-            "short": {"hands": length["short_agent_hands"], **_ms(length["short"])},
-            "long": {"hands": length["agent_hands"], **_ms(length["long"])},
+            "short": {"hands": length["short_agent_hands"], **mean_std(length["short"])},
+            "long": {"hands": length["agent_hands"], **mean_std(length["long"])},
             "paper": paper.DQN_TRAINING,
         },
         "panel": {
