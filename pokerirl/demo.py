@@ -52,7 +52,7 @@ def run_demo(
     """Write the synthetic month into ``out/irc`` and run the study into ``out``."""
     root = Path(out)
     root.mkdir(parents=True, exist_ok=True)
-    say(f"synth: {config.synthetic_hands:,} heads-up hands, seed {config.seed} -> {root / 'irc'}")
     month = synthetic_month(root, hands=config.synthetic_hands, seed=config.seed)
+    say(f"synth: {config.synthetic_hands:,} heads-up hands, seed {config.seed} -> {month}")
     study = dataclasses.replace(config.study, jobs=config.jobs)
     return run_study([month], root, study, overwrite=overwrite, progress=progress, say=say)
