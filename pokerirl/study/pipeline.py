@@ -23,12 +23,17 @@ import shutil
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from pokerirl.atomic import write_text
 from pokerirl.study.config import AGENT_KINDS, BUILT_INS, IRL_ALGOS, StudyConfig, StudyError
+
+if TYPE_CHECKING:  # the layers below load lazily: ``pokerirl report`` needs none of them
+    from pokerirl.agents.train import TrainConfig
+    from pokerirl.irl.config import AIRLConfig
+    from pokerirl.tournaments import TournamentReport
 
 STAGES = ("ingest", "irl", "agents", "tournament", "panel", "report")
 RECORD_FORMAT = "pokerirl-study-stage/1"
@@ -47,15 +52,23 @@ class Execution:
     jobs: int = 1
     progress: bool = False
 
-    def train_runs(self, table: Path, out: Path, *, algo: str, runs: int, config: Any) -> None:
+    def train_runs(
+        self, table: Path, out: Path, *, algo: str, runs: int, config: AIRLConfig
+    ) -> None:
         from pokerirl.irl.run import train_runs
 
+        # train_runs stages its folder, so ``out`` holds a finished run or nothing of ours.
         train_runs(
-            table, out, runs=runs, algo=algo, config=config, progress=self.progress,
+            table,
+            out,
+            runs=runs,
+            algo=algo,
+            config=config,
+            progress=self.progress,
             overwrite=True,
-        )  # fmt: skip
+        )
 
-    def train_seeds(self, out: Path, config: Any, seeds: Sequence[int]) -> None:
+    def train_seeds(self, out: Path, config: TrainConfig, seeds: Sequence[int]) -> None:
         from pokerirl.agents.train import train_seeds
 
         train_seeds(out, config, list(seeds), jobs=self.jobs, progress=self.progress)
@@ -68,13 +81,18 @@ class Execution:
         seeds: Sequence[int],
         out: Path,
         duplicate: bool,
-    ) -> Any:
+    ) -> TournamentReport:
         from pokerirl.tournaments import run_tournament
 
         return run_tournament(
-            matchups, hands=hands, seeds=seeds, out=out, duplicate=duplicate, jobs=self.jobs,
+            matchups,
+            hands=hands,
+            seeds=seeds,
+            out=out,
+            duplicate=duplicate,
+            jobs=self.jobs,
             progress=self.progress,
-        )  # fmt: skip
+        )
 
 
 # --------------------------------------------------------------------------- stage records
