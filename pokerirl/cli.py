@@ -175,33 +175,77 @@ def synth(
 @app.command()
 def demo(
     out: Path = typer.Option(Path("demo-output"), "--out", "-o", help="Where the demo writes."),
-    seed: int = typer.Option(0, "--seed", help="Seed of the synthetic data and of the IRL runs."),
+    seed: int = typer.Option(0, "--seed", help="Seed of the synthetic data."),
     jobs: int = typer.Option(2, "--jobs", min=1, help="Processes for agent training and play."),
+    overwrite: bool = typer.Option(False, "--overwrite", help="Recompute changed stages."),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bars."),
 ) -> None:
-    """Run the whole study on built-in synthetic data, in a few minutes on a CPU.
+    """Run the study (pokerirl study, quick preset) on built-in synthetic data.
 
-    synth -> ingest -> train hairl and airl -> agent train (sparse, hairl, airl; 3 seeds)
-    -> tournament of each reward-shaped DQN against the sparse-reward DQN -> report.
+    synth -> ingest -> IRL (airl, hairl) -> agents (dqn, airl_dqn, hairl_dqn) -> Table 1
+    tournament -> panel -> report.md, report.json and figures. A rerun skips finished stages.
     """
     from pokerirl.demo import DemoConfig, run_demo
-    from pokerirl.tournaments import render_report
 
     try:
-        result = run_demo(out, DemoConfig(seed=seed, jobs=jobs), say=typer.echo, progress=not quiet)
+        result = run_demo(
+            out,
+            DemoConfig(seed=seed, jobs=jobs),
+            say=typer.echo,
+            progress=not quiet,
+            overwrite=overwrite,
+        )
     except (ValueError, OSError) as error:
         fail(str(error))
-    summary = result.ingest_summary
-    typer.echo(
-        f"\ningest: {summary['hands_read_total']:,} hands, {summary['kept_hands']:,} kept, "
-        f"{summary['rows']:,} decisions"
-    )
-    for algo, (alignment, majority) in result.irl_alignment.items():
-        typer.echo(f"{algo}: validation alignment {alignment:.3f} (majority {majority:.3f})")
     typer.echo("")
-    typer.echo(render_report(result.report))
-    typer.echo(f"files: table {result.table}, reward runs {out / 'runs'}, agents {out / 'agents'},")
-    typer.echo(f"       report {result.report_dir}/report.md (pokerirl report {result.report_dir})")
+    typer.echo(result.markdown)
+    typer.echo(f"report: {out / 'report.md'} (pokerirl report {out})")
+
+
+@app.command()
+def study(
+    sources: list[Path] = typer.Argument(..., help="IRC month folders or archives."),
+    out: Path = typer.Option(..., "--out", "-o", help="The study folder."),
+    preset_name: str = typer.Option("quick", "--preset", help="quick or paper."),
+    runs: int | None = typer.Option(None, "--runs", min=1, help="IRL runs per algorithm."),
+    seeds: str | None = typer.Option(None, "--seeds", help="Agent seeds, e.g. 0-19."),
+    hands: int | None = typer.Option(None, "--hands", min=2, help="Tournament hands per seed."),
+    jobs: int = typer.Option(2, "--jobs", min=1, help="Processes for training and play."),
+    ray: str | None = typer.Option(None, "--ray", metavar="ADDRESS", help=RAY_HELP),
+    overwrite: bool = typer.Option(
+        False, "--overwrite", help="Recompute a stage whose settings changed, and those after it."
+    ),
+    quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bars."),
+) -> None:
+    """The paper's poker study in one command: ingest, IRL (AIRL and H-AIRL, several runs),
+    DQN agents (sparse, AIRL and H-AIRL rewards), Table 1, the panel, and a report beside the
+    paper's numbers (report.md, report.json, panel.csv, figures/). Resumable by stage."""
+    from pokerirl.study import parse_seeds, preset, run_study
+
+    try:
+        config = preset(
+            preset_name,
+            runs=runs,
+            seeds=None if seeds is None else parse_seeds(seeds),
+            hands=hands,
+            jobs=jobs,
+        )
+        result = run_study(
+            sources,
+            out,
+            config,
+            overwrite=overwrite,
+            progress=not quiet,
+            say=typer.echo,
+            backend=_backend(jobs, ray),
+        )
+    except (ValueError, OSError, execution.ExecutionError) as error:
+        fail(str(error))
+    except KeyboardInterrupt:
+        fail(INTERRUPTED, 130)
+    typer.echo("")
+    typer.echo(result.markdown)
+    typer.echo(f"report: {out / 'report.md'} (pokerirl report {out})")
 
 
 @app.command()
@@ -345,13 +389,25 @@ def tournament(
 
 @app.command()
 def report(
-    folder: Path = typer.Argument(..., help="A folder written by pokerirl tournament."),
+    folder: Path = typer.Argument(
+        ..., help="A folder written by pokerirl study or pokerirl tournament."
+    ),
     output_format: str = typer.Option("markdown", "--format", help="markdown or json."),
 ) -> None:
-    """Print a tournament report (Markdown, or JSON for scripts)."""
+    """Print a study or tournament report (Markdown, or JSON for scripts)."""
+    from pokerirl.study import is_study_report, load_study_report, render_markdown
     from pokerirl.tournaments import load_report, render_report
 
     try:
+        if is_study_report(folder):
+            found = load_study_report(folder)
+            if output_format == "json":
+                typer.echo(json.dumps(found, indent=2))
+            elif output_format in ("markdown", "text"):
+                typer.echo(render_markdown(found), nl=False)
+            else:
+                fail(f"unknown --format {output_format!r}; choose markdown or json")
+            return
         typer.echo(render_report(load_report(folder), output_format), nl=False)
     except ValueError as error:
         fail(str(error))

@@ -1,38 +1,31 @@
-"""The demo pipeline end to end, at toy sizes."""
+"""The demo: the study on synthetic data, end to end at toy sizes."""
 
 from __future__ import annotations
 
 import json
 from pathlib import Path
 
+import pytest
+
 from pokerirl.demo import DemoConfig, run_demo
+from pokerirl.study import preset
 
 
-def test_demo_runs_every_step_and_writes_the_report(tmp_path: Path) -> None:
+@pytest.mark.slow
+def test_demo_is_the_study_on_synthetic_data(tmp_path: Path) -> None:
+    study = preset(
+        "quick", runs=2, seeds=(0, 1), hands=200, panel_hands=100, agent_hands=400,
+        short_agent_hands=200, eval_every=200, eval_hands=100, irl_epochs=1,
+    )  # fmt: skip
+    config = DemoConfig(synthetic_hands=500, jobs=1, study=study)
     said: list[str] = []
-    config = DemoConfig(
-        synthetic_hands=1_500,
-        irl_epochs=1,
-        agent_hands=1_000,
-        agent_seeds=(0, 1),
-        tournament_hands=1_000,
-        jobs=1,
-    )
     result = run_demo(tmp_path, config, say=said.append)
-    assert [line[:5] for line in said] == ["[1/5]", "[2/5]"] + ["[3/5]"] * 2 + ["[4/5]"] * 3 + [
-        "[5/5]"
-    ]
-    assert result.ingest_summary["buckets_add_up"] and result.ingest_summary["kept_hands"] > 0
-    assert set(result.irl_alignment) == {"hairl", "airl"}
-    for run in result.reward_runs.values():
-        assert (run / "reward.pt").is_file() and (run / "config.json").is_file()
-    for agent_set in result.agent_sets.values():
-        assert sorted(p.name for p in agent_set.iterdir()) == ["seed-0", "seed-1"]
-    report = json.loads((result.report_dir / "report.json").read_text())
-    matchups = [(m["agent_a"], m["agent_b"]) for m in report["matchups"]]
-    assert [(Path(a).name, Path(b).name) for a, b in matchups] == [
-        ("hairl-dqn", "dqn"),
-        ("airl-dqn", "dqn"),
-    ]
-    assert (result.report_dir / "report.md").is_file()
-    assert len(result.report.matchups) == 2
+    assert said[0].startswith("synth: 500 heads-up hands")
+    report = json.loads((tmp_path / "report.json").read_text())
+    assert report == result.report and report["preset"] == "quick"
+    assert report["seeds"] == [0, 1]
+    assert (tmp_path / "report.md").read_text() == result.markdown
+    # A rerun reuses the synthetic month, so every stage is skipped.
+    said.clear()
+    run_demo(tmp_path, config, say=said.append)
+    assert sum("skipped" in line for line in said) == 5

@@ -1,0 +1,109 @@
+"""The paper's whole poker study in one call: :func:`run_study` (``pokerirl study``).
+
+Stages (see :mod:`pokerirl.study.pipeline`): ingest -> IRL (AIRL, H-AIRL; several runs) ->
+agents (sparse DQN, AIRL-DQN, H-AIRL-DQN; seed k on IRL run k mod runs) -> tournament
+(Table 1) -> panel (every agent kind and built-in against every other) -> report
+(``report.md``, ``report.json``, ``panel.csv``, ``figures/``).
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from pokerirl.execution import Backend
+from pokerirl.study import figures
+from pokerirl.study.config import PRESETS, StudyConfig, StudyError, parse_seeds, preset
+from pokerirl.study.pipeline import (
+    STAGES,
+    Execution,
+    Say,
+    Study,
+    agents_stage,
+    ingest_stage,
+    irl_stage,
+    panel_stage,
+    tournament_stage,
+)
+from pokerirl.study.report import (
+    FIGURES,
+    build_report,
+    is_study_report,
+    load_study_report,
+    render_markdown,
+    write_study_report,
+)
+
+__all__ = [
+    "PRESETS",
+    "STAGES",
+    "StudyConfig",
+    "StudyError",
+    "StudyResult",
+    "is_study_report",
+    "load_study_report",
+    "parse_seeds",
+    "preset",
+    "render_markdown",
+    "run_study",
+]
+
+
+@dataclass(frozen=True)
+class StudyResult:
+    root: Path
+    report: dict[str, Any]
+    markdown: str
+
+
+def run_study(
+    sources: Sequence[str | os.PathLike[str]],
+    out: str | os.PathLike[str],
+    config: StudyConfig,
+    *,
+    overwrite: bool = False,
+    progress: bool = False,
+    say: Say = lambda message: None,
+    backend: Backend | None = None,
+) -> StudyResult:
+    """Run (or resume) the study of ``sources`` into ``out``; ``say`` hears one line per stage.
+
+    Its units run on ``backend`` (default: ``config.jobs`` local processes); results do not
+    depend on it.
+
+    Raises:
+        StudyError: bad settings, or a stage already run with other settings (without
+            ``overwrite``). Lower layers' errors (IngestError, TournamentError...) pass through.
+    """
+    if not sources:
+        raise StudyError("give at least one SOURCE (an IRC month folder or archive)")
+    root = Path(out)
+    if root.exists() and not root.is_dir():
+        raise StudyError(f"{root} exists and is not a folder; choose another --out")
+    root.mkdir(parents=True, exist_ok=True)
+    study = Study(
+        root,
+        config,
+        Execution(backend or Backend(jobs=config.jobs), progress=progress),
+        overwrite,
+        say,
+    )
+    ingested = ingest_stage(study, sources)
+    irl = irl_stage(study, ingested)
+    agents = agents_stage(study, irl)
+    tournament = tournament_stage(study, agents)
+    panel = panel_stage(study, agents)
+    say(f"[{len(STAGES)}/{len(STAGES)}] report -> {root / 'report.md'}")
+    report = build_report(
+        config, ingested=ingested, irl=irl, agents=agents, tournament=tournament, panel=panel
+    )
+    figures.irl_alignment(irl, root / FIGURES["irl_alignment"])
+    figures.irl_discriminator(irl, root / FIGURES["irl_discriminator"])
+    figures.irl_actions(irl, root / FIGURES["irl_actions"])
+    figures.rl_curves(agents, root / FIGURES["rl_vs_random"])
+    figures.panel_heatmap(panel, root / FIGURES["panel_heatmap"])
+    write_study_report(root, report, panel)
+    return StudyResult(root=root, report=report, markdown=render_markdown(report))

@@ -1,0 +1,126 @@
+"""The study's figures, drawn with matplotlib's Agg backend and written atomically as PNG."""
+
+from __future__ import annotations
+
+import io
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from pokerirl.atomic import write_bytes
+from pokerirl.encoding import ACTIONS
+
+ALGO_LABELS = {"airl": "AIRL", "hairl": "H-AIRL"}
+KIND_LABELS = {"dqn": "DQN", "airl_dqn": "AIRL-DQN", "hairl_dqn": "H-AIRL-DQN"}
+
+
+def _pyplot() -> Any:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def _save(figure: Any, path: Path) -> None:
+    buffer = io.BytesIO()
+    figure.savefig(buffer, format="png", dpi=110, bbox_inches="tight", metadata={"Software": None})
+    _pyplot().close(figure)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    write_bytes(path, buffer.getvalue())
+
+
+def _band(axis: Any, x: Any, curve: dict[str, Any], label: str) -> None:
+    mean, std = np.asarray(curve["mean"]), np.asarray(curve["std"])
+    axis.plot(x, mean, label=label)
+    axis.fill_between(x, mean - std, mean + std, alpha=0.25)
+
+
+def irl_alignment(irl: dict[str, Any], path: Path) -> None:
+    """Validation alignment over epochs, mean ± std over runs, with the baselines as lines."""
+    plt = _pyplot()
+    figure, axis = plt.subplots(figsize=(6.4, 4))
+    for algo, label in ALGO_LABELS.items():
+        curve = irl[algo]["curves"]["val_alignment"]
+        _band(axis, np.arange(1, len(curve["mean"]) + 1), curve, label)
+    styles = {"majority": ":", "legal_majority": "--", "bc": "-."}
+    for name, style in styles.items():
+        value = irl["hairl"]["baselines"][name]["mean"]
+        axis.axhline(value, color="grey", linestyle=style, label=f"{name} {value:.3f}")
+    axis.set(xlabel="epoch", ylabel="validation alignment", title="IRL: validation alignment")
+    axis.legend(fontsize=8)
+    _save(figure, path)
+
+
+def irl_discriminator(irl: dict[str, Any], path: Path) -> None:
+    """Discriminator accuracy on expert and on policy actions over epochs, mean ± std."""
+    plt = _pyplot()
+    figure, axis = plt.subplots(figsize=(6.4, 4))
+    for algo, label in ALGO_LABELS.items():
+        for key, side in (("disc_acc_expert", "expert"), ("disc_acc_policy", "policy")):
+            curve = irl[algo]["curves"][key]
+            _band(axis, np.arange(1, len(curve["mean"]) + 1), curve, f"{label}, {side}")
+    axis.set(xlabel="epoch", ylabel="accuracy", title="IRL: discriminator accuracy", ylim=(0, 1))
+    axis.legend(fontsize=8)
+    _save(figure, path)
+
+
+def irl_actions(irl: dict[str, Any], path: Path) -> None:
+    """Validation action distributions (expert, AIRL, H-AIRL mean π) as grouped bars."""
+    plt = _pyplot()
+    groups = {"expert": irl["hairl"]["action_dist"]["val_expert_dist"]}
+    for algo, label in ALGO_LABELS.items():
+        groups[label] = irl[algo]["action_dist"]["val_policy_dist"]
+    count = len(groups["expert"]["mean"])
+    x = np.arange(count)
+    width = 0.8 / len(groups)
+    figure, axis = plt.subplots(figsize=(6.4, 4))
+    for index, (label, dist) in enumerate(groups.items()):
+        axis.bar(x + index * width, dist["mean"], width, yerr=dist["std"], label=label)
+    names = ACTIONS if count == len(ACTIONS) else tuple(str(a) for a in range(count))
+    axis.set_xticks(x + width * (len(groups) - 1) / 2, names)
+    axis.set(ylabel="share of validation decisions", title="Action distributions")
+    axis.legend(fontsize=8)
+    _save(figure, path)
+
+
+def rl_curves(agents: dict[str, Any], path: Path) -> None:
+    """Learning curves against random, mean ± std over seeds, with always-call and
+    always-raise as reference lines (the paper's RL figure)."""
+    plt = _pyplot()
+    figure, axis = plt.subplots(figsize=(6.4, 4))
+    for kind, label in KIND_LABELS.items():
+        curve = agents["curves"][kind]
+        _band(axis, curve["hands"], curve, label)
+    for name, style in (("call", ":"), ("raise", "--")):
+        value = agents["references"][name]["mbb_per_hand"]
+        axis.axhline(value, color="grey", linestyle=style, label=f"always-{name} {value:,.0f}")
+    axis.set(xlabel="training hands", ylabel="mbb/hand vs random", title="RL against random")
+    axis.legend(fontsize=8)
+    _save(figure, path)
+
+
+def panel_heatmap(panel: dict[str, Any], path: Path) -> None:
+    """The panel's cross-table (row agent's mbb/h against the column agent) as a heat map."""
+    plt = _pyplot()
+    names = panel["agents"]
+    matrix = np.array(
+        [[np.nan if v is None else v for v in row] for row in panel["mbb_per_hand"]], dtype=float
+    )
+    limit = float(np.nanmax(np.abs(matrix))) if np.isfinite(matrix).any() else 1.0
+    figure, axis = plt.subplots(figsize=(6.4, 5.4))
+    image = axis.imshow(matrix, cmap="RdBu", vmin=-limit, vmax=limit or 1.0)
+    axis.set_xticks(range(len(names)), names, rotation=45, ha="right")
+    axis.set_yticks(range(len(names)), names)
+    for i, row in enumerate(panel["mbb_per_hand"]):
+        for j, value in enumerate(row):
+            if value is not None:
+                error = panel["std_error"][i][j]
+                axis.text(
+                    j, i, f"{value:,.0f}\n±{error:,.0f}", ha="center", va="center", fontsize=7
+                )
+    figure.colorbar(image, label="mbb/hand (row vs column)")
+    axis.set_title("Panel: row agent against column agent")
+    _save(figure, path)

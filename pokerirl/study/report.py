@@ -1,0 +1,293 @@
+"""The study report: ``report.json`` (every number, with the names scripts read) and
+``report.md`` (the paper's Table 1 beside ours, then IRL, RL and the panel, with figures)."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+from pokerirl import atomic
+from pokerirl.study import paper
+from pokerirl.study.config import AGENT_KINDS, IRL_ALGOS, StudyConfig, StudyError
+from pokerirl.study.pipeline import mean_std
+
+REPORT_FORMAT = "pokerirl-study-report/1"
+FIGURES = {
+    "irl_alignment": "figures/irl_alignment.png",
+    "irl_discriminator": "figures/irl_discriminator.png",
+    "irl_actions": "figures/irl_actions.png",
+    "rl_vs_random": "figures/rl_vs_random.png",
+    "panel_heatmap": "figures/panel_heatmap.png",
+}
+PANEL_CSV = "panel.csv"
+LABELS = {"dqn": "DQN", "airl_dqn": "AIRL-DQN", "hairl_dqn": "H-AIRL-DQN"}
+
+
+def build_report(
+    config: StudyConfig,
+    *,
+    ingested: dict[str, Any],
+    irl: dict[str, Any],
+    agents: dict[str, Any],
+    tournament: dict[str, Any],
+    panel: dict[str, Any],
+) -> dict[str, Any]:
+    """The whole report as a JSON-ready dict; the issue's keys at the top level."""
+    table1 = {name: {**tournament[name], "paper": paper.TABLE1[name]} for name in paper.TABLE1}
+    irl_part: dict[str, Any] = {}
+    for algo in IRL_ALGOS:
+        final = irl[algo]["final"]
+        irl_part[algo] = {
+            "final_val_alignment": {k: final["val_alignment"][k] for k in ("mean", "std")},
+            "final_disc_acc_expert": {k: final["disc_acc_expert"][k] for k in ("mean", "std")},
+            "final_disc_acc_policy": {k: final["disc_acc_policy"][k] for k in ("mean", "std")},
+            "per_run_val_alignment": final["val_alignment"]["values"],
+            "paper": {
+                "final_val_alignment": paper.IRL_ALIGNMENT[algo],
+                "final_disc_acc": paper.DISC_ACC_FINAL[algo],
+            },
+        }
+    # BC is trained inside every run on that run's split; H-AIRL's runs' BC is the one reported.
+    baselines = irl["hairl"]["baselines"]
+    irl_part["bc"] = {
+        "final_val_alignment": {k: baselines["bc"][k] for k in ("mean", "std")},
+        "per_run_val_alignment": baselines["bc"]["values"],
+    }
+    irl_part["baselines"] = {
+        name: {k: baselines[name][k] for k in ("mean", "std")}
+        for name in ("majority", "legal_majority")
+    }
+    irl_part["runs"] = config.runs
+    irl_part["epochs"] = irl["hairl"]["epochs"]
+    rl = {
+        kind: {**mean_std(agents["final_vs_random"][kind]), "paper": paper.RL_VS_RANDOM[kind]}
+        for kind in AGENT_KINDS
+    }
+    rl["references"] = agents["references"]
+    rl["per_seed"] = {kind: agents["final_vs_random"][kind] for kind in AGENT_KINDS}
+    length = agents["training_length"]
+    summary = ingested["summary"]
+    return {
+        "format": REPORT_FORMAT,
+        "preset": config.preset,
+        "runs": config.runs,
+        "seeds": list(config.seeds),
+        "hands": config.hands,
+        "settings": config.settings(),
+        "data": {
+            "kept_hands": summary.get("kept_hands"),
+            "rows": summary.get("rows"),
+            "hands_read_total": summary.get("hands_read_total"),
+        },
+        "table1": table1,
+        "irl": irl_part,
+        "rl_vs_random": rl,
+        "training_length": {
+            "short": {"hands": length["short_agent_hands"], **mean_std(length["short"])},
+            "long": {"hands": length["agent_hands"], **mean_std(length["long"])},
+            "paper": paper.DQN_TRAINING,
+        },
+        "panel": {
+            "agents": panel["agents"],
+            "mbb_per_hand": panel["mbb_per_hand"],
+            "std_error": panel["std_error"],
+            "hands": config.panel_hands,
+        },
+        "figures": FIGURES,
+        "paper": paper.paper_values(),
+    }
+
+
+def panel_csv(panel: dict[str, Any]) -> str:
+    """The cross-table: one row per agent, ``mbb ± se`` against each column agent."""
+    names = panel["agents"]
+    lines = [",".join(["agent", *names])]
+    for name, row, errors in zip(names, panel["mbb_per_hand"], panel["std_error"], strict=True):
+        cells = [
+            "" if v is None else f"{v:.1f} ± {e:.1f}" for v, e in zip(row, errors, strict=True)
+        ]
+        lines.append(",".join([name, *cells]))
+    return "\n".join(lines) + "\n"
+
+
+def _pm(value: dict[str, float], scale: float = 1.0, digits: int = 0) -> str:
+    return f"{value['mean'] * scale:,.{digits}f} ± {value['std'] * scale:,.{digits}f}"
+
+
+def _p(p: float) -> str:
+    return f"{p:.2e}" if p < 1e-3 else f"{p:.3f}"
+
+
+def render_markdown(report: dict[str, Any]) -> str:
+    """``report.md``: the paper's numbers beside ours, and what the paper leaves open."""
+    settings = report["settings"]
+    seeds = report["seeds"]
+    n_seeds = len(seeds)
+    lines = [
+        f"# pokerirl study ({report['preset']} preset)",
+        "",
+        f"Data: {report['data']['kept_hands']:,} kept heads-up hands, "
+        f"{report['data']['rows']:,} decisions.",
+        f"Sizes: {report['runs']} IRL runs per algorithm "
+        f"({report['irl']['epochs']} epochs), {n_seeds} agent seeds ({seeds[0]}-{seeds[-1]}) of "
+        f"{settings['agent_hands']:,} training hands, {report['hands']:,} tournament hands per "
+        f"seed ({'duplicate deals' if settings['duplicate'] else 'no duplicate deals'}), "
+        f"{settings['panel_hands']:,} per seed for each panel pair.",
+    ]
+    if report["preset"] != "paper":
+        lines.append(
+            "**Reduced sizes**: the paper's protocol is 10 IRL runs, 20 seeds of 50,000 hands and "
+            "20 x 1,000,000 tournament hands (`--preset paper`); these numbers are noisier."
+        )
+    lines += [
+        "",
+        "## Table 1: against the sparse-reward DQN (mbb/hand, pooled over seeds)",
+        "",
+        "| matchup | ours | SE | p | p (Bonferroni) | seeds with p < 0.05/m | the paper |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    for name, label in (("hairl_dqn_vs_dqn", "H-AIRL-DQN vs DQN"),
+                        ("airl_dqn_vs_dqn", "AIRL-DQN vs DQN")):  # fmt: skip
+        row = report["table1"][name]
+        theirs = row["paper"]
+        lines.append(
+            f"| {label} | {row['mbb_per_hand']:+,.0f} | {row['std_error']:,.0f} | "
+            f"{_p(row['p_value'])} | {_p(row['p_bonferroni'])} | "
+            f"{row['seeds_significant_bonferroni']}/{n_seeds} | "
+            f"{theirs['mbb_per_hand']:+,} ± {theirs['std_error']} (p < 1e-10) |"
+        )
+    spread = {
+        name: (min(row["per_seed"]), max(row["per_seed"])) for name, row in report["table1"].items()
+    }
+    lines += [
+        "",
+        "Per-seed range: "
+        + "; ".join(f"{name} {low:+,.0f} to {high:+,.0f}" for name, (low, high) in spread.items())
+        + ". Seeds are the replicates (SE over per-seed means, df = seeds - 1).",
+        "",
+        "**Where the paper is silent.** The paper does not say whether its tournament used "
+        "duplicate deals. We do (each deal from both seats), which removes the luck of the cards "
+        "but also makes two deterministic agents of opposite styles (an aggressive one and a "
+        "calling station) nearly cancel out, so a DQN-vs-DQN number near 0 can hide very "
+        "different play. The panel below answers that: every agent against every other and "
+        "against fixed strategies.",
+        "",
+        "## IRL (validation alignment: share of held-out expert actions the policy picks)",
+        "",
+        "| | ours (mean ± std over runs) | the paper |",
+        "|---|---|---|",
+    ]
+    irl = report["irl"]
+    for algo, label in (("airl", "AIRL"), ("hairl", "H-AIRL")):
+        theirs = irl[algo]["paper"]["final_val_alignment"]
+        lines.append(
+            f"| {label} | {_pm(irl[algo]['final_val_alignment'], 100, 1)}% | "
+            f"{theirs['mean'] * 100:.1f} ± {theirs['std'] * 100:.1f}% |"
+        )
+    lines.append(f"| BC (supervised only) | {_pm(irl['bc']['final_val_alignment'], 100, 1)}% | "
+                 "not reported |")  # fmt: skip
+    for name in ("majority", "legal_majority"):
+        lines.append(f"| {name} | {_pm(irl['baselines'][name], 100, 1)}% | not reported |")
+    lines += [
+        "",
+        "Discriminator accuracy at the end of IRL (expert / policy actions):",
+        "",
+        "| | ours, expert | ours, policy | the paper (about) |",
+        "|---|---|---|---|",
+    ]
+    for algo, label in (("airl", "AIRL"), ("hairl", "H-AIRL")):
+        lines.append(
+            f"| {label} | {_pm(irl[algo]['final_disc_acc_expert'], 100, 1)}% | "
+            f"{_pm(irl[algo]['final_disc_acc_policy'], 100, 1)}% | "
+            f"{irl[algo]['paper']['final_disc_acc'] * 100:.0f}% |"
+        )
+    figures = report["figures"]
+    lines += [
+        "",
+        f"![validation alignment]({figures['irl_alignment']})",
+        f"![discriminator accuracy]({figures['irl_discriminator']})",
+        f"![action distributions]({figures['irl_actions']})",
+        "",
+        "The BC action distribution is not drawn: the IRL core records only BC's alignment.",
+        "",
+        "## RL against random (mbb/hand at the end of training, mean ± std over seeds)",
+        "",
+        "| agent | ours | per-seed range | the paper (about) |",
+        "|---|---|---|---|",
+    ]
+    rl = report["rl_vs_random"]
+    for kind, label in LABELS.items():
+        values = rl["per_seed"][kind]
+        lines.append(
+            f"| {label} | {_pm(rl[kind])} | {min(values):+,.0f} to {max(values):+,.0f} | "
+            f"{rl[kind]['paper']:+,} |"
+        )
+    for name in ("call", "raise"):
+        ref = rl["references"][name]
+        lines.append(f"| always-{name} | {ref['mbb_per_hand']:+,.0f} (SE {ref['std_error']:,.0f})"
+                     " | one fixed strategy | not reported |")  # fmt: skip
+    length = report["training_length"]
+    lines += [
+        "",
+        f"![RL against random]({figures['rl_vs_random']})",
+        "",
+        f"**Training length.** The paper's DQN trains {length['paper']}; ours trains "
+        f"{length['long']['hands']:,} hands. On the same {n_seeds} seeds, the sparse DQN ends at "
+        f"{_pm(length['short'])} mbb/hand against random after {length['short']['hands']:,} hands "
+        f"and {_pm(length['long'])} after {length['long']['hands']:,}.",
+        "",
+        "## Panel: row agent against column agent (mbb/hand ± SE, pooled over seeds)",
+        "",
+    ]
+    panel = report["panel"]
+    names = panel["agents"]
+    lines += ["| | " + " | ".join(names) + " |", "|---" * (len(names) + 1) + "|"]
+    for name, row, errors in zip(names, panel["mbb_per_hand"], panel["std_error"], strict=True):
+        cells = [
+            "-" if v is None else f"{v:+,.0f} ± {e:,.0f}" for v, e in zip(row, errors, strict=True)
+        ]
+        lines.append(f"| {name} | " + " | ".join(cells) + " |")
+    lines += [
+        "",
+        f"{panel['hands']:,} hands per seed per pair, {n_seeds} seeds; cross-table in "
+        f"`{PANEL_CSV}`.",
+        "",
+        f"![panel]({figures['panel_heatmap']})",
+        "",
+    ]
+    return "\n".join(lines)
+
+
+def write_study_report(root: Path, report: dict[str, Any], panel: dict[str, Any]) -> None:
+    """``panel.csv``, ``report.md``, then ``report.json`` last: it marks a finished study."""
+    atomic.write_text(root / PANEL_CSV, panel_csv(panel))
+    atomic.write_text(root / "report.md", render_markdown(report))
+    atomic.write_text(root / "report.json", json.dumps(report, indent=2) + "\n")
+
+
+def is_study_report(folder: Path | str) -> bool:
+    """Whether ``folder/report.json`` is a study report (not a tournament's)."""
+    try:
+        data = json.loads((Path(folder) / "report.json").read_text())
+    except (OSError, json.JSONDecodeError):
+        return False
+    return isinstance(data, dict) and data.get("format") == REPORT_FORMAT
+
+
+def load_study_report(folder: Path | str) -> dict[str, Any]:
+    """The study report in ``folder``; one-line :class:`StudyError` when it is not one."""
+    path = Path(folder) / "report.json"
+    try:
+        data = json.loads(path.read_text())
+    except FileNotFoundError:
+        raise StudyError(f"{folder}: no report.json (run pokerirl study first)") from None
+    except (OSError, json.JSONDecodeError) as error:
+        raise StudyError(f"{path}: cannot read the report ({error})") from None
+    if not isinstance(data, dict) or data.get("format") != REPORT_FORMAT:
+        raise StudyError(f"{path}: not a study report")
+    try:
+        render_markdown(data)
+    except (KeyError, IndexError, TypeError, ValueError) as error:
+        raise StudyError(f"{path}: malformed study report ({error!r})") from None
+    return data

@@ -1,0 +1,167 @@
+"""``pokerirl study`` end to end at toy sizes: the report's tables, resuming, refusing."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+from typer.testing import CliRunner
+
+from pokerirl.cli import app
+from pokerirl.game.synth import write_synthetic_month
+from pokerirl.study import StudyError, load_study_report, parse_seeds, preset, run_study
+from pokerirl.study.report import FIGURES
+from pokerirl.tournaments import load_report
+
+TOY = dict(
+    runs=2,
+    seeds=(0, 1),
+    hands=400,
+    panel_hands=200,
+    agent_hands=600,
+    short_agent_hands=300,
+    eval_every=300,
+    eval_hands=200,
+    irl_epochs=2,
+    jobs=1,
+)
+
+
+@pytest.fixture(scope="module")
+def finished(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path, list[str]]:
+    root = tmp_path_factory.mktemp("study")
+    month = write_synthetic_month(root / "irc", hands=600, seed=0)
+    said: list[str] = []
+    run_study([month], root / "out", preset("quick", **TOY), say=said.append)
+    return month, root / "out", said
+
+
+@pytest.mark.slow
+def test_report_json_has_the_issue_names_and_the_tournaments_numbers(
+    finished: tuple[Path, Path, list[str]],
+) -> None:
+    _, out, said = finished
+    assert [line[:5] for line in said if line.startswith("[")] == [f"[{k}/6]" for k in range(1, 7)]
+    report = json.loads((out / "report.json").read_text())
+    assert (report["preset"], report["runs"], report["seeds"], report["hands"]) == (
+        "quick",
+        2,
+        [0, 1],
+        400,
+    )
+    # Table 1 is the pooled line of the tournament stage's own report, with the paper beside.
+    tournament = load_report(out / "tournament")
+    names = [(Path(m.agent_a).name, Path(m.agent_b).name) for m in tournament.matchups]
+    assert names == [("hairl-dqn", "dqn"), ("airl-dqn", "dqn")]
+    for key, matchup in zip(
+        ("hairl_dqn_vs_dqn", "airl_dqn_vs_dqn"), tournament.matchups, strict=True
+    ):
+        row = report["table1"][key]
+        assert row["mbb_per_hand"] == matchup.pooled.mbb_per_hand
+        assert row["std_error"] == matchup.pooled.std_error
+        assert row["p_value"] == matchup.pooled.p_value
+        assert row["p_bonferroni"] == matchup.pooled.p_value_bonferroni
+    assert report["table1"]["hairl_dqn_vs_dqn"]["paper"] == {"mbb_per_hand": 96, "std_error": 14}
+    assert report["table1"]["airl_dqn_vs_dqn"]["paper"] == {"mbb_per_hand": -693, "std_error": 34}
+    # IRL: mean and std over the runs' own metrics files.
+    for algo in ("airl", "hairl"):
+        finals = [
+            json.loads(
+                (out / "irl" / algo / f"run-{k}" / "metrics.jsonl").read_text().split("\n")[-2]
+            )["val_alignment"]
+            for k in range(2)
+        ]
+        got = report["irl"][algo]["final_val_alignment"]
+        assert got["mean"] == pytest.approx(sum(finals) / 2)
+        assert got["std"] == pytest.approx(abs(finals[0] - finals[1]) / 2**0.5)
+    assert set(report["irl"]["bc"]["final_val_alignment"]) == {"mean", "std"}
+    assert set(report["irl"]["baselines"]) == {"majority", "legal_majority"}
+    # RL against random: the last evaluation of every seed.
+    for kind, folder in (("dqn", "dqn"), ("airl_dqn", "airl-dqn"), ("hairl_dqn", "hairl-dqn")):
+        last = [
+            json.loads(
+                (out / "agents" / folder / f"seed-{s}" / "metrics.jsonl")
+                .read_text()
+                .splitlines()[-1]
+            )["eval"]["random"]["mbb_per_hand"]
+            for s in (0, 1)
+        ]
+        assert report["rl_vs_random"][kind]["mean"] == pytest.approx(sum(last) / 2)
+    # Learned-reward seed k used IRL run k mod runs.
+    for seed in (0, 1):
+        config = json.loads(
+            (out / "agents" / "hairl-dqn" / f"seed-{seed}" / "config.json").read_text()
+        )
+        assert Path(config["reward"]["run"]).name == f"run-{seed}"
+    # The panel: every pair once, antisymmetric, built-ins included.
+    panel = report["panel"]
+    assert panel["agents"] == ["dqn", "airl_dqn", "hairl_dqn", "random", "call", "raise"]
+    matrix = panel["mbb_per_hand"]
+    for i in range(6):
+        assert matrix[i][i] is None
+        for j in range(i + 1, 6):
+            assert matrix[i][j] == -matrix[j][i]
+            assert panel["std_error"][i][j] == panel["std_error"][j][i] >= 0
+    assert matrix[4][5] == 0.0  # call vs raise on duplicate deals: exactly even
+    assert matrix[5][3] > 0  # raise beats random
+    csv = (out / "panel.csv").read_text().splitlines()
+    assert csv[0] == "agent,dqn,airl_dqn,hairl_dqn,random,call,raise" and len(csv) == 7
+    for figure in FIGURES.values():
+        assert (out / figure).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    markdown = (out / "report.md").read_text()
+    assert "+96 ± 14" in markdown and "-693 ± 34" in markdown and "Reduced sizes" in markdown
+    assert "duplicate" in markdown and "5,000 episodes" in markdown
+
+
+@pytest.mark.slow
+def test_rerun_skips_every_stage_and_a_changed_setting_is_refused(
+    finished: tuple[Path, Path, list[str]],
+) -> None:
+    month, out, _ = finished
+    before = (out / "report.json").read_bytes()
+    said: list[str] = []
+    run_study([month], out, preset("quick", **TOY), say=said.append)
+    assert sum("skipped" in line for line in said) == 5
+    assert (out / "report.json").read_bytes() == before  # same inputs, same bytes
+    changed = preset("quick", **{**TOY, "panel_hands": 300})
+    with pytest.raises(StudyError, match=r"panel.json: stage panel was run with other settings"):
+        run_study([month], out, changed)
+    assert (out / "report.json").read_bytes() == before
+    # --overwrite recomputes the changed stage only; the stages before it are skipped.
+    said.clear()
+    result = run_study([month], out, changed, overwrite=True, say=said.append)
+    assert sum("skipped" in line for line in said) == 4 and said[-2] == "[5/6] panel"
+    assert result.report["panel"]["hands"] == 300
+    assert result.report["table1"] == json.loads(before)["table1"]
+
+
+@pytest.mark.slow
+def test_report_command_prints_the_study_report(finished: tuple[Path, Path, list[str]]) -> None:
+    _, out, _ = finished
+    result = CliRunner().invoke(app, ["report", str(out)])
+    assert result.exit_code == 0, result.output
+    assert result.output.startswith("# pokerirl study (quick preset)")
+    as_json = CliRunner().invoke(app, ["report", str(out), "--format", "json"])
+    assert json.loads(as_json.output) == load_study_report(out)
+    # A tournament folder still prints as before.
+    tournament = CliRunner().invoke(app, ["report", str(out / "tournament")])
+    assert tournament.exit_code == 0 and "hairl-dqn" in tournament.output
+
+
+def test_bad_settings_are_one_line() -> None:
+    with pytest.raises(StudyError, match="unknown preset 'fast'"):
+        preset("fast")
+    with pytest.raises(StudyError, match="runs >= 1"):
+        preset("quick", runs=0)
+    with pytest.raises(StudyError, match="bad --seeds 'a-b'"):
+        parse_seeds("a-b")
+    assert parse_seeds("0-2,5") == (0, 1, 2, 5)
+
+
+def test_cli_refuses_a_missing_source(tmp_path: Path) -> None:
+    result = CliRunner().invoke(
+        app, ["study", str(tmp_path / "missing"), "--out", str(tmp_path / "out"), "-q"]
+    )
+    assert result.exit_code == 1
+    assert "missing: no such file or folder" in result.output
