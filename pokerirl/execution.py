@@ -515,8 +515,8 @@ def ray_head(*, num_cpus: int = 2, timeout: float = 120.0) -> Iterator[str]:
     For tests and benchmarks. It owns everything it starts: a temporary folder of its own (a
     short path: Ray's socket paths must fit in 107 characters), free ports, workers whose
     working directory is an empty folder of their own, this ``pokerirl`` importable on them.
-    It stops only its own processes, by the process ids it recorded: never ``ray stop``,
-    which ends every Ray process on the machine.
+    It stops only its own processes, by the process ids it recorded: never Ray's
+    stop-everything command, which ends every Ray process on the machine.
 
     Raises:
         ExecutionError: Ray did not start (with the reason from its log).

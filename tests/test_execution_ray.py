@@ -1,6 +1,7 @@
 """The Ray backend on a real cluster: `ray start --head` with 2 CPUs, a temporary folder and
 free ports of its own, started once for this module and stopped by the process ids it
-recorded (never `ray stop`). If Ray cannot start, these tests fail with the reason.
+recorded (never Ray's stop-everything command). If Ray cannot start, these tests fail with
+the reason.
 
 Agent sets and tournaments through `--ray ADDRESS` give the numbers and the model bytes of
 local processes, from a driver whose working directory differs from the workers', and a

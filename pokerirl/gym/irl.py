@@ -49,6 +49,7 @@ from pokerirl.irl.run import (
     SPLIT_FILE,
     SUMMARY_FILE,
     RunError,
+    data_record,
     run_baselines,
     save_run,
     summarize,
@@ -296,14 +297,7 @@ def train_gym_irl(
         )
         data_info = {
             "env": env_id,
-            "path": str(Path(data_path).resolve()),
-            "sha256": data.fingerprint(),
-            "rows": len(data),
-            "groups": len(np.unique(data.groups)),
-            "train_rows": len(train_data),
-            "val_rows": len(val_data),
-            "has_reward": data.rewards is not None,
-            "has_next_obs": data.next_obs is not None,
+            **data_record(data, train_data, val_data, path=data_path),
         }
         shares = {k: v for k, v in found.items() if k in ALIGNMENT_BASELINES and discrete}
         results = []

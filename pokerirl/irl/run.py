@@ -150,16 +150,7 @@ def train_into(
         progress=progress,
         on_epoch=log_epoch,
     )
-    data_info = {
-        "path": None if table is None else str(Path(table).resolve()),
-        "sha256": data.fingerprint(),
-        "rows": len(data),
-        "groups": len(np.unique(data.groups)),
-        "train_rows": len(train_data),
-        "val_rows": len(val_data),
-        "has_reward": data.rewards is not None,
-        "has_next_obs": data.next_obs is not None,
-    }
+    data_info = data_record(data, train_data, val_data, path=table)
     save_run(result, folder, algo=algo, data=data_info, baselines=found, device=device)
     plot_curves(result.metrics, folder, baselines=found)
     return RunSummary(
@@ -170,6 +161,26 @@ def train_into(
         train_rows=len(train_data),
         val_rows=len(val_data),
     )
+
+
+def data_record(
+    data: Transitions,
+    train_data: Transitions,
+    val_data: Transitions,
+    *,
+    path: str | os.PathLike[str] | None,
+) -> dict[str, Any]:
+    """What a run's ``config.json`` says of its data: where, which bytes, how it was split."""
+    return {
+        "path": None if path is None else str(Path(path).resolve()),
+        "sha256": data.fingerprint(),
+        "rows": len(data),
+        "groups": len(np.unique(data.groups)),
+        "train_rows": len(train_data),
+        "val_rows": len(val_data),
+        "has_reward": data.rewards is not None,
+        "has_next_obs": data.next_obs is not None,
+    }
 
 
 def run_baselines(
