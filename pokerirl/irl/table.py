@@ -13,6 +13,7 @@ gives next_obs (the same player's next decision in the hand) and done (their las
 from __future__ import annotations
 
 import os
+from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
@@ -33,22 +34,35 @@ def read_table(path: str | os.PathLike[str]) -> Transitions:
     Raises ``FileNotFoundError`` for a missing file and ``ValueError`` for anything else wrong
     (not Parquet, missing columns, wrong types or widths, nulls, empty, illegal expert actions).
     """
+    table = read_parquet(path, REQUIRED_COLUMNS, OPTIONAL_COLUMNS, what="table")
+    return transitions_from_arrow(table, source=str(Path(path)))
+
+
+def read_parquet(
+    path: str | os.PathLike[str],
+    required: Sequence[str],
+    optional: Sequence[str] = (),
+    *,
+    what: str,
+) -> pa.Table:
+    """The ``required`` columns (and the ``optional`` ones present) of the Parquet file at
+    ``path``: ``FileNotFoundError`` if it is missing, else a one-line ``ValueError`` naming it.
+    """
     path = Path(path)
     if not path.is_file():
-        raise FileNotFoundError(f"table not found: {path}")
+        raise FileNotFoundError(f"{what} not found: {path}")
     try:
         schema = pq.read_schema(path)
     except (pa.ArrowException, OSError) as error:
         raise ValueError(f"cannot read {path} as Parquet: {first_line(error)}") from None
-    missing = [name for name in REQUIRED_COLUMNS if name not in schema.names]
+    missing = [name for name in required if name not in schema.names]
     if missing:
         raise ValueError(f"{path} lacks required column(s): {', '.join(missing)}")
-    columns = [*REQUIRED_COLUMNS, *(c for c in OPTIONAL_COLUMNS if c in schema.names)]
+    columns = [*required, *(c for c in optional if c in schema.names)]
     try:
-        table = pq.read_table(path, columns=columns)
+        return pq.read_table(path, columns=columns)
     except (pa.ArrowException, OSError) as error:
         raise ValueError(f"cannot read {path}: {first_line(error)}") from None
-    return transitions_from_arrow(table, source=str(path))
 
 
 def transitions_from_arrow(table: pa.Table, *, source: str = "table") -> Transitions:

@@ -120,20 +120,11 @@ class Transitions:
         ``action`` (int64, or fixed_size_list<float>[k]), ``reward`` (float), ``done`` (bool),
         ``episode`` (int). Bad files raise ``ValueError`` naming the file."""
         import pyarrow as pa
-        import pyarrow.parquet as pq
 
-        from pokerirl.irl.table import first_line, fixed_width
+        from pokerirl.irl.table import fixed_width, read_parquet
 
         path = Path(path)
-        if not path.is_file():
-            raise FileNotFoundError(f"rollouts not found: {path}")
-        try:
-            table = pq.read_table(path)
-        except (pa.ArrowException, OSError) as error:
-            raise ValueError(f"cannot read {path} as Parquet: {first_line(error)}") from None
-        missing = [c for c in ENV_COLUMNS if c not in table.column_names]
-        if missing:
-            raise ValueError(f"{path} lacks required column(s): {', '.join(missing)}")
+        table = read_parquet(path, ENV_COLUMNS, what="rollouts")
         if table.num_rows == 0:
             raise ValueError(f"{path} is empty: no transitions")
         for name in ENV_COLUMNS:
