@@ -120,3 +120,15 @@ def test_rl_command_trains_on_the_env_reward_and_refuses_a_reward_that_does_not_
 
     with pytest.raises(ValueError, match="does not fit MountainCar-v0: obs must be"):
         train_rl("MountainCar-v0", reward=poker_reward, reward_name="poker", seed=0, timesteps=10)
+
+
+def test_rl_training_leaves_no_logger_folders_in_the_temp_dir(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    import tempfile
+
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))
+    monkeypatch.delenv("SB3_LOGDIR", raising=False)
+    train_rl("Acrobot-v1", reward=None, reward_name="env", seed=0, timesteps=64, eval_episodes=1,
+             evaluations=1)  # fmt: skip
+    assert not list(tmp_path.glob("SB3-*"))

@@ -146,6 +146,7 @@ def make_model(env_id: str, settings: RLSettings, *, seed: int, env: Any = None)
     """An SB3 PPO or DQN model with ``settings`` on ``env`` (default: a Monitor-wrapped env)."""
     require_gym()
     from stable_baselines3 import DQN, PPO
+    from stable_baselines3.common.logger import Logger
     from stable_baselines3.common.monitor import Monitor
 
     env = env if env is not None else Monitor(make_env(env_id))
@@ -153,11 +154,15 @@ def make_model(env_id: str, settings: RLSettings, *, seed: int, env: Any = None)
     if settings.dqn is not None:
         d = asdict(settings.dqn)
         d.pop("net_arch")
-        return DQN("MlpPolicy", env, seed=seed, policy_kwargs=kwargs, device="cpu", **d)
-    ppo = asdict(settings.ppo)
-    for key in ("net_arch", "activation", "log_std_init", "ortho_init"):
-        ppo.pop(key)
-    return PPO("MlpPolicy", env, seed=seed, policy_kwargs=kwargs, device="cpu", **ppo)
+        model = DQN("MlpPolicy", env, seed=seed, policy_kwargs=kwargs, device="cpu", **d)
+    else:
+        ppo = asdict(settings.ppo)
+        for key in ("net_arch", "activation", "log_std_init", "ortho_init"):
+            ppo.pop(key)
+        model = PPO("MlpPolicy", env, seed=seed, policy_kwargs=kwargs, device="cpu", **ppo)
+    # SB3's default logger makes an empty /tmp/SB3-<date> folder per learn() call.
+    model.set_logger(Logger(folder=None, output_formats=[]))
+    return model
 
 
 # --------------------------------------------------------------------------- evaluation
