@@ -783,6 +783,9 @@ def gym_irl(
     preset: str = typer.Option("paper", help="quick or paper: the budgets."),
     seed: int = typer.Option(0, help="Run k uses seed + k; the data split uses seed."),
     epochs: int | None = typer.Option(None, min=1, help="Override the preset's epochs."),
+    raw_obs: bool = typer.Option(
+        False, "--raw-obs", help="Train on raw observations (default: standardized)."
+    ),
     out: Path = typer.Option(..., "--out", "-o", help="Folder of run-<k> and summary.json."),
     overwrite: bool = typer.Option(False, help="Replace earlier runs in OUT."),
     threads: int = typer.Option(1, help="torch threads."),
@@ -803,6 +806,7 @@ def gym_irl(
     settings = PRESETS[preset].irl(env)
     if epochs is not None:
         settings = replace(settings, epochs=epochs)
+    settings = replace(settings, standardize_obs=not raw_obs)
     _gym_threads(threads)
     try:
         from pokerirl.gym.irl import train_gym_irl

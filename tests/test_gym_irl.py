@@ -65,6 +65,9 @@ def test_mountaincar_irl_runs_evaluate_in_the_env_and_feed_the_rl_phase(tmp_path
         config = json.loads((run / "config.json").read_text())
         assert config["hyperparameters"]["seed"] == k
         assert config["architecture"]["action_space"] == {"type": "discrete", "num_actions": 3}
+        # trained on standardized observations (velocity's std is about 0.01 to 0.03)
+        scale = config["data"]["obs_standardization"]["scale"]
+        assert len(scale) == 2 and 0 < scale[1] < 0.1
         baselines = json.loads((run / "baselines.json").read_text())
         assert set(baselines) == CORE_BASELINES | {"random", "expert"}
         assert baselines["random"] == -200.0  # a random policy never reaches the flag

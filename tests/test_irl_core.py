@@ -312,3 +312,32 @@ def test_flat_adam_matches_torch_adam_with_autograd_gradients() -> None:
     for a, b in zip(net_a.parameters(), net_b.parameters(), strict=True):
         torch.testing.assert_close(a, b, atol=1e-6, rtol=1e-5)
     assert not torch.allclose(net_a[0].weight, net_b[0].weight.detach() * 0)
+
+
+@pytest.mark.parametrize("family", ["state_action", "shaped"])
+@pytest.mark.parametrize("discrete", [True, False])
+def test_folding_a_standardization_keeps_every_default_net_the_same_function(
+    family: str, discrete: bool
+) -> None:
+    from pokerirl.irl.nets import fold_obs_standardization
+
+    torch.manual_seed(0)
+    spec = NetSpec(reward_hidden=(8, 4), policy_hidden=(8,), reward_family=family)
+    action_dim = 3 if discrete else 2
+    reward, policy = build_nets(
+        spec, obs_dim=4, action_dim=action_dim, discrete=discrete, low=[-1, -2], high=[1, 2]
+    )
+    x, x2 = torch.randn(6, 4) * 5 + 3, torch.randn(6, 4) * 5 + 3
+    actions = torch.rand(2, 6, action_dim)
+    done = torch.tensor([True, False] * 3)
+    shift, scale = torch.tensor([3.0, -1.0, 0.5, 2.0]), torch.tensor([5.0, 0.07, 1.0, 2.0])
+    z, z2 = (x - shift) / scale, (x2 - shift) / scale
+    f_before = reward(z, actions, z2, done)
+    pi_before = policy(z, None) if discrete else policy(z)[0]
+    fold_obs_standardization(reward, shift, scale)
+    fold_obs_standardization(policy, shift, scale)
+    torch.testing.assert_close(reward(x, actions, x2, done), f_before, atol=1e-5, rtol=1e-5)
+    pi_after = policy(x, None) if discrete else policy(x)[0]
+    torch.testing.assert_close(pi_after, pi_before, atol=1e-5, rtol=1e-5)
+    with pytest.raises(TypeError, match="not one of the default nets"):
+        fold_obs_standardization(torch.nn.Linear(4, 1), shift, scale)

@@ -34,7 +34,7 @@ from typing import Any
 
 import numpy as np
 import torch
-from torch import nn
+from torch import Tensor, nn
 
 from pokerirl.atomic import atomic_path, make_shareable, write_text
 from pokerirl.gym.experts import make_env, shipped_manifest
@@ -42,6 +42,7 @@ from pokerirl.gym.presets import TASKS, IRLSettings
 from pokerirl.gym.rl import EVAL_SEED
 from pokerirl.irl.airl import default_nets, train_many
 from pokerirl.irl.config import AIRLConfig
+from pokerirl.irl.nets import fold_obs_standardization
 from pokerirl.irl.plots import plot_bands, plot_curves
 from pokerirl.irl.run import (
     BASELINES_FILE,
@@ -125,6 +126,21 @@ def load_env_transitions(env_id: str, data_path: str | os.PathLike[str]) -> Tran
             f"{data_path}: observations have {data.obs_dim} dims, {env_id} has {obs_space.shape}"
         )
     return data
+
+
+def obs_standardization(data: Transitions, *, enabled: bool = True) -> tuple[Tensor, Tensor]:
+    """(shift, scale): the observations' mean and std (scale 1 where a dimension is constant);
+    (0, 1) when not ``enabled``."""
+    if not enabled:
+        return torch.zeros(data.obs_dim), torch.ones(data.obs_dim)
+    std = data.obs.std(dim=0)
+    return data.obs.mean(dim=0), torch.where(std > 1e-6, std, torch.ones_like(std))
+
+
+def standardized(data: Transitions, shift: Tensor, scale: Tensor) -> Transitions:
+    """``data`` with obs and next_obs mapped to ``(x - shift) / scale``."""
+    next_obs = None if data.next_obs is None else (data.next_obs - shift) / scale
+    return replace(data, obs=(data.obs - shift) / scale, next_obs=next_obs)
 
 
 # --------------------------------------------------------------------------- evaluation
@@ -248,11 +264,17 @@ def train_gym_irl(
     data = load_env_transitions(env_id, data_path)
     discrete = data.discrete
     train_data, val_data, val_groups = data.split(val_fraction=config.val_fraction, seed=seed)
+    shift, scale = obs_standardization(train_data, enabled=settings.standardize_obs)
+    train_data, val_data = (
+        standardized(train_data, shift, scale),
+        standardized(val_data, shift, scale),
+    )
 
     found = run_baselines(train_data, val_data, config=config, device=device, progress=progress)
     found["random"] = random_return(env_id, episodes=settings.eval_episodes)
     found["expert"] = expert_return(env_id, data_path)
 
+    shift_np, scale_np = shift.numpy(), scale.numpy()
     seeds = [seed + k for k in range(runs)]
     nets = [default_nets(train_data, config, s) for s in seeds]
     policies = [p for _, p in nets]
@@ -275,7 +297,9 @@ def train_gym_irl(
                 policy.eval()
                 returns = episode_returns(
                     env_id,
-                    lambda obs, p=policy: policy_actions(p, obs, discrete=discrete),
+                    lambda obs, p=policy: policy_actions(
+                        p, (obs - shift_np) / scale_np, discrete=discrete
+                    ),
                     episodes=settings.eval_episodes,
                 )
                 policy.train(was_training)
@@ -298,10 +322,16 @@ def train_gym_irl(
         data_info = {
             "env": env_id,
             **data_record(data, train_data, val_data, path=data_path),
+            "obs_standardization": {"shift": shift.tolist(), "scale": scale.tolist()}
+            if settings.standardize_obs
+            else None,
         }
         shares = {k: v for k, v in found.items() if k in ALIGNMENT_BASELINES and discrete}
         results = []
         for k, result in enumerate(many.runs):
+            # The saved nets take raw observations (load_reward, the RL wrapper, reward maps).
+            fold_obs_standardization(result.reward, shift, scale)
+            fold_obs_standardization(result.policy, shift, scale)
             save_run(result, folders[k], algo=algo, data=data_info, baselines=found, device=device)
             plot_curves(result.metrics, folders[k], baselines=shares)
             results.append({"seed": seeds[k], "metrics": result.metrics, "baselines": found})

@@ -36,6 +36,10 @@ class IRLSettings:
     sigma_start: float
     sigma_end: float
     sigma_decay: float = 0.01
+    # Ours, not the paper's (which does not say): train on observations standardized with the
+    # training split's mean and std, folded into the saved nets' first layers. False feeds raw
+    # observations, which leaves MountainCar's velocity (|v| < 0.07) nearly invisible.
+    standardize_obs: bool = True
 
 
 @dataclass(frozen=True, kw_only=True)

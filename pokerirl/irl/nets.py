@@ -289,3 +289,39 @@ def project_to_simplex(v: Tensor, mask: Tensor | None = None) -> Tensor:
     # sorted_v_k is in the support and falls after, so its maximum is at the support's end.
     theta = ((sorted_v.cumsum(dim=-1) - 1) / k).amax(dim=-1, keepdim=True)
     return (v - theta).clamp_min(0)
+
+
+def obs_input_layers(module: nn.Module) -> list[nn.Linear]:
+    """The Linear layers of a default net that read the observation directly.
+
+    Raises ``TypeError`` for any other module: only the default nets' layouts are known.
+    """
+    if isinstance(module, StateActionReward):
+        return [module.obs_layer]
+    if isinstance(module, ShapedReward):
+        return [module.g.obs_layer, module.h[0]]  # type: ignore[list-item]
+    if isinstance(module, (DiscretePolicy, GaussianPolicy)):
+        return [module.mlp[0]]  # type: ignore[list-item]
+    raise TypeError(f"{type(module).__name__} is not one of the default nets")
+
+
+@torch.no_grad()
+def fold_obs_standardization(module: nn.Module, shift: Tensor, scale: Tensor) -> nn.Module:
+    """Make a default net trained on ``(obs - shift) / scale`` take raw observations.
+
+    Each first layer ``W z + b`` with ``z = (x - shift) / scale`` becomes
+    ``(W / scale) x + (b - (W / scale) shift)``: the same function, so saved nets (and
+    :func:`pokerirl.irl.load_reward`) need no extra preprocessing. In place; returns ``module``.
+
+    >>> torch.manual_seed(0) and None
+    >>> net = DiscretePolicy(obs_dim=2, num_actions=3, hidden=(4,))
+    >>> x = torch.randn(5, 2); shift, scale = torch.tensor([1.0, -2.0]), torch.tensor([0.5, 3.0])
+    >>> before = net((x - shift) / scale, None)
+    >>> torch.allclose(fold_obs_standardization(net, shift, scale)(x, None), before, atol=1e-6)
+    True
+    """
+    for layer in obs_input_layers(module):
+        layer.weight.div_(scale)
+        if layer.bias is not None:
+            layer.bias.sub_(layer.weight @ shift)
+    return module
