@@ -876,9 +876,7 @@ def gym_reward_map(
     if not folders:
         fail("give the IRL folders to draw: --runs AIRL_DIR HAIRL_DIR")
     try:
-        result = reward_map(
-            env, folders, grid=grid, expert=None if expert == "none" else expert
-        )
+        result = reward_map(env, folders, grid=grid, expert=None if expert == "none" else expert)
         out.parent.mkdir(parents=True, exist_ok=True)
         plot_reward_map(result, out)
     except (ValueError, ImportError) as error:

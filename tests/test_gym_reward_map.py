@@ -47,7 +47,8 @@ def hand_set_run(
     with torch.no_grad():
         for p in reward.parameters():
             p.zero_()
-        obs_w, act_w, bias = reward.obs_layer.weight, reward.action_layer.weight, reward.obs_layer.bias
+        obs_w, bias = reward.obs_layer.weight, reward.obs_layer.bias
+        act_w = reward.action_layer.weight
         bias[:] = -BIG
         obs_w[0, 1], act_w[0, RIGHT] = velocity * V_SCALE, BIG  # unit 0: right
         obs_w[1, 1], act_w[1, LEFT] = -velocity * V_SCALE, BIG  # unit 1: left
@@ -178,3 +179,19 @@ def test_plot_bytes_change_with_the_map(tmp_path: Path) -> None:
                    expert=None)  # fmt: skip
     paths = [plot_reward_map(r, tmp_path / f"{i}.png") for i, r in enumerate((a, a, b))]
     assert paths[0].read_bytes() == paths[1].read_bytes() != paths[2].read_bytes()
+
+
+def test_the_drawing_puts_positive_velocity_on_top(tmp_path: Path) -> None:
+    from matplotlib.image import imread
+
+    result = reward_map("MountainCar-v0", [hand_set_run(tmp_path / "v", velocity=1.0)],
+                        grid=21, expert=None)  # fmt: skip
+    pixels = imread(plot_reward_map(result, tmp_path / "map.png"))[..., :3]
+
+    def rows_of(colour: str) -> np.ndarray:
+        rgb = np.array([int(colour[i : i + 2], 16) / 255 for i in (1, 3, 5)])
+        return np.nonzero(np.abs(pixels - rgb).max(-1) < 0.02)[0]
+
+    right, left = rows_of("#D55E00"), rows_of("#0072B2")  # push right, push left
+    assert len(right) > 1000 and len(left) > 1000
+    assert right.mean() < left.mean()  # image rows grow downwards

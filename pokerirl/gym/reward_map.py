@@ -153,7 +153,9 @@ def check_run(run: Path, env_id: str, num_actions: int) -> str:
     arch = record["architecture"]
     space = arch["action_space"]
     if arch["obs_dim"] != 2 or space.get("num_actions") != num_actions:
-        raise RunError(f"{run}: its nets do not fit {env_id}'s 2-d states and {num_actions} actions")
+        raise RunError(
+            f"{run}: its nets do not fit {env_id}'s 2-d states and {num_actions} actions"
+        )
     return str(record.get("algo", "?"))
 
 
@@ -266,7 +268,9 @@ def plot_reward_map(result: RewardMap, path: str | os.PathLike[str]) -> Path:
         axes.set_xlabel(result.axis_names[0])
         if i == 0:
             axes.set_ylabel(result.axis_names[1])
-    handles = [Patch(color=c, label=name) for c, name in zip(colours, result.action_names)]
+    handles = [
+        Patch(color=c, label=name) for c, name in zip(colours, result.action_names, strict=True)
+    ]
     figure.legend(handles=handles, loc="lower center", ncol=k, frameon=False)
     figure.suptitle(f"{result.env_id}: the action the learned reward f(s, a) prefers")
     figure.tight_layout(rect=(0, 0.07, 1, 1))
