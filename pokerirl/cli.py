@@ -862,7 +862,7 @@ def gym_reward_map(
         [], "--runs", help="IRL folders (run-<k> inside, or one run), one panel each, in order."
     ),
     out: Path = typer.Option(..., "--out", "-o", help="The PNG to write."),
-    grid: int = typer.Option(101, "--grid", min=2, help="Cells per axis."),
+    grid: int = typer.Option(101, "--grid", min=2, max=501, help="Cells per axis."),
     expert: str = typer.Option(
         "shipped", "--expert", help="Reference panel: shipped, an expert folder, or none."
     ),
@@ -884,7 +884,7 @@ def gym_reward_map(
     except OSError as error:
         fail(f"{error.filename or out}: {error.strerror or error}")
     for panel in result.panels:
-        line = f"{panel.label} {panel.folder}"
+        line = panel.label
         if panel.agreement is not None:
             low, high = min(panel.run_agreements), max(panel.run_agreements)
             line += (
