@@ -892,4 +892,7 @@ def gym_reward_map(
                 f"{grid}x{grid} cells (single runs {100 * low:.1f}-{100 * high:.1f}%)"
             )
         typer.echo(line)
+    if result.constant_agreement is not None:
+        action, share = result.constant_agreement
+        typer.echo(f"baseline: a constant {action!r} agrees on {100 * share:.1f}% of cells")
     typer.echo(f"wrote {out}")

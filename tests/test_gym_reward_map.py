@@ -116,6 +116,9 @@ def test_agreement_with_the_shipped_expert(tmp_path: Path) -> None:
     assert panel.agreement == pytest.approx(share)
     assert panel.run_agreements == (pytest.approx(share),)
     assert 0.3 < share < 1  # the expert pushes with the velocity over most of the box
+    action, constant = result.constant_agreement
+    assert constant == max((result.expert == a).mean() for a in (LEFT, NO_PUSH, RIGHT))
+    assert action == result.action_names[int(np.bincount(result.expert.ravel()).argmax())]
 
 
 def test_cli_takes_runs_a_b_and_repeated_runs_and_writes_the_same_bytes(tmp_path: Path) -> None:
@@ -130,11 +133,12 @@ def test_cli_takes_runs_a_b_and_repeated_runs_and_writes_the_same_bytes(tmp_path
     lines = result.output.splitlines()
     assert lines[0].startswith("AIRL: airl (1 run)") and "agrees with the expert on" in lines[0]
     assert lines[1].startswith("H-AIRL: hairl (1 run)")
+    assert lines[2].startswith("baseline: a constant")
     again = CliRunner().invoke(
         app, [*base, "--runs", str(airl), "--runs", str(hairl), "-o", str(second), "--grid", "21"]
     )
     assert again.exit_code == 0, again.output
-    assert again.output.splitlines()[:2] == lines[:2]
+    assert again.output.splitlines()[:3] == lines[:3]
     assert first.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert first.read_bytes() == second.read_bytes()
 

@@ -69,6 +69,16 @@ class RewardMap:
     expert_label: str | None
     panels: tuple[Panel, ...]
 
+    @property
+    def constant_agreement(self) -> tuple[str, float] | None:
+        """The baseline for agreement: the one action that matches the expert on the most
+        cells, and that share (what a reward preferring it everywhere would score)."""
+        if self.expert is None:
+            return None
+        shares = np.bincount(self.expert.ravel(), minlength=len(self.action_names))
+        best = int(shares.argmax())
+        return self.action_names[best], float(shares[best] / self.expert.size)
+
 
 def task_space(env_id: str) -> tuple[np.ndarray, np.ndarray, int]:
     """(low, high, number of actions) of a task with a bounded 2-d observation and discrete
@@ -241,8 +251,10 @@ def plot_reward_map(result: RewardMap, path: str | os.PathLike[str]) -> Path:
     colours = [COLOURS[i % len(COLOURS)] for i in range(k)]
     cmap = ListedColormap(colours)
     maps: list[tuple[str, np.ndarray]] = []
-    if result.expert is not None:
-        maps.append((f"{result.expert_label}: greedy action", result.expert))
+    if result.expert is not None and result.constant_agreement is not None:
+        action, share = result.constant_agreement
+        title = f"{result.expert_label}: greedy action\na constant {action!r} matches "
+        maps.append((title + f"{100 * share:.1f}% of cells", result.expert))
     for panel in result.panels:
         title = panel.label
         if panel.agreement is not None:
