@@ -852,3 +852,51 @@ def gym_irl(
     if result.final_alignment is not None:
         line += f", alignment {100 * result.final_alignment['mean']:.1f}%"
     typer.echo(f"{line}; wrote {out}")
+
+
+@gym_app.command("reward-map")
+def gym_reward_map(
+    env_and_folders: list[str] = typer.Argument(
+        ...,
+        metavar="ENV [RUN_DIR]...",
+        help="The task (a 2-d observation, discrete actions: MountainCar-v0); folders given "
+        "after --runs land here too (`--runs A B`).",
+    ),
+    runs: list[Path] = typer.Option(
+        [], "--runs", help="IRL folders (run-<k> inside, or one run), one panel each, in order."
+    ),
+    out: Path = typer.Option(..., "--out", "-o", help="The PNG to write."),
+    grid: int = typer.Option(101, "--grid", min=2, max=501, help="Cells per axis."),
+    expert: str = typer.Option(
+        "shipped", "--expert", help="Reference panel: shipped, an expert folder, or none."
+    ),
+) -> None:
+    """Draw the action each folder's learned reward f(s, a) prefers over the state space."""
+    from pokerirl.gym.reward_map import plot_reward_map, reward_map
+
+    env, *extra = env_and_folders
+    # click gives an option one value: `--runs A B` leaves B among the positionals.
+    folders = [*runs, *map(Path, extra)]
+    if not folders:
+        fail("give the IRL folders to draw: --runs AIRL_DIR HAIRL_DIR")
+    try:
+        result = reward_map(env, folders, grid=grid, expert=None if expert == "none" else expert)
+        out.parent.mkdir(parents=True, exist_ok=True)
+        plot_reward_map(result, out)
+    except (ValueError, ImportError) as error:
+        fail(str(error))
+    except OSError as error:
+        fail(f"{error.filename or out}: {error.strerror or error}")
+    for panel in result.panels:
+        line = panel.label
+        if panel.agreement is not None:
+            low, high = min(panel.run_agreements), max(panel.run_agreements)
+            line += (
+                f": agrees with the expert on {100 * panel.agreement:.1f}% of "
+                f"{grid}x{grid} cells (single runs {100 * low:.1f}-{100 * high:.1f}%)"
+            )
+        typer.echo(line)
+    if result.constant_agreement is not None:
+        action, share = result.constant_agreement
+        typer.echo(f"baseline: a constant {action!r} agrees on {100 * share:.1f}% of cells")
+    typer.echo(f"wrote {out}")
