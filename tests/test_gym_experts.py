@@ -23,6 +23,7 @@ from pokerirl.gym.experts import (  # noqa: E402
     shipped_dir,
     shipped_manifest,
 )
+from pokerirl.gym.presets import TASKS  # noqa: E402
 
 torch.set_num_threads(1)
 
@@ -96,7 +97,7 @@ def test_bad_expert_folders_and_envs_fail_in_one_line(tmp_path: Path) -> None:
 
 def test_shipped_manifest_matches_the_shipped_files() -> None:
     manifest = shipped_manifest()
-    assert manifest, "no shipped experts"
+    assert sorted(e["env"] for e in manifest) == sorted(TASKS), "one shipped expert per task"
     total = sum(f.stat().st_size for f in shipped_dir().rglob("*") if f.is_file())
     assert total < 10 * 2**20
     for entry in manifest:
