@@ -900,3 +900,54 @@ def gym_reward_map(
         action, share = result.constant_agreement
         typer.echo(f"baseline: a constant {action!r} agrees on {100 * share:.1f}% of cells")
     typer.echo(f"wrote {out}")
+
+
+@gym_app.command("study")
+def gym_study(
+    task: str = typer.Argument(..., metavar="ENV|all", help="A task, e.g. MountainCar-v0, or all."),
+    out: Path = typer.Option(..., "--out", "-o", help="The study folder."),
+    preset_name: str = typer.Option("quick", "--preset", help="quick or paper: the budgets."),
+    runs: int | None = typer.Option(None, "--runs", min=1, help="Runs per algorithm and reward."),
+    seed: int | None = typer.Option(None, "--seed", min=0, help="Data seed; run k uses seed + k."),
+    transitions: int | None = typer.Option(None, min=2, help="Override the expert transitions."),
+    epochs: int | None = typer.Option(None, min=1, help="Override the IRL epochs."),
+    eval_episodes: int | None = typer.Option(None, min=1, help="Override episodes per evaluation."),
+    timesteps: int | None = typer.Option(None, min=1, help="Override the RL steps per run."),
+    jobs: int = typer.Option(2, "--jobs", min=1, help="Processes for the units."),
+    ray: str | None = typer.Option(None, "--ray", metavar="ADDRESS", help=RAY_HELP),
+    overwrite: bool = typer.Option(
+        False, "--overwrite", help="Recompute units whose settings changed."
+    ),
+    quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bars."),
+) -> None:
+    """The paper's Gymnasium study: shipped expert -> data -> IRL (AIRL and H-AIRL) -> RL (env
+    reward, AIRL and H-AIRL rewards) -> summary.json, figures/ and report.md beside the
+    authors' finals. Resumable: finished units are kept."""
+    from pokerirl.gym.study import parse_tasks, run_gym_study, study_preset
+
+    try:
+        preset = study_preset(
+            preset_name,
+            tasks=parse_tasks(task),
+            runs=runs,
+            seed=seed,
+            transitions=transitions,
+            epochs=epochs,
+            eval_episodes=eval_episodes,
+            rl_timesteps=timesteps,
+        )
+        result = run_gym_study(
+            out,
+            preset,
+            backend=_backend(jobs, ray),
+            overwrite=overwrite,
+            progress=not quiet,
+            say=typer.echo,
+        )
+    except (ValueError, ImportError, OSError, execution.ExecutionError) as error:
+        fail(str(error))
+    except KeyboardInterrupt:
+        fail(INTERRUPTED, 130)
+    typer.echo("")
+    typer.echo(result.markdown)
+    typer.echo(f"report: {out / 'report.md'}")

@@ -615,11 +615,14 @@ def read_files(folder: str | os.PathLike[str], names: Sequence[str]) -> dict[str
 
 
 def write_files(folder: str | os.PathLike[str], files: Mapping[str, bytes]) -> Path:
-    """Write ``files`` into ``folder`` (created): how a worker lands its inputs."""
+    """Write ``files`` into ``folder`` (created, as are subfolders named in ``files``): how a
+    worker lands its inputs."""
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     for name, data in files.items():
-        (folder / name).write_bytes(data)
+        path = folder / name  # names may hold subfolders: "run-0/reward.pt"
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_bytes(data)
     return folder
 
 

@@ -240,13 +240,16 @@ def train_gym_irl(
     device: str = "cpu",
     progress: bool = True,
     overwrite: bool = False,
+    data_label: str | os.PathLike[str] | None = None,
 ) -> GymIRLResult:
     """``runs`` IRL runs (seeds ``seed + k``) of ``algo`` on ``data_path`` in lock-step.
 
     ``settings`` default to the task's (the authors'); a preset's come from
     ``PRESETS[name].irl(env_id)``. ``out`` may already hold other files (the expert data);
     run folders and the summary are built in a hidden folder inside it and moved into place
-    at the end, refusing to replace earlier results unless ``overwrite``.
+    at the end, refusing to replace earlier results unless ``overwrite``. ``data_label`` is
+    the data's path the run configs record (default ``data_path``; a worker that got the data
+    as bytes names the driver's file, so the bytes do not depend on its scratch folder).
     """
     if env_id not in TASKS:
         raise ValueError(f"unknown task {env_id!r}; choose one of {', '.join(TASKS)}")
@@ -321,7 +324,7 @@ def train_gym_irl(
         )
         data_info = {
             "env": env_id,
-            **data_record(data, train_data, val_data, path=data_path),
+            **data_record(data, train_data, val_data, path=data_label or data_path),
             "obs_standardization": {"shift": shift.tolist(), "scale": scale.tolist()}
             if settings.standardize_obs
             else None,

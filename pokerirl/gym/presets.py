@@ -421,7 +421,28 @@ class StudyPreset:
     epochs: int | None = None
     eval_episodes: int | None = None
     rl_timesteps: int | None = None
+    rl_evaluations: int = 10  # points on each RL run's true-return curve, the last at its end
+    seed: int = 0  # expert data from reset(seed + k); IRL run k and RL run k use seed + k
+    standardize_obs: bool = True  # IRL on standardized observations (see IRLSettings)
     notes: str = ""
+
+    def __post_init__(self) -> None:
+        unknown = [t for t in self.tasks if t not in TASKS]
+        if unknown:
+            raise ValueError(f"unknown task {unknown[0]!r}; choose one of {', '.join(TASKS)}")
+        checks = {
+            "runs >= 1": self.runs >= 1,
+            "at least one task": len(self.tasks) >= 1,
+            "transitions >= 2": self.transitions is None or self.transitions >= 2,
+            "epochs >= 1": self.epochs is None or self.epochs >= 1,
+            "eval episodes >= 1": self.eval_episodes is None or self.eval_episodes >= 1,
+            "RL timesteps >= 1": self.rl_timesteps is None or self.rl_timesteps >= 1,
+            "RL evaluations >= 1": self.rl_evaluations >= 1,
+            "seed >= 0": self.seed >= 0,
+        }
+        broken = [name for name, ok in checks.items() if not ok]
+        if broken:
+            raise ValueError(f"bad study settings: {', '.join(broken)}")
 
     def irl(self, env_id: str) -> IRLSettings:
         """The task's IRL settings with this preset's budget overrides applied."""
@@ -431,6 +452,7 @@ class StudyPreset:
             transitions=self.transitions or base.transitions,
             epochs=self.epochs or base.epochs,
             eval_episodes=self.eval_episodes or base.eval_episodes,
+            standardize_obs=self.standardize_obs,
         )
 
     def rl(self, env_id: str) -> RLSettings:

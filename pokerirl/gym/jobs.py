@@ -1,0 +1,381 @@
+"""The units of the Gymnasium study and the sweep, and the rules that make them resumable.
+
+Three kinds of unit, each a top-level function of plain arguments that returns bytes (so it
+runs on any :mod:`pokerirl.execution` backend, with no shared filesystem):
+
+- :func:`collect_unit`: the shipped expert's transitions (``gym collect``) as Parquet bytes;
+- :func:`irl_unit`: one algorithm's IRL runs in lock-step (``gym irl``), as a folder's files;
+- :func:`rl_unit`: one RL run (``gym rl``) on the env reward or on one IRL run's reward.
+
+The driver writes what comes back, with a unit record (``unit.json``, or ``expert.unit.json``
+beside the data) holding a fingerprint of everything the unit's result depends on: the task,
+the settings, the seeds and the sha256 of its inputs. A rerun reuses a unit whose record
+matches, recomputes one that is missing, half-written or corrupt, and refuses, in one line,
+one made with other settings or inputs unless ``overwrite``.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import tempfile
+from collections.abc import Callable, Sequence
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Any
+
+from pokerirl.atomic import write_bytes
+from pokerirl.execution import (
+    RECORD_FILE,
+    Backend,
+    UnitConflict,
+    bytes_fingerprint,
+    load_unit,
+    load_unit_folder,
+    make_record,
+    map_units,
+    read_files,
+    save_record,
+    save_unit_folder,
+    write_files,
+)
+from pokerirl.gym.presets import IRLSettings, RLSettings
+
+DATA_FILE = "expert.parquet"
+DATA_RECORD = "expert.unit.json"
+TIMINGS = "timings.json"  # wall-clock seconds: written, never fingerprinted
+REWARD_INPUTS = ("config.json", "reward.pt")  # what load_reward reads of a run folder
+
+
+class JobError(ValueError):
+    """A unit made with other settings, or a folder that does not fit; the message is one line."""
+
+
+def _folder_files(root: Path) -> dict[str, bytes]:
+    """Every file under ``root`` by its relative path (``run-0/reward.pt``)."""
+    return {
+        str(path.relative_to(root)): path.read_bytes()
+        for path in sorted(root.rglob("*"))
+        if path.is_file()
+    }
+
+
+def _split_timings(files: dict[str, bytes]) -> tuple[dict[str, bytes], dict[str, bytes]]:
+    timed = {name: data for name, data in files.items() if Path(name).name == TIMINGS}
+    return {name: data for name, data in files.items() if name not in timed}, timed
+
+
+def expert_fingerprint(env_id: str) -> dict[str, Any]:
+    """The shipped expert of ``env_id``: its manifest entry and the sha256 of its weights."""
+    from pokerirl.gym.experts import MODEL_FILE, resolve_expert_dir, shipped_manifest
+
+    folder = resolve_expert_dir("shipped", env_id)
+    entry = next((e for e in shipped_manifest() if e["env"] == env_id), None)
+    digest = hashlib.sha256((folder / MODEL_FILE).read_bytes()).hexdigest()
+    return {"manifest": entry, "model_sha256": digest}
+
+
+# --------------------------------------------------------------------------- the units
+
+
+def collect_unit(env_id: str, transitions: int, seed: int) -> bytes:
+    """The shipped expert's ``transitions`` deterministic transitions (episode k from
+    ``reset(seed=seed + k)``), as the bytes of the Parquet table ``gym collect`` writes."""
+    from pokerirl.gym.collect import collect
+    from pokerirl.gym.experts import load_expert, resolve_expert_dir
+
+    with tempfile.TemporaryDirectory(prefix="pokerirl-collect-") as scratch:
+        path = Path(scratch) / DATA_FILE
+        expert = load_expert(resolve_expert_dir("shipped", env_id))
+        collect(expert, path, transitions=transitions, seed=seed)
+        return path.read_bytes()
+
+
+def irl_unit(
+    env_id: str,
+    data: bytes,
+    data_label: str,
+    algo: str,
+    runs: int,
+    settings: IRLSettings,
+    seed: int,
+) -> dict[str, bytes]:
+    """``runs`` IRL runs of ``algo`` in lock-step on the expert data (Parquet bytes): the
+    files of a ``gym irl`` folder (``run-<k>/...``, ``summary.json``, figures)."""
+    from pokerirl.gym.irl import train_gym_irl
+
+    with tempfile.TemporaryDirectory(prefix="pokerirl-gym-irl-") as scratch:
+        path = Path(scratch) / DATA_FILE
+        path.write_bytes(data)
+        out = Path(scratch) / "out"
+        train_gym_irl(
+            env_id,
+            path,
+            algo=algo,
+            runs=runs,
+            settings=settings,
+            seed=seed,
+            out=out,
+            progress=False,
+            data_label=data_label,
+        )
+        return _folder_files(out)
+
+
+def rl_unit(
+    env_id: str,
+    reward_files: dict[str, bytes] | None,
+    reward_name: str,
+    seed: int,
+    settings: RLSettings,
+    evaluations: int,
+    eval_episodes: int,
+) -> dict[str, bytes]:
+    """One RL run on the env reward (``reward_files`` None) or on the learned reward of the IRL
+    run whose ``config.json`` and ``reward.pt`` are given: the files ``gym rl`` writes."""
+    from pokerirl.gym.rl import train_rl
+    from pokerirl.irl import load_reward
+
+    with tempfile.TemporaryDirectory(prefix="pokerirl-gym-rl-") as scratch:
+        reward = None
+        if reward_files is not None:
+            reward = load_reward(write_files(Path(scratch) / "reward-run", reward_files))
+        out = Path(scratch) / "run"
+        train_rl(
+            env_id,
+            reward=reward,
+            reward_name=reward_name,
+            seed=seed,
+            settings=settings,
+            evaluations=evaluations,
+            eval_episodes=eval_episodes,
+            out=out,
+        )
+        return _folder_files(out)
+
+
+# --------------------------------------------------------------------------- jobs
+
+
+@dataclass(frozen=True, kw_only=True)
+class DataJob:
+    """The expert data of one task, written to ``path`` (its record beside it)."""
+
+    env: str
+    transitions: int
+    seed: int
+    path: Path
+
+    def config(self) -> dict[str, Any]:
+        return {
+            "unit": "gym-data",
+            "env": self.env,
+            "expert": expert_fingerprint(self.env),
+            "transitions": self.transitions,
+            "seed": self.seed,
+        }
+
+
+@dataclass(frozen=True, kw_only=True)
+class IRLJob:
+    """``runs`` IRL runs of ``algo`` (seeds ``seed + k``) into the unit folder ``folder``."""
+
+    env: str
+    algo: str
+    runs: int
+    settings: IRLSettings
+    seed: int
+    data: Path
+    folder: Path
+
+    def config(self) -> dict[str, Any]:
+        return {
+            "unit": "gym-irl",
+            "env": self.env,
+            "algo": self.algo,
+            "runs": self.runs,
+            "seed": self.seed,
+            "settings": asdict(self.settings),
+            "data": bytes_fingerprint(self.data.read_bytes()),
+        }
+
+    def run(self, k: int) -> Path:
+        return self.folder / f"run-{k}"
+
+
+@dataclass(frozen=True, kw_only=True)
+class RLJob:
+    """One RL run (seed ``seed``) on the env reward (``reward_run`` None) or on the reward of
+    the IRL run folder ``reward_run``, into the unit folder ``folder``."""
+
+    env: str
+    reward: str  # "env", or the IRL algorithm whose reward it learns from
+    reward_run: Path | None
+    seed: int
+    settings: RLSettings
+    evaluations: int
+    eval_episodes: int
+    folder: Path
+
+    def reward_files(self) -> dict[str, bytes] | None:
+        if self.reward_run is None:
+            return None
+        try:
+            return read_files(self.reward_run, REWARD_INPUTS)
+        except OSError as error:
+            raise JobError(f"{self.reward_run}: cannot read the IRL run ({error})") from None
+
+    def config(self, reward_files: dict[str, bytes] | None) -> dict[str, Any]:
+        return {
+            "unit": "gym-rl",
+            "env": self.env,
+            "reward": self.reward,
+            "reward_run": None
+            if reward_files is None
+            else {name: bytes_fingerprint(data) for name, data in sorted(reward_files.items())},
+            "seed": self.seed,
+            "settings": asdict(self.settings),
+            "evaluations": self.evaluations,
+            "eval_episodes": self.eval_episodes,
+        }
+
+    def reward_name(self) -> str:
+        if self.reward_run is None:
+            return "env"
+        return f"{self.reward}:{self.reward_run.name}"
+
+
+Say = Callable[[str], None]
+
+
+def _unfinished(
+    folders: Sequence[Path], configs: Sequence[dict[str, Any]], *, overwrite: bool
+) -> list[int]:
+    """Indices of the unit folders to (re)compute; a unit of other settings is a JobError."""
+    todo = []
+    for i, (folder, config) in enumerate(zip(folders, configs, strict=True)):
+        try:
+            if load_unit_folder(folder, config, overwrite=overwrite) is None:
+                todo.append(i)
+        except UnitConflict as error:
+            raise JobError(str(error)) from None
+    return todo
+
+
+def run_data_jobs(
+    jobs: Sequence[DataJob],
+    *,
+    backend: Backend,
+    overwrite: bool = False,
+    progress: bool = False,
+) -> int:
+    """Collect every job's data that is not already there; returns how many were reused."""
+    todo = []
+    for job in jobs:
+        record = job.path.parent / DATA_RECORD
+        try:
+            if load_unit(record, job.config(), overwrite=overwrite, what=str(job.path)) is None:
+                todo.append(job)
+        except UnitConflict as error:
+            raise JobError(str(error)) from None
+
+    def save(index: int, data: bytes) -> None:
+        job = todo[index]
+        job.path.parent.mkdir(parents=True, exist_ok=True)
+        write_bytes(job.path, data)
+        record = make_record(job.config(), files={DATA_FILE: data})
+        save_record(job.path.parent / DATA_RECORD, record)
+
+    map_units(
+        collect_unit,
+        [(job.env, job.transitions, job.seed) for job in todo],
+        backend=backend,
+        progress=progress,
+        desc="expert data",
+        reused=len(jobs) - len(todo),
+        on_result=save,
+        labels=[f"{job.env} data" for job in todo],
+    )
+    return len(jobs) - len(todo)
+
+
+def run_irl_jobs(
+    jobs: Sequence[IRLJob],
+    *,
+    backend: Backend,
+    overwrite: bool = False,
+    progress: bool = False,
+) -> int:
+    """Train every IRL job that is not finished with its settings; returns how many were reused."""
+    configs = [job.config() for job in jobs]
+    todo = _unfinished([job.folder for job in jobs], configs, overwrite=overwrite)
+
+    def save(index: int, files: dict[str, bytes]) -> None:
+        i = todo[index]
+        hashed, timed = _split_timings(files)
+        save_unit_folder(jobs[i].folder, hashed, configs[i], unhashed=timed)
+
+    units = []
+    for i in todo:
+        job = jobs[i]
+        data = job.data.read_bytes()
+        units.append(
+            (job.env, data, str(job.data.resolve()), job.algo, job.runs, job.settings, job.seed)
+        )
+    map_units(
+        irl_unit,
+        units,
+        backend=backend,
+        progress=progress,
+        desc="IRL",
+        reused=len(jobs) - len(todo),
+        on_result=save,
+        labels=[f"{jobs[i].env} {jobs[i].algo}" for i in todo],
+    )
+    return len(jobs) - len(todo)
+
+
+def run_rl_jobs(
+    jobs: Sequence[RLJob],
+    *,
+    backend: Backend,
+    overwrite: bool = False,
+    progress: bool = False,
+) -> int:
+    """Train every RL job that is not finished with its settings and reward; returns how many
+    were reused."""
+    inputs = [job.reward_files() for job in jobs]
+    configs = [job.config(files) for job, files in zip(jobs, inputs, strict=True)]
+    todo = _unfinished([job.folder for job in jobs], configs, overwrite=overwrite)
+
+    def save(index: int, files: dict[str, bytes]) -> None:
+        i = todo[index]
+        save_unit_folder(jobs[i].folder, files, configs[i])
+
+    units = [
+        (
+            jobs[i].env,
+            inputs[i],
+            jobs[i].reward_name(),
+            jobs[i].seed,
+            jobs[i].settings,
+            jobs[i].evaluations,
+            jobs[i].eval_episodes,
+        )
+        for i in todo
+    ]
+    map_units(
+        rl_unit,
+        units,
+        backend=backend,
+        progress=progress,
+        desc="RL runs",
+        reused=len(jobs) - len(todo),
+        on_result=save,
+        labels=[f"{jobs[i].env} {jobs[i].reward} seed {jobs[i].seed}" for i in todo],
+    )
+    return len(jobs) - len(todo)
+
+
+def is_finished(folder: Path) -> bool:
+    """Whether ``folder`` holds a unit record (a finished IRL or RL job)."""
+    return (folder / RECORD_FILE).is_file()

@@ -1,0 +1,517 @@
+"""The paper's Gymnasium study in one call: :func:`run_gym_study` (``pokerirl gym study``).
+
+For every task: the shipped expert's data -> IRL (AIRL and H-AIRL, ``runs`` runs each, in
+lock-step) -> RL (SB3 on the env reward, on each AIRL run's reward and on each H-AIRL run's
+reward; RL run k uses seed ``seed + k`` and IRL run k) -> ``summary.json``, figures and
+``report.md`` beside the authors' final values.
+
+One task writes into ``out`` itself; several write ``out/<env>/`` each (the same layout) and
+``out/summary.json`` and ``out/report.md`` over all of them::
+
+    expert.parquet, expert.unit.json     the expert data and its record
+    irl/airl/, irl/hairl/                gym irl folders (run-<k>, summary.json, figures)
+    rl/env/, rl/airl/, rl/hairl/         run-<k>: gym rl run folders (metrics.jsonl, ...)
+    figures/irl_returns.png              IRL-phase return, mean ± std over runs (Figure 1)
+    figures/alignment.png                validation alignment, discrete tasks (Figure 2)
+    figures/rl_returns.png               RL-phase true return (Figure 3)
+    summary.json, report.md
+
+Every unit (data, IRL, RL run) is resumable on its own (:mod:`pokerirl.gym.jobs`): a rerun
+keeps the finished ones and refuses, in one line, units made with other settings unless
+``overwrite``.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+from collections.abc import Sequence
+from dataclasses import asdict, dataclass, replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from pokerirl.atomic import write_text
+from pokerirl.execution import Backend
+from pokerirl.gym.jobs import (
+    DATA_FILE,
+    DataJob,
+    IRLJob,
+    RLJob,
+    Say,
+    run_data_jobs,
+    run_irl_jobs,
+    run_rl_jobs,
+)
+from pokerirl.gym.presets import PRESETS, TASK_ORDER, TASKS, MeanStd, StudyPreset
+
+SUMMARY_FORMAT = "pokerirl-gym-study/1"
+ALGOS = ("airl", "hairl")
+REWARDS = ("env", "airl", "hairl")  # RL-phase rewards: the env's, then each IRL algorithm's
+LABELS = {"airl": "AIRL", "hairl": "H-AIRL", "env": "env reward"}
+COLORS = {"airl": "C0", "hairl": "C1", "env": "C2"}  # the same in every figure
+FIGURES = {
+    "irl_returns": "figures/irl_returns.png",
+    "alignment": "figures/alignment.png",
+    "rl_returns": "figures/rl_returns.png",
+}
+STEPS = 4
+
+
+class GymStudyError(ValueError):
+    """Bad study settings, or a study folder that does not fit them; the message is one line."""
+
+
+@dataclass(frozen=True, kw_only=True)
+class GymStudyResult:
+    """What :func:`run_gym_study` wrote: one summary per task, and the report."""
+
+    out: Path
+    summaries: dict[str, dict[str, Any]]  # env -> the task's summary.json
+    markdown: str
+
+
+def study_preset(name: str, **overrides: Any) -> StudyPreset:
+    """The preset ``name`` with ``overrides`` (None values ignored).
+
+    >>> study_preset("quick", runs=2).runs
+    2
+    """
+    if name not in PRESETS:
+        raise GymStudyError(f"unknown preset {name!r}; choose one of {', '.join(PRESETS)}")
+    changes = {key: value for key, value in overrides.items() if value is not None}
+    try:
+        return replace(PRESETS[name], **changes)
+    except (TypeError, ValueError) as error:
+        raise GymStudyError(str(error)) from None
+
+
+def parse_tasks(text: str) -> tuple[str, ...]:
+    """``all`` (the six, cheapest first) or one task id.
+
+    >>> parse_tasks("MountainCar-v0")
+    ('MountainCar-v0',)
+    """
+    if text == "all":
+        return TASK_ORDER
+    if text not in TASKS:
+        raise GymStudyError(f"unknown task {text!r}; choose one of {', '.join(TASKS)} or all")
+    return (text,)
+
+
+def task_root(out: Path, env: str, tasks: Sequence[str]) -> Path:
+    """Where a task's study lives: ``out`` for a single task, else ``out/<env>``."""
+    return out if len(tasks) == 1 else out / env
+
+
+# --------------------------------------------------------------------------- the jobs
+
+
+def data_job(root: Path, env: str, preset: StudyPreset) -> DataJob:
+    transitions = preset.irl(env).transitions
+    return DataJob(env=env, transitions=transitions, seed=preset.seed, path=root / DATA_FILE)
+
+
+def irl_job(root: Path, env: str, algo: str, preset: StudyPreset, **settings: Any) -> IRLJob:
+    return IRLJob(
+        env=env,
+        algo=algo,
+        runs=preset.runs,
+        settings=replace(preset.irl(env), **settings),
+        seed=preset.seed,
+        data=root / DATA_FILE,
+        folder=root / "irl" / algo,
+    )
+
+
+def rl_jobs(
+    root: Path, env: str, reward: str, irl: IRLJob | None, preset: StudyPreset
+) -> list[RLJob]:
+    """RL run k on the env reward (``irl`` None) or on ``irl``'s run k, seed ``seed + k``."""
+    return [
+        RLJob(
+            env=env,
+            reward=reward,
+            reward_run=None if irl is None else irl.run(k),
+            seed=preset.seed + k,
+            settings=preset.rl(env),
+            evaluations=preset.rl_evaluations,
+            eval_episodes=preset.irl(env).eval_episodes,
+            folder=root / "rl" / reward / f"run-{k}",
+        )
+        for k in range(preset.runs)
+    ]
+
+
+# --------------------------------------------------------------------------- the study
+
+
+def run_gym_study(
+    out: str | os.PathLike[str],
+    preset: StudyPreset,
+    *,
+    backend: Backend | None = None,
+    overwrite: bool = False,
+    progress: bool = False,
+    say: Say = lambda message: None,
+) -> GymStudyResult:
+    """Run (or resume) the study of ``preset.tasks`` into ``out``; ``say`` hears a line per step.
+
+    Units run on ``backend`` (default: this process); results do not depend on it.
+
+    Raises:
+        GymStudyError: ``out`` is a file, or a unit was made with other settings or inputs
+            (without ``overwrite``); the message names it.
+    """
+    from pokerirl.gym.experts import require_gym
+
+    require_gym()
+    backend = backend or Backend()
+    out = Path(out)
+    if out.exists() and not out.is_dir():
+        raise GymStudyError(f"{out} exists and is not a folder; choose another --out")
+    tasks = preset.tasks
+    roots = {env: task_root(out, env, tasks) for env in tasks}
+    names = ", ".join(tasks)
+    options = {"backend": backend, "overwrite": overwrite, "progress": progress}
+    try:
+        data = [data_job(roots[env], env, preset) for env in tasks]
+        say(f"[1/{STEPS}] expert data: {names}")
+        reused = run_data_jobs(data, **options)
+        _said_reused(say, reused, len(data))
+
+        irl = {
+            (env, algo): irl_job(roots[env], env, algo, preset) for env in tasks for algo in ALGOS
+        }
+        say(f"[2/{STEPS}] IRL: AIRL and H-AIRL, {preset.runs} runs each, on {names}")
+        reused = run_irl_jobs(list(irl.values()), **options)
+        _said_reused(say, reused, len(irl))
+
+        rl = [
+            job
+            for env in tasks
+            for reward in REWARDS
+            for job in rl_jobs(roots[env], env, reward, irl.get((env, reward)), preset)
+        ]
+        say(f"[3/{STEPS}] RL: env reward, AIRL and H-AIRL rewards, {preset.runs} runs each")
+        reused = run_rl_jobs(rl, **options)
+        _said_reused(say, reused, len(rl))
+    except ValueError as error:
+        raise GymStudyError(str(error)) from None
+
+    report = out / "report.md"
+    say(f"[4/{STEPS}] report -> {report}")
+    summaries = {}
+    for env in tasks:
+        summary = task_summary(roots[env], env, preset)
+        write_text(roots[env] / "summary.json", json.dumps(summary, indent=2) + "\n")
+        draw_figures(roots[env], summary)
+        if len(tasks) > 1:
+            write_text(roots[env] / "report.md", render_report({env: summary}, preset))
+        summaries[env] = summary
+    if len(tasks) > 1:
+        overall = {
+            "format": SUMMARY_FORMAT,
+            "preset": preset.name,
+            "runs": preset.runs,
+            "tasks": summaries,
+        }
+        write_text(out / "summary.json", json.dumps(overall, indent=2) + "\n")
+    markdown = render_report(summaries, preset, prefix="" if len(tasks) == 1 else None)
+    write_text(report, markdown)
+    return GymStudyResult(out=out, summaries=summaries, markdown=markdown)
+
+
+def _said_reused(say: Say, reused: int, total: int) -> None:
+    if reused:
+        say(f"      {reused} of {total} finished already, reused")
+
+
+# --------------------------------------------------------------------------- summaries
+
+
+def mean_std(values: Sequence[float]) -> dict[str, float]:
+    """Mean and sample std (ddof 1; 0 for one value), as the IRL summaries give them.
+
+    >>> mean_std([1.0, 3.0])
+    {'mean': 2.0, 'std': 1.4142135623730951}
+    """
+    array = np.asarray(values, dtype=float)
+    std = float(array.std(ddof=1)) if len(array) > 1 else 0.0
+    return {"mean": float(array.mean()), "std": std}
+
+
+def _read_jsonl(path: Path) -> list[dict[str, Any]]:
+    return [json.loads(line) for line in path.read_text().splitlines() if line.strip()]
+
+
+def rl_curves(root: Path, reward: str, runs: int) -> dict[str, Any]:
+    """The RL runs' true-return curves: timesteps, per-run values, mean and std per point."""
+    lines = [_read_jsonl(root / "rl" / reward / f"run-{k}" / "metrics.jsonl") for k in range(runs)]
+    points = min(len(line) for line in lines)
+    values = np.array([[p["return_mean"] for p in line[:points]] for line in lines])
+    std = values.std(0, ddof=1) if runs > 1 else np.zeros(points)
+    return {
+        "timesteps": [p["timesteps"] for p in lines[0][:points]],
+        "mean": values.mean(0).tolist(),
+        "std": std.tolist(),
+        "per_run_final": values[:, -1].tolist(),
+    }
+
+
+def _paper(value: MeanStd | float | None) -> dict[str, float | None] | None:
+    if value is None:
+        return None
+    if isinstance(value, MeanStd):
+        return {"mean": value.mean, "std": value.std}
+    return {"mean": value, "std": None}
+
+
+def task_summary(root: Path, env: str, preset: StudyPreset) -> dict[str, Any]:
+    """The task's ``summary.json``: final values (mean ± std over runs) of every phase, the
+    curves behind the figures, the baselines, the settings, and the authors' finals."""
+    task = TASKS[env]
+    algos: dict[str, Any] = {}
+    irl_summaries = {}
+    for algo in ALGOS:
+        irl = json.loads((root / "irl" / algo / "summary.json").read_text())
+        irl_summaries[algo] = irl
+        metrics = irl["metrics"]
+        rl = rl_curves(root, algo, preset.runs)
+        entry: dict[str, Any] = {
+            "irl_final_return": irl["irl_final_return"],
+            "rl_final_return": mean_std(rl["per_run_final"]),
+            "baselines": irl["baselines"],
+            "irl_per_run_final": _per_run_final(root / "irl" / algo, preset.runs, "eval_return"),
+            "rl_per_run_final": rl["per_run_final"],
+            "curves": {
+                "irl_epochs": irl["epochs"],
+                "irl_return": metrics["eval_return"],
+                "rl": {key: rl[key] for key in ("timesteps", "mean", "std")},
+            },
+        }
+        if task.discrete:
+            entry["final_alignment"] = irl["final_alignment"]
+            entry["final_reward_alignment"] = {
+                "mean": metrics["val_reward_alignment"]["mean"][-1],
+                "std": metrics["val_reward_alignment"]["std"][-1],
+            }
+            entry["curves"]["alignment"] = metrics["val_alignment"]
+        for key in ("disc_acc_expert", "disc_acc_policy"):
+            if key in metrics:
+                entry[f"final_{key}"] = {
+                    "mean": metrics[key]["mean"][-1],
+                    "std": metrics[key]["std"][-1],
+                }
+        algos[algo] = entry
+    env_rl = rl_curves(root, "env", preset.runs)
+    baselines = irl_summaries["hairl"]["baselines"]
+    paper = task.paper
+    return {
+        "format": SUMMARY_FORMAT,
+        "env": env,
+        "preset": preset.name,
+        "runs": preset.runs,
+        "seeds": [preset.seed + k for k in range(preset.runs)],
+        "discrete": task.discrete,
+        "expert_return": irl_summaries["hairl"]["expert_return"],
+        "random_return": baselines["random"]["mean"],
+        "algos": algos,
+        "env_reward": {
+            "rl_final_return": mean_std(env_rl["per_run_final"]),
+            "rl_per_run_final": env_rl["per_run_final"],
+            "curves": {"rl": {key: env_rl[key] for key in ("timesteps", "mean", "std")}},
+        },
+        "settings": {
+            "irl": asdict(preset.irl(env)),
+            "rl": asdict(preset.rl(env)),
+            "rl_evaluations": preset.rl_evaluations,
+            "rl_eval_episodes": preset.irl(env).eval_episodes,
+            "seed": preset.seed,
+        },
+        "paper": {
+            "irl_final_return": {"airl": _paper(paper.irl_airl), "hairl": _paper(paper.irl_hairl)},
+            "expert_return": paper.irl_expert.mean,
+            "rl_final_return": {
+                "airl": _paper(paper.rl_airl),
+                "hairl": _paper(paper.rl_hairl),
+                "env_reward": _paper(paper.rl_env_reward),
+            },
+            "final_alignment": {"airl": paper.alignment_airl, "hairl": paper.alignment_hairl}
+            if task.discrete
+            else None,
+            "random_return": task.random_return,
+        },
+    }
+
+
+def _per_run_final(folder: Path, runs: int, key: str) -> list[float]:
+    return [_read_jsonl(folder / f"run-{k}" / "metrics.jsonl")[-1][key] for k in range(runs)]
+
+
+# --------------------------------------------------------------------------- report
+
+
+def _value(value: dict[str, Any] | None, *, percent: bool = False, digits: int = 1) -> str:
+    if value is None or value.get("mean") is None:
+        return "–"
+    scale = 100.0 if percent else 1.0
+    text = f"{scale * value['mean']:,.{digits}f}"
+    if value.get("std") is not None:
+        text += f" ± {scale * value['std']:,.{digits}f}"
+    return text + ("%" if percent else "")
+
+
+def _paper_percent(value: float | None) -> str:
+    return "–" if value is None else f"{value:.1f}%"
+
+
+def task_table(summary: dict[str, Any]) -> list[str]:
+    """Our finals beside the authors', one row per figure of the paper."""
+    algos, paper = summary["algos"], summary["paper"]
+    expert = {"mean": summary["expert_return"], "std": None}
+    rows = [
+        ("IRL-phase return, AIRL", _value(algos["airl"]["irl_final_return"]),
+         _value(paper["irl_final_return"]["airl"])),
+        ("IRL-phase return, H-AIRL", _value(algos["hairl"]["irl_final_return"]),
+         _value(paper["irl_final_return"]["hairl"])),
+        ("expert (its data's episodes)", _value(expert), _value({"mean": paper["expert_return"]})),
+        ("RL-phase return, AIRL reward", _value(algos["airl"]["rl_final_return"]),
+         _value(paper["rl_final_return"]["airl"])),
+        ("RL-phase return, H-AIRL reward", _value(algos["hairl"]["rl_final_return"]),
+         _value(paper["rl_final_return"]["hairl"])),
+        ("RL-phase return, env reward", _value(summary["env_reward"]["rl_final_return"]),
+         _value(paper["rl_final_return"]["env_reward"])),
+    ]  # fmt: skip
+    if summary["discrete"]:
+        bc = summary["algos"]["hairl"]["baselines"]["bc"]
+        rows += [
+            ("alignment, AIRL policy", _value(algos["airl"]["final_alignment"], percent=True),
+             _paper_percent(paper["final_alignment"]["airl"])),
+            ("alignment, H-AIRL policy", _value(algos["hairl"]["final_alignment"], percent=True),
+             _paper_percent(paper["final_alignment"]["hairl"])),
+            ("alignment, behaviour cloning (same net and epochs)", _value(bc, percent=True),
+             "not reported"),
+            ("alignment, reward argmax: AIRL / H-AIRL",
+             f"{_value(algos['airl']['final_reward_alignment'], percent=True)} / "
+             f"{_value(algos['hairl']['final_reward_alignment'], percent=True)}", "not reported"),
+        ]  # fmt: skip
+    rows.append(
+        ("random policy", _value({"mean": summary["random_return"]}),
+         _value({"mean": paper["random_return"]}))
+    )  # fmt: skip
+    lines = ["| | ours | the authors |", "|---|---|---|"]
+    lines += [f"| {name} | {ours} | {theirs} |" for name, ours, theirs in rows]
+    return lines
+
+
+def _budget(summary: dict[str, Any]) -> str:
+    irl, rl = summary["settings"]["irl"], summary["settings"]["rl"]
+    seeds = summary["seeds"]
+    return (
+        f"{summary['runs']} runs per algorithm (seeds {seeds[0]}–{seeds[-1]}); expert data "
+        f"{irl['transitions']:,} transitions; IRL {irl['epochs']} epochs, batch "
+        f"{irl['batch_size']}, α {irl['alpha']}, β {irl['beta']}, σ {irl['sigma_start']} → "
+        f"{irl['sigma_end']} (H-AIRL), each epoch's policy over {irl['eval_episodes']} "
+        f"episodes; RL {rl['algo'].upper()} for {rl['timesteps']:,} steps, each point "
+        f"{summary['settings']['rl_eval_episodes']} deterministic episodes."
+    )
+
+
+def render_report(
+    summaries: dict[str, dict[str, Any]], preset: StudyPreset, *, prefix: str | None = ""
+) -> str:
+    """``report.md``: per task, the budget, our finals beside the authors', the figures.
+
+    ``prefix`` is where each task's figures are, relative to the report (None: ``<env>/``).
+    """
+    lines = [f"# pokerirl gym study ({preset.name} preset)", ""]
+    lines += [
+        "Mean ± std (sample std) over runs of each curve's last point; the authors' values are "
+        "the last points of their figures' curves, at their budgets."
+    ]
+    if preset.name != "paper":
+        lines += ["", f"**Budgets are the {preset.name} preset's, not the authors'**: "
+                  "compare the directions, not the digits."]  # fmt: skip
+    for env, summary in summaries.items():
+        where = f"{env}/" if prefix is None else prefix
+        lines += ["", f"## {env}", "", _budget(summary), ""]
+        lines += task_table(summary)
+        note = TASKS[env].version_note
+        if note:
+            lines += ["", note]
+        lines += [""]
+        figures = ["irl_returns", "alignment", "rl_returns"] if summary["discrete"] else [
+            "irl_returns", "rl_returns"]  # fmt: skip
+        lines += [f"![{name}]({where}{FIGURES[name]})" for name in figures]
+    return "\n".join(lines) + "\n"
+
+
+# --------------------------------------------------------------------------- figures
+
+
+def draw_figures(root: Path, summary: dict[str, Any]) -> None:
+    """IRL-phase returns, alignment (discrete tasks) and RL-phase returns, mean ± std bands."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    from pokerirl.atomic import atomic_path
+
+    def figure() -> tuple[Figure, Any]:
+        fig = Figure(figsize=(6.4, 4), dpi=100)
+        FigureCanvasAgg(fig)
+        return fig, fig.add_subplot()
+
+    def band(axes: Any, x: Sequence[float], curve: dict[str, Any], label: str, color: str) -> None:
+        mean, std = np.asarray(curve["mean"]), np.asarray(curve["std"])
+        axes.plot(x, mean, color=color, label=label)
+        axes.fill_between(x, mean - std, mean + std, color=color, alpha=0.2)
+
+    def save(fig: Figure, axes: Any, name: str, title: str, xlabel: str, ylabel: str) -> None:
+        axes.set(title=f"{summary['env']}: {title}", xlabel=xlabel, ylabel=ylabel)
+        axes.grid(alpha=0.3)
+        axes.legend(fontsize="small")
+        fig.tight_layout()
+        path = root / FIGURES[name]
+        path.parent.mkdir(parents=True, exist_ok=True)
+        with atomic_path(path) as temporary:
+            fig.savefig(temporary, format="png", metadata={"Software": None})
+
+    def lines(axes: Any) -> None:
+        for value, label, style in (
+            (summary["expert_return"], "expert", "--"),
+            (summary["random_return"], "random", ":"),
+        ):
+            if math.isfinite(value):
+                axes.axhline(value, color="grey", linestyle=style, linewidth=1, label=label)
+
+    runs = f"mean ± std of {summary['runs']} runs"
+    fig, axes = figure()
+    for algo in ALGOS:
+        curves = summary["algos"][algo]["curves"]
+        band(axes, curves["irl_epochs"], curves["irl_return"], LABELS[algo], COLORS[algo])
+    lines(axes)
+    save(fig, axes, "irl_returns", f"IRL-phase return ({runs})", "epoch", "return")
+
+    if summary["discrete"]:
+        fig, axes = figure()
+        for algo in ALGOS:
+            curves = summary["algos"][algo]["curves"]
+            band(axes, curves["irl_epochs"], curves["alignment"], LABELS[algo], COLORS[algo])
+        baselines = summary["algos"]["hairl"]["baselines"]
+        for name, style in (("bc", "-."), ("majority", ":")):
+            value = baselines[name]["mean"]
+            axes.axhline(
+                value, color="grey", linestyle=style, linewidth=1, label=f"{name} {value:.3f}"
+            )
+        save(fig, axes, "alignment", f"validation alignment ({runs})", "epoch", "alignment")
+
+    fig, axes = figure()
+    for reward in REWARDS:
+        source = summary["env_reward"] if reward == "env" else summary["algos"][reward]
+        curve = source["curves"]["rl"]
+        band(axes, curve["timesteps"], curve, LABELS[reward], COLORS[reward])
+    lines(axes)
+    save(fig, axes, "rl_returns", f"RL-phase true return ({runs})", "timesteps", "return")
