@@ -178,14 +178,19 @@ def demo(
     seed: int = typer.Option(0, "--seed", help="Seed of the synthetic data."),
     jobs: int = typer.Option(2, "--jobs", min=1, help="Processes for agent training and play."),
     overwrite: bool = typer.Option(False, "--overwrite", help="Recompute changed stages."),
+    gym: bool = typer.Option(
+        True, "--gym/--no-gym", help="Also run the Gymnasium study's quick preset (~8 min)."
+    ),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bars."),
 ) -> None:
-    """Run the study (pokerirl study, quick preset) on built-in synthetic data.
+    """Run the study (pokerirl study, quick preset) on built-in synthetic data, then the
+    Gymnasium study's quick preset (pokerirl gym study MountainCar-v0) on the shipped expert.
 
     synth -> ingest -> IRL (airl, hairl) -> agents (dqn, airl_dqn, hairl_dqn) -> Table 1
-    tournament -> panel -> report.md, report.json and figures. A rerun skips finished stages.
+    tournament -> panel -> report.md, report.json and figures; then OUT/gym: expert data ->
+    AIRL and H-AIRL -> DQN on each reward -> OUT/gym/report.md. A rerun skips finished work.
     """
-    from pokerirl.demo import DemoConfig, run_demo
+    from pokerirl.demo import DemoConfig, run_demo, run_gym_demo
 
     try:
         result = run_demo(
@@ -200,6 +205,28 @@ def demo(
     typer.echo("")
     typer.echo(result.markdown)
     typer.echo(f"report: {out / 'report.md'} (pokerirl report {out})")
+    if not gym:
+        return
+    try:
+        from pokerirl.gym.experts import require_gym
+
+        require_gym()
+    except ImportError as error:
+        warnings.warn(f"the Gymnasium demo is skipped: {error}", stacklevel=1)
+        return
+    typer.echo("")
+    typer.echo(f"gym: the quick study on MountainCar-v0 -> {out / 'gym'}")
+    try:
+        gym_result = run_gym_demo(
+            out, jobs=jobs, say=typer.echo, progress=not quiet, overwrite=overwrite
+        )
+    except (ValueError, OSError, execution.ExecutionError) as error:
+        fail(str(error))
+    except KeyboardInterrupt:
+        fail(INTERRUPTED, 130)
+    typer.echo("")
+    typer.echo(gym_result.markdown)
+    typer.echo(f"report: {out / 'gym' / 'report.md'}")
 
 
 @app.command()
@@ -951,3 +978,72 @@ def gym_study(
     typer.echo("")
     typer.echo(result.markdown)
     typer.echo(f"report: {out / 'report.md'}")
+
+
+@app.command()
+def sweep(
+    env: str = typer.Argument(..., help="The task, e.g. MountainCar-v0."),
+    param: list[str] = typer.Option(
+        ..., "--param", help="NAME=V1,V2,...: alpha, beta, sigma_start or sigma_end; repeatable."
+    ),
+    out: Path = typer.Option(..., "--out", "-o", help="The sweep folder."),
+    preset_name: str = typer.Option("quick", "--preset", help="quick or paper: the budgets."),
+    runs: int | None = typer.Option(None, "--runs", min=1, help="Runs per point."),
+    seed: int | None = typer.Option(None, "--seed", min=0, help="Data seed; run k uses seed + k."),
+    transitions: int | None = typer.Option(None, min=2, help="Override the expert transitions."),
+    epochs: int | None = typer.Option(None, min=1, help="Override the IRL epochs."),
+    eval_episodes: int | None = typer.Option(None, min=1, help="Override episodes per evaluation."),
+    timesteps: int | None = typer.Option(None, min=1, help="Override the RL steps per run."),
+    jobs: int = typer.Option(2, "--jobs", min=1, help="Processes for the units."),
+    ray: str | None = typer.Option(None, "--ray", metavar="ADDRESS", help=RAY_HELP),
+    overwrite: bool = typer.Option(
+        False, "--overwrite", help="Recompute units whose settings changed."
+    ),
+    quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bars."),
+) -> None:
+    """One-factor-at-a-time ablation of H-AIRL (the paper's Figure 5): each point runs the IRL
+    phase, then RL on its learned rewards; writes sweep.csv, sweep.json and PARAM.png."""
+    from pokerirl.gym.study import GymStudyError, parse_tasks, study_preset
+    from pokerirl.gym.sweep import parse_param, run_sweep
+
+    try:
+        params: dict[str, tuple[float, ...]] = {}
+        for text in param:
+            name, values = parse_param(text)
+            if name in params:
+                raise GymStudyError(f"--param {name} is given twice; list its values once")
+            params[name] = values
+        preset = study_preset(
+            preset_name,
+            tasks=parse_tasks(env),
+            runs=runs,
+            seed=seed,
+            transitions=transitions,
+            epochs=epochs,
+            eval_episodes=eval_episodes,
+            rl_timesteps=timesteps,
+        )
+        result = run_sweep(
+            env,
+            params,
+            preset,
+            out,
+            backend=_backend(jobs, ray),
+            overwrite=overwrite,
+            progress=not quiet,
+            say=typer.echo,
+        )
+    except (ValueError, ImportError, OSError, execution.ExecutionError) as error:
+        fail(str(error))
+    except KeyboardInterrupt:
+        fail(INTERRUPTED, 130)
+    for row in result.rows:
+        line = (
+            f"{row['param']}={row['value']:g}: IRL return {row['irl_final_return_mean']:.1f} "
+            f"+- {row['irl_final_return_std']:.1f}, RL return {row['rl_final_return_mean']:.1f} "
+            f"+- {row['rl_final_return_std']:.1f}"
+        )
+        if row["final_alignment_mean"] is not None:
+            line += f", alignment {100 * row['final_alignment_mean']:.1f}%"
+        typer.echo(line)
+    typer.echo(f"wrote {out / 'sweep.csv'} and {', '.join(str(p) for p in result.figures)}")

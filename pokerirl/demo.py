@@ -1,11 +1,15 @@
-"""The study (:func:`pokerirl.study.run_study`, quick preset) on built-in synthetic data.
+"""The study (:func:`pokerirl.study.run_study`, quick preset) on built-in synthetic data, then
+the Gymnasium study's quick preset on the shipped MountainCar expert.
 
 1. ``synth``: a month of heads-up 10-20 hands between two scripted players, in IRC format
    (written once; a rerun reuses it, so the study's stages resume);
 2. the study: ingest -> IRL (AIRL, H-AIRL) -> agents (DQN, AIRL-DQN, H-AIRL-DQN) -> Table 1
-   tournament -> panel -> ``report.md``, ``report.json``, ``panel.csv`` and ``figures/``.
+   tournament -> panel -> ``report.md``, ``report.json``, ``panel.csv`` and ``figures/``;
+3. :func:`run_gym_demo`: ``pokerirl gym study MountainCar-v0 --preset quick`` into
+   ``out/gym`` (needs the ``pokerirl[gym]`` extra).
 
-One code path: ``pokerirl demo`` is ``pokerirl study`` on the synthetic month.
+One code path: ``pokerirl demo`` is ``pokerirl study`` on the synthetic month, then
+``pokerirl gym study``.
 """
 
 from __future__ import annotations
@@ -15,11 +19,17 @@ import os
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
+from pokerirl.execution import Backend
 from pokerirl.game.synth import write_synthetic_month
 from pokerirl.study import PRESETS, StudyConfig, StudyResult, run_study
 
+if TYPE_CHECKING:  # the gym layer loads only when its demo runs
+    from pokerirl.gym.study import GymStudyResult
+
 SYNTH_FOLDER = "irc"
+GYM_FOLDER = "gym"
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -56,3 +66,26 @@ def run_demo(
     say(f"synth: {config.synthetic_hands:,} heads-up hands, seed {config.seed} -> {month}")
     study = dataclasses.replace(config.study, jobs=config.jobs)
     return run_study([month], root, study, overwrite=overwrite, progress=progress, say=say)
+
+
+def run_gym_demo(
+    out: str | os.PathLike[str],
+    *,
+    jobs: int = 2,
+    say: Callable[[str], None] = lambda message: None,
+    progress: bool = False,
+    overwrite: bool = False,
+) -> GymStudyResult:
+    """The Gymnasium study's quick preset (MountainCar-v0: AIRL and H-AIRL, then DQN on each
+    reward and on the env reward, 3 runs each) into ``out/gym``."""
+    from pokerirl.gym.presets import PRESETS as GYM_PRESETS
+    from pokerirl.gym.study import run_gym_study
+
+    return run_gym_study(
+        Path(out) / GYM_FOLDER,
+        GYM_PRESETS["quick"],
+        backend=Backend(jobs=jobs),
+        overwrite=overwrite,
+        progress=progress,
+        say=say,
+    )

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import json
 import os
+from collections.abc import Sequence
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
@@ -163,7 +164,17 @@ def _save(out: Path, result: RLResult, settings: RLSettings, model: Any) -> None
     write_text(out / CONFIG_FILE, json.dumps(record, indent=2) + "\n")
 
 
+def mean_std(values: Sequence[float]) -> dict[str, float]:
+    """Mean and sample std (ddof 1; 0 for one value), as the IRL summaries give them.
+
+    >>> mean_std([1.0, 3.0])
+    {'mean': 2.0, 'std': 1.4142135623730951}
+    """
+    array = np.asarray(values, dtype=float)
+    std = float(array.std(ddof=1)) if len(array) > 1 else 0.0
+    return {"mean": float(array.mean()), "std": std}
+
+
 def summarize(results: list[RLResult]) -> dict[str, float]:
-    """Mean and std over runs of the final true return."""
-    finals = np.array([r.final_return for r in results])
-    return {"mean": float(finals.mean()), "std": float(finals.std()), "runs": len(finals)}
+    """Mean and sample std over runs of the final true return."""
+    return {**mean_std([r.final_return for r in results]), "runs": len(results)}

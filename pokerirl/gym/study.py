@@ -46,6 +46,7 @@ from pokerirl.gym.jobs import (
     run_rl_jobs,
 )
 from pokerirl.gym.presets import PRESETS, TASK_ORDER, TASKS, MeanStd, StudyPreset
+from pokerirl.gym.rl import mean_std
 
 SUMMARY_FORMAT = "pokerirl-gym-study/1"
 ALGOS = ("airl", "hairl")
@@ -114,14 +115,17 @@ def data_job(root: Path, env: str, preset: StudyPreset) -> DataJob:
     return DataJob(env=env, transitions=transitions, seed=preset.seed, path=root / DATA_FILE)
 
 
-def irl_job(root: Path, env: str, algo: str, preset: StudyPreset, **settings: Any) -> IRLJob:
+def irl_job(
+    root: Path, env: str, algo: str, preset: StudyPreset, *, data: Path, **settings: Any
+) -> IRLJob:
+    """``algo``'s runs on ``data`` into ``root/irl/<algo>``; ``settings`` override the preset's."""
     return IRLJob(
         env=env,
         algo=algo,
         runs=preset.runs,
         settings=replace(preset.irl(env), **settings),
         seed=preset.seed,
-        data=root / DATA_FILE,
+        data=data,
         folder=root / "irl" / algo,
     )
 
@@ -183,7 +187,9 @@ def run_gym_study(
         _said_reused(say, reused, len(data))
 
         irl = {
-            (env, algo): irl_job(roots[env], env, algo, preset) for env in tasks for algo in ALGOS
+            (env, algo): irl_job(roots[env], env, algo, preset, data=roots[env] / DATA_FILE)
+            for env in tasks
+            for algo in ALGOS
         }
         say(f"[2/{STEPS}] IRL: AIRL and H-AIRL, {preset.runs} runs each, on {names}")
         reused = run_irl_jobs(list(irl.values()), **options)
@@ -230,17 +236,6 @@ def _said_reused(say: Say, reused: int, total: int) -> None:
 
 
 # --------------------------------------------------------------------------- summaries
-
-
-def mean_std(values: Sequence[float]) -> dict[str, float]:
-    """Mean and sample std (ddof 1; 0 for one value), as the IRL summaries give them.
-
-    >>> mean_std([1.0, 3.0])
-    {'mean': 2.0, 'std': 1.4142135623730951}
-    """
-    array = np.asarray(values, dtype=float)
-    std = float(array.std(ddof=1)) if len(array) > 1 else 0.0
-    return {"mean": float(array.mean()), "std": std}
 
 
 def _read_jsonl(path: Path) -> list[dict[str, Any]]:

@@ -1,0 +1,231 @@
+"""The Gymnasium study and the ablation sweep on real environments at tiny budgets: Acrobot and
+MountainCar IRL, then a few thousand RL steps; resume, refusal and the report's numbers."""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+pytest.importorskip("gymnasium")
+pytest.importorskip("stable_baselines3")
+
+from pokerirl.cli import app  # noqa: E402
+from pokerirl.execution import Backend  # noqa: E402
+from pokerirl.gym.jobs import DATA_FILE  # noqa: E402
+from pokerirl.gym.study import (  # noqa: E402
+    GymStudyError,
+    parse_tasks,
+    run_gym_study,
+    study_preset,
+)
+from pokerirl.gym.sweep import parse_param, sweep_points  # noqa: E402
+from pokerirl.irl import load_reward  # noqa: E402
+
+TINY = ["--runs", "2", "--transitions", "1500", "--epochs", "2", "--eval-episodes", "2"]
+TINY += ["--timesteps", "2000", "--jobs", "2", "--quiet"]
+MEAN_STD = {"mean", "std"}
+
+
+def jsonl(path: Path) -> list[dict]:
+    return [json.loads(line) for line in path.read_text().splitlines() if line]
+
+
+def study(out: Path, *extra: str, task: str = "MountainCar-v0") -> object:
+    return CliRunner().invoke(app, ["gym", "study", task, "--out", str(out), *TINY, *extra])
+
+
+@pytest.fixture(scope="module")
+def mountaincar(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    out = tmp_path_factory.mktemp("study") / "mc"
+    result = study(out)
+    assert result.exit_code == 0, result.output
+    assert "# pokerirl gym study (quick preset)" in result.output
+    return out
+
+
+def test_summary_has_the_issue_names_and_the_runs_numbers(mountaincar: Path) -> None:
+    summary = json.loads((mountaincar / "summary.json").read_text())
+    assert summary["env"] == "MountainCar-v0" and summary["runs"] == 2
+    assert set(summary["algos"]) == {"airl", "hairl"}
+    for algo, entry in summary["algos"].items():
+        for key in ("irl_final_return", "rl_final_return", "final_alignment"):
+            assert set(entry[key]) == MEAN_STD, (algo, key)
+        assert {"majority", "legal_majority", "bc", "random", "expert"} <= set(entry["baselines"])
+        # The finals are the run folders' last points, mean and sample std over the runs.
+        irl = [jsonl(mountaincar / "irl" / algo / f"run-{k}" / "metrics.jsonl") for k in (0, 1)]
+        last = [run[-1]["eval_return"] for run in irl]
+        assert entry["irl_final_return"]["mean"] == pytest.approx(np.mean(last))
+        assert entry["irl_final_return"]["std"] == pytest.approx(np.std(last, ddof=1))
+        alignment = [run[-1]["val_alignment"] for run in irl]
+        assert entry["final_alignment"]["mean"] == pytest.approx(np.mean(alignment))
+        rl = [jsonl(mountaincar / "rl" / algo / f"run-{k}" / "metrics.jsonl") for k in (0, 1)]
+        assert entry["rl_final_return"]["mean"] == pytest.approx(
+            np.mean([run[-1]["return_mean"] for run in rl])
+        )
+        assert all(run[-1]["timesteps"] == 2000 and -200 <= run[-1]["return_mean"] for run in rl)
+    assert set(summary["env_reward"]["rl_final_return"]) == MEAN_STD
+    # The expert's return is measured once, from the data's complete episodes.
+    assert -200 < summary["expert_return"] < -80
+    assert summary["paper"]["irl_final_return"]["hairl"] == {"mean": -123.3, "std": 8.0}
+
+
+def test_rl_runs_learn_from_their_own_irl_runs_reward(mountaincar: Path) -> None:
+    for k in (0, 1):
+        record = json.loads((mountaincar / "rl" / "hairl" / f"run-{k}" / "config.json").read_text())
+        assert record["reward"] == f"hairl:run-{k}" and record["seed"] == k
+        unit = json.loads((mountaincar / "rl" / "hairl" / f"run-{k}" / "unit.json").read_text())
+        reward_pt = mountaincar / "irl" / "hairl" / f"run-{k}" / "reward.pt"
+        digest = "sha256:" + hashlib.sha256(reward_pt.read_bytes()).hexdigest()
+        assert unit["config"]["reward_run"]["reward.pt"] == digest
+    env_record = json.loads((mountaincar / "rl" / "env" / "run-0" / "config.json").read_text())
+    assert env_record["reward"] == "env"
+    # The two H-AIRL runs learned different rewards (other seeds), and both are usable.
+    obs = np.array([[-0.5, 0.0], [-0.9, 0.03]], dtype=np.float32)
+    f0 = load_reward(mountaincar / "irl" / "hairl" / "run-0")(obs, np.array([0, 2]))
+    f1 = load_reward(mountaincar / "irl" / "hairl" / "run-1")(obs, np.array([0, 2]))
+    assert f0.shape == (2,) and not np.allclose(f0, f1)
+
+
+def test_figures_and_report_beside_the_authors(mountaincar: Path) -> None:
+    for name in ("irl_returns", "alignment", "rl_returns"):
+        data = (mountaincar / "figures" / f"{name}.png").read_bytes()
+        assert data.startswith(b"\x89PNG") and len(data) > 10_000
+    report = (mountaincar / "report.md").read_text()
+    summary = json.loads((mountaincar / "summary.json").read_text())
+    hairl = summary["algos"]["hairl"]["irl_final_return"]
+    assert f"| IRL-phase return, H-AIRL | {hairl['mean']:,.1f} ± {hairl['std']:,.1f} | " in report
+    assert "-123.3 ± 8.0" in report and "-149.5 ± 36.7" in report  # the authors' finals
+    assert "Budgets are the quick preset's" in report
+    assert "![rl_returns](figures/rl_returns.png)" in report
+
+
+def test_rerun_reuses_every_unit_and_changed_settings_are_refused(mountaincar: Path) -> None:
+    before = {p: p.read_bytes() for p in mountaincar.rglob("*") if p.is_file()}
+    result = study(mountaincar)
+    assert result.exit_code == 0, result.output
+    assert result.output.count("finished already, reused") == 3
+    after = {p: p.read_bytes() for p in mountaincar.rglob("*") if p.is_file()}
+    assert after == before  # same inputs, same bytes (the figures and report included)
+
+    refused = study(mountaincar, "--epochs", "3")
+    assert refused.exit_code == 1
+    lines = refused.output.strip().splitlines()
+    assert lines[-1].startswith("error: ") and "settings.epochs 2 -> 3" in lines[-1]
+    assert "--overwrite" in lines[-1]
+    assert {p: p.read_bytes() for p in mountaincar.rglob("*") if p.is_file()} == before
+
+
+def test_a_corrupt_rl_run_is_recomputed_to_the_same_bytes(mountaincar: Path) -> None:
+    run = mountaincar / "rl" / "airl" / "run-1"
+    model = (run / "model.pt").read_bytes()
+    (run / "model.pt").write_bytes(b"truncated")
+    result = study(mountaincar)
+    assert result.exit_code == 0, result.output
+    assert "5 of 6 finished already, reused" in result.output  # only that run was recomputed
+    assert (run / "model.pt").read_bytes() == model
+
+
+@pytest.mark.slow
+def test_two_tasks_acrobot_and_mountaincar_each_get_a_folder(tmp_path: Path) -> None:
+    preset = study_preset(
+        "quick",
+        tasks=("Acrobot-v1", "MountainCar-v0"),
+        runs=2,
+        transitions=1200,
+        epochs=2,
+        eval_episodes=1,
+        rl_timesteps=1024,
+        rl_evaluations=2,
+    )
+    said: list[str] = []
+    result = run_gym_study(tmp_path, preset, backend=Backend(jobs=2), say=said.append)
+    assert said[0] == "[1/4] expert data: Acrobot-v1, MountainCar-v0"
+    overall = json.loads((tmp_path / "summary.json").read_text())
+    assert set(overall["tasks"]) == {"Acrobot-v1", "MountainCar-v0"}
+    for env in overall["tasks"]:
+        folder = tmp_path / env
+        assert (folder / DATA_FILE).is_file() and (folder / "report.md").is_file()
+        summary = json.loads((folder / "summary.json").read_text())
+        assert summary == overall["tasks"][env] == result.summaries[env]
+        assert summary["env_reward"]["curves"]["rl"]["timesteps"][-1] == 1024
+    acrobot = overall["tasks"]["Acrobot-v1"]
+    assert -500 <= acrobot["algos"]["hairl"]["irl_final_return"]["mean"] <= 0
+    assert acrobot["random_return"] == pytest.approx(-500, abs=50)
+    report = (tmp_path / "report.md").read_text()
+    assert "## Acrobot-v1" in report and "## MountainCar-v0" in report
+    assert "(Acrobot-v1/figures/irl_returns.png)" in report
+
+
+def test_bad_inputs_are_one_line(tmp_path: Path) -> None:
+    runner = CliRunner()
+    cases = [
+        (["gym", "study", "Pong-v5", "--out", str(tmp_path / "a")], "unknown task 'Pong-v5'"),
+        (["gym", "study", "MountainCar-v0", "--preset", "huge", "--out", str(tmp_path / "b")],
+         "unknown preset 'huge'"),
+        (["sweep", "MountainCar-v0", "--param", "gamma=0.9", "--out", str(tmp_path / "c")],
+         "bad --param 'gamma=0.9'"),
+        (["sweep", "MountainCar-v0", "--param", "alpha=0,2", "--out", str(tmp_path / "d")],
+         "alpha must be in [0, 1], got 2"),
+        (["sweep", "MountainCar-v0", "--param", "beta=0", "--param", "beta=1", "--out",
+          str(tmp_path / "e")], "given twice"),
+    ]  # fmt: skip
+    for args, message in cases:
+        result = runner.invoke(app, args)
+        assert result.exit_code == 1, (args, result.output)
+        lines = result.output.strip().splitlines()
+        assert len(lines) == 1 and lines[0].startswith("error: "), result.output
+        assert message in result.output, result.output
+    afile = tmp_path / "file"
+    afile.write_text("x")
+    result = runner.invoke(app, ["gym", "study", "MountainCar-v0", "--out", str(afile)])
+    assert result.exit_code == 1 and "is not a folder" in result.output
+    assert afile.read_text() == "x"
+
+
+def test_parse_tasks_and_points() -> None:
+    assert len(parse_tasks("all")) == 6
+    with pytest.raises(GymStudyError):
+        parse_tasks("CartPole-v1")
+    assert parse_param("sigma_end=0.5, 0.04") == ("sigma_end", (0.5, 0.04))
+    points = sweep_points("MountainCar-v0", {"alpha": (0.1, 1.0)}, study_preset("quick"))
+    assert [p.name for p in points] == [
+        "alpha=0.1_beta=0.25_sigma_start=1_sigma_end=0.04",
+        "alpha=1_beta=0.25_sigma_start=1_sigma_end=0.04",
+    ]
+
+
+@pytest.mark.slow
+def test_sweep_runs_irl_then_rl_per_point_and_shares_the_preset_point(tmp_path: Path) -> None:
+    out = tmp_path / "sweep"
+    args = ["sweep", "MountainCar-v0", "--param", "alpha=0.1,1", "--param", "sigma_end=0.04,0.5"]
+    args += ["--out", str(out), "--runs", "2", "--transitions", "1500", "--epochs", "2"]
+    args += ["--eval-episodes", "2", "--timesteps", "1000", "--jobs", "2", "-q"]
+    result = CliRunner().invoke(app, args)
+    assert result.exit_code == 0, result.output
+    assert "alpha=1: IRL return" in result.output
+    # alpha=0.1 and sigma_end=0.04 are both the preset's point: three points, not four.
+    points = sorted(p.name for p in (out / "points").iterdir())
+    assert len(points) == 3
+    rows = (out / "sweep.csv").read_text().splitlines()
+    assert rows[0].startswith("param,value,point,runs,irl_final_return_mean")
+    assert len(rows) == 5
+    record = json.loads((out / "sweep.json").read_text())
+    by_value = {(r["param"], r["value"]): r for r in record["rows"]}
+    assert by_value[("alpha", 0.1)]["point"] == by_value[("sigma_end", 0.04)]["point"]
+    one = by_value[("alpha", 1.0)]
+    run = out / "points" / one["point"] / "irl" / "hairl" / "run-0"
+    hyper = json.loads((run / "config.json").read_text())["hyperparameters"]
+    assert hyper["alpha"] == 1.0 and hyper["sigma_end"] == 0.04
+    irl = [jsonl(run.parent / f"run-{k}" / "metrics.jsonl")[-1]["eval_return"] for k in (0, 1)]
+    assert one["irl_final_return_mean"] == pytest.approx(np.mean(irl))
+    rl_record = json.loads((run.parents[2] / "rl" / "hairl" / "run-1" / "config.json").read_text())
+    assert rl_record["reward"] == "hairl:run-1" and rl_record["timesteps"] == 1000
+    for name in ("alpha.png", "sigma_end.png"):
+        assert (out / name).read_bytes().startswith(b"\x89PNG")
+    again = CliRunner().invoke(app, args)
+    assert again.exit_code == 0 and (out / "sweep.csv").read_text().splitlines() == rows
