@@ -18,6 +18,7 @@ from pokerirl.cli import app  # noqa: E402
 from pokerirl.execution import Backend  # noqa: E402
 from pokerirl.gym.jobs import DATA_FILE  # noqa: E402
 from pokerirl.gym.study import (  # noqa: E402
+    REWARDS,
     GymStudyError,
     parse_tasks,
     run_gym_study,
@@ -84,6 +85,9 @@ def test_rl_runs_learn_from_their_own_irl_runs_reward(mountaincar: Path) -> None
         assert unit["config"]["reward_run"]["reward.pt"] == digest
     env_record = json.loads((mountaincar / "rl" / "env" / "run-0" / "config.json").read_text())
     assert env_record["reward"] == "env"
+    # Same seed, same settings: only the reward differs, and it changes what DQN learns.
+    models = {r: (mountaincar / "rl" / r / "run-0" / "model.pt").read_bytes() for r in REWARDS}
+    assert len(set(models.values())) == 3
     # The two H-AIRL runs learned different rewards (other seeds), and both are usable.
     obs = np.array([[-0.5, 0.0], [-0.9, 0.03]], dtype=np.float32)
     f0 = load_reward(mountaincar / "irl" / "hairl" / "run-0")(obs, np.array([0, 2]))

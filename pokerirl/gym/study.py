@@ -319,9 +319,9 @@ def task_summary(root: Path, env: str, preset: StudyPreset) -> dict[str, Any]:
             "rl_per_run_final": env_rl["per_run_final"],
             "curves": {"rl": {key: env_rl[key] for key in ("timesteps", "mean", "std")}},
         },
-        "settings": {
-            "irl": asdict(preset.irl(env)),
-            "rl": asdict(preset.rl(env)),
+        "settings": {  # through JSON: tuples become lists, as in summary.json
+            "irl": json.loads(json.dumps(asdict(preset.irl(env)))),
+            "rl": json.loads(json.dumps(asdict(preset.rl(env)))),
             "rl_evaluations": preset.rl_evaluations,
             "rl_eval_episodes": preset.irl(env).eval_episodes,
             "seed": preset.seed,
