@@ -126,3 +126,21 @@ def test_a_ray_worker_killed_mid_run_is_retried_with_identical_results(
     assert stdout.count("1,024 hands") == 4 and not list(out.glob("seed-*/.*"))
     invoke("agent", "train", "--out", str(tmp_path / "local"), "--seeds", "0-3", *SET)
     assert weights(out) == weights(tmp_path / "local")
+
+
+def test_gym_study_on_ray_equals_local_processes(
+    cluster: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    pytest.importorskip("gymnasium")
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.delenv("RAY_ADDRESS", raising=False)
+    tiny = ["--runs", "2", "--transitions", "1000", "--epochs", "1", "--eval-episodes", "1"]
+    tiny += ["--timesteps", "600", "-q"]
+    invoke("gym", "study", "MountainCar-v0", "--out", "ray-study", "--ray", cluster, *tiny)
+    invoke("gym", "study", "MountainCar-v0", "--out", "local-study", "--jobs", "1", *tiny)
+    for pattern in ("irl/*/run-*/reward.pt", "rl/*/run-*/model.pt", "summary.json"):
+        ray = {p.relative_to("ray-study"): p.read_bytes() for p in Path("ray-study").glob(pattern)}
+        local = {
+            p.relative_to("local-study"): p.read_bytes() for p in Path("local-study").glob(pattern)
+        }
+        assert ray == local and ray, pattern
