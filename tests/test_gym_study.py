@@ -96,7 +96,7 @@ def test_rl_runs_learn_from_their_own_irl_runs_reward(mountaincar: Path) -> None
 
 
 def test_figures_and_report_beside_the_authors(mountaincar: Path) -> None:
-    for name in ("irl_returns", "alignment", "rl_returns"):
+    for name in ("irl_returns", "alignment", "rl_returns", "reward_map"):
         data = (mountaincar / "figures" / f"{name}.png").read_bytes()
         assert data.startswith(b"\x89PNG") and len(data) > 10_000
     report = (mountaincar / "report.md").read_text()
@@ -106,6 +106,10 @@ def test_figures_and_report_beside_the_authors(mountaincar: Path) -> None:
     assert "-123.3 ± 8.0" in report and "-149.5 ± 36.7" in report  # the authors' finals
     assert "Budgets are the quick preset's" in report
     assert "![rl_returns](figures/rl_returns.png)" in report
+    found = summary["reward_map"]
+    assert found["grid"] == 101 and 0 < found["constant_agreement"] < 1
+    assert len(found["agreement"]["hairl"]["runs"]) == 2
+    assert f"{100 * found['agreement']['hairl']['mean_f']:.1f}%" in report
 
 
 def test_rerun_reuses_every_unit_and_changed_settings_are_refused(mountaincar: Path) -> None:
@@ -158,6 +162,8 @@ def test_two_tasks_acrobot_and_mountaincar_each_get_a_folder(tmp_path: Path) -> 
         assert summary == overall["tasks"][env] == result.summaries[env]
         assert summary["env_reward"]["curves"]["rl"]["timesteps"][-1] == 1024
     acrobot = overall["tasks"]["Acrobot-v1"]
+    assert acrobot["reward_map"] is None  # 6-d observations: no map
+    assert not (tmp_path / "Acrobot-v1" / "figures" / "reward_map.png").exists()
     assert -500 <= acrobot["algos"]["hairl"]["irl_final_return"]["mean"] <= 0
     assert acrobot["random_return"] == pytest.approx(-500, abs=50)
     report = (tmp_path / "report.md").read_text()

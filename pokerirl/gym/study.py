@@ -14,6 +14,8 @@ One task writes into ``out`` itself; several write ``out/<env>/`` each (the same
     figures/irl_returns.png              IRL-phase return, mean ± std over runs (Figure 1)
     figures/alignment.png                validation alignment, discrete tasks (Figure 2)
     figures/rl_returns.png               RL-phase true return (Figure 3)
+    figures/reward_map.png               f's preferred action over the states (Figure 4;
+                                         2-d observations and discrete actions: MountainCar)
     summary.json, report.md
 
 Every unit (data, IRL, RL run) is resumable on its own (:mod:`pokerirl.gym.jobs`): a rerun
@@ -57,7 +59,9 @@ FIGURES = {
     "irl_returns": "figures/irl_returns.png",
     "alignment": "figures/alignment.png",
     "rl_returns": "figures/rl_returns.png",
+    "reward_map": "figures/reward_map.png",
 }
+MAP_GRID = 101  # cells per axis of the reward map
 STEPS = 4
 
 
@@ -212,6 +216,7 @@ def run_gym_study(
     summaries = {}
     for env in tasks:
         summary = task_summary(roots[env], env, preset)
+        summary["reward_map"] = draw_reward_map(roots[env], env)
         write_text(roots[env] / "summary.json", json.dumps(summary, indent=2) + "\n")
         draw_figures(roots[env], summary)
         if len(tasks) > 1:
@@ -346,6 +351,33 @@ def _per_run_final(folder: Path, runs: int, key: str) -> list[float]:
     return [_read_jsonl(folder / f"run-{k}" / "metrics.jsonl")[-1][key] for k in range(runs)]
 
 
+def draw_reward_map(root: Path, env: str) -> dict[str, Any] | None:
+    """Figure 4 for a task with a bounded 2-d observation and discrete actions (MountainCar):
+    the action each algorithm's mean f prefers over the state lattice, beside the shipped
+    expert's; returns the agreements (None for other tasks)."""
+    from pokerirl.gym.reward_map import plot_reward_map, reward_map, task_space
+
+    try:
+        task_space(env)
+    except ValueError:
+        return None
+    result = reward_map(env, [root / "irl" / algo for algo in ALGOS], grid=MAP_GRID)
+    path = root / FIGURES["reward_map"]
+    path.parent.mkdir(parents=True, exist_ok=True)
+    plot_reward_map(result, path)
+    constant = result.constant_agreement
+    assert constant is not None  # the shipped expert's panel is drawn
+    return {
+        "grid": MAP_GRID,
+        "agreement": {
+            algo: {"mean_f": panel.agreement, "runs": list(panel.run_agreements)}
+            for algo, panel in zip(ALGOS, result.panels, strict=True)
+        },
+        "constant_action": constant[0],
+        "constant_agreement": constant[1],
+    }
+
+
 # --------------------------------------------------------------------------- report
 
 
@@ -393,6 +425,16 @@ def task_table(summary: dict[str, Any]) -> list[str]:
              f"{_value(algos['airl']['final_reward_alignment'], percent=True)} / "
              f"{_value(algos['hairl']['final_reward_alignment'], percent=True)}", "not reported"),
         ]  # fmt: skip
+    found = summary.get("reward_map")
+    if found is not None:
+        agree = found["agreement"]
+        rows.append(
+            (f"reward map: cells where f prefers the expert's action ({found['grid']}² lattice), "
+             "AIRL / H-AIRL",
+             f"{100 * agree['airl']['mean_f']:.1f}% / {100 * agree['hairl']['mean_f']:.1f}% "
+             f"(a constant {found['constant_action']!r}: {100 * found['constant_agreement']:.1f}%)",
+             "Figure 4: maps only"),
+        )  # fmt: skip
     rows.append(
         ("random policy", _value({"mean": summary["random_return"]}),
          _value({"mean": paper["random_return"]}))
@@ -440,6 +482,8 @@ def render_report(
         lines += [""]
         figures = ["irl_returns", "alignment", "rl_returns"] if summary["discrete"] else [
             "irl_returns", "rl_returns"]  # fmt: skip
+        if summary.get("reward_map") is not None:
+            figures.append("reward_map")
         lines += [f"![{name}]({where}{FIGURES[name]})" for name in figures]
     return "\n".join(lines) + "\n"
 
