@@ -183,6 +183,8 @@ def test_bad_inputs_are_one_line(tmp_path: Path) -> None:
          "alpha must be in [0, 1], got 2"),
         (["sweep", "MountainCar-v0", "--param", "beta=0", "--param", "beta=1", "--out",
           str(tmp_path / "e")], "given twice"),
+        (["sweep", "MountainCar-v0", "--param", "sigma_end=0.04,2", "--out", str(tmp_path / "f")],
+         "point alpha=0.1_beta=0.25_sigma_start=1_sigma_end=2: invalid AIRL config"),
     ]  # fmt: skip
     for args, message in cases:
         result = runner.invoke(app, args)
@@ -190,6 +192,7 @@ def test_bad_inputs_are_one_line(tmp_path: Path) -> None:
         lines = result.output.strip().splitlines()
         assert len(lines) == 1 and lines[0].startswith("error: "), result.output
         assert message in result.output, result.output
+    assert not (tmp_path / "f").exists()  # refused before anything was written
     afile = tmp_path / "file"
     afile.write_text("x")
     result = runner.invoke(app, ["gym", "study", "MountainCar-v0", "--out", str(afile)])

@@ -32,6 +32,7 @@ import numpy as np
 
 from pokerirl.atomic import atomic_path, write_text
 from pokerirl.execution import Backend
+from pokerirl.gym.irl import irl_config
 from pokerirl.gym.jobs import DATA_FILE, Say, run_data_jobs, run_irl_jobs, run_rl_jobs
 from pokerirl.gym.presets import TASKS, StudyPreset
 from pokerirl.gym.rl import mean_std
@@ -154,6 +155,11 @@ def run_sweep(
         p.name: irl_job(out / "points" / p.name, env, "hairl", preset, data=data, **p.settings)
         for p in unique
     }
+    for name, job in irl.items():  # every point's settings are checked before anything runs
+        try:
+            irl_config("hairl", job.settings, seed=preset.seed)
+        except ValueError as error:
+            raise GymStudyError(f"point {name}: {error}") from None
     try:
         say(f"[1/4] expert data: {env}")
         run_data_jobs([data_job(out, env, preset)], **options)
