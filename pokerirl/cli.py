@@ -929,40 +929,52 @@ def gym_reward_map(
     typer.echo(f"wrote {out}")
 
 
+# The budget and execution options that gym study and sweep share.
+GYM_SEED = typer.Option(None, "--seed", min=0, help="Data seed; run k uses seed + k.")
+GYM_TRANSITIONS = typer.Option(None, min=2, help="Override the expert transitions.")
+GYM_EPOCHS = typer.Option(None, min=1, help="Override the IRL epochs.")
+GYM_EVAL_EPISODES = typer.Option(None, min=1, help="Override episodes per evaluation.")
+GYM_TIMESTEPS = typer.Option(None, min=1, help="Override the RL steps per run.")
+GYM_JOBS = typer.Option(2, "--jobs", min=1, help="Processes for the units.")
+GYM_RAY = typer.Option(None, "--ray", metavar="ADDRESS", help=RAY_HELP)
+GYM_OVERWRITE = typer.Option(False, "--overwrite", help="Recompute units whose settings changed.")
+GYM_QUIET = typer.Option(False, "--quiet", "-q", help="No progress bars.")
+
+
+def _gym_preset(name: str, task: str, **overrides: int | None) -> Any:
+    """The study preset ``name`` for ``task`` (or all) with the command line's overrides."""
+    from pokerirl.gym.study import parse_tasks, study_preset
+
+    timesteps = overrides.pop("timesteps")
+    return study_preset(name, tasks=parse_tasks(task), rl_timesteps=timesteps, **overrides)
+
+
 @gym_app.command("study")
 def gym_study(
     task: str = typer.Argument(..., metavar="ENV|all", help="A task, e.g. MountainCar-v0, or all."),
     out: Path = typer.Option(..., "--out", "-o", help="The study folder."),
     preset_name: str = typer.Option("quick", "--preset", help="quick or paper: the budgets."),
     runs: int | None = typer.Option(None, "--runs", min=1, help="Runs per algorithm and reward."),
-    seed: int | None = typer.Option(None, "--seed", min=0, help="Data seed; run k uses seed + k."),
-    transitions: int | None = typer.Option(None, min=2, help="Override the expert transitions."),
-    epochs: int | None = typer.Option(None, min=1, help="Override the IRL epochs."),
-    eval_episodes: int | None = typer.Option(None, min=1, help="Override episodes per evaluation."),
-    timesteps: int | None = typer.Option(None, min=1, help="Override the RL steps per run."),
-    jobs: int = typer.Option(2, "--jobs", min=1, help="Processes for the units."),
-    ray: str | None = typer.Option(None, "--ray", metavar="ADDRESS", help=RAY_HELP),
-    overwrite: bool = typer.Option(
-        False, "--overwrite", help="Recompute units whose settings changed."
-    ),
-    quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bars."),
+    seed: int | None = GYM_SEED,
+    transitions: int | None = GYM_TRANSITIONS,
+    epochs: int | None = GYM_EPOCHS,
+    eval_episodes: int | None = GYM_EVAL_EPISODES,
+    timesteps: int | None = GYM_TIMESTEPS,
+    jobs: int = GYM_JOBS,
+    ray: str | None = GYM_RAY,
+    overwrite: bool = GYM_OVERWRITE,
+    quiet: bool = GYM_QUIET,
 ) -> None:
     """The paper's Gymnasium study: shipped expert -> data -> IRL (AIRL and H-AIRL) -> RL (env
     reward, AIRL and H-AIRL rewards) -> summary.json, figures/ and report.md beside the
     authors' finals. Resumable: finished units are kept."""
-    from pokerirl.gym.study import parse_tasks, run_gym_study, study_preset
+    from pokerirl.gym.study import run_gym_study
 
     try:
-        preset = study_preset(
-            preset_name,
-            tasks=parse_tasks(task),
-            runs=runs,
-            seed=seed,
-            transitions=transitions,
-            epochs=epochs,
-            eval_episodes=eval_episodes,
-            rl_timesteps=timesteps,
-        )
+        preset = _gym_preset(
+            preset_name, task, runs=runs, seed=seed, transitions=transitions, epochs=epochs,
+            eval_episodes=eval_episodes, timesteps=timesteps,
+        )  # fmt: skip
         result = run_gym_study(
             out,
             preset,
@@ -989,21 +1001,19 @@ def sweep(
     out: Path = typer.Option(..., "--out", "-o", help="The sweep folder."),
     preset_name: str = typer.Option("quick", "--preset", help="quick or paper: the budgets."),
     runs: int | None = typer.Option(None, "--runs", min=1, help="Runs per point."),
-    seed: int | None = typer.Option(None, "--seed", min=0, help="Data seed; run k uses seed + k."),
-    transitions: int | None = typer.Option(None, min=2, help="Override the expert transitions."),
-    epochs: int | None = typer.Option(None, min=1, help="Override the IRL epochs."),
-    eval_episodes: int | None = typer.Option(None, min=1, help="Override episodes per evaluation."),
-    timesteps: int | None = typer.Option(None, min=1, help="Override the RL steps per run."),
-    jobs: int = typer.Option(2, "--jobs", min=1, help="Processes for the units."),
-    ray: str | None = typer.Option(None, "--ray", metavar="ADDRESS", help=RAY_HELP),
-    overwrite: bool = typer.Option(
-        False, "--overwrite", help="Recompute units whose settings changed."
-    ),
-    quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bars."),
+    seed: int | None = GYM_SEED,
+    transitions: int | None = GYM_TRANSITIONS,
+    epochs: int | None = GYM_EPOCHS,
+    eval_episodes: int | None = GYM_EVAL_EPISODES,
+    timesteps: int | None = GYM_TIMESTEPS,
+    jobs: int = GYM_JOBS,
+    ray: str | None = GYM_RAY,
+    overwrite: bool = GYM_OVERWRITE,
+    quiet: bool = GYM_QUIET,
 ) -> None:
     """One-factor-at-a-time ablation of H-AIRL (the paper's Figure 5): each point runs the IRL
     phase, then RL on its learned rewards; writes sweep.csv, sweep.json and PARAM.png."""
-    from pokerirl.gym.study import GymStudyError, parse_tasks, study_preset
+    from pokerirl.gym.study import GymStudyError
     from pokerirl.gym.sweep import parse_param, run_sweep
 
     try:
@@ -1013,16 +1023,10 @@ def sweep(
             if name in params:
                 raise GymStudyError(f"--param {name} is given twice; list its values once")
             params[name] = values
-        preset = study_preset(
-            preset_name,
-            tasks=parse_tasks(env),
-            runs=runs,
-            seed=seed,
-            transitions=transitions,
-            epochs=epochs,
-            eval_episodes=eval_episodes,
-            rl_timesteps=timesteps,
-        )
+        preset = _gym_preset(
+            preset_name, env, runs=runs, seed=seed, transitions=transitions, epochs=epochs,
+            eval_episodes=eval_episodes, timesteps=timesteps,
+        )  # fmt: skip
         result = run_sweep(
             env,
             params,

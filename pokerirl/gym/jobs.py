@@ -25,7 +25,6 @@ from typing import Any
 
 from pokerirl.atomic import write_bytes
 from pokerirl.execution import (
-    RECORD_FILE,
     Backend,
     UnitConflict,
     bytes_fingerprint,
@@ -247,10 +246,20 @@ class RLJob:
 Say = Callable[[str], None]
 
 
-def _unfinished(
-    folders: Sequence[Path], configs: Sequence[dict[str, Any]], *, overwrite: bool
-) -> list[int]:
-    """Indices of the unit folders to (re)compute; a unit of other settings is a JobError."""
+def _run_folder_units(
+    fn: Callable[..., dict[str, bytes]],
+    *,
+    folders: Sequence[Path],
+    configs: Sequence[dict[str, Any]],
+    unit_args: Callable[[int], tuple[Any, ...]],
+    labels: Sequence[str],
+    desc: str,
+    backend: Backend,
+    overwrite: bool,
+    progress: bool,
+) -> int:
+    """Run ``fn(*unit_args(i))`` for each unit folder not finished with ``configs[i]`` and save
+    the files it returns there (timings unhashed); returns how many units were reused."""
     todo = []
     for i, (folder, config) in enumerate(zip(folders, configs, strict=True)):
         try:
@@ -258,7 +267,23 @@ def _unfinished(
                 todo.append(i)
         except UnitConflict as error:
             raise JobError(str(error)) from None
-    return todo
+
+    def save(index: int, files: dict[str, bytes]) -> None:
+        i = todo[index]
+        hashed, timed = _split_timings(files)
+        save_unit_folder(folders[i], hashed, configs[i], unhashed=timed)
+
+    map_units(
+        fn,
+        [unit_args(i) for i in todo],
+        backend=backend,
+        progress=progress,
+        desc=desc,
+        reused=len(folders) - len(todo),
+        on_result=save,
+        labels=[labels[i] for i in todo],
+    )
+    return len(folders) - len(todo)
 
 
 def run_data_jobs(
@@ -306,32 +331,23 @@ def run_irl_jobs(
     progress: bool = False,
 ) -> int:
     """Train every IRL job that is not finished with its settings; returns how many were reused."""
-    configs = [job.config() for job in jobs]
-    todo = _unfinished([job.folder for job in jobs], configs, overwrite=overwrite)
 
-    def save(index: int, files: dict[str, bytes]) -> None:
-        i = todo[index]
-        hashed, timed = _split_timings(files)
-        save_unit_folder(jobs[i].folder, hashed, configs[i], unhashed=timed)
-
-    units = []
-    for i in todo:
+    def unit_args(i: int) -> tuple[Any, ...]:
         job = jobs[i]
-        data = job.data.read_bytes()
-        units.append(
-            (job.env, data, str(job.data.resolve()), job.algo, job.runs, job.settings, job.seed)
-        )
-    map_units(
+        data, label = job.data.read_bytes(), str(job.data.resolve())
+        return job.env, data, label, job.algo, job.runs, job.settings, job.seed
+
+    return _run_folder_units(
         irl_unit,
-        units,
-        backend=backend,
-        progress=progress,
+        folders=[job.folder for job in jobs],
+        configs=[job.config() for job in jobs],
+        unit_args=unit_args,
+        labels=[f"{job.env} {job.algo}" for job in jobs],
         desc="IRL",
-        reused=len(jobs) - len(todo),
-        on_result=save,
-        labels=[f"{jobs[i].env} {jobs[i].algo}" for i in todo],
+        backend=backend,
+        overwrite=overwrite,
+        progress=progress,
     )
-    return len(jobs) - len(todo)
 
 
 def run_rl_jobs(
@@ -344,38 +360,20 @@ def run_rl_jobs(
     """Train every RL job that is not finished with its settings and reward; returns how many
     were reused."""
     inputs = [job.reward_files() for job in jobs]
-    configs = [job.config(files) for job, files in zip(jobs, inputs, strict=True)]
-    todo = _unfinished([job.folder for job in jobs], configs, overwrite=overwrite)
 
-    def save(index: int, files: dict[str, bytes]) -> None:
-        i = todo[index]
-        save_unit_folder(jobs[i].folder, files, configs[i])
+    def unit_args(i: int) -> tuple[Any, ...]:
+        job = jobs[i]
+        return (job.env, inputs[i], job.reward_name(), job.seed, job.settings, job.evaluations,
+                job.eval_episodes)  # fmt: skip
 
-    units = [
-        (
-            jobs[i].env,
-            inputs[i],
-            jobs[i].reward_name(),
-            jobs[i].seed,
-            jobs[i].settings,
-            jobs[i].evaluations,
-            jobs[i].eval_episodes,
-        )
-        for i in todo
-    ]
-    map_units(
+    return _run_folder_units(
         rl_unit,
-        units,
-        backend=backend,
-        progress=progress,
+        folders=[job.folder for job in jobs],
+        configs=[job.config(files) for job, files in zip(jobs, inputs, strict=True)],
+        unit_args=unit_args,
+        labels=[f"{job.env} {job.reward} seed {job.seed}" for job in jobs],
         desc="RL runs",
-        reused=len(jobs) - len(todo),
-        on_result=save,
-        labels=[f"{jobs[i].env} {jobs[i].reward} seed {jobs[i].seed}" for i in todo],
+        backend=backend,
+        overwrite=overwrite,
+        progress=progress,
     )
-    return len(jobs) - len(todo)
-
-
-def is_finished(folder: Path) -> bool:
-    """Whether ``folder`` holds a unit record (a finished IRL or RL job)."""
-    return (folder / RECORD_FILE).is_file()
