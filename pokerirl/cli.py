@@ -417,15 +417,25 @@ def tournament(
 @app.command()
 def report(
     folder: Path = typer.Argument(
-        ..., help="A folder written by pokerirl study or pokerirl tournament."
+        ..., help="A folder written by pokerirl study, gym study or tournament."
     ),
     output_format: str = typer.Option("markdown", "--format", help="markdown or json."),
 ) -> None:
     """Print a study or tournament report (Markdown, or JSON for scripts)."""
+    from pokerirl.gym.study import is_gym_study, load_gym_study
     from pokerirl.study import is_study_report, load_study_report, render_markdown
     from pokerirl.tournaments import load_report, render_report
 
     try:
+        if is_gym_study(folder):
+            summary, markdown = load_gym_study(folder)
+            if output_format == "json":
+                typer.echo(json.dumps(summary, indent=2))
+            elif output_format in ("markdown", "text"):
+                typer.echo(markdown, nl=False)
+            else:
+                fail(f"unknown --format {output_format!r}; choose markdown or json")
+            return
         if is_study_report(folder):
             found = load_study_report(folder)
             if output_format == "json":

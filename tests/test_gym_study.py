@@ -110,6 +110,11 @@ def test_figures_and_report_beside_the_authors(mountaincar: Path) -> None:
     assert found["grid"] == 101 and 0 < found["constant_agreement"] < 1
     assert len(found["agreement"]["hairl"]["runs"]) == 2
     assert f"{100 * found['agreement']['hairl']['mean_f']:.1f}%" in report
+    # pokerirl report renders the same report again, or prints summary.json
+    again = CliRunner().invoke(app, ["report", str(mountaincar)])
+    assert again.exit_code == 0 and again.output == report
+    as_json = CliRunner().invoke(app, ["report", str(mountaincar), "--format", "json"])
+    assert json.loads(as_json.output) == summary
 
 
 def test_rerun_reuses_every_unit_and_changed_settings_are_refused(mountaincar: Path) -> None:
@@ -167,6 +172,7 @@ def test_two_tasks_acrobot_and_mountaincar_each_get_a_folder(tmp_path: Path) -> 
     assert -500 <= acrobot["algos"]["hairl"]["irl_final_return"]["mean"] <= 0
     assert acrobot["random_return"] == pytest.approx(-500, abs=50)
     report = (tmp_path / "report.md").read_text()
+    assert CliRunner().invoke(app, ["report", str(tmp_path)]).output == report
     assert "## Acrobot-v1" in report and "## MountainCar-v0" in report
     assert "(Acrobot-v1/figures/irl_returns.png)" in report
 

@@ -220,7 +220,7 @@ def run_gym_study(
         write_text(roots[env] / "summary.json", json.dumps(summary, indent=2) + "\n")
         draw_figures(roots[env], summary)
         if len(tasks) > 1:
-            write_text(roots[env] / "report.md", render_report({env: summary}, preset))
+            write_text(roots[env] / "report.md", render_report({env: summary}, preset.name))
         summaries[env] = summary
     if len(tasks) > 1:
         overall = {
@@ -230,9 +230,30 @@ def run_gym_study(
             "tasks": summaries,
         }
         write_text(out / "summary.json", json.dumps(overall, indent=2) + "\n")
-    markdown = render_report(summaries, preset, prefix="" if len(tasks) == 1 else None)
+    markdown = render_report(summaries, preset.name, prefix="" if len(tasks) == 1 else None)
     write_text(report, markdown)
     return GymStudyResult(out=out, summaries=summaries, markdown=markdown)
+
+
+def is_gym_study(folder: str | os.PathLike[str]) -> bool:
+    """Whether ``folder`` holds a gym study's ``summary.json``."""
+    try:
+        found = json.loads((Path(folder) / "summary.json").read_text())
+    except (OSError, ValueError):
+        return False
+    return isinstance(found, dict) and found.get("format") == SUMMARY_FORMAT
+
+
+def load_gym_study(folder: str | os.PathLike[str]) -> tuple[dict[str, Any], str]:
+    """A finished study's ``summary.json`` and its report rendered again (``pokerirl report``)."""
+    path = Path(folder) / "summary.json"
+    try:
+        found = json.loads(path.read_text())
+        if "tasks" in found:
+            return found, render_report(found["tasks"], found["preset"], prefix=None)
+        return found, render_report({found["env"]: found}, found["preset"])
+    except (OSError, ValueError, KeyError, TypeError) as error:
+        raise GymStudyError(f"{path}: not a readable gym study summary ({error})") from None
 
 
 def _said_reused(say: Say, reused: int, total: int) -> None:
@@ -458,19 +479,20 @@ def _budget(summary: dict[str, Any]) -> str:
 
 
 def render_report(
-    summaries: dict[str, dict[str, Any]], preset: StudyPreset, *, prefix: str | None = ""
+    summaries: dict[str, dict[str, Any]], preset: str, *, prefix: str | None = ""
 ) -> str:
     """``report.md``: per task, the budget, our finals beside the authors', the figures.
 
-    ``prefix`` is where each task's figures are, relative to the report (None: ``<env>/``).
+    ``preset`` is the preset's name; ``prefix`` is where each task's figures are, relative to
+    the report (None: ``<env>/``).
     """
-    lines = [f"# pokerirl gym study ({preset.name} preset)", ""]
+    lines = [f"# pokerirl gym study ({preset} preset)", ""]
     lines += [
         "Mean ± std (sample std) over runs of each curve's last point; the authors' values are "
         "the last points of their figures' curves, at their budgets."
     ]
-    if preset.name != "paper":
-        lines += ["", f"**Budgets are the {preset.name} preset's, not the authors'**: "
+    if preset != "paper":
+        lines += ["", f"**Budgets are the {preset} preset's, not the authors'**: "
                   "compare the directions, not the digits."]  # fmt: skip
     for env, summary in summaries.items():
         where = f"{env}/" if prefix is None else prefix
