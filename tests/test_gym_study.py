@@ -20,6 +20,7 @@ from pokerirl.gym.jobs import DATA_FILE  # noqa: E402
 from pokerirl.gym.study import (  # noqa: E402
     REWARDS,
     GymStudyError,
+    authors_budget,
     parse_tasks,
     run_gym_study,
     study_preset,
@@ -104,7 +105,8 @@ def test_figures_and_report_beside_the_authors(mountaincar: Path) -> None:
     hairl = summary["algos"]["hairl"]["irl_final_return"]
     assert f"| IRL-phase return, H-AIRL | {hairl['mean']:,.1f} ± {hairl['std']:,.1f} | " in report
     assert "-123.3 ± 8.0" in report and "-149.5 ± 36.7" in report  # the authors' finals
-    assert "Budgets are the quick preset's" in report
+    assert "**Not the authors' budget or number of runs**" in report
+    assert summary["settings"]["authors_budget"] is False
     assert "![rl_returns](figures/rl_returns.png)" in report
     found = summary["reward_map"]
     assert found["grid"] == 101 and 0 < found["constant_agreement"] < 1
@@ -208,6 +210,10 @@ def test_bad_inputs_are_one_line(tmp_path: Path) -> None:
 
 def test_parse_tasks_and_points() -> None:
     assert len(parse_tasks("all")) == 6
+    paper = study_preset("paper")
+    assert all(authors_budget(env, paper) for env in paper.tasks)
+    assert not authors_budget("Acrobot-v1", study_preset("paper", runs=3))
+    assert not authors_budget("Acrobot-v1", study_preset("paper", rl_timesteps=1000))
     with pytest.raises(GymStudyError):
         parse_tasks("CartPole-v1")
     assert parse_param("sigma_end=0.5, 0.04") == ("sigma_end", (0.5, 0.04))
