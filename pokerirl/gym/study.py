@@ -282,12 +282,8 @@ def rl_curves(root: Path, reward: str, runs: int) -> dict[str, Any]:
     }
 
 
-def _paper(value: MeanStd | float | None) -> dict[str, float | None] | None:
-    if value is None:
-        return None
-    if isinstance(value, MeanStd):
-        return {"mean": value.mean, "std": value.std}
-    return {"mean": value, "std": None}
+def _paper(value: MeanStd) -> dict[str, float | None]:
+    return {"mean": value.mean, "std": value.std}
 
 
 def task_summary(root: Path, env: str, preset: StudyPreset) -> dict[str, Any]:
