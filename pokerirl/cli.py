@@ -428,26 +428,21 @@ def report(
 
     try:
         if is_gym_study(folder):
-            summary, markdown = load_gym_study(folder)
-            if output_format == "json":
-                typer.echo(json.dumps(summary, indent=2))
-            elif output_format in ("markdown", "text"):
-                typer.echo(markdown, nl=False)
-            else:
-                fail(f"unknown --format {output_format!r}; choose markdown or json")
-            return
-        if is_study_report(folder):
+            found, markdown = load_gym_study(folder)
+        elif is_study_report(folder):
             found = load_study_report(folder)
-            if output_format == "json":
-                typer.echo(json.dumps(found, indent=2))
-            elif output_format in ("markdown", "text"):
-                typer.echo(render_markdown(found), nl=False)
-            else:
-                fail(f"unknown --format {output_format!r}; choose markdown or json")
+            markdown = render_markdown(found)
+        else:
+            typer.echo(render_report(load_report(folder), output_format), nl=False)
             return
-        typer.echo(render_report(load_report(folder), output_format), nl=False)
     except ValueError as error:
         fail(str(error))
+    if output_format == "json":
+        typer.echo(json.dumps(found, indent=2))
+    elif output_format in ("markdown", "text"):
+        typer.echo(markdown, nl=False)
+    else:
+        fail(f"unknown --format {output_format!r}; choose markdown or json")
 
 
 @app.command()
@@ -955,8 +950,7 @@ def _gym_preset(name: str, task: str, **overrides: int | None) -> Any:
     """The study preset ``name`` for ``task`` (or all) with the command line's overrides."""
     from pokerirl.gym.study import parse_tasks, study_preset
 
-    timesteps = overrides.pop("timesteps")
-    return study_preset(name, tasks=parse_tasks(task), rl_timesteps=timesteps, **overrides)
+    return study_preset(name, tasks=parse_tasks(task), **overrides)
 
 
 @gym_app.command("study")
@@ -983,7 +977,7 @@ def gym_study(
     try:
         preset = _gym_preset(
             preset_name, task, runs=runs, seed=seed, transitions=transitions, epochs=epochs,
-            eval_episodes=eval_episodes, timesteps=timesteps,
+            eval_episodes=eval_episodes, rl_timesteps=timesteps,
         )  # fmt: skip
         result = run_gym_study(
             out,
@@ -1035,7 +1029,7 @@ def sweep(
             params[name] = values
         preset = _gym_preset(
             preset_name, env, runs=runs, seed=seed, transitions=transitions, epochs=epochs,
-            eval_episodes=eval_episodes, timesteps=timesteps,
+            eval_episodes=eval_episodes, rl_timesteps=timesteps,
         )  # fmt: skip
         result = run_sweep(
             env,

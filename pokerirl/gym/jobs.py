@@ -38,11 +38,11 @@ from pokerirl.execution import (
     write_files,
 )
 from pokerirl.gym.presets import IRLSettings, RLSettings
+from pokerirl.irl.run import CONFIG_FILE, REWARD_FILE, TIMINGS_FILE
 
 DATA_FILE = "expert.parquet"
 DATA_RECORD = "expert.unit.json"
-TIMINGS = "timings.json"  # wall-clock seconds: written, never fingerprinted
-REWARD_INPUTS = ("config.json", "reward.pt")  # what load_reward reads of a run folder
+REWARD_INPUTS = (CONFIG_FILE, REWARD_FILE)  # what load_reward reads of a run folder
 
 
 class JobError(ValueError):
@@ -59,7 +59,8 @@ def _folder_files(root: Path) -> dict[str, bytes]:
 
 
 def _split_timings(files: dict[str, bytes]) -> tuple[dict[str, bytes], dict[str, bytes]]:
-    timed = {name: data for name, data in files.items() if Path(name).name == TIMINGS}
+    # Wall-clock seconds: written, never fingerprinted.
+    timed = {name: data for name, data in files.items() if Path(name).name == TIMINGS_FILE}
     return {name: data for name, data in files.items() if name not in timed}, timed
 
 
@@ -186,7 +187,8 @@ class IRLJob:
     data: Path
     folder: Path
 
-    def config(self) -> dict[str, Any]:
+    def config(self, data: bytes) -> dict[str, Any]:
+        """The unit's fingerprinted configuration; ``data`` is the bytes of ``self.data``."""
         return {
             "unit": "gym-irl",
             "env": self.env,
@@ -194,7 +196,7 @@ class IRLJob:
             "runs": self.runs,
             "seed": self.seed,
             "settings": asdict(self.settings),
-            "data": bytes_fingerprint(self.data.read_bytes()),
+            "data": bytes_fingerprint(data),
         }
 
     def run(self, k: int) -> Path:
@@ -294,31 +296,31 @@ def run_data_jobs(
     progress: bool = False,
 ) -> int:
     """Collect every job's data that is not already there; returns how many were reused."""
+    configs = [job.config() for job in jobs]
     todo = []
-    for job in jobs:
+    for job, config in zip(jobs, configs, strict=True):
         record = job.path.parent / DATA_RECORD
         try:
-            if load_unit(record, job.config(), overwrite=overwrite, what=str(job.path)) is None:
-                todo.append(job)
+            if load_unit(record, config, overwrite=overwrite, what=str(job.path)) is None:
+                todo.append((job, config))
         except UnitConflict as error:
             raise JobError(str(error)) from None
 
     def save(index: int, data: bytes) -> None:
-        job = todo[index]
+        job, config = todo[index]
         job.path.parent.mkdir(parents=True, exist_ok=True)
         write_bytes(job.path, data)
-        record = make_record(job.config(), files={DATA_FILE: data})
-        save_record(job.path.parent / DATA_RECORD, record)
+        save_record(job.path.parent / DATA_RECORD, make_record(config, files={DATA_FILE: data}))
 
     map_units(
         collect_unit,
-        [(job.env, job.transitions, job.seed) for job in todo],
+        [(job.env, job.transitions, job.seed) for job, _ in todo],
         backend=backend,
         progress=progress,
         desc="expert data",
         reused=len(jobs) - len(todo),
         on_result=save,
-        labels=[f"{job.env} data" for job in todo],
+        labels=[f"{job.env} data" for job, _ in todo],
     )
     return len(jobs) - len(todo)
 
@@ -331,16 +333,19 @@ def run_irl_jobs(
     progress: bool = False,
 ) -> int:
     """Train every IRL job that is not finished with its settings; returns how many were reused."""
+    # Each data file is read once, whether one job or many (both algorithms, all sweep points)
+    # train on it: for its fingerprint and for the units that need it.
+    data = {path: path.read_bytes() for path in {job.data for job in jobs}}
 
     def unit_args(i: int) -> tuple[Any, ...]:
         job = jobs[i]
-        data, label = job.data.read_bytes(), str(job.data.resolve())
-        return job.env, data, label, job.algo, job.runs, job.settings, job.seed
+        label = str(job.data.resolve())
+        return job.env, data[job.data], label, job.algo, job.runs, job.settings, job.seed
 
     return _run_folder_units(
         irl_unit,
         folders=[job.folder for job in jobs],
-        configs=[job.config() for job in jobs],
+        configs=[job.config(data[job.data]) for job in jobs],
         unit_args=unit_args,
         labels=[f"{job.env} {job.algo}" for job in jobs],
         desc="IRL",
