@@ -114,11 +114,16 @@ def test_each_shipped_expert_replays_its_recorded_first_episode(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     monkeypatch.chdir(tmp_path)  # MuJoCo writes its warnings to MUJOCO_LOG.TXT in the cwd
-    # Guards the shipped weights against the manifest's claims: a deterministic replay.
+    # Guards the shipped weights against the manifest's claims: a deterministic replay. MuJoCo's
+    # contacts are chaotic and its floating point differs between CPUs (seen: HalfCheetah-v4
+    # 3,551 where it was recorded, 3,683 on an AVX-512 machine), so there the replay only has
+    # to land near the recorded return; wrong weights score near random (-234 and -16).
     for entry in shipped_manifest():
         expert = load_expert(shipped_dir() / entry["env"])
         replay = evaluate(expert.policy, entry["env"], episodes=1, seed=FINAL_EVAL_SEED)
-        assert replay.returns[0] == pytest.approx(expert.record["evaluation"]["returns"][0])
+        recorded = expert.record["evaluation"]["returns"][0]
+        rel = 0.15 if entry["env"] in ("Ant-v4", "HalfCheetah-v4") else 1e-6
+        assert replay.returns[0] == pytest.approx(recorded, rel=rel), entry["env"]
 
 
 def test_experts_command_prints_the_manifest_with_exactly_its_keys() -> None:

@@ -1,0 +1,18 @@
+"""The ``pokerirl`` command line: thin typer commands over the library, one module per group.
+
+Importing the package registers every command on :data:`app` (the ``pokerirl`` script).
+"""
+
+from __future__ import annotations
+
+# isort: off  (the order of registration is the order of `pokerirl --help`)
+from pokerirl.cli import (
+    gym,  # noqa: E402, F401
+    poker,  # noqa: E402, F401
+    studies,  # noqa: E402, F401
+)
+from pokerirl.cli.app import app, fail
+
+# isort: on
+
+__all__ = ["app", "fail"]

@@ -1,0 +1,422 @@
+"""The Gymnasium commands: pokerirl gym ... and the sweep."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+import typer
+
+from pokerirl import execution
+from pokerirl.cli.app import INTERRUPTED, RAY_HELP, _backend, app, fail
+
+gym_app = typer.Typer(
+    help="The paper's Gymnasium tasks: SB3 experts, expert data, RL on a learned reward.",
+    no_args_is_help=True,
+)
+app.add_typer(gym_app, name="gym")
+
+
+def _gym_threads(threads: int) -> None:
+    # SB3's small MLPs run fastest on one thread; more only contend with other work.
+    import torch
+
+    torch.set_num_threads(threads)
+
+
+@gym_app.command("expert")
+def gym_expert(
+    env: str = typer.Argument(..., help="Acrobot-v1, MountainCar-v0, LunarLander-v3, ..."),
+    out: Path = typer.Option(..., "--out", "-o", help="Expert folder to write."),
+    seed: int = typer.Option(0, help="Training seed."),
+    timesteps: int | None = typer.Option(None, help="Budget (default: the authors')."),
+    hyper: str = typer.Option("paper", help="paper (the authors' settings) or zoo (rl-zoo's)."),
+    eval_every: int | None = typer.Option(None, help="Steps between evaluations (budget/20)."),
+    eval_episodes: int = typer.Option(5, help="Episodes per periodic evaluation."),
+    final_episodes: int = typer.Option(20, help="Episodes of the best policy's final evaluation."),
+    threads: int = typer.Option(1, help="torch threads."),
+) -> None:
+    """Train an SB3 expert (PPO; DQN for MountainCar), keeping the best evaluated checkpoint."""
+    from pokerirl.gym.experts import train_expert
+
+    _gym_threads(threads)
+    try:
+        record = train_expert(
+            out,
+            env,
+            seed=seed,
+            timesteps=timesteps,
+            hyper=hyper,
+            eval_every=eval_every,
+            eval_episodes=eval_episodes,
+            final_episodes=final_episodes,
+        )
+    except (ValueError, ImportError) as error:
+        fail(str(error))
+    except OSError as error:
+        fail(f"{error.filename or out}: {error.strerror or error}")
+    typer.echo(
+        f"{env}: {record['algo']} expert, return {record['return_mean']:.1f} "
+        f"+- {record['return_std']:.1f} over {record['episodes']} episodes "
+        f"(target {record['target']:g}); wrote {out}"
+    )
+
+
+@gym_app.command("experts")
+def gym_experts(
+    format: str = typer.Option("text", "--format", help="json or text."),
+) -> None:
+    """Print the manifest of the experts shipped with pokerirl."""
+    from pokerirl.gym.experts import MANIFEST_KEYS, shipped_manifest
+
+    if format not in ("json", "text"):
+        fail(f"--format must be json or text, got {format!r}")
+    try:
+        manifest = [{key: entry[key] for key in MANIFEST_KEYS} for entry in shipped_manifest()]
+    except ValueError as error:
+        fail(str(error))
+    if format == "json":
+        typer.echo(json.dumps(manifest, indent=2))
+        return
+    for e in manifest:
+        typer.echo(
+            f"{e['env']:<16} {e['algo']:<4} {e['return_mean']:>9.1f} +- {e['return_std']:<7.1f}"
+            f" ({e['episodes']} episodes; seed {e['seed']}, {e['timesteps']:,} steps)"
+        )
+
+
+@gym_app.command("collect")
+def gym_collect(
+    env: str = typer.Argument(..., help="The expert's environment."),
+    expert: str = typer.Option("shipped", help="An expert folder, or 'shipped'."),
+    transitions: int = typer.Option(..., "--transitions", "-n", min=1, help="Rows to write."),
+    seed: int = typer.Option(0, help="Episode k starts from reset(seed=seed + k)."),
+    out: Path = typer.Option(..., "--out", "-o", help="The Parquet table to write."),
+    stochastic: bool = typer.Option(False, help="Sample the expert's actions (else its mode)."),
+) -> None:
+    """Write the expert's play as a Parquet transition table (same seed, same bytes)."""
+    from pokerirl.gym.collect import collect
+    from pokerirl.gym.experts import load_expert, resolve_expert_dir
+
+    try:
+        loaded = load_expert(resolve_expert_dir(expert, env))
+        if loaded.env_id != env:
+            fail(f"{expert}: an expert for {loaded.env_id}, not {env}")
+        summary = collect(
+            loaded, out, transitions=transitions, seed=seed, deterministic=not stochastic
+        )
+    except (ValueError, ImportError) as error:
+        fail(str(error))
+    except OSError as error:
+        fail(f"{error.filename or out}: {error.strerror or error}")
+    typer.echo(
+        f"wrote {summary.transitions:,} transitions ({summary.episodes} episodes) to {out}; "
+        f"expert return {summary.return_mean:.1f} +- {summary.return_std:.1f} "
+        f"over {summary.complete_episodes} complete episodes"
+    )
+
+
+@gym_app.command("rl")
+def gym_rl(
+    env: str = typer.Argument(..., help="The environment."),
+    reward_run: Path | None = typer.Option(
+        None, help="IRL run folder whose learned reward replaces the env reward."
+    ),
+    env_reward: bool = typer.Option(False, help="Train on the env reward (the baseline)."),
+    runs: int = typer.Option(10, min=1, help="Runs (seeds 0..runs-1), in OUT/run-<k>."),
+    out: Path = typer.Option(..., "--out", "-o", help="Folder of the runs."),
+    timesteps: int | None = typer.Option(None, help="Budget (default: the authors')."),
+    evaluations: int = typer.Option(10, help="Points on the true-return curve."),
+    eval_episodes: int = typer.Option(5, help="Episodes per point."),
+    threads: int = typer.Option(1, help="torch threads."),
+) -> None:
+    """Train SB3 PPO (DQN for MountainCar) on a learned reward; the curve is the true return."""
+    from pokerirl.gym.rl import summarize, train_rl
+
+    if (reward_run is None) == (not env_reward):
+        fail("give exactly one of --reward-run DIR and --env-reward")
+    _gym_threads(threads)
+    try:
+        reward = None
+        if reward_run is not None:
+            from pokerirl.irl import load_reward
+
+            reward = load_reward(reward_run)
+        results = [
+            train_rl(
+                env,
+                reward=reward,
+                reward_name="env" if reward is None else str(reward_run),
+                seed=k,
+                timesteps=timesteps,
+                evaluations=evaluations,
+                eval_episodes=eval_episodes,
+                out=out / f"run-{k}",
+            )
+            for k in range(runs)
+        ]
+    except (ValueError, ImportError, KeyError) as error:
+        fail(str(error))
+    except OSError as error:
+        fail(f"{error.filename or out}: {error.strerror or error}")
+    final = summarize(results)
+    typer.echo(
+        f"{env}: final true return {final['mean']:.1f} +- {final['std']:.1f} over {runs} runs; "
+        f"wrote {out}"
+    )
+
+
+@gym_app.command("irl")
+def gym_irl(
+    env: str = typer.Argument(..., help="The task, e.g. MountainCar-v0."),
+    data: Path | None = typer.Option(
+        None,
+        help="Expert Parquet (gym collect); default: collect the preset's from the "
+        "shipped expert into OUT/expert.parquet.",
+    ),
+    algo: str = typer.Option("hairl", help="airl or hairl."),
+    runs: int | None = typer.Option(None, min=1, help="Runs in lock-step (default: preset's)."),
+    preset: str = typer.Option("paper", help="quick or paper: the budgets."),
+    seed: int = typer.Option(0, help="Run k uses seed + k; the data split uses seed."),
+    epochs: int | None = typer.Option(None, min=1, help="Override the preset's epochs."),
+    raw_obs: bool = typer.Option(
+        False, "--raw-obs", help="Train on raw observations (default: standardized)."
+    ),
+    out: Path = typer.Option(..., "--out", "-o", help="Folder of run-<k> and summary.json."),
+    overwrite: bool = typer.Option(False, help="Replace earlier runs in OUT."),
+    threads: int = typer.Option(1, help="torch threads."),
+) -> None:
+    """AIRL or H-AIRL on a task's expert data; each epoch's policy is evaluated in the env."""
+    from dataclasses import replace
+
+    from pokerirl.gym.presets import PRESETS, TASKS
+
+    if preset not in PRESETS:
+        fail(f"--preset must be one of {', '.join(PRESETS)}, got {preset!r}")
+    if algo not in ("airl", "hairl"):
+        fail(f"--algo must be airl or hairl, got {algo!r}")
+    if env not in TASKS:
+        fail(f"unknown task {env!r}; choose one of {', '.join(TASKS)}")
+    if data is not None and not data.is_file():
+        fail(f"--data {data}: no such file")
+    settings = PRESETS[preset].irl(env)
+    if epochs is not None:
+        settings = replace(settings, epochs=epochs)
+    settings = replace(settings, standardize_obs=not raw_obs)
+    _gym_threads(threads)
+    try:
+        from pokerirl.gym.irl import train_gym_irl
+
+        if data is None:
+            from pokerirl.gym.collect import collect
+            from pokerirl.gym.experts import load_expert, resolve_expert_dir
+
+            data = out / "expert.parquet"
+            if not data.is_file():
+                out.mkdir(parents=True, exist_ok=True)
+                collect(
+                    load_expert(resolve_expert_dir("shipped", env)),
+                    data,
+                    transitions=settings.transitions,
+                    seed=seed,
+                )
+                typer.echo(f"collected {settings.transitions:,} expert transitions into {data}")
+            else:
+                typer.echo(f"reusing the expert data in {data}")
+        result = train_gym_irl(
+            env,
+            data,
+            algo=algo,
+            runs=runs or PRESETS[preset].runs,
+            settings=settings,
+            seed=seed,
+            out=out,
+            overwrite=overwrite,
+        )
+    except (ValueError, ImportError) as error:
+        fail(str(error))
+    except KeyboardInterrupt:
+        fail(INTERRUPTED, code=130)
+    except OSError as error:
+        fail(f"{error.filename or out}: {error.strerror or error}")
+    final = result.final_return
+    line = (
+        f"{env} {algo}: final return {final['mean']:.1f} +- {final['std']:.1f} over "
+        f"{result.runs} runs (expert {result.expert_return:.1f}, "
+        f"random {result.baselines['random']:.1f})"
+    )
+    if result.final_alignment is not None:
+        line += f", alignment {100 * result.final_alignment['mean']:.1f}%"
+    typer.echo(f"{line}; wrote {out}")
+
+
+@gym_app.command("reward-map")
+def gym_reward_map(
+    env_and_folders: list[str] = typer.Argument(
+        ...,
+        metavar="ENV [RUN_DIR]...",
+        help="The task (a 2-d observation, discrete actions: MountainCar-v0); folders given "
+        "after --runs land here too (`--runs A B`).",
+    ),
+    runs: list[Path] = typer.Option(
+        [], "--runs", help="IRL folders (run-<k> inside, or one run), one panel each, in order."
+    ),
+    out: Path = typer.Option(..., "--out", "-o", help="The PNG to write."),
+    grid: int = typer.Option(101, "--grid", min=2, max=501, help="Cells per axis."),
+    expert: str = typer.Option(
+        "shipped", "--expert", help="Reference panel: shipped, an expert folder, or none."
+    ),
+) -> None:
+    """Draw the action each folder's learned reward f(s, a) prefers over the state space."""
+    from pokerirl.gym.reward_map import plot_reward_map, reward_map
+
+    env, *extra = env_and_folders
+    # click gives an option one value: `--runs A B` leaves B among the positionals.
+    folders = [*runs, *map(Path, extra)]
+    if not folders:
+        fail("give the IRL folders to draw: --runs AIRL_DIR HAIRL_DIR")
+    try:
+        result = reward_map(env, folders, grid=grid, expert=None if expert == "none" else expert)
+        out.parent.mkdir(parents=True, exist_ok=True)
+        plot_reward_map(result, out)
+    except (ValueError, ImportError) as error:
+        fail(str(error))
+    except OSError as error:
+        fail(f"{error.filename or out}: {error.strerror or error}")
+    for panel in result.panels:
+        line = panel.label
+        if panel.agreement is not None:
+            low, high = min(panel.run_agreements), max(panel.run_agreements)
+            line += (
+                f": agrees with the expert on {100 * panel.agreement:.1f}% of "
+                f"{grid}x{grid} cells (single runs {100 * low:.1f}-{100 * high:.1f}%)"
+            )
+        typer.echo(line)
+    if result.constant_agreement is not None:
+        action, share = result.constant_agreement
+        typer.echo(f"baseline: a constant {action!r} agrees on {100 * share:.1f}% of cells")
+    typer.echo(f"wrote {out}")
+
+
+# The budget and execution options that gym study and sweep share.
+GYM_SEED = typer.Option(None, "--seed", min=0, help="Data seed; run k uses seed + k.")
+GYM_TRANSITIONS = typer.Option(None, min=2, help="Override the expert transitions.")
+GYM_EPOCHS = typer.Option(None, min=1, help="Override the IRL epochs.")
+GYM_EVAL_EPISODES = typer.Option(None, min=1, help="Override episodes per evaluation.")
+GYM_TIMESTEPS = typer.Option(None, min=1, help="Override the RL steps per run.")
+GYM_JOBS = typer.Option(2, "--jobs", min=1, help="Processes for the units.")
+GYM_RAY = typer.Option(None, "--ray", metavar="ADDRESS", help=RAY_HELP)
+GYM_OVERWRITE = typer.Option(False, "--overwrite", help="Recompute units whose settings changed.")
+GYM_QUIET = typer.Option(False, "--quiet", "-q", help="No progress bars.")
+
+
+def _gym_preset(name: str, task: str, **overrides: int | None) -> Any:
+    """The study preset ``name`` for ``task`` (or all) with the command line's overrides."""
+    from pokerirl.gym.study import parse_tasks, study_preset
+
+    return study_preset(name, tasks=parse_tasks(task), **overrides)
+
+
+@gym_app.command("study")
+def gym_study(
+    task: str = typer.Argument(..., metavar="ENV|all", help="A task, e.g. MountainCar-v0, or all."),
+    out: Path = typer.Option(..., "--out", "-o", help="The study folder."),
+    preset_name: str = typer.Option("quick", "--preset", help="quick or paper: the budgets."),
+    runs: int | None = typer.Option(None, "--runs", min=1, help="Runs per algorithm and reward."),
+    seed: int | None = GYM_SEED,
+    transitions: int | None = GYM_TRANSITIONS,
+    epochs: int | None = GYM_EPOCHS,
+    eval_episodes: int | None = GYM_EVAL_EPISODES,
+    timesteps: int | None = GYM_TIMESTEPS,
+    jobs: int = GYM_JOBS,
+    ray: str | None = GYM_RAY,
+    overwrite: bool = GYM_OVERWRITE,
+    quiet: bool = GYM_QUIET,
+) -> None:
+    """The paper's Gymnasium study: shipped expert -> data -> IRL (AIRL and H-AIRL) -> RL (env
+    reward, AIRL and H-AIRL rewards) -> summary.json, figures/ and report.md beside the
+    authors' finals. Resumable: finished units are kept."""
+    from pokerirl.gym.study import run_gym_study
+
+    try:
+        preset = _gym_preset(
+            preset_name, task, runs=runs, seed=seed, transitions=transitions, epochs=epochs,
+            eval_episodes=eval_episodes, rl_timesteps=timesteps,
+        )  # fmt: skip
+        result = run_gym_study(
+            out,
+            preset,
+            backend=_backend(jobs, ray),
+            overwrite=overwrite,
+            progress=not quiet,
+            say=typer.echo,
+        )
+    except (ValueError, ImportError, OSError, execution.ExecutionError) as error:
+        fail(str(error))
+    except KeyboardInterrupt:
+        fail(INTERRUPTED, 130)
+    typer.echo("")
+    typer.echo(result.markdown)
+    typer.echo(f"report: {out / 'report.md'}")
+
+
+@app.command()
+def sweep(
+    env: str = typer.Argument(..., help="The task, e.g. MountainCar-v0."),
+    param: list[str] = typer.Option(
+        ..., "--param", help="NAME=V1,V2,...: alpha, beta, sigma_start or sigma_end; repeatable."
+    ),
+    out: Path = typer.Option(..., "--out", "-o", help="The sweep folder."),
+    preset_name: str = typer.Option("quick", "--preset", help="quick or paper: the budgets."),
+    runs: int | None = typer.Option(None, "--runs", min=1, help="Runs per point."),
+    seed: int | None = GYM_SEED,
+    transitions: int | None = GYM_TRANSITIONS,
+    epochs: int | None = GYM_EPOCHS,
+    eval_episodes: int | None = GYM_EVAL_EPISODES,
+    timesteps: int | None = GYM_TIMESTEPS,
+    jobs: int = GYM_JOBS,
+    ray: str | None = GYM_RAY,
+    overwrite: bool = GYM_OVERWRITE,
+    quiet: bool = GYM_QUIET,
+) -> None:
+    """One-factor-at-a-time ablation of H-AIRL (the paper's Figure 5): each point runs the IRL
+    phase, then RL on its learned rewards; writes sweep.csv, sweep.json and PARAM.png."""
+    from pokerirl.gym.study import GymStudyError
+    from pokerirl.gym.sweep import parse_param, run_sweep
+
+    try:
+        params: dict[str, tuple[float, ...]] = {}
+        for text in param:
+            name, values = parse_param(text)
+            if name in params:
+                raise GymStudyError(f"--param {name} is given twice; list its values once")
+            params[name] = values
+        preset = _gym_preset(
+            preset_name, env, runs=runs, seed=seed, transitions=transitions, epochs=epochs,
+            eval_episodes=eval_episodes, rl_timesteps=timesteps,
+        )  # fmt: skip
+        result = run_sweep(
+            env,
+            params,
+            preset,
+            out,
+            backend=_backend(jobs, ray),
+            overwrite=overwrite,
+            progress=not quiet,
+            say=typer.echo,
+        )
+    except (ValueError, ImportError, OSError, execution.ExecutionError) as error:
+        fail(str(error))
+    except KeyboardInterrupt:
+        fail(INTERRUPTED, 130)
+    for row in result.rows:
+        line = (
+            f"{row['param']}={row['value']:g}: IRL return {row['irl_final_return_mean']:.1f} "
+            f"+- {row['irl_final_return_std']:.1f}, RL return {row['rl_final_return_mean']:.1f} "
+            f"+- {row['rl_final_return_std']:.1f}"
+        )
+        if row["final_alignment_mean"] is not None:
+            line += f", alignment {100 * row['final_alignment_mean']:.1f}%"
+        typer.echo(line)
+    typer.echo(f"wrote {out / 'sweep.csv'} and {', '.join(str(p) for p in result.figures)}")

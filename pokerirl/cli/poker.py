@@ -1,0 +1,395 @@
+"""The poker commands: ingest, synth, match, tournament, train, agent train."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import typer
+
+from pokerirl import execution
+from pokerirl.cli.app import INTERRUPTED, RAY_HELP, _backend, app, fail
+
+
+@app.command()
+def ingest(
+    sources: list[Path] = typer.Argument(
+        ..., help="Month folders, folders of months, month .tgz archives or IRCdata.tgz."
+    ),
+    out: Path = typer.Option(..., "--out", "-o", help="The Parquet table to write."),
+    strict: bool = typer.Option(False, "--strict", help="Stop at the first malformed line."),
+    quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bar, no summary."),
+) -> None:
+    """Turn IRC Poker Database hand histories into a Parquet state-action table.
+
+    Writes TABLE and TABLE.summary.json (where every hand went) and prints the summary.
+    """
+    from pokerirl.datasets.ingest import ingest as run_ingest
+    from pokerirl.parsers.irc import IngestError
+
+    try:
+        summary = run_ingest(sources, out, strict=strict, progress=not quiet)
+    except IngestError as error:
+        fail(str(error))
+    except OSError as error:
+        fail(f"{error.filename or out}: {error.strerror or error}")
+    if not quiet:
+        typer.echo(json.dumps(summary, indent=2))
+
+
+@app.command()
+def synth(
+    out: Path = typer.Option(..., "--out", "-o", help="Folder to write <out>/holdem/<YYYYMM>/ in."),
+    hands: int = typer.Option(10_000, "--hands", "-n", min=1, help="Number of hands."),
+    seed: int = typer.Option(0, "--seed", help="Random seed: the same seed, the same files."),
+) -> None:
+    """Write a synthetic IRC-format month of heads-up 10-20 limit hold'em between two bots."""
+    from pokerirl.game.synth import write_synthetic_month
+
+    try:
+        folder = write_synthetic_month(out, hands=hands, seed=seed)
+    except ValueError as error:
+        fail(str(error))
+    except OSError as error:
+        fail(f"{error.filename or out}: {error.strerror or error}")
+    typer.echo(f"wrote {hands} hands to {folder}")
+
+
+@app.command()
+def match(
+    agent_a: str = typer.Argument(
+        ...,
+        help="Agent A (reported): random, raise, call, an agent folder or rlcard:CKPT "
+        "(an RLCard checkpoint: it is unpickled, which runs any code it holds; trusted "
+        "files only).",
+    ),
+    agent_b: str = typer.Argument(..., help="Agent B: as agent A."),
+    hands: int = typer.Option(100_000, help="Hands to play (even with --duplicate)."),
+    seed: int = typer.Option(0, help="Seed of the deals and of the agents' random draws."),
+    duplicate: bool = typer.Option(
+        True, "--duplicate/--no-duplicate", help="Play every deal from both seats."
+    ),
+    output_format: str = typer.Option("text", "--format", help="text or json."),
+) -> None:
+    """Play A against B and print A's result in milli-big-blinds per hand."""
+    from pokerirl.agents import resolve_agent
+    from pokerirl.game import play_match
+
+    if output_format not in ("text", "json"):
+        fail(f"unknown format {output_format!r} (text or json)")
+    try:
+        result = play_match(
+            resolve_agent(agent_a),
+            resolve_agent(agent_b),
+            hands=hands,
+            seed=seed,
+            duplicate=duplicate,
+            progress=True,
+        )
+    except ValueError as error:
+        fail(str(error))
+    if output_format == "json":
+        summary = {
+            "mbb_per_hand": result.mbb_per_hand,
+            "std_error": result.std_error,
+            "hands": result.hands,
+            "hands_per_second": result.hands_per_second,
+        }
+        typer.echo(json.dumps(summary))
+    else:
+        typer.echo(
+            f"{result.agent_a} vs {result.agent_b}: {result.mbb_per_hand:+.1f} "
+            f"+- {result.std_error:.1f} mbb/h over {result.hands:,} hands "
+            f"({result.hands_per_second:,.0f} hands/s)"
+        )
+
+
+@app.command()
+def tournament(
+    agents: list[str] = typer.Argument(
+        None,
+        help="A B (one matchup, A's payoff), or with --vs the agents to play against BASE. "
+        "Each: a built-in (random, raise, call), an agent folder, or an agent set (a folder "
+        "of seed-<k> agent folders: seed k plays seed-k). An rlcard:CKPT agent is unpickled, "
+        "which runs any code it holds (trusted files only).",
+        show_default=False,
+    ),
+    vs: str | None = typer.Option(
+        None, "--vs", metavar="BASE", help="Play every AGENT against BASE (several matchups)."
+    ),
+    hands: int = typer.Option(1_000_000, "--hands", "-n", help="Hands per seed."),
+    seeds: str = typer.Option("0-19", "--seeds", help="Seeds, e.g. 0-19 or 0-4,10."),
+    out: Path = typer.Option(..., "--out", "-o", help="Report folder (resumes what it holds)."),
+    duplicate: bool = typer.Option(
+        True, "--duplicate/--no-duplicate", help="Play every deal from both seats, paired."
+    ),
+    jobs: int = typer.Option(
+        2, "--jobs", "-j", help="Local worker processes (results do not change)."
+    ),
+    ray: str | None = typer.Option(
+        None,
+        "--ray",
+        metavar="ADDRESS",
+        help="Play the seeds on the Ray cluster at ADDRESS (default: $RAY_ADDRESS when set), "
+        "or 'local' for a private single-machine Ray. Results do not change.",
+    ),
+    alpha: float = typer.Option(0.05, help="Family-wise error rate (Bonferroni, Holm)."),
+    batch_size: int = typer.Option(65_536, help="Hands in lock-step (part of the config)."),
+    overwrite: bool = typer.Option(
+        False, "--overwrite", help="Recompute saved seeds from another configuration."
+    ),
+    quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bar, no report."),
+) -> None:
+    """Multi-seed head-to-head evaluation: mbb/h, duplicate deals, Bonferroni and Holm.
+
+    \b
+    One matchup:      pokerirl tournament A B --hands N --seeds 0-19 --out DIR
+    Several matchups: pokerirl tournament --vs dqn hairl-dqn airl-dqn --out DIR
+                      (hairl-dqn vs dqn and airl-dqn vs dqn, corrected together)
+
+    Writes DIR/report.md, report.json, per_seed.csv, per_seed.png; prints the report.
+
+    \b
+    Resumable: each seed is saved when it finishes. A rerun reuses saved seeds
+    whose agents, hands, duplicate mode and batch size match, and refuses the
+    others (--overwrite recomputes them); a corrupt saved seed is recomputed.
+    pokerirl report DIR prints it again.
+    """
+    from pokerirl.execution import ExecutionError
+    from pokerirl.seeds import parse_seeds
+    from pokerirl.tournaments import render_report, run_tournament
+
+    agents = agents or []
+    if vs is not None:
+        if not agents:
+            fail("--vs BASE needs at least one agent to play against it")
+        matchups = [(agent, vs) for agent in agents]
+    elif len(agents) == 2:
+        matchups = [(agents[0], agents[1])]
+    else:
+        fail(f"give two agents (A B) or --vs BASE and agents; got {len(agents)} agent(s)")
+    backend = _backend(jobs, ray)
+    try:
+        report = run_tournament(
+            matchups,
+            hands=hands,
+            seeds=parse_seeds(seeds),
+            out=out,
+            duplicate=duplicate,
+            alpha=alpha,
+            jobs=jobs,
+            batch_size=batch_size,
+            overwrite=overwrite,
+            progress=not quiet,
+            backend=backend,
+        )
+    except (ValueError, ExecutionError) as error:  # TournamentError, an agent's illegal move
+        fail(str(error))
+    except KeyboardInterrupt:
+        fail(INTERRUPTED, code=130)
+    except OSError as error:
+        fail(f"{error.filename or out}: {error.strerror or error}")
+    if not quiet:
+        typer.echo(render_report(report))
+        typer.echo(f"wrote {out}/report.md, report.json, per_seed.csv, per_seed.png")
+
+
+@app.command()
+def train(
+    table: str = typer.Argument(..., help="Parquet decision table written by `pokerirl ingest`."),
+    out: str = typer.Option(..., "--out", help="Run folder (with --runs > 1: a folder of runs)."),
+    algo: str = typer.Option("hairl", "--algo", help="hairl or airl (picks the defaults)."),
+    runs: int = typer.Option(
+        1, "--runs", help="Runs with seeds seed..seed+runs-1, in OUT/run-<k>."
+    ),
+    overwrite: bool = typer.Option(
+        False, "--overwrite", help="Replace a finished run (with --runs: runs of other settings)."
+    ),
+    jobs: int = typer.Option(1, "--jobs", "-j", help="Processes running --runs at once."),
+    ray: str | None = typer.Option(None, "--ray", metavar="ADDRESS", help=RAY_HELP),
+    epochs: int | None = typer.Option(None, "--epochs", help="Training epochs [default: 50]."),
+    seed: int | None = typer.Option(None, "--seed", help="Seed for init, split, shuffle, noise."),
+    device: str = typer.Option("cpu", "--device", help="cpu or cuda."),
+    config: str | None = typer.Option(None, "--config", help="TOML file of hyperparameters."),
+    batch_size: int | None = typer.Option(None, "--batch-size"),
+    hidden: str | None = typer.Option(None, "--hidden", help="Widths for both nets, e.g. 64,64."),
+    reward_lr: float | None = typer.Option(None, "--reward-lr"),
+    policy_lr: float | None = typer.Option(None, "--policy-lr"),
+    reward_weight_decay: float | None = typer.Option(None, "--reward-weight-decay"),
+    alpha: float | None = typer.Option(None, "--alpha", help="Supervised weight in policy loss."),
+    beta: float | None = typer.Option(None, "--beta", help="Env-reward weight in disc. loss."),
+    sigma_start: float | None = typer.Option(None, "--sigma-start"),
+    sigma_end: float | None = typer.Option(None, "--sigma-end"),
+    val_fraction: float | None = typer.Option(None, "--val-fraction", help="Share of hands."),
+    threads: int = typer.Option(1, "--threads", help="CPU threads; small nets train best on 1."),
+    quiet: bool = typer.Option(False, "--quiet", help="No progress bar."),
+) -> None:
+    """Learn a reward function with AIRL or Hybrid-AIRL from an expert decision table.
+
+    Writes OUT/reward.pt, policy.pt, config.json, timings.json, metrics.jsonl,
+    baselines.json, split.json and plots; with --runs N, OUT/run-<k> and OUT/summary.json.
+    A finished OUT is replaced only with --overwrite, and only once the new run is complete.
+    """
+    import torch
+
+    from pokerirl.irl import load_config, train_runs
+
+    if threads < 1:
+        fail("--threads must be at least 1")
+    torch.set_num_threads(threads)
+
+    widths = None
+    if hidden is not None:
+        try:
+            widths = [int(w) for w in hidden.split(",") if w.strip()]
+        except ValueError:
+            fail(f"--hidden must be comma-separated integers, got {hidden!r}")
+    overrides = {
+        "epochs": epochs,
+        "seed": seed,
+        "batch_size": batch_size,
+        "reward_hidden": widths,
+        "policy_hidden": widths,
+        "reward_lr": reward_lr,
+        "policy_lr": policy_lr,
+        "reward_weight_decay": reward_weight_decay,
+        "alpha": alpha,
+        "beta": beta,
+        "sigma_start": sigma_start,
+        "sigma_end": sigma_end,
+        "val_fraction": val_fraction,
+    }
+    try:
+        settings = load_config(algo, config_file=config, overrides=overrides)
+        summary = train_runs(
+            table,
+            out,
+            runs=runs,
+            algo=algo,
+            config=settings,
+            device=device,
+            progress=not quiet,
+            overwrite=overwrite,
+            backend=_backend(jobs, ray),
+        )
+    except (ValueError, execution.ExecutionError) as error:
+        fail(str(error))
+    except OSError as error:
+        fail(f"{error.filename or out}: {error.strerror or error}")
+    except KeyboardInterrupt:
+        fail(INTERRUPTED, 130)
+    single = {"metrics": summary.metrics, "baselines": summary.baselines}
+    for run in summary.runs or (single,):
+        last, base = run["metrics"][-1], run["baselines"]
+        name = f"{algo} {Path(run['out']).name}" if "out" in run else algo
+        rows = run.get("train_rows", summary.train_rows), run.get("val_rows", summary.val_rows)
+        typer.echo(
+            f"{name}: {len(run['metrics'])} epochs on {rows[0]} rows; validation "
+            f"alignment {last['val_alignment']:.3f}, reward alignment "
+            f"{last['val_reward_alignment']:.3f}; baselines "
+            + ", ".join(f"{k} {v:.3f}" for k, v in base.items())
+            + f" on {rows[1]} rows"
+        )
+    typer.echo(f"{summary.samples_per_second:,.0f} samples/s; wrote {summary.out_dir}")
+
+
+agent_app = typer.Typer(help="Train DQN agents.", no_args_is_help=True)
+app.add_typer(agent_app, name="agent")
+
+
+@agent_app.command("train")
+def agent_train(
+    out: Path = typer.Option(..., "--out", "-o", help="Agent folder (with --seeds: its parent)."),
+    reward: str = typer.Option("sparse", help="sparse (the payoff) or learned (--reward-run's f)."),
+    reward_run: Path | None = typer.Option(None, help="AIRL / H-AIRL run folder (learned reward)."),
+    payoff_weight: float = typer.Option(
+        0.0, help="w in r = w * payoff + (1 - w) * f(s, a); 0: the learned reward alone."
+    ),
+    hands: int = typer.Option(50_000, "--hands", "-n", help="Training hands."),
+    seed: int = typer.Option(0, help="Seed of one agent."),
+    seeds: str | None = typer.Option(None, help="e.g. 0-19: one agent per seed, in OUT/seed-<k>."),
+    jobs: int = typer.Option(1, "--jobs", "-j", help="Local processes training seeds at once."),
+    ray: str | None = typer.Option(None, "--ray", metavar="ADDRESS", help=RAY_HELP),
+    threads: int = typer.Option(
+        1, "--threads", help="torch threads per agent (part of the result: the weights change)."
+    ),
+    overwrite: bool = typer.Option(
+        False, "--overwrite", help="Retrain finished agents of other settings (else refused)."
+    ),
+    opponent: str = typer.Option(
+        "random",
+        help="random, raise, call, an agent folder, rlcard:CKPT (unpickled: runs any code it "
+        "holds; trusted files only), or self.",
+    ),
+    eval_every: int = typer.Option(10_000, help="Evaluate every N training hands."),
+    eval_hands: int = typer.Option(20_000, help="Duplicate hands per evaluation (even)."),
+    eval_seed: int = typer.Option(1_000_003, help="Deal seed of every evaluation."),
+    train_every: int = typer.Option(16, help="Stored transitions per gradient update."),
+    concurrent_hands: int = typer.Option(1024, help="Hands played in lock-step."),
+    learning_rate: float = typer.Option(5e-5, help="Adam learning rate."),
+    self_play_every: int = typer.Option(1_000, help="Updates between refreshes of 'self'."),
+    quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bar."),
+) -> None:
+    """Train a DQN agent (or one per seed) on the sparse payoff or a learned reward.
+
+    \b
+    A finished agent folder is never changed: a rerun with the same settings reuses it,
+    one with other settings is refused (--overwrite retrains it). New folders are
+    written beside the old and swapped in at the end, so a killed run loses nothing.
+    With --seeds, seeds run as units (--jobs or --ray); a rerun resumes the set.
+    """
+    from pokerirl.agents.dqn import DQNConfig
+    from pokerirl.agents.train import TrainConfig, train_agent, train_seeds
+    from pokerirl.execution import ExecutionError
+    from pokerirl.seeds import parse_seeds
+
+    backend = _backend(jobs, ray, threads)
+    try:
+        config = TrainConfig(
+            hands=hands,
+            seed=seed,
+            reward=reward,
+            reward_run=None if reward_run is None else str(reward_run),
+            payoff_weight=payoff_weight,
+            opponent=opponent,
+            eval_every=eval_every,
+            eval_hands=eval_hands,
+            eval_seed=eval_seed,
+            dqn=DQNConfig(
+                train_every=train_every,
+                concurrent_hands=concurrent_hands,
+                learning_rate=learning_rate,
+                self_play_every=self_play_every,
+            ),
+        )
+        if seeds is None:
+            summary = train_agent(
+                out, config, progress=not quiet, overwrite=overwrite, backend=backend
+            )
+            lines = {seed: summary}
+        else:
+            lines = train_seeds(
+                out,
+                config,
+                list(parse_seeds(seeds)),
+                jobs=jobs,
+                progress=not quiet,
+                overwrite=overwrite,
+                backend=backend,
+            )
+    except (ValueError, ExecutionError) as error:
+        fail(str(error))
+    except KeyboardInterrupt:
+        fail(INTERRUPTED, code=130)
+    except OSError as error:
+        fail(f"{error.filename or out}: {error.strerror or error}")
+    for agent_seed, line in lines.items():
+        folder = out if seeds is None else out / f"seed-{agent_seed}"
+        if line is None:
+            typer.echo(f"{folder}: already finished with these settings, reused")
+            continue
+        scores = ", ".join(
+            f"vs {name} {e['mbb_per_hand']:+.0f} +- {e['std_error']:.0f} mbb/h"
+            for name, e in line["eval"].items()
+        )
+        typer.echo(f"{folder}: {line['hands']:,} hands, {scores}")

@@ -1,0 +1,146 @@
+"""The study commands: demo, study (poker) and report (any study or tournament folder)."""
+
+from __future__ import annotations
+
+import json
+import warnings
+from pathlib import Path
+
+import typer
+
+from pokerirl import execution
+from pokerirl.cli.app import INTERRUPTED, RAY_HELP, _backend, app, fail
+
+
+@app.command()
+def demo(
+    out: Path = typer.Option(Path("demo-output"), "--out", "-o", help="Where the demo writes."),
+    seed: int = typer.Option(0, "--seed", help="Seed of the synthetic data."),
+    jobs: int = typer.Option(2, "--jobs", min=1, help="Processes for agent training and play."),
+    overwrite: bool = typer.Option(False, "--overwrite", help="Recompute changed stages."),
+    gym: bool = typer.Option(
+        True, "--gym/--no-gym", help="Also run the Gymnasium study's quick preset (~8 min)."
+    ),
+    quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bars."),
+) -> None:
+    """Run the study (pokerirl study, quick preset) on built-in synthetic data, then the
+    Gymnasium study's quick preset (pokerirl gym study MountainCar-v0) on the shipped expert.
+
+    synth -> ingest -> IRL (airl, hairl) -> agents (dqn, airl_dqn, hairl_dqn) -> Table 1
+    tournament -> panel -> report.md, report.json and figures; then OUT/gym: expert data ->
+    AIRL and H-AIRL -> DQN on each reward -> OUT/gym/report.md. A rerun skips finished work.
+    """
+    from pokerirl.demo import DemoConfig, run_demo, run_gym_demo
+
+    try:
+        result = run_demo(
+            out,
+            DemoConfig(seed=seed, jobs=jobs),
+            say=typer.echo,
+            progress=not quiet,
+            overwrite=overwrite,
+        )
+    except (ValueError, OSError) as error:
+        fail(str(error))
+    typer.echo("")
+    typer.echo(result.markdown)
+    typer.echo(f"report: {out / 'report.md'} (pokerirl report {out})")
+    if not gym:
+        return
+    try:
+        from pokerirl.gym.experts import require_gym
+
+        require_gym()
+    except ImportError as error:
+        warnings.warn(f"the Gymnasium demo is skipped: {error}", stacklevel=1)
+        return
+    typer.echo("")
+    typer.echo(f"gym: the quick study on MountainCar-v0 -> {out / 'gym'}")
+    try:
+        gym_result = run_gym_demo(
+            out, jobs=jobs, say=typer.echo, progress=not quiet, overwrite=overwrite
+        )
+    except (ValueError, OSError, execution.ExecutionError) as error:
+        fail(str(error))
+    except KeyboardInterrupt:
+        fail(INTERRUPTED, 130)
+    typer.echo("")
+    typer.echo(gym_result.markdown)
+    typer.echo(f"report: {out / 'gym' / 'report.md'}")
+
+
+@app.command()
+def study(
+    sources: list[Path] = typer.Argument(..., help="IRC month folders or archives."),
+    out: Path = typer.Option(..., "--out", "-o", help="The study folder."),
+    preset_name: str = typer.Option("quick", "--preset", help="quick or paper."),
+    runs: int | None = typer.Option(None, "--runs", min=1, help="IRL runs per algorithm."),
+    seeds: str | None = typer.Option(None, "--seeds", help="Agent seeds, e.g. 0-19."),
+    hands: int | None = typer.Option(None, "--hands", min=2, help="Tournament hands per seed."),
+    jobs: int = typer.Option(2, "--jobs", min=1, help="Processes for training and play."),
+    ray: str | None = typer.Option(None, "--ray", metavar="ADDRESS", help=RAY_HELP),
+    overwrite: bool = typer.Option(
+        False, "--overwrite", help="Recompute a stage whose settings changed, and those after it."
+    ),
+    quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bars."),
+) -> None:
+    """The paper's poker study in one command: ingest, IRL (AIRL and H-AIRL, several runs),
+    DQN agents (sparse, AIRL and H-AIRL rewards), Table 1, the panel, and a report beside the
+    paper's numbers (report.md, report.json, panel.csv, figures/). Resumable by stage."""
+    from pokerirl.study import parse_seeds, preset, run_study
+
+    try:
+        config = preset(
+            preset_name,
+            runs=runs,
+            seeds=None if seeds is None else parse_seeds(seeds),
+            hands=hands,
+            jobs=jobs,
+        )
+        result = run_study(
+            sources,
+            out,
+            config,
+            overwrite=overwrite,
+            progress=not quiet,
+            say=typer.echo,
+            backend=_backend(jobs, ray),
+        )
+    except (ValueError, OSError, execution.ExecutionError) as error:
+        fail(str(error))
+    except KeyboardInterrupt:
+        fail(INTERRUPTED, 130)
+    typer.echo("")
+    typer.echo(result.markdown)
+    typer.echo(f"report: {out / 'report.md'} (pokerirl report {out})")
+
+
+@app.command()
+def report(
+    folder: Path = typer.Argument(
+        ..., help="A folder written by pokerirl study, gym study or tournament."
+    ),
+    output_format: str = typer.Option("markdown", "--format", help="markdown or json."),
+) -> None:
+    """Print a study or tournament report (Markdown, or JSON for scripts)."""
+    from pokerirl.gym.study import is_gym_study, load_gym_study
+    from pokerirl.study import is_study_report, load_study_report, render_markdown
+    from pokerirl.tournaments import load_report, render_report
+
+    try:
+        if is_gym_study(folder):
+            found, markdown = load_gym_study(folder)
+        elif is_study_report(folder):
+            found = load_study_report(folder)
+            markdown = render_markdown(found)
+        else:
+            typer.echo(render_report(load_report(folder), output_format), nl=False)
+            return
+    except ValueError as error:
+        fail(str(error))
+    if output_format == "json":
+        typer.echo(json.dumps(found, indent=2))
+    elif output_format in ("markdown", "text"):
+        typer.echo(markdown, nl=False)
+    else:
+        fail(f"unknown --format {output_format!r}; choose markdown or json")
