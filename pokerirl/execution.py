@@ -726,22 +726,24 @@ def save_unit_folder(
     folder = Path(folder)
     folder.parent.mkdir(parents=True, exist_ok=True)
     tidy_folder(folder)
-    staging = Path(tempfile.mkdtemp(prefix=f".{folder.name}.new-", dir=folder.parent))
-    try:
-        atomic.make_shareable(staging)
-        write_files(staging, {**files, **(unhashed or {})})
-        record = make_record(config, files=files)
-        (staging / RECORD_FILE).write_text(json.dumps(record, indent=2, sort_keys=True) + "\n")
-        if folder.exists():
-            old = Path(tempfile.mkdtemp(prefix=f".{folder.name}.old-", dir=folder.parent))
-            os.rename(folder, old / "x")
-            os.rename(staging, folder)
-            shutil.rmtree(old, ignore_errors=True)
-        else:
-            os.rename(staging, folder)
-    except BaseException:
-        shutil.rmtree(staging, ignore_errors=True)
-        raise
+    with atomic.naming(folder):  # errors name the folder, not the staging one
+        staging = Path(tempfile.mkdtemp(prefix=f".{folder.name}.new-", dir=folder.parent))
+        try:
+            atomic.make_shareable(staging)
+            write_files(staging, {**files, **(unhashed or {})})
+            record = make_record(config, files=files)
+            text = json.dumps(record, indent=2, sort_keys=True) + "\n"
+            (staging / RECORD_FILE).write_text(text)
+            if folder.exists():
+                old = Path(tempfile.mkdtemp(prefix=f".{folder.name}.old-", dir=folder.parent))
+                os.rename(folder, old / "x")
+                os.rename(staging, folder)
+                shutil.rmtree(old, ignore_errors=True)
+            else:
+                os.rename(staging, folder)
+        except BaseException:
+            shutil.rmtree(staging, ignore_errors=True)
+            raise
 
 
 def tidy_folder(folder: str | os.PathLike[str]) -> None:
