@@ -161,9 +161,15 @@ def _ingest(
                 in_memory = 0
     summary = _summary(stats, sources, out_path, counts)
     table_file, summary_file = work_dir / "table.parquet", work_dir / "summary.json"
-    with pq.ParquetWriter(table_file, SCHEMA, **PARQUET_OPTIONS) as writer:
+    with (
+        _file(table_file, "wb") as sink,
+        pq.ParquetWriter(sink, SCHEMA, **PARQUET_OPTIONS) as writer,
+    ):
         for _, _, data in sorted(months, key=lambda item: item[:2]):
-            writer.write_table(data if isinstance(data, pa.Table) else pq.read_table(data))
+            if isinstance(data, Path):
+                with _file(data, "rb") as part:
+                    data = pq.read_table(part)
+            writer.write_table(data)
     summary_file.write_text(json.dumps(summary, indent=2) + "\n", encoding="utf-8")
     # Files in the work folder are 0666 less the umask already (mkdtemp only restricts the
     # folder). Old summary out, new table in, new summary in: see ingest().
@@ -180,8 +186,15 @@ def _spill(
     if isinstance(data, Path):
         return item
     part = work_dir / f"part-{order:06d}.parquet"
-    pq.write_table(data, part, compression="lz4")
+    with _file(part, "wb") as sink:
+        pq.write_table(data, sink, compression="lz4")
     return key, order, part
+
+
+def _file(path: Path, mode: str) -> pa.OSFile:
+    """A native Arrow file at ``path``, named by its bytes: Arrow takes a text path as UTF-8
+    and fails on a folder name that is not (which ``os.fsdecode`` keeps as surrogates)."""
+    return pa.OSFile(os.fsencode(path), mode)
 
 
 def _value_counts(column: pa.ChunkedArray) -> tuple[list[str], list[int]]:
