@@ -78,18 +78,18 @@ def test_agent_sets_and_tournaments_on_ray_equal_local_processes(
     invoke("tournament", *games, "--out", "t-two", "--jobs", "2")
     assert per_seed(Path("t-ray")) == per_seed(Path("t-one")) == per_seed(Path("t-two"))
     assert len({line[2] for line in per_seed(Path("t-ray"))}) == 8  # all different numbers
-    timing = json.loads(Path("t-ray/report.json").read_text())["timing"]
+    timing = json.loads(Path("t-ray/timings.json").read_text())
     assert timing["backend"] == f"ray at {cluster}" and timing["seeds_reused"] == 0
 
     # The check, and RAY_ADDRESS picks Ray; a rerun reuses every seed.
     games = ["raise", "random", "--hands", "200000", "--seeds", "0-3", "-q"]
     monkeypatch.setenv("RAY_ADDRESS", cluster)
     invoke("tournament", *games, "--out", "big-ray")
-    again = json.loads(Path("big-ray/report.json").read_text())
+    timing = json.loads(Path("big-ray/timings.json").read_text())
     monkeypatch.delenv("RAY_ADDRESS")
     invoke("tournament", *games, "--out", "big-local")
     assert per_seed(Path("big-ray")) == per_seed(Path("big-local"))
-    assert again["timing"]["backend"].startswith("ray at")
+    assert timing["backend"].startswith("ray at")
 
 
 def test_a_ray_worker_killed_mid_run_is_retried_with_identical_results(

@@ -372,3 +372,54 @@ def test_only_the_hand_of_a_corrupt_line_is_malformed_in_a_real_month(tmp_path: 
     assert after["malformed_lines"] == 1
     expected = {**before["dropped"], "malformed_line": 1, "missing_pdb_line": 1}
     assert after["dropped"] == expected
+
+
+# --- tournaments: the same seeds, the same bytes ----------------------------------------------
+
+
+def _files(folder: Path) -> dict[str, bytes]:
+    return {str(p.relative_to(folder)): p.read_bytes() for p in folder.rglob("*") if p.is_file()}
+
+
+def test_tournament_same_seeds_same_bytes_with_timings_apart(tmp_path: Path) -> None:
+    games = ["tournament", "--vs", "random", "call", "raise", "--hands", "2000", "--seeds", "0-2"]
+    for out, jobs in (("a", "1"), ("b", "2")):
+        code, lines = run_cli(*games, "--out", str(tmp_path / out), "--jobs", jobs, "-q")
+        assert code == 0, lines
+    first, second = _files(tmp_path / "a"), _files(tmp_path / "b")
+    timings = [json.loads(files.pop("timings.json", b"{}")) for files in (first, second)]
+    assert sorted(first) == [
+        "per_seed.csv",
+        "per_seed.png",
+        "report.json",
+        "report.md",
+        *(f"seeds/{m}-vs-random/seed-{k}.json" for m in ("call", "raise") for k in range(3)),
+    ]
+    assert first == second
+    text = b"".join(data for name, data in first.items() if not name.endswith(".png"))
+    assert not re.search(rb"seconds|hands_per_second|hands/s", text)
+    assert [t["jobs"] for t in timings] == [1, 2] and timings[0]["seeds_reused"] == 0
+    assert timings[0]["wall_seconds"] > 0 and len(timings[0]["seeds_played"]) == 6
+    assert all(s["seconds"] > 0 and s["hands_per_second"] > 0 for s in timings[0]["seeds_played"])
+
+
+def test_tournament_reuses_a_seed_saved_with_timings_by_an_older_pokerirl(tmp_path: Path) -> None:
+    games = ["tournament", "call", "random", "--hands", "2000", "--seeds", "0-1", "-q"]
+    code, lines = run_cli(*games, "--out", str(tmp_path))
+    assert code == 0, lines
+    report = (tmp_path / "report.json").read_bytes()
+    saved = tmp_path / "seeds" / "call-vs-random" / "seed-1.json"
+    record = json.loads(saved.read_text())  # the layout before: timings in the result
+    record["result"].update(seconds=0.25, hands_per_second=8000.0)
+    record["result"]["estimate"]["mbb_per_hand"] += 1.0  # proof that the file is what is read
+    saved.write_text(json.dumps(record, indent=2))
+    old = saved.read_bytes()
+    code, lines = run_cli(*games, "--out", str(tmp_path))
+    assert code == 0, lines
+    timings = json.loads((tmp_path / "timings.json").read_text())
+    assert timings["seeds_reused"] == 2 and timings["hands_played"] == 0
+    assert saved.read_bytes() == old  # reused as it is, not rewritten
+    seeds = json.loads((tmp_path / "report.json").read_text())["matchups"][0]["seeds"]
+    before = json.loads(report)["matchups"][0]["seeds"]
+    assert seeds[1]["mbb_per_hand"] == before[1]["mbb_per_hand"] + 1.0
+    assert seeds[0] == before[0]
