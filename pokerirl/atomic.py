@@ -113,3 +113,23 @@ def write_torch(path: str | os.PathLike[str], obj: object) -> None:
 def make_shareable(folder: str | os.PathLike[str]) -> None:
     """Give a folder made by ``tempfile.mkdtemp`` (0700) the mode ``mkdir`` would give it."""
     os.chmod(folder, 0o777 & ~current_umask())
+
+
+def lock_folder(folder: str | os.PathLike[str]) -> int | None:
+    """An exclusive ``flock`` on ``folder`` (released when the process ends, even when killed),
+    as an open descriptor to close when done; None if another process holds it or locks are
+    unavailable. How a folder's owner says it is still alive."""
+    try:
+        import fcntl
+    except ImportError:  # not POSIX
+        return None
+    try:
+        descriptor = os.open(folder, os.O_RDONLY)
+    except OSError:
+        return None
+    try:
+        fcntl.flock(descriptor, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except OSError:
+        os.close(descriptor)
+        return None
+    return descriptor

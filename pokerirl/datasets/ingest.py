@@ -19,6 +19,7 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 from tqdm import tqdm
 
+from pokerirl.atomic import lock_folder
 from pokerirl.datasets.table import SCHEMA, month_table
 from pokerirl.encoding import ACTIONS, FOLD
 from pokerirl.parsers.irc import (
@@ -96,39 +97,20 @@ def _work_dir(out_path: Path) -> Iterator[Path]:
     except OSError:  # an unlistable folder: nothing to clean, and mkdtemp below tells the rest
         candidates = []
     for stale in candidates:
-        if stale.is_dir() and (lock := _lock(stale)) is not None:
+        if stale.is_dir() and (lock := lock_folder(stale)) is not None:
             shutil.rmtree(stale, ignore_errors=True)
             os.close(lock)
     try:
         work_dir = Path(tempfile.mkdtemp(prefix=prefix, dir=out_path.parent))
     except OSError as error:
         raise IngestError(f"{out_path}: cannot write ({error.strerror or error})") from None
-    lock = _lock(work_dir)
+    lock = lock_folder(work_dir)
     try:
         yield work_dir
     finally:
         shutil.rmtree(work_dir, ignore_errors=True)
         if lock is not None:
             os.close(lock)
-
-
-def _lock(folder: Path) -> int | None:
-    """An exclusive ``flock`` on ``folder`` (released when the process ends, even when killed),
-    as an open descriptor; None if another process holds it or locks are unavailable."""
-    try:
-        import fcntl
-    except ImportError:  # not POSIX: no stale folders are removed
-        return None
-    try:
-        descriptor = os.open(folder, os.O_RDONLY)
-    except OSError:
-        return None
-    try:
-        fcntl.flock(descriptor, fcntl.LOCK_EX | fcntl.LOCK_NB)
-    except OSError:
-        os.close(descriptor)
-        return None
-    return descriptor
 
 
 def _ingest(
