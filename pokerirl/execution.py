@@ -535,6 +535,7 @@ def _ray_session(backend: Backend) -> Iterator[Any]:
             private = None
             if connect_here and backend.address == LOCAL_RAY:
                 private = stack.enter_context(_private_ray_folder())
+                stack.enter_context(_private_token(ray))
             if connect_here:
                 _ray_init(ray, backend.address or LOCAL_RAY, private)
                 stack.callback(ray.shutdown)
@@ -659,7 +660,50 @@ def _ray_init(ray: Any, address: str, temp_dir: str | None) -> None:
         with _address_as_given():
             ray.init(address=address, **options)
     except (ConnectionError, RuntimeError, ValueError) as error:
-        raise ExecutionError(f"cannot connect to Ray at {address}: {_first_line(error)}") from None
+        raise ExecutionError(f"cannot connect to Ray at {address}: {_why(error)}") from None
+
+
+def _why(error: BaseException) -> str:
+    """The first line of a failed ``ray.init``, or what its causes say about a token."""
+    cause: BaseException | None = error
+    while cause is not None:
+        if "InvalidAuthToken" in str(cause):
+            return (
+                "the cluster wants its authentication token (set RAY_AUTH_MODE=token, with "
+                "the token in RAY_AUTH_TOKEN or ~/.ray/auth_token)"
+            )
+        cause = cause.__cause__ or cause.__context__
+    return _first_line(error)
+
+
+@contextlib.contextmanager
+def _private_token(ray: Any) -> Iterator[None]:
+    """For a private instance, from before it starts to after it stops: a token of its own,
+    in its processes' environment only.
+
+    Ray otherwise saves a new local instance's token to ``~/.ray/auth_token``, and every
+    ``ray start --head`` on the machine then wants it, which drivers given an explicit
+    address never send: one ``--ray local`` would break every later ``--ray HOST:PORT``.
+    Ray's processes inherit the token as they start; this process's environment is put back.
+    """
+    names = ("RAY_AUTH_TOKEN", "RAY_AUTH_MODE")
+    if any(os.environ.get(n) for n in ("RAY_AUTH_TOKEN", "RAY_AUTH_TOKEN_PATH")):
+        yield  # the user's own
+        return
+    import secrets
+
+    before = {name: os.environ.get(name) for name in names}
+    os.environ["RAY_AUTH_TOKEN"] = secrets.token_hex(32)
+    try:
+        yield
+    finally:
+        for name, value in before.items():
+            if value is None:
+                os.environ.pop(name, None)
+            else:
+                os.environ[name] = value
+        with contextlib.suppress(AttributeError, RuntimeError):
+            ray._raylet.Config.initialize("")  # Ray reads RAY_AUTH_MODE again
 
 
 @contextlib.contextmanager
@@ -730,7 +774,8 @@ def ray_head(*, num_cpus: int = 2, timeout: float = 120.0) -> Iterator[str]:
 
     For tests and benchmarks. It owns everything it starts: a temporary folder of its own (a
     short path: Ray's socket paths must fit in 107 characters), free ports, workers whose
-    working directory is an empty folder of their own, this ``pokerirl`` importable on them.
+    working directory is an empty folder of their own, this ``pokerirl`` importable on them,
+    no token authentication (whatever ``~/.ray`` holds: drivers given an address send none).
     It stops only its own processes, by the process ids it recorded: never Ray's
     stop-everything command, which ends every Ray process on the machine.
 
@@ -767,8 +812,12 @@ def ray_head(*, num_cpus: int = 2, timeout: float = 120.0) -> Iterator[str]:
         **os.environ,
         "PYTHONPATH": package_root + (os.pathsep + path if path else ""),
         "RAY_DISABLE_USAGE_STATS": "1",
+        # Ray would want a token whenever ~/.ray/auth_token exists (any local ray.init leaves
+        # one); drivers given an explicit address never send it.
+        "RAY_AUTH_MODE": "disabled",
     }
-    environment.pop("RAY_ADDRESS", None)
+    for name in ("RAY_ADDRESS", "RAY_AUTH_TOKEN", "RAY_AUTH_TOKEN_PATH"):
+        environment.pop(name, None)
     (home / "cwd").mkdir()
     log = home / "head.log"
     with log.open("wb") as stream:
