@@ -24,46 +24,13 @@ from pathlib import Path
 import pyarrow as pa
 import pyarrow.parquet as pq
 import pytest
-from typer.testing import CliRunner
+from test_reliability import MINIMAL, one_error_line, run_cli, write_minimal
 
-from pokerirl.cli import app
 from pokerirl.datasets.ingest import ingest, summary_path
 from pokerirl.parsers import irc
 
 REPO = Path(__file__).resolve().parents[1]
 SAMPLE = REPO.parent / "shared" / "irc-sample" / "holdem" / "199504"
-
-# One real kept hand (CRLF endings), as in test_reliability.py.
-MINIMAL: dict[str, bytes] = {
-    "hdb": b"797241924 1 600 2 2/60 2/80 2/120 2/160 5c 9h 4h 6c 6s",
-    "hroster": b"797241924 2 MrX horseplay",
-    "pdb/pdb.MrX": b"MrX 797241924 2 1 Bcr b kc kc 1015 80 0 Ad Ts",
-    "pdb/pdb.horseplay": b"horseplay 797241924 2 2 Brc c b b 1340 80 160 9s 9c",
-}
-
-
-def write_minimal(folder: Path, file: str = "", old: bytes = b"", new: bytes = b"") -> Path:
-    """The minimal month in ``folder``, with ``old`` replaced by ``new`` in ``file``."""
-    (folder / "pdb").mkdir(parents=True, exist_ok=True)
-    for name, line in MINIMAL.items():
-        if name == file:
-            assert old in line
-            line = line.replace(old, new, 1)
-        (folder / name).write_bytes(line + b"\r\n")
-    return folder
-
-
-def run_cli(*args: str) -> tuple[int, list[str]]:
-    """Exit code and the non-empty lines printed (stdout and stderr)."""
-    result = CliRunner().invoke(app, list(args))
-    return result.exit_code, [line for line in result.output.splitlines() if line.strip()]
-
-
-def one_error_line(lines: list[str]) -> str:
-    errors = [line for line in lines if line.startswith("error:")]
-    assert len(errors) == 1, lines
-    assert not any("Traceback" in line for line in lines), lines
-    return errors[0]
 
 
 @contextlib.contextmanager
@@ -154,7 +121,8 @@ def _pokerirl(*args: str | bytes, cwd: Path) -> subprocess.CompletedProcess[byte
 
 def test_ingest_with_non_utf8_names_writes_the_table_or_names_the_path(tmp_path: Path) -> None:
     odd = os.fsdecode(b"\xff")
-    month = write_minimal(tmp_path / f"in{odd}" / "holdem" / f"1995{odd}04")
+    month = write_minimal(tmp_path / f"in{odd}")  # in<odd>/holdem/199504
+    month = month.rename(month.with_name(f"1995{odd}04"))
     out_folder = tmp_path / f"out{odd}"
     out_folder.mkdir()
     out = out_folder / "t.parquet"
@@ -214,7 +182,7 @@ def _special(path: Path, kind: str) -> str:
 def test_ingest_refuses_a_file_that_is_not_regular_at_once(
     tmp_path: Path, file: str, kind: str
 ) -> None:
-    month = write_minimal(tmp_path / "holdem" / "199504")
+    month = write_minimal(tmp_path)
     words = _special(month / file, kind)
     started = time.monotonic()
     with unblocked_after(month / file, 20):
@@ -302,7 +270,7 @@ def test_ingest_reads_at_most_the_cap_of_a_file_that_grows(
 ) -> None:
     # hdb is small when its size is checked and 50,000 bytes when read: the read stops one
     # byte past the cap, and the file is refused.
-    month = write_minimal(tmp_path / "holdem" / "199504")
+    month = write_minimal(tmp_path)
     monkeypatch.setattr(irc, "MAX_FILE_BYTES", 1_000)
     opened = irc._open_regular
 
@@ -334,7 +302,7 @@ def test_ingest_reads_at_most_the_cap_of_a_file_that_grows(
 def test_a_corrupt_line_in_any_file_is_a_malformed_line(
     tmp_path: Path, file: str, old: bytes, new: bytes
 ) -> None:
-    month = write_minimal(tmp_path / "holdem" / "199504", file, old, new)
+    month = write_minimal(tmp_path, file, old, new)
     summary = ingest([month], tmp_path / "t.parquet")
     assert summary["malformed_lines"] == 1 and summary["buckets_add_up"]
     assert summary["dropped"]["malformed_line"] == 1, summary["dropped"]
