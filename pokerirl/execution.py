@@ -12,7 +12,15 @@ results in unit order, whatever the backend:
   driver itself, with the same thread pinning.
 * **Ray** (``--ray ADDRESS``, or ``RAY_ADDRESS`` set; ``--ray local`` starts a private
   single-machine instance): one task per unit with one CPU. ``ray`` is imported only then
-  (``pip install 'pokerirl[ray]'``).
+  (``pip install 'pokerirl[ray]'``). An address is used as given, loopback included, and one
+  where no Ray head answers fails in one line within seconds. A private instance dies with
+  its driver, even a killed one: a small reaper process kills every process the instance
+  started and removes its folder (``pokerirl-ray-<pid>-*`` in the temp folder).
+
+**Scratch.** Every worker (local or Ray) keeps its temporary files in a folder of its own,
+``pokerirl-scratch-<pid>-*`` in the temp folder, locked while it lives. A worker that is
+killed leaves it behind: the driver removes it when it sees the worker die, and any later
+run removes those of processes that are gone.
 
 Results do not depend on the backend or on the number of jobs: every unit runs with torch
 pinned to ``threads`` threads (one by default) and seeds everything from its own arguments.
@@ -43,6 +51,7 @@ True
 
 from __future__ import annotations
 
+import atexit
 import contextlib
 import hashlib
 import json
@@ -70,6 +79,8 @@ RETRIES = 2  # a unit whose worker dies runs at most 1 + RETRIES times
 RECORD_FILE = "unit.json"
 RECORD_FORMAT = "pokerirl-unit/1"
 LOCAL_RAY = "local"
+SCRATCH_PREFIX = "pokerirl-scratch-"  # + the owner's pid: a worker's temporary files
+PRIVATE_RAY_PREFIX = "pokerirl-ray-"  # + the driver's pid: a private Ray instance's folder
 
 
 class ExecutionError(RuntimeError):
@@ -277,8 +288,11 @@ def _die_with(driver: int) -> None:
     threading.Thread(target=watch, daemon=True).start()
 
 
-def _worker(connection: Any, parent: int, threads: int) -> None:
-    """A local worker: run the units the driver sends until it sends None or goes away."""
+def _worker(connection: Any, parent: int, threads: int, temp: str) -> None:
+    """A local worker: run the units the driver sends until it sends None or goes away.
+
+    ``temp``: the driver's temporary folder, where this worker's scratch folder goes.
+    """
     _die_with(parent)
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the driver's to handle
     # tqdm's default lock is a multiprocessing semaphore: a worker killed mid-unit would leak
@@ -286,8 +300,7 @@ def _worker(connection: Any, parent: int, threads: int) -> None:
     tqdm.set_lock(threading.RLock())
     for variable in ("OMP_NUM_THREADS", "MKL_NUM_THREADS"):
         os.environ[variable] = str(threads)
-    home = tempfile.mkdtemp(prefix="pokerirl-worker-")
-    os.chdir(home)  # units must not depend on the driver's working directory
+    os.chdir(_enter_scratch(temp))  # units must not depend on the driver's working directory
     try:
         while True:
             try:
@@ -304,8 +317,91 @@ def _worker(connection: Any, parent: int, threads: int) -> None:
                 data = pickle.dumps((index, False, _portable(error)))
             connection.send_bytes(data)
     finally:
-        os.chdir(tempfile.gettempdir())
-        shutil.rmtree(home, ignore_errors=True)
+        os.chdir(temp)
+        _leave_scratch()
+
+
+# --- scratch folders -------------------------------------------------------------------------
+
+_scratch: tuple[Path, int | None] | None = None  # this process's scratch folder and its lock
+
+
+def _owned_folder(prefix: str, parent: str | None) -> tuple[Path, int | None]:
+    """A new folder ``<prefix><pid>-*`` in ``parent``, locked by this process (the lock's
+    descriptor, to close when the folder goes)."""
+    folder = Path(tempfile.mkdtemp(prefix=f"{prefix}{os.getpid()}-", dir=parent))
+    return folder, atomic.lock_folder(folder)
+
+
+def _enter_scratch(temp: str) -> Path:
+    """This process's scratch folder in ``temp`` (made on the first call, after removing the
+    leftovers of processes that are gone), and tempfile's folder from now on: whatever units
+    leave there goes with it."""
+    global _scratch
+    if _scratch is None:
+        sweep_leftovers(temp)
+        _scratch = _owned_folder(SCRATCH_PREFIX, temp)
+        tempfile.tempdir = str(_scratch[0])
+        atexit.register(_leave_scratch)
+    return _scratch[0]
+
+
+def _leave_scratch() -> None:
+    global _scratch
+    if _scratch is not None:
+        (folder, lock), _scratch = _scratch, None
+        tempfile.tempdir = None
+        shutil.rmtree(folder, ignore_errors=True)
+        if lock is not None:
+            os.close(lock)
+
+
+def sweep_leftovers(temp: str | os.PathLike[str] | None = None) -> list[Path]:
+    """Remove the scratch and private-Ray folders in ``temp`` (default: the temporary folder)
+    left by processes that are gone: the pid in the name is not running, and nobody holds the
+    folder's lock. Returns the folders removed."""
+    removed = []
+    try:
+        entries = list(Path(temp or tempfile.gettempdir()).iterdir())
+    except OSError:
+        return removed
+    for folder in entries:
+        prefix = next(
+            (p for p in (SCRATCH_PREFIX, PRIVATE_RAY_PREFIX) if folder.name.startswith(p)), None
+        )
+        owner = folder.name[len(prefix) :].partition("-")[0] if prefix else ""
+        if not owner.isdecimal() or _running(int(owner)) or not folder.is_dir():
+            continue
+        lock = atomic.lock_folder(folder)
+        if lock is None:  # a process it was handed to still holds it
+            continue
+        try:
+            shutil.rmtree(folder, ignore_errors=True)
+        finally:
+            os.close(lock)
+        removed.append(folder)
+    return removed
+
+
+def _running(pid: int) -> bool:
+    """Whether ``pid`` is a process that has not ended (a zombie has ended)."""
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return _start_mark(pid) != "Z"
+
+
+def _start_mark(pid: int) -> str | None:
+    """``pid``'s start time (Linux ``/proc``), to tell it from a later process given the same
+    pid; ``"Z"`` for a zombie, None when it is gone or unknown."""
+    try:
+        fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+    except (OSError, IndexError):
+        return None
+    return "Z" if fields[0] in ("Z", "X") else fields[19]
 
 
 def _portable(error: Exception) -> Exception:
@@ -353,10 +449,12 @@ def _map_local(
     slots: list[_Slot] = []
     remaining = len(units)
 
+    temp = tempfile.gettempdir()
+
     def start() -> _Slot:
         mine, theirs = context.Pipe()
         process = context.Process(
-            target=_worker, args=(theirs, os.getpid(), backend.threads), daemon=True
+            target=_worker, args=(theirs, os.getpid(), backend.threads, temp), daemon=True
         )
         process.start()
         theirs.close()
@@ -388,6 +486,7 @@ def _map_local(
                         finished(index, value)
                     elif not slot.process.is_alive() or slot.process.sentinel in ready:
                         slot.process.join()
+                        sweep_leftovers(temp)  # the dead worker's scratch folder
                         unit, slot.unit = slot.unit, None
                         deaths[unit] += 1
                         bar.fail()
@@ -401,6 +500,7 @@ def _map_local(
                         slots[i] = start()
     finally:
         _stop(slots)
+        sweep_leftovers(temp)  # workers killed by _stop
 
 
 def _stop(slots: list[_Slot]) -> None:
@@ -430,18 +530,82 @@ def _ray_session(backend: Backend) -> Iterator[Any]:
     except ImportError:
         raise ExecutionError("the Ray backend needs ray: pip install 'pokerirl[ray]'") from None
     connect_here = not ray.is_initialized()
-    private = None
-    if connect_here:
-        if backend.address == LOCAL_RAY:  # its own short folder: never /tmp/ray, shared
-            private = tempfile.mkdtemp(prefix="ray", dir="/tmp" if os.path.isdir("/tmp") else None)
-        _ray_init(ray, backend.address or LOCAL_RAY, private)
     try:
-        yield ray
+        with contextlib.ExitStack() as stack:
+            private = None
+            if connect_here and backend.address == LOCAL_RAY:
+                private = stack.enter_context(_private_ray_folder())
+                stack.enter_context(_private_token(ray))
+            if connect_here:
+                _ray_init(ray, backend.address or LOCAL_RAY, private)
+                stack.callback(ray.shutdown)
+            yield ray
     finally:
-        if connect_here:
-            ray.shutdown()
-        if private is not None:
-            shutil.rmtree(private, ignore_errors=True)
+        sweep_leftovers()  # the scratch folders of Ray workers killed on this machine
+
+
+@contextlib.contextmanager
+def _private_ray_folder() -> Iterator[str]:
+    """The folder of a private Ray instance (short: Ray's socket paths must fit in 107
+    characters; never /tmp/ray, which is shared), and a reaper that, whenever this process
+    ends (a kill included), kills the processes the instance started and removes the folder."""
+    import subprocess
+
+    folder, lock = _owned_folder(PRIVATE_RAY_PREFIX, "/tmp" if os.path.isdir("/tmp") else None)
+    package_root = str(Path(__file__).resolve().parents[1])
+    path = os.environ.get("PYTHONPATH")
+    code = "from pokerirl.execution import _reap; _reap()"
+    reaper = subprocess.Popen(
+        [sys.executable, "-c", code, str(os.getpid()), str(folder)],
+        stdin=subprocess.PIPE,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+        env={**os.environ, "PYTHONPATH": package_root + (os.pathsep + path if path else "")},
+        start_new_session=True,  # a Ctrl-C or a kill of the driver's group spares it
+    )
+    try:
+        yield str(folder)
+    finally:
+        reaper.stdin.close()  # type: ignore[union-attr]  # the end of this process does the same
+        with contextlib.suppress(subprocess.TimeoutExpired):
+            reaper.wait(timeout=30)
+        shutil.rmtree(folder, ignore_errors=True)
+        if lock is not None:
+            os.close(lock)
+
+
+def _reap() -> None:
+    """The reaper of a private Ray instance (``python -c``; arguments: the driver's pid and
+    the instance's folder).
+
+    Until its standard input closes (the driver is done, or gone) or its parent changes, it
+    notes, four times a second, every process below the driver that was not there when it
+    started (the instance's: Ray's own agents outlive a killed driver by a minute or more);
+    then it kills those still running, by pid and start time, and removes the folder.
+    """
+    import select
+
+    driver, folder = int(sys.argv[1]), sys.argv[2]
+    for name in ("SIGINT", "SIGHUP"):
+        signal.signal(getattr(signal, name), signal.SIG_IGN)
+    before = _descendants(driver) | {os.getpid()}
+    seen: dict[int, str] = {}
+    while os.getppid() == driver:
+        for pid in _descendants(driver) - before - seen.keys():
+            if (mark := _start_mark(pid)) not in (None, "Z"):
+                seen[pid] = mark  # type: ignore[assignment]
+        if select.select([sys.stdin], [], [], 0.25)[0] and not os.read(sys.stdin.fileno(), 64):
+            break
+    doomed = {pid for pid, mark in seen.items() if _start_mark(pid) == mark}
+    for pid in list(doomed):  # and what they started since the last look
+        doomed |= {child for child in _descendants(pid) if _start_mark(child) not in (None, "Z")}
+    for pid in doomed:
+        with contextlib.suppress(OSError):
+            os.kill(pid, signal.SIGKILL)
+    deadline = time.monotonic() + 10
+    while any(_running(pid) for pid in doomed) and time.monotonic() < deadline:
+        time.sleep(0.05)
+    shutil.rmtree(folder, ignore_errors=True)
 
 
 def _map_ray(
@@ -455,7 +619,7 @@ def _map_ray(
 ) -> None:
     from ray.exceptions import RayError, RayTaskError
 
-    task = ray.remote(num_cpus=1, max_retries=backend.retries)(run_unit)
+    task = ray.remote(num_cpus=1, max_retries=backend.retries)(run_unit_in_scratch)
     pending = {task.remote(fn, args, backend.threads): i for i, args in enumerate(units)}
     try:
         while pending:
@@ -479,6 +643,12 @@ def _map_ray(
                 ray.cancel(ref, force=True)
 
 
+def run_unit_in_scratch(fn: Callable[..., R], args: tuple[Any, ...], threads: int) -> R:
+    """:func:`run_unit` in a Ray worker, with its temporary files in a scratch folder."""
+    _enter_scratch(tempfile.gettempdir())
+    return run_unit(fn, args, threads)
+
+
 def _ray_init(ray: Any, address: str, temp_dir: str | None) -> None:
     import logging
 
@@ -487,13 +657,85 @@ def _ray_init(ray: Any, address: str, temp_dir: str | None) -> None:
     if address == LOCAL_RAY:
         options.update(include_dashboard=False, _temp_dir=temp_dir)
     try:
-        ray.init(address=address, **options)
+        with _address_as_given():
+            ray.init(address=address, **options)
     except (ConnectionError, RuntimeError, ValueError) as error:
-        raise ExecutionError(f"cannot connect to Ray at {address}: {_first_line(error)}") from None
+        raise ExecutionError(f"cannot connect to Ray at {address}: {_why(error)}") from None
+
+
+def _why(error: BaseException) -> str:
+    """The first line of a failed ``ray.init``, or what its causes say about a token."""
+    cause: BaseException | None = error
+    while cause is not None:
+        if "InvalidAuthToken" in str(cause):
+            return (
+                "the cluster wants its authentication token (set RAY_AUTH_MODE=token, with "
+                "the token in RAY_AUTH_TOKEN or ~/.ray/auth_token)"
+            )
+        cause = cause.__cause__ or cause.__context__
+    return _first_line(error)
+
+
+@contextlib.contextmanager
+def _private_token(ray: Any) -> Iterator[None]:
+    """For a private instance, from before it starts to after it stops: a token of its own,
+    in its processes' environment only.
+
+    Ray otherwise saves a new local instance's token to ``~/.ray/auth_token``, and every
+    ``ray start --head`` on the machine then wants it, which drivers given an explicit
+    address never send: one ``--ray local`` would break every later ``--ray HOST:PORT``.
+    Ray's processes inherit the token as they start; this process's environment is put back.
+    """
+    names = ("RAY_AUTH_TOKEN", "RAY_AUTH_MODE")
+    if any(os.environ.get(n) for n in ("RAY_AUTH_TOKEN", "RAY_AUTH_TOKEN_PATH")):
+        yield  # the user's own
+        return
+    import secrets
+
+    before = {name: os.environ.get(name) for name in names}
+    os.environ["RAY_AUTH_TOKEN"] = secrets.token_hex(32)
+    try:
+        yield
+    finally:
+        for name, value in before.items():
+            if value is None:
+                os.environ.pop(name, None)
+            else:
+                os.environ[name] = value
+        with contextlib.suppress(AttributeError, RuntimeError):
+            ray._raylet.Config.initialize("")  # Ray reads RAY_AUTH_MODE again
+
+
+@contextlib.contextmanager
+def _address_as_given() -> Iterator[None]:
+    """Inside the block, Ray connects to a loopback address as given.
+
+    Ray replaces ``127.0.0.1``, ``localhost`` and ``::1`` with this machine's network address
+    before it connects (for multi-node clusters), and a head started with
+    ``--node-ip-address 127.0.0.1`` may not answer there. Without that helper (another Ray),
+    Ray's own behaviour stays.
+    """
+    services = sys.modules.get("ray._private.services")
+    original = getattr(services, "resolve_ip_for_localhost", None)
+    if original is None:
+        yield
+        return
+    services.resolve_ip_for_localhost = lambda host: host  # type: ignore[union-attr]
+    try:
+        yield
+    finally:
+        services.resolve_ip_for_localhost = original  # type: ignore[union-attr]
+
+
+PROBE_SECONDS = 5.0  # how long a Ray head has to answer the first bytes of gRPC
+# HTTP/2's client preface and an empty SETTINGS frame: a gRPC server (Ray's GCS) answers with
+# a SETTINGS frame of its own; an HTTP/1 server (Ray's dashboard) with "HTTP/" or a page.
+_HTTP2_PREFACE = b"PRI * HTTP/2.0\r\n\r\nSM\r\n\r\n" + bytes([0, 0, 0, 4, 0, 0, 0, 0, 0])
 
 
 def _check_reachable(address: str, timeout: float = 10.0) -> None:
-    """Fail in one line when nothing listens at a ``HOST:PORT`` address: ``ray.init`` would
+    """Fail in one line, within seconds, when nothing listens at a ``HOST:PORT`` address, or
+    something that is not a Ray head (an HTTP server, a silent port): ``ray.init`` would
     otherwise retry for ever."""
     import socket
 
@@ -501,10 +743,28 @@ def _check_reachable(address: str, timeout: float = 10.0) -> None:
     if "://" in address or not host or not port.isdigit():
         return  # ray://, auto, local: Ray's own checks
     try:
-        socket.create_connection((host.strip("[]"), int(port)), timeout=timeout).close()
+        connection = socket.create_connection((host.strip("[]"), int(port)), timeout=timeout)
     except OSError as error:
         reason = error.strerror or type(error).__name__
         raise ExecutionError(f"cannot reach the Ray cluster at {address}: {reason}") from None
+    if os.environ.get("RAY_USE_TLS", "0").lower() in ("1", "true"):
+        connection.close()  # a TLS head answers a handshake first: Ray's own checks
+        return
+    answer = b""
+    with connection, contextlib.suppress(OSError):
+        connection.settimeout(PROBE_SECONDS)
+        connection.sendall(_HTTP2_PREFACE)
+        while len(answer) < 9 and (data := connection.recv(9 - len(answer))):
+            answer += data
+    if len(answer) == 9 and answer[3] == 4 and answer[5:9] == bytes(4):
+        return  # a SETTINGS frame on stream 0: gRPC
+    if answer.startswith((b"HTTP/", b"<")):  # a status line, or an HTTP/0.9 page
+        why = "an HTTP server answers there, not a Ray head (the head's --port, not its dashboard)"
+    elif answer:
+        why = "what answers there is not a Ray head (no gRPC)"
+    else:
+        why = f"it accepts connections but gave no Ray answer within {PROBE_SECONDS:g} s"
+    raise ExecutionError(f"cannot connect to Ray at {address}: {why}")
 
 
 @contextlib.contextmanager
@@ -514,7 +774,8 @@ def ray_head(*, num_cpus: int = 2, timeout: float = 120.0) -> Iterator[str]:
 
     For tests and benchmarks. It owns everything it starts: a temporary folder of its own (a
     short path: Ray's socket paths must fit in 107 characters), free ports, workers whose
-    working directory is an empty folder of their own, this ``pokerirl`` importable on them.
+    working directory is an empty folder of their own, this ``pokerirl`` importable on them,
+    no token authentication (whatever ``~/.ray`` holds: drivers given an address send none).
     It stops only its own processes, by the process ids it recorded: never Ray's
     stop-everything command, which ends every Ray process on the machine.
 
@@ -551,8 +812,12 @@ def ray_head(*, num_cpus: int = 2, timeout: float = 120.0) -> Iterator[str]:
         **os.environ,
         "PYTHONPATH": package_root + (os.pathsep + path if path else ""),
         "RAY_DISABLE_USAGE_STATS": "1",
+        # Ray would want a token whenever ~/.ray/auth_token exists (any local ray.init leaves
+        # one); drivers given an explicit address never send it.
+        "RAY_AUTH_MODE": "disabled",
     }
-    environment.pop("RAY_ADDRESS", None)
+    for name in ("RAY_ADDRESS", "RAY_AUTH_TOKEN", "RAY_AUTH_TOKEN_PATH"):
+        environment.pop(name, None)
     (home / "cwd").mkdir()
     log = home / "head.log"
     with log.open("wb") as stream:
@@ -726,22 +991,24 @@ def save_unit_folder(
     folder = Path(folder)
     folder.parent.mkdir(parents=True, exist_ok=True)
     tidy_folder(folder)
-    staging = Path(tempfile.mkdtemp(prefix=f".{folder.name}.new-", dir=folder.parent))
-    try:
-        atomic.make_shareable(staging)
-        write_files(staging, {**files, **(unhashed or {})})
-        record = make_record(config, files=files)
-        (staging / RECORD_FILE).write_text(json.dumps(record, indent=2, sort_keys=True) + "\n")
-        if folder.exists():
-            old = Path(tempfile.mkdtemp(prefix=f".{folder.name}.old-", dir=folder.parent))
-            os.rename(folder, old / "x")
-            os.rename(staging, folder)
-            shutil.rmtree(old, ignore_errors=True)
-        else:
-            os.rename(staging, folder)
-    except BaseException:
-        shutil.rmtree(staging, ignore_errors=True)
-        raise
+    with atomic.naming(folder):  # errors name the folder, not the staging one
+        staging = Path(tempfile.mkdtemp(prefix=f".{folder.name}.new-", dir=folder.parent))
+        try:
+            atomic.make_shareable(staging)
+            write_files(staging, {**files, **(unhashed or {})})
+            record = make_record(config, files=files)
+            text = json.dumps(record, indent=2, sort_keys=True) + "\n"
+            (staging / RECORD_FILE).write_text(text)
+            if folder.exists():
+                old = Path(tempfile.mkdtemp(prefix=f".{folder.name}.old-", dir=folder.parent))
+                os.rename(folder, old / "x")
+                os.rename(staging, folder)
+                shutil.rmtree(old, ignore_errors=True)
+            else:
+                os.rename(staging, folder)
+        except BaseException:
+            shutil.rmtree(staging, ignore_errors=True)
+            raise
 
 
 def tidy_folder(folder: str | os.PathLike[str]) -> None:

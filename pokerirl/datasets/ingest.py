@@ -19,6 +19,7 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 from tqdm import tqdm
 
+from pokerirl.atomic import lock_folder
 from pokerirl.datasets.table import SCHEMA, month_table
 from pokerirl.encoding import ACTIONS, FOLD
 from pokerirl.parsers.irc import (
@@ -96,39 +97,20 @@ def _work_dir(out_path: Path) -> Iterator[Path]:
     except OSError:  # an unlistable folder: nothing to clean, and mkdtemp below tells the rest
         candidates = []
     for stale in candidates:
-        if stale.is_dir() and (lock := _lock(stale)) is not None:
+        if stale.is_dir() and (lock := lock_folder(stale)) is not None:
             shutil.rmtree(stale, ignore_errors=True)
             os.close(lock)
     try:
         work_dir = Path(tempfile.mkdtemp(prefix=prefix, dir=out_path.parent))
     except OSError as error:
         raise IngestError(f"{out_path}: cannot write ({error.strerror or error})") from None
-    lock = _lock(work_dir)
+    lock = lock_folder(work_dir)
     try:
         yield work_dir
     finally:
         shutil.rmtree(work_dir, ignore_errors=True)
         if lock is not None:
             os.close(lock)
-
-
-def _lock(folder: Path) -> int | None:
-    """An exclusive ``flock`` on ``folder`` (released when the process ends, even when killed),
-    as an open descriptor; None if another process holds it or locks are unavailable."""
-    try:
-        import fcntl
-    except ImportError:  # not POSIX: no stale folders are removed
-        return None
-    try:
-        descriptor = os.open(folder, os.O_RDONLY)
-    except OSError:
-        return None
-    try:
-        fcntl.flock(descriptor, fcntl.LOCK_EX | fcntl.LOCK_NB)
-    except OSError:
-        os.close(descriptor)
-        return None
-    return descriptor
 
 
 def _ingest(
@@ -161,9 +143,15 @@ def _ingest(
                 in_memory = 0
     summary = _summary(stats, sources, out_path, counts)
     table_file, summary_file = work_dir / "table.parquet", work_dir / "summary.json"
-    with pq.ParquetWriter(table_file, SCHEMA, **PARQUET_OPTIONS) as writer:
+    with (
+        _file(table_file, "wb") as sink,
+        pq.ParquetWriter(sink, SCHEMA, **PARQUET_OPTIONS) as writer,
+    ):
         for _, _, data in sorted(months, key=lambda item: item[:2]):
-            writer.write_table(data if isinstance(data, pa.Table) else pq.read_table(data))
+            if isinstance(data, Path):
+                with _file(data, "rb") as part:
+                    data = pq.read_table(part)
+            writer.write_table(data)
     summary_file.write_text(json.dumps(summary, indent=2) + "\n", encoding="utf-8")
     # Files in the work folder are 0666 less the umask already (mkdtemp only restricts the
     # folder). Old summary out, new table in, new summary in: see ingest().
@@ -180,8 +168,15 @@ def _spill(
     if isinstance(data, Path):
         return item
     part = work_dir / f"part-{order:06d}.parquet"
-    pq.write_table(data, part, compression="lz4")
+    with _file(part, "wb") as sink:
+        pq.write_table(data, sink, compression="lz4")
     return key, order, part
+
+
+def _file(path: Path, mode: str) -> pa.OSFile:
+    """A native Arrow file at ``path``, named by its bytes: Arrow takes a text path as UTF-8
+    and fails on a folder name that is not (which ``os.fsdecode`` keeps as surrogates)."""
+    return pa.OSFile(os.fsencode(path), mode)
 
 
 def _value_counts(column: pa.ChunkedArray) -> tuple[list[str], list[int]]:

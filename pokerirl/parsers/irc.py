@@ -6,7 +6,9 @@ month folders, folders of month folders, month archives (``holdem.199504.tgz``) 
 ``IRCdata.tgz`` (archives inside an archive). Archives are streamed member by member and never
 extracted; only one month is held in memory at a time, and a month's files are capped
 (:data:`MAX_FILE_BYTES` each, :data:`MAX_MONTH_BYTES` together), so memory stays bounded even
-for a small archive that inflates to a huge member.
+for a small archive that inflates to a huge member. Only regular files are read (a FIFO, a
+device or a link to one is refused before a byte is read), and sizes are checked before
+anything is allocated, in folders and in archives alike.
 
 :func:`iter_months` yields the raw files of each month; :func:`parse_month` turns one month into
 the heads-up hands that can be learned from, and puts every hand of ``hdb`` into exactly one
@@ -15,8 +17,10 @@ bucket of :class:`IngestStats`.
 
 from __future__ import annotations
 
+import bisect
 import gc
 import os
+import stat
 import tarfile
 from collections import Counter, defaultdict
 from collections.abc import Callable, Iterator, Sequence
@@ -59,6 +63,8 @@ MAX_MALFORMED_EXAMPLES = 10
 # reading it whole would take several times its size in memory.
 MAX_FILE_BYTES = 128 * 1024 * 1024
 MAX_MONTH_BYTES = 512 * 1024 * 1024
+# tarfile reads a long name or a pax header whole into memory; IRC names are short.
+MAX_TAR_HEADER_BYTES = 1024 * 1024
 # Largest values the table's columns hold (timestamp int64, chips int32, raises int16): a line
 # beyond them is malformed, not silently wrapped.
 _MAX_TIMESTAMP = 2**63 - 1
@@ -182,8 +188,14 @@ def iter_months(sources: Sequence[str | os.PathLike[str]]) -> Iterator[MonthFile
             raise IngestError(f"{path}: no IRC data here (no <channel>/<month>/hdb inside)")
 
 
+def _present(path: Path) -> bool:
+    """Whether ``path`` names anything but a folder (a file, a FIFO, a link, even a dangling
+    one): what a month's files are looked up by, so a FIFO is refused, not passed over."""
+    return os.path.lexists(path) and not path.is_dir()
+
+
 def _iter_folder(path: Path) -> Iterator[MonthFiles]:
-    if (path / "hdb").is_file():
+    if _present(path / "hdb"):
         yield _read_month_folder(path)
         return
     found: list[Path] = []
@@ -220,39 +232,78 @@ def _check_size(where: str, size: int, month_total: int) -> None:
         )
 
 
-def _read_bytes(path: Path, month_total: int = 0) -> bytes:
-    """The bytes of ``path``, checked against the caps given the month's bytes read so far."""
+_FILE_KINDS = {
+    stat.S_IFDIR: "a folder",
+    stat.S_IFCHR: "a character device",
+    stat.S_IFBLK: "a block device",
+    stat.S_IFIFO: "a FIFO",
+    stat.S_IFSOCK: "a socket",
+}
+
+
+@contextmanager
+def _open_regular(path: Path) -> Iterator[tuple[IO[bytes], int]]:
+    """``path`` open for reading, and its size; :class:`IngestError` unless it is a regular
+    file (after links). Opening does not block: a FIFO without a writer is refused at once."""
     try:
-        size = path.stat().st_size
-        _check_size(str(path), size, month_total + size)
-        return path.read_bytes()
+        descriptor = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0))
     except OSError as error:
-        raise IngestError(f"{path}: cannot read ({error.strerror})") from error
+        raise IngestError(f"{path}: cannot read ({error.strerror or error})") from None
+    with os.fdopen(descriptor, "rb") as handle:
+        info = os.fstat(descriptor)
+        if not stat.S_ISREG(info.st_mode):
+            kind = _FILE_KINDS.get(stat.S_IFMT(info.st_mode), "not a plain file")
+            raise IngestError(f"{path}: not a regular file ({kind}); IRC data is plain files")
+        try:
+            yield handle, info.st_size
+        except OSError as error:
+            raise IngestError(f"{path}: cannot read ({error.strerror or error})") from None
+
+
+def _read_bytes(path: Path, month_total: int = 0) -> bytes:
+    """The bytes of ``path``, checked against the caps given the month's bytes read so far:
+    its size before reading, and what was read (at most one byte past the caps), in case the
+    file grew in between."""
+    with _open_regular(path) as (handle, size):
+        _check_size(str(path), size, month_total + size)
+        data = handle.read(min(MAX_FILE_BYTES, MAX_MONTH_BYTES - month_total) + 1)
+        _check_size(str(path), len(data), month_total + len(data))
+        return data
 
 
 def _read_month_folder(path: Path) -> MonthFiles:
     resolved = path.resolve()
-    channel, month = resolved.parent.name, resolved.name
+    channel, month = _text(resolved.parent.name), _text(resolved.name)
     pdb_dir = path / "pdb"
     hdb = _read_bytes(path / "hdb")
     roster_path = path / "hroster"
-    roster = _read_bytes(roster_path, len(hdb)) if roster_path.is_file() else b""
+    roster = _read_bytes(roster_path, len(hdb)) if _present(roster_path) else b""
     total = len(hdb) + len(roster)
     pdb: dict[str, bytes] = {}
     if channel in BIG_BLIND_BY_CHANNEL and pdb_dir.is_dir():
         for pdb_file in sorted(pdb_dir.iterdir()):
-            if pdb_file.name.startswith("pdb.") and pdb_file.is_file():
+            if pdb_file.name.startswith("pdb.") and _present(pdb_file):
                 pdb[pdb_file.name] = data = _read_bytes(pdb_file, total)
                 total += len(data)
     return MonthFiles(channel, month, str(path), hdb, roster, pdb)
 
 
-def _iter_archive_file(path: Path) -> Iterator[MonthFiles]:
+def _text(name: str) -> str:
+    """A file name as valid text for the table: bytes that are not UTF-8 (which ``os.fsdecode``
+    and tarfile keep as surrogates) shown as ``\\xNN``, as ``ls -b`` does.
+
+    >>> _text("1995" + os.fsdecode(b"\\xff") + "04")
+    '1995\\\\xff04'
+    """
     try:
-        with open(path, "rb") as handle:
-            yield from _iter_tar_stream(handle, str(path), path.name)
-    except OSError as error:
-        raise IngestError(f"{path}: cannot read ({error.strerror or error})") from error
+        return name.encode("utf-8", "surrogateescape").decode("utf-8", "backslashreplace")
+    except UnicodeEncodeError:  # a surrogate no file name decodes to
+        return name.encode("utf-8", "backslashreplace").decode("utf-8")
+
+
+def _iter_archive_file(path: Path) -> Iterator[MonthFiles]:
+    with _open_regular(path) as (handle, _):
+        yield from _iter_tar_stream(handle, str(path), path.name)
 
 
 def _hint_from_archive_name(name: str) -> tuple[str | None, str | None]:
@@ -284,7 +335,29 @@ def _member_key(name: str, hint: tuple[str | None, str | None]) -> tuple[str, st
     channel = folder[-2] if len(folder) >= 2 else hint[0]
     if month is None or channel is None:
         return None
-    return channel, month, leaf
+    return _text(channel), _text(month), leaf
+
+
+class _HeaderTooLarge(Exception):
+    """A tar header of more than :data:`MAX_TAR_HEADER_BYTES` (its size)."""
+
+
+class _BoundedTarInfo(tarfile.TarInfo):
+    """A tar header that refuses a long-name or pax header beyond
+    :data:`MAX_TAR_HEADER_BYTES`, which tarfile would otherwise read whole into memory."""
+
+    _EXTENDED = (
+        tarfile.GNUTYPE_LONGNAME,
+        tarfile.GNUTYPE_LONGLINK,
+        tarfile.XHDTYPE,
+        tarfile.XGLTYPE,
+        tarfile.SOLARIS_XHDTYPE,
+    )
+
+    def _proc_member(self, tar: tarfile.TarFile) -> tarfile.TarInfo:
+        if self.type in self._EXTENDED and self.size > MAX_TAR_HEADER_BYTES:
+            raise _HeaderTooLarge(self.size)
+        return super()._proc_member(tar)  # type: ignore[misc]
 
 
 def _iter_tar_stream(fileobj: IO[bytes], origin: str, archive_name: str) -> Iterator[MonthFiles]:
@@ -308,9 +381,15 @@ def _iter_tar_stream(fileobj: IO[bytes], origin: str, archive_name: str) -> Iter
 
     try:
         # "r|*" streams: each member is read once, in order, with no seeking back.
-        with tarfile.open(fileobj=fileobj, mode="r|*") as tar:
+        with tarfile.open(fileobj=fileobj, mode="r|*", tarinfo=_BoundedTarInfo) as tar:
             for member in tar:
                 if not member.isfile():
+                    if not member.isdir() and _member_key(member.name, hint) is not None:
+                        raise IngestError(
+                            f"{origin}:{member.name}: not a regular file in the archive "
+                            f"({_MEMBER_KINDS.get(member.type, 'a special member')}); "
+                            "IRC data is plain files"
+                        )
                     continue
                 if member.name.endswith(_ARCHIVE_SUFFIXES):
                     yield from flush()
@@ -336,8 +415,22 @@ def _iter_tar_stream(fileobj: IO[bytes], origin: str, archive_name: str) -> Iter
                 if extracted is not None:
                     files[leaf] = extracted.read()
             yield from flush()
+    except _HeaderTooLarge as error:
+        raise IngestError(
+            f"{origin}: a tar header of {error.args[0]:,} bytes, more than the "
+            f"{MAX_TAR_HEADER_BYTES:,} an IRC archive's names need (not IRC data?)"
+        ) from None
     except (tarfile.TarError, EOFError, OSError) as error:
         raise IngestError(f"{origin}: not a readable tar archive ({error})") from error
+
+
+_MEMBER_KINDS = {
+    tarfile.SYMTYPE: "a symbolic link",
+    tarfile.LNKTYPE: "a hard link",
+    tarfile.CHRTYPE: "a character device",
+    tarfile.BLKTYPE: "a block device",
+    tarfile.FIFOTYPE: "a FIFO",
+}
 
 
 # ---------------------------------------------------------------------------------------------
@@ -357,44 +450,108 @@ def _lines(data: bytes) -> list[str]:
 _PdbFields = tuple[list[str], str, int]
 
 
-def _read_pdb(month: MonthFiles, stats: IngestStats) -> dict[int, list[_PdbFields]]:
-    """Heads-up pdb lines by timestamp, split but not yet validated."""
+class _LostLines:
+    """Where a file's unreadable lines were, as timestamps: the hand that lost its hroster or
+    pdb line to one of them is a ``malformed_line``, as it would be for a corrupt hdb line,
+    not a ``missing_pdb_line`` or a ``roster_mismatch``.
+
+    The files are in time order, so a line whose timestamp is itself corrupt lies between the
+    readable timestamps before and after it; a line with a readable timestamp lost only its
+    own hand. Built line by line (:meth:`readable`, :meth:`unreadable`), then :meth:`close`.
+
+    >>> lost = _LostLines()
+    >>> for stamp in (10, None, 30, 40):
+    ...     lost.readable(stamp) if stamp is not None else lost.unreadable(None)
+    >>> lost.close()
+    >>> [t for t in (10, 20, 29, 30, 40) if lost.covers(t)]
+    [20, 29]
+    """
+
+    def __init__(self) -> None:
+        self._after, self._open = -1, False
+        self._spans: list[tuple[int, int]] = []  # exclusive bounds
+        self._lows: list[int] = []
+        self._highs: list[int] = []
+
+    def readable(self, stamp: int) -> None:
+        if self._open:
+            self._spans.append((min(self._after, stamp), max(self._after, stamp)))
+            self._open = False
+        self._after = stamp
+
+    def unreadable(self, stamp: int | None) -> None:
+        """An unreadable line, with its timestamp if that part is readable."""
+        if stamp is None:
+            self._open = True
+        else:
+            self._spans.append((stamp - 1, stamp + 1))
+            self.readable(stamp)
+
+    def close(self) -> None:
+        if self._open:
+            self._spans.append((self._after, _MAX_TIMESTAMP + 1))
+        for low, high in sorted(self._spans):  # merged, for bisect
+            if self._highs and low < self._highs[-1]:
+                self._highs[-1] = max(self._highs[-1], high)
+            else:
+                self._lows.append(low)
+                self._highs.append(high)
+
+    def covers(self, stamp: int) -> bool:
+        i = bisect.bisect_left(self._lows, stamp) - 1
+        return i >= 0 and stamp < self._highs[i]
+
+
+_NOTHING_LOST = _LostLines()
+_NOTHING_LOST.close()
+
+
+def _stamp(text: str) -> int | None:
+    """A timestamp field's value, or None if it is not one (not decimal, beyond int64)."""
+    if len(text) > _MAX_DIGITS or not text.isdecimal():
+        return None
+    value = int(text)
+    return value if value <= _MAX_TIMESTAMP else None
+
+
+def _read_pdb(
+    month: MonthFiles, stats: IngestStats
+) -> tuple[dict[int, list[_PdbFields]], dict[str, _LostLines]]:
+    """Heads-up pdb lines by timestamp, split but not yet validated, and each nick's
+    unreadable lines."""
     by_hand: dict[int, list[_PdbFields]] = defaultdict(list)
+    lost: dict[str, _LostLines] = {}
     for file_name, data in month.pdb.items():
         where = f"{month.origin}/pdb/{file_name}"
+        lost[file_name.removeprefix("pdb.")] = lines_lost = _LostLines()
         for number, line in enumerate(_lines(data), start=1):
             fields = line.split()
-            if (
-                len(fields) >= 11
-                and fields[2] == "2"
-                and fields[1].isdecimal()
-                and len(fields[1]) <= _MAX_DIGITS
-            ):
-                by_hand[int(fields[1])].append((fields, where, number))
-            elif (
-                len(fields) < 11
-                or not fields[1].isdecimal()
-                or not fields[2].isdecimal()
-                or len(fields[1]) > _MAX_DIGITS
-            ):
+            stamp = _stamp(fields[1]) if len(fields) >= 2 else None
+            if len(fields) < 11 or stamp is None or not fields[2].isdecimal():
                 stats.malformed(f"{where}:{number}", "not a pdb line")
-    return by_hand
+                lines_lost.unreadable(stamp)
+                continue
+            lines_lost.readable(stamp)
+            if fields[2] == "2":
+                by_hand[stamp].append((fields, where, number))
+        lines_lost.close()
+    return by_hand, lost
 
 
-def _read_roster(month: MonthFiles, stats: IngestStats) -> dict[int, list[str]]:
+def _read_roster(month: MonthFiles, stats: IngestStats) -> tuple[dict[int, list[str]], _LostLines]:
     roster: dict[int, list[str]] = {}
+    lost = _LostLines()
     for number, line in enumerate(_lines(month.hroster), start=1):
         fields = line.split()
-        if (
-            len(fields) < 2
-            or len(fields[0]) > _MAX_DIGITS
-            or not fields[0].isdecimal()
-            or not fields[1].isdecimal()
-        ):
+        stamp = _stamp(fields[0]) if fields else None
+        if len(fields) < 2 or stamp is None or not fields[1].isdecimal():
             stats.malformed(f"{month.origin}/hroster:{number}", "not an hroster line")
+            lost.unreadable(stamp)
             continue
-        roster[int(fields[0])] = fields[2:]
-    return roster
+        lost.readable(stamp)
+        roster[stamp] = fields[2:]
+    lost.close()
+    return roster, lost
 
 
 def parse_month(
@@ -446,8 +603,8 @@ def _parse_limit_holdem_month(
     on_hands: Callable[[int], None] | None,
     hands: MonthHands,
 ) -> MonthHands:
-    pdb = _read_pdb(month, stats)
-    roster = _read_roster(month, stats)
+    pdb, pdb_lost = _read_pdb(month, stats)
+    roster, roster_lost = _read_roster(month, stats)
     hdb_where = f"{month.origin}/hdb"
     timestamps: set[int] = set(seen[month.key].tolist()) if month.key in seen else set()
 
@@ -494,12 +651,32 @@ def _parse_limit_holdem_month(
             hands,
             stats,
         )
+        if bucket in ("missing_pdb_line", "roster_mismatch"):
+            bucket = _lost_or(bucket, timestamp, pdb_lost, roster_lost, roster.get(timestamp))
         stats.buckets[bucket] += 1
     stats.orphan_pdb_lines += sum(len(lines) for lines in pdb.values())
     seen[month.key] = np.fromiter(timestamps, dtype=np.int64, count=len(timestamps))
     if on_hands is not None:
         on_hands(len(hdb_lines) % _PROGRESS_EVERY)
     return hands
+
+
+def _lost_or(
+    bucket: str,
+    timestamp: int,
+    pdb_lost: dict[str, _LostLines],
+    roster_lost: _LostLines,
+    roster_names: list[str] | None,
+) -> str:
+    """``malformed_line`` for a hand whose missing roster, or a missing pdb line of a player
+    in its roster, may be an unreadable line; else ``bucket``."""
+    if roster_names is None:
+        return "malformed_line" if roster_lost.covers(timestamp) else bucket
+    if bucket == "missing_pdb_line" and any(
+        pdb_lost.get(nick, _NOTHING_LOST).covers(timestamp) for nick in roster_names
+    ):
+        return "malformed_line"
+    return bucket
 
 
 def _parse_cards(texts: list[str]) -> tuple[int, ...]:

@@ -1,9 +1,10 @@
 """The tournament report: its data, its files (``report.md``, ``report.json``,
-``per_seed.csv``, ``per_seed.png``) and its text.
+``per_seed.csv``, ``per_seed.png``, and ``timings.json`` beside them) and its text.
 
 Every number lives in :class:`TournamentReport`; the files are renderings of it, written
 atomically (:mod:`pokerirl.atomic`), so the numbers agree across them: Markdown shows
-them rounded, JSON and CSV in full (``repr``) precision.
+them rounded, JSON and CSV in full (``repr``) precision. The same seeds give the same bytes
+in all four: the run's wall-clock figures are in ``timings.json`` alone.
 
 >>> render_p(0.000123456), render_p(0.5), render_p(0.0)
 ('0.000123', '0.5', '< 1e-300')
@@ -14,7 +15,7 @@ from __future__ import annotations
 import csv
 import io
 import json
-from dataclasses import asdict, dataclass, fields
+from dataclasses import asdict, dataclass, field, fields, replace
 from pathlib import Path
 from typing import Any, Literal
 
@@ -23,6 +24,7 @@ from pokerirl.seeds import format_seeds
 from pokerirl.tournaments.lineup import TournamentError
 
 REPORT_FORMAT = "pokerirl-tournament/1"
+TIMINGS_FILE = "timings.json"
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -46,14 +48,12 @@ class Line:
 
 @dataclass(frozen=True, kw_only=True)
 class SeedLine(Line):
-    """One seed of one matchup, with the agents that played it and how long it took."""
+    """One seed of one matchup, with the agents that played it."""
 
     seed: int
     hands: int
     fingerprint_a: str
     fingerprint_b: str
-    seconds: float
-    hands_per_second: float
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -79,19 +79,22 @@ class TournamentReport:
 
     ``config``: hands per seed, seeds, duplicate, batch_size, alpha. ``family``: the size and
     Bonferroni threshold of the per-seed family (seeds x matchups) and of the pooled family
-    (matchups). ``timing``: this run's wall time and hands/s (not part of the results: a rerun
-    that reuses saved seeds is faster and reports the same numbers).
+    (matchups). ``timing``: this run's wall time, hands/s, backend and the seeds it played
+    and reused; not part of the results (a rerun that reuses saved seeds is faster and
+    reports the same numbers), so not in :meth:`to_dict`: it is written to ``timings.json``,
+    which :func:`load_report` reads back when it is there.
     """
 
     config: dict[str, Any]
     family: dict[str, Any]
     matchups: tuple[MatchupReport, ...]
     versions: dict[str, str | None]
-    timing: dict[str, float | int]
+    timing: dict[str, Any] = field(default_factory=dict)
 
     def to_dict(self) -> dict[str, Any]:
-        """Plain JSON-ready data (tuples become lists)."""
+        """Plain JSON-ready data (tuples become lists), without the timings."""
         data = asdict(self)
+        del data["timing"]
         for matchup, original in zip(data["matchups"], self.matchups, strict=True):
             matchup["seeds_significant_bonferroni"] = original.seeds_significant_bonferroni
         return {"format": REPORT_FORMAT, **json.loads(json.dumps(data))}
@@ -111,7 +114,7 @@ class TournamentReport:
             )
             for m in data["matchups"]
         )
-        return cls(**{**_pick(cls, data), "matchups": matchups})
+        return cls(**{**_pick(cls, data), "matchups": matchups, "timing": {}})
 
 
 def _pick(kind: type, data: dict[str, Any]) -> dict[str, Any]:
@@ -126,8 +129,11 @@ def _line(kind: type[Line], data: dict[str, Any]) -> Line:
 
 
 def write_report(report: TournamentReport, out: Path) -> None:
-    """Write the four report files into ``out``; report.json last, so it marks a whole run."""
+    """Write the four report files and ``timings.json`` (when the report has timings) into
+    ``out``; report.json last, so it marks a whole run."""
     out.mkdir(parents=True, exist_ok=True)
+    if report.timing:
+        atomic.write_text(out / TIMINGS_FILE, json.dumps(report.timing, indent=2) + "\n")
     atomic.write_text(out / "report.md", render_markdown(report))
     atomic.write_text(out / "per_seed.csv", render_csv(report))
     atomic.write_bytes(out / "per_seed.png", render_png(report))
@@ -157,7 +163,11 @@ def load_report(out: Path | str) -> TournamentReport:
         raise TournamentError(f"{path}: {error}") from None
     except (KeyError, IndexError, TypeError, ValueError, AttributeError, ArithmeticError) as error:
         raise TournamentError(f"{path}: malformed report ({error!r})") from None
-    return report
+    try:  # wall-clock figures, not results: a missing or damaged file is no timings
+        timing = json.loads((Path(out) / TIMINGS_FILE).read_text())
+    except (OSError, ValueError):
+        timing = {}
+    return replace(report, timing=timing if isinstance(timing, dict) else {})
 
 
 def _kind(data: object) -> str:
@@ -271,12 +281,9 @@ def render_markdown(report: TournamentReport) -> str:
             )
             out.append(f"- {m.agent_a} vs {m.agent_b}, {side} = `{spec}`: {shown}")
     versions = ", ".join(f"{name} {version}" for name, version in report.versions.items())
-    timing = report.timing
     out += [
         f"- batch size {config['batch_size']}; versions: {versions}",
-        f"- this run: {timing['hands_played']:,} hands played in {timing['wall_seconds']:.1f} s "
-        f"({timing['hands_per_second']:,.0f} hands/s), {timing['seeds_reused']} seed result(s) "
-        "reused from an earlier run",
+        f"- wall-clock figures of the last run (and the seeds it reused): {TIMINGS_FILE}",
         "",
     ]
     return "\n".join(out)
@@ -299,8 +306,6 @@ CSV_COLUMNS = (
     "significant_holm",
     "fingerprint_a",
     "fingerprint_b",
-    "seconds",
-    "hands_per_second",
 )
 
 

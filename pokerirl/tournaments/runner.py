@@ -26,6 +26,11 @@ match; when they do not it refuses (:class:`TournamentError`), unless ``overwrit
 which recomputes that seed. A saved seed that is not a valid record (corrupt, truncated,
 ``[]``, a string, an older format) cannot have come from a finished write, which is atomic:
 it is recomputed, which gives the same numbers.
+
+Same seeds, same bytes: wall-clock figures (the run's and each seed's seconds and hands/s,
+the backend, the seeds reused) go to ``<out>/timings.json`` only, never into the seed files
+or the report. Seed files written before that (with ``seconds`` in their result) are reused
+as they are.
 """
 
 from __future__ import annotations
@@ -85,12 +90,13 @@ class SeedKey:
 
 @dataclass(frozen=True, kw_only=True)
 class SeedResult:
-    """One seed of one matchup before corrections: what is saved and reused."""
+    """One seed of one matchup before corrections: ``key`` and ``estimate`` are saved and
+    reused; the timings (None for a reused seed) only go to ``timings.json``."""
 
     key: SeedKey
     estimate: Estimate
-    seconds: float
-    hands_per_second: float
+    seconds: float | None = None
+    hands_per_second: float | None = None
 
 
 @contextlib.contextmanager
@@ -152,11 +158,7 @@ def _seed_config(key: SeedKey) -> dict[str, Any]:
 
 
 def _save_seed(path: Path, result: SeedResult) -> None:
-    outcome = {
-        "estimate": asdict(result.estimate),
-        "seconds": result.seconds,
-        "hands_per_second": result.hands_per_second,
-    }
+    outcome = {"estimate": asdict(result.estimate)}  # no timings: the same bytes every run
     save_record(path, make_record(_seed_config(result.key), result=outcome))
 
 
@@ -169,15 +171,8 @@ def _load_seed(path: Path, key: SeedKey, *, overwrite: bool) -> SeedResult | Non
     if record is None:
         return None
     try:
-        outcome = record["result"]
-        return SeedResult(
-            key=key,
-            estimate=Estimate(
-                **{**outcome["estimate"], "ci95": tuple(outcome["estimate"]["ci95"])}
-            ),
-            seconds=float(outcome["seconds"]),
-            hands_per_second=float(outcome["hands_per_second"]),
-        )
+        saved = record["result"]["estimate"]  # older files also hold timings: ignored
+        return SeedResult(key=key, estimate=Estimate(**{**saved, "ci95": tuple(saved["ci95"])}))
     except (KeyError, TypeError, ValueError):
         return None  # a record without a usable result: recompute it
 
@@ -373,6 +368,15 @@ def run_tournament(
             "seeds_reused": len(matchups) * len(seeds) - len(units),
             "jobs": jobs,
             "backend": backend.describe(),
+            "seeds_played": [
+                {
+                    "matchup": folders[m],
+                    "seed": seed,
+                    "seconds": done[m, seed].seconds,
+                    "hands_per_second": done[m, seed].hands_per_second,
+                }
+                for m, seed in cells
+            ],
         },
     )
     write_report(report, out)
@@ -410,8 +414,6 @@ def _build_report(
                 hands=hands,
                 fingerprint_a=done[m, seed].key.fingerprint_a,
                 fingerprint_b=done[m, seed].key.fingerprint_b,
-                seconds=done[m, seed].seconds,
-                hands_per_second=done[m, seed].hands_per_second,
             )
             for seed in seeds
         )
