@@ -96,8 +96,8 @@ def test_minimal_month_ingests_cleanly(tmp_path: Path) -> None:
         ("hdb", b"797241924", b"79724192\xb2", "malformed_line"),
         ("hdb", b"797241924", b"79724192\xb3", "malformed_line"),
         ("hdb", b"797241924", b"\xb97241924", "malformed_line"),
-        ("hroster", b"797241924", b"79724192\xb2", "roster_mismatch"),
-        ("pdb/pdb.MrX", b"797241924", b"79724192\xb2", "missing_pdb_line"),
+        ("hroster", b"797241924", b"79724192\xb2", "malformed_line"),
+        ("pdb/pdb.MrX", b"797241924", b"79724192\xb2", "malformed_line"),
         # Beyond the table's int64 timestamp and int32 chips.
         ("hdb", b"797241924", b"9999999999999999999", "malformed_line"),
         ("hdb", b"797241924", b"12345678901234567890", "malformed_line"),
