@@ -18,7 +18,8 @@ A kill at any instant therefore leaves the old entries (before step 3) or the ne
 writer, or a reader that calls :func:`tidy`, deletes an uncommitted ``.new-`` folder and
 finishes a committed ``.swap-`` one, unless its writer is still alive (it holds the lock):
 writers of different units in one parent never touch each other's folders, and two writers
-of the same unit both finish, the later one's entries winning.
+of the same key both finish, the later one's entries winning (entry by entry: a unit's record
+then vouches only for the files it was written with, and a mismatch is recomputed).
 
 :func:`tidy` also clears what the writers before this module left, by their exact names:
 ``execution.save_unit_folder``'s ``.<name>.new-*`` and ``.<name>.old-*/x`` (the old folder,
@@ -124,8 +125,9 @@ def tidy(parent: str | os.PathLike[str], *, key: str) -> None:
     docstring); folders whose writer is alive stay. Nothing to do when ``parent`` is not
     a folder or cannot be listed."""
     parent = Path(parent)
-    try:
-        names = sorted(entry.name for entry in parent.iterdir())
+    hidden = f".{key}."
+    try:  # names first: a parent may hold thousands of units, and each checks its own
+        names = sorted(name for name in os.listdir(parent) if name.startswith(hidden))
     except OSError:
         return
     new, swap = _pattern(key, f"{NEW}-{_RANDOM}"), _pattern(key, f"{SWAP}-{_RANDOM}")
