@@ -33,7 +33,9 @@ def _count_mutations(limit: int | None) -> list[int]:
     for name in MUTATIONS:
         original = getattr(os, name)
 
-        def wrapped(*args: object, _original: Callable[..., object] = original, **kw: object):  # noqa: ANN202
+        def wrapped(
+            *args: object, _original: Callable[..., object] = original, **kw: object
+        ) -> object:
             count[0] += 1
             if limit is not None and count[0] == limit:
                 os.kill(os.getpid(), signal.SIGKILL)
@@ -55,7 +57,7 @@ def _in_child(write: Callable[[], None], limit: int | None) -> int | None:
             write()
             os.write(writer, str(count[0]).encode())
             os._exit(0)
-        except BaseException:  # noqa: BLE001 - any failure is the child's exit code
+        except BaseException:  # any failure is the child's exit code
             os._exit(3)
     os.close(writer)
     with os.fdopen(reader) as stream:

@@ -190,7 +190,7 @@ def test_file_and_record_units_and_in_process_writers(tmp_path: Path) -> None:
         "expert.unit.json",
     ]
     assert check(data).fate is Fate.REUSED
-    with pytest.raises(ValueError, match="did not write expert.parquet"):
+    with pytest.raises(ValueError, match=r"did not write expert\.parquet"):
         save(data, UnitOutput(files={"other.parquet": b"rows"}))
 
     seed = Unit(key="seed 0", target=tmp_path / "seeds" / "seed-0.json", layout=Layout.RECORD,
@@ -218,7 +218,7 @@ def test_a_folder_that_no_unit_wrote_is_never_replaced_silently(tmp_path: Path) 
         check(unit)
     assert check(unit, overwrite=True).fate is Fate.RECOMPUTED
     (theirs / "sub").mkdir()
-    with pytest.raises(UnitConflict, match="it has subfolders, so it is never replaced$"):
+    with pytest.raises(UnitConflict, match=r"it has subfolders, so it is never replaced$"):
         check(unit, overwrite=True)
     (tmp_path / "file").write_text("")
     with pytest.raises(UnitConflict, match="exists and is not a folder"):
