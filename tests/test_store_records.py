@@ -10,6 +10,7 @@ tests keep guarding old folders after round 2 deletes those functions.
 from __future__ import annotations
 
 import json
+import math
 from pathlib import Path
 
 import pytest
@@ -138,6 +139,8 @@ def test_the_record_written_round_trips_and_keeps_its_fingerprint() -> None:
     text = record.to_text()
     assert json.loads(text)["format"] == "pokerirl-unit/2"
     assert UnitRecord.from_json(json.loads(text)) == record
+    nan = UnitRecord.make({"seed": 1}, result={"p_value": float("nan")})  # an even matchup
+    assert math.isnan(UnitRecord.from_json(json.loads(nan.to_text())).result["p_value"])
     with pytest.raises(ValueError, match="'seed' is both a setting and an input"):
         UnitRecord.make({"seed": 1}, inputs={"seed": digest(b"x")})
 

@@ -126,7 +126,7 @@ class UnitRecord:
             config=plain_config,
             inputs={key: identity[key] for key in inputs},
             files={name: digest(data) for name, data in sorted((files or {}).items())},
-            result=json.loads(json.dumps(result, allow_nan=False)),
+            result=json.loads(json.dumps(result)),  # NaN allowed, as before (a p-value)
         )
 
     @property

@@ -130,33 +130,31 @@ def tidy(parent: str | os.PathLike[str], *, key: str) -> None:
         names = sorted(name for name in os.listdir(parent) if name.startswith(hidden))
     except OSError:
         return
-    new, swap = _pattern(key, f"{NEW}-{_RANDOM}"), _pattern(key, f"{SWAP}-{_RANDOM}")
-    old = _pattern(key, f"old-{_RANDOM}")  # execution.save_unit_folder's old folder aside
-    legacy = [
-        _pattern(key, rf"{_RANDOM}\.tmp"),  # irl.run.staged_folder's new folder
-        _pattern(key, r"ingest-" + _RANDOM),  # datasets.ingest's work folder
-    ]
-    legacy_old = _pattern(key, r"[0-9a-f]{32}\.old")  # irl.run.staged_folder's old folder
+    patterns = {
+        NEW: _pattern(key, f"{NEW}-{_RANDOM}"),
+        SWAP: _pattern(key, f"{SWAP}-{_RANDOM}"),
+        "old": _pattern(key, f"old-{_RANDOM}"),  # execution.save_unit_folder's, aside
+        "legacy new": _pattern(key, rf"{_RANDOM}\.tmp"),  # irl.run.staged_folder's
+        "legacy old": _pattern(key, r"[0-9a-f]{32}\.old"),  # irl.run.staged_folder's, aside
+        "ingest": _pattern(key, f"ingest-{_RANDOM}"),  # datasets.ingest's work folder
+    }
     target = parent / key
     for name in names:
         path = parent / name
-        if not path.is_dir() or path.is_symlink():
-            continue
-        if swap.fullmatch(name):
-            with _owned(path) as mine:
-                if mine:
-                    _roll_forward(parent, path)
-                    shutil.rmtree(path, ignore_errors=True)
-        elif new.fullmatch(name) or any(p.fullmatch(name) for p in legacy):
-            with _owned(path) as mine:
-                if mine:
-                    shutil.rmtree(path, ignore_errors=True)
-        elif old.fullmatch(name) or legacy_old.fullmatch(name):
-            # A swap of the old writers killed between its two renames: the old folder comes
-            # back when nothing replaced it.
-            inside = path / "x" if old.fullmatch(name) else path
-            if not os.path.lexists(target) and inside.is_dir():
-                os.rename(inside, target)
+        kind = next((k for k, pattern in patterns.items() if pattern.fullmatch(name)), None)
+        if kind is None or not _is_folder(path):
+            continue  # not a name any writer makes
+        with naming(target), _owned(path) as mine:
+            if not mine:
+                continue  # its writer is alive
+            if kind == SWAP:
+                _roll_forward(parent, path)
+            elif kind in ("old", "legacy old"):
+                # A swap of the writers before the store, killed between its two renames: the
+                # old folder comes back when nothing replaced it.
+                inside = path / "x" if kind == "old" else path
+                if not os.path.lexists(target) and inside.is_dir():
+                    os.rename(inside, target)
             shutil.rmtree(path, ignore_errors=True)
 
 
@@ -181,18 +179,22 @@ def _is_folder(path: Path) -> bool:
 
 def _claim(parent: Path, key: str) -> tuple[Path, int | None]:
     """A new ``.<key>.new-XXXXXXXX`` folder in ``parent``, locked by this process."""
-    while True:
+    for _ in range(100):
         staging = Path(tempfile.mkdtemp(prefix=f".{key}.{NEW}-", dir=parent))
         locked, lock = _lock(staging)
         if locked:
             return staging, lock
         # A tidy of another process took it between mkdtemp and the lock: take another.
+    raise BlockingIOError(errno.EAGAIN, "its staging folders keep being removed", str(parent))
 
 
 @contextmanager
 def _owned(path: Path) -> Iterator[bool]:
     """Whether this process could lock ``path`` (its writer is gone), held in the block."""
-    locked, lock = _lock(path)
+    try:
+        locked, lock = _lock(path)
+    except OSError:  # cannot even be opened: leave it
+        locked, lock = False, None
     try:
         yield locked
     finally:
@@ -202,14 +204,18 @@ def _owned(path: Path) -> Iterator[bool]:
 def _lock(path: Path) -> tuple[bool, int | None]:
     """An exclusive ``flock`` on the folder ``path``: (True, descriptor) when this process
     holds it, (True, None) where locks are unavailable (no owner can be told apart), (False,
-    None) when another process holds it or ``path`` is gone."""
+    None) when another process holds it or ``path`` is gone.
+
+    Raises:
+        OSError: ``path`` exists but cannot be opened (out of descriptors, say).
+    """
     try:
         import fcntl
     except ImportError:  # not POSIX
         return path.is_dir(), None
     try:
         descriptor = os.open(path, os.O_RDONLY)
-    except OSError:
+    except FileNotFoundError:
         return False, None
     try:
         fcntl.flock(descriptor, fcntl.LOCK_EX | fcntl.LOCK_NB)
