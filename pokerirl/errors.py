@@ -1,0 +1,185 @@
+"""One error contract: what the library raises on purpose, and how a command reports it.
+
+Every error that pokerirl raises on purpose (bad input, a file that cannot be used, a unit
+made with other settings) derives from :class:`PokerIRLError`, and its message is one line
+that names the user's file or setting, never a command-line flag: the library does not know
+the command line. Where a command could get past it (another output folder, recomputing),
+the error says so as a :class:`Remedy`, and the command line adds the advice in terms of its
+own flags (:data:`ADVICE`).
+
+:class:`one_line_errors` is the contract of every command, as a decorator or a ``with``
+block:
+
+* a :class:`PokerIRLError` or an ``OSError`` prints one ``error: ...`` line on stderr and
+  exits 1 (an ``OSError`` names its file: ``error: out/table.parquet: Permission denied``);
+* a :class:`UsageError` (a command line that cannot be run) does the same with exit code 2,
+  like the command-line parser's own errors;
+* Ctrl-C prints one line (``interrupted``, or what the command says) and exits 130;
+* anything else is a bug: it keeps its traceback;
+* with ``POKERIRL_DEBUG=1`` in the environment (the group's ``--debug`` sets it), every
+  error also prints its traceback.
+
+>>> class TableError(PokerIRLError, ValueError):
+...     pass
+>>> @one_line_errors(stream=sys.stdout, debug=False)
+... def command():
+...     raise TableError("out/t.parquet: not a decision table")
+>>> try:
+...     command()
+... except SystemExit as done:
+...     print("exit", done.code)
+error: out/t.parquet: not a decision table
+exit 1
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import sys
+import traceback
+from collections.abc import Mapping
+from enum import StrEnum
+from types import TracebackType
+from typing import ClassVar, Literal, TextIO
+
+DEBUG_VARIABLE = "POKERIRL_DEBUG"
+INTERRUPTED_CODE = 130  # 128 + SIGINT, what a shell reports for Ctrl-C
+
+
+class Remedy(StrEnum):
+    """How a command could get past an error that protects what is already on disk."""
+
+    RECOMPUTE = "recompute"  # write elsewhere, or recompute what is there
+    REPLACE = "replace"  # write elsewhere, or replace what is there
+    ELSEWHERE = "elsewhere"  # write elsewhere: what is there is never replaced
+
+
+# The command line's words for each remedy (every command that writes has --out and
+# --overwrite). Library messages never hold them; round 2 moves this to pokerirl/cli/errors.py.
+ADVICE: Mapping[Remedy, str] = {
+    Remedy.RECOMPUTE: "use another --out, or --overwrite to recompute it",
+    Remedy.REPLACE: "use another --out, or --overwrite to replace it",
+    Remedy.ELSEWHERE: "use another --out",
+}
+
+
+class PokerIRLError(Exception):
+    """The base of every error pokerirl raises on purpose; its message is one line.
+
+    ``remedy``: how a command could get past it, if it can (see :data:`ADVICE`). It survives
+    pickling (an error raised in a worker process reaches the driver whole).
+
+    >>> import pickle
+    >>> error = pickle.loads(pickle.dumps(PokerIRLError("x", remedy=Remedy.REPLACE)))
+    >>> error.remedy, str(error)
+    (<Remedy.REPLACE: 'replace'>, 'x')
+    """
+
+    exit_code: ClassVar[int] = 1
+
+    def __init__(self, message: str, *, remedy: Remedy | None = None) -> None:
+        super().__init__(message)
+        self.remedy = remedy
+
+
+class UsageError(PokerIRLError):
+    """A command line that cannot be run (options that contradict each other, a value that no
+    option type checks): exit code 2, like the parser's own errors. Raised by the command
+    line, not the library."""
+
+    exit_code: ClassVar[int] = 2
+
+
+def debug_enabled(environ: Mapping[str, str] | None = None) -> bool:
+    """Whether ``POKERIRL_DEBUG`` asks for tracebacks (``1``, ``true``, ``yes`` or ``on``)."""
+    value = (os.environ if environ is None else environ).get(DEBUG_VARIABLE, "")
+    return value.strip().lower() in ("1", "true", "yes", "on")
+
+
+def one_line(text: str) -> str:
+    """``text`` on one line: its non-blank lines joined by spaces."""
+    return " ".join(line.strip() for line in text.splitlines() if line.strip())
+
+
+def describe_os_error(error: OSError) -> str:
+    """``PATH: reason`` (``OLD -> NEW: reason`` for a rename), or the reason alone.
+
+    >>> describe_os_error(PermissionError(13, "Permission denied", "out/runs"))
+    'out/runs: Permission denied'
+    """
+    reason = error.strerror or one_line(str(error)) or type(error).__name__
+    names = [os.fsdecode(name) for name in (error.filename, error.filename2) if name is not None]
+    return f"{' -> '.join(names)}: {reason}" if names else reason
+
+
+def report(error: BaseException, advice: Mapping[Remedy, str] = ADVICE) -> tuple[int, str] | None:
+    """The exit code and the one line for an error of the contract; None for a bug.
+
+    >>> report(UsageError("--runs must be at least 1"))
+    (2, '--runs must be at least 1')
+    >>> print(report(PokerIRLError("run-0 was made with other settings", remedy=Remedy.REPLACE)))
+    (1, 'run-0 was made with other settings; use another --out, or --overwrite to replace it')
+    >>> report(KeyError("epochs")) is None
+    True
+    """
+    if isinstance(error, PokerIRLError):
+        line = one_line(str(error)) or type(error).__name__
+        if error.remedy is not None and error.remedy in advice:
+            line = f"{line}; {advice[error.remedy]}"
+        return error.exit_code, line
+    if isinstance(error, OSError):
+        return 1, describe_os_error(error)
+    return None
+
+
+class one_line_errors(contextlib.ContextDecorator):  # lower case: a decorator
+    """The error contract of a command (see the module's docstring), as a decorator or a
+    ``with`` block.
+
+    Args:
+        interrupted: the line Ctrl-C prints (a resumable command says how to resume).
+        advice: the command line's words for each :class:`Remedy`.
+        debug: print tracebacks too; default: :func:`debug_enabled`, read when an error
+            arrives (so a ``--debug`` handled after this object was made still counts).
+        stream: where the lines go (default: stderr at the time of the error).
+    """
+
+    def __init__(
+        self,
+        *,
+        interrupted: str = "interrupted",
+        advice: Mapping[Remedy, str] = ADVICE,
+        debug: bool | None = None,
+        stream: TextIO | None = None,
+    ) -> None:
+        self.interrupted = interrupted
+        self.advice = advice
+        self.debug = debug
+        self.stream = stream
+
+    def __enter__(self) -> one_line_errors:
+        return self
+
+    def __exit__(
+        self,
+        kind: type[BaseException] | None,
+        error: BaseException | None,
+        trace: TracebackType | None,
+    ) -> Literal[False]:
+        if error is None:
+            return False
+        if isinstance(error, KeyboardInterrupt):
+            code, line = INTERRUPTED_CODE, self.interrupted
+        else:
+            found = report(error, self.advice)
+            if found is None:
+                return False  # a bug: its traceback, as Python prints it
+            code, line = found
+        stream = self.stream or sys.stderr
+        if self.debug if self.debug is not None else debug_enabled():
+            traceback.print_exception(error, file=stream)
+        colour = getattr(stream, "isatty", lambda: False)()
+        stream.write(f"\x1b[31merror: {line}\x1b[0m\n" if colour else f"error: {line}\n")
+        stream.flush()
+        raise SystemExit(code) from None
