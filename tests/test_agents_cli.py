@@ -172,6 +172,8 @@ def test_learned_reward_training_records_the_run(tmp_path: Path) -> None:
         "run": str(tmp_path),
         "fingerprint": reward_run_fingerprint(tmp_path),
         "payoff_weight": 0.5,
+        "transform": "raw",
+        "raise_counts": "decision",
     }
     assert sum(calls) == record["final"]["transitions"]
 

@@ -31,6 +31,7 @@ DEFAULT_BATCH_SIZE = 65_536
 MAX_HANDS = 100_000_000
 MAX_BATCH_SIZE = 1_048_576
 AGENT_STREAM = 1  # spawn-key word for agents' randomness (deals use 0)
+SEATINGS = ("alternate", "random")
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -164,12 +165,15 @@ def play_match(
     batch_size: int = DEFAULT_BATCH_SIZE,
     progress: bool = False,
     log: list[DecisionLog] | None = None,
+    seating: str = "alternate",
 ) -> MatchResult:
     """Play ``hands`` hands of A against B, ``batch_size`` hands in lock-step at a time.
 
     The same arguments give the same result; deals do not depend on ``batch_size``, but the
     agents' random draws do. ``progress`` shows a tqdm bar on stderr; ``log`` collects A's
-    decisions (see :func:`play_batch`).
+    decisions (see :func:`play_batch`). ``seating="random"`` (without duplicate) draws A's
+    seat for every hand, as RLCard draws the small blind for every game; the default
+    alternates it.
 
     Raises:
         ValueError: as :func:`check_match_size`, or on a negative seed.
@@ -177,8 +181,11 @@ def play_match(
     check_match_size(hands, duplicate=duplicate, batch_size=batch_size)
     if seed < 0:
         raise ValueError(f"seed must be non-negative, got {seed}")
+    if seating not in SEATINGS or (seating == "random" and duplicate):
+        raise ValueError(f"seating must be alternate, or random without duplicate: {seating!r}")
 
     rngs = (_agent_rng(seed, 0), _agent_rng(seed, 1))
+    seat_rng = _agent_rng(seed, 2)
     results = np.empty(hands, dtype=np.float64)
     prepare_tables()  # one-time setup, kept out of hands_per_second
     started = time.perf_counter()
@@ -191,7 +198,10 @@ def play_match(
                 )
             else:
                 deals = deal_cards(seed=seed, start=start, count=count)
-            seat_of_a = (np.arange(start, start + count) % 2).astype(np.int8)
+            if seating == "random":
+                seat_of_a = seat_rng.integers(0, 2, count).astype(np.int8)
+            else:
+                seat_of_a = (np.arange(start, start + count) % 2).astype(np.int8)
             results[start : start + count] = play_batch(
                 (agent_a, agent_b), deals, seat_of_a, rngs, log=log
             )
