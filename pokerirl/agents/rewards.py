@@ -122,7 +122,7 @@ def transform_values(values: np.ndarray, legal_mask: np.ndarray, transform: str)
     >>> values = np.array([[1.0, 3.0, 0.0, 9.0]]); legal = np.array([[1, 1, 0, 0]], bool)
     >>> transform_values(values, legal, "centered").tolist()
     [[-1.0, 1.0, nan, nan]]
-    >>> np.round(np.exp(transform_values(values, legal, "log_softmax")[0, :2]).sum(), 6)
+    >>> round(float(np.exp(transform_values(values, legal, "log_softmax")[0, :2]).sum()), 6)
     1.0
     """
     if transform not in TRANSFORMS:

@@ -278,6 +278,8 @@ def train(
         fail(f"{error.filename or out}: {error.strerror or error}")
     except KeyboardInterrupt:
         fail(INTERRUPTED, 130)
+    from pokerirl.agents.reward_card import read_card
+
     single = {"metrics": summary.metrics, "baselines": summary.baselines}
     for run in summary.runs or (single,):
         last, base = run["metrics"][-1], run["baselines"]
@@ -290,7 +292,55 @@ def train(
             + ", ".join(f"{k} {v:.3f}" for k, v in base.items())
             + f" on {rows[1]} rows"
         )
+        card = read_card(run.get("out", summary.out_dir))
+        if card is not None:
+            shares = ", ".join(f"{a} {v:.0%}" for a, v in card.argmax_share.items())
+            typer.echo(
+                f"  reward card: {card.prediction}. argmax over legal actions: {shares}; "
+                f"= expert {card.agree_expert:.1%}, = legal majority "
+                f"{card.agree_legal_majority:.1%} (reward_card.json)"
+            )
     typer.echo(f"{summary.samples_per_second:,.0f} samples/s; wrote {summary.out_dir}")
+
+
+@app.command("reward-card")
+def reward_card_command(
+    reward: str = typer.Argument(
+        ..., help="An AIRL / H-AIRL run folder, or authors:FILE (one of the authors' rewards)."
+    ),
+    table: Path = typer.Option(..., "--table", help="Decision table (pokerirl ingest) of states."),
+    out: Path = typer.Option(..., "--out", "-o", help="Folder for reward_card.json and .png."),
+    validation: bool = typer.Option(
+        False, "--validation", help="Only the run's validation hands (its split.json)."
+    ),
+    transform: str = typer.Option("raw", "--transform", help="raw, centered or log_softmax."),
+) -> None:
+    """What a reward prefers: f per action, the per-decision bonus, the argmax over legal
+    actions by street and equity, its agreement with the expert and the legal-majority rule,
+    and what a DQN is predicted to learn. Writes OUT/reward_card.json and reward_card.png.
+    """
+    from pokerirl.agents.reward_card import CardStates, reward_card, write_card
+    from pokerirl.agents.rewards import TransformedReward, load_reward_source
+
+    try:
+        source = load_reward_source(reward)
+        groups = None
+        if validation:
+            split = Path(reward) / "split.json"
+            if not split.is_file():
+                fail(f"--validation needs a run folder with split.json; {reward} has none")
+            groups = {str(g) for g in json.loads(split.read_text())["validation_groups"]}
+        states = CardStates.from_table(table, groups=groups)
+        card = reward_card(TransformedReward(source, transform), states)
+        write_card(card, out)
+    except FileNotFoundError as error:
+        fail(str(error))
+    except ValueError as error:
+        fail(str(error))
+    except OSError as error:
+        fail(f"{error.filename or out}: {error.strerror or error}")
+    typer.echo(card.render())
+    typer.echo(f"wrote {out / 'reward_card.json'} and reward_card.png")
 
 
 agent_app = typer.Typer(help="Train DQN agents.", no_args_is_help=True)
