@@ -138,6 +138,54 @@ def study(
 
 
 @app.command()
+def transfer(
+    reward_run: str = typer.Argument(..., help="An IRL run folder, or authors:FILE."),
+    out: Path = typer.Option(..., "--out", "-o", help="Folder for the agents and the table."),
+    transforms: str = typer.Option(
+        "raw,centered,log_softmax", "--transforms", help="Reward transforms to train on."
+    ),
+    payoff_weights: str = typer.Option("0", "--payoff-weights", help="e.g. 0,0.5."),
+    seeds: str = typer.Option("0-2", "--seeds", help="DQN seeds."),
+    hands: int = typer.Option(50_000, "--hands", "-n", help="DQN training hands."),
+    agent_preset: str = typer.Option("default", "--preset", help="DQN preset: default, authors."),
+    eval_hands: int = typer.Option(20_000, "--eval-hands", help="Duplicate hands vs random."),
+    experts: str = typer.Option(
+        "tightbot,loosebot", "--experts", help="Expert rules to compare with, or none."
+    ),
+    jobs: int = typer.Option(2, "--jobs", min=1, help="Processes training seeds at once."),
+    ray: str | None = typer.Option(None, "--ray", metavar="ADDRESS", help=RAY_HELP),
+    quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bars."),
+) -> None:
+    """Does a learned reward teach the expert's play? DQNs on each reward transform (and
+    payoff weight), each judged against random, against the expert rules on the states it
+    visits and by its action shares, beside the expert bots, always-call and a sparse DQN.
+    Writes OUT/transfer.json and transfer.md; a rerun reuses the trained agents."""
+    from pokerirl.seeds import parse_seeds
+    from pokerirl.study.transfer import TransferConfig, parse_list, run_transfer
+
+    try:
+        config = TransferConfig(
+            transforms=parse_list(transforms),
+            payoff_weights=parse_list(payoff_weights, float),
+            seeds=tuple(parse_seeds(seeds)),
+            hands=hands,
+            agent_preset=agent_preset,
+            eval_hands=eval_hands,
+            experts=parse_list(experts),
+        )
+        result = run_transfer(
+            reward_run, out, config, backend=_backend(jobs, ray), progress=not quiet,
+            say=typer.echo,
+        )  # fmt: skip
+    except (ValueError, OSError, execution.ExecutionError) as error:
+        fail(str(error))
+    except KeyboardInterrupt:
+        fail(INTERRUPTED, 130)
+    typer.echo(result.markdown())
+    typer.echo(f"wrote {out / 'transfer.json'} and transfer.md")
+
+
+@app.command()
 def report(
     folder: Path = typer.Argument(
         ..., help="A folder written by pokerirl study, gym study or tournament."
