@@ -28,8 +28,8 @@ AUTHORS_REWARDS: dict[str, dict[str, Any]] = {
         "argmax_share": {"call": 0.20, "raise": 0.68, "fold": 0.0, "check": 0.12},
         "agree_expert": "0.52-0.55",
     },
-    "airl": {
-        "mean_f": "about -0.75 for every action",
+    "airl": {  # "every action scores negative (about -0.75 each)"
+        "mean_f": {"call": -0.75, "raise": -0.75, "fold": -0.75, "check": -0.75},
         "argmax_share": {"raise": 0.74},
         "agree_expert": "0.52-0.55",
     },

@@ -8,6 +8,7 @@ from pathlib import Path
 from typing import Any
 
 from pokerirl import atomic
+from pokerirl.encoding import ACTIONS
 from pokerirl.study import paper
 from pokerirl.study.config import AGENT_KINDS, IRL_ALGOS, StudyConfig, StudyError
 from pokerirl.study.pipeline import mean_std
@@ -170,7 +171,13 @@ def render_markdown(report: dict[str, Any]) -> str:
         f"seed ({'duplicate deals' if settings['duplicate'] else 'no duplicate deals'}), "
         f"{settings['panel_hands']:,} per seed for each panel pair.",
     ]
-    if report["preset"] != "paper":
+    if report["preset"] == "authors":
+        if report["runs"] < 20:
+            lines.append(
+                f"**Fewer experiments**: the authors ran 20 experiments; this study ran "
+                f"{report['runs']} (`--runs`); these numbers are noisier."
+            )
+    elif report["preset"] != "paper":
         lines.append(
             "**Reduced sizes**: the paper's protocol is 10 IRL runs, 20 seeds of 50,000 hands and "
             "20 x 1,000,000 tournament hands (`--preset paper`); these numbers are noisier."
@@ -273,12 +280,16 @@ def render_markdown(report: dict[str, Any]) -> str:
         "",
         f"![RL against random]({figures['rl_vs_random']})",
         "",
-        f"**Training length.** The paper's DQN trains {length['paper']}; ours trains "
-        f"{length['long']['hands']:,} hands. On the same {n_seeds} seeds, the sparse DQN ends at "
-        f"{_pm(length['short'])} mbb/hand against random after {length['short']['hands']:,} hands "
-        f"and {_pm(length['long'])} after {length['long']['hands']:,}.",
-        "",
     ]
+    if length["short"]["hands"] != length["long"]["hands"]:
+        lines += [
+            f"**Training length.** The paper's DQN trains {length['paper']}; ours trains "
+            f"{length['long']['hands']:,} hands. On the same {n_seeds} seeds, the sparse DQN ends "
+            f"at {_pm(length['short'])} mbb/hand against random after "
+            f"{length['short']['hands']:,} hands and {_pm(length['long'])} after "
+            f"{length['long']['hands']:,}.",
+            "",
+        ]
     lines += authors_markdown(report)
     lines += cards_markdown(report)
     lines += [
@@ -345,10 +356,11 @@ def cards_markdown(report: dict[str, Any]) -> list[str]:
         )
         if algo in theirs:
             mine = theirs[algo]
+            f_theirs = " | ".join(f"{mine['mean_f'][a]:+.2f}" for a in ACTIONS)
             lines.append(
-                f"| the authors' published {label} reward (review, not the paper) | "
-                f"{json.dumps(mine['mean_f'])} | | | | | "
-                f"{mine['argmax_share'].get('raise', 0) * 100:.0f}% | {mine['agree_expert']} | |"
+                f"| the authors' published {label} reward (the review; not in the paper) | "
+                f"{f_theirs} | | {mine['argmax_share']['raise'] * 100:.0f}% | "
+                f"{mine['agree_expert']} | |"
             )
     any_card = next(c for c in cards.values() if c)
     lines += [
