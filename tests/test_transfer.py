@@ -52,6 +52,7 @@ def test_transfer_table_has_every_row_and_the_expert_baselines(
         < rows["loosebot"]["mean_agreement"]["loosebot"]
     )
     assert rows["always-call"]["mean_action_shares"]["raise"] == 0.0
+    assert rows["always-call"]["mean_agreement"]["legal_majority"] == 1.0
     assert rows["always-raise"]["mean_vs_random"] > rows["always-call"]["mean_vs_random"]
     assert "| sparse DQN |" in (out / "transfer.md").read_text()
     # A rerun reuses the agents (same numbers).

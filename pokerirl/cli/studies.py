@@ -150,7 +150,10 @@ def transfer(
     agent_preset: str = typer.Option("default", "--preset", help="DQN preset: default, authors."),
     eval_hands: int = typer.Option(20_000, "--eval-hands", help="Duplicate hands vs random."),
     experts: str = typer.Option(
-        "tightbot,loosebot", "--experts", help="Expert rules to compare with, or none."
+        "tightbot,loosebot,legal_majority",
+        "--experts",
+        help="Rules to compare the agents' actions with (tightbot, loosebot, legal_majority), "
+        "or none.",
     ),
     jobs: int = typer.Option(2, "--jobs", min=1, help="Processes training seeds at once."),
     ray: str | None = typer.Option(None, "--ray", metavar="ADDRESS", help=RAY_HELP),

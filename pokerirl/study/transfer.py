@@ -7,12 +7,14 @@ payoff weight, and a sparse DQN on the same seeds and hands. Each greedy agent t
 
 * its result against random (mbb/h; mean and SE over seeds);
 * the share of its decisions where it takes the action of each expert rule (the synthetic
-  months' ``tightbot`` and ``loosebot`` without their noise), on the states it visits;
+  months' ``tightbot`` and ``loosebot`` without their noise), on the states it visits, and
+  of the legal-majority rule (check if legal, else call: a calling station's);
 * its action shares (call, raise, fold, check).
 
 Beside them: each expert bot's own result against random (with its noise), always-call's
 and the sparse DQN's. ``best`` is the transform (and weight) whose agents agree most with the
-expert rules (ties: the better result against random); on synthetic data the truth is known.
+expert rules (ties, or no expert rule: the better result against random); on synthetic data
+the truth is known.
 
 Agents are units of :func:`pokerirl.agents.train.train_seeds` under ``<out>/agents/``: a rerun
 reuses them; the evaluations are recomputed (they are cheap and deterministic).
@@ -38,6 +40,7 @@ from pokerirl.execution import Backend
 TRANSFER_FILE, TRANSFER_MARKDOWN = "transfer.json", "transfer.md"
 EVAL_SEED = 4_242_424
 EXPERTS = ("tightbot", "loosebot")
+RULES = (*EXPERTS, "legal_majority")  # what an agent's actions are compared with
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -50,7 +53,7 @@ class TransferConfig:
     hands: int = 50_000  # DQN training hands
     agent_preset: str = "default"
     eval_hands: int = 20_000
-    experts: tuple[str, ...] = EXPERTS
+    experts: tuple[str, ...] = RULES
 
     def __post_init__(self) -> None:
         from pokerirl.agents.rewards import TRANSFORMS
@@ -61,9 +64,9 @@ class TransferConfig:
             raise ValueError("payoff weights must lie in [0, 1]")
         if not self.seeds or self.hands < 1 or self.eval_hands < 2 or self.eval_hands % 2:
             raise ValueError("need seeds, hands >= 1 and an even eval_hands >= 2")
-        unknown = [e for e in self.experts if e not in EXPERTS]
+        unknown = [e for e in self.experts if e not in RULES]
         if unknown:
-            raise ValueError(f"unknown expert rule {unknown[0]!r} ({', '.join(EXPERTS)})")
+            raise ValueError(f"unknown rule {unknown[0]!r} ({', '.join(RULES)})")
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -87,7 +90,9 @@ class TransferRow:
         return float(values.std(ddof=1) / math.sqrt(values.size)) if values.size > 1 else 0.0
 
     def mean_agreement(self, expert: str | None = None) -> float:
-        experts = [expert] if expert else list(self.agreement)
+        """Mean agreement with ``expert``'s rule, or with every expert bot's (not the
+        legal-majority rule's); 0 without any."""
+        experts = [expert] if expert else [e for e in self.agreement if e in EXPERTS]
         return float(np.mean([np.mean(self.agreement[e]) for e in experts])) if experts else 0.0
 
     def mean_share(self, action: str) -> float:
@@ -160,6 +165,16 @@ def _folder(transform: str, weight: float) -> str:
     return transform if weight == 0 else f"{transform}-w{weight:g}"
 
 
+def _rule(name: str, seen: Any) -> np.ndarray:
+    """The actions of rule ``name`` on logged decisions."""
+    from pokerirl.agents.reward_card import legal_majority
+    from pokerirl.game import make_agent
+
+    if name == "legal_majority":
+        return legal_majority(seen.legal_mask)
+    return make_agent(name).rule(seen.obs, seen.legal_mask, seen.cards)  # type: ignore[attr-defined]
+
+
 def _judge(agent: Any, config: TransferConfig) -> tuple[float, dict[str, float], dict[str, float]]:
     """An agent against random: mbb/h, agreement with each expert rule, action shares."""
     from pokerirl.game import DecisionLog, make_agent, play_match
@@ -168,12 +183,7 @@ def _judge(agent: Any, config: TransferConfig) -> tuple[float, dict[str, float],
     result = play_match(agent, make_agent("random"), hands=config.eval_hands, seed=EVAL_SEED,
                         log=log)  # fmt: skip
     seen = DecisionLog.concatenate(log)
-    agreement = {
-        expert: float(
-            (make_agent(expert).rule(seen.obs, seen.legal_mask, seen.cards) == seen.actions).mean()  # type: ignore[attr-defined]
-        )
-        for expert in config.experts
-    }
+    agreement = {rule: float((_rule(rule, seen) == seen.actions).mean()) for rule in config.experts}
     counts = np.bincount(seen.actions, minlength=len(ACTIONS)) / max(len(seen.actions), 1)
     return result.mbb_per_hand, agreement, {a: float(counts[i]) for i, a in enumerate(ACTIONS)}
 
@@ -232,9 +242,10 @@ def run_transfer(
     say(f"transfer: sparse DQN: {len(config.seeds)} seeds -> {out / 'agents' / 'sparse'}")
     train(out / "agents" / "sparse", base)
     rows.append(_row("sparse DQN", agents_of(out / "agents" / "sparse"), config))
-    for name in (*config.experts, "call", "raise"):
-        rows.append(_row(name if name in config.experts else f"always-{name}",
-                         [resolve_agent(name)], config))  # fmt: skip
+    bots = [e for e in config.experts if e in EXPERTS]
+    for name in (*bots, "call", "raise"):
+        rows.append(_row(name if name in bots else f"always-{name}", [resolve_agent(name)],
+                         config))  # fmt: skip
     learned_rows = [row for row in rows if row.transform is not None]
     best = max(learned_rows, key=lambda row: (round(row.mean_agreement(), 3), row.mean_vs_random))
     result = TransferResult(reward=str(reward_run), config=config, rows=tuple(rows),
