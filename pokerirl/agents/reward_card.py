@@ -16,7 +16,9 @@ rows, or a run's validation hands), the card holds:
 * ``agree_expert`` (the argmax is the expert's action) and ``agree_legal_majority`` (it is
   the legal-majority rule's: check if legal, else call), with the rule's own agreement with
   the expert beside them;
-* ``prediction``: in one line, what the card predicts a DQN will learn from it.
+* ``prediction``: in one line, what the card predicts a DQN will learn from it;
+* ``expert_share`` (and ``expert_share_by_strength``): the expert's own actions on the same
+  states, to read the argmax shares against.
 
 >>> from pokerirl.agents.rewards import ObsReward
 >>> states = CardStates.from_arrays(
@@ -195,6 +197,8 @@ class RewardCard:
     agree_legal_majority: float
     legal_majority_agree_expert: float | None
     prediction: str
+    expert_share: dict[str, float] | None = None  # the expert's own actions, for comparison
+    expert_share_by_strength: list[dict[str, float]] | None = None
     format: str = CARD_FORMAT
 
     def to_json(self) -> str:
@@ -228,6 +232,8 @@ class RewardCard:
         for name, shares, count in zip(self.strength_buckets, self.argmax_share_by_strength,
                                        self.states_by_strength, strict=True):  # fmt: skip
             lines.append(f"    eq {name:<6} ({count:>6,}): {row(shares)}")
+        if self.expert_share is not None:
+            lines.append("  the expert's own actions:   " + row(self.expert_share))
         expert = "n/a" if self.agree_expert is None else f"{self.agree_expert:.1%}"
         rule = self.legal_majority_agree_expert
         lines.append(
@@ -308,6 +314,12 @@ def reward_card(reward: PokerReward, states: CardStates) -> RewardCard:
             None if states.expert is None else float((rule == states.expert).mean())
         ),
         prediction=predict(bonus, shares, agree_rule, mean_f["fold"]),
+        expert_share=None if states.expert is None else _shares(states.expert),
+        expert_share_by_strength=(
+            None
+            if states.expert is None
+            else [_shares(states.expert[bucket == b]) for b in range(len(STRENGTH_LABELS))]
+        ),
     )
 
 
@@ -404,6 +416,11 @@ def card_summary(cards: list[RewardCard]) -> dict[str, Any]:
         "agree_expert": stat([c.agree_expert or 0.0 for c in cards]),
         "agree_legal_majority": stat([c.agree_legal_majority for c in cards]),
         "legal_majority_agree_expert": stat([c.legal_majority_agree_expert or 0.0 for c in cards]),
+        "expert_share": {
+            a: stat([c.expert_share[a] for c in cards if c.expert_share]) for a in ACTIONS
+        }
+        if all(c.expert_share for c in cards)
+        else None,
         "predictions": [c.prediction for c in cards],
     }
 

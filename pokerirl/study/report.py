@@ -363,10 +363,14 @@ def cards_markdown(report: dict[str, Any]) -> list[str]:
                 f"{mine['agree_expert']} | |"
             )
     any_card = next(c for c in cards.values() if c)
+    expert = any_card.get("expert_share")
+    raises = "" if not expert else (
+        f" The expert raises in {_pm(expert['raise'], 100, 1)}% of them."
+    )  # fmt: skip
     lines += [
         "",
         f"The legal-majority rule itself agrees with the expert on "
-        f"{_pm(any_card['legal_majority_agree_expert'], 100, 1)}% of these states.",
+        f"{_pm(any_card['legal_majority_agree_expert'], 100, 1)}% of these states.{raises}",
         "",
     ]
     for algo, card in cards.items():
