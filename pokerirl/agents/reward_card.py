@@ -197,6 +197,7 @@ class RewardCard:
     agree_legal_majority: float
     legal_majority_agree_expert: float | None
     prediction: str
+    preference_spread: float | None = None  # mean over states of max - min f, legal, no fold
     expert_share: dict[str, float] | None = None  # the expert's own actions, for comparison
     expert_share_by_strength: list[dict[str, float]] | None = None
     format: str = CARD_FORMAT
@@ -249,14 +250,21 @@ def predict(
     shares: dict[str, float],
     agree_legal_majority: float,
     fold_f: float | None = None,
+    spread: float = float("inf"),
 ) -> str:
     """What a DQN on this reward is expected to learn, in one line (a heuristic: the sign of
-    the per-decision bonus, then the argmax's dominant style, then whether folding costs).
+    the per-decision bonus, then the argmax's dominant style, or raise-heavy when a positive
+    bonus outweighs the state's preferences (``spread``: how far apart f puts the actions),
+    since raising prolongs the hand; then whether folding costs).
 
     >>> predict(0.8, {"call": 0.2, "raise": 0.68, "fold": 0.0, "check": 0.12}, 0.3, -8.5)
     'pays +0.80 per decision: expect long, raise-heavy hands; folding costs 8.50'
+    >>> predict(12.0, {"call": 0.2, "raise": 0.04, "fold": 0.0, "check": 0.76}, 0.96, None, 2.0)
+    'pays +12.00 per decision: expect long, raise-heavy (bonus over preferences) hands'
     """
-    if shares["raise"] >= 0.5:
+    if bonus > max(spread, BONUS_TOLERANCE):
+        style = "raise-heavy (bonus over preferences)"
+    elif shares["raise"] >= 0.5:
         style = "raise-heavy"
     elif agree_legal_majority >= 0.8:
         style = "calling-station (check if legal, else call)"
@@ -283,6 +291,11 @@ def reward_card(reward: PokerReward, states: CardStates) -> RewardCard:
     going_on = legal.copy()
     going_on[:, FOLD] = False  # every state has a legal call or check
     bonus = float((np.where(going_on, values, 0.0).sum(axis=1) / going_on.sum(axis=1)).mean())
+    spread = float(
+        (
+            np.where(going_on, values, -np.inf).max(1) - np.where(going_on, values, np.inf).min(1)
+        ).mean()
+    )
     mean_f: dict[str, float | None] = {}
     std_f: dict[str, float | None] = {}
     for action, name in enumerate(ACTIONS):
@@ -313,7 +326,8 @@ def reward_card(reward: PokerReward, states: CardStates) -> RewardCard:
         legal_majority_agree_expert=(
             None if states.expert is None else float((rule == states.expert).mean())
         ),
-        prediction=predict(bonus, shares, agree_rule, mean_f["fold"]),
+        prediction=predict(bonus, shares, agree_rule, mean_f["fold"], spread),
+        preference_spread=spread,
         expert_share=None if states.expert is None else _shares(states.expert),
         expert_share_by_strength=(
             None
