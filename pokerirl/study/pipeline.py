@@ -395,6 +395,9 @@ def agents_stage(study: Study, irl: dict[str, Any]) -> dict[str, Any]:
     sets = {kind: folder / name for kind, name in AGENT_FOLDERS.items()}
     short = folder / SHORT_DQN
     short_is_long = config.short_agent_hands == config.agent_hands
+    # The authors' evaluations are 1,000 games; the references are measured as the agents are.
+    authors = config.agent_preset == "authors"
+    reference_hands = PLAYING_HANDS if authors else config.eval_hands
 
     def train(out: Path, hands: int, algo: str | None) -> None:
         base = agent_preset(
@@ -434,7 +437,7 @@ def agents_stage(study: Study, irl: dict[str, Any]) -> dict[str, Any]:
         references = {}
         for name in ("call", "raise"):
             result = play_match(
-                make_agent(name), make_agent("random"), hands=config.eval_hands,
+                make_agent(name), make_agent("random"), hands=reference_hands,
                 seed=TrainConfig.eval_seed,
             )  # fmt: skip
             references[name] = {"mbb_per_hand": result.mbb_per_hand, "std_error": result.std_error}
@@ -451,7 +454,7 @@ def agents_stage(study: Study, irl: dict[str, Any]) -> dict[str, Any]:
             },
             "references": references,
         }
-        if config.agent_preset == "authors":
+        if authors:
             found["playing_vs_random"] = {
                 kind: _playing_vs_random(out, config.seeds) for kind, out in sets.items()
             }
@@ -467,6 +470,7 @@ def agents_stage(study: Study, irl: dict[str, Any]) -> dict[str, Any]:
         "eval_hands": config.eval_hands,
         "upstream": irl["fingerprint"],
         **_non_default(config, "agent_preset", "reward_transform"),
+        **({"reference_hands": reference_hands} if authors else {}),
     }
     return study.stage("agents", settings, [folder], compute)
 
