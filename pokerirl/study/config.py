@@ -28,7 +28,8 @@ TRANSFORMS = ("raw", "centered", "log_softmax")  # pokerirl.agents.rewards.TRANS
 # distribution (not a sample) shown to the discriminator; H-AIRL: gt_ratio_p 0.33,
 # gt_ratio_d 0, noise over the batch from 1.0 to 0.1 with decay 0.1. Their split is the first
 # 80% of rows; ours stays a seeded share of hands. Their supervised term is a summed MSE on
-# the probabilities; ours stays cross-entropy until the IRL core offers theirs.
+# the probabilities; ours stays cross-entropy until the IRL core offers theirs (issue 20's
+# `supervised_loss = "sum_mse"`: AUTHORS_HAIRL should set it once that lands).
 AUTHORS_IRL: dict[str, object] = {
     "reward_hidden": (64,),
     "policy_hidden": (64,),
