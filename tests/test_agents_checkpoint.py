@@ -56,6 +56,8 @@ def test_round_trip_keeps_the_network_and_the_training_record(trained: Path) -> 
         "run": None,
         "fingerprint": None,
         "payoff_weight": 0.0,
+        "transform": "raw",
+        "raise_counts": "decision",
     }
     assert config["seed"] == 7 and config["hands"] == 1_024 and config["hidden"] == [32, 16]
     assert config["dqn"]["learning_rate"] == 5e-5 and config["dqn"]["gamma"] == 0.99

@@ -172,6 +172,8 @@ def test_learned_reward_training_records_the_run(tmp_path: Path) -> None:
         "run": str(tmp_path),
         "fingerprint": reward_run_fingerprint(tmp_path),
         "payoff_weight": 0.5,
+        "transform": "raw",
+        "raise_counts": "decision",
     }
     assert sum(calls) == record["final"]["transitions"]
 
@@ -205,3 +207,71 @@ def test_learned_reward_from_a_real_irl_run_end_to_end(tmp_path: Path) -> None:
     expected = 0.7 * f(replay.obs[:n][steps], replay.actions[:n][steps])
     np.testing.assert_allclose(replay.rewards[:n][steps], expected, rtol=1e-5, atol=1e-6)
     assert steps.sum() > 20 and np.unique(expected).size > 1
+
+
+DQN_FLAGS = (
+    "--hidden", "--replay-size", "--replay-init", "--batch-size", "--lr", "--gamma",
+    "--epsilon-start", "--epsilon-end", "--epsilon-decay-steps", "--target-update-every",
+    "--train-every", "--concurrent-hands", "--self-play-every",
+)  # fmt: skip
+
+
+def test_every_dqn_field_is_a_flag_and_a_toml_key(tmp_path: Path) -> None:
+    import dataclasses
+    import re
+
+    result = CliRunner().invoke(app, ["agent", "train", "--help"], env={"COLUMNS": "200"})
+    plain = re.sub(r"\x1b\[[0-9;]*m", "", result.output)
+    assert all(flag in plain for flag in DQN_FLAGS)
+    assert len(DQN_FLAGS) == len(dataclasses.fields(DQNConfig))
+    toml = tmp_path / "dqn.toml"
+    toml.write_text("epsilon_end = 0.05\nhidden = [16, 8]\ntrain_every = 4\nhands = 256\n")
+    out = tmp_path / "agent"
+    flags = ["--train-every", "2", "--eval-every", "256", "--eval-hands", "100"]
+    code, output = invoke("agent", "train", "--config", str(toml), *flags, "--out", str(out), "-q")
+    assert code == 0, output
+    record = json.loads((out / "config.json").read_text())
+    assert record["hidden"] == [16, 8] and record["hands"] == 256
+    assert record["dqn"]["epsilon_end"] == 0.05 and record["dqn"]["train_every"] == 2  # flag wins
+    toml.write_text("learning_rat = 1e-3\n")
+    code, output = invoke("agent", "train", "--config", str(toml), "--out", str(out), "-q")
+    assert (
+        code == 1 and "unknown setting 'learning_rat'" in output and len(output.splitlines()) == 1
+    )
+    toml.write_text('train_every = "often"\n')
+    code, output = invoke("agent", "train", "--config", str(toml), "--out", str(out), "-q")
+    assert code == 1 and "train_every must be an integer" in output
+
+
+def test_the_authors_preset_keeps_and_plays_the_best_checkpoint(tmp_path: Path) -> None:
+    from pokerirl.agents import resolve_agent
+    from pokerirl.agents.checkpoint import QNetwork
+
+    out = tmp_path / "authors"
+    flags = ["--hands", "300", "--eval-hands", "200", "--concurrent-hands", "4"]
+    code, output = invoke("agent", "train", "--preset", "authors", *flags, "--out", str(out))
+    assert code == 0, output
+    assert "plays kept.pt" in output
+    record = json.loads((out / "config.json").read_text())
+    assert record["dqn"]["learning_rate"] == 5e-4 and record["dqn"]["train_every"] == 1
+    assert record["dqn"]["epsilon_end"] == 0.0 and record["dqn"]["epsilon_decay_steps"] == 5_000
+    assert record["plays"] == "kept" and record["evaluation"]["protocol"] == "authors"
+    lines = [json.loads(x) for x in (out / "metrics.jsonl").read_text().splitlines()]
+    assert [line["hands"] for line in lines] == [4, 104, 204, 300]  # after hands 1, 101, 201
+    assert [line["keep_rule"] for line in lines] == [True, True, True, False]
+    # The rule: keep a model whose payoff beats 0.8 x the best so far (the best starts at -inf).
+    best, kept = float("-inf"), None
+    for line in lines[:-1]:
+        payoff = line["eval"]["random"]["mbb_per_hand"]
+        if payoff > 0.8 * best:
+            kept, best = line, max(best, payoff)
+    assert record["kept"] == kept
+    network = QNetwork()
+    network.load_state_dict(torch.load(out / "kept.pt", weights_only=True))
+    agent = resolve_agent(str(out))
+    obs = np.random.default_rng(0).integers(0, 2, (5, 72)).astype(np.uint8)
+    with torch.no_grad():
+        expected = network.eval()(torch.from_numpy(obs).float()).numpy()
+    np.testing.assert_allclose(agent.q_values(obs), expected, rtol=1e-6)
+    code, output = invoke("agent", "train", "--play", "kept", "--out", str(tmp_path / "x"), "-q")
+    assert code == 1 and "--play kept needs --protocol authors" in output

@@ -80,5 +80,6 @@ def test_random_agent_is_uniform_over_legal_actions_and_seeded() -> None:
 
 
 def test_unknown_agent_is_a_value_error() -> None:
-    with pytest.raises(ValueError, match="unknown agent 'dqn'.*call, raise, random"):
+    known = "call, loosebot, raise, random, tightbot"
+    with pytest.raises(ValueError, match=f"unknown agent .dqn. .built-in agents: {known}"):
         make_agent("dqn")

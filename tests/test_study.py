@@ -165,3 +165,45 @@ def test_cli_refuses_a_missing_source(tmp_path: Path) -> None:
     )
     assert result.exit_code == 1
     assert "missing: no such file or folder" in result.output
+
+
+AUTHORS_TOY = dict(
+    runs=2, hands=400, panel_hands=200, agent_hands=300, short_agent_hands=300,
+    eval_every=100, eval_hands=100, irl_epochs=2, authors_repeats=3, authors_games=100, jobs=1,
+)  # fmt: skip
+
+
+@pytest.mark.slow
+def test_the_authors_preset_reports_both_statistics(tmp_path: Path) -> None:
+    month = write_synthetic_month(tmp_path / "irc", hands=400, seed=1)
+    said: list[str] = []
+    config = preset("authors", **AUTHORS_TOY)
+    assert config.seeds == (0, 1) and config.agent_preset == "authors"
+    result = run_study([month], tmp_path / "out", config, say=said.append)
+    assert [line[:5] for line in said if line.startswith("[")] == [f"[{k}/7]" for k in range(1, 8)]
+    report = json.loads((tmp_path / "out" / "report.json").read_text())
+    for name in ("hairl_dqn_vs_dqn", "airl_dqn_vs_dqn"):
+        row = report["table1_authors"][name]
+        for key in ("mean", "paper_style_se", "se_over_experiments", "duplicate_mbb_per_hand",
+                    "per_experiment"):  # fmt: skip
+            assert key in row
+        assert len(row["per_experiment"]) == 2
+        assert row["duplicate_mbb_per_hand"] == report["table1"][name]["mbb_per_hand"]
+        assert row["mean"] == pytest.approx(sum(row["per_experiment"]) / 2)
+    # The IRL runs used the authors' settings; the agents their preset, playing kept.pt.
+    irl = json.loads((tmp_path / "out" / "irl" / "hairl" / "run-1" / "config.json").read_text())
+    assert irl["hyperparameters"]["disc_action"] == "distribution"
+    assert irl["hyperparameters"]["noise_schedule"] == "authors"
+    assert irl["hyperparameters"]["activation"] == "leaky_relu"
+    agent = json.loads(
+        (tmp_path / "out" / "agents" / "hairl-dqn" / "seed-1" / "config.json").read_text()
+    )
+    assert agent["plays"] == "kept" and agent["dqn"]["learning_rate"] == 5e-4
+    assert Path(agent["reward"]["run"]).name == "run-1"
+    for algo in ("airl", "hairl"):
+        card = report["reward_cards"][algo]
+        assert card["runs"] == 2 and set(card["argmax_share"]) == {"call", "raise", "fold", "check"}
+    for figure in report["figures"].values():
+        assert (tmp_path / "out" / figure).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert "The authors' protocol" in result.markdown and "Reward cards" in result.markdown
+    assert load_study_report(tmp_path / "out")["table1_authors"] == report["table1_authors"]

@@ -1,8 +1,8 @@
 """Trained agents (DQN on the sparse payoff or on a learned reward) and agent resolution.
 
 :func:`resolve_agent` is the one place that turns what a user typed into an agent: a built-in
-name (``random``, ``raise``, ``call``), an agent folder written by ``pokerirl agent train``,
-or ``rlcard:PATH`` for an RLCard DQN checkpoint.
+name (``random``, ``raise``, ``call``, ``tightbot``, ``loosebot``), an agent folder written by
+``pokerirl agent train``, or ``rlcard:PATH`` for an RLCard DQN checkpoint.
 
 :func:`ship_agent` and :func:`land_agent` carry an agent to a worker as bytes (see
 :mod:`pokerirl.execution`): the driver reads the files, the worker writes them into a private
@@ -26,7 +26,8 @@ from typing import Any
 from pokerirl.agents.registry import RLCARD_PREFIX, agent_fingerprint, resolve_agent
 from pokerirl.game.agents import BUILT_IN_AGENTS, Agent
 
-AGENT_FILES = ("model.pt", "config.json")  # what an agent folder's agent is made of
+AGENT_FILES = ("model.pt", "config.json")  # what an agent folder's agent is made of (and
+KEPT_FILE = "kept.pt"  # the authors' kept checkpoint, when there is one)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -44,8 +45,10 @@ def ship_agent(spec: str) -> ShippedAgent:
     if spec.startswith(RLCARD_PREFIX):
         path = Path(spec.removeprefix(RLCARD_PREFIX))
         return ShippedAgent(spec=spec, files=(("checkpoint.pt", path.read_bytes()),))
+    kept = (KEPT_FILE,) if (Path(spec) / KEPT_FILE).is_file() else ()
+    names = (*AGENT_FILES, *kept)
     return ShippedAgent(
-        spec=spec, files=tuple((name, (Path(spec) / name).read_bytes()) for name in AGENT_FILES)
+        spec=spec, files=tuple((name, (Path(spec) / name).read_bytes()) for name in names)
     )
 
 

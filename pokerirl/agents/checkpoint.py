@@ -4,7 +4,9 @@ An agent folder holds ``model.pt`` (the q-network's ``state_dict``, loaded with
 ``weights_only=True``) and ``config.json`` (network shape, how it was trained: reward mode,
 reward-run fingerprint, seed, hyper-parameters). Both are written atomically, ``config.json``
 last, so a folder with both is finished. Training also writes ``metrics.jsonl`` and
-``learning_curve.png`` there.
+``learning_curve.png`` there. An agent trained with the authors' protocol also holds
+``kept.pt``, the checkpoint their "> 0.8 x best" rule keeps; ``config.json``'s ``plays`` says
+which of the two the agent plays (``final``, the default, or ``kept``).
 
 >>> import tempfile
 >>> folder = Path(tempfile.mkdtemp()) / "agent"
@@ -27,7 +29,8 @@ import torch
 from pokerirl.agents.dqn import GreedyQAgent, QNetwork
 from pokerirl.atomic import write_bytes, write_torch
 
-MODEL_FILE, CONFIG_FILE = "model.pt", "config.json"
+MODEL_FILE, CONFIG_FILE, KEPT_FILE = "model.pt", "config.json", "kept.pt"
+PLAYS = ("final", "kept")
 METRICS_FILE, CURVE_FILE = "metrics.jsonl", "learning_curve.png"
 FORMAT = "pokerirl-dqn"
 FORMAT_VERSION = 1
@@ -38,8 +41,15 @@ def is_finished(folder: str | os.PathLike[str]) -> bool:
     return (Path(folder) / MODEL_FILE).is_file() and (Path(folder) / CONFIG_FILE).is_file()
 
 
-def save_agent(folder: str | os.PathLike[str], network: QNetwork, config: dict[str, Any]) -> None:
-    """Write ``network``'s weights and ``config`` (JSON-able; ``hidden`` is required).
+def save_agent(
+    folder: str | os.PathLike[str],
+    network: QNetwork,
+    config: dict[str, Any],
+    *,
+    kept: dict[str, torch.Tensor] | None = None,
+) -> None:
+    """Write ``network``'s weights and ``config`` (JSON-able; ``hidden`` is required), and
+    ``kept`` (a ``state_dict``) as ``kept.pt`` when given.
 
     ``format`` and ``version`` keys are added to the config.
     """
@@ -48,6 +58,8 @@ def save_agent(folder: str | os.PathLike[str], network: QNetwork, config: dict[s
     write_torch(
         folder / MODEL_FILE, {k: v.detach().cpu().clone() for k, v in network.state_dict().items()}
     )
+    if kept is not None:
+        write_torch(folder / KEPT_FILE, {k: v.detach().cpu().clone() for k, v in kept.items()})
     record = {"format": FORMAT, "version": FORMAT_VERSION, **config}
     write_bytes(folder / CONFIG_FILE, (json.dumps(record, indent=2) + "\n").encode())
 
@@ -60,9 +72,15 @@ def files_fingerprint(folder: str | os.PathLike[str], names: tuple[str, ...]) ->
     return f"sha256:{digest.hexdigest()}"
 
 
+def agent_files(folder: str | os.PathLike[str]) -> tuple[str, ...]:
+    """The files an agent folder's agent is made of: the checkpoints, then the config."""
+    kept = (KEPT_FILE,) if (Path(folder) / KEPT_FILE).is_file() else ()
+    return (MODEL_FILE, *kept, CONFIG_FILE)
+
+
 def folder_fingerprint(folder: str | os.PathLike[str]) -> str:
-    """``sha256:<hex>`` over the checkpoint's and the config's bytes."""
-    return files_fingerprint(folder, (MODEL_FILE, CONFIG_FILE))
+    """``sha256:<hex>`` over the checkpoints' and the config's bytes."""
+    return files_fingerprint(folder, agent_files(folder))
 
 
 def load_agent(folder: str | os.PathLike[str]) -> GreedyQAgent:
@@ -77,14 +95,15 @@ def load_agent(folder: str | os.PathLike[str]) -> GreedyQAgent:
     folder = Path(folder)
     if not is_finished(folder):
         raise ValueError(f"{folder}: not an agent folder (needs {MODEL_FILE} and {CONFIG_FILE})")
-    hidden = _read_hidden(folder / CONFIG_FILE)
-    state = _read_state_dict(folder / MODEL_FILE)
+    hidden, plays = _read_config(folder / CONFIG_FILE)
+    checkpoint = folder / (KEPT_FILE if plays == "kept" else MODEL_FILE)
+    state = _read_state_dict(checkpoint)
     network = QNetwork(hidden=hidden)
     try:
         network.load_state_dict(state)
     except (RuntimeError, ValueError, TypeError) as error:
         raise _bad(
-            folder / MODEL_FILE,
+            checkpoint,
             f"does not fit {CONFIG_FILE}'s hidden {list(hidden)}: {_first_line(error)}",
         ) from None
     return GreedyQAgent(
@@ -101,8 +120,9 @@ def _first_line(error: BaseException) -> str:
     return text.splitlines()[0] if text else type(error).__name__
 
 
-def _read_hidden(path: Path) -> tuple[int, ...]:
-    """The hidden widths in an agent's ``config.json``; ValueError naming ``path`` if bad."""
+def _read_config(path: Path) -> tuple[tuple[int, ...], str]:
+    """The hidden widths in an agent's ``config.json`` and which checkpoint plays;
+    ValueError naming ``path`` if bad."""
     try:
         config = json.loads(path.read_text(encoding="utf-8"))
     except OSError as error:
@@ -120,7 +140,12 @@ def _read_hidden(path: Path) -> tuple[int, ...]:
         or not all(type(width) is int and width > 0 for width in hidden)
     ):
         raise _bad(path, f"hidden must be a list of positive integers, got {str(hidden)[:60]}")
-    return tuple(hidden)
+    plays = config.get("plays", "final")
+    if plays not in PLAYS:
+        raise _bad(path, f"plays must be final or kept, got {str(plays)[:40]!r}")
+    if plays == "kept" and not (path.parent / KEPT_FILE).is_file():
+        raise _bad(path, f"plays the kept checkpoint, but there is no {KEPT_FILE}")
+    return tuple(hidden), plays
 
 
 def _read_state_dict(path: Path) -> dict[str, torch.Tensor]:

@@ -10,6 +10,9 @@ Rewards, per learner decision ``(s, a)`` (``reward_fn`` is f_θ, ``w`` the payof
 
 * sparse (``reward_fn=None``): the hand's payoff in big blinds on the last decision, else 0;
 * learned: ``(1 - w) * f(s, a)`` at every decision, plus ``w * payoff`` on the last one.
+  ``f`` sees the state as it was at the decision, or, with ``raise_counts="end-of-hand"``,
+  with the raise counts the hand ended with (what the authors' reward read: RLCard's live
+  ``raise_nums`` list after the hand); then a hand's transitions are stored when it ends.
 
 >>> import torch; _ = torch.manual_seed(0)
 >>> from pokerirl.game import make_agent
@@ -22,6 +25,7 @@ Rewards, per learner decision ``(s, a)`` (``reward_fn`` is f_θ, ``w`` the payof
 from __future__ import annotations
 
 import copy
+import functools
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
@@ -30,13 +34,16 @@ import torch
 from torch import nn
 from tqdm import tqdm
 
-from pokerirl.encoding import NUM_ACTIONS, OBS_SIZE
-from pokerirl.game.agents import Agent, RandomAgent
-from pokerirl.game.deals import deal_cards
+from pokerirl.agents.rewards import RAISE_COUNTS, Decisions, PokerReward, as_poker_reward
+from pokerirl.encoding import NUM_ACTIONS, OBS_SIZE, encode_obs
+from pokerirl.game.agents import Agent, RandomAgent, agent_actions
+from pokerirl.game.deals import DEAL_BLOCK, deal_cards
 from pokerirl.game.engine import LimitHoldemBatch
+from pokerirl.game.match import turn_cards
 
-RewardFn = Callable[[np.ndarray, np.ndarray], np.ndarray]
-"""A learned reward f(obs (B, 72) uint8, actions (B,) int64) -> (B,) float rewards."""
+RewardFn = Callable[[np.ndarray, np.ndarray], np.ndarray] | PokerReward
+"""A learned reward: f(obs (B, 72) uint8, actions (B,) int64) -> (B,) float rewards, or a
+:class:`pokerirl.agents.rewards.PokerReward` (which may read the cards and legal actions)."""
 
 SELF_PLAY = "self"  # opponent spec: a frozen greedy copy of the learner
 TRAIN_STREAM = 2  # spawn-key word of the trainer's randomness (deals use 0, match agents 1)
@@ -191,7 +198,7 @@ class ReplayMemory:
         rewards: np.ndarray,
         next_obs: np.ndarray,
         next_legal: np.ndarray,
-        done: bool,
+        done: bool | np.ndarray,
     ) -> None:
         """Store n transitions (n may exceed what is left before wrapping, not the capacity)."""
         slots = (self.position + np.arange(len(actions))) % self.capacity
@@ -307,6 +314,7 @@ def train_dqn(
     opponent: Agent | str,
     reward_fn: RewardFn | None = None,
     payoff_weight: float = 0.0,
+    raise_counts: str = "decision",
     progress: bool = False,
     on_hands: Callable[[int, DQNLearner], None] | None = None,
 ) -> DQNLearner:
@@ -322,6 +330,8 @@ def train_dqn(
         reward_fn: ``None`` for the sparse payoff; else f_θ, called once per lock-step on
             every learner decision of the step, with exactly the (obs, action) it took.
         payoff_weight: w in ``(1 - w) f(s, a) + w * payoff``; ignored when sparse.
+        raise_counts: ``decision`` (f sees the decision's state) or ``end-of-hand`` (f sees
+            the hand's final raise counts, and is called when the hand ends).
         progress: show a tqdm bar over hands on stderr.
         on_hands: called as ``on_hands(hands_done, learner)`` after every lock-step batch.
     """
@@ -331,6 +341,9 @@ def train_dqn(
         raise ValueError(f"payoff weight must be in [0, 1], got {payoff_weight}")
     if isinstance(opponent, str) and opponent != SELF_PLAY:
         raise ValueError(f"opponent must be an agent or {SELF_PLAY!r}, got {opponent!r}")
+    if raise_counts not in RAISE_COUNTS:
+        raise ValueError(f"raise_counts must be one of {', '.join(RAISE_COUNTS)}")
+    reward = as_poker_reward(reward_fn)
     torch.manual_seed(seed)
     streams = np.random.SeedSequence(seed, spawn_key=(TRAIN_STREAM,)).spawn(2)
     rng, opponent_rng = (np.random.Generator(np.random.PCG64(s)) for s in streams)
@@ -338,19 +351,18 @@ def train_dqn(
     self_play = opponent == SELF_PLAY
     rival = learner.greedy_agent("self") if self_play else opponent
     explore = RandomAgent()
-    decision_weight = 0.0 if reward_fn is None else 1.0 - payoff_weight
-    payoff_scale = 1.0 if reward_fn is None else payoff_weight
+    decision_weight = 0.0 if reward is None else 1.0 - payoff_weight
+    payoff_scale = 1.0 if reward is None else payoff_weight
+    at_end = reward is not None and raise_counts == "end-of-hand"
+    needs_cards = at_end or (reward is not None and reward.needs_cards)
+    deals = _Deals(seed=seed, chunk=max(config.concurrent_hands, DEAL_BLOCK))
 
     with tqdm(total=hands, unit="hand", unit_scale=True, disable=not progress) as bar:
         for start in range(0, hands, config.concurrent_hands):
             count = min(config.concurrent_hands, hands - start)
-            game = LimitHoldemBatch(deals=deal_cards(seed=seed, start=start, count=count))
+            game = LimitHoldemBatch(deals=deals.get(start, count))
             my_seat = ((start + np.arange(count)) % 2).astype(np.int8)
-            # The learner's last decision in each hand, waiting for its next state.
-            pending = np.zeros(count, bool)
-            pending_obs = np.zeros((count, OBS_SIZE), np.uint8)
-            pending_action = np.zeros(count, np.int64)
-            pending_reward = np.zeros(count, np.float32)
+            pending = _Pending(count, learner, _Staged() if at_end else None)
 
             while game.active().size:
                 active = game.active()
@@ -359,13 +371,10 @@ def train_dqn(
                 if learner_hands.size:
                     obs, legal = game.observe(learner_hands), game.legal_mask(learner_hands)
                     # This state closes the learner's previous transition in these hands.
-                    waiting = pending[learner_hands]
+                    waiting = pending.waiting[learner_hands]
                     before = learner_hands[waiting]
-                    learner.replay.add(
-                        pending_obs[before], pending_action[before], pending_reward[before],
-                        obs[waiting], legal[waiting], done=False,
-                    )  # fmt: skip
-                    learner.total_t += before.size
+                    pending.close(before, pending.reward[before], obs[waiting], legal[waiting],
+                                  done=False)  # fmt: skip
 
                     # Epsilon-greedy: uniform over legal actions with probability epsilon.
                     epsilon = epsilon_at(config, learner.total_t)
@@ -375,31 +384,32 @@ def train_dqn(
                     randomize = rng.random(actions.size) < epsilon
                     actions[randomize] = explore.act(obs[randomize], legal[randomize], rng)
 
-                    pending[learner_hands] = True
-                    pending_obs[learner_hands] = obs
-                    pending_action[learner_hands] = actions
-                    pending_reward[learner_hands] = (
-                        decision_weight * np.asarray(reward_fn(obs, actions), np.float32)
-                        if reward_fn is not None
-                        else 0.0
-                    )
+                    cards = turn_cards(game, learner_hands) if needs_cards else None
+                    rewards = np.zeros(actions.size, np.float32)
+                    if pending.staged is not None:  # f comes when the hand ends
+                        pending.staged.note(learner_hands, cards, legal, actions)
+                    elif reward is not None:
+                        decisions = Decisions(obs=obs, legal_mask=legal, cards=cards)
+                        rewards = decision_weight * reward(decisions, actions)
+                    pending.open(learner_hands, obs, actions, rewards)
                     game.step(actions, learner_hands)
                 if rival_hands.size:
                     rival_obs, rival_legal = game.observe(rival_hands), game.legal_mask(rival_hands)
-                    game.step(rival.act(rival_obs, rival_legal, opponent_rng), rival_hands)
+                    cards_of = functools.partial(turn_cards, game, rival_hands)
+                    game.step(
+                        agent_actions(rival, rival_obs, rival_legal, opponent_rng, cards_of),
+                        rival_hands,
+                    )
 
                 # Hands that just ended close the learner's last transition with the payoff.
-                ended = np.flatnonzero(game.done & pending)
+                ended = np.flatnonzero(game.done & pending.waiting)
                 if ended.size:
                     payoff = game.payoffs[ended, my_seat[ended]].astype(np.float32)
-                    learner.replay.add(
-                        pending_obs[ended], pending_action[ended],
-                        pending_reward[ended] + payoff_scale * payoff,
-                        game.observe(ended, my_seat[ended]),
-                        np.zeros((ended.size, NUM_ACTIONS), bool), done=True,
-                    )  # fmt: skip
-                    learner.total_t += ended.size
-                    pending[ended] = False
+                    pending.close(ended, pending.reward[ended] + payoff_scale * payoff,
+                                  game.observe(ended, my_seat[ended]),
+                                  np.zeros((ended.size, NUM_ACTIONS), bool), done=True)  # fmt: skip
+                    if pending.staged is not None:
+                        pending.staged.flush(ended, game.raises, reward, decision_weight, learner)  # type: ignore[arg-type]
 
                 for _ in range(learner.updates_due()):
                     learner.update(rng)
@@ -409,3 +419,89 @@ def train_dqn(
             if on_hands is not None:
                 on_hands(start + count, learner)
     return learner
+
+
+@dataclass(kw_only=True)
+class _Deals:
+    """Deals of one seed, made ``chunk`` at a time: small lock-step batches (one hand at a
+    time, as RLCard plays) then do not each pay for a block of deals."""
+
+    seed: int
+    chunk: int
+    first: int = -1
+    cards: np.ndarray = field(default_factory=lambda: np.zeros((0, 9), np.int8))
+
+    def get(self, start: int, count: int) -> np.ndarray:
+        if not (self.first <= start and start + count <= self.first + len(self.cards)):
+            self.first = start
+            self.cards = deal_cards(seed=self.seed, start=start, count=max(count, self.chunk))
+        return self.cards[start - self.first : start - self.first + count]
+
+
+class _Pending:
+    """The learner's last decision in each hand of a batch, waiting for its next state."""
+
+    def __init__(self, count: int, learner: DQNLearner, staged: _Staged | None) -> None:
+        self.learner, self.staged = learner, staged
+        self.waiting = np.zeros(count, bool)
+        self.obs = np.zeros((count, OBS_SIZE), np.uint8)
+        self.action = np.zeros(count, np.int64)
+        self.reward = np.zeros(count, np.float32)
+
+    def open(self, hands: np.ndarray, obs: np.ndarray, actions: np.ndarray,
+             rewards: np.ndarray) -> None:  # fmt: skip
+        self.waiting[hands] = True
+        self.obs[hands], self.action[hands], self.reward[hands] = obs, actions, rewards
+
+    def close(self, hands: np.ndarray, rewards: np.ndarray, next_obs: np.ndarray,
+              next_legal: np.ndarray, *, done: bool) -> None:  # fmt: skip
+        """Store the pending transitions of ``hands`` (now, or when they end)."""
+        args = (self.obs[hands], self.action[hands], rewards, next_obs, next_legal)
+        if self.staged is not None:
+            self.staged.add(hands, *args, done=done)
+        else:
+            self.learner.replay.add(*args, done=done)
+            self.learner.total_t += hands.size
+        if done:
+            self.waiting[hands] = False
+
+
+class _Staged:
+    """A batch's learner transitions held until their hand ends (``end-of-hand`` raise
+    counts): each decision's cards, legal actions and action, and the closed transitions."""
+
+    def __init__(self) -> None:
+        self.decisions: list[tuple[np.ndarray, ...]] = []  # (hands, cards, legal, actions)
+        # (hands, obs, action, reward, s', legal actions at s', done)
+        self.closed: list[tuple[np.ndarray, ...]] = []
+
+    def note(self, hands: np.ndarray, cards: np.ndarray, legal: np.ndarray,
+             actions: np.ndarray) -> None:  # fmt: skip
+        self.decisions.append((hands, cards, legal, actions))
+
+    def add(self, hands: np.ndarray, obs: np.ndarray, actions: np.ndarray, rewards: np.ndarray,
+            next_obs: np.ndarray, next_legal: np.ndarray, *, done: bool) -> None:  # fmt: skip
+        self.closed.append((hands, obs, actions, rewards, next_obs, next_legal,
+                            np.full(hands.size, done)))  # fmt: skip
+
+    @staticmethod
+    def _take(parts: list[tuple[np.ndarray, ...]], ended: np.ndarray
+              ) -> tuple[list[np.ndarray], list[tuple[np.ndarray, ...]]]:  # fmt: skip
+        """The rows of ``ended`` hands (by hand, then in play order), and the rest."""
+        columns = [np.concatenate(column) for column in zip(*parts, strict=True)]
+        hit = np.isin(columns[0], ended)
+        order = np.flatnonzero(hit)[np.argsort(columns[0][hit], kind="stable")]
+        rest = [tuple(c[~hit] for c in columns)] if (~hit).any() else []
+        return [c[order] for c in columns], rest
+
+    def flush(self, ended: np.ndarray, raises: np.ndarray, reward: PokerReward,
+              weight: float, learner: DQNLearner) -> None:  # fmt: skip
+        """Store the transitions of the ``ended`` hands, f read with their final raises."""
+        (hands, cards, legal, actions), self.decisions = self._take(self.decisions, ended)
+        (_, obs, taken, rewards, next_obs, next_legal, done), self.closed = self._take(
+            self.closed, ended
+        )
+        decisions = Decisions(obs=encode_obs(cards, raises[hands]), legal_mask=legal, cards=cards)
+        f = reward(decisions, actions) if weight else np.zeros(len(actions), np.float32)
+        learner.replay.add(obs, taken, rewards + weight * f, next_obs, next_legal, done=done)
+        learner.total_t += len(taken)

@@ -6,6 +6,12 @@
 ``metrics.jsonl`` and redrawing ``learning_curve.png``. :func:`train_seeds` trains one agent
 per seed into ``<out>/seed-<k>``.
 
+``protocol="authors"`` trains and evaluates as the authors' ``train_rl.py`` does (see
+:data:`AGENT_PRESETS`): an evaluation after hands 1, 1 + ``eval_every``, ... on ``eval_hands``
+fresh games against random, seats drawn per game (RLCard's ``tournament``); the model of
+every evaluation that beats 0.8 x the best payoff so far is kept (``kept.pt``), beside the
+final one (``model.pt``); ``play`` says which one the folder's agent plays.
+
 Both run through :func:`pokerirl.execution.map_units`: each agent is a unit, trained with
 torch on ``threads`` threads (one by default) in a private folder from its own seed, from the
 bytes of its reward run and opponent; the driver writes the folder. So the weights do not
@@ -46,9 +52,10 @@ from pokerirl.agents import ShippedAgent, land_agent, ship_agent
 from pokerirl.agents.checkpoint import (
     CONFIG_FILE,
     CURVE_FILE,
+    KEPT_FILE,
     METRICS_FILE,
     MODEL_FILE,
-    files_fingerprint,
+    PLAYS,
     save_agent,
 )
 from pokerirl.agents.dqn import (
@@ -60,6 +67,18 @@ from pokerirl.agents.dqn import (
     train_dqn,
 )
 from pokerirl.agents.registry import agent_fingerprint, resolve_agent
+from pokerirl.agents.rewards import (
+    RAISE_COUNTS,
+    REWARD_RUN_FILES,  # noqa: F401 - re-exported: pokerirl.agents.train.REWARD_RUN_FILES
+    TRANSFORMS,
+    PokerReward,
+    TransformedReward,
+    as_poker_reward,
+    landed_spec,
+    load_reward_source,
+    reward_source_files,
+    reward_source_fingerprint,
+)
 from pokerirl.atomic import atomic_path
 from pokerirl.execution import (
     Backend,
@@ -73,9 +92,10 @@ from pokerirl.game import make_agent, play_match
 from pokerirl.game.agents import Agent
 
 REWARD_MODES = ("sparse", "learned")
-REWARD_RUN_FILES = ("reward.pt", "config.json")  # what identifies a learned-reward run
+PROTOCOLS = ("pokerirl", "authors")
 TIMINGS_FILE = "timings.json"
 AGENT_OUTPUTS = (MODEL_FILE, CONFIG_FILE, METRICS_FILE, CURVE_FILE)
+KEEP_RATIO = 0.8  # the authors' rule: keep a model whose payoff beats 0.8 x the best so far
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -83,9 +103,13 @@ class TrainConfig:
     """One training run: what to learn from, against whom, for how long, how to evaluate.
 
     ``reward``: ``sparse`` (the payoff at the end of a hand) or ``learned`` (f_θ of
-    ``reward_run``, mixed with the payoff by ``payoff_weight``). ``opponent``: an agent spec
+    ``reward_run``, a run folder or ``authors:FILE``, after ``reward_transform`` over the
+    legal actions, mixed with the payoff by ``payoff_weight``; ``raise_counts`` says which
+    raise counts f reads). ``opponent``: an agent spec
     (:func:`pokerirl.agents.resolve_agent`) or ``self``. The evaluation plays ``eval_hands``
-    duplicate hands of seed ``eval_seed`` every ``eval_every`` training hands and at the end.
+    duplicate hands of seed ``eval_seed`` every ``eval_every`` training hands and at the end;
+    ``protocol="authors"`` evaluates and keeps a checkpoint as the authors do (see the module
+    docstring), and ``play`` says which checkpoint the agent plays.
     """
 
     hands: int
@@ -98,6 +122,10 @@ class TrainConfig:
     eval_hands: int = 20_000
     eval_seed: int = 1_000_003
     dqn: DQNConfig = field(default_factory=DQNConfig)
+    reward_transform: str = "raw"
+    raise_counts: str = "decision"
+    protocol: str = "pokerirl"
+    play: str = "final"
 
     def __post_init__(self) -> None:
         if self.reward not in REWARD_MODES:
@@ -112,35 +140,164 @@ class TrainConfig:
             raise ValueError("hands and eval_every must be at least 1")
         if self.seed < 0 or self.eval_seed < 0:
             raise ValueError("seeds must be non-negative")
-        if self.eval_hands < 2 or self.eval_hands % 2:
+        if self.protocol not in PROTOCOLS:
+            raise ValueError(f"unknown protocol {self.protocol!r} ({', '.join(PROTOCOLS)})")
+        duplicate = self.protocol == "pokerirl"
+        if self.eval_hands < 2 or (duplicate and self.eval_hands % 2):
             raise ValueError(f"eval_hands must be even and at least 2, got {self.eval_hands}")
+        if self.reward_transform not in TRANSFORMS:
+            raise ValueError(
+                f"unknown reward transform {self.reward_transform!r} ({', '.join(TRANSFORMS)})"
+            )
+        if self.raise_counts not in RAISE_COUNTS:
+            raise ValueError(f"--raise-counts must be one of {', '.join(RAISE_COUNTS)}")
+        if self.reward == "sparse" and (
+            self.reward_transform != "raw" or self.raise_counts != "decision"
+        ):
+            raise ValueError("--reward-transform and --raise-counts need --reward learned")
+        if self.play not in PLAYS:
+            raise ValueError(f"--play must be one of {', '.join(PLAYS)}")
+        if self.play == "kept" and self.protocol != "authors":
+            raise ValueError("--play kept needs --protocol authors (its kept checkpoint)")
+
+
+_OURS = TrainConfig(hands=1, seed=0)
+AUTHORS_DQN = DQNConfig(
+    learning_rate=5e-4,
+    train_every=1,
+    epsilon_end=0.0,
+    epsilon_decay_steps=5_000,
+    concurrent_hands=1,  # one hand at a time, as RLCard plays (evaluation points fall on it)
+)
+AGENT_PRESETS: dict[str, dict[str, Any]] = {
+    # Ours: 50,000 hands, RLCard's constructor defaults but train_every 16 (docs/agents.md).
+    "default": {"hands": 50_000},
+    # The authors' train_rl.py (silue-dev/hairl) with their DQNAgent subclass's settings:
+    # lr 5e-4, train_every 1, epsilon 1 -> 0 over 5,000 steps; batch 32, replay 20,000,
+    # target every 1,000 updates and MLP [64, 64] are RLCard's constructor defaults, as ours.
+    "authors": {
+        "hands": 5_000,
+        "eval_every": 100,
+        "eval_hands": 1_000,
+        "protocol": "authors",
+        "play": "kept",
+        "dqn": AUTHORS_DQN,
+    },
+}
+
+
+def agent_preset(name: str, **overrides: Any) -> TrainConfig:
+    """The preset ``name`` (:data:`AGENT_PRESETS`), then ``overrides`` (None values ignored);
+    ``hands`` and ``seed`` may come from either. ``dqn`` overrides may be a dict of fields."""
+    if name not in AGENT_PRESETS:
+        raise ValueError(f"unknown agent preset {name!r}; choose {', '.join(AGENT_PRESETS)}")
+    settings = {"seed": 0, **AGENT_PRESETS[name]}
+    changes = {k: v for k, v in overrides.items() if v is not None}
+    dqn = changes.pop("dqn", {})
+    settings.update(changes)
+    base = settings.get("dqn", DQNConfig())
+    settings["dqn"] = dataclasses.replace(base, **dqn) if isinstance(dqn, dict) else dqn
+    return TrainConfig(**settings)
+
+
+_TRAIN_KEYS = {f.name: f.type for f in dataclasses.fields(TrainConfig) if f.name != "dqn"}
+_DQN_KEYS = {f.name: f.type for f in dataclasses.fields(DQNConfig)}
+
+
+def _typed(key: str, hint: str, value: Any) -> Any:
+    """``value`` if it fits the field's annotation (as a string: ``from __future__``)."""
+    number = isinstance(value, int | float) and not isinstance(value, bool)
+    if hint == "int" and isinstance(value, int) and not isinstance(value, bool):
+        return value
+    if hint == "float" and number:
+        return float(value)
+    if hint.startswith("str") and (isinstance(value, str) or (value is None and "None" in hint)):
+        return value
+    if hint.startswith("tuple") and isinstance(value, list) and value:
+        if all(isinstance(w, int) and not isinstance(w, bool) for w in value):
+            return tuple(value)
+    kind = {"int": "an integer", "float": "a number", "tuple[int, ...]": "a list of integers"}
+    raise ValueError(f"{key} must be {kind.get(hint, 'a string')}")
+
+
+def load_agent_config(path: str | os.PathLike[str]) -> dict[str, Any]:
+    """A TOML file of training settings as :func:`agent_preset` overrides: flat keys, any
+    field of :class:`TrainConfig` (``hands``, ``eval_every``, ...) or of
+    :class:`~pokerirl.agents.dqn.DQNConfig` (``learning_rate``, ``train_every``, ...).
+
+    Raises ``ValueError`` of one line naming the file and the key.
+    """
+    import tomllib
+
+    path = Path(path)
+    try:
+        settings = tomllib.loads(path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise ValueError(f"config file not found: {path}") from None
+    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as error:
+        raise ValueError(f"cannot read {path} as TOML: {error}") from None
+    found: dict[str, Any] = {"dqn": {}}
+    for key, value in settings.items():
+        hint = _TRAIN_KEYS.get(key) or _DQN_KEYS.get(key)
+        if hint is None or key == "seed":
+            known = sorted({*_TRAIN_KEYS, *_DQN_KEYS} - {"seed"})
+            raise ValueError(f"{path}: unknown setting {key!r} (known: {', '.join(known)})")
+        try:
+            checked = _typed(key, str(hint), value)
+        except ValueError as error:
+            raise ValueError(f"{path}: {error}, got {value!r}") from None
+        (found["dqn"] if key in _DQN_KEYS else found)[key] = checked
+    return found
 
 
 def reward_run_fingerprint(run_dir: str | os.PathLike[str]) -> str:
-    """``sha256:<hex>`` over a reward run's ``reward.pt`` and ``config.json``."""
-    for name in REWARD_RUN_FILES:
-        if not (Path(run_dir) / name).is_file():
-            raise ValueError(f"{run_dir}: not a reward run (no {name})")
-    return files_fingerprint(run_dir, REWARD_RUN_FILES)
+    """``sha256:<hex>`` of a reward source: a run's ``reward.pt`` and ``config.json``, or an
+    ``authors:FILE`` (:func:`pokerirl.agents.rewards.reward_source_fingerprint`)."""
+    return reward_source_fingerprint(run_dir)
 
 
-def load_reward_fn(run_dir: str | os.PathLike[str]) -> RewardFn:
-    """f_θ of a learned-reward run, via ``pokerirl.irl.load_reward`` (imported here only)."""
-    reward_run_fingerprint(run_dir)  # a clear error before the irl package is touched
-    from pokerirl.irl import load_reward
-
-    return load_reward(run_dir)
+def load_reward_fn(run_dir: str | os.PathLike[str], transform: str = "raw") -> PokerReward:
+    """f_θ of a run folder or ``authors:FILE``, after ``transform`` over the legal actions."""
+    return TransformedReward(load_reward_source(run_dir), transform)
 
 
 def _evaluate(
-    learner: DQNLearner, opponents: dict[str, Any], config: TrainConfig
+    learner: DQNLearner, opponents: dict[str, Any], config: TrainConfig, index: int
 ) -> dict[str, dict[str, float]]:
+    """The greedy policy against each opponent: duplicate hands of the fixed evaluation seed,
+    or, for the authors' protocol, fresh games (seed ``eval_seed + index``) with seats drawn
+    per game, as RLCard's ``tournament``."""
     greedy = learner.greedy_agent()
+    authors = config.protocol == "authors"
     results = {}
     for label, opponent in opponents.items():
-        result = play_match(greedy, opponent, hands=config.eval_hands, seed=config.eval_seed)
+        result = play_match(
+            greedy,
+            opponent,
+            hands=config.eval_hands,
+            seed=config.eval_seed + index if authors else config.eval_seed,
+            duplicate=not authors,
+            seating="random" if authors else "alternate",
+        )
         results[label] = {"mbb_per_hand": result.mbb_per_hand, "std_error": result.std_error}
     return results
+
+
+def evaluation_points(config: TrainConfig) -> list[int]:
+    """Training hands after which the agent is evaluated (the last one: the final model).
+
+    Ours: every ``eval_every`` hands and at the end (at the first lock-step boundary on or
+    after each). The authors': after hands 1, 1 + ``eval_every``, ... (their episode 0, 100,
+    ...), then ours adds the end, which their rule never sees.
+
+    >>> evaluation_points(TrainConfig(hands=250, seed=0, eval_every=100, protocol="authors"))
+    [1, 101, 201, 250]
+    """
+    if config.protocol == "authors":
+        points = list(range(1, config.hands + 1, config.eval_every))
+    else:
+        points = list(range(config.eval_every, config.hands, config.eval_every))
+    return points if points and points[-1] == config.hands else [*points, config.hands]
 
 
 def plot_learning_curve(metrics: list[dict[str, Any]], path: Path) -> None:
@@ -251,8 +408,10 @@ def agent_unit_config(
     """Everything that determines an agent's bytes, fingerprinted in its ``unit.json``.
 
     Inputs count by content (the reward run's and the opponent's fingerprints), not by path.
+    Settings added since the first format appear only when they differ from their default,
+    so agents trained before them keep their fingerprints.
     """
-    return {
+    found = {
         "kind": "pokerirl-dqn-agent",
         "seed": config.seed,
         "hands": config.hands,
@@ -264,6 +423,10 @@ def agent_unit_config(
         "dqn": dataclasses.asdict(config.dqn),
         "threads": threads,
     }
+    for name in ("reward_transform", "raise_counts", "protocol", "play"):
+        if getattr(config, name) != getattr(_OURS, name):
+            found[name] = getattr(config, name)
+    return found
 
 
 def _train_many(
@@ -283,11 +446,11 @@ def _train_many(
     reward_print = None
     if first.reward == "learned":
         if first.reward_run is None:
-            raise ValueError("--reward learned needs --reward-run RUN_DIR")
+            raise ValueError("--reward learned needs --reward-run RUN_DIR (or authors:FILE)")
         reward_print = reward_run_fingerprint(first.reward_run)
         if reward_fn is None:
             load_reward_fn(first.reward_run)  # errors name the user's files, not a worker's copy
-            reward_files = read_files(first.reward_run, REWARD_RUN_FILES)
+            reward_files = reward_source_files(first.reward_run)
     if first.opponent == SELF_PLAY:
         opponent, opponent_print = None, SELF_PLAY
     else:
@@ -338,11 +501,15 @@ def _train_many(
 def _train_unit(unit: _TrainUnit, reward_fn: RewardFn | None = None) -> TrainedAgent:
     """Train one agent in a private folder and return its files (runs in a worker)."""
     config = unit.config
+    reward: PokerReward | None = None
     with tempfile.TemporaryDirectory(prefix="pokerirl-agent-") as private:
-        if config.reward == "learned" and reward_fn is None:
-            reward_fn = load_reward_fn(
-                write_files(Path(private, "reward-run"), dict(unit.reward_files))
-            )
+        if config.reward == "learned":
+            if reward_fn is None:
+                landed = write_files(Path(private, "reward-run"), dict(unit.reward_files))
+                reward = load_reward_source(landed_spec(str(config.reward_run), landed))
+            else:
+                reward = as_poker_reward(reward_fn)
+            reward = TransformedReward(reward, config.reward_transform)  # type: ignore[arg-type]
         opponent = (
             SELF_PLAY
             if unit.opponent is None
@@ -352,21 +519,40 @@ def _train_unit(unit: _TrainUnit, reward_fn: RewardFn | None = None) -> TrainedA
         summary, timings = _train_into(
             out,
             config,
-            reward_fn=reward_fn if config.reward == "learned" else None,
+            reward=reward,
             reward_fingerprint=unit.reward_fingerprint,
             opponent=opponent,
             threads=unit.threads,
             progress=unit.progress,
         )
-        files = read_files(out, AGENT_OUTPUTS)
+        kept = (KEPT_FILE,) if (out / KEPT_FILE).is_file() else ()
+        files = read_files(out, (*AGENT_OUTPUTS, *kept))
     return TrainedAgent(files=files, timings=timings, summary=summary)
+
+
+@dataclass(kw_only=True)
+class _Keeper:
+    """The authors' checkpoint rule: after an evaluation whose payoff against random beats
+    0.8 x the best so far, keep that model (``train_rl.py``: ``if payoff > 0.8 *
+    best_payoff: torch.save(agent)``; the best starts at minus infinity)."""
+
+    best: float = float("-inf")
+    state: dict[str, torch.Tensor] | None = None
+    line: dict[str, Any] | None = None
+
+    def offer(self, learner: DQNLearner, line: dict[str, Any]) -> None:
+        payoff = line["eval"]["random"]["mbb_per_hand"]
+        if payoff > KEEP_RATIO * self.best:
+            self.state = {k: v.detach().clone() for k, v in learner.q_net.state_dict().items()}
+            self.line = line
+            self.best = max(self.best, payoff)
 
 
 def _train_into(
     out: Path,
     config: TrainConfig,
     *,
-    reward_fn: RewardFn | None,
+    reward: PokerReward | None,
     reward_fingerprint: str | None,
     opponent: Agent | str,
     threads: int,
@@ -385,13 +571,14 @@ def _train_into(
     metrics: list[dict[str, Any]] = []
     seconds: list[float] = []
     started = time.perf_counter()
-    next_eval = min(config.eval_every, config.hands)
+    points = evaluation_points(config)
+    keeper = _Keeper() if config.protocol == "authors" else None
 
     def evaluate(hands_done: int, learner: DQNLearner) -> None:
-        nonlocal next_eval
-        if hands_done < next_eval:
+        due = [p for p in points if p <= hands_done]
+        if not due:
             return
-        next_eval = min((hands_done // config.eval_every + 1) * config.eval_every, config.hands)
+        del points[: len(due)]
         seconds.append(round(time.perf_counter() - started, 3))  # timings.json, not here
         line = {
             "hands": hands_done,
@@ -399,8 +586,14 @@ def _train_into(
             "updates": learner.train_t,
             "epsilon": epsilon_at(config.dqn, learner.total_t),
             "loss": None if np.isnan(learner.last_loss) else learner.last_loss,  # JSON has no NaN
-            "eval": _evaluate(learner, opponents, config),
+            "eval": _evaluate(learner, opponents, config, len(metrics)),
         }
+        if keeper is not None:
+            # The authors never evaluate their last hands' model: the end is not offered.
+            is_final = hands_done == config.hands and (config.hands - 1) % config.eval_every
+            line["keep_rule"] = not is_final
+            if not is_final:
+                keeper.offer(learner, line)
         metrics.append(line)
         with metrics_path.open("a") as stream:
             stream.write(json.dumps(line) + "\n")
@@ -411,8 +604,9 @@ def _train_into(
         hands=config.hands,
         seed=config.seed,
         opponent=opponent,
-        reward_fn=reward_fn,
+        reward_fn=reward,
         payoff_weight=config.payoff_weight,
+        raise_counts=config.raise_counts,
         progress=progress,
         on_hands=evaluate,
     )
@@ -424,6 +618,8 @@ def _train_into(
             "run": config.reward_run,
             "fingerprint": reward_fingerprint,
             "payoff_weight": config.payoff_weight,
+            "transform": config.reward_transform,
+            "raise_counts": config.raise_counts,
         },
         "opponent": {
             "spec": config.opponent,
@@ -436,11 +632,14 @@ def _train_into(
             "every": config.eval_every,
             "hands": config.eval_hands,
             "seed": config.eval_seed,
+            "protocol": config.protocol,
         },
         "dqn": dataclasses.asdict(config.dqn),
         "final": metrics[-1],
+        "plays": config.play,
+        "kept": None if keeper is None else keeper.line,
     }
-    save_agent(out, learner.q_net, record)
+    save_agent(out, learner.q_net, record, kept=None if keeper is None else keeper.state)
     total = time.perf_counter() - started
     timings = {
         "seconds": round(total, 3),

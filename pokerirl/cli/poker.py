@@ -278,6 +278,8 @@ def train(
         fail(f"{error.filename or out}: {error.strerror or error}")
     except KeyboardInterrupt:
         fail(INTERRUPTED, 130)
+    from pokerirl.agents.reward_card import read_card
+
     single = {"metrics": summary.metrics, "baselines": summary.baselines}
     for run in summary.runs or (single,):
         last, base = run["metrics"][-1], run["baselines"]
@@ -290,7 +292,55 @@ def train(
             + ", ".join(f"{k} {v:.3f}" for k, v in base.items())
             + f" on {rows[1]} rows"
         )
+        card = read_card(run.get("out", summary.out_dir))
+        if card is not None:
+            shares = ", ".join(f"{a} {v:.0%}" for a, v in card.argmax_share.items())
+            typer.echo(
+                f"  reward card: {card.prediction}. argmax over legal actions: {shares}; "
+                f"= expert {card.agree_expert:.1%}, = legal majority "
+                f"{card.agree_legal_majority:.1%} (reward_card.json)"
+            )
     typer.echo(f"{summary.samples_per_second:,.0f} samples/s; wrote {summary.out_dir}")
+
+
+@app.command("reward-card")
+def reward_card_command(
+    reward: str = typer.Argument(
+        ..., help="An AIRL / H-AIRL run folder, or authors:FILE (one of the authors' rewards)."
+    ),
+    table: Path = typer.Option(..., "--table", help="Decision table (pokerirl ingest) of states."),
+    out: Path = typer.Option(..., "--out", "-o", help="Folder for reward_card.json and .png."),
+    validation: bool = typer.Option(
+        False, "--validation", help="Only the run's validation hands (its split.json)."
+    ),
+    transform: str = typer.Option("raw", "--transform", help="raw, centered or log_softmax."),
+) -> None:
+    """What a reward prefers: f per action, the per-decision bonus, the argmax over legal
+    actions by street and equity, its agreement with the expert and the legal-majority rule,
+    and what a DQN is predicted to learn. Writes OUT/reward_card.json and reward_card.png.
+    """
+    from pokerirl.agents.reward_card import CardStates, reward_card, write_card
+    from pokerirl.agents.rewards import TransformedReward, load_reward_source
+
+    try:
+        source = load_reward_source(reward)
+        groups = None
+        if validation:
+            split = Path(reward) / "split.json"
+            if not split.is_file():
+                fail(f"--validation needs a run folder with split.json; {reward} has none")
+            groups = {str(g) for g in json.loads(split.read_text())["validation_groups"]}
+        states = CardStates.from_table(table, groups=groups)
+        card = reward_card(TransformedReward(source, transform), states)
+        write_card(card, out)
+    except FileNotFoundError as error:
+        fail(str(error))
+    except ValueError as error:
+        fail(str(error))
+    except OSError as error:
+        fail(f"{error.filename or out}: {error.strerror or error}")
+    typer.echo(card.render())
+    typer.echo(f"wrote {out / 'reward_card.json'} and reward_card.png")
 
 
 agent_app = typer.Typer(help="Train DQN agents.", no_args_is_help=True)
@@ -300,12 +350,37 @@ app.add_typer(agent_app, name="agent")
 @agent_app.command("train")
 def agent_train(
     out: Path = typer.Option(..., "--out", "-o", help="Agent folder (with --seeds: its parent)."),
-    reward: str = typer.Option("sparse", help="sparse (the payoff) or learned (--reward-run's f)."),
-    reward_run: Path | None = typer.Option(None, help="AIRL / H-AIRL run folder (learned reward)."),
-    payoff_weight: float = typer.Option(
-        0.0, help="w in r = w * payoff + (1 - w) * f(s, a); 0: the learned reward alone."
+    preset: str = typer.Option(
+        "default",
+        "--preset",
+        help="default (ours: 50,000 hands, train_every 16) or authors (their train_rl.py: "
+        "5,000 hands, lr 5e-4, train_every 1, epsilon 1 -> 0 over 5,000 steps, evaluation "
+        "every 100 hands on 1,000 games, the > 0.8 x best checkpoint plays). Flags and "
+        "--config override it.",
     ),
-    hands: int = typer.Option(50_000, "--hands", "-n", help="Training hands."),
+    config_file: Path | None = typer.Option(
+        None, "--config", help="TOML file of settings (any TrainConfig or DQNConfig field)."
+    ),
+    reward: str | None = typer.Option(
+        None, help="sparse (the payoff) or learned (--reward-run's f) [default: sparse]."
+    ),
+    reward_run: str | None = typer.Option(
+        None, help="AIRL / H-AIRL run folder, or authors:FILE (one of the authors' rewards)."
+    ),
+    payoff_weight: float | None = typer.Option(
+        None, help="w in r = w * payoff + (1 - w) * f(s, a); 0: the learned reward alone."
+    ),
+    reward_transform: str | None = typer.Option(
+        None,
+        help="raw (f), centered (f minus its mean over legal actions) or log_softmax (f minus "
+        "its logsumexp over legal actions) [default: raw].",
+    ),
+    raise_counts: str | None = typer.Option(
+        None,
+        help="decision (f reads the raise counts of the decision) or end-of-hand (those the "
+        "hand ended with, as the authors' agent read RLCard's live list) [default: decision].",
+    ),
+    hands: int | None = typer.Option(None, "--hands", "-n", help="Training hands."),
     seed: int = typer.Option(0, help="Seed of one agent."),
     seeds: str | None = typer.Option(None, help="e.g. 0-19: one agent per seed, in OUT/seed-<k>."),
     jobs: int = typer.Option(1, "--jobs", "-j", help="Local processes training seeds at once."),
@@ -316,18 +391,33 @@ def agent_train(
     overwrite: bool = typer.Option(
         False, "--overwrite", help="Retrain finished agents of other settings (else refused)."
     ),
-    opponent: str = typer.Option(
-        "random",
-        help="random, raise, call, an agent folder, rlcard:CKPT (unpickled: runs any code it "
-        "holds; trusted files only), or self.",
+    opponent: str | None = typer.Option(
+        None,
+        help="random (default), raise, call, tightbot, loosebot, an agent folder, rlcard:CKPT "
+        "(unpickled: runs any code it holds; trusted files only), or self.",
     ),
-    eval_every: int = typer.Option(10_000, help="Evaluate every N training hands."),
-    eval_hands: int = typer.Option(20_000, help="Duplicate hands per evaluation (even)."),
-    eval_seed: int = typer.Option(1_000_003, help="Deal seed of every evaluation."),
-    train_every: int = typer.Option(16, help="Stored transitions per gradient update."),
-    concurrent_hands: int = typer.Option(1024, help="Hands played in lock-step."),
-    learning_rate: float = typer.Option(5e-5, help="Adam learning rate."),
-    self_play_every: int = typer.Option(1_000, help="Updates between refreshes of 'self'."),
+    protocol: str | None = typer.Option(
+        None, help="pokerirl (duplicate evaluations) or authors (their evaluation and kept model)."
+    ),
+    play: str | None = typer.Option(
+        None, help="final or kept (the authors' > 0.8 x best checkpoint; needs --protocol authors)."
+    ),
+    eval_every: int | None = typer.Option(None, help="Evaluate every N training hands."),
+    eval_hands: int | None = typer.Option(None, help="Hands per evaluation (even, duplicate)."),
+    eval_seed: int | None = typer.Option(None, help="Deal seed of every evaluation."),
+    hidden: str | None = typer.Option(None, help="Q-network widths, e.g. 64,64."),
+    replay_size: int | None = typer.Option(None, help="Replay memory size."),
+    replay_init: int | None = typer.Option(None, help="Transitions before the first update."),
+    batch_size: int | None = typer.Option(None, help="Update minibatch size."),
+    learning_rate: float | None = typer.Option(None, "--lr", "--learning-rate", help="Adam lr."),
+    gamma: float | None = typer.Option(None, help="Discount."),
+    epsilon_start: float | None = typer.Option(None, help="Exploration at the start."),
+    epsilon_end: float | None = typer.Option(None, help="Exploration after the decay."),
+    epsilon_decay_steps: int | None = typer.Option(None, help="Transitions of the linear decay."),
+    target_update_every: int | None = typer.Option(None, help="Updates between target copies."),
+    train_every: int | None = typer.Option(None, help="Stored transitions per gradient update."),
+    concurrent_hands: int | None = typer.Option(None, help="Hands played in lock-step."),
+    self_play_every: int | None = typer.Option(None, help="Updates between refreshes of 'self'."),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bar."),
 ) -> None:
     """Train a DQN agent (or one per seed) on the sparse payoff or a learned reward.
@@ -337,31 +427,53 @@ def agent_train(
     one with other settings is refused (--overwrite retrains it). New folders are
     written beside the old and swapped in at the end, so a killed run loses nothing.
     With --seeds, seeds run as units (--jobs or --ray); a rerun resumes the set.
+    Every setting: --preset, then --config FILE, then the flags (docs/agents.md).
     """
-    from pokerirl.agents.dqn import DQNConfig
-    from pokerirl.agents.train import TrainConfig, train_agent, train_seeds
+    from pokerirl.agents.train import agent_preset, load_agent_config, train_agent, train_seeds
     from pokerirl.execution import ExecutionError
     from pokerirl.seeds import parse_seeds
 
     backend = _backend(jobs, ray, threads)
+    widths = None
+    if hidden is not None:
+        try:
+            widths = tuple(int(w) for w in hidden.split(",") if w.strip())
+        except ValueError:
+            fail(f"--hidden must be comma-separated integers, got {hidden!r}")
+    flags = {
+        "hands": hands,
+        "reward": reward,
+        "reward_run": reward_run,
+        "payoff_weight": payoff_weight,
+        "reward_transform": reward_transform,
+        "raise_counts": raise_counts,
+        "opponent": opponent,
+        "protocol": protocol,
+        "play": play,
+        "eval_every": eval_every,
+        "eval_hands": eval_hands,
+        "eval_seed": eval_seed,
+    }
+    dqn_flags = {
+        "hidden": widths,
+        "replay_size": replay_size,
+        "replay_init": replay_init,
+        "batch_size": batch_size,
+        "learning_rate": learning_rate,
+        "gamma": gamma,
+        "epsilon_start": epsilon_start,
+        "epsilon_end": epsilon_end,
+        "epsilon_decay_steps": epsilon_decay_steps,
+        "target_update_every": target_update_every,
+        "train_every": train_every,
+        "concurrent_hands": concurrent_hands,
+        "self_play_every": self_play_every,
+    }
     try:
-        config = TrainConfig(
-            hands=hands,
-            seed=seed,
-            reward=reward,
-            reward_run=None if reward_run is None else str(reward_run),
-            payoff_weight=payoff_weight,
-            opponent=opponent,
-            eval_every=eval_every,
-            eval_hands=eval_hands,
-            eval_seed=eval_seed,
-            dqn=DQNConfig(
-                train_every=train_every,
-                concurrent_hands=concurrent_hands,
-                learning_rate=learning_rate,
-                self_play_every=self_play_every,
-            ),
-        )
+        from_file = {"dqn": {}} if config_file is None else load_agent_config(config_file)
+        dqn = {**from_file.pop("dqn"), **{k: v for k, v in dqn_flags.items() if v is not None}}
+        settings = {**from_file, **{k: v for k, v in flags.items() if v is not None}}
+        config = agent_preset(preset, seed=seed, dqn=dqn, **settings)
         if seeds is None:
             summary = train_agent(
                 out, config, progress=not quiet, overwrite=overwrite, backend=backend
@@ -393,3 +505,10 @@ def agent_train(
             for name, e in line["eval"].items()
         )
         typer.echo(f"{folder}: {line['hands']:,} hands, {scores}")
+        if config.play == "kept":
+            kept = json.loads((folder / "config.json").read_text())["kept"]
+            typer.echo(
+                f"{folder}: plays kept.pt (after {kept['hands']:,} hands, vs random "
+                f"{kept['eval']['random']['mbb_per_hand']:+.0f} mbb/h in its evaluation); "
+                "model.pt is the final model"
+            )

@@ -73,10 +73,25 @@ def demo(
 def study(
     sources: list[Path] = typer.Argument(..., help="IRC month folders or archives."),
     out: Path = typer.Option(..., "--out", "-o", help="The study folder."),
-    preset_name: str = typer.Option("quick", "--preset", help="quick or paper."),
+    preset_name: str = typer.Option(
+        "quick",
+        "--preset",
+        help="quick, paper (ours) or authors (their IRL and DQN settings and their "
+        "tournament protocol, beside our duplicate-deal Table 1).",
+    ),
     runs: int | None = typer.Option(None, "--runs", min=1, help="IRL runs per algorithm."),
     seeds: str | None = typer.Option(None, "--seeds", help="Agent seeds, e.g. 0-19."),
     hands: int | None = typer.Option(None, "--hands", min=2, help="Tournament hands per seed."),
+    reward_run: list[str] = typer.Option(
+        [],
+        "--reward-run",
+        metavar="[ALGO=]SPEC",
+        help="Replace an algorithm's IRL runs by a reward, e.g. authors:FILE (hairl, the "
+        "default) or airl=authors:FILE2; repeatable.",
+    ),
+    reward_transform: str | None = typer.Option(
+        None, "--reward-transform", help="raw, centered or log_softmax: the learned-reward DQNs'."
+    ),
     jobs: int = typer.Option(2, "--jobs", min=1, help="Processes for training and play."),
     ray: str | None = typer.Option(None, "--ray", metavar="ADDRESS", help=RAY_HELP),
     overwrite: bool = typer.Option(
@@ -86,9 +101,14 @@ def study(
 ) -> None:
     """The paper's poker study in one command: ingest, IRL (AIRL and H-AIRL, several runs),
     DQN agents (sparse, AIRL and H-AIRL rewards), Table 1, the panel, and a report beside the
-    paper's numbers (report.md, report.json, panel.csv, figures/). Resumable by stage."""
+    paper's numbers (report.md, report.json, panel.csv, figures/), with the reward cards.
+    --preset authors adds the authors' tournament protocol. Resumable by stage."""
     from pokerirl.study import parse_seeds, preset, run_study
 
+    sources_given = []
+    for item in reward_run:
+        algo, _, spec = item.partition("=") if "=" in item.split(":", 1)[0] else ("", "", item)
+        sources_given.append((algo or "hairl", spec))
     try:
         config = preset(
             preset_name,
@@ -96,6 +116,8 @@ def study(
             seeds=None if seeds is None else parse_seeds(seeds),
             hands=hands,
             jobs=jobs,
+            reward_sources=tuple(sources_given) or None,
+            reward_transform=reward_transform,
         )
         result = run_study(
             sources,
@@ -113,6 +135,57 @@ def study(
     typer.echo("")
     typer.echo(result.markdown)
     typer.echo(f"report: {out / 'report.md'} (pokerirl report {out})")
+
+
+@app.command()
+def transfer(
+    reward_run: str = typer.Argument(..., help="An IRL run folder, or authors:FILE."),
+    out: Path = typer.Option(..., "--out", "-o", help="Folder for the agents and the table."),
+    transforms: str = typer.Option(
+        "raw,centered,log_softmax", "--transforms", help="Reward transforms to train on."
+    ),
+    payoff_weights: str = typer.Option("0", "--payoff-weights", help="e.g. 0,0.5."),
+    seeds: str = typer.Option("0-2", "--seeds", help="DQN seeds."),
+    hands: int = typer.Option(50_000, "--hands", "-n", help="DQN training hands."),
+    agent_preset: str = typer.Option("default", "--preset", help="DQN preset: default, authors."),
+    eval_hands: int = typer.Option(20_000, "--eval-hands", help="Duplicate hands vs random."),
+    experts: str = typer.Option(
+        "tightbot,loosebot,legal_majority",
+        "--experts",
+        help="Rules to compare the agents' actions with (tightbot, loosebot, legal_majority), "
+        "or none.",
+    ),
+    jobs: int = typer.Option(2, "--jobs", min=1, help="Processes training seeds at once."),
+    ray: str | None = typer.Option(None, "--ray", metavar="ADDRESS", help=RAY_HELP),
+    quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bars."),
+) -> None:
+    """Does a learned reward teach the expert's play? DQNs on each reward transform (and
+    payoff weight), each judged against random, against the expert rules on the states it
+    visits and by its action shares, beside the expert bots, always-call and a sparse DQN.
+    Writes OUT/transfer.json and transfer.md; a rerun reuses the trained agents."""
+    from pokerirl.seeds import parse_seeds
+    from pokerirl.study.transfer import TransferConfig, parse_list, run_transfer
+
+    try:
+        config = TransferConfig(
+            transforms=parse_list(transforms),
+            payoff_weights=parse_list(payoff_weights, float),
+            seeds=tuple(parse_seeds(seeds)),
+            hands=hands,
+            agent_preset=agent_preset,
+            eval_hands=eval_hands,
+            experts=parse_list(experts),
+        )
+        result = run_transfer(
+            reward_run, out, config, backend=_backend(jobs, ray), progress=not quiet,
+            say=typer.echo,
+        )  # fmt: skip
+    except (ValueError, OSError, execution.ExecutionError) as error:
+        fail(str(error))
+    except KeyboardInterrupt:
+        fail(INTERRUPTED, 130)
+    typer.echo(result.markdown())
+    typer.echo(f"wrote {out / 'transfer.json'} and transfer.md")
 
 
 @app.command()

@@ -9,7 +9,10 @@ from pokerirl.game.agents import (
     CallAgent,
     RaiseAgent,
     RandomAgent,
+    ScriptedAgent,
+    agent_actions,
     make_agent,
+    seat_cards,
 )
 from pokerirl.game.deals import DEAL_SIZE, deal_cards
 from pokerirl.game.engine import (
@@ -19,7 +22,14 @@ from pokerirl.game.engine import (
     LimitHoldemBatch,
 )
 from pokerirl.game.evaluator import HAND_CATEGORIES, category, hand_strength
-from pokerirl.game.match import MatchResult, check_match_size, play_batch, play_match
+from pokerirl.game.match import (
+    DecisionLog,
+    MatchResult,
+    check_match_size,
+    play_batch,
+    play_match,
+    turn_cards,
+)
 
 __all__ = [
     "BIG_BLIND",
@@ -29,11 +39,14 @@ __all__ = [
     "SMALL_BLIND",
     "Agent",
     "CallAgent",
+    "DecisionLog",
     "IllegalActionError",
     "LimitHoldemBatch",
     "MatchResult",
     "RaiseAgent",
     "RandomAgent",
+    "ScriptedAgent",
+    "agent_actions",
     "category",
     "check_match_size",
     "deal_cards",
@@ -41,4 +54,6 @@ __all__ = [
     "make_agent",
     "play_batch",
     "play_match",
+    "seat_cards",
+    "turn_cards",
 ]

@@ -1,7 +1,9 @@
 """The agent protocol the engine talks to, the built-in agents and the name registry.
 
 An agent decides for a whole batch at once: one call per decision step, so a network agent
-makes one batched forward pass.
+makes one batched forward pass. An agent whose ``sees_cards`` is true also gets ``cards``:
+its hole cards and the board shown so far, in the order they were dealt (the observation's
+card bits cannot tell hole cards from board cards); :func:`agent_actions` passes them.
 
 >>> agent = make_agent("raise")
 >>> mask = np.array([[True, True, True, False], [True, False, True, False]])
@@ -17,7 +19,8 @@ from typing import Protocol, runtime_checkable
 
 import numpy as np
 
-from pokerirl.encoding import CALL, CHECK, RAISE
+from pokerirl.encoding import BOARD_SIZE_BY_ROUND, CALL, CHECK, FOLD, RAISE, RAISE_OFFSET
+from pokerirl.game.synth import DEFAULT_PLAYERS, ScriptedPlayer, visible_strength
 
 # For each of the 16 legal-mask patterns (bit i: action i legal): how many, and the k-th one.
 _LEGAL_COUNT = np.array([bin(p).count("1") for p in range(16)])
@@ -77,10 +80,123 @@ class CallAgent:
         return np.where(legal_mask[:, CALL], CALL, CHECK).astype(np.int64)
 
 
+# Cards a seat sees, by round (4 is after the river): its 2 hole cards, then the board.
+_SHOWN = np.arange(7) < 2 + np.array((*BOARD_SIZE_BY_ROUND, 5))[:, None]
+
+
+def seat_cards(deals: np.ndarray, rounds: np.ndarray, seats: np.ndarray) -> np.ndarray:
+    """(n, 7) int8: each seat's hole cards then the board shown in ``rounds``, -1 for the rest.
+
+    Args:
+        deals: (n, 9) deals (seat 0 hole, seat 1 hole, board), e.g. ``LimitHoldemBatch.cards``
+            of the hands.
+        rounds: (n,) betting round of each hand (0 preflop .. 3 river, 4 after the river).
+        seats: (n,) whose view (0 small blind, 1 big blind).
+
+    >>> deal = np.arange(9)[None]
+    >>> seat_cards(deal, np.array([1]), np.array([1])).tolist()
+    [[2, 3, 4, 5, 6, -1, -1]]
+    """
+    deals = np.asarray(deals)
+    seats = np.asarray(seats, dtype=np.int64)
+    hole = np.stack([deals[np.arange(len(seats)), 2 * seats + k] for k in (0, 1)], axis=1)
+    cards = np.concatenate([hole, deals[:, 4:9]], axis=1).astype(np.int8)
+    return np.where(_SHOWN[np.asarray(rounds, dtype=np.int64)], cards, np.int8(-1))
+
+
+def street_of(obs: np.ndarray) -> np.ndarray:
+    """(B,) betting round of (B, 72) observations, from how many cards they show."""
+    shown = np.asarray(obs)[:, :RAISE_OFFSET].sum(axis=1)
+    return np.searchsorted(np.array((2, 5, 6, 7)), shown).astype(np.int64)
+
+
+def raises_this_round(obs: np.ndarray) -> np.ndarray:
+    """(B,) raises so far in the current round, read from the observation's one-hot slots."""
+    obs = np.asarray(obs)
+    street = street_of(obs)
+    slots = RAISE_OFFSET + 5 * street[:, None] + np.arange(5)
+    return obs[np.arange(len(obs))[:, None], slots].argmax(axis=1)
+
+
+@dataclass(frozen=True, kw_only=True)
+class ScriptedAgent:
+    """A scripted player of the synthetic months (:mod:`pokerirl.game.synth`) on the engine.
+
+    Its score ``s`` is :func:`~pokerirl.game.synth.visible_strength` of its hole cards and
+    the board shown. With probability ``1 - noise`` it raises when ``s > raise_above`` and
+    fewer than ``max_raises`` raises were made this round (and raising is legal), else
+    calls a bet when ``s > call_above``, else checks or folds; with probability ``noise`` it
+    picks uniformly among those options (check or call; fold when facing a bet; raise when
+    allowed). :meth:`rule` is the noiseless choice.
+    """
+
+    name: str
+    player: ScriptedPlayer
+    sees_cards: bool = True
+
+    def _options(
+        self, obs: np.ndarray, legal_mask: np.ndarray, cards: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        legal_mask = np.asarray(legal_mask, dtype=bool)
+        cards = np.asarray(cards, dtype=np.int64)
+        street = street_of(obs)
+        score = visible_strength(cards[:, :2], cards[:, 2:7])[np.arange(len(street)), street]
+        facing = legal_mask[:, CALL]
+        can_raise = legal_mask[:, RAISE] & (raises_this_round(obs) < self.player.max_raises)
+        return score, facing, can_raise, np.where(facing, CALL, CHECK)
+
+    def rule(self, obs: np.ndarray, legal_mask: np.ndarray, cards: np.ndarray) -> np.ndarray:
+        """(B,) the noiseless action of each decision."""
+        score, facing, can_raise, passive = self._options(obs, legal_mask, cards)
+        stays = ~facing | (score > self.player.call_above)
+        action = np.where(stays, passive, FOLD)
+        return np.where(can_raise & (score > self.player.raise_above), RAISE, action).astype(
+            np.int64
+        )
+
+    def act(
+        self,
+        obs: np.ndarray,
+        legal_mask: np.ndarray,
+        rng: np.random.Generator,
+        *,
+        cards: np.ndarray,
+    ) -> np.ndarray:
+        score, facing, can_raise, passive = self._options(obs, legal_mask, cards)
+        action = self.rule(obs, legal_mask, cards)
+        noisy = rng.random(len(action)) < self.player.noise
+        # Options in synth's order: check or call, fold when facing, raise when allowed.
+        count = 1 + facing + can_raise
+        pick = (rng.random(len(action)) * count).astype(np.int64)
+        options = np.stack([passive, np.where(facing, FOLD, RAISE), np.full_like(passive, RAISE)])
+        random_pick = options[pick, np.arange(len(action))]
+        return np.where(noisy, random_pick, action).astype(np.int64)
+
+
+def agent_actions(
+    agent: Agent,
+    obs: np.ndarray,
+    legal_mask: np.ndarray,
+    rng: np.random.Generator,
+    cards: Callable[[], np.ndarray],
+) -> np.ndarray:
+    """``agent.act``, given the cards (``cards()``, computed only then) if it sees them."""
+    if getattr(agent, "sees_cards", False):
+        return agent.act(obs, legal_mask, rng, cards=cards())  # type: ignore[call-arg]
+    return agent.act(obs, legal_mask, rng)
+
+
+def _scripted(index: int) -> Callable[[], Agent]:
+    player = DEFAULT_PLAYERS[index]
+    return lambda: ScriptedAgent(name=player.nick.lower(), player=player)
+
+
 BUILT_IN_AGENTS: dict[str, Callable[[], Agent]] = {
     "random": RandomAgent,
     "raise": RaiseAgent,
     "call": CallAgent,
+    "tightbot": _scripted(0),  # the synthetic months' experts, with their noise
+    "loosebot": _scripted(1),
 }
 
 

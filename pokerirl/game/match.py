@@ -13,13 +13,14 @@ hands ``2j`` and ``2j + 1`` both use deal ``j``, so each agent plays each deal f
 
 from __future__ import annotations
 
+import functools
 import time
 from dataclasses import dataclass, field
 
 import numpy as np
 from tqdm import tqdm
 
-from pokerirl.game.agents import Agent
+from pokerirl.game.agents import Agent, agent_actions, seat_cards
 from pokerirl.game.deals import deal_cards
 from pokerirl.game.engine import IllegalActionError, LimitHoldemBatch
 from pokerirl.game.evaluator import prepare_tables
@@ -30,6 +31,7 @@ DEFAULT_BATCH_SIZE = 65_536
 MAX_HANDS = 100_000_000
 MAX_BATCH_SIZE = 1_048_576
 AGENT_STREAM = 1  # spawn-key word for agents' randomness (deals use 0)
+SEATINGS = ("alternate", "random")
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -65,11 +67,37 @@ def _agent_rng(seed: int, which: int) -> np.random.Generator:
     )
 
 
+def turn_cards(game: LimitHoldemBatch, hands: np.ndarray) -> np.ndarray:
+    """(n, 7) cards of the seat to act in ``hands``, hole cards first (see ``seat_cards``)."""
+    return seat_cards(game.cards[hands], game.round[hands], game.to_act[hands])
+
+
+@dataclass(frozen=True, kw_only=True)
+class DecisionLog:
+    """Every decision one agent took in a match: what it saw and what it did, in play order."""
+
+    obs: np.ndarray  # (N, 72) uint8
+    legal_mask: np.ndarray  # (N, 4) bool
+    cards: np.ndarray  # (N, 7) int8: hole cards, then the board shown (-1 beyond)
+    actions: np.ndarray  # (N,) int64
+
+    @classmethod
+    def concatenate(cls, parts: list[DecisionLog]) -> DecisionLog:
+        return cls(
+            **{
+                name: np.concatenate([getattr(p, name) for p in parts])
+                for name in ("obs", "legal_mask", "cards", "actions")
+            }
+        )
+
+
 def play_batch(
     agents: tuple[Agent, Agent],
     deals: np.ndarray,
     seat_of_first: np.ndarray,
     rngs: tuple[np.random.Generator, np.random.Generator],
+    *,
+    log: list[DecisionLog] | None = None,
 ) -> np.ndarray:
     """Play one batch of hands to the end; return the first agent's net big blinds per hand.
 
@@ -78,17 +106,24 @@ def play_batch(
         deals: (B, 9) deals.
         seat_of_first: (B,) seat (0 small blind, 1 big blind) of ``agents[0]`` in each hand.
         rngs: each agent's generator.
+        log: when given, the first agent's decisions are appended to it, one part per step.
     """
     game = LimitHoldemBatch(deals=deals)
     while game.active().size:
         hands = game.active()
         first_to_act = game.to_act[hands] == seat_of_first[hands]
         # Each agent decides for all hands where it is to act: one batched call per agent.
-        for agent, rng, turn in zip(agents, rngs, (first_to_act, ~first_to_act), strict=True):
+        for which, agent, rng, turn in zip(
+            (0, 1), agents, rngs, (first_to_act, ~first_to_act), strict=True
+        ):
             mine = hands[turn]
             if mine.size == 0:
                 continue
-            actions = agent.act(game.observe(mine), game.legal_mask(mine), rng)
+            obs, legal = game.observe(mine), game.legal_mask(mine)
+            cards = functools.partial(turn_cards, game, mine)
+            actions = agent_actions(agent, obs, legal, rng, cards)
+            if log is not None and which == 0:
+                log.append(DecisionLog(obs=obs, legal_mask=legal, cards=cards(), actions=actions))
             try:
                 game.step(actions, mine)
             except IllegalActionError as error:
@@ -129,11 +164,16 @@ def play_match(
     duplicate: bool = True,
     batch_size: int = DEFAULT_BATCH_SIZE,
     progress: bool = False,
+    log: list[DecisionLog] | None = None,
+    seating: str = "alternate",
 ) -> MatchResult:
     """Play ``hands`` hands of A against B, ``batch_size`` hands in lock-step at a time.
 
     The same arguments give the same result; deals do not depend on ``batch_size``, but the
-    agents' random draws do. ``progress`` shows a tqdm bar on stderr.
+    agents' random draws do. ``progress`` shows a tqdm bar on stderr; ``log`` collects A's
+    decisions (see :func:`play_batch`). ``seating="random"`` (without duplicate) draws A's
+    seat for every hand, as RLCard draws the small blind for every game; the default
+    alternates it.
 
     Raises:
         ValueError: as :func:`check_match_size`, or on a negative seed.
@@ -141,8 +181,11 @@ def play_match(
     check_match_size(hands, duplicate=duplicate, batch_size=batch_size)
     if seed < 0:
         raise ValueError(f"seed must be non-negative, got {seed}")
+    if seating not in SEATINGS or (seating == "random" and duplicate):
+        raise ValueError(f"seating must be alternate, or random without duplicate: {seating!r}")
 
     rngs = (_agent_rng(seed, 0), _agent_rng(seed, 1))
+    seat_rng = _agent_rng(seed, 2)
     results = np.empty(hands, dtype=np.float64)
     prepare_tables()  # one-time setup, kept out of hands_per_second
     started = time.perf_counter()
@@ -155,8 +198,13 @@ def play_match(
                 )
             else:
                 deals = deal_cards(seed=seed, start=start, count=count)
-            seat_of_a = (np.arange(start, start + count) % 2).astype(np.int8)
-            results[start : start + count] = play_batch((agent_a, agent_b), deals, seat_of_a, rngs)
+            if seating == "random":
+                seat_of_a = seat_rng.integers(0, 2, count).astype(np.int8)
+            else:
+                seat_of_a = (np.arange(start, start + count) % 2).astype(np.int8)
+            results[start : start + count] = play_batch(
+                (agent_a, agent_b), deals, seat_of_a, rngs, log=log
+            )
             bar.update(count)
     seconds = time.perf_counter() - started
 

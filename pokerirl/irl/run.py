@@ -4,8 +4,10 @@ A run folder holds ``reward.pt`` and ``policy.pt`` (state_dicts), ``config.json`
 (architecture, hyperparameters, data fingerprint, package versions, final metrics: what
 determines the result, never wall-clock times), ``timings.json`` (samples/s, seconds),
 ``metrics.jsonl`` (one line per epoch), ``baselines.json``, ``split.json`` (the validation
-group ids) and PNG curves. A folder of several runs holds ``run-<k>`` folders, each with seed
-``seed + k``, and ``summary.json`` (mean and std over runs) with a banded plot.
+group ids), PNG curves and, for a poker table with cards, the reward card
+(``reward_card.json`` and ``reward_card.png``: what f prefers on the validation hands; see
+:mod:`pokerirl.agents.reward_card`). A folder of several runs holds ``run-<k>`` folders,
+each with seed ``seed + k``, and ``summary.json`` (mean and std over runs) with a banded plot.
 
 A finished folder is never modified in place: a run is written into a hidden temporary folder
 beside it and renamed into place at the end (replacing an old run only with ``overwrite``).
@@ -125,8 +127,12 @@ def train_into(
     device: str = "cpu",
     progress: bool = False,
     table: str | os.PathLike[str] | None = None,
+    table_file: str | os.PathLike[str] | None = None,
 ) -> RunSummary:
-    """Split, compute the baselines, train and write a run into the (new) ``folder``."""
+    """Split, compute the baselines, train and write a run into the (new) ``folder``.
+
+    ``table`` is the table's path for the record; ``table_file`` the file to read the reward
+    card's states from (default ``table``)."""
     train_data, val_data, val_groups = data.split(
         val_fraction=config.val_fraction, seed=config.seed
     )
@@ -153,6 +159,7 @@ def train_into(
     data_info = data_record(data, train_data, val_data, path=table)
     save_run(result, folder, algo=algo, data=data_info, baselines=found, device=device)
     plot_curves(result.metrics, folder, baselines=found)
+    write_reward_card(folder, table_file or table)
     return RunSummary(
         out_dir=folder,
         metrics=result.metrics,
@@ -161,6 +168,30 @@ def train_into(
         train_rows=len(train_data),
         val_rows=len(val_data),
     )
+
+
+CARD_COLUMNS = ("hole_cards", "board")  # what the card reads beyond the trainer's columns
+
+
+def write_reward_card(folder: Path, table: str | os.PathLike[str] | None) -> None:
+    """The run's reward card over its validation hands, when ``table`` has the cards.
+
+    The one call of the train fan-out into the agents layer (the card is poker-specific);
+    it moves with the fan-out when that leaves ``irl/``.
+    """
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    if table is None:
+        return
+    try:
+        names = pq.read_schema(table).names
+    except (OSError, pa.ArrowException):
+        return
+    if all(name in names for name in CARD_COLUMNS):
+        from pokerirl.agents.reward_card import run_card, write_card
+
+        write_card(run_card(folder, table), folder)
 
 
 def data_record(
@@ -301,6 +332,7 @@ def train_unit(
                 config=AIRLConfig(**settings),
                 device=device,
                 table=table_path,
+                table_file=path,
             )
             files = {f.name: f.read_bytes() for f in sorted(run.iterdir()) if f.is_file()}
     finally:
@@ -401,6 +433,9 @@ def train_runs(
         on_result=save,
         labels=[f"run-{k}" for k in todo],
     )
+    for folder in folders:  # runs of an older pokerirl, reused: add their card
+        if not (folder / "reward_card.json").is_file():
+            write_reward_card(folder, table)
     results = [_run_result(folder) for folder in folders]
     summary = summarize(results)
     write_text(out / SUMMARY_FILE, json.dumps(summary, indent=2) + "\n")

@@ -2,8 +2,9 @@
 
 Stages (see :mod:`pokerirl.study.pipeline`): ingest -> IRL (AIRL, H-AIRL; several runs) ->
 agents (sparse DQN, AIRL-DQN, H-AIRL-DQN; seed k on IRL run k mod runs) -> tournament
-(Table 1) -> panel (every agent kind and built-in against every other) -> report
-(``report.md``, ``report.json``, ``panel.csv``, ``figures/``).
+(Table 1) -> [authors: their tournament protocol, with the ``authors`` preset] -> panel
+(every agent kind and built-in against every other) -> report (``report.md``,
+``report.json``, ``panel.csv``, ``figures/``), with the reward cards of the IRL runs.
 """
 
 from __future__ import annotations
@@ -23,12 +24,16 @@ from pokerirl.study.pipeline import (
     Say,
     Study,
     agents_stage,
+    authors_stage,
     ingest_stage,
     irl_stage,
     panel_stage,
+    reward_cards,
+    stage_names,
     tournament_stage,
 )
 from pokerirl.study.report import (
+    AUTHORS_FIGURE,
     FIGURES,
     build_report,
     is_study_report,
@@ -95,15 +100,20 @@ def run_study(
     irl = irl_stage(study, ingested)
     agents = agents_stage(study, irl)
     tournament = tournament_stage(study, agents)
+    authors = authors_stage(study, agents, tournament) if config.authors_repeats else None
     panel = panel_stage(study, agents)
-    say(f"[{len(STAGES)}/{len(STAGES)}] report -> {root / 'report.md'}")
+    stages = len(stage_names(config))
+    say(f"[{stages}/{stages}] report -> {root / 'report.md'}")
     report = build_report(
-        config, ingested=ingested, irl=irl, agents=agents, tournament=tournament, panel=panel
-    )
+        config, ingested=ingested, irl=irl, agents=agents, tournament=tournament, panel=panel,
+        authors=authors, cards=reward_cards(root, config),
+    )  # fmt: skip
     figures.irl_alignment(irl, root / FIGURES["irl_alignment"])
     figures.irl_discriminator(irl, root / FIGURES["irl_discriminator"])
     figures.irl_actions(irl, root / FIGURES["irl_actions"])
     figures.rl_curves(agents, root / FIGURES["rl_vs_random"])
     figures.panel_heatmap(panel, root / FIGURES["panel_heatmap"])
+    if authors is not None:
+        figures.authors_tournament(authors, report, root / AUTHORS_FIGURE)
     write_study_report(root, report, panel)
     return StudyResult(root=root, report=report, markdown=render_markdown(report))

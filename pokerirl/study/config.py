@@ -1,9 +1,12 @@
-"""The study's settings: one frozen dataclass and its two presets, ``quick`` and ``paper``.
+"""The study's settings: one frozen dataclass and its presets, ``quick``, ``paper`` (ours)
+and ``authors`` (the authors' protocol, from their code).
 
 >>> PRESETS["paper"].runs, len(PRESETS["paper"].seeds), PRESETS["paper"].hands
 (10, 20, 1000000)
 >>> preset("quick", runs=3).runs
 3
+>>> preset("authors", runs=3).seeds  # one experiment per IRL run
+(0, 1, 2)
 """
 
 from __future__ import annotations
@@ -15,6 +18,45 @@ from typing import Any
 AGENT_KINDS = ("dqn", "airl_dqn", "hairl_dqn")  # report.json names
 IRL_ALGOS = ("airl", "hairl")
 BUILT_INS = ("random", "call", "raise")
+IRL_SETTINGS = ("ours", "authors")
+AGENT_PRESETS = ("default", "authors")  # pokerirl.agents.train.AGENT_PRESETS
+TRANSFORMS = ("raw", "centered", "log_softmax")  # pokerirl.agents.rewards.TRANSFORMS
+
+# The authors' poker IRL settings (silue-dev/hairl, src/utils/training.py, LimitHoldem-v0):
+# one hidden layer of 64 in both nets, leaky ReLU, lr 1e-3 for both, weight decay 5e-3 on the
+# discriminator only, 50 steps (epochs) of batches of 256, an 80/20 split, the policy's
+# distribution (not a sample) shown to the discriminator; H-AIRL: gt_ratio_p 0.33,
+# gt_ratio_d 0, noise over the batch from 1.0 to 0.1 with decay 0.1. Their split is the first
+# 80% of rows; ours stays a seeded share of hands. Their supervised term is a summed MSE on
+# the probabilities; ours stays cross-entropy until the IRL core offers theirs (issue 20's
+# `supervised_loss = "sum_mse"`: AUTHORS_HAIRL should set it once that lands).
+AUTHORS_IRL: dict[str, object] = {
+    "reward_hidden": (64,),
+    "policy_hidden": (64,),
+    "activation": "leaky_relu",
+    "reward_lr": 1e-3,
+    "policy_lr": 1e-3,
+    "reward_weight_decay": 5e-3,
+    "batch_size": 256,
+    "epochs": 50,
+    "beta": 0.0,
+    "disc_action": "distribution",
+    "val_fraction": 0.2,
+}
+AUTHORS_HAIRL: dict[str, object] = {
+    "alpha": 0.33,
+    "sigma_start": 1.0,
+    "sigma_end": 0.1,
+    "noise_schedule": "authors",
+    "noise_decay": 0.1,
+}
+
+
+def irl_overrides(settings: str, algo: str) -> dict[str, object]:
+    """The IRL core's settings the study changes for ``settings`` (ours: none)."""
+    if settings == "ours":
+        return {}
+    return {**AUTHORS_IRL, **(AUTHORS_HAIRL if algo == "hairl" else {})}
 
 
 class StudyError(ValueError):
@@ -27,7 +69,11 @@ class StudyConfig:
 
     ``irl_epochs`` None keeps the IRL core's defaults (the paper's poker settings);
     ``short_agent_hands`` trains a second sparse DQN set at the paper's training length
-    (5,000 episodes) beside ours, on the same seeds.
+    (5,000 episodes) beside ours, on the same seeds. ``irl_settings`` and ``agent_preset``
+    choose ours or the authors' settings; ``authors_repeats`` > 0 adds the authors' tournament
+    (that many repeats of ``authors_games`` games per experiment and matchup);
+    ``reward_sources`` replaces an algorithm's IRL runs by a reward (``authors:FILE``), as
+    ``(algo, spec)`` pairs; ``reward_transform`` is the learned-reward DQNs' transform.
     """
 
     preset: str
@@ -42,6 +88,12 @@ class StudyConfig:
     irl_epochs: int | None = None
     irl_seed: int = 0
     duplicate: bool = True
+    irl_settings: str = "ours"
+    agent_preset: str = "default"
+    authors_repeats: int = 0
+    authors_games: int = 1_000
+    reward_sources: tuple[tuple[str, str], ...] = ()
+    reward_transform: str = "raw"
     jobs: int = 2  # processes; the one setting that does not change a result
 
     def __post_init__(self) -> None:
@@ -58,6 +110,15 @@ class StudyConfig:
             "eval hands >= 2": self.eval_hands >= 2,
             "IRL epochs >= 1": self.irl_epochs is None or self.irl_epochs >= 1,
             "jobs >= 1": self.jobs >= 1,
+            f"irl settings in {', '.join(IRL_SETTINGS)}": self.irl_settings in IRL_SETTINGS,
+            f"agent preset in {', '.join(AGENT_PRESETS)}": self.agent_preset in AGENT_PRESETS,
+            "authors' repeats >= 0": self.authors_repeats >= 0,
+            "authors' games >= 2": self.authors_games >= 2,
+            "reward sources for airl or hairl, once each": all(
+                algo in IRL_ALGOS for algo, _ in self.reward_sources
+            )
+            and len({algo for algo, _ in self.reward_sources}) == len(self.reward_sources),
+            f"reward transform in {', '.join(TRANSFORMS)}": self.reward_transform in TRANSFORMS,
         }
         broken = [name for name, ok in checks.items() if not ok]
         if broken:
@@ -68,7 +129,12 @@ class StudyConfig:
         found = dataclasses.asdict(self)
         found.pop("jobs")
         found["seeds"] = list(self.seeds)
+        found["reward_sources"] = [list(pair) for pair in self.reward_sources]
         return found
+
+    def reward_source(self, algo: str) -> str | None:
+        """The reward that replaces ``algo``'s IRL runs, if any."""
+        return dict(self.reward_sources).get(algo)
 
 
 PRESETS: dict[str, StudyConfig] = {
@@ -97,6 +163,24 @@ PRESETS: dict[str, StudyConfig] = {
         eval_hands=4_000,
         irl_epochs=20,
     ),
+    # The authors' protocol (src/main.py, train_rl.py): per experiment k, IRL run k with their
+    # settings, then a sparse DQN, an AIRL-DQN and an H-AIRL-DQN with their DQN preset (5,000
+    # hands; the > 0.8 x best checkpoint plays), then 50 x 1,000 non-duplicate games per pair.
+    # They ran 20 experiments; our own duplicate-deal Table 1 and panel play the same agents.
+    "authors": StudyConfig(
+        preset="authors",
+        runs=20,
+        seeds=tuple(range(20)),
+        hands=100_000,
+        panel_hands=20_000,
+        agent_hands=5_000,
+        short_agent_hands=5_000,
+        eval_every=100,
+        eval_hands=1_000,
+        irl_settings="authors",
+        agent_preset="authors",
+        authors_repeats=50,
+    ),
 }
 
 
@@ -107,6 +191,10 @@ def preset(name: str, **overrides: Any) -> StudyConfig:
     changes = {k: v for k, v in overrides.items() if v is not None}
     if "seeds" in changes:
         changes["seeds"] = tuple(changes["seeds"])
+    elif name == "authors" and "runs" in changes:
+        changes["seeds"] = tuple(range(changes["runs"]))  # experiment k: IRL run k, seed k
+    if "reward_sources" in changes:
+        changes["reward_sources"] = tuple(tuple(pair) for pair in changes["reward_sources"])
     try:
         return dataclasses.replace(PRESETS[name], **changes)
     except TypeError as error:

@@ -38,16 +38,22 @@ def _band(axis: Any, x: Any, curve: dict[str, Any], label: str) -> None:
     axis.fill_between(x, mean - std, mean + std, alpha=0.25)
 
 
+def _trained(irl: dict[str, Any]) -> dict[str, str]:
+    """The algorithms whose IRL runs the study trained (not replaced by a given reward)."""
+    return {algo: label for algo, label in ALGO_LABELS.items() if "replaced" not in irl[algo]}
+
+
 def irl_alignment(irl: dict[str, Any], path: Path) -> None:
     """Validation alignment over epochs, mean ± std over runs, with the baselines as lines."""
     plt = _pyplot()
     figure, axis = plt.subplots(figsize=(6.4, 4))
-    for algo, label in ALGO_LABELS.items():
+    trained = _trained(irl)
+    for algo, label in trained.items():
         curve = irl[algo]["curves"]["val_alignment"]
         _band(axis, np.arange(1, len(curve["mean"]) + 1), curve, label)
     styles = {"majority": ":", "legal_majority": "--", "bc": "-."}
-    for name, style in styles.items():
-        value = irl["hairl"]["baselines"][name]["mean"]
+    for name, style in styles.items() if trained else ():
+        value = irl[list(trained)[-1]]["baselines"][name]["mean"]
         axis.axhline(value, color="grey", linestyle=style, label=f"{name} {value:.3f}")
     axis.set(xlabel="epoch", ylabel="validation alignment", title="IRL: validation alignment")
     axis.legend(fontsize=8)
@@ -58,7 +64,7 @@ def irl_discriminator(irl: dict[str, Any], path: Path) -> None:
     """Discriminator accuracy on expert and on policy actions over epochs, mean ± std."""
     plt = _pyplot()
     figure, axis = plt.subplots(figsize=(6.4, 4))
-    for algo, label in ALGO_LABELS.items():
+    for algo, label in _trained(irl).items():
         for key, side in (("disc_acc_expert", "expert"), ("disc_acc_policy", "policy")):
             curve = irl[algo]["curves"][key]
             _band(axis, np.arange(1, len(curve["mean"]) + 1), curve, f"{label}, {side}")
@@ -70,9 +76,17 @@ def irl_discriminator(irl: dict[str, Any], path: Path) -> None:
 def irl_actions(irl: dict[str, Any], path: Path) -> None:
     """Validation action distributions (expert, AIRL, H-AIRL mean π) as grouped bars."""
     plt = _pyplot()
-    groups = {"expert": irl["hairl"]["action_dist"]["val_expert_dist"]}
-    for algo, label in ALGO_LABELS.items():
+    trained = _trained(irl)
+    groups = {}
+    for algo, label in trained.items():
+        groups["expert"] = irl[algo]["action_dist"]["val_expert_dist"]
         groups[label] = irl[algo]["action_dist"]["val_policy_dist"]
+    if not groups:
+        figure, axis = plt.subplots(figsize=(6.4, 4))
+        axis.set_title("no IRL runs: both rewards were given")
+        _save(figure, path)
+        return
+    groups = {"expert": groups.pop("expert"), **groups}
     count = len(groups["expert"]["mean"])
     x = np.arange(count)
     width = 0.8 / len(groups)
@@ -123,4 +137,43 @@ def panel_heatmap(panel: dict[str, Any], path: Path) -> None:
                 )
     figure.colorbar(image, label="mbb/hand (row vs column)")
     axis.set_title("Panel: row agent against column agent")
+    _save(figure, path)
+
+
+def authors_tournament(authors: dict[str, Any], report: dict[str, Any], path: Path) -> None:
+    """Every pair's result under the authors' protocol: each repeat (dots), each experiment's
+    mean, the overall mean with their ± and with the SE over experiments, our duplicate-deal
+    figure on the same agents and the paper's."""
+    plt = _pyplot()
+    labels = {"hairl_dqn_vs_dqn": "H-AIRL-DQN vs DQN", "airl_dqn_vs_dqn": "AIRL-DQN vs DQN"}
+    figure, axes = plt.subplots(1, len(labels), figsize=(11, 4.2), sharey=True)
+    rng = np.random.default_rng(0)  # jitter only
+    for axis, (name, label) in zip(axes, labels.items(), strict=True):
+        row = authors[name]
+        repeats = row["repeats_by_experiment"]
+        for k, values in enumerate(repeats):
+            x = k + rng.uniform(-0.2, 0.2, len(values))
+            axis.scatter(x, values, s=6, alpha=0.35, color="C0")
+            axis.scatter([k], [np.mean(values)], marker="D", color="black", zorder=3)
+        right = len(repeats) - 0.5
+        mean = row["mean"]
+        axis.axhline(mean, color="C1", label=f"mean {mean:+,.0f}")
+        axis.axhspan(mean - row["paper_style_se"], mean + row["paper_style_se"], color="C1",
+                     alpha=0.5, label=f"their ± {row['paper_style_se']:,.0f}")  # fmt: skip
+        se = row["se_over_experiments"]
+        if se is not None:
+            axis.axhspan(mean - se, mean + se, color="C1", alpha=0.15,
+                         label=f"SE over experiments {se:,.0f}")  # fmt: skip
+        duplicate = row["duplicate_mbb_per_hand"]
+        if duplicate is not None:
+            axis.axhline(duplicate, color="C2", linestyle="--",
+                         label=f"ours, duplicate {duplicate:+,.0f}")  # fmt: skip
+        theirs = report["table1_authors"][name]["paper"]
+        paper_label = f"the paper {theirs['mbb_per_hand']:+,} ± {theirs['std_error']}"
+        axis.axhline(theirs["mbb_per_hand"], color="C3", linestyle=":", label=paper_label)
+        axis.set(title=label, xlabel="experiment (diamond: its mean)", xlim=(-0.5, right))
+        axis.set_xticks(range(len(repeats)))
+        axis.legend(fontsize=7)
+    axes[0].set_ylabel(f"mbb/hand of one repeat ({row['games']:,} games)")
+    figure.suptitle("The authors' tournament protocol: every repeat of every pair", fontsize=10)
     _save(figure, path)

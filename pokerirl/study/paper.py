@@ -20,6 +20,21 @@ RL_VS_RANDOM: dict[str, float] = {"dqn": 2270, "airl_dqn": 1817, "hairl_dqn": 22
 DISC_ACC_FINAL: dict[str, float] = {"airl": 0.52, "hairl": 0.95}  # end of IRL, about
 DQN_TRAINING = "5,000 episodes against random"
 APPROXIMATE = ("rl_vs_random", "disc_acc_final")
+# Not in the paper: the authors' two published poker rewards, read in the review behind
+# issue 17 (argmax over legal actions on 5,847 random-play states and the April 1995 rows).
+AUTHORS_REWARDS: dict[str, dict[str, Any]] = {
+    "hairl": {
+        "mean_f": {"call": 0.83, "raise": 0.88, "fold": -8.5, "check": 0.76},
+        "argmax_share": {"call": 0.20, "raise": 0.68, "fold": 0.0, "check": 0.12},
+        "agree_expert": "0.52-0.55",
+    },
+    "airl": {  # "every action scores negative (about -0.75 each)"
+        "mean_f": {"call": -0.75, "raise": -0.75, "fold": -0.75, "check": -0.75},
+        "argmax_share": {"raise": 0.74},
+        "agree_expert": "0.52-0.55",
+    },
+}
+AUTHORS_TOURNAMENT_PAIRS = (-941, 567, 36)  # the review's three pairs under their protocol
 
 
 def paper_values() -> dict[str, Any]:
@@ -32,4 +47,6 @@ def paper_values() -> dict[str, Any]:
         "disc_acc_final": DISC_ACC_FINAL,
         "dqn_training": DQN_TRAINING,
         "approximate": list(APPROXIMATE),
+        "authors_rewards": AUTHORS_REWARDS,
+        "authors_tournament_pairs": list(AUTHORS_TOURNAMENT_PAIRS),
     }

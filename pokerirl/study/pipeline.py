@@ -1,4 +1,7 @@
-"""The study pipeline: ingest -> irl -> agents -> tournament -> panel -> report.
+"""The study pipeline: ingest -> irl -> agents -> tournament [-> authors] -> panel -> report.
+
+The ``authors`` stage (the authors' tournament protocol) runs when the settings ask for it
+(``authors_repeats`` > 0: the ``authors`` preset).
 
 Each stage writes its outputs under the study folder and a record ``stages/<stage>.json``
 holding a fingerprint of its settings and of the fingerprints of the stages it reads. A rerun:
@@ -28,7 +31,14 @@ import numpy as np
 
 from pokerirl.atomic import write_text
 from pokerirl.execution import Backend, fingerprint
-from pokerirl.study.config import AGENT_KINDS, BUILT_INS, IRL_ALGOS, StudyConfig, StudyError
+from pokerirl.study.config import (
+    AGENT_KINDS,
+    BUILT_INS,
+    IRL_ALGOS,
+    StudyConfig,
+    StudyError,
+    irl_overrides,
+)
 
 if TYPE_CHECKING:  # the layers below load lazily: ``pokerirl report`` needs none of them
     from pokerirl.agents.train import TrainConfig
@@ -36,6 +46,9 @@ if TYPE_CHECKING:  # the layers below load lazily: ``pokerirl report`` needs non
     from pokerirl.tournaments import TournamentReport
 
 STAGES = ("ingest", "irl", "agents", "tournament", "panel", "report")
+AUTHORS_STAGES = ("ingest", "irl", "agents", "tournament", "authors", "panel", "report")
+TABLE1_NAMES = ("hairl_dqn", "airl_dqn")  # the matchups against the sparse DQN
+PLAYING_HANDS = 20_000  # duplicate hands of the playing checkpoint against random (authors)
 RECORD_FORMAT = "pokerirl-study-stage/1"
 TABLE = "expert.parquet"
 AGENT_FOLDERS = {"dqn": "dqn", "airl_dqn": "airl-dqn", "hairl_dqn": "hairl-dqn"}
@@ -96,8 +109,50 @@ class Execution:
             progress=self.progress,
         )
 
+    def authors_tournament(
+        self,
+        matchups: Sequence[tuple[str, str]],
+        *,
+        names: Sequence[str],
+        experiments: Sequence[int],
+        repeats: int,
+        games: int,
+        out: Path,
+        duplicate: dict[str, float],
+    ) -> dict[str, Any]:
+        from pokerirl.tournaments import run_authors_tournament
+
+        return run_authors_tournament(
+            matchups,
+            names=names,
+            experiments=experiments,
+            repeats=repeats,
+            games=games,
+            out=out,
+            duplicate=duplicate,
+            overwrite=True,  # the stage record guards the settings
+            backend=self.backend,
+            progress=self.progress,
+        )
+
 
 # --------------------------------------------------------------------------- stage records
+
+
+def stage_names(config: StudyConfig) -> tuple[str, ...]:
+    """The stages a study of ``config`` runs, in order."""
+    return AUTHORS_STAGES if config.authors_repeats else STAGES
+
+
+def _non_default(config: StudyConfig, *names: str) -> dict[str, Any]:
+    """The settings among ``names`` that differ from their defaults: stage fingerprints of
+    studies made before they existed stay the same."""
+    import dataclasses
+
+    defaults = {f.name: f.default for f in dataclasses.fields(StudyConfig)}
+    return {
+        name: getattr(config, name) for name in names if getattr(config, name) != defaults[name]
+    }
 
 
 def _sources_fingerprint(sources: Sequence[str | os.PathLike[str]]) -> dict[str, Any]:
@@ -133,7 +188,8 @@ class Study:
     ) -> dict[str, Any]:
         """Run ``compute`` unless a finished record with the same fingerprint exists; return
         its result (a JSON-ready dict) and the fingerprint under ``"fingerprint"``."""
-        number = f"[{STAGES.index(name) + 1}/{len(STAGES)}]"
+        names = stage_names(self.config)
+        number = f"[{names.index(name) + 1}/{len(names)}]"
         wanted = fingerprint({"stage": name, "settings": settings})
         path = self.root / "stages" / f"{name}.json"
         record = _read_record(path)
@@ -252,9 +308,16 @@ def irl_stage(study: Study, ingested: dict[str, Any]) -> dict[str, Any]:
     def compute() -> dict[str, Any]:
         found = {}
         for algo, out in zip(IRL_ALGOS, outputs, strict=True):
-            settings = load_config(
-                algo, overrides={"epochs": config.irl_epochs, "seed": config.irl_seed}
-            )
+            source = config.reward_source(algo)
+            if source is not None:
+                found[algo] = replaced_irl(study, algo, source, out)
+                continue
+            chosen = {"epochs": config.irl_epochs, "seed": config.irl_seed}
+            overrides = {
+                **irl_overrides(config.irl_settings, algo),
+                **{k: v for k, v in chosen.items() if v is not None},
+            }
+            settings = load_config(algo, overrides=overrides)
             done = out / ("summary.json" if config.runs > 1 else "config.json")
             if not done.is_file():  # train_runs stages its folder: present means finished
                 study.say(f"      {algo}: {config.runs} runs -> {out}")
@@ -268,8 +331,31 @@ def irl_stage(study: Study, ingested: dict[str, Any]) -> dict[str, Any]:
         "epochs": config.irl_epochs,
         "seed": config.irl_seed,
         "upstream": ingested["fingerprint"],
+        **_non_default(config, "irl_settings"),
     }
+    if config.reward_sources:
+        settings["reward_sources"] = _source_prints(config)
     return study.stage("irl", settings, outputs, compute)
+
+
+def _source_prints(config: StudyConfig) -> dict[str, str]:
+    from pokerirl.agents.rewards import reward_source_fingerprint
+
+    try:
+        return {algo: reward_source_fingerprint(spec) for algo, spec in config.reward_sources}
+    except ValueError as error:
+        raise StudyError(str(error)) from None
+
+
+def replaced_irl(study: Study, algo: str, source: str, out: Path) -> dict[str, Any]:
+    """An algorithm whose IRL runs a given reward replaces: its card over the whole table."""
+    from pokerirl.agents.reward_card import CardStates, reward_card, write_card
+    from pokerirl.agents.rewards import load_reward_source
+
+    study.say(f"      {algo}: replaced by {source}")
+    card = reward_card(load_reward_source(source), CardStates.from_table(study.root / TABLE))
+    write_card(card, out)
+    return {"replaced": source}
 
 
 def _final_vs_random(agent_set: Path, seeds: Sequence[int]) -> list[float]:
@@ -286,16 +372,36 @@ def _curve(agent_set: Path, seeds: Sequence[int]) -> dict[str, Any]:
     return {"hands": [lines[0][i]["hands"] for i in range(points)], **mean_std(values, axis=0)}
 
 
-def agents_stage(study: Study, irl: dict[str, Any]) -> dict[str, Any]:
+def _playing_vs_random(agent_set: Path, seeds: Sequence[int]) -> list[float]:
+    """Each seed's playing checkpoint against random, over duplicate hands (the authors'
+    preset plays its kept model, which its last evaluation did not see)."""
+    from pokerirl.agents import resolve_agent
     from pokerirl.agents.train import TrainConfig
+    from pokerirl.game import make_agent, play_match
+
+    return [
+        play_match(resolve_agent(str(agent_set / f"seed-{s}")), make_agent("random"),
+                   hands=PLAYING_HANDS, seed=TrainConfig.eval_seed).mbb_per_hand
+        for s in seeds
+    ]  # fmt: skip
+
+
+def agents_stage(study: Study, irl: dict[str, Any]) -> dict[str, Any]:
+    from pokerirl.agents.train import TrainConfig, agent_preset
     from pokerirl.game import make_agent, play_match
 
     config = study.config
     folder = study.root / "agents"
     sets = {kind: folder / name for kind, name in AGENT_FOLDERS.items()}
+    short = folder / SHORT_DQN
+    short_is_long = config.short_agent_hands == config.agent_hands
+    # The authors' evaluations are 1,000 games; the references are measured as the agents are.
+    authors = config.agent_preset == "authors"
+    reference_hands = PLAYING_HANDS if authors else config.eval_hands
 
     def train(out: Path, hands: int, algo: str | None) -> None:
-        base = TrainConfig(
+        base = agent_preset(
+            config.agent_preset,
             hands=hands,
             seed=config.seeds[0],
             eval_every=min(config.eval_every, hands),
@@ -304,13 +410,17 @@ def agents_stage(study: Study, irl: dict[str, Any]) -> dict[str, Any]:
         if algo is None:
             study.execution.train_seeds(out, base, config.seeds)
             return
+        learned = replace(base, reward="learned", reward_transform=config.reward_transform)
+        source = config.reward_source(algo)
+        if source is not None:
+            study.execution.train_seeds(out, replace(learned, reward_run=source), config.seeds)
+            return
         runs = run_paths(study.root / "irl" / algo, config.runs)
         # Seed s learns from IRL run s mod runs: one call per run, its seeds side by side.
         for k, run in enumerate(runs):
             group = [s for s in config.seeds if s % config.runs == k]
             if group:
-                learned = replace(base, reward="learned", reward_run=str(run))
-                study.execution.train_seeds(out, learned, group)
+                study.execution.train_seeds(out, replace(learned, reward_run=str(run)), group)
 
     def compute() -> dict[str, Any]:
         for kind, out in sets.items():
@@ -319,19 +429,19 @@ def agents_stage(study: Study, irl: dict[str, Any]) -> dict[str, Any]:
                 f"      {kind}: {len(config.seeds)} seeds x {config.agent_hands:,} hands -> {out}"
             )
             train(out, config.agent_hands, algo)
-        short = folder / SHORT_DQN
-        study.say(
-            f"      dqn (short): {len(config.seeds)} seeds x {config.short_agent_hands:,} hands"
-        )
-        train(short, config.short_agent_hands, None)
+        if not short_is_long:
+            study.say(
+                f"      dqn (short): {len(config.seeds)} seeds x {config.short_agent_hands:,} hands"
+            )
+            train(short, config.short_agent_hands, None)
         references = {}
         for name in ("call", "raise"):
             result = play_match(
-                make_agent(name), make_agent("random"), hands=config.eval_hands,
+                make_agent(name), make_agent("random"), hands=reference_hands,
                 seed=TrainConfig.eval_seed,
             )  # fmt: skip
             references[name] = {"mbb_per_hand": result.mbb_per_hand, "std_error": result.std_error}
-        return {
+        found = {
             "final_vs_random": {
                 kind: _final_vs_random(out, config.seeds) for kind, out in sets.items()
             },
@@ -340,10 +450,16 @@ def agents_stage(study: Study, irl: dict[str, Any]) -> dict[str, Any]:
                 "agent_hands": config.agent_hands,
                 "short_agent_hands": config.short_agent_hands,
                 "long": _final_vs_random(sets["dqn"], config.seeds),
-                "short": _final_vs_random(short, config.seeds),
+                "short": _final_vs_random(sets["dqn"] if short_is_long else short, config.seeds),
             },
             "references": references,
         }
+        if authors:
+            found["playing_vs_random"] = {
+                kind: _playing_vs_random(out, config.seeds) for kind, out in sets.items()
+            }
+            found["playing_hands"] = PLAYING_HANDS
+        return found
 
     settings = {
         "seeds": list(config.seeds),
@@ -353,6 +469,8 @@ def agents_stage(study: Study, irl: dict[str, Any]) -> dict[str, Any]:
         "eval_every": config.eval_every,
         "eval_hands": config.eval_hands,
         "upstream": irl["fingerprint"],
+        **_non_default(config, "agent_preset", "reward_transform"),
+        **({"reference_hands": reference_hands} if authors else {}),
     }
     return study.stage("agents", settings, [folder], compute)
 
@@ -373,7 +491,7 @@ def tournament_stage(study: Study, agents: dict[str, Any]) -> dict[str, Any]:
     out = study.root / "tournament"
     folder = study.root / "agents"
     baseline = str(folder / AGENT_FOLDERS["dqn"])
-    names = ("hairl_dqn", "airl_dqn")
+    names = TABLE1_NAMES
 
     def compute() -> dict[str, Any]:
         matchups = [(str(folder / AGENT_FOLDERS[name]), baseline) for name in names]
@@ -396,6 +514,62 @@ def tournament_stage(study: Study, agents: dict[str, Any]) -> dict[str, Any]:
         "upstream": agents["fingerprint"],
     }
     return study.stage("tournament", settings, [out], compute)
+
+
+def authors_stage(
+    study: Study, agents: dict[str, Any], tournament: dict[str, Any]
+) -> dict[str, Any]:
+    """The authors' tournament: for each experiment (seed) k, 50 x 1,000 non-duplicate games
+    of each learned-reward DQN against the sparse one, seats drawn per game."""
+    config = study.config
+    out = study.root / "authors"
+    folder = study.root / "agents"
+    baseline = str(folder / AGENT_FOLDERS["dqn"])
+    names = [f"{name}_vs_dqn" for name in TABLE1_NAMES]
+
+    def compute() -> dict[str, Any]:
+        found = study.execution.authors_tournament(
+            [(str(folder / AGENT_FOLDERS[name]), baseline) for name in TABLE1_NAMES],
+            names=names,
+            experiments=config.seeds,
+            repeats=config.authors_repeats,
+            games=config.authors_games,
+            out=out,
+            duplicate={name: tournament[name]["mbb_per_hand"] for name in names},
+        )
+        return {
+            name: {
+                **matchup.summary(),
+                "repeats_by_experiment": [list(e.repeats_mbb) for e in matchup.experiments],
+            }
+            for name, matchup in found.items()
+        }
+
+    settings = {
+        "repeats": config.authors_repeats,
+        "games": config.authors_games,
+        "seeds": list(config.seeds),
+        "upstream": [agents["fingerprint"], tournament["fingerprint"]],
+    }
+    return study.stage("authors", settings, [out], compute)
+
+
+def reward_cards(root: Path, config: StudyConfig) -> dict[str, Any]:
+    """Each algorithm's reward cards (its runs' ``reward_card.json``), summarized over runs;
+    None for an algorithm without cards (runs of an older pokerirl, or a table without
+    cards)."""
+    from pokerirl.agents.reward_card import CARD_FIGURE, card_summary, read_card
+
+    found: dict[str, Any] = {}
+    for algo in IRL_ALGOS:
+        out = root / "irl" / algo
+        folders = [out] if config.reward_source(algo) else run_paths(out, config.runs)
+        cards = [card for folder in folders if (card := read_card(folder)) is not None]
+        found[algo] = None
+        if cards:
+            figure = (folders[0] / CARD_FIGURE).relative_to(root)
+            found[algo] = {**card_summary(cards), "figure": str(figure)}
+    return found
 
 
 def panel_agents(root: Path) -> list[tuple[str, str]]:

@@ -8,6 +8,7 @@ from pathlib import Path
 from typing import Any
 
 from pokerirl import atomic
+from pokerirl.encoding import ACTIONS
 from pokerirl.study import paper
 from pokerirl.study.config import AGENT_KINDS, IRL_ALGOS, StudyConfig, StudyError
 from pokerirl.study.pipeline import mean_std
@@ -24,6 +25,9 @@ PANEL_CSV = "panel.csv"
 LABELS = {"dqn": "DQN", "airl_dqn": "AIRL-DQN", "hairl_dqn": "H-AIRL-DQN"}
 
 
+AUTHORS_FIGURE = "figures/authors_tournament.png"
+
+
 def build_report(
     config: StudyConfig,
     *,
@@ -32,11 +36,21 @@ def build_report(
     agents: dict[str, Any],
     tournament: dict[str, Any],
     panel: dict[str, Any],
+    authors: dict[str, Any] | None = None,
+    cards: dict[str, Any] | None = None,
 ) -> dict[str, Any]:
-    """The whole report as a JSON-ready dict; the issue's keys at the top level."""
+    """The whole report as a JSON-ready dict; the issue's keys at the top level.
+
+    ``authors``: the authors' tournament stage's result (``table1_authors``); ``cards``: the
+    reward cards' summaries per algorithm (``reward_cards``).
+    """
     table1 = {name: {**tournament[name], "paper": paper.TABLE1[name]} for name in paper.TABLE1}
     irl_part: dict[str, Any] = {}
+    trained = [algo for algo in IRL_ALGOS if "replaced" not in irl[algo]]
     for algo in IRL_ALGOS:
+        if algo not in trained:
+            irl_part[algo] = {"replaced_by": irl[algo]["replaced"]}
+            continue
         final = irl[algo]["final"]
         irl_part[algo] = {
             "final_val_alignment": {k: final["val_alignment"][k] for k in ("mean", "std")},
@@ -49,25 +63,46 @@ def build_report(
             },
         }
     # BC is trained inside every run on that run's split; H-AIRL's runs' BC is the one reported.
-    baselines = irl["hairl"]["baselines"]
-    irl_part["bc"] = {
-        "final_val_alignment": {k: baselines["bc"][k] for k in ("mean", "std")},
-        "per_run_val_alignment": baselines["bc"]["values"],
-    }
-    irl_part["baselines"] = {
-        name: {k: baselines[name][k] for k in ("mean", "std")}
-        for name in ("majority", "legal_majority")
-    }
+    if trained:
+        baselines = irl[trained[-1]]["baselines"]
+        irl_part["bc"] = {
+            "final_val_alignment": {k: baselines["bc"][k] for k in ("mean", "std")},
+            "per_run_val_alignment": baselines["bc"]["values"],
+        }
+        irl_part["baselines"] = {
+            name: {k: baselines[name][k] for k in ("mean", "std")}
+            for name in ("majority", "legal_majority")
+        }
+        irl_part["epochs"] = irl[trained[-1]]["epochs"]
     irl_part["runs"] = config.runs
-    irl_part["epochs"] = irl["hairl"]["epochs"]
+    # The authors' preset plays its kept checkpoint: that one is measured against random.
+    vs_random = agents.get("playing_vs_random", agents["final_vs_random"])
     rl = {
-        kind: {**mean_std(agents["final_vs_random"][kind]), "paper": paper.RL_VS_RANDOM[kind]}
+        kind: {**mean_std(vs_random[kind]), "paper": paper.RL_VS_RANDOM[kind]}
         for kind in AGENT_KINDS
     }
     rl["references"] = agents["references"]
-    rl["per_seed"] = {kind: agents["final_vs_random"][kind] for kind in AGENT_KINDS}
+    rl["per_seed"] = {kind: vs_random[kind] for kind in AGENT_KINDS}
+    rl["measured"] = (
+        f"the playing checkpoint, {agents['playing_hands']:,} duplicate hands"
+        if "playing_vs_random" in agents
+        else "the last evaluation of training"
+    )
     length = agents["training_length"]
     summary = ingested["summary"]
+    extra: dict[str, Any] = {}
+    figures = dict(FIGURES)
+    if cards is not None:
+        extra["reward_cards"] = cards
+    if authors is not None:
+        extra["table1_authors"] = {
+            name: {
+                **{k: v for k, v in authors[name].items() if k != "repeats_by_experiment"},
+                "paper": paper.TABLE1[name],
+            }
+            for name in paper.TABLE1
+        }
+        figures["authors_tournament"] = AUTHORS_FIGURE
     return {
         "format": REPORT_FORMAT,
         "preset": config.preset,
@@ -94,8 +129,9 @@ def build_report(
             "std_error": panel["std_error"],
             "hands": config.panel_hands,
         },
-        "figures": FIGURES,
+        "figures": figures,
         "paper": paper.paper_values(),
+        **extra,
     }
 
 
@@ -135,7 +171,13 @@ def render_markdown(report: dict[str, Any]) -> str:
         f"seed ({'duplicate deals' if settings['duplicate'] else 'no duplicate deals'}), "
         f"{settings['panel_hands']:,} per seed for each panel pair.",
     ]
-    if report["preset"] != "paper":
+    if report["preset"] == "authors":
+        if report["runs"] < 20:
+            lines.append(
+                f"**Fewer experiments**: the authors ran 20 experiments; this study ran "
+                f"{report['runs']} (`--runs`); these numbers are noisier."
+            )
+    elif report["preset"] != "paper":
         lines.append(
             "**Reduced sizes**: the paper's protocol is 10 IRL runs, 20 seeds of 50,000 hands and "
             "20 x 1,000,000 tournament hands (`--preset paper`); these numbers are noisier."
@@ -179,16 +221,22 @@ def render_markdown(report: dict[str, Any]) -> str:
         "|---|---|---|",
     ]
     irl = report["irl"]
+    trained = [(a, label) for a, label in (("airl", "AIRL"), ("hairl", "H-AIRL"))
+               if "replaced_by" not in irl[a]]  # fmt: skip
     for algo, label in (("airl", "AIRL"), ("hairl", "H-AIRL")):
+        if "replaced_by" in irl[algo]:
+            lines.append(f"| {label} | replaced by `{irl[algo]['replaced_by']}` | |")
+            continue
         theirs = irl[algo]["paper"]["final_val_alignment"]
         lines.append(
             f"| {label} | {_pm(irl[algo]['final_val_alignment'], 100, 1)}% | "
             f"{theirs['mean'] * 100:.1f} ± {theirs['std'] * 100:.1f}% |"
         )
-    lines.append(f"| BC (supervised only) | {_pm(irl['bc']['final_val_alignment'], 100, 1)}% | "
-                 "not reported |")  # fmt: skip
-    for name in ("majority", "legal_majority"):
-        lines.append(f"| {name} | {_pm(irl['baselines'][name], 100, 1)}% | not reported |")
+    if "bc" in irl:
+        lines.append(f"| BC (supervised only) | {_pm(irl['bc']['final_val_alignment'], 100, 1)}%"
+                     " | not reported |")  # fmt: skip
+        for name in ("majority", "legal_majority"):
+            lines.append(f"| {name} | {_pm(irl['baselines'][name], 100, 1)}% | not reported |")
     lines += [
         "",
         "Discriminator accuracy at the end of IRL (expert / policy actions):",
@@ -196,7 +244,7 @@ def render_markdown(report: dict[str, Any]) -> str:
         "| | ours, expert | ours, policy | the paper (about) |",
         "|---|---|---|---|",
     ]
-    for algo, label in (("airl", "AIRL"), ("hairl", "H-AIRL")):
+    for algo, label in trained:
         lines.append(
             f"| {label} | {_pm(irl[algo]['final_disc_acc_expert'], 100, 1)}% | "
             f"{_pm(irl[algo]['final_disc_acc_policy'], 100, 1)}% | "
@@ -211,7 +259,7 @@ def render_markdown(report: dict[str, Any]) -> str:
         "",
         "The BC action distribution is not drawn: the IRL core records only BC's alignment.",
         "",
-        "## RL against random (mbb/hand at the end of training, mean ± std over seeds)",
+        f"## RL against random (mbb/hand of {rl_measured(report)}, mean ± std over seeds)",
         "",
         "| agent | ours | per-seed range | the paper (about) |",
         "|---|---|---|---|",
@@ -232,11 +280,19 @@ def render_markdown(report: dict[str, Any]) -> str:
         "",
         f"![RL against random]({figures['rl_vs_random']})",
         "",
-        f"**Training length.** The paper's DQN trains {length['paper']}; ours trains "
-        f"{length['long']['hands']:,} hands. On the same {n_seeds} seeds, the sparse DQN ends at "
-        f"{_pm(length['short'])} mbb/hand against random after {length['short']['hands']:,} hands "
-        f"and {_pm(length['long'])} after {length['long']['hands']:,}.",
-        "",
+    ]
+    if length["short"]["hands"] != length["long"]["hands"]:
+        lines += [
+            f"**Training length.** The paper's DQN trains {length['paper']}; ours trains "
+            f"{length['long']['hands']:,} hands. On the same {n_seeds} seeds, the sparse DQN ends "
+            f"at {_pm(length['short'])} mbb/hand against random after "
+            f"{length['short']['hands']:,} hands and {_pm(length['long'])} after "
+            f"{length['long']['hands']:,}.",
+            "",
+        ]
+    lines += authors_markdown(report)
+    lines += cards_markdown(report)
+    lines += [
         "## Panel: row agent against column agent (mbb/hand ± SE, pooled over seeds)",
         "",
     ]
@@ -257,6 +313,108 @@ def render_markdown(report: dict[str, Any]) -> str:
         "",
     ]
     return "\n".join(lines)
+
+
+def rl_measured(report: dict[str, Any]) -> str:
+    return report["rl_vs_random"].get("measured", "the last evaluation of training")
+
+
+def _f(value: Any) -> str:
+    if isinstance(value, dict):
+        return f"{value['mean']:+.2f} ± {value['std']:.2f}"
+    return "n/a" if value is None else str(value)
+
+
+def cards_markdown(report: dict[str, Any]) -> list[str]:
+    """The reward cards section: what each learned reward prefers (mean ± std over runs)."""
+    cards = report.get("reward_cards") or {}
+    if not any(cards.values()):
+        return []
+    lines = [
+        "## Reward cards (what each learned reward prefers, on the validation hands)",
+        "",
+        "f per action over the states where it is legal; the per-decision bonus is the mean of f "
+        "over the legal actions other than fold; shares are of f's argmax over the legal "
+        "actions. Mean ± std over runs.",
+        "",
+        "| | f call | f raise | f fold | f check | bonus | argmax raise | argmax = expert | "
+        "argmax = legal majority |",
+        "|---|---|---|---|---|---|---|---|---|",
+    ]
+    theirs = report["paper"].get("authors_rewards", {})
+    for algo, label in (("airl", "AIRL"), ("hairl", "H-AIRL")):
+        card = cards.get(algo)
+        if not card:
+            continue
+        f = card["mean_f"]
+        lines.append(
+            f"| {label} ({card['runs']} runs) | {_f(f['call'])} | {_f(f['raise'])} | "
+            f"{_f(f['fold'])} | {_f(f['check'])} | {_f(card['decision_bonus'])} | "
+            f"{_pm(card['argmax_share']['raise'], 100, 1)}% | "
+            f"{_pm(card['agree_expert'], 100, 1)}% | "
+            f"{_pm(card['agree_legal_majority'], 100, 1)}% |"
+        )
+        if algo in theirs:
+            mine = theirs[algo]
+            f_theirs = " | ".join(f"{mine['mean_f'][a]:+.2f}" for a in ACTIONS)
+            lines.append(
+                f"| the authors' published {label} reward (the review; not in the paper) | "
+                f"{f_theirs} | | {mine['argmax_share']['raise'] * 100:.0f}% | "
+                f"{mine['agree_expert']} | |"
+            )
+    any_card = next(c for c in cards.values() if c)
+    expert = any_card.get("expert_share")
+    raises = "" if not expert else (
+        f" The expert raises in {_pm(expert['raise'], 100, 1)}% of them."
+    )  # fmt: skip
+    lines += [
+        "",
+        f"The legal-majority rule itself agrees with the expert on "
+        f"{_pm(any_card['legal_majority_agree_expert'], 100, 1)}% of these states.{raises}",
+        "",
+    ]
+    for algo, card in cards.items():
+        if card:
+            lines.append(f"- {algo}: {card['predictions'][0]}")
+            if card.get("figure"):
+                lines.append(f"  ![{algo} reward card]({card['figure']})")
+    return [*lines, ""]
+
+
+def authors_markdown(report: dict[str, Any]) -> list[str]:
+    """The authors' protocol section, when the study ran it."""
+    table = report.get("table1_authors")
+    if not table:
+        return []
+    first = next(iter(table.values()))
+    n = len(first["per_experiment"])
+    lines = [
+        "## The authors' protocol (their train_rl.py and main.py, on our engine)",
+        "",
+        f"{n} experiments: IRL run k, then a sparse DQN, an AIRL-DQN and an H-AIRL-DQN with "
+        "their DQN settings (5,000 hands against random; the > 0.8 x best checkpoint plays), "
+        f"then {first['repeats']} x {first['games']:,} non-duplicate games per pair, the small "
+        "blind drawn per game. Their ± is std(repeats)/√1000 over all repeats; the SE over "
+        "experiments carries the variance between training runs.",
+        "",
+        "| matchup | mean | their ± | SE over experiments | ours: duplicate deals | the paper |",
+        "|---|---|---|---|---|---|",
+    ]
+    for name, label in (("hairl_dqn_vs_dqn", "H-AIRL-DQN vs DQN"),
+                        ("airl_dqn_vs_dqn", "AIRL-DQN vs DQN")):  # fmt: skip
+        row = table[name]
+        se = row["se_over_experiments"]
+        duplicate = row["duplicate_mbb_per_hand"]
+        lines.append(
+            f"| {label} | {row['mean']:+,.0f} | {row['paper_style_se']:,.0f} | "
+            f"{'n/a' if se is None else f'{se:,.0f}'} | "
+            f"{'n/a' if duplicate is None else f'{duplicate:+,.0f}'} | "
+            f"{row['paper']['mbb_per_hand']:+,} ± {row['paper']['std_error']} |"
+        )
+        per = ", ".join(f"{v:+,.0f}" for v in row["per_experiment"])
+        lines.append(f"| (per experiment) | {per} | | | | |")
+    return [*lines, "", f"![the authors' tournament]({report['figures']['authors_tournament']})",
+            ""]  # fmt: skip
 
 
 def write_study_report(root: Path, report: dict[str, Any], panel: dict[str, Any]) -> None:

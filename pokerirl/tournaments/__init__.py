@@ -13,6 +13,11 @@ Holm corrections, and the report files (``pokerirl tournament``, ``pokerirl repo
 from __future__ import annotations
 
 from pokerirl.seeds import format_seeds, parse_seeds
+from pokerirl.tournaments.authors import (
+    AuthorsMatchup,
+    load_authors_tournament,
+    run_authors_tournament,
+)
 from pokerirl.tournaments.lineup import TournamentError
 from pokerirl.tournaments.report import (
     Line,
@@ -27,6 +32,7 @@ from pokerirl.tournaments.runner import run_tournament
 from pokerirl.tournaments.stats import Estimate, bonferroni, estimate, holm
 
 __all__ = [
+    "AuthorsMatchup",
     "Estimate",
     "Line",
     "MatchupReport",
@@ -37,9 +43,11 @@ __all__ = [
     "estimate",
     "format_seeds",
     "holm",
+    "load_authors_tournament",
     "load_report",
     "parse_seeds",
     "render_report",
+    "run_authors_tournament",
     "run_tournament",
     "write_report",
 ]

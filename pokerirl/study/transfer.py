@@ -1,0 +1,265 @@
+"""The transfer test (``pokerirl transfer``): does a learned reward teach the expert's play?
+
+For one reward (an IRL run folder or ``authors:FILE``), DQNs are trained on each reward
+transform (``raw`` f, ``centered``, ``log_softmax``; :mod:`pokerirl.agents.rewards`) and each
+payoff weight, and a sparse DQN on the same seeds and hands. Each greedy agent then plays
+``eval_hands`` duplicate hands against random, which gives:
+
+* its result against random (mbb/h; mean and SE over seeds);
+* the share of its decisions where it takes the action of each expert rule (the synthetic
+  months' ``tightbot`` and ``loosebot`` without their noise), on the states it visits, and
+  of the legal-majority rule (check if legal, else call: a calling station's);
+* its action shares (call, raise, fold, check).
+
+Beside them: each expert bot's own result against random (with its noise), always-call's
+and the sparse DQN's. ``best`` is the transform (and weight) whose agents agree most with the
+expert rules (ties, or no expert rule: the better result against random); on synthetic data
+the truth is known.
+
+Agents are units of :func:`pokerirl.agents.train.train_seeds` under ``<out>/agents/``: a rerun
+reuses them; the evaluations are recomputed (they are cheap and deterministic).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+import os
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from pokerirl.atomic import write_text
+from pokerirl.encoding import ACTIONS
+from pokerirl.execution import Backend
+
+TRANSFER_FILE, TRANSFER_MARKDOWN = "transfer.json", "transfer.md"
+EVAL_SEED = 4_242_424
+EXPERTS = ("tightbot", "loosebot")
+RULES = (*EXPERTS, "legal_majority")  # what an agent's actions are compared with
+
+
+@dataclass(frozen=True, kw_only=True)
+class TransferConfig:
+    """What to train and how to judge it."""
+
+    transforms: tuple[str, ...] = ("raw", "centered", "log_softmax")
+    payoff_weights: tuple[float, ...] = (0.0,)
+    seeds: tuple[int, ...] = (0, 1, 2)
+    hands: int = 50_000  # DQN training hands
+    agent_preset: str = "default"
+    eval_hands: int = 20_000
+    experts: tuple[str, ...] = RULES
+
+    def __post_init__(self) -> None:
+        from pokerirl.agents.rewards import TRANSFORMS
+
+        if not self.transforms or any(t not in TRANSFORMS for t in self.transforms):
+            raise ValueError(f"transforms must be some of {', '.join(TRANSFORMS)}")
+        if not self.payoff_weights or any(not 0 <= w <= 1 for w in self.payoff_weights):
+            raise ValueError("payoff weights must lie in [0, 1]")
+        if not self.seeds or self.hands < 1 or self.eval_hands < 2 or self.eval_hands % 2:
+            raise ValueError("need seeds, hands >= 1 and an even eval_hands >= 2")
+        unknown = [e for e in self.experts if e not in RULES]
+        if unknown:
+            raise ValueError(f"unknown rule {unknown[0]!r} ({', '.join(RULES)})")
+
+
+@dataclass(frozen=True, kw_only=True)
+class TransferRow:
+    """One agent kind over its seeds (or one fixed agent: a single 'seed')."""
+
+    label: str
+    transform: str | None  # None: not a learned-reward DQN
+    payoff_weight: float | None
+    vs_random: list[float]  # mbb/h per seed
+    agreement: dict[str, list[float]]  # expert rule -> share per seed
+    action_shares: list[dict[str, float]]  # per seed
+
+    @property
+    def mean_vs_random(self) -> float:
+        return float(np.mean(self.vs_random))
+
+    @property
+    def se_vs_random(self) -> float:
+        values = np.asarray(self.vs_random)
+        return float(values.std(ddof=1) / math.sqrt(values.size)) if values.size > 1 else 0.0
+
+    def mean_agreement(self, expert: str | None = None) -> float:
+        """Mean agreement with ``expert``'s rule, or with every expert bot's (not the
+        legal-majority rule's); 0 without any."""
+        experts = [expert] if expert else [e for e in self.agreement if e in EXPERTS]
+        return float(np.mean([np.mean(self.agreement[e]) for e in experts])) if experts else 0.0
+
+    def mean_share(self, action: str) -> float:
+        return float(np.mean([shares[action] for shares in self.action_shares]))
+
+    def summary(self) -> dict[str, Any]:
+        return {
+            **dataclasses.asdict(self),
+            "mean_vs_random": self.mean_vs_random,
+            "se_vs_random": self.se_vs_random,
+            "mean_agreement": {e: self.mean_agreement(e) for e in self.agreement},
+            "mean_action_shares": {a: self.mean_share(a) for a in ACTIONS},
+        }
+
+
+@dataclass(frozen=True, kw_only=True)
+class TransferResult:
+    reward: str
+    config: TransferConfig
+    rows: tuple[TransferRow, ...]
+    best: str
+    eval_seed: int = EVAL_SEED
+    notes: list[str] = field(default_factory=list)
+
+    def to_json(self) -> str:
+        body = {
+            "format": "pokerirl-transfer/1",
+            "reward": self.reward,
+            "config": dataclasses.asdict(self.config),
+            "eval_seed": self.eval_seed,
+            "rows": [row.summary() for row in self.rows],
+            "best": self.best,
+        }
+        return json.dumps(body, indent=2) + "\n"
+
+    def markdown(self) -> str:
+        experts = list(self.config.experts)
+        head = ["agent", "vs random (mbb/h)", *[f"= {e} rule" for e in experts],
+                *[f"{a} share" for a in ACTIONS]]  # fmt: skip
+        lines = [
+            f"# Transfer test: {self.reward}",
+            "",
+            f"{len(self.config.seeds)} seeds x {self.config.hands:,} training hands "
+            f"({self.config.agent_preset} DQN preset); each agent then plays "
+            f"{self.config.eval_hands:,} duplicate hands against random (seed {self.eval_seed}),"
+            " on which its actions are compared with the expert rules (noiseless). ± is the SE "
+            "over seeds.",
+            "",
+            "| " + " | ".join(head) + " |",
+            "|" + "---|" * len(head),
+        ]
+        for row in self.rows:
+            vs = f"{row.mean_vs_random:+,.0f} ± {row.se_vs_random:,.0f}"
+            agree = [f"{row.mean_agreement(e):.1%}" for e in experts]
+            shares = [f"{row.mean_share(a):.1%}" for a in ACTIONS]
+            lines.append("| " + " | ".join([row.label, vs, *agree, *shares]) + " |")
+        lines += [
+            "",
+            f"Best transform (most agreement with the expert rules): **{self.best}**.",
+            "",
+        ]
+        return "\n".join(lines)
+
+
+def _label(transform: str, weight: float) -> str:
+    return transform if weight == 0 else f"{transform}, payoff weight {weight:g}"
+
+
+def _folder(transform: str, weight: float) -> str:
+    return transform if weight == 0 else f"{transform}-w{weight:g}"
+
+
+def _rule(name: str, seen: Any) -> np.ndarray:
+    """The actions of rule ``name`` on logged decisions."""
+    from pokerirl.agents.reward_card import legal_majority
+    from pokerirl.game import make_agent
+
+    if name == "legal_majority":
+        return legal_majority(seen.legal_mask)
+    return make_agent(name).rule(seen.obs, seen.legal_mask, seen.cards)  # type: ignore[attr-defined]
+
+
+def _judge(agent: Any, config: TransferConfig) -> tuple[float, dict[str, float], dict[str, float]]:
+    """An agent against random: mbb/h, agreement with each expert rule, action shares."""
+    from pokerirl.game import DecisionLog, make_agent, play_match
+
+    log: list[DecisionLog] = []
+    result = play_match(agent, make_agent("random"), hands=config.eval_hands, seed=EVAL_SEED,
+                        log=log)  # fmt: skip
+    seen = DecisionLog.concatenate(log)
+    agreement = {rule: float((_rule(rule, seen) == seen.actions).mean()) for rule in config.experts}
+    counts = np.bincount(seen.actions, minlength=len(ACTIONS)) / max(len(seen.actions), 1)
+    return result.mbb_per_hand, agreement, {a: float(counts[i]) for i, a in enumerate(ACTIONS)}
+
+
+def _row(label: str, agents: list[Any], config: TransferConfig, transform: str | None = None,
+         weight: float | None = None) -> TransferRow:  # fmt: skip
+    judged = [_judge(agent, config) for agent in agents]
+    return TransferRow(
+        label=label,
+        transform=transform,
+        payoff_weight=weight,
+        vs_random=[j[0] for j in judged],
+        agreement={e: [j[1][e] for j in judged] for e in config.experts},
+        action_shares=[j[2] for j in judged],
+    )
+
+
+def run_transfer(
+    reward_run: str | os.PathLike[str],
+    out: str | os.PathLike[str],
+    config: TransferConfig = TransferConfig(),
+    *,
+    backend: Backend | None = None,
+    progress: bool = False,
+    say: Callable[[str], None] = lambda message: None,
+) -> TransferResult:
+    """Train and judge the agents of the transfer test into ``out``; write
+    ``transfer.json`` and ``transfer.md`` there."""
+    from pokerirl.agents import resolve_agent
+    from pokerirl.agents.rewards import reward_source_fingerprint
+    from pokerirl.agents.train import agent_preset, train_seeds
+
+    reward_source_fingerprint(reward_run)  # one line for a bad reward, before anything runs
+    out = Path(out)
+    base = agent_preset(config.agent_preset, hands=config.hands, seed=config.seeds[0],
+                        eval_every=config.hands, eval_hands=2_000)  # fmt: skip
+
+    def agents_of(folder: Path) -> list[Any]:
+        return [resolve_agent(str(folder / f"seed-{s}")) for s in config.seeds]
+
+    def train(folder: Path, train_config: Any) -> None:
+        train_seeds(folder, train_config, list(config.seeds), backend=backend, progress=progress)
+
+    rows: list[TransferRow] = []
+    for transform in config.transforms:
+        for weight in config.payoff_weights:
+            folder = out / "agents" / _folder(transform, weight)
+            say(f"transfer: {_label(transform, weight)}: {len(config.seeds)} seeds -> {folder}")
+            learned = dataclasses.replace(
+                base, reward="learned", reward_run=str(reward_run), reward_transform=transform,
+                payoff_weight=weight,
+            )  # fmt: skip
+            train(folder, learned)
+            rows.append(_row(_label(transform, weight), agents_of(folder), config, transform,
+                             weight))  # fmt: skip
+    say(f"transfer: sparse DQN: {len(config.seeds)} seeds -> {out / 'agents' / 'sparse'}")
+    train(out / "agents" / "sparse", base)
+    rows.append(_row("sparse DQN", agents_of(out / "agents" / "sparse"), config))
+    bots = [e for e in config.experts if e in EXPERTS]
+    for name in (*bots, "call", "raise"):
+        rows.append(_row(name if name in bots else f"always-{name}", [resolve_agent(name)],
+                         config))  # fmt: skip
+    learned_rows = [row for row in rows if row.transform is not None]
+    best = max(learned_rows, key=lambda row: (round(row.mean_agreement(), 3), row.mean_vs_random))
+    result = TransferResult(reward=str(reward_run), config=config, rows=tuple(rows),
+                            best=best.label)  # fmt: skip
+    out.mkdir(parents=True, exist_ok=True)
+    write_text(out / TRANSFER_FILE, result.to_json())
+    write_text(out / TRANSFER_MARKDOWN, result.markdown())
+    return result
+
+
+def parse_list(text: str, kind: type = str) -> tuple[Any, ...]:
+    """``"a,b"`` as ``("a", "b")`` (``kind`` applied); ``"none"`` or ``""`` as ``()``."""
+    parts = [part.strip() for part in text.split(",") if part.strip()]
+    return () if parts in ([], ["none"]) else tuple(kind(part) for part in parts)
+
+
+__all__ = ["TransferConfig", "TransferResult", "TransferRow", "parse_list", "run_transfer"]
