@@ -147,7 +147,9 @@ def tournament(
     Several matchups: pokerirl tournament --vs dqn hairl-dqn airl-dqn --out DIR
                       (hairl-dqn vs dqn and airl-dqn vs dqn, corrected together)
 
-    Writes DIR/report.md, report.json, per_seed.csv, per_seed.png; prints the report.
+    Writes DIR/report.md, report.json, per_seed.csv, per_seed.png (and timings.json:
+    the wall-clock figures, kept apart so the rest is the same bytes for the same seeds);
+    prints the report.
 
     \b
     Resumable: each seed is saved when it finishes. A rerun reuses saved seeds
@@ -191,7 +193,7 @@ def tournament(
         fail(f"{error.filename or out}: {error.strerror or error}")
     if not quiet:
         typer.echo(render_report(report))
-        typer.echo(f"wrote {out}/report.md, report.json, per_seed.csv, per_seed.png")
+        typer.echo(f"wrote {out}/report.md, report.json, per_seed.csv, per_seed.png, timings.json")
 
 
 @app.command()
