@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import json
 import warnings
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
 import typer
@@ -23,11 +25,18 @@ from pokerirl.cli.app import (
 )
 
 
-def _study_errors() -> tuple[type[Exception], ...]:
-    """What a study stops on with one line: bad input and settings, files, units."""
+@contextmanager
+def _one_line_errors(out: Path) -> Iterator[None]:
+    """What a study stops on, in one line: bad input and settings, files (naming ``out`` when
+    the error names none), units; Ctrl-C (finished units are kept)."""
     from pokerirl.parsers.irc import IngestError
 
-    return (ValueError, OSError, execution.ExecutionError, IngestError)
+    try:
+        yield
+    except (ValueError, OSError, execution.ExecutionError, IngestError) as error:
+        fail(error_line(error, out))
+    except KeyboardInterrupt:
+        fail(INTERRUPTED, 130)
 
 
 @app.command()
@@ -50,7 +59,7 @@ def demo(
     """
     from pokerirl.demo import DemoConfig, run_demo, run_gym_demo
 
-    try:
+    with _one_line_errors(out):
         result = run_demo(
             out,
             DemoConfig(seed=seed, jobs=jobs),
@@ -58,10 +67,6 @@ def demo(
             progress=not quiet,
             overwrite=overwrite,
         )
-    except _study_errors() as error:
-        fail(error_line(error, out))
-    except KeyboardInterrupt:
-        fail(INTERRUPTED, 130)
     echo("")
     echo(result.markdown)
     echo(f"report: {out / 'report.md'} (pokerirl report {out})")
@@ -76,12 +81,8 @@ def demo(
         return
     echo("")
     echo(f"gym: the quick study on MountainCar-v0 -> {out / 'gym'}")
-    try:
+    with _one_line_errors(out):
         gym_result = run_gym_demo(out, jobs=jobs, say=echo, progress=not quiet, overwrite=overwrite)
-    except _study_errors() as error:
-        fail(error_line(error, out))
-    except KeyboardInterrupt:
-        fail(INTERRUPTED, 130)
     echo("")
     echo(gym_result.markdown)
     echo(f"report: {out / 'gym' / 'report.md'}")
@@ -139,7 +140,7 @@ def study(
             reward_sources=tuple(sources_given) or None,
             reward_transform=reward_transform,
         )
-    try:
+    with _one_line_errors(out):
         result = run_study(
             sources,
             out,
@@ -149,10 +150,6 @@ def study(
             say=echo,
             backend=_backend(jobs, ray),
         )
-    except _study_errors() as error:
-        fail(error_line(error, out))
-    except KeyboardInterrupt:
-        fail(INTERRUPTED, 130)
     echo("")
     echo(result.markdown)
     echo(f"report: {out / 'report.md'} (pokerirl report {out})")
@@ -199,15 +196,11 @@ def transfer(
             eval_hands=eval_hands,
             experts=parse_list(experts),
         )
-    try:
+    with _one_line_errors(out):
         result = run_transfer(
             reward_run, out, config, backend=_backend(jobs, ray), progress=not quiet,
             say=echo,
         )  # fmt: skip
-    except (ValueError, OSError, execution.ExecutionError) as error:
-        fail(error_line(error, out))
-    except KeyboardInterrupt:
-        fail(INTERRUPTED, 130)
     echo(result.markdown())
     echo(f"wrote {out / 'transfer.json'} and transfer.md")
 
