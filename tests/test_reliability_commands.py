@@ -287,76 +287,34 @@ class Command:
     writes: bool = True
 
 
+AGENT_FAST = "-q --hands 8 --eval-every 8 --eval-hands 8 --hidden 4 --concurrent-hands 4"
+GAMES_FAST = "-q --hands 4 --seeds 0 --jobs 1"
+TRANSFER_FAST = "-q --jobs 1 --seeds 0 --hands 8 --eval-hands 8 --transforms raw"
 COMMANDS = [
     Command("ingest", lambda i, t: ["ingest", str(i.month), "--out", str(t), "-q"]),
-    Command("synth", lambda i, t: ["synth", "--out", str(t), "--hands", "10"]),
+    Command("synth", lambda i, t: ["synth", "--out", str(t), *"--hands 10".split()]),
     Command(
         "train",
-        lambda i, t: ["train", str(i.table), "--out", str(t), "--epochs", "1", "--quiet"],
+        lambda i, t: ["train", str(i.table), "--out", str(t), *"--quiet --epochs 1".split()],
     ),
     Command(
         "agent train",
-        lambda i, t: [
-            "agent",
-            "train",
-            "--out",
-            str(t),
-            "-q",
-            "--hands",
-            "8",
-            "--eval-every",
-            "8",
-            "--eval-hands",
-            "8",
-            "--hidden",
-            "4",
-            "--concurrent-hands",
-            "4",
-        ],
-    ),  # fmt: skip
+        lambda i, t: ["agent", "train", "--out", str(t), *AGENT_FAST.split()],
+    ),
     Command(
         "tournament",
-        lambda i, t: [
-            "tournament",
-            "call",
-            "raise",
-            "--hands",
-            "4",
-            "--seeds",
-            "0",
-            "--out",
-            str(t),
-            "-q",
-            "--jobs",
-            "1",
-        ],
-    ),  # fmt: skip
-    Command("study", lambda i, t: ["study", str(i.month), "--out", str(t), "-q", "--jobs", "1"]),
+        lambda i, t: ["tournament", "call", "raise", "--out", str(t), *GAMES_FAST.split()],
+    ),
+    Command("study", lambda i, t: ["study", str(i.month), "--out", str(t), *"-q --jobs 1".split()]),
     Command(
         "reward-card",
         lambda i, t: ["reward-card", str(i.run), "--table", str(i.table), "--out", str(t)],
     ),
     Command(
         "transfer",
-        lambda i, t: [
-            "transfer",
-            str(i.run),
-            "--out",
-            str(t),
-            "-q",
-            "--jobs",
-            "1",
-            "--seeds",
-            "0",
-            "--hands",
-            "8",
-            "--eval-hands",
-            "8",
-            "--transforms",
-            "raw",
-        ],
-    ),  # fmt: skip
-    Command("demo", lambda i, t: ["demo", "--out", str(t), "-q", "--no-gym", "--jobs", "1"]),
+        lambda i, t: ["transfer", str(i.run), "--out", str(t), *TRANSFER_FAST.split()],
+    ),
+    Command("demo", lambda i, t: ["demo", "--out", str(t), *"-q --no-gym --jobs 1".split()]),
     Command("report", lambda i, t: ["report", str(t)], writes=False),
     Command("match", lambda i, t: ["match", str(t), "raise", "--hands", "8"], writes=False),
     # The gym commands are rows of the next round (pokerirl/cli/gym.py).
