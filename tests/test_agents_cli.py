@@ -115,25 +115,27 @@ def test_same_seed_same_bytes_and_threads_are_explicit(tmp_path: Path) -> None:
         "agent", "train", "--out", str(tmp_path / "a"), "--threads", "2", "-q", *FAST
     )
     assert code == 1 and "threads 1 -> 2" in output
-    assert invoke("agent", "train", "--out", str(tmp_path / "x"), "--threads", "0")[0] == 1
+    assert invoke("agent", "train", "--out", str(tmp_path / "x"), "--threads", "0")[0] == 2
 
 
 @pytest.mark.parametrize(
-    ("args", "message"),
+    ("args", "code", "message"),
     [
-        (["--reward", "learned"], "--reward learned needs --reward-run"),
-        (["--reward", "shaped"], "unknown reward mode"),
-        (["--reward-run", "."], "--reward-run needs --reward learned"),
-        (["--reward", "learned", "--reward-run", "."], "not a reward run"),
-        (["--seeds", "5-2"], "empty seed range"),
-        (["--opponent", "nobody"], "unknown agent 'nobody'"),
-        (["--eval-hands", "3"], "eval_hands must be even"),
-        (["--train-every", "0"], "train_every must be at least 1"),
+        (["--reward", "learned"], 1, "--reward learned needs --reward-run"),
+        (["--reward", "shaped"], 2, "unknown reward mode"),
+        (["--reward-run", "."], 2, "--reward-run needs --reward learned"),
+        (["--reward", "learned", "--reward-run", "."], 1, "not a reward run"),
+        (["--seeds", "5-2"], 2, "empty seed range"),
+        (["--opponent", "nobody"], 1, "unknown agent 'nobody'"),
+        (["--eval-hands", "3"], 2, "eval_hands must be even"),
+        (["--train-every", "0"], 2, "train_every must be at least 1"),
     ],
 )
-def test_bad_input_is_a_one_line_error(tmp_path: Path, args: list[str], message: str) -> None:
-    code, output = invoke("agent", "train", "--out", str(tmp_path / "x"), "-q", *args)
-    assert code == 1
+def test_bad_input_is_a_one_line_error(
+    tmp_path: Path, args: list[str], code: int, message: str
+) -> None:
+    found, output = invoke("agent", "train", "--out", str(tmp_path / "x"), "-q", *args)
+    assert found == code  # 2: settings that cannot run (usage); 1: inputs that cannot be used
     assert message in output and output.count("\n") == 1 and "Traceback" not in output
 
 
@@ -236,11 +238,11 @@ def test_every_dqn_field_is_a_flag_and_a_toml_key(tmp_path: Path) -> None:
     toml.write_text("learning_rat = 1e-3\n")
     code, output = invoke("agent", "train", "--config", str(toml), "--out", str(out), "-q")
     assert (
-        code == 1 and "unknown setting 'learning_rat'" in output and len(output.splitlines()) == 1
+        code == 2 and "unknown setting 'learning_rat'" in output and len(output.splitlines()) == 1
     )
     toml.write_text('train_every = "often"\n')
     code, output = invoke("agent", "train", "--config", str(toml), "--out", str(out), "-q")
-    assert code == 1 and "train_every must be an integer" in output
+    assert code == 2 and "train_every must be an integer" in output
 
 
 def test_the_authors_preset_keeps_and_plays_the_best_checkpoint(tmp_path: Path) -> None:
@@ -274,4 +276,4 @@ def test_the_authors_preset_keeps_and_plays_the_best_checkpoint(tmp_path: Path) 
         expected = network.eval()(torch.from_numpy(obs).float()).numpy()
     np.testing.assert_allclose(agent.q_values(obs), expected, rtol=1e-6)
     code, output = invoke("agent", "train", "--play", "kept", "--out", str(tmp_path / "x"), "-q")
-    assert code == 1 and "--play kept needs --protocol authors" in output
+    assert code == 2 and "--play kept needs --protocol authors" in output

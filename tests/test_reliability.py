@@ -374,20 +374,20 @@ def test_byte_flips_of_the_real_sample_never_crash_and_every_line_is_counted(
 @pytest.mark.parametrize(
     ("args", "message"),
     [
-        (["--seed", "-1"], "error: seed must be non-negative, got -1"),
-        (["--hands", "1000001"], "error: hands must be between 1 and 1,000,000 (one month)"),
+        (["--seed", "-1"], "error: pokerirl synth: Invalid value for '--seed'"),
+        (["--hands", "1000001"], "error: --hands must be at most 1,000,000 (one month)"),
     ],
 )
 def test_synth_bad_values_are_one_line(tmp_path: Path, args: list[str], message: str) -> None:
     code, lines = run_cli("synth", "--out", str(tmp_path / "s"), *args)
-    assert code == 1
+    assert code == 2
     assert one_error_line(lines).startswith(message)
     assert not (tmp_path / "s").exists()
 
 
 def test_huge_match_is_refused_before_allocating() -> None:
     code, lines = run_cli("match", "raise", "call", "--hands", "99999999999998")
-    assert code == 1
+    assert code == 2
     assert one_error_line(lines) == (
         f"error: hands must be at most {MAX_HANDS:,} per match, got 99,999,999,999,998"
     )
@@ -404,7 +404,7 @@ def test_huge_tournament_is_one_line_and_writes_nothing(tmp_path: Path) -> None:
         "tournament", "raise", "call", "--hands", "99999999999998", "--seeds", "0-1",
         "--out", str(out), "--jobs", "1", "-q",
     )  # fmt: skip
-    assert code == 1
+    assert code == 2
     assert one_error_line(lines).startswith(f"error: hands must be at most {MAX_HANDS:,}")
     assert not out.exists()
 

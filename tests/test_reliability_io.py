@@ -138,7 +138,7 @@ def test_ingest_with_non_utf8_names_writes_the_table_or_names_the_path(tmp_path:
     failed = _pokerirl("ingest", os.fsencode(missing), "--out", "t.parquet", cwd=tmp_path)
     lines = failed.stderr.decode("utf-8", "backslashreplace").splitlines()
     assert failed.returncode == 1 and failed.stdout == b""
-    assert lines == [f"error: {tmp_path}/nothing\\udcff: no such file or folder"], lines
+    assert lines == [f"error: {tmp_path}/nothing\\xff: no such file or folder"], lines
 
 
 # --- ingest: bounded reads ------------------------------------------------------------------

@@ -127,7 +127,7 @@ def test_png_is_an_image(two_matchups: Path) -> None:
 
 def test_report_prints_markdown_and_json(two_matchups: Path) -> None:
     xml = runner.invoke(app, ["report", str(two_matchups), "--format", "xml"])
-    assert xml.exit_code == 1 and "unknown format 'xml'" in xml.stderr
+    assert xml.exit_code == 2 and "unknown --format 'xml'" in xml.stderr
     text = runner.invoke(app, ["report", str(two_matchups)])
     assert text.exit_code == 0 and text.output == (two_matchups / "report.md").read_text()
     as_json = runner.invoke(app, ["report", str(two_matchups), "--format", "json"])
@@ -181,19 +181,21 @@ def test_tournament_agrees_with_match_and_reruns_identically(tmp_path: Path) -> 
 
 
 @pytest.mark.parametrize(
-    ("args", "message"),
+    ("args", "code", "message"),
     [
-        (["raise", "call", "--hands", "0"], "hands must be at least 4"),
-        (["raise", "call", "--seeds", "5-3"], "empty seed range"),
-        (["raise", "runs/missing-dqn"], "runs/missing-dqn: no such agent folder"),
-        (["raise"], "give two agents"),
-        (["raise", "call", "random"], "give two agents"),
-        (["--vs", "call"], "needs at least one agent"),
+        (["raise", "call", "--hands", "2"], 2, "hands must be at least 4"),
+        (["raise", "call", "--seeds", "5-3"], 2, "empty seed range"),
+        (["raise", "runs/missing-dqn"], 1, "runs/missing-dqn: no such agent folder"),
+        (["raise"], 2, "give two agents"),
+        (["raise", "call", "random"], 2, "give two agents"),
+        (["--vs", "call"], 2, "needs at least one agent"),
     ],
 )
-def test_bad_input_is_a_one_line_error(tmp_path: Path, args: list[str], message: str) -> None:
+def test_bad_input_is_a_one_line_error(
+    tmp_path: Path, args: list[str], code: int, message: str
+) -> None:
     result = runner.invoke(app, ["tournament", *args, "--out", str(tmp_path), "-q"])
-    assert result.exit_code == 1 and result.stdout == ""
+    assert result.exit_code == code and result.stdout == ""
     assert re.fullmatch(rf"error: .*{re.escape(message)}.*\n", result.stderr)
 
 

@@ -92,6 +92,11 @@ class DQNConfig:
             )
         if not self.learning_rate > 0 or not 0 <= self.gamma <= 1:
             raise ValueError("learning_rate must be positive and gamma in [0, 1]")
+        if not (0 <= self.epsilon_start <= 1 and 0 <= self.epsilon_end <= 1):
+            raise ValueError(
+                f"epsilon_start and epsilon_end must lie in [0, 1], got {self.epsilon_start} "
+                f"and {self.epsilon_end}"
+            )
         if not self.hidden or min(self.hidden) < 1:
             raise ValueError(f"hidden must be positive layer sizes, got {self.hidden}")
 

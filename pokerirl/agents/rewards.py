@@ -25,6 +25,7 @@ and their identity.
 
 from __future__ import annotations
 
+import json
 import os
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -32,7 +33,7 @@ from pathlib import Path
 
 import numpy as np
 
-from pokerirl.encoding import MAX_RAISES, NUM_ACTIONS, NUM_ROUNDS, RAISE_OFFSET
+from pokerirl.encoding import MAX_RAISES, NUM_ACTIONS, NUM_ROUNDS, OBS_SIZE, RAISE_OFFSET
 
 TRANSFORMS = ("raw", "centered", "log_softmax")
 RAISE_COUNTS = ("decision", "end-of-hand")
@@ -200,7 +201,31 @@ def reward_source_fingerprint(spec: str | os.PathLike[str]) -> str:
     for name in REWARD_RUN_FILES:
         if not (Path(spec) / name).is_file():
             raise ValueError(f"{spec}: not a reward run (no {name}) nor authors:FILE")
+    _check_poker_run(Path(spec))
     return files_fingerprint(spec, REWARD_RUN_FILES)
+
+
+def _check_poker_run(run: Path) -> None:
+    """``ValueError`` (one line) for a run whose reward is not on poker decisions: a
+    Gymnasium run (its task named), or one on other observations or actions. What cannot be
+    read is left to :func:`pokerirl.irl.load_reward`, which names the problem."""
+    try:
+        record = json.loads((run / "config.json").read_bytes())
+        data, architecture = record.get("data") or {}, record.get("architecture") or {}
+        task = data.get("env")
+        sizes = architecture.get("obs_dim"), architecture["action_space"].get("num_actions")
+    except (OSError, ValueError, AttributeError, KeyError, TypeError):
+        return
+    if task is not None:
+        raise ValueError(
+            f"{run}: a Gymnasium IRL run (reward of {task}), not a poker reward; "
+            "give a run of pokerirl train"
+        )
+    if sizes != (OBS_SIZE, NUM_ACTIONS):
+        raise ValueError(
+            f"{run}: a reward on {sizes[0]}-d observations and {sizes[1]} actions, not "
+            f"poker's {OBS_SIZE}-d observation and {NUM_ACTIONS} actions"
+        )
 
 
 def load_reward_source(spec: str | os.PathLike[str]) -> PokerReward:

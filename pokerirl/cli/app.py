@@ -3,15 +3,19 @@ shares; the commands live beside it, by group (poker, studies, gym)."""
 
 from __future__ import annotations
 
+import os
+import re
 import sys
 import warnings
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
 from typing import Any, NoReturn
 
 import typer
 from typer.core import TyperGroup
 
 from pokerirl import execution  # light: tqdm only; ray loads when chosen
+from pokerirl.errors import UsageError, describe_os_error
 
 
 def _command_line_errors() -> tuple[type[Exception], ...]:
@@ -67,7 +71,7 @@ class OneLineErrors(TyperGroup):
                 return super().main(
                     args, prog_name, complete_var, True, windows_expand_args, **extra
                 )
-            typer.secho(f"error: {_one_line(error)}", err=True, fg=typer.colors.RED)
+            typer.secho(f"error: {display_error(_one_line(error))}", err=True, fg=typer.colors.RED)
             sys.exit(getattr(error, "exit_code", 2))
         except typer.Abort:
             typer.secho("error: aborted", err=True, fg=typer.colors.RED)
@@ -76,7 +80,7 @@ class OneLineErrors(TyperGroup):
 
 
 def _one_line_warning(message: Warning | str, *_: Any, **__: Any) -> None:
-    typer.secho(f"warning: {message}", err=True, fg=typer.colors.YELLOW)
+    typer.secho(f"warning: {display_error(str(message))}", err=True, fg=typer.colors.YELLOW)
 
 
 def _one_line(error: Exception) -> str:
@@ -98,10 +102,89 @@ app = typer.Typer(
 )
 
 
+def display(text: str) -> str:
+    r"""``text`` as a terminal shows it: the bytes of a path that are not UTF-8 (which Python
+    holds as surrogates) as ``\xff``. JSON text is unchanged (it escapes them itself).
+
+    >>> display(os.fsdecode(b"runs/caf\xe9") + ": Permission denied")
+    'runs/caf\\xe9: Permission denied'
+    """
+    try:
+        return os.fsencode(text).decode("utf-8", "backslashreplace")
+    except UnicodeError:  # a surrogate no file name holds
+        return text.encode("utf-8", "backslashreplace").decode("utf-8")
+
+
+def display_error(text: str) -> str:
+    r"""An error line as :func:`display` shows it, with the undecodable bytes of a path
+    quoted by ``repr`` (``'caf\udce9'``, as Python's own messages quote paths) as ``\xe9`` too.
+
+    >>> display_error("unknown agent " + repr(os.fsdecode(b"caf\xe9")))
+    "unknown agent 'caf\\xe9'"
+    """
+    return display(_REPR_SURROGATE.sub(r"\\x\1", text))
+
+
+_REPR_SURROGATE = re.compile(r"\\udc([89a-f][0-9a-f])")  # an undecodable byte, as repr shows it
+
+
 def fail(message: str, code: int = 1) -> NoReturn:
     """Print a one-line error to stderr and exit non-zero, without a traceback."""
-    typer.secho(f"error: {message}", err=True, fg=typer.colors.RED)
+    typer.secho(f"error: {display_error(message)}", err=True, fg=typer.colors.RED)
     raise typer.Exit(code)
+
+
+def echo(message: str = "", *, nl: bool = True) -> None:
+    """``typer.echo`` of a line that may hold paths (see :func:`display`): a name that is
+    not UTF-8 cannot stop a command after its work is done."""
+    typer.echo(display(message), nl=nl)
+
+
+def error_line(error: Exception, path: str | os.PathLike[str] | None = None) -> str:
+    """An error's one line; an ``OSError`` as ``FILE: reason``, naming ``path`` (the user's)
+    when the error names no file."""
+    if not isinstance(error, OSError):
+        return str(error)
+    if error.filename is None and path is not None:
+        return f"{os.fsdecode(path)}: {error.strerror or error}"
+    return describe_os_error(error)
+
+
+@contextmanager
+def usage_errors() -> Iterator[None]:
+    """Settings checked before any work: a ``ValueError`` there is a usage error (exit 2,
+    like the parser's own)."""
+    try:
+        yield
+    except ValueError as error:
+        fail(str(error), UsageError.exit_code)
+
+
+MAX_SEED = 2**32 - 1  # the largest seed numpy's and Gymnasium's generators take
+MAX_SEEDS = 10_000  # seeds in one --seeds list
+SEED_OPTION: dict[str, Any] = {"min": 0, "max": MAX_SEED}  # typer.Option(..., **SEED_OPTION)
+
+
+def seed_list(text: str | None) -> str | None:
+    """Check a ``--seeds`` value (``0-19``, ``0-4,10``) before it is expanded: every seed
+    within 0..2^32-1, at most :data:`MAX_SEEDS` of them (a typer callback: exit 2)."""
+    if text is None:
+        return None
+    from pokerirl.seeds import parse_seeds
+
+    count = 0
+    for part in text.split(","):
+        numbers = [int(n) for n in re.findall(r"\d+", part)]
+        if any(n > MAX_SEED for n in numbers):
+            raise typer.BadParameter(f"seeds must be at most {MAX_SEED:,}, got {max(numbers):,}")
+        count += numbers[-1] - numbers[0] + 1 if len(numbers) == 2 else 1
+    if count > MAX_SEEDS:
+        raise typer.BadParameter(f"at most {MAX_SEEDS:,} seeds, got {count:,} in {text!r}")
+    try:
+        parse_seeds(text)
+    except ValueError as error:
+        raise typer.BadParameter(str(error)) from None
+    return text
 
 
 def _backend(jobs: int, ray: str | None, threads: int = 1) -> execution.Backend:

@@ -8,7 +8,18 @@ from pathlib import Path
 import typer
 
 from pokerirl import execution
-from pokerirl.cli.app import INTERRUPTED, RAY_HELP, _backend, app, fail
+from pokerirl.cli.app import (
+    INTERRUPTED,
+    RAY_HELP,
+    SEED_OPTION,
+    _backend,
+    app,
+    echo,
+    error_line,
+    fail,
+    seed_list,
+    usage_errors,
+)
 
 
 @app.command()
@@ -32,27 +43,31 @@ def ingest(
     except IngestError as error:
         fail(str(error))
     except OSError as error:
-        fail(f"{error.filename or out}: {error.strerror or error}")
+        fail(error_line(error, out))
     if not quiet:
-        typer.echo(json.dumps(summary, indent=2))
+        echo(json.dumps(summary, indent=2))
 
 
 @app.command()
 def synth(
     out: Path = typer.Option(..., "--out", "-o", help="Folder to write <out>/holdem/<YYYYMM>/ in."),
     hands: int = typer.Option(10_000, "--hands", "-n", min=1, help="Number of hands."),
-    seed: int = typer.Option(0, "--seed", help="Random seed: the same seed, the same files."),
+    seed: int = typer.Option(
+        0, "--seed", **SEED_OPTION, help="Random seed: the same seed, the same files."
+    ),
 ) -> None:
     """Write a synthetic IRC-format month of heads-up 10-20 limit hold'em between two bots."""
-    from pokerirl.game.synth import write_synthetic_month
+    from pokerirl.game.synth import MAX_HANDS, write_synthetic_month
 
+    if hands > MAX_HANDS:
+        fail(f"--hands must be at most {MAX_HANDS:,} (one month), got {hands:,}", 2)
     try:
         folder = write_synthetic_month(out, hands=hands, seed=seed)
     except ValueError as error:
         fail(str(error))
     except OSError as error:
-        fail(f"{error.filename or out}: {error.strerror or error}")
-    typer.echo(f"wrote {hands} hands to {folder}")
+        fail(error_line(error, out))
+    echo(f"wrote {hands} hands to {folder}")
 
 
 @app.command()
@@ -64,8 +79,10 @@ def match(
         "files only).",
     ),
     agent_b: str = typer.Argument(..., help="Agent B: as agent A."),
-    hands: int = typer.Option(100_000, help="Hands to play (even with --duplicate)."),
-    seed: int = typer.Option(0, help="Seed of the deals and of the agents' random draws."),
+    hands: int = typer.Option(100_000, min=1, help="Hands to play (even with --duplicate)."),
+    seed: int = typer.Option(
+        0, **SEED_OPTION, help="Seed of the deals and of the agents' random draws."
+    ),
     duplicate: bool = typer.Option(
         True, "--duplicate/--no-duplicate", help="Play every deal from both seats."
     ),
@@ -73,10 +90,12 @@ def match(
 ) -> None:
     """Play A against B and print A's result in milli-big-blinds per hand."""
     from pokerirl.agents import resolve_agent
-    from pokerirl.game import play_match
+    from pokerirl.game import check_match_size, play_match
 
     if output_format not in ("text", "json"):
-        fail(f"unknown format {output_format!r} (text or json)")
+        fail(f"unknown --format {output_format!r} (text or json)", 2)
+    with usage_errors():
+        check_match_size(hands, duplicate=duplicate)
     try:
         result = play_match(
             resolve_agent(agent_a),
@@ -95,9 +114,9 @@ def match(
             "hands": result.hands,
             "hands_per_second": result.hands_per_second,
         }
-        typer.echo(json.dumps(summary))
+        echo(json.dumps(summary))
     else:
-        typer.echo(
+        echo(
             f"{result.agent_a} vs {result.agent_b}: {result.mbb_per_hand:+.1f} "
             f"+- {result.std_error:.1f} mbb/h over {result.hands:,} hands "
             f"({result.hands_per_second:,.0f} hands/s)"
@@ -117,14 +136,16 @@ def tournament(
     vs: str | None = typer.Option(
         None, "--vs", metavar="BASE", help="Play every AGENT against BASE (several matchups)."
     ),
-    hands: int = typer.Option(1_000_000, "--hands", "-n", help="Hands per seed."),
-    seeds: str = typer.Option("0-19", "--seeds", help="Seeds, e.g. 0-19 or 0-4,10."),
+    hands: int = typer.Option(1_000_000, "--hands", "-n", min=2, help="Hands per seed."),
+    seeds: str = typer.Option(
+        "0-19", "--seeds", callback=seed_list, help="Seeds, e.g. 0-19 or 0-4,10."
+    ),
     out: Path = typer.Option(..., "--out", "-o", help="Report folder (resumes what it holds)."),
     duplicate: bool = typer.Option(
         True, "--duplicate/--no-duplicate", help="Play every deal from both seats, paired."
     ),
     jobs: int = typer.Option(
-        2, "--jobs", "-j", help="Local worker processes (results do not change)."
+        2, "--jobs", "-j", min=1, help="Local worker processes (results do not change)."
     ),
     ray: str | None = typer.Option(
         None,
@@ -134,7 +155,7 @@ def tournament(
         "or 'local' for a private single-machine Ray. Results do not change.",
     ),
     alpha: float = typer.Option(0.05, help="Family-wise error rate (Bonferroni, Holm)."),
-    batch_size: int = typer.Option(65_536, help="Hands in lock-step (part of the config)."),
+    batch_size: int = typer.Option(65_536, min=2, help="Hands in lock-step (part of the config)."),
     overwrite: bool = typer.Option(
         False, "--overwrite", help="Recompute saved seeds from another configuration."
     ),
@@ -158,18 +179,25 @@ def tournament(
     pokerirl report DIR prints it again.
     """
     from pokerirl.execution import ExecutionError
+    from pokerirl.game import check_match_size
     from pokerirl.seeds import parse_seeds
     from pokerirl.tournaments import render_report, run_tournament
 
     agents = agents or []
     if vs is not None:
         if not agents:
-            fail("--vs BASE needs at least one agent to play against it")
+            fail("--vs BASE needs at least one agent to play against it", 2)
         matchups = [(agent, vs) for agent in agents]
     elif len(agents) == 2:
         matchups = [(agents[0], agents[1])]
     else:
-        fail(f"give two agents (A B) or --vs BASE and agents; got {len(agents)} agent(s)")
+        fail(f"give two agents (A B) or --vs BASE and agents; got {len(agents)} agent(s)", 2)
+    if not 0 < alpha < 1:
+        fail(f"--alpha must be between 0 and 1, got {alpha}", 2)
+    if duplicate and hands < 4:
+        fail(f"--hands must be at least 4 with duplicate deals (two pairs), got {hands}", 2)
+    with usage_errors():
+        check_match_size(hands, duplicate=duplicate, batch_size=batch_size)
     backend = _backend(jobs, ray)
     try:
         report = run_tournament(
@@ -190,10 +218,10 @@ def tournament(
     except KeyboardInterrupt:
         fail(INTERRUPTED, code=130)
     except OSError as error:
-        fail(f"{error.filename or out}: {error.strerror or error}")
+        fail(error_line(error, out))
     if not quiet:
-        typer.echo(render_report(report))
-        typer.echo(f"wrote {out}/report.md, report.json, per_seed.csv, per_seed.png, timings.json")
+        echo(render_report(report))
+        echo(f"wrote {out}/report.md, report.json, per_seed.csv, per_seed.png, timings.json")
 
 
 @app.command()
@@ -202,18 +230,22 @@ def train(
     out: str = typer.Option(..., "--out", help="Run folder (with --runs > 1: a folder of runs)."),
     algo: str = typer.Option("hairl", "--algo", help="hairl or airl (picks the defaults)."),
     runs: int = typer.Option(
-        1, "--runs", help="Runs with seeds seed..seed+runs-1, in OUT/run-<k>."
+        1, "--runs", min=1, help="Runs with seeds seed..seed+runs-1, in OUT/run-<k>."
     ),
     overwrite: bool = typer.Option(
         False, "--overwrite", help="Replace a finished run (with --runs: runs of other settings)."
     ),
-    jobs: int = typer.Option(1, "--jobs", "-j", help="Processes running --runs at once."),
+    jobs: int = typer.Option(1, "--jobs", "-j", min=1, help="Processes running --runs at once."),
     ray: str | None = typer.Option(None, "--ray", metavar="ADDRESS", help=RAY_HELP),
-    epochs: int | None = typer.Option(None, "--epochs", help="Training epochs [default: 50]."),
-    seed: int | None = typer.Option(None, "--seed", help="Seed for init, split, shuffle, noise."),
+    epochs: int | None = typer.Option(
+        None, "--epochs", min=1, help="Training epochs [default: 50]."
+    ),
+    seed: int | None = typer.Option(
+        None, "--seed", **SEED_OPTION, help="Seed for init, split, shuffle, noise."
+    ),
     device: str = typer.Option("cpu", "--device", help="cpu or cuda."),
     config: str | None = typer.Option(None, "--config", help="TOML file of hyperparameters."),
-    batch_size: int | None = typer.Option(None, "--batch-size"),
+    batch_size: int | None = typer.Option(None, "--batch-size", min=1),
     hidden: str | None = typer.Option(None, "--hidden", help="Widths for both nets, e.g. 64,64."),
     reward_lr: float | None = typer.Option(None, "--reward-lr"),
     policy_lr: float | None = typer.Option(None, "--policy-lr"),
@@ -223,7 +255,9 @@ def train(
     sigma_start: float | None = typer.Option(None, "--sigma-start"),
     sigma_end: float | None = typer.Option(None, "--sigma-end"),
     val_fraction: float | None = typer.Option(None, "--val-fraction", help="Share of hands."),
-    threads: int = typer.Option(1, "--threads", help="CPU threads; small nets train best on 1."),
+    threads: int = typer.Option(
+        1, "--threads", min=1, help="CPU threads; small nets train best on 1."
+    ),
     quiet: bool = typer.Option(False, "--quiet", help="No progress bar."),
 ) -> None:
     """Learn a reward function with AIRL or Hybrid-AIRL from an expert decision table.
@@ -235,17 +269,10 @@ def train(
     import torch
 
     from pokerirl.irl import load_config, train_runs
+    from pokerirl.irl.airl import resolve_device
 
-    if threads < 1:
-        fail("--threads must be at least 1")
     torch.set_num_threads(threads)
-
-    widths = None
-    if hidden is not None:
-        try:
-            widths = [int(w) for w in hidden.split(",") if w.strip()]
-        except ValueError:
-            fail(f"--hidden must be comma-separated integers, got {hidden!r}")
+    widths = None if hidden is None else _widths(hidden)
     overrides = {
         "epochs": epochs,
         "seed": seed,
@@ -261,8 +288,10 @@ def train(
         "sigma_end": sigma_end,
         "val_fraction": val_fraction,
     }
-    try:
+    with usage_errors():
         settings = load_config(algo, config_file=config, overrides=overrides)
+        resolve_device(device)
+    try:
         summary = train_runs(
             table,
             out,
@@ -277,7 +306,7 @@ def train(
     except (ValueError, execution.ExecutionError) as error:
         fail(str(error))
     except OSError as error:
-        fail(f"{error.filename or out}: {error.strerror or error}")
+        fail(error_line(error, out))
     except KeyboardInterrupt:
         fail(INTERRUPTED, 130)
     from pokerirl.agents.reward_card import read_card
@@ -287,7 +316,7 @@ def train(
         last, base = run["metrics"][-1], run["baselines"]
         name = f"{algo} {Path(run['out']).name}" if "out" in run else algo
         rows = run.get("train_rows", summary.train_rows), run.get("val_rows", summary.val_rows)
-        typer.echo(
+        echo(
             f"{name}: {len(run['metrics'])} epochs on {rows[0]} rows; validation "
             f"alignment {last['val_alignment']:.3f}, reward alignment "
             f"{last['val_reward_alignment']:.3f}; baselines "
@@ -297,12 +326,20 @@ def train(
         card = read_card(run.get("out", summary.out_dir))
         if card is not None:
             shares = ", ".join(f"{a} {v:.0%}" for a, v in card.argmax_share.items())
-            typer.echo(
+            echo(
                 f"  reward card: {card.prediction}. argmax over legal actions: {shares}; "
                 f"= expert {card.agree_expert:.1%}, = legal majority "
                 f"{card.agree_legal_majority:.1%} (reward_card.json)"
             )
-    typer.echo(f"{summary.samples_per_second:,.0f} samples/s; wrote {summary.out_dir}")
+    echo(f"{summary.samples_per_second:,.0f} samples/s; wrote {summary.out_dir}")
+
+
+def _widths(hidden: str) -> list[int]:
+    """``--hidden 64,64`` as layer widths (a usage error when not integers)."""
+    try:
+        return [int(w) for w in hidden.split(",") if w.strip()]
+    except ValueError:
+        fail(f"--hidden must be comma-separated integers, got {hidden!r}", 2)
 
 
 @app.command("reward-card")
@@ -322,8 +359,10 @@ def reward_card_command(
     and what a DQN is predicted to learn. Writes OUT/reward_card.json and reward_card.png.
     """
     from pokerirl.agents.reward_card import CardStates, reward_card, write_card
-    from pokerirl.agents.rewards import TransformedReward, load_reward_source
+    from pokerirl.agents.rewards import TRANSFORMS, TransformedReward, load_reward_source
 
+    if transform not in TRANSFORMS:
+        fail(f"unknown --transform {transform!r} ({', '.join(TRANSFORMS)})", 2)
     try:
         source = load_reward_source(reward)
         groups = None
@@ -335,14 +374,12 @@ def reward_card_command(
         states = CardStates.from_table(table, groups=groups)
         card = reward_card(TransformedReward(source, transform), states)
         write_card(card, out)
-    except FileNotFoundError as error:
-        fail(str(error))
     except ValueError as error:
         fail(str(error))
     except OSError as error:
-        fail(f"{error.filename or out}: {error.strerror or error}")
-    typer.echo(card.render())
-    typer.echo(f"wrote {out / 'reward_card.json'} and reward_card.png")
+        fail(error_line(error, out))
+    echo(card.render())
+    echo(f"wrote {out / 'reward_card.json'} and reward_card.png")
 
 
 agent_app = typer.Typer(help="Train DQN agents.", no_args_is_help=True)
@@ -383,12 +420,19 @@ def agent_train(
         "hand ended with, as the authors' agent read RLCard's live list) [default: decision].",
     ),
     hands: int | None = typer.Option(None, "--hands", "-n", help="Training hands."),
-    seed: int = typer.Option(0, help="Seed of one agent."),
-    seeds: str | None = typer.Option(None, help="e.g. 0-19: one agent per seed, in OUT/seed-<k>."),
-    jobs: int = typer.Option(1, "--jobs", "-j", help="Local processes training seeds at once."),
+    seed: int = typer.Option(0, **SEED_OPTION, help="Seed of one agent."),
+    seeds: str | None = typer.Option(
+        None, callback=seed_list, help="e.g. 0-19: one agent per seed, in OUT/seed-<k>."
+    ),
+    jobs: int = typer.Option(
+        1, "--jobs", "-j", min=1, help="Local processes training seeds at once."
+    ),
     ray: str | None = typer.Option(None, "--ray", metavar="ADDRESS", help=RAY_HELP),
     threads: int = typer.Option(
-        1, "--threads", help="torch threads per agent (part of the result: the weights change)."
+        1,
+        "--threads",
+        min=1,
+        help="torch threads per agent (part of the result: the weights change).",
     ),
     overwrite: bool = typer.Option(
         False, "--overwrite", help="Retrain finished agents of other settings (else refused)."
@@ -406,7 +450,9 @@ def agent_train(
     ),
     eval_every: int | None = typer.Option(None, help="Evaluate every N training hands."),
     eval_hands: int | None = typer.Option(None, help="Hands per evaluation (even, duplicate)."),
-    eval_seed: int | None = typer.Option(None, help="Deal seed of every evaluation."),
+    eval_seed: int | None = typer.Option(
+        None, **SEED_OPTION, help="Deal seed of every evaluation."
+    ),
     hidden: str | None = typer.Option(None, help="Q-network widths, e.g. 64,64."),
     replay_size: int | None = typer.Option(None, help="Replay memory size."),
     replay_init: int | None = typer.Option(None, help="Transitions before the first update."),
@@ -436,12 +482,7 @@ def agent_train(
     from pokerirl.seeds import parse_seeds
 
     backend = _backend(jobs, ray, threads)
-    widths = None
-    if hidden is not None:
-        try:
-            widths = tuple(int(w) for w in hidden.split(",") if w.strip())
-        except ValueError:
-            fail(f"--hidden must be comma-separated integers, got {hidden!r}")
+    widths = None if hidden is None else tuple(_widths(hidden))
     flags = {
         "hands": hands,
         "reward": reward,
@@ -471,11 +512,12 @@ def agent_train(
         "concurrent_hands": concurrent_hands,
         "self_play_every": self_play_every,
     }
-    try:
+    with usage_errors():
         from_file = {"dqn": {}} if config_file is None else load_agent_config(config_file)
         dqn = {**from_file.pop("dqn"), **{k: v for k, v in dqn_flags.items() if v is not None}}
         settings = {**from_file, **{k: v for k, v in flags.items() if v is not None}}
         config = agent_preset(preset, seed=seed, dqn=dqn, **settings)
+    try:
         if seeds is None:
             summary = train_agent(
                 out, config, progress=not quiet, overwrite=overwrite, backend=backend
@@ -496,20 +538,20 @@ def agent_train(
     except KeyboardInterrupt:
         fail(INTERRUPTED, code=130)
     except OSError as error:
-        fail(f"{error.filename or out}: {error.strerror or error}")
+        fail(error_line(error, out))
     for agent_seed, line in lines.items():
         folder = out if seeds is None else out / f"seed-{agent_seed}"
         if line is None:
-            typer.echo(f"{folder}: already finished with these settings, reused")
+            echo(f"{folder}: already finished with these settings, reused")
             continue
         scores = ", ".join(
             f"vs {name} {e['mbb_per_hand']:+.0f} +- {e['std_error']:.0f} mbb/h"
             for name, e in line["eval"].items()
         )
-        typer.echo(f"{folder}: {line['hands']:,} hands, {scores}")
+        echo(f"{folder}: {line['hands']:,} hands, {scores}")
         if config.play == "kept":
             kept = json.loads((folder / "config.json").read_text())["kept"]
-            typer.echo(
+            echo(
                 f"{folder}: plays kept.pt (after {kept['hands']:,} hands, vs random "
                 f"{kept['eval']['random']['mbb_per_hand']:+.0f} mbb/h in its evaluation); "
                 "model.pt is the final model"

@@ -4,18 +4,45 @@ from __future__ import annotations
 
 import json
 import warnings
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
 import typer
 
 from pokerirl import execution
-from pokerirl.cli.app import INTERRUPTED, RAY_HELP, _backend, app, fail
+from pokerirl.cli.app import (
+    INTERRUPTED,
+    RAY_HELP,
+    SEED_OPTION,
+    _backend,
+    app,
+    echo,
+    error_line,
+    fail,
+    seed_list,
+    usage_errors,
+)
+
+
+@contextmanager
+def _one_line_errors(out: Path) -> Iterator[None]:
+    """What a study stops on, in one line: bad input and settings, files (naming ``out`` when
+    the error names none), units; Ctrl-C (finished units are kept)."""
+    from pokerirl.parsers.irc import IngestError
+
+    try:
+        yield
+    except (ValueError, OSError, execution.ExecutionError, IngestError) as error:
+        fail(error_line(error, out))
+    except KeyboardInterrupt:
+        fail(INTERRUPTED, 130)
 
 
 @app.command()
 def demo(
     out: Path = typer.Option(Path("demo-output"), "--out", "-o", help="Where the demo writes."),
-    seed: int = typer.Option(0, "--seed", help="Seed of the synthetic data."),
+    seed: int = typer.Option(0, "--seed", **SEED_OPTION, help="Seed of the synthetic data."),
     jobs: int = typer.Option(2, "--jobs", min=1, help="Processes for agent training and play."),
     overwrite: bool = typer.Option(False, "--overwrite", help="Recompute changed stages."),
     gym: bool = typer.Option(
@@ -32,19 +59,17 @@ def demo(
     """
     from pokerirl.demo import DemoConfig, run_demo, run_gym_demo
 
-    try:
+    with _one_line_errors(out):
         result = run_demo(
             out,
             DemoConfig(seed=seed, jobs=jobs),
-            say=typer.echo,
+            say=echo,
             progress=not quiet,
             overwrite=overwrite,
         )
-    except (ValueError, OSError) as error:
-        fail(str(error))
-    typer.echo("")
-    typer.echo(result.markdown)
-    typer.echo(f"report: {out / 'report.md'} (pokerirl report {out})")
+    echo("")
+    echo(result.markdown)
+    echo(f"report: {out / 'report.md'} (pokerirl report {out})")
     if not gym:
         return
     try:
@@ -54,19 +79,13 @@ def demo(
     except ImportError as error:
         warnings.warn(f"the Gymnasium demo is skipped: {error}", stacklevel=1)
         return
-    typer.echo("")
-    typer.echo(f"gym: the quick study on MountainCar-v0 -> {out / 'gym'}")
-    try:
-        gym_result = run_gym_demo(
-            out, jobs=jobs, say=typer.echo, progress=not quiet, overwrite=overwrite
-        )
-    except (ValueError, OSError, execution.ExecutionError) as error:
-        fail(str(error))
-    except KeyboardInterrupt:
-        fail(INTERRUPTED, 130)
-    typer.echo("")
-    typer.echo(gym_result.markdown)
-    typer.echo(f"report: {out / 'gym' / 'report.md'}")
+    echo("")
+    echo(f"gym: the quick study on MountainCar-v0 -> {out / 'gym'}")
+    with _one_line_errors(out):
+        gym_result = run_gym_demo(out, jobs=jobs, say=echo, progress=not quiet, overwrite=overwrite)
+    echo("")
+    echo(gym_result.markdown)
+    echo(f"report: {out / 'gym' / 'report.md'}")
 
 
 @app.command()
@@ -80,7 +99,9 @@ def study(
         "tournament protocol, beside our duplicate-deal Table 1).",
     ),
     runs: int | None = typer.Option(None, "--runs", min=1, help="IRL runs per algorithm."),
-    seeds: str | None = typer.Option(None, "--seeds", help="Agent seeds, e.g. 0-19."),
+    seeds: str | None = typer.Option(
+        None, "--seeds", callback=seed_list, help="Agent seeds, e.g. 0-19."
+    ),
     hands: int | None = typer.Option(None, "--hands", min=2, help="Tournament hands per seed."),
     reward_run: list[str] = typer.Option(
         [],
@@ -109,7 +130,7 @@ def study(
     for item in reward_run:
         algo, _, spec = item.partition("=") if "=" in item.split(":", 1)[0] else ("", "", item)
         sources_given.append((algo or "hairl", spec))
-    try:
+    with usage_errors():
         config = preset(
             preset_name,
             runs=runs,
@@ -119,22 +140,19 @@ def study(
             reward_sources=tuple(sources_given) or None,
             reward_transform=reward_transform,
         )
+    with _one_line_errors(out):
         result = run_study(
             sources,
             out,
             config,
             overwrite=overwrite,
             progress=not quiet,
-            say=typer.echo,
+            say=echo,
             backend=_backend(jobs, ray),
         )
-    except (ValueError, OSError, execution.ExecutionError) as error:
-        fail(str(error))
-    except KeyboardInterrupt:
-        fail(INTERRUPTED, 130)
-    typer.echo("")
-    typer.echo(result.markdown)
-    typer.echo(f"report: {out / 'report.md'} (pokerirl report {out})")
+    echo("")
+    echo(result.markdown)
+    echo(f"report: {out / 'report.md'} (pokerirl report {out})")
 
 
 @app.command()
@@ -145,10 +163,12 @@ def transfer(
         "raw,centered,log_softmax", "--transforms", help="Reward transforms to train on."
     ),
     payoff_weights: str = typer.Option("0", "--payoff-weights", help="e.g. 0,0.5."),
-    seeds: str = typer.Option("0-2", "--seeds", help="DQN seeds."),
-    hands: int = typer.Option(50_000, "--hands", "-n", help="DQN training hands."),
+    seeds: str = typer.Option("0-2", "--seeds", callback=seed_list, help="DQN seeds."),
+    hands: int = typer.Option(50_000, "--hands", "-n", min=1, help="DQN training hands."),
     agent_preset: str = typer.Option("default", "--preset", help="DQN preset: default, authors."),
-    eval_hands: int = typer.Option(20_000, "--eval-hands", help="Duplicate hands vs random."),
+    eval_hands: int = typer.Option(
+        20_000, "--eval-hands", min=2, help="Duplicate hands vs random."
+    ),
     experts: str = typer.Option(
         "tightbot,loosebot,legal_majority",
         "--experts",
@@ -166,7 +186,7 @@ def transfer(
     from pokerirl.seeds import parse_seeds
     from pokerirl.study.transfer import TransferConfig, parse_list, run_transfer
 
-    try:
+    with usage_errors():
         config = TransferConfig(
             transforms=parse_list(transforms),
             payoff_weights=parse_list(payoff_weights, float),
@@ -176,16 +196,13 @@ def transfer(
             eval_hands=eval_hands,
             experts=parse_list(experts),
         )
+    with _one_line_errors(out):
         result = run_transfer(
             reward_run, out, config, backend=_backend(jobs, ray), progress=not quiet,
-            say=typer.echo,
+            say=echo,
         )  # fmt: skip
-    except (ValueError, OSError, execution.ExecutionError) as error:
-        fail(str(error))
-    except KeyboardInterrupt:
-        fail(INTERRUPTED, 130)
-    typer.echo(result.markdown())
-    typer.echo(f"wrote {out / 'transfer.json'} and transfer.md")
+    echo(result.markdown())
+    echo(f"wrote {out / 'transfer.json'} and transfer.md")
 
 
 @app.command()
@@ -200,6 +217,10 @@ def report(
     from pokerirl.study import is_study_report, load_study_report, render_markdown
     from pokerirl.tournaments import load_report, render_report
 
+    if output_format not in ("markdown", "text", "json"):
+        fail(f"unknown --format {output_format!r}; choose markdown or json", 2)
+    for name in ("summary.json", "report.json"):
+        _refuse_corrupt(folder / name)
     try:
         if is_gym_study(folder):
             found, markdown = load_gym_study(folder)
@@ -207,13 +228,25 @@ def report(
             found = load_study_report(folder)
             markdown = render_markdown(found)
         else:
-            typer.echo(render_report(load_report(folder), output_format), nl=False)
+            echo(render_report(load_report(folder), output_format), nl=False)
             return
     except ValueError as error:
         fail(str(error))
     if output_format == "json":
-        typer.echo(json.dumps(found, indent=2))
-    elif output_format in ("markdown", "text"):
-        typer.echo(markdown, nl=False)
+        echo(json.dumps(found, indent=2))
     else:
-        fail(f"unknown --format {output_format!r}; choose markdown or json")
+        echo(markdown, nl=False)
+
+
+def _refuse_corrupt(path: Path) -> None:
+    """Fail on a report's file (gym study's summary.json, a study's or tournament's
+    report.json) that is there but cannot be read as JSON: truncated or damaged."""
+    try:
+        json.loads(path.read_bytes())
+    except FileNotFoundError:
+        return
+    except OSError as error:
+        fail(error_line(error, path))
+    except ValueError as error:  # JSONDecodeError, UnicodeDecodeError
+        reason = error.msg if isinstance(error, json.JSONDecodeError) else "not UTF-8 text"
+        fail(f"{path}: corrupt: not JSON ({reason})")

@@ -29,6 +29,7 @@ from pokerirl.study.pipeline import (
     irl_stage,
     panel_stage,
     reward_cards,
+    reward_source_prints,
     stage_names,
     tournament_stage,
 )
@@ -83,8 +84,12 @@ def run_study(
         StudyError: bad settings, or a stage already run with other settings (without
             ``overwrite``). Lower layers' errors (IngestError, TournamentError...) pass through.
     """
+    from pokerirl.parsers.irc import check_sources
+
     if not sources:
         raise StudyError("give at least one SOURCE (an IRC month folder or archive)")
+    check_sources(sources)  # before anything is written: a missing path, a plain file
+    reward_source_prints(config)  # a reward that replaces IRL runs, checked as early
     root = Path(out)
     if root.exists() and not root.is_dir():
         raise StudyError(f"{root} exists and is not a folder; choose another --out")

@@ -213,7 +213,14 @@ class Study:
         started = {"format": RECORD_FORMAT, "stage": name, "fingerprint": wanted}
         write_text(path, json.dumps({**started, "settings": settings, "finished": False}) + "\n")
         self.say(f"{number} {name}")
-        result = compute()
+        try:
+            result = compute()
+        except BaseException:
+            # A first attempt that wrote none of its outputs (sources that are not IRC data,
+            # an interruption before the first unit) leaves no record to refuse a fixed rerun.
+            if record is None and not any(p.exists() for p in outputs):
+                path.unlink(missing_ok=True)
+            raise
         body = {**started, "settings": settings, "finished": True, "result": result}
         write_text(path, json.dumps(body, indent=1) + "\n")
         return {**result, "fingerprint": wanted}
@@ -334,11 +341,12 @@ def irl_stage(study: Study, ingested: dict[str, Any]) -> dict[str, Any]:
         **_non_default(config, "irl_settings"),
     }
     if config.reward_sources:
-        settings["reward_sources"] = _source_prints(config)
+        settings["reward_sources"] = reward_source_prints(config)
     return study.stage("irl", settings, outputs, compute)
 
 
-def _source_prints(config: StudyConfig) -> dict[str, str]:
+def reward_source_prints(config: StudyConfig) -> dict[str, str]:
+    """The fingerprint of each reward that replaces IRL runs; one-line StudyError if bad."""
     from pokerirl.agents.rewards import reward_source_fingerprint
 
     try:

@@ -36,6 +36,7 @@ import numpy as np
 from pokerirl.atomic import write_text
 from pokerirl.encoding import ACTIONS
 from pokerirl.execution import Backend
+from pokerirl.study.config import AGENT_PRESETS
 
 TRANSFER_FILE, TRANSFER_MARKDOWN = "transfer.json", "transfer.md"
 EVAL_SEED = 4_242_424
@@ -67,6 +68,10 @@ class TransferConfig:
         unknown = [e for e in self.experts if e not in RULES]
         if unknown:
             raise ValueError(f"unknown rule {unknown[0]!r} ({', '.join(RULES)})")
+        if self.agent_preset not in AGENT_PRESETS:
+            raise ValueError(
+                f"unknown agent preset {self.agent_preset!r}; choose {', '.join(AGENT_PRESETS)}"
+            )
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -259,7 +264,12 @@ def run_transfer(
 def parse_list(text: str, kind: type = str) -> tuple[Any, ...]:
     """``"a,b"`` as ``("a", "b")`` (``kind`` applied); ``"none"`` or ``""`` as ``()``."""
     parts = [part.strip() for part in text.split(",") if part.strip()]
-    return () if parts in ([], ["none"]) else tuple(kind(part) for part in parts)
+    if parts in ([], ["none"]):
+        return ()
+    try:
+        return tuple(kind(part) for part in parts)
+    except ValueError:
+        raise ValueError(f"{text!r}: not a list of {kind.__name__} values") from None
 
 
 __all__ = ["TransferConfig", "TransferResult", "TransferRow", "parse_list", "run_transfer"]
