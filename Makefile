@@ -19,6 +19,7 @@ demo: install
 	$(BIN)/pokerirl demo
 
 test: install-dev
+	$(BIN)/ruff check pokerirl tests benchmarks
 	$(BIN)/python -m pytest -q
 
 lint: install-dev
