@@ -9,13 +9,35 @@ from typing import Any
 import typer
 
 from pokerirl import execution
-from pokerirl.cli.app import INTERRUPTED, RAY_HELP, _backend, app, fail
+from pokerirl.cli.app import (
+    INTERRUPTED,
+    MAX_SEED,
+    RAY_HELP,
+    SEED_OPTION,
+    _backend,
+    app,
+    display,
+    fail,
+)
+from pokerirl.gym.presets import MAX_TRANSITIONS, TASKS
 
 gym_app = typer.Typer(
     help="The paper's Gymnasium tasks: SB3 experts, expert data, RL on a learned reward.",
     no_args_is_help=True,
 )
 app.add_typer(gym_app, name="gym")
+
+
+def _known_task(env: str) -> None:
+    """Refuse an env id the toolkit has no settings for, naming the ones it has (exit 2)."""
+    if env not in TASKS:
+        fail(f"unknown task {env!r}; choose one of {', '.join(TASKS)}", 2)
+
+
+def _folder_out(out: Path) -> None:
+    """Refuse an --out that exists and is not a folder, before any work (exit 2)."""
+    if out.exists() and not out.is_dir():
+        fail(f"--out {display(str(out))}: exists and is not a folder", 2)
 
 
 def _gym_threads(threads: int) -> None:
@@ -29,31 +51,61 @@ def _gym_threads(threads: int) -> None:
 def gym_expert(
     env: str = typer.Argument(..., help="Acrobot-v1, MountainCar-v0, LunarLander-v3, ..."),
     out: Path = typer.Option(..., "--out", "-o", help="Expert folder to write."),
-    seed: int = typer.Option(0, help="Training seed."),
-    timesteps: int | None = typer.Option(None, help="Budget (default: the authors')."),
+    seed: int = typer.Option(0, **SEED_OPTION, help="Training seed."),
+    timesteps: int | None = typer.Option(None, min=1, help="Budget (default: the authors')."),
     hyper: str = typer.Option("paper", help="paper (the authors' settings) or zoo (rl-zoo's)."),
     eval_every: int | None = typer.Option(None, help="Steps between evaluations (budget/20)."),
     eval_episodes: int = typer.Option(5, help="Episodes per periodic evaluation."),
     final_episodes: int = typer.Option(20, help="Episodes of the best policy's final evaluation."),
-    threads: int = typer.Option(1, help="torch threads."),
+    overwrite: bool = typer.Option(False, help="Replace an expert trained with other settings."),
+    threads: int = typer.Option(1, min=1, help="torch threads."),
 ) -> None:
-    """Train an SB3 expert (PPO; DQN for MountainCar), keeping the best evaluated checkpoint."""
-    from pokerirl.gym.experts import train_expert
+    """Train an SB3 expert (PPO; DQN for MountainCar), keeping the best evaluated checkpoint.
 
+    A rerun with the same settings keeps the expert; other settings are refused unless
+    --overwrite (OUT/expert.job.json records them)."""
+    from pokerirl.gym.experts import (
+        CONFIG_FILE,
+        METRICS_FILE,
+        MODEL_FILE,
+        expert_settings,
+        train_expert,
+    )
+    from pokerirl.gym.job import claim
+    from pokerirl.store import staged_files, tidy
+
+    _known_task(env)
+    _folder_out(out)
     _gym_threads(threads)
+    files = (CONFIG_FILE, METRICS_FILE, MODEL_FILE)
     try:
-        record = train_expert(
-            out,
-            env,
-            seed=seed,
-            timesteps=timesteps,
-            hyper=hyper,
-            eval_every=eval_every,
-            eval_episodes=eval_episodes,
-            final_episodes=final_episodes,
-        )
+        identity = {
+            "env": env, "seed": seed, "hyper": hyper,
+            "timesteps": timesteps or expert_settings(env, hyper=hyper).timesteps,
+            "eval_every": eval_every, "eval_episodes": eval_episodes,
+            "final_episodes": final_episodes,
+        }  # fmt: skip
+        claim(out, "expert.job.json", identity, outputs=list(files), overwrite=overwrite)
+        tidy(out, key="expert")  # what a killed rerun left
+        if all((out / name).is_file() for name in files):
+            record = json.loads((out / CONFIG_FILE).read_text())
+            typer.echo(f"reusing the expert in {out} (same settings)")
+        else:
+            with staged_files(out, key="expert") as new:  # the three files, or none
+                record = train_expert(
+                    new,
+                    env,
+                    seed=seed,
+                    timesteps=timesteps,
+                    hyper=hyper,
+                    eval_every=eval_every,
+                    eval_episodes=eval_episodes,
+                    final_episodes=final_episodes,
+                )
     except (ValueError, ImportError) as error:
         fail(str(error))
+    except KeyboardInterrupt:
+        fail(INTERRUPTED, code=130)
     except OSError as error:
         fail(f"{error.filename or out}: {error.strerror or error}")
     typer.echo(
@@ -90,8 +142,10 @@ def gym_experts(
 def gym_collect(
     env: str = typer.Argument(..., help="The expert's environment."),
     expert: str = typer.Option("shipped", help="An expert folder, or 'shipped'."),
-    transitions: int = typer.Option(..., "--transitions", "-n", min=1, help="Rows to write."),
-    seed: int = typer.Option(0, help="Episode k starts from reset(seed=seed + k)."),
+    transitions: int = typer.Option(
+        ..., "--transitions", "-n", min=1, max=MAX_TRANSITIONS, help="Rows to write."
+    ),
+    seed: int = typer.Option(0, **SEED_OPTION, help="Episode k starts from reset(seed=seed + k)."),
     out: Path = typer.Option(..., "--out", "-o", help="The Parquet table to write."),
     stochastic: bool = typer.Option(False, help="Sample the expert's actions (else its mode)."),
 ) -> None:
@@ -99,6 +153,7 @@ def gym_collect(
     from pokerirl.gym.collect import collect
     from pokerirl.gym.experts import load_expert, resolve_expert_dir
 
+    _known_task(env)
     try:
         loaded = load_expert(resolve_expert_dir(expert, env))
         if loaded.env_id != env:
@@ -126,41 +181,73 @@ def gym_rl(
     env_reward: bool = typer.Option(False, help="Train on the env reward (the baseline)."),
     runs: int = typer.Option(10, min=1, help="Runs (seeds 0..runs-1), in OUT/run-<k>."),
     out: Path = typer.Option(..., "--out", "-o", help="Folder of the runs."),
-    timesteps: int | None = typer.Option(None, help="Budget (default: the authors')."),
-    evaluations: int = typer.Option(10, help="Points on the true-return curve."),
-    eval_episodes: int = typer.Option(5, help="Episodes per point."),
-    threads: int = typer.Option(1, help="torch threads."),
+    timesteps: int | None = typer.Option(None, min=1, help="Budget (default: the authors')."),
+    evaluations: int = typer.Option(10, min=1, help="Points on the true-return curve."),
+    eval_episodes: int = typer.Option(5, min=1, help="Episodes per point."),
+    overwrite: bool = typer.Option(False, help="Replace runs trained with other settings."),
+    threads: int = typer.Option(1, min=1, help="torch threads."),
 ) -> None:
-    """Train SB3 PPO (DQN for MountainCar) on a learned reward; the curve is the true return."""
-    from pokerirl.gym.rl import summarize, train_rl
+    """Train SB3 PPO (DQN for MountainCar) on a learned reward; the curve is the true return.
+
+    Resumable: a rerun with the same settings keeps the finished runs; other settings are
+    refused unless --overwrite (OUT/rl.job.json records them)."""
+    from pokerirl.gym.experts import CONFIG_FILE, METRICS_FILE, MODEL_FILE
+    from pokerirl.gym.job import claim
+    from pokerirl.gym.rl import mean_std, train_rl
+    from pokerirl.store import digest, staged_folder, tidy
 
     if (reward_run is None) == (not env_reward):
         fail("give exactly one of --reward-run DIR and --env-reward")
+    _known_task(env)
+    _folder_out(out)
     _gym_threads(threads)
+    files = (CONFIG_FILE, METRICS_FILE, MODEL_FILE)
     try:
         reward = None
+        reward_identity: Any = "env"
         if reward_run is not None:
             from pokerirl.irl import load_reward
 
             reward = load_reward(reward_run)
-        results = [
-            train_rl(
-                env,
-                reward=reward,
-                reward_name="env" if reward is None else str(reward_run),
-                seed=k,
-                timesteps=timesteps,
-                evaluations=evaluations,
-                eval_episodes=eval_episodes,
-                out=out / f"run-{k}",
-            )
-            for k in range(runs)
-        ]
+            weights = reward_run / "reward.pt"
+            reward_identity = {
+                "run": str(reward_run),
+                "sha256": digest(weights.read_bytes()) if weights.is_file() else None,
+            }
+        identity = {
+            "env": env,
+            "reward": reward_identity,
+            "timesteps": timesteps or TASKS[env].rl.timesteps,
+            "evaluations": evaluations,
+            "eval_episodes": eval_episodes,
+        }
+        claim(out, "rl.job.json", identity, outputs=["run-*"], overwrite=overwrite)
+        finals: list[float] = []
+        for k in range(runs):
+            run = out / f"run-{k}"
+            tidy(out, key=run.name)  # what a killed rerun left
+            if all((run / name).is_file() for name in files):
+                finals.append(float(json.loads((run / CONFIG_FILE).read_text())["final_return"]))
+                continue
+            with staged_folder(run) as stage:  # a run is there whole, or not at all
+                result = train_rl(
+                    env,
+                    reward=reward,
+                    reward_name="env" if reward is None else str(reward_run),
+                    seed=k,
+                    timesteps=timesteps,
+                    evaluations=evaluations,
+                    eval_episodes=eval_episodes,
+                    out=stage,
+                )
+            finals.append(result.final_return)
     except (ValueError, ImportError, KeyError) as error:
         fail(str(error))
+    except KeyboardInterrupt:
+        fail(INTERRUPTED, code=130)
     except OSError as error:
         fail(f"{error.filename or out}: {error.strerror or error}")
-    final = summarize(results)
+    final = mean_std(finals)
     typer.echo(
         f"{env}: final true return {final['mean']:.1f} +- {final['std']:.1f} over {runs} runs; "
         f"wrote {out}"
@@ -178,28 +265,29 @@ def gym_irl(
     algo: str = typer.Option("hairl", help="airl or hairl."),
     runs: int | None = typer.Option(None, min=1, help="Runs in lock-step (default: preset's)."),
     preset: str = typer.Option("paper", help="quick or paper: the budgets."),
-    seed: int = typer.Option(0, help="Run k uses seed + k; the data split uses seed."),
+    seed: int = typer.Option(
+        0, **SEED_OPTION, help="Run k uses seed + k; the data split uses seed."
+    ),
     epochs: int | None = typer.Option(None, min=1, help="Override the preset's epochs."),
     raw_obs: bool = typer.Option(
         False, "--raw-obs", help="Train on raw observations (default: standardized)."
     ),
     out: Path = typer.Option(..., "--out", "-o", help="Folder of run-<k> and summary.json."),
     overwrite: bool = typer.Option(False, help="Replace earlier runs in OUT."),
-    threads: int = typer.Option(1, help="torch threads."),
+    threads: int = typer.Option(1, min=1, help="torch threads."),
 ) -> None:
     """AIRL or H-AIRL on a task's expert data; each epoch's policy is evaluated in the env."""
     from dataclasses import replace
 
-    from pokerirl.gym.presets import PRESETS, TASKS
+    from pokerirl.gym.presets import PRESETS
 
     if preset not in PRESETS:
         fail(f"--preset must be one of {', '.join(PRESETS)}, got {preset!r}")
     if algo not in ("airl", "hairl"):
         fail(f"--algo must be airl or hairl, got {algo!r}")
-    if env not in TASKS:
-        fail(f"unknown task {env!r}; choose one of {', '.join(TASKS)}")
+    _known_task(env)
     if data is not None and not data.is_file():
-        fail(f"--data {data}: no such file")
+        fail(f"--data {display(str(data))}: no such file")
     settings = PRESETS[preset].irl(env)
     if epochs is not None:
         settings = replace(settings, epochs=epochs)
@@ -300,8 +388,10 @@ def gym_reward_map(
 
 
 # The budget and execution options that gym study and sweep share.
-GYM_SEED = typer.Option(None, "--seed", min=0, help="Data seed; run k uses seed + k.")
-GYM_TRANSITIONS = typer.Option(None, min=2, help="Override the expert transitions.")
+GYM_SEED = typer.Option(None, "--seed", **SEED_OPTION, help="Data seed; run k uses seed + k.")
+GYM_TRANSITIONS = typer.Option(
+    None, min=2, max=MAX_TRANSITIONS, help="Override the expert transitions."
+)
 GYM_EPOCHS = typer.Option(None, min=1, help="Override the IRL epochs.")
 GYM_EVAL_EPISODES = typer.Option(None, min=1, help="Override episodes per evaluation.")
 GYM_TIMESTEPS = typer.Option(None, min=1, help="Override the RL steps per run.")
@@ -315,7 +405,14 @@ def _gym_preset(name: str, task: str, **overrides: int | None) -> Any:
     """The study preset ``name`` for ``task`` (or all) with the command line's overrides."""
     from pokerirl.gym.study import parse_tasks, study_preset
 
-    return study_preset(name, tasks=parse_tasks(task), **overrides)
+    preset = study_preset(name, tasks=parse_tasks(task), **overrides)
+    if preset.seed + preset.runs - 1 > MAX_SEED:  # run k uses seed + k
+        fail(
+            f"--seed {preset.seed:,} with {preset.runs} runs: run seeds must be at most "
+            f"{MAX_SEED:,}",
+            2,
+        )
+    return preset
 
 
 @gym_app.command("study")

@@ -32,6 +32,7 @@ import torch
 
 from pokerirl.atomic import atomic_path
 from pokerirl.gym.experts import Expert, make_env
+from pokerirl.gym.presets import MAX_TRANSITIONS
 
 COLUMNS = ("obs", "action", "reward", "next_obs", "done", "truncated", "episode")
 LOCKSTEP_ENVS = 8  # fixed: the batching must not depend on the machine
@@ -66,8 +67,11 @@ def rollout(
     expert: Expert, *, transitions: int, seed: int, deterministic: bool = True
 ) -> list[Episode]:
     """Play episodes ``seed``, ``seed + 1``, ... until they hold ``transitions`` steps."""
-    if transitions < 1:
-        raise ValueError(f"transitions must be positive, got {transitions}")
+    if not 1 <= transitions <= MAX_TRANSITIONS:
+        raise ValueError(
+            f"transitions must be within 1..{MAX_TRANSITIONS:,} (held in memory until "
+            f"written), got {transitions:,}"
+        )
     envs = [make_env(expert.env_id) for _ in range(LOCKSTEP_ENVS)]
     finished: dict[int, Episode] = {}
     slots: list[dict | None] = [None] * len(envs)  # per env: its episode's id and lists
@@ -206,7 +210,8 @@ def read_transitions(path: str | os.PathLike[str]) -> dict[str, np.ndarray]:
     import pyarrow as pa
     import pyarrow.parquet as pq
 
-    table = pq.read_table(Path(path))
+    with open(path, "rb") as file:  # a file object: pyarrow cannot name non-UTF-8 paths
+        table = pq.read_table(file)
     out: dict[str, np.ndarray] = {}
     for name in COLUMNS:
         column = table.column(name).combine_chunks()

@@ -371,9 +371,14 @@ def load_expert(folder: str | os.PathLike[str]) -> Expert:
         raise ValueError(
             f"{folder}: not an expert folder ({Path(error.filename).name} missing)"
         ) from None
+    except pickle.UnpicklingError:
+        # weights_only refused a pickled object: nothing was executed; torch's advice is
+        # several lines about unpickling, which we refuse to do.
+        raise ValueError(
+            f"{folder / MODEL_FILE}: not a state_dict (refusing to unpickle)"
+        ) from None
     except (
         json.JSONDecodeError,
-        pickle.UnpicklingError,
         KeyError,
         RuntimeError,
         TypeError,

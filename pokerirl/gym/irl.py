@@ -206,7 +206,8 @@ def expert_return(env_id: str, data_path: str | os.PathLike[str]) -> float:
     time limit); the shipped manifest's when the data has none; NaN when neither exists."""
     import pyarrow.parquet as pq
 
-    table = pq.read_table(data_path)
+    with open(data_path, "rb") as file:  # a file object: pyarrow cannot name non-UTF-8 paths
+        table = pq.read_table(file)
     names = [n for n in ("reward", "episode", "done", "truncated") if n in table.column_names]
     columns = {n: table.column(n).to_numpy(zero_copy_only=False) for n in names}
     ended = columns["done"] | columns.get("truncated", np.zeros_like(columns["done"]))

@@ -246,9 +246,12 @@ def is_gym_study(folder: str | os.PathLike[str]) -> bool:
 
 def load_gym_study(folder: str | os.PathLike[str]) -> tuple[dict[str, Any], str]:
     """A finished study's ``summary.json`` and its report rendered again (``pokerirl report``)."""
+    from pokerirl.gym.summary_check import check_summary
+
     path = Path(folder) / "summary.json"
     try:
         found = json.loads(path.read_text())
+        check_summary(found)  # once, on reading: the renderer trusts what passes
         if "tasks" in found:
             return found, render_report(found["tasks"], found["preset"], prefix=None)
         return found, render_report({found["env"]: found}, found["preset"])

@@ -51,18 +51,21 @@ def read_parquet(
     path = Path(path)
     if not path.is_file():
         raise FileNotFoundError(f"{what} not found: {path}")
-    try:
-        schema = pq.read_schema(path)
-    except (pa.ArrowException, OSError) as error:
-        raise ValueError(f"cannot read {path} as Parquet: {first_line(error)}") from None
-    missing = [name for name in required if name not in schema.names]
-    if missing:
-        raise ValueError(f"{path} lacks required column(s): {', '.join(missing)}")
-    columns = [*required, *(c for c in optional if c in schema.names)]
-    try:
-        return pq.read_table(path, columns=columns)
-    except (pa.ArrowException, OSError) as error:
-        raise ValueError(f"cannot read {path}: {first_line(error)}") from None
+    # Through a file object: pyarrow cannot open a path whose name is not UTF-8.
+    with open(path, "rb") as file:
+        try:
+            parquet = pq.ParquetFile(file)
+            schema = parquet.schema_arrow
+        except (pa.ArrowException, OSError) as error:
+            raise ValueError(f"cannot read {path} as Parquet: {first_line(error)}") from None
+        missing = [name for name in required if name not in schema.names]
+        if missing:
+            raise ValueError(f"{path} lacks required column(s): {', '.join(missing)}")
+        columns = [*required, *(c for c in optional if c in schema.names)]
+        try:
+            return parquet.read(columns=columns)
+        except (pa.ArrowException, OSError) as error:
+            raise ValueError(f"cannot read {path}: {first_line(error)}") from None
 
 
 def transitions_from_arrow(table: pa.Table, *, source: str = "table") -> Transitions:
