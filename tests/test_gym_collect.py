@@ -106,3 +106,26 @@ def test_collect_with_a_bad_expert_fails_in_one_line(tmp_path: Path) -> None:
     result = CliRunner().invoke(app, ["gym", "collect", "Foo-v0", "-n", "10", "--out", str(out)])
     assert result.exit_code != 0 and "no shipped expert for 'Foo-v0'" in result.output
     assert not out.exists()
+
+
+def test_continuous_tasks_collect_sampled_actions_by_default_and_record_it(
+    tmp_path: Path,
+) -> None:
+    # Issue 20: deterministic Pendulum demos make log σ collapse and AIRL's reward invert;
+    # the authors record SB3's sampled actions. Discrete tasks keep the greedy action.
+    from pokerirl.gym.collect import default_deterministic
+
+    assert default_deterministic("Pendulum-v1") is False
+    assert default_deterministic("Acrobot-v1") is True
+    expert = load_expert(resolve_expert_dir("shipped", "Pendulum-v1"))
+    paths = {k: tmp_path / f"{k}.parquet" for k in ("default", "sampled", "mean")}
+    summary = collect(expert, paths["default"], transitions=200, seed=0)
+    collect(expert, paths["sampled"], transitions=200, seed=0, deterministic=False)
+    collect(expert, paths["mean"], transitions=200, seed=0, deterministic=True)
+    assert summary.deterministic is False
+    meta = pq.read_schema(paths["default"]).metadata[b"pokerirl.gym"]
+    assert b'"deterministic": false' in meta
+    assert digest(paths["default"]) == digest(paths["sampled"]) != digest(paths["mean"])
+    # The expert's action at the first (same) state differs between sampled and mean.
+    sampled, mean = (read_transitions(paths[k])["action"] for k in ("sampled", "mean"))
+    assert not np.allclose(sampled[0], mean[0])

@@ -60,3 +60,13 @@ def test_importing_the_gym_package_and_the_cli_does_not_import_gymnasium_or_sb3(
         "assert not loaded, loaded"
     )
     subprocess.run([sys.executable, "-c", code], check=True)
+
+
+def test_gymnasium_tasks_use_no_reward_weight_decay_as_the_authors() -> None:
+    # Issue 20: the poker default 5e-3 used to leak into every Gymnasium run.
+    from pokerirl.gym.irl import irl_config
+
+    for task in TASKS.values():
+        assert task.irl.reward_weight_decay == 0.0
+        for algo in ("airl", "hairl"):
+            assert irl_config(algo, task.irl, seed=0).reward_weight_decay == 0.0

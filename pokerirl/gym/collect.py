@@ -32,7 +32,7 @@ import torch
 
 from pokerirl.atomic import atomic_path
 from pokerirl.gym.experts import Expert, make_env
-from pokerirl.gym.presets import MAX_TRANSITIONS
+from pokerirl.gym.presets import MAX_TRANSITIONS, TASKS
 
 COLUMNS = ("obs", "action", "reward", "next_obs", "done", "truncated", "episode")
 LOCKSTEP_ENVS = 8  # fixed: the batching must not depend on the machine
@@ -63,10 +63,30 @@ class CollectSummary:
     complete_episodes: int
 
 
+def default_deterministic(env_id: str) -> bool:
+    """Whether ``env_id``'s demonstrations are the expert's deterministic actions by default.
+
+    Discrete tasks: yes (the greedy action, as before). Continuous tasks: no, SB3's sampled
+    actions, as the authors record them (``train_irl.py``: ``expert.predict(obs)``). On
+    deterministic continuous demos the policy's log σ collapses and AIRL's reward inverts
+    (issue 20).
+    """
+    if env_id in TASKS:
+        return TASKS[env_id].discrete
+    env = make_env(env_id)
+    try:
+        return hasattr(env.action_space, "n")
+    finally:
+        env.close()
+
+
 def rollout(
-    expert: Expert, *, transitions: int, seed: int, deterministic: bool = True
+    expert: Expert, *, transitions: int, seed: int, deterministic: bool | None = None
 ) -> list[Episode]:
-    """Play episodes ``seed``, ``seed + 1``, ... until they hold ``transitions`` steps."""
+    """Play episodes ``seed``, ``seed + 1``, ... until they hold ``transitions`` steps
+    (``deterministic`` None: the task's default, :func:`default_deterministic`)."""
+    if deterministic is None:
+        deterministic = default_deterministic(expert.env_id)
     if not 1 <= transitions <= MAX_TRANSITIONS:
         raise ValueError(
             f"transitions must be within 1..{MAX_TRANSITIONS:,} (held in memory until "
@@ -132,12 +152,16 @@ def collect(
     *,
     transitions: int,
     seed: int = 0,
-    deterministic: bool = True,
+    deterministic: bool | None = None,
 ) -> CollectSummary:
-    """Write ``transitions`` rows of the expert's play to the Parquet table ``out``."""
+    """Write ``transitions`` rows of the expert's play to the Parquet table ``out``
+    (``deterministic`` None: the task's default, :func:`default_deterministic`; the table's
+    metadata and the summary record the value used)."""
     import pyarrow as pa
     import pyarrow.parquet as pq
 
+    if deterministic is None:
+        deterministic = default_deterministic(expert.env_id)
     episodes = rollout(expert, transitions=transitions, seed=seed, deterministic=deterministic)
     lengths = np.array([len(e.rewards) for e in episodes])
     obs = np.concatenate([e.obs for e in episodes])[:transitions]

@@ -78,7 +78,7 @@ class GymIRLResult:
 
 def irl_config(algo: str, settings: IRLSettings, *, seed: int) -> AIRLConfig:
     """The task's IRL settings as an :class:`AIRLConfig`: nets, epochs, one learning rate for
-    both nets, batch, the authors' noise schedule with decay k; α, β, σ for H-AIRL only
+    both nets, batch, the reward's weight decay, the authors' noise schedule with decay k; α, β, σ for H-AIRL only
     (``airl`` keeps α = β = 0 and no noise)."""
     overrides: dict[str, Any] = {
         "policy_hidden": settings.policy_hidden,
@@ -86,6 +86,7 @@ def irl_config(algo: str, settings: IRLSettings, *, seed: int) -> AIRLConfig:
         "epochs": settings.epochs,
         "reward_lr": settings.learning_rate,
         "policy_lr": settings.learning_rate,
+        "reward_weight_decay": settings.reward_weight_decay,
         "batch_size": settings.batch_size,
         "noise_schedule": "authors",
         "noise_decay": settings.sigma_decay,

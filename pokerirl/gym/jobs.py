@@ -78,7 +78,7 @@ def expert_fingerprint(env_id: str) -> dict[str, Any]:
 
 
 def collect_unit(env_id: str, transitions: int, seed: int) -> bytes:
-    """The shipped expert's ``transitions`` deterministic transitions (episode k from
+    """The shipped expert's ``transitions`` transitions (episode k from
     ``reset(seed=seed + k)``), as the bytes of the Parquet table ``gym collect`` writes."""
     from pokerirl.gym.collect import collect
     from pokerirl.gym.experts import load_expert, resolve_expert_dir
@@ -86,7 +86,8 @@ def collect_unit(env_id: str, transitions: int, seed: int) -> bytes:
     with tempfile.TemporaryDirectory(prefix="pokerirl-collect-") as scratch:
         path = Path(scratch) / DATA_FILE
         expert = load_expert(resolve_expert_dir("shipped", env_id))
-        collect(expert, path, transitions=transitions, seed=seed)
+        # deterministic=None: the task's default (continuous: sampled), recorded in the table
+        collect(expert, path, transitions=transitions, seed=seed, deterministic=None)
         return path.read_bytes()
 
 

@@ -36,6 +36,9 @@ class IRLSettings:
     sigma_start: float
     sigma_end: float
     sigma_decay: float = 0.01
+    # The authors use no weight decay on the reward net for any Gymnasium task; the poker
+    # default (AIRLConfig.reward_weight_decay, 5e-3) leaked in before (issue 20).
+    reward_weight_decay: float = 0.0
     # Ours, not the paper's (which does not say): train on observations standardized with the
     # training split's mean and std, folded into the saved nets' first layers. False feeds raw
     # observations, which leaves MountainCar's velocity (|v| < 0.07) nearly invisible.
