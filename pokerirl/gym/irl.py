@@ -25,8 +25,6 @@ from __future__ import annotations
 import json
 import math
 import os
-import shutil
-import tempfile
 from collections.abc import Callable
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -56,8 +54,10 @@ from pokerirl.irl.run import (
     summarize,
 )
 from pokerirl.irl.transitions import Transitions
+from pokerirl.store import staged_files, tidy
 
 RETURNS_FILE = "returns_bands.png"
+STAGE_KEY = "irl"  # the staged write's hidden folders in OUT: .irl.new-*, .irl.swap-*
 ALIGNMENT_BASELINES = ("majority", "legal_majority", "bc")  # shares of states, not returns
 
 
@@ -78,8 +78,9 @@ class GymIRLResult:
 
 def irl_config(algo: str, settings: IRLSettings, *, seed: int) -> AIRLConfig:
     """The task's IRL settings as an :class:`AIRLConfig`: nets, epochs, one learning rate for
-    both nets, batch, the reward's weight decay, the authors' noise schedule with decay k; α, β, σ for H-AIRL only
-    (``airl`` keeps α = β = 0 and no noise)."""
+    both nets, batch, the reward's weight decay, the log σ floor, the authors' noise schedule
+    with decay k; α, β, σ, the noise and supervised forms for H-AIRL only (``airl`` keeps
+    α = β = 0 and no noise)."""
     overrides: dict[str, Any] = {
         "policy_hidden": settings.policy_hidden,
         "reward_hidden": settings.reward_hidden,
@@ -90,6 +91,7 @@ def irl_config(algo: str, settings: IRLSettings, *, seed: int) -> AIRLConfig:
         "batch_size": settings.batch_size,
         "noise_schedule": "authors",
         "noise_decay": settings.sigma_decay,
+        "log_std_min": settings.log_std_min,
         "seed": seed,
     }
     if algo == "hairl":
@@ -98,6 +100,8 @@ def irl_config(algo: str, settings: IRLSettings, *, seed: int) -> AIRLConfig:
             beta=settings.beta,
             sigma_start=settings.sigma_start,
             sigma_end=settings.sigma_end,
+            noise_form=settings.noise_form,
+            supervised_form=settings.supervised_form,
         )
     return AIRLConfig.for_algo(algo, **overrides)
 
@@ -262,6 +266,8 @@ def train_gym_irl(
     products = [f"run-{k}" for k in range(runs)] + [SUMMARY_FILE, RETURNS_FILE]
     if out.exists() and not out.is_dir():
         raise RunError(f"{out} exists and is not a folder; choose another --out")
+    if out.is_dir():
+        tidy(out, key=STAGE_KEY)  # finish or remove what a killed run left
     taken = [p for p in products if (out / p).exists()] if out.is_dir() else []
     if taken and not overwrite:
         raise RunError(f"{out} already holds {taken[0]}; pass --overwrite to replace")
@@ -284,10 +290,10 @@ def train_gym_irl(
     nets = [default_nets(train_data, config, s) for s in seeds]
     policies = [p for _, p in nets]
 
-    out.mkdir(parents=True, exist_ok=True)
-    stage = Path(tempfile.mkdtemp(prefix=".irl.", suffix=".tmp", dir=out))
-    make_shareable(stage)
-    try:
+    # Staged as one write (pokerirl.store): a killed run leaves a hidden folder that the next
+    # run's tidy removes (it used to leave .irl.*.tmp forever).
+    with staged_files(out, key=STAGE_KEY) as stage:
+        make_shareable(stage)
         folders = [stage / f"run-{k}" for k in range(runs)]
         lines: list[list[str]] = [[] for _ in range(runs)]
         for folder in folders:
@@ -365,13 +371,6 @@ def train_gym_irl(
             plot_bands(
                 {**summary, "baselines": {k: summary["baselines"][k] for k in shares}}, stage
             )
-            products.append("alignment_bands.png")
-        for name in products:
-            if (out / name).is_dir():
-                shutil.rmtree(out / name)
-            os.replace(stage / name, out / name)
-    finally:
-        shutil.rmtree(stage, ignore_errors=True)
     return GymIRLResult(
         out=out,
         env=env_id,

@@ -39,6 +39,12 @@ class IRLSettings:
     # The authors use no weight decay on the reward net for any Gymnasium task; the poker
     # default (AIRLConfig.reward_weight_decay, 5e-3) leaked in before (issue 20).
     reward_weight_decay: float = 0.0
+    # Options of the IRL core (pokerirl.irl.config, issue 20): H-AIRL's noise ("ours" or
+    # "authors") and supervised term ("mean_mse" or the authors' "sum_mse"); the policy's
+    # log σ floor in training (-20 never binds).
+    noise_form: str = "ours"
+    supervised_form: str = "mean_mse"
+    log_std_min: float = -20.0
     # Ours, not the paper's (which does not say): train on observations standardized with the
     # training split's mean and std, folded into the saved nets' first layers. False feeds raw
     # observations, which leaves MountainCar's velocity (|v| < 0.07) nearly invisible.

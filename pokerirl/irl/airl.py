@@ -554,6 +554,7 @@ class _Loop:
             probs = log_pi.exp()
         else:
             mean, log_std = self.policies(obs)
+            log_std = log_std.clamp(self.config.log_std_min, self.config.log_std_max)
             sample = mean + log_std.exp() * draw["pi_eps"][step]
 
         # 2. discriminator step
@@ -567,12 +568,19 @@ class _Loop:
                 else:
                     m, ls = mean.detach(), log_std.detach()
                     seen = sample.detach() if self.config.disc_action == "sample" else m
+                    log_pi_seen = None
                     if self.noisy:
                         sigma = draw["sig"][step] if "sig" in draw else self.sigma
-                        noise = sigma[..., None] * (self.high - self.low) * draw["eps"][step]
-                        seen = torch.maximum(torch.minimum(seen + noise, self.high), self.low)
+                        if self.config.noise_form == "authors":
+                            # σ in units of high, no clipping, log π of the clean sample.
+                            log_pi_seen = gaussian_log_prob(seen, m, ls)
+                            seen = seen + sigma[..., None] * self.high * draw["eps"][step]
+                        else:
+                            noise = sigma[..., None] * (self.high - self.low) * draw["eps"][step]
+                            seen = torch.maximum(torch.minimum(seen + noise, self.high), self.low)
                     log_pi_expert = gaussian_log_prob(expert, m, ls)
-                    log_pi_seen = gaussian_log_prob(seen, m, ls)
+                    if log_pi_seen is None:
+                        log_pi_seen = gaussian_log_prob(seen, m, ls)
             both = torch.stack((expert, seen), dim=1)  # (R, 2, B, k)
             if self.shaped:
                 f = self.rewards(
@@ -602,7 +610,10 @@ class _Loop:
             else:
                 adversarial = zero
         else:
-            supervised = (mean - expert).square().sum(-1).mean(-1)
+            if self.config.supervised_form == "sum_mse":
+                supervised = (sample - expert).square().sum((-2, -1))  # authors': summed
+            else:
+                supervised = (mean - expert).square().sum(-1).mean(-1)
             if self.alpha < 1:
                 g = self.rewards(obs[:, None], sample[:, None])[:, 0]
                 adversarial = (gaussian_log_prob(sample, mean, log_std) - g).mean(-1)
@@ -678,12 +689,13 @@ class _Loop:
             "disc_acc_policy": (f_seen < lp_seen).float().mean((0, 2)),  # D < 1/2
             "reward_expert": f_expert.mean((0, 2)),
             "reward_policy": f_seen.mean((0, 2)),
+            "reward_gap": (f_expert - f_seen).mean((0, 2)),  # expert minus policy
             "policy_loss": record[..., -3].mean(0),
             "policy_adv_loss": record[..., -2].mean(0),
             "policy_sup_loss": record[..., -1].mean(0),
         }
         if not self.adversarial:
-            for key in list(values)[:7]:
+            for key in list(values)[:8]:
                 values[key] = torch.zeros(self.runs)
         return {key: value.tolist() for key, value in values.items()}
 
@@ -767,7 +779,8 @@ def evaluate(
     Discrete: ``val_alignment`` (argmax π over legal actions = the expert's action),
     ``val_reward_alignment`` (argmax over legal actions of the reward g(s, ·) = the expert's),
     ``val_policy_dist`` (mean π), ``val_policy_argmax_dist`` and ``val_expert_dist``
-    (action histograms). Continuous: ``val_mse`` of the mean action.
+    (action histograms). Continuous: ``val_mse`` of the mean action and ``log_std``, the
+    policy's mean log σ.
     """
     was_training = reward.training, policy.training
     reward.eval()
@@ -777,9 +790,10 @@ def evaluate(
         if not val.discrete:
             errors = []
             for i in range(0, len(val), chunk):
-                mean, _ = policy(val.obs[i : i + chunk].to(device))
+                mean, log_std = policy(val.obs[i : i + chunk].to(device))
                 errors.append((mean - val.actions[i : i + chunk].to(device)).square().sum(-1))
-            return {"val_mse": torch.cat(errors).mean().item()}
+            # log σ: collapsing σ lets -log π alone win D and invert the reward (issue 20)
+            return {"val_mse": torch.cat(errors).mean().item(), "log_std": log_std.mean().item()}
         k = val.action_dim
         eye = torch.eye(k, device=device)[:, None, :]
         log_probs, reward_ids = [], []

@@ -34,6 +34,14 @@ from pokerirl.irl.nets import ACTIVATIONS, REWARD_FAMILIES, NetSpec
 ALGOS: tuple[str, ...] = ("airl", "hairl")
 NOISE_SCHEDULES: tuple[str, ...] = ("linear", "authors")
 DISC_ACTIONS: tuple[str, ...] = ("sample", "distribution")
+# Continuous actions only (issue 20). "ours": σ in box widths (high - low), the noised action
+# clipped to the box, log π at the noised action. "authors" (silue-dev/hairl src/hairl.py): σ
+# in units of ``high``, no clipping, log π of the clean sample.
+NOISE_FORMS: tuple[str, ...] = ("ours", "authors")
+# Continuous actions only. "mean_mse": α × batch mean of ‖μ − a_E‖² (ours). "sum_mse": the
+# authors' mse_loss(reparameterized sample, a_E, reduction="sum"), summed over the batch (it
+# also penalizes σ²).
+SUPERVISED_FORMS: tuple[str, ...] = ("mean_mse", "sum_mse")
 
 
 class ConfigError(ValueError):
@@ -65,6 +73,12 @@ class AIRLConfig:
     noise_schedule: str = "linear"  # "linear" (the paper) or "authors" (their code)
     noise_decay: float = 0.1  # k of the authors' schedule: 0.1 poker, 0.01 Gymnasium
     disc_action: str = "sample"  # what the discriminator sees of π: "sample" or "distribution"
+    noise_form: str = "ours"  # continuous actions: see NOISE_FORMS
+    supervised_form: str = "mean_mse"  # continuous actions: see SUPERVISED_FORMS
+    # Continuous policies' log σ is clamped to [log_std_min, log_std_max] in training (the
+    # defaults never bind in practice; -5 keeps -log π from winning D alone, issue 20).
+    log_std_min: float = -20.0
+    log_std_max: float = 2.0
     # data
     val_fraction: float = 0.1  # share of groups (hands, episodes) held out
     seed: int = 0
@@ -94,6 +108,10 @@ class AIRLConfig:
             f"noise_schedule in {', '.join(NOISE_SCHEDULES)}": self.noise_schedule
             in NOISE_SCHEDULES,
             f"disc_action in {', '.join(DISC_ACTIONS)}": self.disc_action in DISC_ACTIONS,
+            f"noise_form in {', '.join(NOISE_FORMS)}": self.noise_form in NOISE_FORMS,
+            f"supervised_form in {', '.join(SUPERVISED_FORMS)}": self.supervised_form
+            in SUPERVISED_FORMS,
+            "log_std_min < log_std_max": self.log_std_min < self.log_std_max,
         }
         broken = [name for name, ok in checks.items() if not ok]
         if broken:
