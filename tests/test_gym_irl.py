@@ -176,3 +176,66 @@ def test_config_follows_the_task_preset_and_airl_has_no_hybrid_terms() -> None:
     airl = irl_config("airl", settings, seed=0)
     assert (airl.alpha, airl.beta, airl.sigma_start, airl.sigma_end) == (0, 0, 0, 0)
     assert airl.reward_lr == 3e-4 and airl.epochs == settings.epochs
+
+
+@pytest.mark.slow
+def test_a_tiny_pendulum_irl_run_on_sampled_demos_beats_random(tmp_path: Path) -> None:
+    # Issue 20: on the default (sampled) demos H-AIRL's policy must beat a random policy
+    # (about -1,200) within a few epochs, and log σ and the reward gap are logged.
+    data = tmp_path / "expert.parquet"
+    shipped_data("Pendulum-v1", data, 10_000)
+    assert b'"deterministic": false' in pq.read_schema(data).metadata[b"pokerirl.gym"]
+    settings = replace(TASKS["Pendulum-v1"].irl, epochs=3, eval_episodes=4, learning_rate=2e-3)
+    result = train_gym_irl(
+        "Pendulum-v1", data, algo="hairl", runs=1, settings=settings, out=tmp_path / "irl",
+        progress=False,
+    )  # fmt: skip
+    random = result.baselines["random"]
+    assert result.final_return["mean"] > random + 300, (result.final_return, random)
+    last = json.loads((tmp_path / "irl" / "run-0" / "metrics.jsonl").read_text().splitlines()[-1])
+    assert -3.0 < last["log_std"] < 1.0 and np.isfinite(last["reward_gap"])
+    config = json.loads((tmp_path / "irl" / "run-0" / "config.json").read_text())
+    assert json.dumps(config).count('"reward_weight_decay": 0.0') == 1
+
+
+_KILLED_RUN = """
+import sys
+from dataclasses import replace
+from pokerirl.gym.irl import train_gym_irl
+from pokerirl.gym.presets import TASKS
+settings = replace(TASKS["MountainCar-v0"].irl, epochs=300, eval_episodes=1)  # BC baseline first
+train_gym_irl("MountainCar-v0", sys.argv[1], algo="airl", runs=1, settings=settings,
+              out=sys.argv[2], progress=False, overwrite=True)
+"""
+
+
+def test_a_killed_run_leaves_nothing_once_the_next_run_finishes(tmp_path: Path) -> None:
+    # Issue 21: a killed `gym irl --overwrite` used to leave OUT/.irl.*.tmp forever.
+    import os
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    data = tmp_path / "expert.parquet"
+    shipped_data("MountainCar-v0", data, 400)
+    out = tmp_path / "irl"
+    out.mkdir()
+    (out / ".irl.ab12cd34.tmp").mkdir()  # what the writer before pokerirl.store left
+    env = {**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[1])}
+    child = subprocess.Popen([sys.executable, "-c", _KILLED_RUN, str(data), str(out)], env=env)
+    try:
+        deadline = time.monotonic() + 120
+        while not [p for p in out.iterdir() if p.name.startswith(".irl.new-")]:
+            assert child.poll() is None and time.monotonic() < deadline, "no staging appeared"
+            time.sleep(0.2)
+        time.sleep(1.0)
+    finally:
+        child.send_signal(signal.SIGKILL)
+        child.wait()
+    assert [p for p in out.iterdir() if p.name.startswith(".irl.")]  # it left its staging
+    settings = replace(TASKS["MountainCar-v0"].irl, epochs=1, eval_episodes=1)
+    train_gym_irl("MountainCar-v0", data, algo="airl", runs=1, settings=settings, out=out,
+                  progress=False, overwrite=True)  # fmt: skip
+    assert not [p.name for p in out.iterdir() if p.name.startswith(".")]
+    assert (out / "run-0" / "reward.pt").is_file() and (out / "summary.json").is_file()
