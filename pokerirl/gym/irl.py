@@ -25,8 +25,6 @@ from __future__ import annotations
 import json
 import math
 import os
-import shutil
-import tempfile
 from collections.abc import Callable
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -56,6 +54,7 @@ from pokerirl.irl.run import (
     summarize,
 )
 from pokerirl.irl.transitions import Transitions
+from pokerirl.store import staged_files
 
 RETURNS_FILE = "returns_bands.png"
 ALIGNMENT_BASELINES = ("majority", "legal_majority", "bc")  # shares of states, not returns
@@ -283,10 +282,10 @@ def train_gym_irl(
     nets = [default_nets(train_data, config, s) for s in seeds]
     policies = [p for _, p in nets]
 
-    out.mkdir(parents=True, exist_ok=True)
-    stage = Path(tempfile.mkdtemp(prefix=".irl.", suffix=".tmp", dir=out))
-    make_shareable(stage)
-    try:
+    # Staged by the store: a kill leaves the earlier outputs or the new ones, never a mix, and
+    # the next run removes what a dead one left (also an older version's .irl.XXXXXXXX.tmp).
+    with staged_files(out, key="irl") as stage:
+        make_shareable(stage)
         folders = [stage / f"run-{k}" for k in range(runs)]
         lines: list[list[str]] = [[] for _ in range(runs)]
         for folder in folders:
@@ -365,12 +364,6 @@ def train_gym_irl(
                 {**summary, "baselines": {k: summary["baselines"][k] for k in shares}}, stage
             )
             products.append("alignment_bands.png")
-        for name in products:
-            if (out / name).is_dir():
-                shutil.rmtree(out / name)
-            os.replace(stage / name, out / name)
-    finally:
-        shutil.rmtree(stage, ignore_errors=True)
     return GymIRLResult(
         out=out,
         env=env_id,
