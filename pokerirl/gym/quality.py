@@ -536,7 +536,8 @@ def write_reward_quality(
 
     try:
         torch.set_num_threads(1)  # one summation order: the same bytes on any machine
-        f_full = _as_transition_reward(load_reward(run, full=family == "shaped"), full=family == "shaped")
+        shaped = family == "shaped"
+        f_full = _as_transition_reward(load_reward(run, full=shaped), full=shaped)
         g = _as_transition_reward(load_reward(run), full=False)
         initial = _as_transition_reward(initial_reward(record), full=False)
 
