@@ -37,6 +37,7 @@ against the rewards recorded along rollouts (``true_reward_check``).
 
 from __future__ import annotations
 
+import hashlib
 import json
 import math
 import os
@@ -53,7 +54,14 @@ from pokerirl.gym.collect import read_transitions
 from pokerirl.gym.experts import make_env
 from pokerirl.gym.presets import TASKS
 from pokerirl.irl.nets import NetSpec, build_nets, fold_obs_standardization
-from pokerirl.irl.run import CONFIG_FILE, RewardFunction, load_policy, load_reward, load_run_config
+from pokerirl.irl.run import (
+    CONFIG_FILE,
+    REWARD_FILE,
+    RewardFunction,
+    load_policy,
+    load_reward,
+    load_run_config,
+)
 
 QUALITY_FILE = "reward_quality.json"
 QUALITY_FORMAT = "pokerirl-reward-quality/1"
@@ -445,6 +453,7 @@ class RewardQuality:
     coverage: dict[str, Any]
     true_reward: dict[str, Any]
     true_reward_check: dict[str, Any]
+    reward_sha256: str  # of the run's reward.pt: a stale file is one whose digest differs
 
 
 def _number(x: float) -> float | None:
@@ -598,6 +607,7 @@ def write_reward_quality(
             "what": "the per-step part of r against the env's recorded rewards",
             **checks,
         },
+        reward_sha256=reward_digest(run),
     )
     write_quality(run / QUALITY_FILE, quality)
     return quality
@@ -610,10 +620,30 @@ def write_quality(path: Path, quality: RewardQuality) -> None:
     write_text(path, json.dumps(record, indent=2, ensure_ascii=False) + "\n")
 
 
+def reward_digest(run_dir: str | os.PathLike[str]) -> str:
+    return hashlib.sha256((Path(run_dir) / REWARD_FILE).read_bytes()).hexdigest()
+
+
 def read_reward_quality(run_dir: str | os.PathLike[str]) -> dict[str, Any] | None:
-    """A run's ``reward_quality.json``, or None when missing or unreadable."""
+    """A run's ``reward_quality.json``; None when missing, unreadable, or made for another
+    ``reward.pt`` than the folder's."""
     try:
         found = json.loads((Path(run_dir) / QUALITY_FILE).read_text(encoding="utf-8"))
+        if not isinstance(found, dict) or found.get("format") != QUALITY_FORMAT:
+            return None
+        return found if found.get("reward_sha256") == reward_digest(run_dir) else None
     except (OSError, ValueError):
         return None
-    return found if isinstance(found, dict) and found.get("format") == QUALITY_FORMAT else None
+
+
+def run_quality(
+    run_dir: str | os.PathLike[str], *, env_id: str, data_path: str | os.PathLike[str] | None
+) -> dict[str, Any]:
+    """The run's ``reward_quality.json``, computed and written first when missing or stale
+    (runs made before the file existed)."""
+    found = read_reward_quality(run_dir)
+    if found is None:
+        write_reward_quality(run_dir, env_id=env_id, data_path=data_path)
+        found = read_reward_quality(run_dir)
+        assert found is not None
+    return found
