@@ -148,6 +148,22 @@ def test_true_step_reward_matches_the_env_on_random_rollouts(env_id: str, tolera
         assert values[0] == -1 and values[1] == pytest.approx(0.98 / 0.02 - 1)
 
 
+@pytest.mark.parametrize(("env_id", "least"), [("HalfCheetah-v4", 0.9), ("Ant-v4", 0.95)])
+def test_mujoco_forward_reward_approximation_follows_the_env(env_id: str, least: float) -> None:
+    pytest.importorskip("mujoco")
+    from pokerirl.gym.experts import make_env
+
+    env = make_env(env_id)
+    space = env.action_space
+    env.close()
+    space.seed(0)
+    found = roll_out(env_id, lambda o: np.stack([space.sample() for _ in o]), episodes=1, seed=0)
+    truth = true_reward(env_id, task_gamma(env_id))
+    assert truth.kind == "approximation"
+    step = truth.step(found.obs, found.actions, found.next_obs)
+    assert pearson(step, found.rewards) > least
+
+
 def test_unknown_task_and_missing_run_are_one_line(tmp_path: Path) -> None:
     with pytest.raises(QualityError, match="unknown task"):
         write_reward_quality(tmp_path, env_id="CartPole-v1")
