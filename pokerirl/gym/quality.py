@@ -69,6 +69,16 @@ QUALITY_SEED = 20_000  # rollouts start from reset(seed=QUALITY_SEED + k): not t
 DIGITS = 6  # JSON values rounded: the same bytes whatever the BLAS's summation order
 CHUNK = 1 << 18  # rows per batched reward call in the expectations
 
+SCORES = (
+    "pearson_expert",
+    "pearson_policy",
+    "epic",
+    "epic_g",
+    "epic_random_baseline",
+    "epic_expert_coverage",
+    "epic_random_baseline_expert_coverage",
+)
+
 # A batched reward on transitions: (obs (n, d), actions (n,) or (n, k), next_obs (n, d)) -> (n,)
 TransitionReward = Callable[[np.ndarray, np.ndarray, np.ndarray], np.ndarray]
 
@@ -449,6 +459,8 @@ class RewardQuality:
     epic: float
     epic_g: float
     epic_random_baseline: float
+    epic_expert_coverage: float  # f's EPIC with D_S and the transitions the expert's only
+    epic_random_baseline_expert_coverage: float
     gamma: float
     seed: int
     samples: int
@@ -563,12 +575,32 @@ def write_reward_quality(
                 truth.reward(source.obs, source.actions, source.next_obs),
             )
 
+        # The same on the expert's states alone (one cluster of states, not two).
+        expert_cover = make_coverage(
+            expert.obs[rng.choice(len(expert), coverage)],
+            uniform_actions(coverage, rng),
+            seed=seed,
+        )
+
+        def epic_on_expert(reward: TransitionReward) -> float:
+            return epic_distance(
+                reward,
+                truth.reward,
+                expert.obs,
+                expert.actions,
+                expert.next_obs,
+                coverage=expert_cover,
+                gamma=gamma,
+            )
+
         values = {
             "pearson_expert": raw(f_full, expert),
             "pearson_policy": raw(f_full, on_policy),
             "epic": epic(f_full),
             "epic_g": epic(g),
             "epic_random_baseline": epic(initial),
+            "epic_expert_coverage": epic_on_expert(f_full),
+            "epic_random_baseline_expert_coverage": epic_on_expert(initial),
         }
     finally:
         torch.set_num_threads(torch_threads)
@@ -588,6 +620,8 @@ def write_reward_quality(
         epic=values["epic"],
         epic_g=values["epic_g"],
         epic_random_baseline=values["epic_random_baseline"],
+        epic_expert_coverage=values["epic_expert_coverage"],
+        epic_random_baseline_expert_coverage=values["epic_random_baseline_expert_coverage"],
         gamma=gamma,
         seed=seed,
         samples=len(obs),
@@ -603,6 +637,8 @@ def write_reward_quality(
             "policy_transitions": f"{len(on_policy)} of the run's deterministic policy "
             f"({episodes} episodes from reset(seed={QUALITY_SEED} + k))",
             "size": cover.m,
+            "expert_coverage": f"epic_expert_coverage: {cover.m} of the expert's states, "
+            f"the same actions, ρ over the {len(expert)} expert transitions",
         },
         true_reward={"kind": truth.kind, "description": truth.description},
         true_reward_check={
@@ -617,7 +653,7 @@ def write_reward_quality(
 
 def write_quality(path: Path, quality: RewardQuality) -> None:
     record = {"format": QUALITY_FORMAT, **asdict(quality)}
-    for key in ("pearson_expert", "pearson_policy", "epic", "epic_g", "epic_random_baseline"):
+    for key in SCORES:
         record[key] = _number(record[key])
     write_text(path, json.dumps(record, indent=2, ensure_ascii=False) + "\n")
 
@@ -627,13 +663,14 @@ def reward_digest(run_dir: str | os.PathLike[str]) -> str:
 
 
 def read_reward_quality(run_dir: str | os.PathLike[str]) -> dict[str, Any] | None:
-    """A run's ``reward_quality.json``; None when missing, unreadable, or made for another
-    ``reward.pt`` than the folder's."""
+    """A run's ``reward_quality.json``; None when missing, unreadable, made for another
+    ``reward.pt`` than the folder's, or lacking a score (an older file)."""
     try:
         found = json.loads((Path(run_dir) / QUALITY_FILE).read_text(encoding="utf-8"))
         if not isinstance(found, dict) or found.get("format") != QUALITY_FORMAT:
             return None
-        return found if found.get("reward_sha256") == reward_digest(run_dir) else None
+        current = found.get("reward_sha256") == reward_digest(run_dir)
+        return found if current and all(key in found for key in SCORES) else None
     except (OSError, ValueError):
         return None
 

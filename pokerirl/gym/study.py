@@ -366,25 +366,22 @@ def task_summary(root: Path, env: str, preset: StudyPreset) -> dict[str, Any]:
     }
 
 
-QUALITY_KEYS = ("epic", "epic_g", "epic_random_baseline", "pearson_expert", "pearson_policy")
-
-
 def reward_quality(root: Path, env: str, algo: str, runs: int) -> dict[str, Any]:
     """Mean and std over runs of each IRL run's ``reward_quality.json`` (computed there first
     when a run lacks it, e.g. one made before it existed), the per-run values and the
     coverage used. A value null in a run (a constant reward) is left out of its mean."""
-    from pokerirl.gym.quality import run_quality
+    from pokerirl.gym.quality import SCORES, run_quality
 
     found = [
         run_quality(root / "irl" / algo / f"run-{k}", env_id=env, data_path=root / DATA_FILE)
         for k in range(runs)
     ]
     out: dict[str, Any] = {}
-    for key in QUALITY_KEYS:
+    for key in SCORES:
         values = [q[key] for q in found if q.get(key) is not None]
         out[key] = mean_std(values) if values else {"mean": None, "std": None}
     out["reward_quality"] = {
-        "per_run": {key: [q.get(key) for q in found] for key in QUALITY_KEYS},
+        "per_run": {key: [q.get(key) for q in found] for key in SCORES},
         "gamma": found[0]["gamma"],
         "coverage": found[0]["coverage"],
         "true_reward": found[0]["true_reward"],
@@ -488,6 +485,11 @@ def task_table(summary: dict[str, Any]) -> list[str]:
              "AIRL / H-AIRL",
              f"{_value(algos['airl']['epic_random_baseline'], digits=3)} / "
              f"{_value(algos['hairl']['epic_random_baseline'], digits=3)}", "not reported"),
+            ("EPIC on the expert's states and transitions only: AIRL / H-AIRL / random net",
+             f"{_value(algos['airl']['epic_expert_coverage'], digits=3)} / "
+             f"{_value(algos['hairl']['epic_expert_coverage'], digits=3)} / "
+             f"{_value(algos['airl']['epic_random_baseline_expert_coverage'], digits=3)}",
+             "not reported"),
             ("Pearson of f and the true reward on expert / policy transitions: AIRL",
              f"{_value(algos['airl']['pearson_expert'], digits=3)} / "
              f"{_value(algos['airl']['pearson_policy'], digits=3)}", "not reported"),
