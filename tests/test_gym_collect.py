@@ -104,7 +104,7 @@ def test_collect_with_a_bad_expert_fails_in_one_line(tmp_path: Path) -> None:
     result = CliRunner().invoke(app, [*args, "--expert", str(tmp_path)])
     assert result.exit_code != 0 and "not an expert folder" in result.output
     result = CliRunner().invoke(app, ["gym", "collect", "Foo-v0", "-n", "10", "--out", str(out)])
-    assert result.exit_code != 0 and "no shipped expert for 'Foo-v0'" in result.output
+    assert result.exit_code == 2 and "unknown task 'Foo-v0'; choose one of" in result.output
     assert not out.exists()
 
 

@@ -71,6 +71,22 @@ def test_summary_has_the_issue_names_and_the_runs_numbers(mountaincar: Path) -> 
         )
         assert all(run[-1]["timesteps"] == 2000 and -200 <= run[-1]["return_mean"] for run in rl)
     assert set(summary["env_reward"]["rl_final_return"]) == MEAN_STD
+    # EPIC per algorithm: mean and sample std of the runs' reward_quality.json (issue 20).
+    for algo, entry in summary["algos"].items():
+        runs = [
+            json.loads(
+                (mountaincar / "irl" / algo / f"run-{k}" / "reward_quality.json").read_text()
+            )
+            for k in (0, 1)
+        ]
+        for key in ("epic", "epic_random_baseline", "epic_g"):
+            assert set(entry[key]) == MEAN_STD, (algo, key)
+            assert entry[key]["mean"] == pytest.approx(np.mean([q[key] for q in runs]), abs=1e-6)
+            assert entry[key]["std"] == pytest.approx(
+                np.std([q[key] for q in runs], ddof=1), abs=1e-6
+            )
+            assert 0 <= entry[key]["mean"] <= 1
+        assert runs[0]["gamma"] == 0.98  # MountainCar's DQN discount
     # The expert's return is measured once, from the data's complete episodes.
     assert -200 < summary["expert_return"] < -80
     assert summary["paper"]["irl_final_return"]["hairl"] == {"mean": -123.3, "std": 8.0}
@@ -96,6 +112,18 @@ def test_rl_runs_learn_from_their_own_irl_runs_reward(mountaincar: Path) -> None
     assert f0.shape == (2,) and not np.allclose(f0, f1)
 
 
+def test_a_run_without_reward_quality_gets_it_at_the_report(mountaincar: Path) -> None:
+    # An IRL run folder from before reward_quality.json: the study computes it there.
+    path = mountaincar / "irl" / "airl" / "run-1" / "reward_quality.json"
+    before = path.read_bytes()
+    path.unlink()
+    summary = json.loads((mountaincar / "summary.json").read_text())
+    result = study(mountaincar)
+    assert result.exit_code == 0, result.output
+    assert path.read_bytes() == before  # the same bytes again
+    assert json.loads((mountaincar / "summary.json").read_text())["algos"] == summary["algos"]
+
+
 def test_figures_and_report_beside_the_authors(mountaincar: Path) -> None:
     for name in ("irl_returns", "alignment", "rl_returns", "reward_map"):
         data = (mountaincar / "figures" / f"{name}.png").read_bytes()
@@ -112,6 +140,9 @@ def test_figures_and_report_beside_the_authors(mountaincar: Path) -> None:
     assert found["grid"] == 101 and 0 < found["constant_agreement"] < 1
     assert len(found["agreement"]["hairl"]["runs"]) == 2
     assert f"{100 * found['agreement']['hairl']['mean_f']:.1f}%" in report
+    epic = summary["algos"]["hairl"]["epic"]
+    assert f"{epic['mean']:,.3f} ± {epic['std']:,.3f} |" in report
+    assert "EPIC of a random reward net" in report and "γ 0.98" in report
     # pokerirl report renders the same report again, or prints summary.json
     again = CliRunner().invoke(app, ["report", str(mountaincar)])
     assert again.exit_code == 0 and again.output == report

@@ -290,6 +290,12 @@ class Command:
 AGENT_FAST = "-q --hands 8 --eval-every 8 --eval-hands 8 --hidden 4 --concurrent-hands 4"
 GAMES_FAST = "-q --hands 4 --seeds 0 --jobs 1"
 TRANSFER_FAST = "-q --jobs 1 --seeds 0 --hands 8 --eval-hands 8 --transforms raw"
+GYM_EXPERT_FAST = "--timesteps 50 --eval-episodes 1 --final-episodes 1".split()
+GYM_RL_FAST = "--runs 1 --timesteps 50 --evaluations 1 --eval-episodes 1".split()
+GYM_IRL_FAST = "--preset quick --runs 1 --epochs 1".split()
+GYM_STUDY_FAST = (
+    "-q --jobs 1 --runs 1 --transitions 200 --epochs 1 --eval-episodes 1 --timesteps 50".split()
+)
 COMMANDS = [
     Command("ingest", lambda i, t: ["ingest", str(i.month), "--out", str(t), "-q"]),
     Command("synth", lambda i, t: ["synth", "--out", str(t), *"--hands 10".split()]),
@@ -317,7 +323,53 @@ COMMANDS = [
     Command("demo", lambda i, t: ["demo", "--out", str(t), *"-q --no-gym --jobs 1".split()]),
     Command("report", lambda i, t: ["report", str(t)], writes=False),
     Command("match", lambda i, t: ["match", str(t), "raise", "--hands", "8"], writes=False),
-    # The gym commands are rows of the next round (pokerirl/cli/gym.py).
+    Command(
+        "gym expert",
+        lambda i, t: ["gym", "expert", "MountainCar-v0", "--out", str(t), *GYM_EXPERT_FAST],
+    ),
+    Command(
+        "gym collect",
+        lambda i, t: ["gym", "collect", "MountainCar-v0", "-n", "20", "--out", str(t)],
+    ),
+    Command(
+        "gym rl",
+        lambda i, t: ["gym", "rl", "MountainCar-v0", "--env-reward", "--out", str(t), *GYM_RL_FAST],
+    ),
+    Command(
+        "gym irl", lambda i, t: ["gym", "irl", "MountainCar-v0", "--out", str(t), *GYM_IRL_FAST]
+    ),
+    Command(
+        "gym reward-map",
+        lambda i, t: [
+            "gym",
+            "reward-map",
+            "MountainCar-v0",
+            "--runs",
+            str(i.gym_run),
+            "--grid",
+            "3",
+            "--expert",
+            "none",
+            "--out",
+            str(t),
+        ],
+    ),  # fmt: skip
+    Command(
+        "gym study",
+        lambda i, t: ["gym", "study", "MountainCar-v0", "--out", str(t), *GYM_STUDY_FAST],
+    ),
+    Command(
+        "sweep",
+        lambda i, t: [
+            "sweep",
+            "MountainCar-v0",
+            "--param",
+            "alpha=0.5",
+            "--out",
+            str(t),
+            *GYM_STUDY_FAST,
+        ],
+    ),  # fmt: skip
 ]
 
 

@@ -17,6 +17,8 @@ from pokerirl.cli.app import (
     _backend,
     app,
     display,
+    echo,
+    error_line,
     fail,
 )
 from pokerirl.gym.presets import MAX_TRANSITIONS, TASKS
@@ -89,7 +91,7 @@ def gym_expert(
         tidy(out, key="expert")  # what a killed rerun left
         if all((out / name).is_file() for name in files):
             record = json.loads((out / CONFIG_FILE).read_text())
-            typer.echo(f"reusing the expert in {out} (same settings)")
+            echo(f"reusing the expert in {out} (same settings)")
         else:
             with staged_files(out, key="expert") as new:  # the three files, or none
                 record = train_expert(
@@ -107,8 +109,8 @@ def gym_expert(
     except KeyboardInterrupt:
         fail(INTERRUPTED, code=130)
     except OSError as error:
-        fail(f"{error.filename or out}: {error.strerror or error}")
-    typer.echo(
+        fail(error_line(error, out))
+    echo(
         f"{env}: {record['algo']} expert, return {record['return_mean']:.1f} "
         f"+- {record['return_std']:.1f} over {record['episodes']} episodes "
         f"(target {record['target']:g}); wrote {out}"
@@ -129,10 +131,10 @@ def gym_experts(
     except ValueError as error:
         fail(str(error))
     if format == "json":
-        typer.echo(json.dumps(manifest, indent=2))
+        echo(json.dumps(manifest, indent=2))
         return
     for e in manifest:
-        typer.echo(
+        echo(
             f"{e['env']:<16} {e['algo']:<4} {e['return_mean']:>9.1f} +- {e['return_std']:<7.1f}"
             f" ({e['episodes']} episodes; seed {e['seed']}, {e['timesteps']:,} steps)"
         )
@@ -164,8 +166,8 @@ def gym_collect(
     except (ValueError, ImportError) as error:
         fail(str(error))
     except OSError as error:
-        fail(f"{error.filename or out}: {error.strerror or error}")
-    typer.echo(
+        fail(error_line(error, out))
+    echo(
         f"wrote {summary.transitions:,} transitions ({summary.episodes} episodes) to {out}; "
         f"expert return {summary.return_mean:.1f} +- {summary.return_std:.1f} "
         f"over {summary.complete_episodes} complete episodes"
@@ -246,9 +248,9 @@ def gym_rl(
     except KeyboardInterrupt:
         fail(INTERRUPTED, code=130)
     except OSError as error:
-        fail(f"{error.filename or out}: {error.strerror or error}")
+        fail(error_line(error, out))
     final = mean_std(finals)
-    typer.echo(
+    echo(
         f"{env}: final true return {final['mean']:.1f} +- {final['std']:.1f} over {runs} runs; "
         f"wrote {out}"
     )
@@ -309,9 +311,9 @@ def gym_irl(
                     transitions=settings.transitions,
                     seed=seed,
                 )
-                typer.echo(f"collected {settings.transitions:,} expert transitions into {data}")
+                echo(f"collected {settings.transitions:,} expert transitions into {data}")
             else:
-                typer.echo(f"reusing the expert data in {data}")
+                echo(f"reusing the expert data in {data}")
         result = train_gym_irl(
             env,
             data,
@@ -327,7 +329,7 @@ def gym_irl(
     except KeyboardInterrupt:
         fail(INTERRUPTED, code=130)
     except OSError as error:
-        fail(f"{error.filename or out}: {error.strerror or error}")
+        fail(error_line(error, out))
     final = result.final_return
     line = (
         f"{env} {algo}: final return {final['mean']:.1f} +- {final['std']:.1f} over "
@@ -336,7 +338,7 @@ def gym_irl(
     )
     if result.final_alignment is not None:
         line += f", alignment {100 * result.final_alignment['mean']:.1f}%"
-    typer.echo(f"{line}; wrote {out}")
+    echo(f"{line}; wrote {out}")
 
 
 @gym_app.command("reward-map")
@@ -371,7 +373,7 @@ def gym_reward_map(
     except (ValueError, ImportError) as error:
         fail(str(error))
     except OSError as error:
-        fail(f"{error.filename or out}: {error.strerror or error}")
+        fail(error_line(error, out))
     for panel in result.panels:
         line = panel.label
         if panel.agreement is not None:
@@ -380,11 +382,11 @@ def gym_reward_map(
                 f": agrees with the expert on {100 * panel.agreement:.1f}% of "
                 f"{grid}x{grid} cells (single runs {100 * low:.1f}-{100 * high:.1f}%)"
             )
-        typer.echo(line)
+        echo(line)
     if result.constant_agreement is not None:
         action, share = result.constant_agreement
-        typer.echo(f"baseline: a constant {action!r} agrees on {100 * share:.1f}% of cells")
-    typer.echo(f"wrote {out}")
+        echo(f"baseline: a constant {action!r} agrees on {100 * share:.1f}% of cells")
+    echo(f"wrote {out}")
 
 
 # The budget and execution options that gym study and sweep share.
@@ -447,15 +449,15 @@ def gym_study(
             backend=_backend(jobs, ray),
             overwrite=overwrite,
             progress=not quiet,
-            say=typer.echo,
+            say=echo,
         )
     except (ValueError, ImportError, OSError, execution.ExecutionError) as error:
-        fail(str(error))
+        fail(error_line(error, out))
     except KeyboardInterrupt:
         fail(INTERRUPTED, 130)
-    typer.echo("")
-    typer.echo(result.markdown)
-    typer.echo(f"report: {out / 'report.md'}")
+    echo("")
+    echo(result.markdown)
+    echo(f"report: {out / 'report.md'}")
 
 
 @app.command()
@@ -501,10 +503,10 @@ def sweep(
             backend=_backend(jobs, ray),
             overwrite=overwrite,
             progress=not quiet,
-            say=typer.echo,
+            say=echo,
         )
     except (ValueError, ImportError, OSError, execution.ExecutionError) as error:
-        fail(str(error))
+        fail(error_line(error, out))
     except KeyboardInterrupt:
         fail(INTERRUPTED, 130)
     for row in result.rows:
@@ -515,5 +517,5 @@ def sweep(
         )
         if row["final_alignment_mean"] is not None:
             line += f", alignment {100 * row['final_alignment_mean']:.1f}%"
-        typer.echo(line)
-    typer.echo(f"wrote {out / 'sweep.csv'} and {', '.join(str(p) for p in result.figures)}")
+        echo(line)
+    echo(f"wrote {out / 'sweep.csv'} and {', '.join(str(p) for p in result.figures)}")

@@ -217,8 +217,8 @@ def collect(
     }
     table = table.replace_schema_metadata({"pokerirl.gym": json.dumps(meta, sort_keys=True)})
     Path(out).parent.mkdir(parents=True, exist_ok=True)
-    with atomic_path(out) as temporary:
-        pq.write_table(table, temporary)
+    with atomic_path(out) as temporary, open(temporary, "wb") as file:
+        pq.write_table(table, file)  # a file object: pyarrow cannot name non-UTF-8 paths
     return summary
 
 

@@ -365,13 +365,19 @@ def load_expert(folder: str | os.PathLike[str]) -> Expert:
     try:
         record = json.loads((folder / CONFIG_FILE).read_text())
         policy = build_policy(record["env"], record["algo"], record["policy_kwargs"])
-        state = torch.load(folder / MODEL_FILE, weights_only=True, map_location="cpu")
+        with warnings.catch_warnings():  # torch warns about a pickle it then refuses
+            warnings.simplefilter("ignore")
+            state = torch.load(folder / MODEL_FILE, weights_only=True, map_location="cpu")
         policy.load_state_dict(state)
     except FileNotFoundError as error:
         raise ValueError(
             f"{folder}: not an expert folder ({Path(error.filename).name} missing)"
         ) from None
-    except pickle.UnpicklingError:
+    except pickle.UnpicklingError as error:
+        pickled = (folder / MODEL_FILE).read_bytes()[:1] == b"\x80"  # a pickle's opcode
+        refused = "GLOBAL" in str(error) or "Unsupported global" in str(error)
+        if not pickled and not refused:
+            raise ValueError(f"{folder}: bad expert files: {str(error).splitlines()[0]}") from None
         # weights_only refused a pickled object: nothing was executed; torch's advice is
         # several lines about unpickling, which we refuse to do.
         raise ValueError(

@@ -290,8 +290,8 @@ def train_gym_irl(
     nets = [default_nets(train_data, config, s) for s in seeds]
     policies = [p for _, p in nets]
 
-    # Staged as one write (pokerirl.store): a killed run leaves a hidden folder that the next
-    # run's tidy removes (it used to leave .irl.*.tmp forever).
+    # Staged by the store: a kill leaves the earlier outputs or the new ones, never a mix, and
+    # the next run removes what a dead one left (also an older version's .irl.XXXXXXXX.tmp).
     with staged_files(out, key=STAGE_KEY) as stage:
         make_shareable(stage)
         folders = [stage / f"run-{k}" for k in range(runs)]

@@ -325,6 +325,7 @@ def task_summary(root: Path, env: str, preset: StudyPreset) -> dict[str, Any]:
                     "mean": metrics[key]["mean"][-1],
                     "std": metrics[key]["std"][-1],
                 }
+        entry.update(reward_quality(root, env, algo, preset.runs))
         algos[algo] = entry
     env_rl = rl_curves(root, "env", preset.runs)
     baselines = irl_summaries["hairl"]["baselines"]
@@ -366,6 +367,29 @@ def task_summary(root: Path, env: str, preset: StudyPreset) -> dict[str, Any]:
             "random_return": task.random_return,
         },
     }
+
+
+def reward_quality(root: Path, env: str, algo: str, runs: int) -> dict[str, Any]:
+    """Mean and std over runs of each IRL run's ``reward_quality.json`` (computed there first
+    when a run lacks it, e.g. one made before it existed), the per-run values and the
+    coverage used. A value null in a run (a constant reward) is left out of its mean."""
+    from pokerirl.gym.quality import SCORES, run_quality
+
+    found = [
+        run_quality(root / "irl" / algo / f"run-{k}", env_id=env, data_path=root / DATA_FILE)
+        for k in range(runs)
+    ]
+    out: dict[str, Any] = {}
+    for key in SCORES:
+        values = [q[key] for q in found if q.get(key) is not None]
+        out[key] = mean_std(values) if values else {"mean": None, "std": None}
+    out["reward_quality"] = {
+        "per_run": {key: [q.get(key) for q in found] for key in SCORES},
+        "gamma": found[0]["gamma"],
+        "coverage": found[0]["coverage"],
+        "true_reward": found[0]["true_reward"],
+    }
+    return out
 
 
 def authors_budget(env: str, preset: StudyPreset) -> bool:
@@ -454,6 +478,28 @@ def task_table(summary: dict[str, Any]) -> list[str]:
              f"{_value(algos['airl']['final_reward_alignment'], percent=True)} / "
              f"{_value(algos['hairl']['final_reward_alignment'], percent=True)}", "not reported"),
         ]  # fmt: skip
+    if "epic" in algos["airl"]:
+        rows += [
+            ("EPIC distance to the true reward (0 same up to shaping and scale, 0.71 "
+             "unrelated, 1 opposite): AIRL / H-AIRL",
+             f"{_value(algos['airl']['epic'], digits=3)} / "
+             f"{_value(algos['hairl']['epic'], digits=3)}", "not reported"),
+            ("EPIC of a random reward net (same architecture, the runs' initial nets): "
+             "AIRL / H-AIRL",
+             f"{_value(algos['airl']['epic_random_baseline'], digits=3)} / "
+             f"{_value(algos['hairl']['epic_random_baseline'], digits=3)}", "not reported"),
+            ("EPIC on the expert's states and transitions only: AIRL / H-AIRL / random net",
+             f"{_value(algos['airl']['epic_expert_coverage'], digits=3)} / "
+             f"{_value(algos['hairl']['epic_expert_coverage'], digits=3)} / "
+             f"{_value(algos['airl']['epic_random_baseline_expert_coverage'], digits=3)}",
+             "not reported"),
+            ("Pearson of f and the true reward on expert / policy transitions: AIRL",
+             f"{_value(algos['airl']['pearson_expert'], digits=3)} / "
+             f"{_value(algos['airl']['pearson_policy'], digits=3)}", "not reported"),
+            ("Pearson of f and the true reward on expert / policy transitions: H-AIRL",
+             f"{_value(algos['hairl']['pearson_expert'], digits=3)} / "
+             f"{_value(algos['hairl']['pearson_policy'], digits=3)}", "not reported"),
+        ]  # fmt: skip
     found = summary.get("reward_map")
     if found is not None:
         agree = found["agreement"]
@@ -506,6 +552,13 @@ def render_report(
             lines += ["**Not the authors' budget or number of runs** (theirs: 10 runs, "
                       "docs/gym.md): compare the directions, not the digits.", ""]  # fmt: skip
         lines += task_table(summary)
+        quality = summary["algos"]["airl"].get("reward_quality")
+        if quality is not None:
+            truth = quality["true_reward"]
+            cover = quality["coverage"]
+            lines += ["", f"EPIC and Pearson against the true reward ({truth['kind']}: "
+                      f"{truth['description']}), γ {quality['gamma']}; coverage: states "
+                      f"{cover['states']}, actions {cover['actions']}."]  # fmt: skip
         note = TASKS[env].version_note
         if note:
             lines += ["", note]

@@ -101,11 +101,32 @@ _MEAN_STD = _fields(
 )
 
 
+# What the report shows of the runs' reward_quality.json (summaries before it lack them).
+_QUALITY_SCORES = (
+    "epic",
+    "epic_random_baseline",
+    "epic_expert_coverage",
+    "epic_random_baseline_expert_coverage",
+    "pearson_expert",
+    "pearson_policy",
+)
+_QUALITY = _absent_or(
+    _fields(
+        {
+            "true_reward": _fields({"kind": _text, "description": _text}),
+            "coverage": _fields({"states": _text, "actions": _text}),
+            "gamma": _number,
+        }
+    )
+)
+
+
 def _algo(discrete: bool) -> Check:
     fields: dict[str, Check] = {
         "irl_final_return": _MEAN_STD,
         "rl_final_return": _MEAN_STD,
-        "epic": _absent_or(_MEAN_STD),
+        "reward_quality": _QUALITY,
+        **{name: _absent_or(_MEAN_STD) for name in _QUALITY_SCORES},
     }
     if discrete:
         fields |= {

@@ -1,0 +1,688 @@
+"""The learned reward scored directly against the true env reward: Pearson and EPIC.
+
+:func:`write_reward_quality` writes ``reward_quality.json`` into a Gymnasium IRL run folder
+(``run-<k>`` of :func:`pokerirl.gym.irl.train_gym_irl`):
+
+- ``pearson_expert`` / ``pearson_policy``: Pearson correlation of the learned f and the true
+  r on the expert's transitions (a sample of the run's data) and on the run's policy's (its
+  deterministic evaluation policy rolled out in the env);
+- ``epic``: the EPIC distance (Gleave et al. 2021, "Quantifying Differences in Reward
+  Functions") of f and r; ``epic_g`` the same for the transferable reward g (equal to f for
+  the ``state_action`` family); ``epic_random_baseline`` that of a randomly initialised reward
+  net of the same architecture, seeded as the run's own initial net.
+
+EPIC canonicalizes a reward R with a coverage distribution of states D_S and actions D_A,
+
+    C(R)(s, a, s') = R(s, a, s') + γ E[R(s', A, S')] − E[R(s, A, S')] − γ E[R(S, A, S')],
+
+which removes potential shaping γφ(s') − φ(s) exactly, and then takes
+``sqrt((1 − ρ) / 2)`` of the Pearson ρ of the canonical rewards over coverage transitions;
+positive scaling does not change ρ either. 0 means the same reward up to shaping and scale,
+1/√2 ≈ 0.707 uncorrelated, 1 opposite. Here (stated in the JSON):
+
+- D_S: observations of the expert's data and of uniformly random rollouts, half each;
+  the expectations use a fixed sample of ``coverage`` states S, actions A ~ D_A and next
+  states S' = a permutation of the same S (so E over S and over S' are the same sum, and
+  shaping cancels to rounding error, not just in expectation);
+- D_A: uniform over the action box, or uniform over the discrete actions;
+- the transitions ρ is taken over: real (s, a, s') of the expert's data and of the random
+  rollouts, half each (s' follows from s and a, so rewards on s' such as reaching the goal
+  occur);
+- γ: the task's RL-phase discount (:mod:`pokerirl.gym.presets`).
+
+The true reward r(s, a, s') must be computable on any transition; :func:`true_reward` gives
+it per task, with what it is (exact, exact up to shaping, or an approximation) and a check
+against the rewards recorded along rollouts (``true_reward_check``).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+import os
+from collections.abc import Callable
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import torch
+
+from pokerirl.atomic import write_text
+from pokerirl.gym.collect import read_transitions
+from pokerirl.gym.experts import make_env
+from pokerirl.gym.presets import TASKS
+from pokerirl.irl.nets import NetSpec, build_nets, fold_obs_standardization
+from pokerirl.irl.run import (
+    CONFIG_FILE,
+    REWARD_FILE,
+    RewardFunction,
+    load_policy,
+    load_reward,
+    load_run_config,
+)
+
+QUALITY_FILE = "reward_quality.json"
+QUALITY_FORMAT = "pokerirl-reward-quality/1"
+QUALITY_SEED = 20_000  # rollouts start from reset(seed=QUALITY_SEED + k): not the eval seeds
+DIGITS = 6  # JSON values rounded: the same bytes whatever the BLAS's summation order
+CHUNK = 1 << 18  # rows per batched reward call in the expectations
+
+SCORES = (
+    "pearson_expert",
+    "pearson_policy",
+    "epic",
+    "epic_g",
+    "epic_random_baseline",
+    "epic_expert_coverage",
+    "epic_random_baseline_expert_coverage",
+)
+
+# A batched reward on transitions: (obs (n, d), actions (n,) or (n, k), next_obs (n, d)) -> (n,)
+TransitionReward = Callable[[np.ndarray, np.ndarray, np.ndarray], np.ndarray]
+
+
+class QualityError(ValueError):
+    """A run folder or task that cannot be scored; the message is one line."""
+
+
+# --------------------------------------------------------------------------- EPIC
+
+
+@dataclass(frozen=True, kw_only=True)
+class Coverage:
+    """The fixed sample behind the canonicalization's expectations: states S ~ D_S, actions
+    A ~ D_A and next states S' (a permutation of S), ``m`` of each, row j one triple."""
+
+    states: np.ndarray
+    actions: np.ndarray
+    next_states: np.ndarray
+
+    @property
+    def m(self) -> int:
+        return len(self.states)
+
+
+def make_coverage(states: np.ndarray, actions: np.ndarray, *, seed: int) -> Coverage:
+    """Triples (S_j, A_j, S'_j) with S'_j = S_π(j) for a seeded permutation π."""
+    if len(states) != len(actions) or len(states) < 2:
+        raise ValueError("coverage needs as many actions as states, at least 2")
+    perm = np.random.default_rng(seed).permutation(len(states))
+    return Coverage(states=states, actions=actions, next_states=states[perm])
+
+
+def _expected_from(reward: TransitionReward, x: np.ndarray, coverage: Coverage) -> np.ndarray:
+    """E_j[R(x_i, A_j, S'_j)] for every row x_i: n · m reward calls, in chunks."""
+    m = coverage.m
+    out = np.empty(len(x), dtype=np.float64)
+    rows = max(1, CHUNK // m)
+    for start in range(0, len(x), rows):
+        block = x[start : start + rows]
+        obs = np.repeat(block, m, axis=0)
+        actions = np.tile(coverage.actions, (len(block),) + (1,) * (coverage.actions.ndim - 1))
+        nxt = np.tile(coverage.next_states, (len(block), 1))
+        values = np.asarray(reward(obs, actions, nxt), dtype=np.float64)
+        out[start : start + rows] = values.reshape(len(block), m).mean(axis=1)
+    return out
+
+
+def canonicalize(
+    reward: TransitionReward,
+    obs: np.ndarray,
+    actions: np.ndarray,
+    next_obs: np.ndarray,
+    *,
+    coverage: Coverage,
+    gamma: float,
+) -> np.ndarray:
+    """C(R)(s, a, s') on each transition (float64)."""
+    own = np.asarray(reward(obs, actions, next_obs), dtype=np.float64)
+    after = _expected_from(reward, next_obs, coverage)
+    before = _expected_from(reward, obs, coverage)
+    overall = float(
+        np.asarray(
+            reward(coverage.states, coverage.actions, coverage.next_states), dtype=np.float64
+        ).mean()
+    )
+    return own + gamma * after - before - gamma * overall
+
+
+def pearson(x: np.ndarray, y: np.ndarray) -> float:
+    """Pearson's ρ; NaN when either side is constant.
+
+    >>> round(pearson(np.array([1.0, 2, 3]), np.array([2.0, 4, 7])), 4)
+    0.9934
+    """
+    x, y = np.asarray(x, np.float64) - np.mean(x), np.asarray(y, np.float64) - np.mean(y)
+    denominator = math.sqrt(float(x @ x) * float(y @ y))
+    if denominator <= 1e-300 or not math.isfinite(denominator):
+        return math.nan
+    return float(np.clip(float(x @ y) / denominator, -1.0, 1.0))
+
+
+def epic_distance(
+    a: TransitionReward,
+    b: TransitionReward,
+    obs: np.ndarray,
+    actions: np.ndarray,
+    next_obs: np.ndarray,
+    *,
+    coverage: Coverage,
+    gamma: float,
+) -> float:
+    """sqrt((1 − ρ) / 2) of the canonical rewards' Pearson ρ over the given transitions."""
+    ca = canonicalize(a, obs, actions, next_obs, coverage=coverage, gamma=gamma)
+    cb = canonicalize(b, obs, actions, next_obs, coverage=coverage, gamma=gamma)
+    rho = pearson(ca, cb)
+    return math.nan if math.isnan(rho) else math.sqrt(max(0.0, (1.0 - rho) / 2.0))
+
+
+# --------------------------------------------------------------------------- true rewards
+
+
+@dataclass(frozen=True, kw_only=True)
+class TrueReward:
+    """r(s, a, s') of a task on any transition, and what it is.
+
+    ``step`` is the env's per-step reward as far as (s, a, s') determine it (compared with
+    recorded rewards); ``reward`` adds, where an episode ends in a terminal state, the
+    absorbing-state bonus that makes the episodic reward an infinite-horizon one (EPIC's
+    setting): a constant per-step reward c that stops at termination equals, up to potential
+    shaping, −γc/(1−γ) on the transition into the terminal state.
+    """
+
+    env: str
+    kind: str  # "exact", "exact up to potential shaping", "approximation"
+    description: str
+    step: TransitionReward
+    reward: TransitionReward
+
+
+def _pendulum(obs: np.ndarray, actions: np.ndarray, next_obs: np.ndarray) -> np.ndarray:
+    theta = np.arctan2(obs[:, 1], obs[:, 0])  # in (−π, π]: Pendulum's angle_normalize
+    u = np.clip(np.asarray(actions, np.float64).reshape(len(obs), -1)[:, 0], -2.0, 2.0)
+    return -(theta**2 + 0.1 * obs[:, 2] ** 2 + 0.001 * u**2)
+
+
+def _acrobot_terminal(next_obs: np.ndarray) -> np.ndarray:
+    c1, s1, c2, s2 = next_obs[:, 0], next_obs[:, 1], next_obs[:, 2], next_obs[:, 3]
+    return -c1 - (c1 * c2 - s1 * s2) > 1.0  # −cos θ1 − cos(θ1 + θ2) > 1
+
+
+def _mountaincar_goal(next_obs: np.ndarray) -> np.ndarray:
+    return (next_obs[:, 0] >= 0.5) & (next_obs[:, 1] >= 0.0)
+
+
+def _lunar_shaping(x: np.ndarray) -> np.ndarray:
+    return (
+        -100 * np.sqrt(x[:, 0] ** 2 + x[:, 1] ** 2)
+        - 100 * np.sqrt(x[:, 2] ** 2 + x[:, 3] ** 2)
+        - 100 * np.abs(x[:, 4])
+        + 10 * x[:, 6]
+        + 10 * x[:, 7]
+    )
+
+
+def _lunar(obs: np.ndarray, actions: np.ndarray, next_obs: np.ndarray) -> np.ndarray:
+    a = np.asarray(actions).reshape(-1)
+    fuel = 0.30 * (a == 2) + 0.03 * ((a == 1) | (a == 3))
+    return _lunar_shaping(next_obs) - _lunar_shaping(obs) - fuel
+
+
+def _ctrl(actions: np.ndarray, n: int) -> np.ndarray:
+    a = np.asarray(actions, np.float64).reshape(n, -1)
+    return (a * a).sum(axis=1)
+
+
+def _ant_unhealthy(next_obs: np.ndarray) -> np.ndarray:
+    z = next_obs[:, 0]
+    return ~(np.isfinite(next_obs).all(axis=1) & (z >= 0.2) & (z <= 1.0))
+
+
+def true_reward(env_id: str, gamma: float) -> TrueReward:
+    """The true reward of one of the six tasks (see each ``description``)."""
+    bonus = gamma / (1.0 - gamma)  # −γc/(1−γ) for c = −1; its negative for c = +1 (Ant)
+
+    def const(c: float) -> TransitionReward:
+        return lambda o, a, n: np.full(len(o), c)
+
+    if env_id == "Pendulum-v1":
+        return TrueReward(
+            env=env_id,
+            kind="exact",
+            description="−(θ² + 0.1 θ̇² + 0.001 u²), θ = atan2(sin θ, cos θ) of s, u the "
+            "action clipped to [−2, 2]",
+            step=_pendulum,
+            reward=_pendulum,
+        )
+    if env_id == "Acrobot-v1":
+        return TrueReward(
+            env=env_id,
+            kind="exact up to potential shaping",
+            description="the env's −1 per step, 0 into the terminal state (−cos θ1 − "
+            "cos(θ1+θ2) > 1 at s'); plus γ/(1−γ) into it for the absorbing state",
+            step=lambda o, a, n: np.where(_acrobot_terminal(n), 0.0, -1.0),
+            reward=lambda o, a, n: np.where(_acrobot_terminal(n), bonus, -1.0),
+        )
+    if env_id == "MountainCar-v0":
+        return TrueReward(
+            env=env_id,
+            kind="exact up to potential shaping",
+            description="the env's −1 per step; plus γ/(1−γ) into the goal (position ≥ 0.5 "
+            "and velocity ≥ 0 at s') for the absorbing state; the 200-step time limit ignored",
+            step=const(-1.0),
+            reward=lambda o, a, n: np.where(_mountaincar_goal(n), bonus - 1.0, -1.0),
+        )
+    if env_id == "LunarLander-v3":
+        return TrueReward(
+            env=env_id,
+            kind="approximation",
+            description="shaping(s') − shaping(s) − fuel(a) (0.3 main engine, 0.03 side), the "
+            "env's own terms read off the observations; the terminal −100 (crash, out of "
+            "bounds) and +100 (at rest) need the physics state and are left out, as is the "
+            "first step's (no previous shaping)",
+            step=_lunar,
+            reward=_lunar,
+        )
+    if env_id == "HalfCheetah-v4":
+
+        def cheetah(o: np.ndarray, a: np.ndarray, n: np.ndarray) -> np.ndarray:
+            return (o[:, 8] + n[:, 8]) / 2 - 0.1 * _ctrl(a, len(o))
+
+        return TrueReward(
+            env=env_id,
+            kind="approximation",
+            description="(v_x(s) + v_x(s'))/2 − 0.1‖a‖²: the forward reward Δx/dt needs x, "
+            "which is not observed; the mean of the root's x velocity (observation 8) at s and "
+            "s' stands in for it (ρ ≈ 0.97 with the env's reward on random rollouts)",
+            step=cheetah,
+            reward=cheetah,
+        )
+    if env_id == "Ant-v4":
+
+        def ant_step(o: np.ndarray, a: np.ndarray, n: np.ndarray) -> np.ndarray:
+            return 1.0 + (o[:, 13] + n[:, 13]) / 2 - 0.5 * _ctrl(a, len(o))
+
+        return TrueReward(
+            env=env_id,
+            kind="approximation",
+            description="1 (healthy) + (v_x(s) + v_x(s'))/2 − 0.5‖a‖²: the forward reward "
+            "Δx/dt needs x, which is not observed; the mean of the torso's x velocity "
+            "(observation 13) at s and s' stands in for it (ρ ≈ 0.99 with the env's reward on "
+            "random rollouts); minus γ/(1−γ) into an unhealthy s' (z outside [0.2, 1]) for the "
+            "absorbing state; no contact cost (v4's default)",
+            step=ant_step,
+            reward=lambda o, a, n: ant_step(o, a, n) - bonus * _ant_unhealthy(n),
+        )
+    raise QualityError(f"no true reward for {env_id!r}; choose one of {', '.join(TASKS)}")
+
+
+def task_gamma(env_id: str) -> float:
+    """The task's RL-phase discount (PPO's or DQN's gamma)."""
+    rl = TASKS[env_id].rl
+    settings = rl.ppo if rl.ppo is not None else rl.dqn
+    assert settings is not None  # RLSettings checks it
+    return float(settings.gamma)
+
+
+# --------------------------------------------------------------------------- rollouts
+
+
+@dataclass(frozen=True, kw_only=True)
+class Rollouts:
+    """Transitions (s, a, r, s') with the env's recorded rewards."""
+
+    obs: np.ndarray
+    actions: np.ndarray
+    rewards: np.ndarray
+    next_obs: np.ndarray
+
+    def __len__(self) -> int:
+        return len(self.obs)
+
+    def take(self, n: int, rng: np.random.Generator) -> Rollouts:
+        """At most ``n`` rows, a seeded sample in their order."""
+        if len(self) <= n:
+            return self
+        rows = np.sort(rng.choice(len(self), size=n, replace=False))
+        return Rollouts(
+            obs=self.obs[rows],
+            actions=self.actions[rows],
+            rewards=self.rewards[rows],
+            next_obs=self.next_obs[rows],
+        )
+
+
+def roll_out(
+    env_id: str, act: Callable[[np.ndarray], np.ndarray], *, episodes: int, seed: int
+) -> Rollouts:
+    """``episodes`` episodes in lock-step (episode k from ``reset(seed=seed + k)``)."""
+    envs = [make_env(env_id) for _ in range(episodes)]
+    columns: dict[str, list[Any]] = {"obs": [], "actions": [], "rewards": [], "next_obs": []}
+    try:
+        obs = [env.reset(seed=seed + k)[0] for k, env in enumerate(envs)]
+        running = list(range(episodes))
+        while running:
+            batch = np.stack([obs[k] for k in running]).astype(np.float32)
+            actions = act(batch)
+            still = []
+            for row, k in enumerate(running):
+                nxt, reward, terminated, truncated, _ = envs[k].step(actions[row])
+                columns["obs"].append(obs[k])
+                columns["actions"].append(actions[row])
+                columns["rewards"].append(float(reward))
+                columns["next_obs"].append(nxt)
+                obs[k] = nxt
+                if not (terminated or truncated):
+                    still.append(k)
+            running = still
+    finally:
+        for env in envs:
+            env.close()
+    return Rollouts(
+        obs=np.asarray(columns["obs"], np.float32),
+        actions=np.asarray(columns["actions"]),
+        rewards=np.asarray(columns["rewards"], np.float64),
+        next_obs=np.asarray(columns["next_obs"], np.float32),
+    )
+
+
+def _expert_rollouts(path: Path) -> Rollouts:
+    table = read_transitions(path)
+    return Rollouts(
+        obs=table["obs"].astype(np.float32),
+        actions=table["action"].copy(),  # writable: torch warns on views
+        rewards=table["reward"].astype(np.float64),
+        next_obs=table["next_obs"].astype(np.float32),
+    )
+
+
+# --------------------------------------------------------------------------- the run's rewards
+
+
+def _as_transition_reward(function: RewardFunction, *, full: bool) -> TransitionReward:
+    def reward(obs: np.ndarray, actions: np.ndarray, next_obs: np.ndarray) -> np.ndarray:
+        obs32 = np.asarray(obs, np.float32)
+        if full:  # f of the shaped family: s' never terminal on coverage transitions
+            done = np.zeros(len(obs32), dtype=bool)
+            return function(obs32, actions, np.asarray(next_obs, np.float32), done)
+        return function(obs32, actions)
+
+    return reward
+
+
+def initial_reward(record: dict[str, Any]) -> RewardFunction:
+    """The run's reward net as it was before training: same architecture, built from the
+    run's seed as :func:`pokerirl.irl.airl.default_nets` does, standardization folded in."""
+    arch = record["architecture"]
+    space = arch["action_space"]
+    discrete = space["type"] == "discrete"
+    spec = NetSpec(
+        reward_hidden=tuple(arch["reward_hidden"]),
+        policy_hidden=tuple(arch["policy_hidden"]),
+        activation=arch.get("activation", "relu"),
+        layer_norm=arch.get("layer_norm", False),
+        reward_family=arch.get("reward_family", "state_action"),
+        gamma=float(arch.get("gamma", 0.99)),
+    )
+    with torch.random.fork_rng(devices=[]):
+        torch.manual_seed(int(record["hyperparameters"]["seed"]))
+        net, _ = build_nets(
+            spec,
+            obs_dim=arch["obs_dim"],
+            action_dim=space["num_actions"] if discrete else len(space["low"]),
+            discrete=discrete,
+            low=None if discrete else space["low"],
+            high=None if discrete else space["high"],
+        )
+    standard = (record.get("data") or {}).get("obs_standardization")
+    if standard:
+        fold_obs_standardization(
+            net, torch.tensor(standard["shift"]), torch.tensor(standard["scale"])
+        )
+    return RewardFunction(net, num_actions=space["num_actions"] if discrete else None)
+
+
+# --------------------------------------------------------------------------- the file
+
+
+@dataclass(frozen=True, kw_only=True)
+class RewardQuality:
+    """What ``reward_quality.json`` holds (NaN there is null: a constant reward)."""
+
+    env: str
+    algo: str
+    reward_family: str
+    pearson_expert: float
+    pearson_policy: float
+    epic: float
+    epic_g: float
+    epic_random_baseline: float
+    epic_expert_coverage: float  # f's EPIC with D_S and the transitions the expert's only
+    epic_random_baseline_expert_coverage: float
+    gamma: float
+    seed: int
+    samples: int
+    coverage: dict[str, Any]
+    true_reward: dict[str, Any]
+    true_reward_check: dict[str, Any]
+    reward_sha256: str  # of the run's reward.pt: a stale file is one whose digest differs
+
+
+def _number(x: float) -> float | None:
+    return None if x is None or not math.isfinite(x) else round(float(x), DIGITS)
+
+
+def write_reward_quality(
+    run_dir: str | os.PathLike[str],
+    *,
+    env_id: str,
+    data_path: str | os.PathLike[str] | None = None,
+    samples: int = 2000,
+    coverage: int = 256,
+    episodes: int = 4,
+    seed: int = 0,
+) -> RewardQuality:
+    """Score the run's learned reward against ``env_id``'s true reward; write
+    ``run_dir/reward_quality.json`` and return it.
+
+    ``data_path`` is the expert data (default: the path the run's config records);
+    ``samples`` transitions per source (expert, random, policy), ``coverage`` states and
+    actions behind each expectation, ``episodes`` random and policy episodes from
+    ``reset(seed=QUALITY_SEED + k)``. The same inputs give the same bytes.
+    """
+    if env_id not in TASKS:
+        raise QualityError(f"unknown task {env_id!r}; choose one of {', '.join(TASKS)}")
+    run = Path(run_dir)
+    try:
+        record = load_run_config(run)
+    except ValueError as error:
+        raise QualityError(str(error)) from None
+    if data_path is None:
+        data_path = (record.get("data") or {}).get("path")
+        if not data_path:
+            raise QualityError(f"{run / CONFIG_FILE} names no expert data; pass data_path")
+    data_path = Path(data_path)
+    if not data_path.is_file():
+        raise QualityError(f"expert data not found: {data_path}")
+    gamma = task_gamma(env_id)
+    truth = true_reward(env_id, gamma)
+    family = record["architecture"].get("reward_family", "state_action")
+    rng = np.random.default_rng(seed)
+    torch_threads = torch.get_num_threads()
+
+    env = make_env(env_id)
+    space = env.action_space
+    env.close()
+    discrete = hasattr(space, "n")
+
+    def uniform_actions(n: int, generator: np.random.Generator) -> np.ndarray:
+        if discrete:
+            return generator.integers(0, int(space.n), size=n)
+        low, high = space.low.astype(np.float64), space.high.astype(np.float64)
+        return generator.uniform(low, high, size=(n, len(low))).astype(np.float32)
+
+    random_rng = np.random.default_rng(seed + 1)
+    expert = _expert_rollouts(data_path).take(samples, rng)
+    random = roll_out(
+        env_id,
+        lambda obs: uniform_actions(len(obs), random_rng),
+        episodes=episodes,
+        seed=QUALITY_SEED,
+    ).take(samples, rng)
+    from pokerirl.gym.irl import policy_actions  # same layer; imported late (heavy)
+
+    try:
+        policy = load_policy(run)
+    except ValueError as error:
+        raise QualityError(str(error)) from None
+    with torch.no_grad():
+        on_policy = roll_out(
+            env_id,
+            lambda obs: policy_actions(policy, obs, discrete=discrete),
+            episodes=episodes,
+            seed=QUALITY_SEED,
+        ).take(samples, rng)
+
+    half = coverage // 2
+    states = np.concatenate(
+        [expert.obs[rng.choice(len(expert), half)], random.obs[rng.choice(len(random), half)]]
+    )
+    cover = make_coverage(states, uniform_actions(len(states), rng), seed=seed)
+    # ρ over the expert's and the random rollouts' transitions, as many of each
+    size = min(len(expert), len(random))
+    expert, random = expert.take(size, rng), random.take(size, rng)
+    obs = np.concatenate([expert.obs, random.obs])
+    actions = np.concatenate([expert.actions, random.actions])
+    next_obs = np.concatenate([expert.next_obs, random.next_obs])
+
+    try:
+        torch.set_num_threads(1)  # one summation order: the same bytes on any machine
+        shaped = family == "shaped"
+        f_full = _as_transition_reward(load_reward(run, full=shaped), full=shaped)
+        g = _as_transition_reward(load_reward(run), full=False)
+        initial = _as_transition_reward(initial_reward(record), full=False)
+
+        def epic(reward: TransitionReward) -> float:
+            return epic_distance(
+                reward, truth.reward, obs, actions, next_obs, coverage=cover, gamma=gamma
+            )
+
+        def raw(reward: TransitionReward, source: Rollouts) -> float:
+            return pearson(
+                reward(source.obs, source.actions, source.next_obs),
+                truth.reward(source.obs, source.actions, source.next_obs),
+            )
+
+        # The same on the expert's states alone (one cluster of states, not two).
+        expert_cover = make_coverage(
+            expert.obs[rng.choice(len(expert), coverage)],
+            uniform_actions(coverage, rng),
+            seed=seed,
+        )
+
+        def epic_on_expert(reward: TransitionReward) -> float:
+            return epic_distance(
+                reward,
+                truth.reward,
+                expert.obs,
+                expert.actions,
+                expert.next_obs,
+                coverage=expert_cover,
+                gamma=gamma,
+            )
+
+        values = {
+            "pearson_expert": raw(f_full, expert),
+            "pearson_policy": raw(f_full, on_policy),
+            "epic": epic(f_full),
+            "epic_g": epic(g),
+            "epic_random_baseline": epic(initial),
+            "epic_expert_coverage": epic_on_expert(f_full),
+            "epic_random_baseline_expert_coverage": epic_on_expert(initial),
+        }
+    finally:
+        torch.set_num_threads(torch_threads)
+    checks = {}
+    for name, source in (("expert", expert), ("random", random)):
+        step = np.asarray(truth.step(source.obs, source.actions, source.next_obs), np.float64)
+        checks[name] = {
+            "pearson": _number(pearson(step, source.rewards)),
+            "max_abs_error": _number(float(np.abs(step - source.rewards).max())),
+        }
+    quality = RewardQuality(
+        env=env_id,
+        algo=str(record.get("algo", "")),
+        reward_family=family,
+        pearson_expert=values["pearson_expert"],
+        pearson_policy=values["pearson_policy"],
+        epic=values["epic"],
+        epic_g=values["epic_g"],
+        epic_random_baseline=values["epic_random_baseline"],
+        epic_expert_coverage=values["epic_expert_coverage"],
+        epic_random_baseline_expert_coverage=values["epic_random_baseline_expert_coverage"],
+        gamma=gamma,
+        seed=seed,
+        samples=len(obs),
+        coverage={
+            "states": f"observations: {half} of the expert's data, {half} of uniformly random "
+            f"rollouts ({episodes} episodes from reset(seed={QUALITY_SEED} + k))",
+            "actions": f"uniform over the {int(space.n)} discrete actions"
+            if discrete
+            else "uniform over the action box",
+            "next_states": "a seeded permutation of the same states",
+            "transitions": f"{len(expert)} of the expert's data and {len(random)} of the random "
+            "rollouts, actions as taken: ρ is taken over them",
+            "policy_transitions": f"{len(on_policy)} of the run's deterministic policy "
+            f"({episodes} episodes from reset(seed={QUALITY_SEED} + k))",
+            "size": cover.m,
+            "expert_coverage": f"epic_expert_coverage: {cover.m} of the expert's states, "
+            f"the same actions, ρ over the {len(expert)} expert transitions",
+        },
+        true_reward={"kind": truth.kind, "description": truth.description},
+        true_reward_check={
+            "what": "the per-step part of r against the env's recorded rewards",
+            **checks,
+        },
+        reward_sha256=reward_digest(run),
+    )
+    write_quality(run / QUALITY_FILE, quality)
+    return quality
+
+
+def write_quality(path: Path, quality: RewardQuality) -> None:
+    record = {"format": QUALITY_FORMAT, **asdict(quality)}
+    for key in SCORES:
+        record[key] = _number(record[key])
+    write_text(path, json.dumps(record, indent=2, ensure_ascii=False) + "\n")
+
+
+def reward_digest(run_dir: str | os.PathLike[str]) -> str:
+    return hashlib.sha256((Path(run_dir) / REWARD_FILE).read_bytes()).hexdigest()
+
+
+def read_reward_quality(run_dir: str | os.PathLike[str]) -> dict[str, Any] | None:
+    """A run's ``reward_quality.json``; None when missing, unreadable, made for another
+    ``reward.pt`` than the folder's, or lacking a score (an older file)."""
+    try:
+        found = json.loads((Path(run_dir) / QUALITY_FILE).read_text(encoding="utf-8"))
+        if not isinstance(found, dict) or found.get("format") != QUALITY_FORMAT:
+            return None
+        current = found.get("reward_sha256") == reward_digest(run_dir)
+        return found if current and all(key in found for key in SCORES) else None
+    except (OSError, ValueError):
+        return None
+
+
+def run_quality(
+    run_dir: str | os.PathLike[str], *, env_id: str, data_path: str | os.PathLike[str] | None
+) -> dict[str, Any]:
+    """The run's ``reward_quality.json``, computed and written first when missing or stale
+    (runs made before the file existed)."""
+    found = read_reward_quality(run_dir)
+    if found is None:
+        write_reward_quality(run_dir, env_id=env_id, data_path=data_path)
+        found = read_reward_quality(run_dir)
+        assert found is not None
+    return found

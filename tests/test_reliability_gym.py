@@ -1,0 +1,280 @@
+"""Issue 21, the gym commands: bad values are usage errors before any work, a pickled expert
+is refused in one line, non-UTF-8 data paths are read, the report checks a gym summary once
+on reading, and ``gym rl`` / ``gym expert`` reruns resume or refuse, never mix."""
+
+from __future__ import annotations
+
+import copy
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+import pytest
+from test_reliability import one_error_line, run_cli
+
+from pokerirl.cli.app import MAX_SEED
+
+pytest.importorskip("gymnasium")
+pytest.importorskip("stable_baselines3")
+
+ODD = os.fsdecode(b"\xff")
+RL_FAST = ["--timesteps", "300", "--evaluations", "1", "--eval-episodes", "1"]
+EXPERT_FAST = ["--timesteps", "300", "--eval-episodes", "1", "--final-episodes", "1"]
+
+
+def _files(folder: Path) -> dict[str, bytes]:
+    return {str(p.relative_to(folder)): p.read_bytes() for p in folder.rglob("*") if p.is_file()}
+
+
+# --- usage errors: exit 2, one line, before any work -------------------------------------------
+
+
+def _bad_values(out: Path, afile: Path) -> list[tuple[list[str], str]]:
+    rl = ["gym", "rl", "MountainCar-v0", "--env-reward", "--out", str(out)]
+    expert = ["gym", "expert", "MountainCar-v0", "--out", str(out)]
+    collect = ["gym", "collect", "MountainCar-v0", "--out", str(out / "t.parquet")]
+    irl = ["gym", "irl", "MountainCar-v0", "--out", str(out), "--preset", "quick"]
+    study = ["gym", "study", "MountainCar-v0", "--out", str(out)]
+    return [
+        ([*rl, "--threads", "0"], "'--threads'"),
+        ([*irl, "--threads", "0"], "'--threads'"),
+        ([*expert, "--threads", "0"], "'--threads'"),
+        ([*collect, "-n", "10", "--seed", "-1"], "'--seed'"),
+        ([*collect, "-n", "10", "--seed", str(MAX_SEED + 1)], "'--seed'"),
+        ([*collect, "-n", str(10**14)], "less than or equal to 10000000"),
+        ([*study, "--seed", str(MAX_SEED + 1)], "'--seed'"),
+        ([*study, "--seed", str(MAX_SEED), "--runs", "2"], "run seeds must be at most"),
+        (["sweep", "MountainCar-v0", "--param", "alpha=1", "--out", str(out), "--seed", "-1"],
+         "'--seed'"),
+        ([*study, "--transitions", str(10**14)], "'--transitions'"),
+        ([*rl, "--timesteps", "0"], "'--timesteps'"),
+        ([*expert, "--timesteps", "0"], "'--timesteps'"),
+        ([*rl, "--evaluations", "0"], "'--evaluations'"),
+        (["gym", "rl", "Foo-v0", "--env-reward", "--out", str(out)],
+         "unknown task 'Foo-v0'; choose one of Acrobot-v1, MountainCar-v0"),
+        (["gym", "expert", "Foo-v0", "--out", str(out)], "unknown task 'Foo-v0'"),
+        (["gym", "collect", "Foo-v0", "-n", "10", "--out", str(out)], "unknown task 'Foo-v0'"),
+        (["gym", "rl", "MountainCar-v0", "--env-reward", "--out", str(afile)],
+         "exists and is not a folder"),
+        (["gym", "expert", "MountainCar-v0", "--out", str(afile)], "exists and is not a folder"),
+    ]  # fmt: skip
+
+
+def test_bad_values_of_the_gym_commands_are_usage_errors_before_any_work(tmp_path: Path) -> None:
+    out, afile = tmp_path / "out", tmp_path / "afile"
+    afile.write_text("mine")
+    for args, needle in _bad_values(out, afile):
+        started = time.monotonic()
+        code, lines = run_cli(*args)
+        assert code == 2, (args, lines)
+        assert needle in one_error_line(lines), (args, lines)
+        assert not out.exists(), args  # refused before anything is written
+        assert time.monotonic() - started < 20, args  # before any training
+    assert afile.read_text() == "mine"
+
+
+# --- a pickled expert -----------------------------------------------------------------------
+
+
+class _Payload:
+    def __reduce__(self) -> tuple[Any, ...]:
+        return (os.system, (f"touch {os.environ['POKERIRL_PWNED']}",))
+
+
+@pytest.mark.parametrize("how", ["pickle", "torch.save"])
+def test_a_pickled_expert_model_is_refused_in_one_line_and_never_run(
+    tmp_path: Path, how: str
+) -> None:
+    import pickle
+
+    import torch
+
+    from pokerirl.gym.experts import resolve_expert_dir
+
+    expert = tmp_path / "expert"
+    expert.mkdir()
+    shipped = resolve_expert_dir("shipped", "MountainCar-v0")
+    (expert / "config.json").write_bytes((shipped / "config.json").read_bytes())
+    pwned = tmp_path / "pwned"
+    os.environ["POKERIRL_PWNED"] = str(pwned)
+    try:
+        if how == "pickle":
+            (expert / "model.pt").write_bytes(pickle.dumps(_Payload()))
+        else:  # torch's zip format around a pickled object
+            torch.save({"weight": _Payload()}, expert / "model.pt")
+    finally:
+        del os.environ["POKERIRL_PWNED"]
+    out = tmp_path / "t.parquet"
+    code, lines = run_cli(
+        "gym", "collect", "MountainCar-v0", "--expert", str(expert), "-n", "10", "--out", str(out)
+    )
+    assert code == 1
+    line = one_error_line(lines)
+    assert line == f"error: {expert / 'model.pt'}: not a state_dict (refusing to unpickle)"
+    assert not pwned.exists() and not out.exists()
+
+
+# --- a data path that is not UTF-8 ------------------------------------------------------------
+
+
+def test_gym_irl_reads_data_at_a_path_that_is_not_utf8(tmp_path: Path) -> None:
+    data = tmp_path / f"data{ODD}.parquet"
+    code, lines = run_cli("gym", "collect", "MountainCar-v0", "-n", "400", "--out", str(data))
+    assert code == 0, lines
+    out = tmp_path / "irl"
+    code, lines = run_cli(
+        "gym", "irl", "MountainCar-v0", "--data", str(data), "--preset", "quick",
+        "--runs", "1", "--epochs", "1", "--out", str(out),
+    )  # fmt: skip
+    assert code == 0, lines
+    assert (out / "run-0").is_dir()
+
+
+# --- the report checks a gym summary once, on reading ---------------------------------------
+
+
+@pytest.fixture(scope="module")
+def study(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    out = tmp_path_factory.mktemp("gym-study") / "study"
+    code, lines = run_cli(
+        "gym", "study", "MountainCar-v0", "--out", str(out), "-q", "--jobs", "1", "--runs", "2",
+        "--transitions", "600", "--epochs", "1", "--eval-episodes", "1", "--timesteps", "300",
+    )  # fmt: skip
+    assert code == 0, lines
+    return out
+
+
+def _leaves(value: Any, path: tuple[Any, ...] = ()) -> list[tuple[Any, ...]]:
+    if isinstance(value, dict):
+        return [path] + [leaf for k, v in value.items() for leaf in _leaves(v, (*path, k))]
+    if isinstance(value, list):
+        return [path] + [leaf for k, v in enumerate(value) for leaf in _leaves(v, (*path, k))]
+    return [path]
+
+
+def _set(document: Any, path: tuple[Any, ...], value: Any) -> Any:
+    changed = copy.deepcopy(document)
+    inner = changed
+    for key in path[:-1]:
+        inner = inner[key]
+    inner[path[-1]] = value
+    return changed
+
+
+def test_report_on_a_damaged_gym_summary_is_one_line_never_a_crash(
+    study: Path, tmp_path: Path
+) -> None:
+    from pokerirl.gym.study import GymStudyError, load_gym_study
+
+    summary = json.loads((study / "summary.json").read_text())
+    load_gym_study(study)  # the real one renders
+    folder = tmp_path / "damaged"
+    folder.mkdir()
+    tried = 0
+    for path in _leaves(summary)[1:]:
+        for bad in ("x", None, [], {}, -1, True):
+            (folder / "summary.json").write_text(json.dumps(_set(summary, path, bad)))
+            tried += 1
+            try:
+                load_gym_study(folder)
+            except GymStudyError as error:
+                assert "\n" not in str(error) and "summary.json" in str(error)
+    assert tried > 300
+    for path, bad, needle in [
+        (("algos", "airl", "irl_final_return", "mean"), "x", "irl_final_return.mean"),
+        (("seeds",), [], "seeds: must be a non-empty list"),
+        (("algos", "hairl"), None, "algos.hairl: must be an object"),
+    ]:
+        (folder / "summary.json").write_text(json.dumps(_set(summary, path, bad)))
+        code, lines = run_cli("report", str(folder))
+        assert code == 1 and needle in one_error_line(lines), lines
+
+
+# --- gym rl and gym expert reruns ------------------------------------------------------------
+
+
+def test_gym_rl_rerun_resumes_refuses_other_settings_and_overwrites_whole(tmp_path: Path) -> None:
+    out = tmp_path / "rl"
+    base = ["gym", "rl", "MountainCar-v0", "--env-reward", "--runs", "2", "--out", str(out)]
+    assert run_cli(*base, *RL_FAST)[0] == 0
+    before = _files(out)
+    assert run_cli(*base, *RL_FAST)[0] == 0  # same settings: the runs are kept
+    assert _files(out) == before
+    other = ["--timesteps", "400", *RL_FAST[2:]]
+    code, lines = run_cli(*base, *other)
+    assert code == 1
+    assert "other settings (timesteps 300 -> 400); pass --overwrite" in one_error_line(lines)
+    assert _files(out) == before  # nothing replaced
+    assert run_cli(*base, *other, "--overwrite")[0] == 0
+    for k in (0, 1):
+        assert json.loads((out / f"run-{k}" / "config.json").read_text())["timesteps"] == 400
+
+
+def test_a_killed_gym_rl_overwrite_never_leaves_runs_of_two_settings(tmp_path: Path) -> None:
+    out = tmp_path / "rl"
+    base = ["gym", "rl", "MountainCar-v0", "--env-reward", "--out", str(out)]
+    assert run_cli(*base, "--runs", "2", *RL_FAST)[0] == 0
+    argv = [sys.executable, "-m", "pokerirl", *base, "--runs", "2", "--overwrite"]
+    argv += ["--timesteps", "20000", *RL_FAST[2:]]
+    process = subprocess.Popen(argv, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    try:
+        deadline = time.monotonic() + 60
+        while time.monotonic() < deadline and not any(out.glob(".run-0.new-*")):
+            time.sleep(0.05)  # the first new run is under way
+        assert any(out.glob(".run-0.new-*"))
+    finally:
+        process.send_signal(signal.SIGKILL)
+        process.wait()
+    steps = {json.loads(p.read_text())["timesteps"] for p in out.glob("run-*/config.json")}
+    assert steps <= {20000}  # the old runs went before the new ones started
+    record = json.loads((out / "rl.job.json").read_text())
+    assert record["identity"]["timesteps"] == 20000
+
+
+def test_gym_expert_rerun_with_another_seed_is_refused(tmp_path: Path) -> None:
+    out = tmp_path / "expert"
+    base = ["gym", "expert", "MountainCar-v0", "--out", str(out), *EXPERT_FAST]
+    assert run_cli(*base)[0] == 0
+    before = _files(out)
+    code, lines = run_cli(*base)
+    assert code == 0 and any("reusing the expert" in line for line in lines)
+    code, lines = run_cli(*base, "--seed", "3")
+    assert code == 1 and "(seed 0 -> 3); pass --overwrite" in one_error_line(lines)
+    assert _files(out) == before
+    assert run_cli(*base, "--seed", "3", "--overwrite")[0] == 0
+    assert json.loads((out / "config.json").read_text())["seed"] == 3
+
+
+# --- a killed gym irl ------------------------------------------------------------------------
+
+
+def _writing(out: Path) -> bool:
+    return any("abcd1234" not in str(p) for p in out.glob(".irl.*/**/run-0"))
+
+
+def test_a_killed_gym_irl_leaves_nothing_the_next_run_does_not_remove(tmp_path: Path) -> None:
+    out = tmp_path / "irl"
+    args = ["gym", "irl", "MountainCar-v0", "--out", str(out), "--preset", "quick", "--runs", "1"]
+    assert run_cli(*args, "--epochs", "1")[0] == 0
+    before = _files(out)
+    legacy = out / ".irl.abcd1234.tmp" / "run-0"  # what an earlier version's kill left
+    legacy.mkdir(parents=True)
+    argv = [sys.executable, "-m", "pokerirl", *args, "--epochs", "200", "--overwrite"]
+    process = subprocess.Popen(argv, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    try:
+        deadline = time.monotonic() + 60
+        while time.monotonic() < deadline and not _writing(out):
+            time.sleep(0.05)
+        assert _writing(out)  # killed while writing its runs
+    finally:
+        process.send_signal(signal.SIGKILL)
+        process.wait()
+    assert _files(out) == before | {k: v for k, v in _files(out).items() if k.startswith(".")}
+    assert run_cli(*args, "--epochs", "1", "--overwrite")[0] == 0
+    assert not [p.name for p in out.iterdir() if p.name.startswith(".")]
+    assert _files(out).keys() == before.keys()
