@@ -149,7 +149,12 @@ def gym_collect(
     ),
     seed: int = typer.Option(0, **SEED_OPTION, help="Episode k starts from reset(seed=seed + k)."),
     out: Path = typer.Option(..., "--out", "-o", help="The Parquet table to write."),
-    stochastic: bool = typer.Option(False, help="Sample the expert's actions (else its mode)."),
+    stochastic: bool | None = typer.Option(
+        None,
+        "--stochastic/--deterministic",
+        help="Sample the expert's actions or take its mode (default: sampled for continuous "
+        "tasks, the mode for discrete ones).",
+    ),
 ) -> None:
     """Write the expert's play as a Parquet transition table (same seed, same bytes)."""
     from pokerirl.gym.collect import collect
@@ -161,7 +166,11 @@ def gym_collect(
         if loaded.env_id != env:
             fail(f"{expert}: an expert for {loaded.env_id}, not {env}")
         summary = collect(
-            loaded, out, transitions=transitions, seed=seed, deterministic=not stochastic
+            loaded,
+            out,
+            transitions=transitions,
+            seed=seed,
+            deterministic=None if stochastic is None else not stochastic,
         )
     except (ValueError, ImportError) as error:
         fail(str(error))

@@ -37,6 +37,7 @@ from torch import Tensor, nn
 from pokerirl.atomic import atomic_path, make_shareable, write_text
 from pokerirl.gym.experts import make_env, shipped_manifest
 from pokerirl.gym.presets import TASKS, IRLSettings
+from pokerirl.gym.quality import write_reward_quality
 from pokerirl.gym.rl import EVAL_SEED
 from pokerirl.irl.airl import default_nets, train_many
 from pokerirl.irl.config import AIRLConfig
@@ -345,6 +346,8 @@ def train_gym_irl(
             fold_obs_standardization(result.policy, shift, scale)
             save_run(result, folders[k], algo=algo, data=data_info, baselines=found, device=device)
             plot_curves(result.metrics, folders[k], baselines=shares)
+            # The learned reward against the true one (EPIC, Pearson): reward_quality.json.
+            write_reward_quality(folders[k], env_id=env_id, data_path=data_path)
             results.append({"seed": seeds[k], "metrics": result.metrics, "baselines": found})
         summary = summarize(results)
         finals = {

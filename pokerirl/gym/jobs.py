@@ -167,12 +167,17 @@ class DataJob:
     path: Path
 
     def config(self) -> dict[str, Any]:
+        from pokerirl.gym.collect import default_deterministic
+
         return {
             "unit": "gym-data",
             "env": self.env,
             "expert": expert_fingerprint(self.env),
             "transitions": self.transitions,
             "seed": self.seed,
+            # Only where the expert's actions are sampled (continuous tasks, issue 20): the
+            # discrete tasks' records, made before the choice existed, stay valid.
+            **({} if default_deterministic(self.env) else {"actions": "sampled"}),
         }
 
 

@@ -144,7 +144,22 @@ class AIRLConfig:
         )
 
     def to_dict(self) -> dict[str, Any]:
-        return {k: list(v) if isinstance(v, tuple) else v for k, v in vars(self).items()}
+        """The settings as JSON, without the continuous-action options (issue 20) that hold
+        their defaults: run records and fingerprints written before them stay valid."""
+        return {
+            k: list(v) if isinstance(v, tuple) else v
+            for k, v in vars(self).items()
+            if not (k in _ADDED_LATER and v == _ADDED_LATER[k])
+        }
+
+
+# Fields added after runs were recorded, with the defaults that reproduce those runs.
+_ADDED_LATER: dict[str, Any] = {
+    "noise_form": "ours",
+    "supervised_form": "mean_mse",
+    "log_std_min": -20.0,
+    "log_std_max": 2.0,
+}
 
 
 _HINTS: dict[str, Any] = typing.get_type_hints(AIRLConfig)
