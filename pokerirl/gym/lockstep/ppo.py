@@ -186,6 +186,7 @@ class _RunEnvs:
                 self.returns[i] = 0.0
                 obs, _ = env.reset()
             next_obs[i] = obs
+        self.obs = next_obs
         return next_obs, rewards, dones, truncated_obs
 
 
