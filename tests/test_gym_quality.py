@@ -17,6 +17,7 @@ pytest.importorskip("gymnasium")
 from pokerirl.gym.quality import (  # noqa: E402
     QUALITY_FILE,
     QualityError,
+    Rollouts,
     canonicalize,
     epic_distance,
     make_coverage,
@@ -120,6 +121,19 @@ def test_shaped_family_f_and_g_are_epic_equivalent() -> None:
     assert pearson(f_of(obs, actions, next_obs), g_of(obs, actions, next_obs)) < 0.999
 
 
+def _random_rollouts(env_id: str, *, episodes: int) -> Rollouts:
+    """Episodes of uniformly random actions (the action space seeded 0), from seed 0."""
+    from pokerirl.gym.experts import make_env
+
+    env = make_env(env_id)
+    space = env.action_space
+    env.close()
+    space.seed(0)
+    return roll_out(
+        env_id, lambda o: np.stack([space.sample() for _ in o]), episodes=episodes, seed=0
+    )
+
+
 @pytest.mark.parametrize(
     ("env_id", "tolerance"),
     [("Pendulum-v1", 1e-4), ("Acrobot-v1", 0.0), ("MountainCar-v0", 0.0), ("LunarLander-v3", 1e-3)],
@@ -127,13 +141,7 @@ def test_shaped_family_f_and_g_are_epic_equivalent() -> None:
 def test_true_step_reward_matches_the_env_on_random_rollouts(env_id: str, tolerance: float) -> None:
     if env_id == "LunarLander-v3":
         pytest.importorskip("Box2D")
-    from pokerirl.gym.experts import make_env
-
-    env = make_env(env_id)
-    space = env.action_space
-    env.close()
-    space.seed(0)
-    found = roll_out(env_id, lambda o: np.stack([space.sample() for _ in o]), episodes=3, seed=0)
+    found = _random_rollouts(env_id, episodes=3)
     truth = true_reward(env_id, task_gamma(env_id))
     step = truth.step(found.obs, found.actions, found.next_obs)
     error = np.abs(step - found.rewards)
@@ -151,13 +159,7 @@ def test_true_step_reward_matches_the_env_on_random_rollouts(env_id: str, tolera
 @pytest.mark.parametrize(("env_id", "least"), [("HalfCheetah-v4", 0.9), ("Ant-v4", 0.95)])
 def test_mujoco_forward_reward_approximation_follows_the_env(env_id: str, least: float) -> None:
     pytest.importorskip("mujoco")
-    from pokerirl.gym.experts import make_env
-
-    env = make_env(env_id)
-    space = env.action_space
-    env.close()
-    space.seed(0)
-    found = roll_out(env_id, lambda o: np.stack([space.sample() for _ in o]), episodes=1, seed=0)
+    found = _random_rollouts(env_id, episodes=1)
     truth = true_reward(env_id, task_gamma(env_id))
     assert truth.kind == "approximation"
     step = truth.step(found.obs, found.actions, found.next_obs)

@@ -25,7 +25,7 @@ from __future__ import annotations
 import json
 import math
 import os
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
@@ -162,6 +162,35 @@ def policy_actions(policy: nn.Module, obs: np.ndarray, *, discrete: bool) -> np.
         return torch.minimum(torch.maximum(mean, policy.low), policy.high).numpy()
 
 
+def lockstep_steps(
+    env_id: str,
+    act: Callable[[np.ndarray], np.ndarray],
+    *,
+    episodes: int,
+    seed: int = EVAL_SEED,
+) -> Iterator[tuple[int, np.ndarray, Any, float, np.ndarray]]:
+    """Every step ``(episode, obs, action, reward, next_obs)`` of ``episodes`` episodes played
+    in lock-step (episode k from ``reset(seed=seed + k)``); ``act`` maps a batch of
+    observations (the episodes still running) to actions."""
+    envs = [make_env(env_id) for _ in range(episodes)]
+    try:
+        obs = [env.reset(seed=seed + k)[0] for k, env in enumerate(envs)]
+        running = list(range(episodes))
+        while running:
+            actions = act(np.stack([obs[k] for k in running]).astype(np.float32))
+            still = []
+            for row, k in enumerate(running):
+                nxt, reward, terminated, truncated, _ = envs[k].step(actions[row])
+                yield k, obs[k], actions[row], float(reward), nxt
+                obs[k] = nxt
+                if not (terminated or truncated):
+                    still.append(k)
+            running = still
+    finally:
+        for env in envs:
+            env.close()
+
+
 def episode_returns(
     env_id: str,
     act: Callable[[np.ndarray], np.ndarray],
@@ -169,25 +198,10 @@ def episode_returns(
     episodes: int,
     seed: int = EVAL_SEED,
 ) -> np.ndarray:
-    """Returns of ``episodes`` episodes played in lock-step (episode k from ``seed + k``);
-    ``act`` maps a batch of observations (the episodes still running) to actions."""
-    envs = [make_env(env_id) for _ in range(episodes)]
-    try:
-        obs = [env.reset(seed=seed + k)[0] for k, env in enumerate(envs)]
-        totals = np.zeros(episodes)
-        running = list(range(episodes))
-        while running:
-            actions = act(np.stack([obs[k] for k in running]).astype(np.float32))
-            still = []
-            for row, k in enumerate(running):
-                obs[k], reward, terminated, truncated, _ = envs[k].step(actions[row])
-                totals[k] += float(reward)
-                if not (terminated or truncated):
-                    still.append(k)
-            running = still
-    finally:
-        for env in envs:
-            env.close()
+    """Returns of ``episodes`` episodes played in lock-step (see :func:`lockstep_steps`)."""
+    totals = np.zeros(episodes)
+    for k, _, _, reward, _ in lockstep_steps(env_id, act, episodes=episodes, seed=seed):
+        totals[k] += reward
     return totals
 
 

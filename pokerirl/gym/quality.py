@@ -53,11 +53,12 @@ from pokerirl.atomic import write_text
 from pokerirl.gym.collect import read_transitions
 from pokerirl.gym.experts import make_env
 from pokerirl.gym.presets import TASKS
-from pokerirl.irl.nets import NetSpec, build_nets, fold_obs_standardization
+from pokerirl.irl.nets import fold_obs_standardization
 from pokerirl.irl.run import (
     CONFIG_FILE,
     REWARD_FILE,
     RewardFunction,
+    build_from_record,
     load_policy,
     load_reward,
     load_run_config,
@@ -358,33 +359,14 @@ def roll_out(
     env_id: str, act: Callable[[np.ndarray], np.ndarray], *, episodes: int, seed: int
 ) -> Rollouts:
     """``episodes`` episodes in lock-step (episode k from ``reset(seed=seed + k)``)."""
-    envs = [make_env(env_id) for _ in range(episodes)]
-    columns: dict[str, list[Any]] = {"obs": [], "actions": [], "rewards": [], "next_obs": []}
-    try:
-        obs = [env.reset(seed=seed + k)[0] for k, env in enumerate(envs)]
-        running = list(range(episodes))
-        while running:
-            batch = np.stack([obs[k] for k in running]).astype(np.float32)
-            actions = act(batch)
-            still = []
-            for row, k in enumerate(running):
-                nxt, reward, terminated, truncated, _ = envs[k].step(actions[row])
-                columns["obs"].append(obs[k])
-                columns["actions"].append(actions[row])
-                columns["rewards"].append(float(reward))
-                columns["next_obs"].append(nxt)
-                obs[k] = nxt
-                if not (terminated or truncated):
-                    still.append(k)
-            running = still
-    finally:
-        for env in envs:
-            env.close()
+    from pokerirl.gym.irl import lockstep_steps  # same layer; imported late (heavy)
+
+    steps = list(lockstep_steps(env_id, act, episodes=episodes, seed=seed))
     return Rollouts(
-        obs=np.asarray(columns["obs"], np.float32),
-        actions=np.asarray(columns["actions"]),
-        rewards=np.asarray(columns["rewards"], np.float64),
-        next_obs=np.asarray(columns["next_obs"], np.float32),
+        obs=np.asarray([s[1] for s in steps], np.float32),
+        actions=np.asarray([s[2] for s in steps]),
+        rewards=np.asarray([s[3] for s in steps], np.float64),
+        next_obs=np.asarray([s[4] for s in steps], np.float32),
     )
 
 
@@ -415,27 +397,11 @@ def _as_transition_reward(function: RewardFunction, *, full: bool) -> Transition
 def initial_reward(record: dict[str, Any]) -> RewardFunction:
     """The run's reward net as it was before training: same architecture, built from the
     run's seed as :func:`pokerirl.irl.airl.default_nets` does, standardization folded in."""
-    arch = record["architecture"]
-    space = arch["action_space"]
+    space = record["architecture"]["action_space"]
     discrete = space["type"] == "discrete"
-    spec = NetSpec(
-        reward_hidden=tuple(arch["reward_hidden"]),
-        policy_hidden=tuple(arch["policy_hidden"]),
-        activation=arch.get("activation", "relu"),
-        layer_norm=arch.get("layer_norm", False),
-        reward_family=arch.get("reward_family", "state_action"),
-        gamma=float(arch.get("gamma", 0.99)),
-    )
     with torch.random.fork_rng(devices=[]):
         torch.manual_seed(int(record["hyperparameters"]["seed"]))
-        net, _ = build_nets(
-            spec,
-            obs_dim=arch["obs_dim"],
-            action_dim=space["num_actions"] if discrete else len(space["low"]),
-            discrete=discrete,
-            low=None if discrete else space["low"],
-            high=None if discrete else space["high"],
-        )
+        net, _ = build_from_record(record)
     standard = (record.get("data") or {}).get("obs_standardization")
     if standard:
         fold_obs_standardization(

@@ -586,7 +586,9 @@ def _numbers(value: Any) -> bool:
     )
 
 
-def _build_from_record(record: Mapping[str, Any]) -> tuple[nn.Module, nn.Module]:
+def build_from_record(record: Mapping[str, Any]) -> tuple[nn.Module, nn.Module]:
+    """Untrained reward and policy nets of the architecture a run's ``config.json`` records
+    (drawn from torch's global RNG, as :func:`~pokerirl.irl.nets.build_nets` draws them)."""
     arch = record["architecture"]
     space = arch["action_space"]
     spec = NetSpec(
@@ -628,7 +630,7 @@ def _load_state(module: nn.Module, path: Path) -> None:
 
 def load_policy(run_dir: str | os.PathLike[str]) -> nn.Module:
     """The trained policy of a run (on CPU, in eval mode)."""
-    _, policy = _build_from_record(load_run_config(run_dir))
+    _, policy = build_from_record(load_run_config(run_dir))
     _load_state(policy, Path(run_dir) / POLICY_FILE)
     return policy
 
@@ -684,7 +686,7 @@ def load_reward(run_dir: str | os.PathLike[str], *, full: bool = False) -> Rewar
     :class:`RunError` (a ``ValueError``) of one line naming the file.
     """
     record = load_run_config(run_dir)
-    reward, _ = _build_from_record(record)
+    reward, _ = build_from_record(record)
     _load_state(reward, Path(run_dir) / REWARD_FILE)
     space = record["architecture"]["action_space"]
     num_actions = space["num_actions"] if space["type"] == "discrete" else None
