@@ -22,6 +22,7 @@ return, measured once: from the data's complete episodes, else the shipped manif
 
 from __future__ import annotations
 
+import functools
 import json
 import math
 import os
@@ -112,7 +113,8 @@ def load_env_transitions(env_id: str, data_path: str | os.PathLike[str]) -> Tran
     ``Discrete.n`` (not the largest action in the data), or the box's low and high."""
     env = make_env(env_id)
     try:
-        space, obs_space = env.action_space, env.observation_space
+        space: Any = env.action_space  # Discrete (n) or Box (low, high)
+        obs_space: Any = env.observation_space
     finally:
         env.close()
     if hasattr(space, "n"):
@@ -159,7 +161,15 @@ def policy_actions(policy: nn.Module, obs: np.ndarray, *, discrete: bool) -> np.
         if discrete:
             return policy(obs_t, None).argmax(-1).numpy()
         mean, _ = policy(obs_t)
-        return torch.minimum(torch.maximum(mean, policy.low), policy.high).numpy()
+        low, high = policy.get_buffer("low"), policy.get_buffer("high")
+        return torch.minimum(torch.maximum(mean, low), high).numpy()
+
+
+def _standardized_actions(
+    policy: nn.Module, shift: np.ndarray, scale: np.ndarray, discrete: bool, obs: np.ndarray
+) -> np.ndarray:
+    """:func:`policy_actions` of a policy trained on standardized observations."""
+    return policy_actions(policy, (obs - shift) / scale, discrete=discrete)
 
 
 def lockstep_steps(
@@ -323,9 +333,7 @@ def train_gym_irl(
                 policy.eval()
                 returns = episode_returns(
                     env_id,
-                    lambda obs, p=policy: policy_actions(
-                        p, (obs - shift_np) / scale_np, discrete=discrete
-                    ),
+                    functools.partial(_standardized_actions, policy, shift_np, scale_np, discrete),
                     episodes=settings.eval_episodes,
                 )
                 policy.train(was_training)
