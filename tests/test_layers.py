@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import ast
 import itertools
+import re
 from collections import defaultdict
 from collections.abc import Iterator
 from dataclasses import dataclass
@@ -175,6 +176,61 @@ def test_irl_imports_nothing_of_poker_gym_or_above() -> None:
         if item.module.startswith("pokerirl.irl") and item.component in IRL_FORBIDDEN}
     )  # fmt: skip
     assert found == []
+
+
+# The library does not know the command line: its errors name no flag (the CLI adds its own,
+# see pokerirl.errors.Remedy). Checked in these components; (module, function) -> why not yet.
+FLAG_FREE = ("irl", "poker", "datasets", "parquet", "store", "execution")
+FLAG_EXCEPTIONS: dict[tuple[str, str], str] = {
+    # The legacy unit records: tournaments/ and gym/jobs.py re-wrap str(error) into errors
+    # without a remedy; the store port (pokerirl.store, flag-free) replaces them.
+    ("pokerirl.execution", "load_unit"): "legacy records, re-wrapped by their callers",
+    ("pokerirl.execution", "load_unit_folder"): "legacy records, re-wrapped by their callers",
+    ("pokerirl.execution", "ray_head"): "names Ray's own command, `ray start --head`",
+}
+FLAG = re.compile(r"(?<![\w-])--[a-z]")
+
+
+def flags_in_raises(path: Path, package: Path = PACKAGE) -> Iterator[tuple[str, str, int]]:
+    """(module, function, line) of each ``raise`` whose message text names a ``--flag``."""
+    module = module_name(path, package)
+    tree = ast.parse(path.read_text(encoding="utf-8"), str(path))
+    functions = [n for n in ast.walk(tree) if isinstance(n, ast.FunctionDef | ast.AsyncFunctionDef)]
+    owner = {id(node): f.name for f in functions for node in ast.walk(f)}
+    for node in ast.walk(tree):
+        if not (isinstance(node, ast.Raise) and isinstance(node.exc, ast.Call)):
+            continue
+        texts = [
+            part.value
+            for argument in node.exc.args
+            for part in ast.walk(argument)
+            if isinstance(part, ast.Constant) and isinstance(part.value, str)
+        ]
+        if any(FLAG.search(text) for text in texts):
+            yield module, owner.get(id(node), "<module>"), node.lineno
+
+
+def test_library_errors_name_no_flag() -> None:
+    paths = [
+        path
+        for path in sorted(PACKAGE.rglob("*.py"))
+        if component_of(module_name(path, PACKAGE), PACKAGE) in FLAG_FREE
+    ]
+    found = [hit for path in paths for hit in flags_in_raises(path)]
+    new = [f"{m}.{f}: {line}" for m, f, line in found if (m, f) not in FLAG_EXCEPTIONS]
+    assert new == [], "library errors that name a command-line flag (the CLI adds its own)"
+    gone = set(FLAG_EXCEPTIONS) - {(m, f) for m, f, _ in found}
+    assert not gone, f"fixed: remove from FLAG_EXCEPTIONS: {sorted(gone)}"
+
+
+def test_the_flag_check_sees_a_flag_in_an_f_string(tmp_path: Path) -> None:
+    module = tmp_path / "pokerirl" / "irl" / "new.py"
+    module.parent.mkdir(parents=True)
+    module.write_text(
+        "def f(out):\n    raise ValueError(f'{out} is taken; pass --overwrite')\n"
+        "def g(out):\n    raise ValueError(f'{out} is taken', 'x--y')\n"
+    )
+    assert list(flags_in_raises(module, tmp_path / "pokerirl")) == [("pokerirl.irl.new", "f", 2)]
 
 
 def test_no_two_components_import_each_other() -> None:
