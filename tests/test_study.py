@@ -195,6 +195,7 @@ def test_the_authors_preset_reports_both_statistics(tmp_path: Path) -> None:
     assert irl["hyperparameters"]["disc_action"] == "distribution"
     assert irl["hyperparameters"]["noise_schedule"] == "authors"
     assert irl["hyperparameters"]["activation"] == "leaky_relu"
+    assert irl["hyperparameters"]["supervised_form"] == "sum_mse"
     agent = json.loads(
         (tmp_path / "out" / "agents" / "hairl-dqn" / "seed-1" / "config.json").read_text()
     )

@@ -354,7 +354,7 @@ def train_dqn(
     rng, opponent_rng = (np.random.Generator(np.random.PCG64(s)) for s in streams)
     learner = DQNLearner.create(config)
     self_play = opponent == SELF_PLAY
-    rival = learner.greedy_agent("self") if self_play else opponent
+    rival: Agent = learner.greedy_agent("self") if isinstance(opponent, str) else opponent
     explore = RandomAgent()
     decision_weight = 0.0 if reward is None else 1.0 - payoff_weight
     payoff_scale = 1.0 if reward is None else payoff_weight
@@ -390,8 +390,9 @@ def train_dqn(
                     actions[randomize] = explore.act(obs[randomize], legal[randomize], rng)
 
                     cards = turn_cards(game, learner_hands) if needs_cards else None
-                    rewards = np.zeros(actions.size, np.float32)
+                    rewards: np.ndarray = np.zeros(actions.size, np.float32)
                     if pending.staged is not None:  # f comes when the hand ends
+                        assert cards is not None  # staging needs the cards (needs_cards)
                         pending.staged.note(learner_hands, cards, legal, actions)
                     elif reward is not None:
                         decisions = Decisions(obs=obs, legal_mask=legal, cards=cards)

@@ -623,7 +623,7 @@ def _train_into(
         },
         "opponent": {
             "spec": config.opponent,
-            "fingerprint": SELF_PLAY if self_play else agent_fingerprint(opponent),
+            "fingerprint": SELF_PLAY if isinstance(opponent, str) else agent_fingerprint(opponent),
         },
         "seed": config.seed,
         "hands": config.hands,

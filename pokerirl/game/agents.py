@@ -39,7 +39,8 @@ class Agent(Protocol):
     (for reproducible matches); returns (B,) int64 action ids, always legal.
     """
 
-    name: str
+    @property
+    def name(self) -> str: ...  # read-only, so frozen dataclasses qualify
 
     def act(
         self, obs: np.ndarray, legal_mask: np.ndarray, rng: np.random.Generator
@@ -160,8 +161,10 @@ class ScriptedAgent:
         legal_mask: np.ndarray,
         rng: np.random.Generator,
         *,
-        cards: np.ndarray,
+        cards: np.ndarray | None = None,
     ) -> np.ndarray:
+        if cards is None:  # an Agent's act, called without what this agent must see
+            raise ValueError(f"{self.name} sees the cards: pass cards= (see agent_actions)")
         score, facing, can_raise, passive = self._options(obs, legal_mask, cards)
         action = self.rule(obs, legal_mask, cards)
         noisy = rng.random(len(action)) < self.player.noise

@@ -209,7 +209,7 @@ def _play_hand(
             player = by_position[seat]
             facing = street_in[1 - seat] > street_in[seat]
             score = strength[seat, street]
-            options = ["c" if facing else "k", "f" if facing else None]
+            options: list[str | None] = ["c" if facing else "k", "f" if facing else None]
             can_raise = raises < player.max_raises
             if can_raise:
                 options.append("b" if raises == 0 and street > 0 else "r")
@@ -217,9 +217,9 @@ def _play_hand(
                 choices = [o for o in options if o is not None]
                 code = choices[int(next(draw) * len(choices))]
             elif can_raise and score > player.raise_above:
-                code = options[2]
+                code = str(options[2])
             elif not facing or score > player.call_above:
-                code = options[0]
+                code = str(options[0])
             else:
                 code = "f"
             actions[seat][street] += code

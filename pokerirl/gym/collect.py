@@ -109,16 +109,15 @@ def rollout(
                 for i, env in enumerate(envs):
                     if slots[i] is None and steps() < transitions:
                         obs, _ = env.reset(seed=seed + opened)
-                        slots[i] = {"id": opened, "obs": [obs], "actions": [], "rewards": []}
-                        slots[i]["next"] = []
+                        slots[i] = {"id": opened, "obs": [obs], "actions": [], "rewards": [],
+                                    "next": []}  # fmt: skip
                         opened += 1
-                active = [i for i, slot in enumerate(slots) if slot is not None]
-                if not active:
+                open_slots = [(i, slot) for i, slot in enumerate(slots) if slot is not None]
+                if not open_slots:
                     break
-                batch = np.stack([slots[i]["obs"][-1] for i in active]).astype(np.float32)
+                batch = np.stack([slot["obs"][-1] for _, slot in open_slots]).astype(np.float32)
                 actions = expert.act(batch, deterministic=deterministic)
-                for row, i in enumerate(active):
-                    slot = slots[i]
+                for row, (i, slot) in enumerate(open_slots):
                     obs, reward, terminated, truncated, _ = envs[i].step(actions[row])
                     slot["actions"].append(actions[row])
                     slot["rewards"].append(reward)

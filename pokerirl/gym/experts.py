@@ -133,13 +133,14 @@ def build_policy(env_id: str, algo: str, kwargs: dict[str, Any]) -> BasePolicy:
         spaces = (env.observation_space, env.action_space)
     finally:
         env.close()
-    if algo == "dqn":
-        from stable_baselines3.dqn.policies import DQNPolicy as policy_class
-    elif algo == "ppo":
-        from stable_baselines3.common.policies import ActorCriticPolicy as policy_class
-    else:
+    from stable_baselines3.common.policies import ActorCriticPolicy
+    from stable_baselines3.dqn.policies import DQNPolicy
+
+    classes: dict[str, Any] = {"dqn": DQNPolicy, "ppo": ActorCriticPolicy}
+    if algo not in classes:
         raise ValueError(f"unknown expert algorithm {algo!r} (ppo or dqn)")
-    return policy_class(*spaces, lr_schedule=lambda _: 0.0, **_sb3_kwargs(kwargs))
+    policy: BasePolicy = classes[algo](*spaces, lr_schedule=lambda _: 0.0, **_sb3_kwargs(kwargs))
+    return policy
 
 
 def make_model(env_id: str, settings: RLSettings, *, seed: int, env: Any = None) -> BaseAlgorithm:
@@ -151,11 +152,13 @@ def make_model(env_id: str, settings: RLSettings, *, seed: int, env: Any = None)
 
     env = env if env is not None else Monitor(make_env(env_id))
     kwargs = _sb3_kwargs(policy_kwargs(settings))
+    model: BaseAlgorithm
     if settings.dqn is not None:
         d = asdict(settings.dqn)
         d.pop("net_arch")
         model = DQN("MlpPolicy", env, seed=seed, policy_kwargs=kwargs, device="cpu", **d)
     else:
+        assert settings.ppo is not None  # RLSettings holds exactly its algorithm's settings
         ppo = asdict(settings.ppo)
         for key in ("net_arch", "activation", "log_std_init", "ortho_init"):
             ppo.pop(key)
@@ -252,7 +255,7 @@ def train_expert(
     timesteps = timesteps or settings.timesteps
     if timesteps < 1 or eval_episodes < 1 or final_episodes < 1:
         raise ValueError("timesteps, eval_episodes and final_episodes must be positive")
-    eval_every = eval_every or max(timesteps // 20, 1)
+    every: int = eval_every or max(timesteps // 20, 1)
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
 
@@ -272,7 +275,7 @@ def train_expert(
 
     class PeriodicEvaluation(BaseCallback):  # one env: num_timesteps counts single steps
         def _on_step(self) -> bool:
-            if self.num_timesteps % eval_every == 0:
+            if self.num_timesteps % every == 0:
                 evaluate_and_keep()
             return True
 
@@ -294,10 +297,10 @@ def train_expert(
         "timesteps": timesteps,
         "target": TASKS[env_id].expert_target,
         "hyper": hyper,
-        "settings": asdict(settings.dqn if algo == "dqn" else settings.ppo),
+        "settings": asdict(settings.own),
         "policy_kwargs": policy_kwargs(settings),
         "evaluation": {
-            "periodic_every": eval_every,
+            "periodic_every": every,
             "periodic_episodes": eval_episodes,
             "best_periodic_return": max(h["return_mean"] for h in history),
             "final_seed": FINAL_EVAL_SEED,

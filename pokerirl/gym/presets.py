@@ -15,7 +15,7 @@ anything or imports Gymnasium.
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
-from typing import Literal
+from typing import Any, Literal
 
 Algo = Literal["ppo", "dqn"]
 
@@ -104,6 +104,13 @@ class RLSettings:
         ):
             raise ValueError(f"RLSettings: algo {self.algo!r} needs exactly its own settings")
 
+    @property
+    def own(self) -> PPOSettings | DQNSettings:
+        """The settings of this algorithm (``ppo`` or ``dqn``, whichever it is)."""
+        own = self.ppo if self.algo == "ppo" else self.dqn
+        assert own is not None  # __post_init__ holds it
+        return own
+
 
 @dataclass(frozen=True, kw_only=True)
 class MeanStd:
@@ -143,7 +150,9 @@ class Task:
 
 # The authors' PPO policy for LunarLander, Ant and HalfCheetah: separate [256, 256] LeakyReLU
 # nets, log_std_init -2, no orthogonal init.
-_BIG = dict(net_arch=(256, 256), activation="leaky_relu", log_std_init=-2.0, ortho_init=False)
+_BIG: dict[str, Any] = dict(
+    net_arch=(256, 256), activation="leaky_relu", log_std_init=-2.0, ortho_init=False
+)
 
 
 # Ant-v4 and HalfCheetah-v4 share the authors' IRL settings.

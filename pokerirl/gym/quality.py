@@ -479,7 +479,7 @@ def write_reward_quality(
     torch_threads = torch.get_num_threads()
 
     env = make_env(env_id)
-    space = env.action_space
+    space: Any = env.action_space  # Discrete (n) or Box (low, high)
     env.close()
     discrete = hasattr(space, "n")
 

@@ -24,6 +24,7 @@ import re
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -87,7 +88,8 @@ def task_space(env_id: str) -> tuple[np.ndarray, np.ndarray, int]:
 
     env = make_env(env_id)
     try:
-        obs_space, action_space = env.observation_space, env.action_space
+        obs_space: Any = env.observation_space  # a Box here, checked below
+        action_space = env.action_space
     finally:
         env.close()
     shape = getattr(obs_space, "shape", None)
@@ -210,7 +212,8 @@ def reward_map(
     for folder, runs, algos in checked:
         tables = np.stack([reward_table(run, states, num_actions) for run in runs])
         preferred = tables.mean(axis=0).argmax(axis=1)  # over actions, per state
-        agreement, per_run = None, ()
+        agreement: float | None = None
+        per_run: tuple[float, ...] = ()
         if reference is not None:
             agreement = float((preferred == reference).mean())
             per_run = tuple(float((t.argmax(axis=1) == reference).mean()) for t in tables)

@@ -59,8 +59,9 @@ def learned_reward_env(venv: VecEnv, reward: RewardCallable) -> VecEnv:
             self._actions: np.ndarray | None = None
 
         def reset(self) -> np.ndarray:
-            self._obs = self.venv.reset()
-            return self._obs
+            obs = np.asarray(self.venv.reset())  # flat Box observations: an array
+            self._obs = obs
+            return obs
 
         def step_async(self, actions: np.ndarray) -> None:
             self._actions = np.asarray(actions)

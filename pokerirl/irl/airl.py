@@ -502,6 +502,7 @@ class _Loop:
             and self.runs == 1
             and device.type == "cpu"
             and config.reward_family == "state_action"
+            and config.supervised_form == "mean_mse"  # the hand-derived gradients' term
             and fast.supports(rewards.modules[0], policies.modules[0])
         )
 
@@ -601,7 +602,11 @@ class _Loop:
 
         # 3. policy step against the updated reward
         if self.discrete:
-            supervised = -(expert * log_pi).sum(-1).mean(-1)
+            if self.config.supervised_form == "sum_mse":
+                # The authors': mse_loss(π's probabilities, one-hot a_E, reduction="sum").
+                supervised = (probs - expert).square().sum((-2, -1))
+            else:
+                supervised = -(expert * log_pi).sum(-1).mean(-1)
             if self.alpha < 1:
                 with torch.no_grad():
                     g = self.rewards(obs[:, None], self.each_action, shared=(False, True))

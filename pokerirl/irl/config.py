@@ -39,9 +39,10 @@ DISC_ACTIONS: tuple[str, ...] = ("sample", "distribution")
 # clipped to the box, log π at the noised action. "authors" (silue-dev/hairl src/hairl.py): σ
 # in units of ``high``, no clipping, log π of the clean sample.
 NOISE_FORMS: tuple[str, ...] = ("ours", "authors")
-# Continuous actions only. "mean_mse": α × batch mean of ‖μ − a_E‖² (ours). "sum_mse": the
-# authors' mse_loss(reparameterized sample, a_E, reduction="sum"), summed over the batch (it
-# also penalizes σ²).
+# The supervised term. "mean_mse" (ours): continuous, the batch mean of ‖μ − a_E‖²; discrete,
+# the cross-entropy of π at a_E. "sum_mse" (the authors'): mse_loss(x, a_E, reduction="sum"),
+# summed over the batch, where x is the reparameterized sample (continuous: it also penalizes
+# σ²) or π's probabilities against the one-hot a_E (discrete).
 SUPERVISED_FORMS: tuple[str, ...] = ("mean_mse", "sum_mse")
 
 
@@ -75,7 +76,7 @@ class AIRLConfig:
     noise_decay: float = 0.1  # k of the authors' schedule: 0.1 poker, 0.01 Gymnasium
     disc_action: str = "sample"  # what the discriminator sees of π: "sample" or "distribution"
     noise_form: str = "ours"  # continuous actions: see NOISE_FORMS
-    supervised_form: str = "mean_mse"  # continuous actions: see SUPERVISED_FORMS
+    supervised_form: str = "mean_mse"  # see SUPERVISED_FORMS
     # Continuous policies' log σ is clamped to [log_std_min, log_std_max] in training (the
     # defaults never bind in practice; -5 keeps -log π from winning D alone, issue 20).
     log_std_min: float = -20.0

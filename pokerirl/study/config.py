@@ -27,9 +27,8 @@ TRANSFORMS = ("raw", "centered", "log_softmax")  # pokerirl.agents.rewards.TRANS
 # discriminator only, 50 steps (epochs) of batches of 256, an 80/20 split, the policy's
 # distribution (not a sample) shown to the discriminator; H-AIRL: gt_ratio_p 0.33,
 # gt_ratio_d 0, noise over the batch from 1.0 to 0.1 with decay 0.1. Their split is the first
-# 80% of rows; ours stays a seeded share of hands. Their supervised term is a summed MSE on
-# the probabilities; ours stays cross-entropy until the IRL core offers theirs (issue 20's
-# `supervised_loss = "sum_mse"`: AUTHORS_HAIRL should set it once that lands).
+# 80% of rows; ours stays a seeded share of hands. Their supervised term is a summed MSE of
+# the probabilities against the one-hot expert action (`supervised_form = "sum_mse"`).
 AUTHORS_IRL: dict[str, object] = {
     "reward_hidden": (64,),
     "policy_hidden": (64,),
@@ -49,6 +48,7 @@ AUTHORS_HAIRL: dict[str, object] = {
     "sigma_end": 0.1,
     "noise_schedule": "authors",
     "noise_decay": 0.1,
+    "supervised_form": "sum_mse",
 }
 
 

@@ -77,7 +77,7 @@ def build_report(
     irl_part["runs"] = config.runs
     # The authors' preset plays its kept checkpoint: that one is measured against random.
     vs_random = agents.get("playing_vs_random", agents["final_vs_random"])
-    rl = {
+    rl: dict[str, Any] = {
         kind: {**mean_std(vs_random[kind]), "paper": paper.RL_VS_RANDOM[kind]}
         for kind in AGENT_KINDS
     }
