@@ -144,7 +144,7 @@ def choose_backend(
     address = ray if ray is not None else environ.get("RAY_ADDRESS") or None
     if address is not None:
         if not address.strip():
-            raise ValueError("--ray needs an address (HOST:PORT) or 'local'")
+            raise ValueError("Ray needs an address (HOST:PORT) or 'local', got a blank one")
         return Backend(kind="ray", address=address.strip(), jobs=jobs, threads=threads)
     return Backend(jobs=jobs, threads=threads)
 

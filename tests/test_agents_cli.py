@@ -183,8 +183,9 @@ def test_learned_reward_training_records_the_run(tmp_path: Path) -> None:
 def test_learned_reward_from_a_real_irl_run_end_to_end(tmp_path: Path) -> None:
     import pyarrow.parquet as pq
 
-    from pokerirl.irl import load_config, load_reward, train_table
-    from pokerirl.irl.toy import toy_expert_table
+    from pokerirl.datasets.toy import toy_expert_table
+    from pokerirl.irl import load_config, load_reward
+    from pokerirl.poker import train_table
 
     pq.write_table(toy_expert_table(num_hands=200), tmp_path / "table.parquet")
     settings = load_config("hairl", overrides={"epochs": 1, "batch_size": 64})

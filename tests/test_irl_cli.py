@@ -15,10 +15,10 @@ import torch
 from typer.testing import CliRunner
 
 from pokerirl.cli import app
+from pokerirl.datasets.toy import toy_expert_table
 from pokerirl.irl import RunError, load_config, load_policy, load_reward, load_run_config
 from pokerirl.irl.airl import LOSS_KEYS
-from pokerirl.irl.table import read_table
-from pokerirl.irl.toy import toy_expert_table
+from pokerirl.poker import read_table
 
 torch.set_num_threads(1)
 REPO = Path(__file__).resolve().parents[1]

@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 import torch
 
+from pokerirl.datasets.toy import toy_expert_table
 from pokerirl.irl import (
     AIRLConfig,
     NetSpec,
@@ -15,8 +16,7 @@ from pokerirl.irl import (
     fast,
     train,
 )
-from pokerirl.irl.table import transitions_from_arrow
-from pokerirl.irl.toy import toy_expert_table
+from pokerirl.poker import transitions_from_arrow
 
 torch.set_num_threads(1)
 MASK = torch.tensor([[True, True, False, True]] * 3 + [[False, True, True, True]] * 3)

@@ -10,7 +10,8 @@ import torch
 
 from pokerirl.datasets.ingest import ingest
 from pokerirl.game.synth import write_synthetic_month
-from pokerirl.irl import load_config, train_table
+from pokerirl.irl import load_config
+from pokerirl.poker import train_table
 
 
 @pytest.fixture(scope="module")

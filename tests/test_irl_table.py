@@ -10,9 +10,9 @@ import pyarrow.parquet as pq
 import pytest
 import torch
 
-from pokerirl.irl import Transitions, read_table
-from pokerirl.irl.table import transitions_from_arrow
-from pokerirl.irl.toy import toy_expert_rule, toy_expert_table
+from pokerirl.datasets.toy import toy_expert_rule, toy_expert_table
+from pokerirl.irl import Transitions
+from pokerirl.poker import read_table, transitions_from_arrow
 
 
 def write(table: pa.Table, path: Path, **kwargs: object) -> Path:

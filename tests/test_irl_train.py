@@ -8,10 +8,10 @@ import numpy as np
 import pytest
 import torch
 
+from pokerirl.datasets.toy import toy_expert_table
 from pokerirl.irl import AIRLConfig, Transitions, baselines, train
 from pokerirl.irl.airl import LOSS_KEYS
-from pokerirl.irl.table import transitions_from_arrow
-from pokerirl.irl.toy import toy_expert_table
+from pokerirl.poker import transitions_from_arrow
 
 torch.set_num_threads(1)
 

@@ -15,7 +15,8 @@ from pokerirl.cli import app
 def run_dir(tmp_path_factory: pytest.TempPathFactory) -> Path:
     from pokerirl.datasets.ingest import ingest
     from pokerirl.game.synth import write_synthetic_month
-    from pokerirl.irl import load_config, train_table
+    from pokerirl.irl import load_config
+    from pokerirl.poker import train_table
 
     root = tmp_path_factory.mktemp("transfer")
     month = write_synthetic_month(root, hands=300, seed=2)

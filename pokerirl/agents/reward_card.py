@@ -146,7 +146,7 @@ class CardStates:
         cls, path: str | os.PathLike[str], *, groups: set[str] | None = None
     ) -> CardStates:
         """The rows of a decision table (``pokerirl ingest``'s), or of its hands ``groups``."""
-        from pokerirl.irl.table import fixed_width, read_parquet
+        from pokerirl.parquet import fixed_width, read_parquet
 
         table = read_parquet(path, TABLE_COLUMNS, what="table")
         hand_ids = table.column("hand_id").to_pylist()

@@ -7,7 +7,7 @@ import os
 import re
 import sys
 import warnings
-from collections.abc import Iterator, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from typing import Any, NoReturn
 
@@ -15,7 +15,14 @@ import typer
 from typer.core import TyperGroup
 
 from pokerirl import execution  # light: tqdm only; ray loads when chosen
-from pokerirl.errors import UsageError, describe_os_error
+from pokerirl.errors import (
+    ADVICE,
+    PokerIRLError,
+    Remedy,
+    UsageError,
+    describe_os_error,
+    report,
+)
 
 
 def _command_line_errors() -> tuple[type[Exception], ...]:
@@ -150,6 +157,14 @@ def error_line(error: Exception, path: str | os.PathLike[str] | None = None) -> 
     return describe_os_error(error)
 
 
+def advised(error: Exception, advice: Mapping[Remedy, str] = ADVICE) -> str:
+    """An error's one line with the command line's advice for its remedy appended: the
+    library names no flag (``out/run already holds files``), the command adds its own
+    (``; pass --overwrite to replace``). An error without a remedy is its message."""
+    found = report(error, advice) if isinstance(error, PokerIRLError) else None
+    return str(error) if found is None else found[1]
+
+
 @contextmanager
 def usage_errors() -> Iterator[None]:
     """Settings checked before any work: a ``ValueError`` there is a usage error (exit 2,
@@ -189,6 +204,8 @@ def seed_list(text: str | None) -> str | None:
 
 def _backend(jobs: int, ray: str | None, threads: int = 1) -> execution.Backend:
     """The execution backend of a fan-out command: --ray, else $RAY_ADDRESS, else --jobs."""
+    if ray is not None and not ray.strip():
+        fail("--ray needs an address (HOST:PORT) or 'local'")
     try:
         return execution.choose_backend(jobs=jobs, ray=ray, threads=threads)
     except ValueError as error:

@@ -13,6 +13,7 @@ from pokerirl.cli.app import (
     RAY_HELP,
     SEED_OPTION,
     _backend,
+    advised,
     app,
     echo,
     error_line,
@@ -20,6 +21,7 @@ from pokerirl.cli.app import (
     seed_list,
     usage_errors,
 )
+from pokerirl.errors import ADVICE, Remedy
 
 
 @app.command()
@@ -268,8 +270,9 @@ def train(
     """
     import torch
 
-    from pokerirl.irl import load_config, train_runs
+    from pokerirl.irl import load_config
     from pokerirl.irl.airl import resolve_device
+    from pokerirl.poker import train_runs
 
     torch.set_num_threads(threads)
     widths = None if hidden is None else _widths(hidden)
@@ -304,7 +307,7 @@ def train(
             backend=_backend(jobs, ray),
         )
     except (ValueError, execution.ExecutionError) as error:
-        fail(str(error))
+        fail(advised(error, TRAIN_ADVICE))
     except OSError as error:
         fail(error_line(error, out))
     except KeyboardInterrupt:
@@ -332,6 +335,15 @@ def train(
                 f"{card.agree_legal_majority:.1%} (reward_card.json)"
             )
     echo(f"{summary.samples_per_second:,.0f} samples/s; wrote {summary.out_dir}")
+
+
+# pokerirl train's words for the remedies of its run folders (its lines before the library
+# stopped naming flags).
+TRAIN_ADVICE = {
+    **ADVICE,
+    Remedy.REPLACE: "pass --overwrite to replace",
+    Remedy.ELSEWHERE: "choose another --out",
+}
 
 
 def _widths(hidden: str) -> list[int]:

@@ -1,8 +1,10 @@
-"""AIRL / Hybrid-AIRL reward learning on expert :class:`Transitions` (poker or environments).
+"""AIRL / Hybrid-AIRL reward learning on expert :class:`Transitions`.
 
 :mod:`pokerirl.irl.airl` is the trainer (one run, or R in lock-step), :mod:`~.nets` the
-default networks, :mod:`~.transitions` and :mod:`~.table` the data, :mod:`~.run` the run
-folders (``pokerirl train``) and :func:`load_reward`. For example::
+default networks, :mod:`~.transitions` the data, :mod:`~.run` the run folders and
+:func:`load_reward`. It knows nothing of poker or Gymnasium (``tests/test_layers.py``): poker
+tables and ``pokerirl train`` are :mod:`pokerirl.poker`, environments :mod:`pokerirl.gym`.
+For example::
 
     from pokerirl.irl import load_reward
 
@@ -40,10 +42,8 @@ from pokerirl.irl.run import (
     load_policy,
     load_reward,
     load_run_config,
-    train_runs,
-    train_table,
+    train_into,
 )
-from pokerirl.irl.table import read_table
 from pokerirl.irl.transitions import Transitions
 
 __all__ = [
@@ -72,9 +72,7 @@ __all__ = [
     "load_run_config",
     "noise_schedule",
     "project_to_simplex",
-    "read_table",
     "train",
     "train_many",
-    "train_runs",
-    "train_table",
+    "train_into",
 ]

@@ -29,6 +29,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from pokerirl.errors import PokerIRLError
 from pokerirl.irl.nets import ACTIVATIONS, REWARD_FAMILIES, NetSpec
 
 ALGOS: tuple[str, ...] = ("airl", "hairl")
@@ -45,7 +46,7 @@ NOISE_FORMS: tuple[str, ...] = ("ours", "authors")
 SUPERVISED_FORMS: tuple[str, ...] = ("mean_mse", "sum_mse")
 
 
-class ConfigError(ValueError):
+class ConfigError(PokerIRLError, ValueError):
     """A bad setting: one line naming the key (and the file, when there is one)."""
 
 
@@ -214,7 +215,9 @@ def load_config(
         except (tomllib.TOMLDecodeError, UnicodeDecodeError) as error:
             raise ConfigError(f"cannot parse {path} as TOML: {error}") from None
         if "algo" in settings:
-            raise ConfigError(f"{path}: choose the algorithm with --algo, not in the config file")
+            raise ConfigError(
+                f"{path}: 'algo' cannot be set in a config file; the algorithm is chosen on its own"
+            )
         try:
             AIRLConfig.for_algo(algo, **settings)  # blame the file for the file's mistakes
         except ConfigError as error:

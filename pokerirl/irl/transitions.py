@@ -4,9 +4,10 @@ Rows are expert decisions (s, a) with, optionally, the next state s', whether th
 ended there, the environment's reward and the legal actions. Every row has a group id (a
 poker hand, an environment episode): the train/validation split never cuts a group.
 
-Poker tables come in through :func:`pokerirl.irl.table.read_table` (``Transitions.from_table``);
-environment rollouts through :meth:`Transitions.from_parquet` (the schema ``pokerirl gym
-collect`` writes) or :meth:`Transitions.from_arrays`.
+Poker tables come in through :func:`pokerirl.poker.read_table` (which builds them with
+:meth:`Transitions.from_arrays`: this module knows nothing of poker); environment rollouts
+through :meth:`Transitions.from_parquet` (the schema ``pokerirl gym collect`` writes) or
+:meth:`Transitions.from_arrays`.
 
 >>> t = Transitions.from_arrays(np.eye(4, 3), np.array([0, 1, 2, 0]), groups=np.array([0, 0, 1, 1]))
 >>> t.discrete, t.action_dim, len(t)
@@ -121,7 +122,7 @@ class Transitions:
         ``episode`` (int). Bad files raise ``ValueError`` naming the file."""
         import pyarrow as pa
 
-        from pokerirl.irl.table import fixed_width, read_parquet
+        from pokerirl.parquet import fixed_width, read_parquet
 
         path = Path(path)
         table = read_parquet(path, ENV_COLUMNS, what="rollouts")
@@ -156,13 +157,6 @@ class Transitions:
             low=low,
             high=high,
         )
-
-    @classmethod
-    def from_table(cls, path: str | os.PathLike[str]) -> Transitions:
-        """A poker decision table (see :func:`pokerirl.irl.table.read_table`)."""
-        from pokerirl.irl.table import read_table
-
-        return read_table(path)
 
     # ------------------------------------------------------------------ properties
 

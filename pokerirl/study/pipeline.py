@@ -68,7 +68,7 @@ class Execution:
     def train_runs(
         self, table: Path, out: Path, *, algo: str, runs: int, config: AIRLConfig
     ) -> None:
-        from pokerirl.irl.run import train_runs
+        from pokerirl.poker.train import train_runs
 
         # The stage record guards the settings; units of other settings are this stage's own
         # earlier attempt, recomputed (finished runs of the same settings are reused).

@@ -1,10 +1,10 @@
 """A toy expert decision table with a known rule, for tests, benchmarks and examples.
 
 It has the schema ``pokerirl ingest`` writes, so the trainer can be exercised without real
-hand histories. The expert's rule is a function of the observation (and the legal actions):
-raise when more than half of the visible cards (hole and board) are T or better and raising
-is legal; otherwise check when checking is legal, else call. Folds never appear, as in the
-real tables.
+hand histories (:func:`pokerirl.poker.transitions_from_arrow` makes it ``Transitions``). The
+expert's rule is a function of the observation (and the legal actions): raise when more than
+half of the visible cards (hole and board) are T or better and raising is legal; otherwise
+check when checking is legal, else call. Folds never appear, as in the real tables.
 
 >>> table = toy_expert_table(num_hands=50, seed=1)
 >>> table.num_rows > 50, table.schema.field("obs").type

@@ -1,74 +1,77 @@
-"""Read a poker decision table (Parquet, one row per decision) into :class:`Transitions`.
+"""Read a poker decision table (Parquet, one row per decision) into validated numpy arrays.
 
-Only the columns the trainer needs are read, and each goes pyarrow -> numpy -> torch through
-its flat child array, without per-row Python. Problems with the table raise ``ValueError``
-with a one-line message naming it.
+Only the columns the trainer needs are read, and each goes pyarrow -> numpy through its flat
+child array, without per-row Python. Problems with the table raise ``ValueError`` with a
+one-line message naming it. The arrays are what :meth:`pokerirl.irl.Transitions.from_arrays`
+takes; :func:`pokerirl.poker.read_table` makes the :class:`~pokerirl.irl.Transitions` (this
+layer is below ``irl/``, which knows nothing of poker).
 
 Required columns: ``hand_id`` (string), ``obs`` (fixed_size_list<uint8>[72]), ``action_id``
 (integer), ``legal_mask`` (fixed_size_list<bool>[4]). Optional: ``reward`` (float; payoff in
 big blinds on the player's last decision of a hand, else 0) and ``player`` (string), which
 gives next_obs (the same player's next decision in the hand) and done (their last one).
+
+>>> from pokerirl.datasets.toy import toy_expert_table
+>>> decisions = decisions_from_arrow(toy_expert_table(num_hands=20, seed=1))
+>>> decisions.obs.shape[1], decisions.num_actions, decisions.dones is not None
+(72, 4, True)
 """
 
 from __future__ import annotations
 
 import os
-from collections.abc import Sequence
+from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pyarrow as pa
 import pyarrow.compute as pc
-import pyarrow.parquet as pq
 
 from pokerirl.encoding import NUM_ACTIONS, OBS_SIZE
-from pokerirl.irl.transitions import Transitions
+from pokerirl.parquet import fixed_width, read_parquet
 
 REQUIRED_COLUMNS = ("hand_id", "obs", "action_id", "legal_mask")
 OPTIONAL_COLUMNS = ("reward", "player")
 
 
-def read_table(path: str | os.PathLike[str]) -> Transitions:
+@dataclass(frozen=True, kw_only=True, eq=False)
+class DecisionArrays:
+    """A validated decision table as numpy arrays, one row per expert decision."""
+
+    obs: np.ndarray  # (N, 72) uint8
+    action_ids: np.ndarray  # (N,) int64, legal under legal_mask
+    groups: np.ndarray  # (N,) hand_id strings
+    legal_mask: np.ndarray  # (N, 4) bool
+    next_obs: np.ndarray | None = None  # (N, 72) uint8: the same player's next decision
+    dones: np.ndarray | None = None  # (N,) bool: the player's last decision of the hand
+    rewards: np.ndarray | None = None  # (N,) float32
+    num_actions: int = NUM_ACTIONS
+
+    def transitions_arguments(self) -> dict[str, Any]:
+        """Keyword arguments of ``Transitions.from_arrays(obs, actions, **...)`` but the two
+        positional ones (see :func:`pokerirl.poker.read_table`)."""
+        return {
+            "groups": self.groups,
+            "next_obs": self.next_obs,
+            "dones": self.dones,
+            "rewards": self.rewards,
+            "legal_mask": self.legal_mask,
+            "num_actions": self.num_actions,
+        }
+
+
+def read_decisions(path: str | os.PathLike[str]) -> DecisionArrays:
     """Read and validate the decision table at ``path``.
 
     Raises ``FileNotFoundError`` for a missing file and ``ValueError`` for anything else wrong
     (not Parquet, missing columns, wrong types or widths, nulls, empty, illegal expert actions).
     """
     table = read_parquet(path, REQUIRED_COLUMNS, OPTIONAL_COLUMNS, what="table")
-    return transitions_from_arrow(table, source=str(Path(path)))
+    return decisions_from_arrow(table, source=str(Path(path)))
 
 
-def read_parquet(
-    path: str | os.PathLike[str],
-    required: Sequence[str],
-    optional: Sequence[str] = (),
-    *,
-    what: str,
-) -> pa.Table:
-    """The ``required`` columns (and the ``optional`` ones present) of the Parquet file at
-    ``path``: ``FileNotFoundError`` if it is missing, else a one-line ``ValueError`` naming it.
-    """
-    path = Path(path)
-    if not path.is_file():
-        raise FileNotFoundError(f"{what} not found: {path}")
-    # Through a file object: pyarrow cannot open a path whose name is not UTF-8.
-    with open(path, "rb") as file:
-        try:
-            parquet = pq.ParquetFile(file)
-            schema = parquet.schema_arrow
-        except (pa.ArrowException, OSError) as error:
-            raise ValueError(f"cannot read {path} as Parquet: {first_line(error)}") from None
-        missing = [name for name in required if name not in schema.names]
-        if missing:
-            raise ValueError(f"{path} lacks required column(s): {', '.join(missing)}")
-        columns = [*required, *(c for c in optional if c in schema.names)]
-        try:
-            return parquet.read(columns=columns)
-        except (pa.ArrowException, OSError) as error:
-            raise ValueError(f"cannot read {path}: {first_line(error)}") from None
-
-
-def transitions_from_arrow(table: pa.Table, *, source: str = "table") -> Transitions:
+def decisions_from_arrow(table: pa.Table, *, source: str = "table") -> DecisionArrays:
     """Validate an Arrow table with the decision-table schema and convert it."""
     if table.num_rows == 0:
         raise ValueError(f"{source} is empty: no expert decisions to learn from")
@@ -105,15 +108,14 @@ def transitions_from_arrow(table: pa.Table, *, source: str = "table") -> Transit
         dones = following < 0
         next_obs = obs[np.where(dones, np.arange(len(obs)), following)]
 
-    return Transitions.from_arrays(
-        obs,
-        action_ids,
+    return DecisionArrays(
+        obs=obs,
+        action_ids=action_ids,
         groups=np.asarray(hand.dictionary.to_numpy(zero_copy_only=False))[hand.indices],
+        legal_mask=mask,
         next_obs=next_obs,
         dones=dones,
         rewards=rewards,
-        legal_mask=mask,
-        num_actions=NUM_ACTIONS,
     )
 
 
@@ -145,32 +147,3 @@ def next_decision(hand: np.ndarray, player: np.ndarray) -> np.ndarray:
     following = np.full(len(key), -1, dtype=np.int64)
     following[order[:-1][same]] = order[1:][same]
     return following
-
-
-def fixed_width(
-    table: pa.Table, name: str, width: int | None, source: str, *, floating: bool = False
-) -> np.ndarray:
-    """A fixed_size_list column as an (N, width) numpy array, via its flat child values.
-
-    ``width`` None accepts any list size; ``floating`` accepts float values too.
-    """
-    column = table.column(name)
-    kind = column.type
-    if not pa.types.is_fixed_size_list(kind) or (width is not None and kind.list_size != width):
-        size = "" if width is None else f"[{width}]"
-        raise ValueError(f"{source}: column {name!r} must be fixed_size_list{size}, got {kind}")
-    value_type = kind.value_type
-    numeric = pa.types.is_integer(value_type) or pa.types.is_boolean(value_type)
-    if not (numeric or (floating and pa.types.is_floating(value_type))):
-        raise ValueError(f"{source}: column {name!r} holds {value_type}, not numbers")
-    array = column.combine_chunks()
-    # flatten() honours slicing offsets, unlike .values; null children would be corrupt data.
-    values = array.flatten()
-    if values.null_count:
-        raise ValueError(f"{source}: column {name!r} has null entries inside its lists")
-    return values.to_numpy(zero_copy_only=False).reshape(len(array), kind.list_size)
-
-
-def first_line(error: BaseException) -> str:
-    text = str(error).strip()
-    return text.splitlines()[0] if text else type(error).__name__

@@ -1,0 +1,82 @@
+"""Columns of a Parquet file as numpy arrays, with one-line errors naming the file.
+
+Generic (no poker, no Gymnasium): the poker decision tables (:mod:`pokerirl.datasets.decisions`),
+the environments' rollouts (:meth:`pokerirl.irl.Transitions.from_parquet`) and the reward
+card's states (:mod:`pokerirl.agents.reward_card`) all read their files through it. It sits in
+the lowest layer so that each of those layers may use it.
+
+>>> import pyarrow as pa
+>>> table = pa.table({"x": pa.array([[1, 2], [3, 4]], pa.list_(pa.int8(), 2))})
+>>> fixed_width(table, "x", 2, "t").tolist()
+[[1, 2], [3, 4]]
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+import pyarrow as pa
+import pyarrow.parquet as pq
+
+
+def read_parquet(
+    path: str | os.PathLike[str],
+    required: Sequence[str],
+    optional: Sequence[str] = (),
+    *,
+    what: str,
+) -> pa.Table:
+    """The ``required`` columns (and the ``optional`` ones present) of the Parquet file at
+    ``path``: ``FileNotFoundError`` if it is missing, else a one-line ``ValueError`` naming it.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(f"{what} not found: {path}")
+    # Through a file object: pyarrow cannot open a path whose name is not UTF-8.
+    with open(path, "rb") as file:
+        try:
+            parquet = pq.ParquetFile(file)
+            schema = parquet.schema_arrow
+        except (pa.ArrowException, OSError) as error:
+            raise ValueError(f"cannot read {path} as Parquet: {first_line(error)}") from None
+        missing = [name for name in required if name not in schema.names]
+        if missing:
+            raise ValueError(f"{path} lacks required column(s): {', '.join(missing)}")
+        columns = [*required, *(c for c in optional if c in schema.names)]
+        try:
+            return parquet.read(columns=columns)
+        except (pa.ArrowException, OSError) as error:
+            raise ValueError(f"cannot read {path}: {first_line(error)}") from None
+
+
+def fixed_width(
+    table: pa.Table, name: str, width: int | None, source: str, *, floating: bool = False
+) -> np.ndarray:
+    """A fixed_size_list column as an (N, width) numpy array, via its flat child values.
+
+    ``width`` None accepts any list size; ``floating`` accepts float values too.
+    """
+    column = table.column(name)
+    kind = column.type
+    if not pa.types.is_fixed_size_list(kind) or (width is not None and kind.list_size != width):
+        size = "" if width is None else f"[{width}]"
+        raise ValueError(f"{source}: column {name!r} must be fixed_size_list{size}, got {kind}")
+    value_type = kind.value_type
+    numeric = pa.types.is_integer(value_type) or pa.types.is_boolean(value_type)
+    if not (numeric or (floating and pa.types.is_floating(value_type))):
+        raise ValueError(f"{source}: column {name!r} holds {value_type}, not numbers")
+    array = column.combine_chunks()
+    # flatten() honours slicing offsets, unlike .values; null children would be corrupt data.
+    values = array.flatten()
+    if values.null_count:
+        raise ValueError(f"{source}: column {name!r} has null entries inside its lists")
+    return values.to_numpy(zero_copy_only=False).reshape(len(array), kind.list_size)
+
+
+def first_line(error: BaseException) -> str:
+    """The first line of an error's message (its type's name when it has none)."""
+    text = str(error).strip()
+    return text.splitlines()[0] if text else type(error).__name__

@@ -1,0 +1,40 @@
+"""Poker decision tables as :class:`~pokerirl.irl.Transitions`, the trainer's data.
+
+The table is read and validated below ``irl/`` (:mod:`pokerirl.datasets.decisions`, numpy
+only); here, above both, its arrays become ``Transitions``. ``irl/`` itself knows nothing of
+poker.
+
+>>> from pokerirl.datasets.toy import toy_expert_table
+>>> data = transitions_from_arrow(toy_expert_table(num_hands=30, seed=1))
+>>> data.discrete, data.obs_dim, data.action_dim
+(True, 72, 4)
+"""
+
+from __future__ import annotations
+
+import os
+
+import pyarrow as pa
+
+from pokerirl.datasets.decisions import DecisionArrays, decisions_from_arrow, read_decisions
+from pokerirl.irl.transitions import Transitions
+
+
+def read_table(path: str | os.PathLike[str]) -> Transitions:
+    """The decision table at ``path`` (``pokerirl ingest``'s) as ``Transitions``.
+
+    Raises ``FileNotFoundError`` for a missing file and ``ValueError`` for anything else wrong
+    (see :func:`pokerirl.datasets.decisions.read_decisions`).
+    """
+    return as_transitions(read_decisions(path))
+
+
+def transitions_from_arrow(table: pa.Table, *, source: str = "table") -> Transitions:
+    """An Arrow table with the decision-table schema as ``Transitions``, validated."""
+    return as_transitions(decisions_from_arrow(table, source=source))
+
+
+def as_transitions(decisions: DecisionArrays) -> Transitions:
+    return Transitions.from_arrays(
+        decisions.obs, decisions.action_ids, **decisions.transitions_arguments()
+    )

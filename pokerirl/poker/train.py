@@ -1,0 +1,329 @@
+"""``pokerirl train``: AIRL / H-AIRL on a poker decision table, one run or several.
+
+The run folder's format and the trainer are poker-free (:mod:`pokerirl.irl.run`,
+:mod:`pokerirl.irl.airl`); this module adds what is poker's: reading the decision table
+(:func:`pokerirl.poker.read_table`), the reward card of a table with cards
+(``reward_card.json`` and ``reward_card.png``, :mod:`pokerirl.agents.reward_card`), and the
+fan-out of several runs on an execution backend. A folder of several runs holds ``run-<k>``
+folders, each with seed ``seed + k``, and ``summary.json`` (mean and std over runs) with a
+banded plot.
+
+A finished folder is never modified in place: a run is written into a hidden temporary folder
+beside it and renamed into place at the end (replacing an old run only with ``overwrite``).
+Errors are :class:`~pokerirl.irl.RunError` s naming the folder, never a command-line flag; the
+ones a command could get past carry a :class:`~pokerirl.errors.Remedy`.
+
+>>> import tempfile, pyarrow.parquet as pq
+>>> from pokerirl.datasets.toy import toy_expert_table
+>>> from pokerirl.irl import load_config, load_reward
+>>> tmp = Path(tempfile.mkdtemp())
+>>> pq.write_table(toy_expert_table(num_hands=200), tmp / "table.parquet")
+>>> config = load_config("hairl", overrides={"epochs": 2, "batch_size": 64})
+>>> summary = train_table(tmp / "table.parquet", tmp / "run", config=config, progress=False)
+>>> sorted(summary.baselines)
+['bc', 'legal_majority', 'majority']
+>>> reward = load_reward(tmp / "run")
+>>> reward(np.zeros((3, 72), np.uint8), np.array([0, 1, 3])).dtype
+dtype('float32')
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import tempfile
+import uuid
+from collections.abc import Iterator
+from contextlib import contextmanager
+from dataclasses import replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import torch
+
+from pokerirl.atomic import make_shareable, write_text
+from pokerirl.errors import Remedy
+from pokerirl.execution import (
+    Backend,
+    UnitConflict,
+    bytes_fingerprint,
+    load_unit_folder,
+    map_units,
+    save_unit_folder,
+)
+from pokerirl.irl.airl import resolve_device
+from pokerirl.irl.config import AIRLConfig
+from pokerirl.irl.plots import plot_bands
+from pokerirl.irl.run import (
+    BASELINES_FILE,
+    CONFIG_FILE,
+    METRICS_FILE,
+    SUMMARY_FILE,
+    TIMINGS_FILE,
+    RunError,
+    RunSummary,
+    summarize,
+    train_into,
+)
+from pokerirl.irl.transitions import Transitions
+from pokerirl.poker.data import read_table
+
+CARD_COLUMNS = ("hole_cards", "board")  # what the card reads beyond the trainer's columns
+
+
+# --------------------------------------------------------------------------- one run
+
+
+def train_table(
+    table: str | os.PathLike[str],
+    out_dir: str | os.PathLike[str],
+    *,
+    algo: str = "hairl",
+    config: AIRLConfig | None = None,
+    device: str = "cpu",
+    progress: bool = True,
+    overwrite: bool = False,
+) -> RunSummary:
+    """Train on a Parquet decision table and write the run folder ``out_dir``.
+
+    Validation is a seeded share of the *hands* (``config.val_fraction``), never of rows.
+    """
+    config = config or AIRLConfig.for_algo(algo)
+    resolve_device(device)  # fail before reading a large table
+    out = Path(out_dir)
+    check_destination(out, overwrite=overwrite)
+    data = read_table(table)
+    with staged_folder(out, overwrite=overwrite) as folder:
+        summary = train_table_into(
+            data, folder, algo=algo, config=config, device=device, progress=progress, table=table
+        )
+    return replace(summary, out_dir=out)
+
+
+def train_table_into(
+    data: Transitions,
+    folder: Path,
+    *,
+    algo: str,
+    config: AIRLConfig,
+    device: str = "cpu",
+    progress: bool = False,
+    table: str | os.PathLike[str] | None = None,
+    table_file: str | os.PathLike[str] | None = None,
+) -> RunSummary:
+    """:func:`pokerirl.irl.run.train_into`, then the reward card.
+
+    ``table`` is the table's path for the record; ``table_file`` the file to read the reward
+    card's states from (default ``table``)."""
+    summary = train_into(
+        data, folder, algo=algo, config=config, device=device, progress=progress, data_path=table
+    )
+    write_reward_card(folder, table_file or table)
+    return summary
+
+
+def write_reward_card(folder: Path, table: str | os.PathLike[str] | None) -> None:
+    """The run's reward card over its validation hands, when ``table`` has the cards."""
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    if table is None:
+        return
+    try:
+        names = pq.read_schema(table).names
+    except (OSError, pa.ArrowException):
+        return
+    if all(name in names for name in CARD_COLUMNS):
+        from pokerirl.agents.reward_card import run_card, write_card
+
+        write_card(run_card(folder, table), folder)
+
+
+# --------------------------------------------------------------------------- several runs
+
+
+def train_unit(
+    table: bytes, table_path: str, algo: str, settings: dict[str, Any], device: str
+) -> dict[str, Any]:
+    """One run of a fan-out: a top-level, picklable function of plain arguments.
+
+    The table arrives as bytes and the run folder leaves as bytes (``files``; the driver
+    writes them), so a worker needs no shared filesystem. Pins torch to one thread
+    (restored after) and seeds from ``settings["seed"]``.
+    """
+    threads = torch.get_num_threads()
+    torch.set_num_threads(1)
+    try:
+        with tempfile.TemporaryDirectory(prefix="pokerirl-run-") as scratch:
+            path = Path(scratch) / "table.parquet"
+            path.write_bytes(table)
+            torch.manual_seed(settings["seed"])
+            run = Path(scratch) / "run"
+            train_table_into(
+                read_table(path),
+                run,
+                algo=algo,
+                config=AIRLConfig(**settings),
+                device=device,
+                table=table_path,
+                table_file=path,
+            )
+            files = {f.name: f.read_bytes() for f in sorted(run.iterdir()) if f.is_file()}
+    finally:
+        torch.set_num_threads(threads)
+    return {"files": files}
+
+
+def _run_result(folder: Path) -> dict[str, Any]:
+    """What :func:`~pokerirl.irl.run.summarize` needs of a finished run folder."""
+    record = json.loads((folder / CONFIG_FILE).read_text(encoding="utf-8"))
+    timings_path = folder / TIMINGS_FILE
+    timings = json.loads(timings_path.read_text()) if timings_path.is_file() else {}
+    return {
+        "out": str(folder),
+        "seed": record["hyperparameters"]["seed"],
+        "metrics": [
+            json.loads(line) for line in (folder / METRICS_FILE).read_text().splitlines() if line
+        ],
+        "baselines": json.loads((folder / BASELINES_FILE).read_text()),
+        "samples_per_second": timings.get("samples_per_second", float("nan")),
+        "train_rows": record["data"]["train_rows"],
+        "val_rows": record["data"]["val_rows"],
+    }
+
+
+def train_runs(
+    table: str | os.PathLike[str],
+    out_dir: str | os.PathLike[str],
+    *,
+    runs: int,
+    algo: str = "hairl",
+    config: AIRLConfig | None = None,
+    device: str = "cpu",
+    progress: bool = True,
+    overwrite: bool = False,
+    backend: Backend | None = None,
+) -> RunSummary:
+    """``runs`` runs of ``config`` with seeds ``seed + k`` into ``out_dir/run-<k>``, then
+    ``summary.json`` and ``alignment_bands.png``. One run keeps the single-folder layout.
+
+    Each run is a unit of :func:`pokerirl.execution.map_units` on ``backend`` (default: in
+    this process): written atomically with a record of its settings and table, reused by a
+    rerun with the same ones, recomputed when corrupt, refused when made with other
+    settings unless ``overwrite``. Results do not depend on the backend.
+    """
+    if runs < 1:
+        raise ValueError(f"runs must be at least 1, got {runs}")
+    config = config or AIRLConfig.for_algo(algo)
+    if runs == 1:
+        return train_table(
+            table,
+            out_dir,
+            algo=algo,
+            config=config,
+            device=device,
+            progress=progress,
+            overwrite=overwrite,
+        )
+    resolve_device(device)
+    out = Path(out_dir)
+    if out.exists() and not out.is_dir():
+        raise RunError(f"{out} exists and is not a folder", remedy=Remedy.ELSEWHERE)
+    if (out / CONFIG_FILE).is_file():
+        raise RunError(
+            f"{out} holds a single run, not a folder of {runs} runs", remedy=Remedy.ELSEWHERE
+        )
+    read_table(table)  # a bad table fails once, before any unit starts
+    table_bytes = Path(table).read_bytes()
+    shared = {"algo": algo, "device": device, "table": bytes_fingerprint(table_bytes)}
+    unit_configs = [
+        {**shared, "settings": {**config.to_dict(), "seed": config.seed + k}} for k in range(runs)
+    ]
+    folders = [out / f"run-{k}" for k in range(runs)]
+    try:
+        todo = [
+            k
+            for k in range(runs)
+            if load_unit_folder(folders[k], unit_configs[k], overwrite=overwrite) is None
+        ]
+    except UnitConflict as error:
+        raise RunError(str(error)) from None
+
+    def save(index: int, result: dict[str, Any]) -> None:
+        k = todo[index]
+        files = dict(result["files"])
+        timings = {TIMINGS_FILE: files.pop(TIMINGS_FILE)}
+        save_unit_folder(folders[k], files, unit_configs[k], unhashed=timings)
+
+    units = [
+        (table_bytes, str(Path(table).resolve()), algo, unit_configs[k]["settings"], device)
+        for k in todo
+    ]
+    map_units(
+        train_unit,
+        units,
+        backend=backend or Backend(),
+        progress=progress,
+        desc=f"{algo} runs",
+        reused=runs - len(todo),
+        on_result=save,
+        labels=[f"run-{k}" for k in todo],
+    )
+    for folder in folders:  # runs of an older pokerirl, reused: add their card
+        if not (folder / "reward_card.json").is_file():
+            write_reward_card(folder, table)
+    results = [_run_result(folder) for folder in folders]
+    summary = summarize(results)
+    write_text(out / SUMMARY_FILE, json.dumps(summary, indent=2) + "\n")
+    plot_bands(summary, out)
+    first = results[0]
+    return RunSummary(
+        out_dir=out,
+        metrics=first["metrics"],
+        baselines=first["baselines"],
+        samples_per_second=float(np.nanmean([r["samples_per_second"] for r in results])),
+        train_rows=first["train_rows"],
+        val_rows=first["val_rows"],
+        runs=tuple(results),
+    )
+
+
+# --------------------------------------------------------------------------- folders
+
+
+def check_destination(out: Path, *, overwrite: bool) -> None:
+    """Refuse an ``out`` that is a file, or a non-empty folder unless ``overwrite``."""
+    if out.exists() and not out.is_dir():
+        raise RunError(f"{out} exists and is not a folder", remedy=Remedy.ELSEWHERE)
+    if out.is_dir() and any(out.iterdir()) and not overwrite:
+        raise RunError(f"{out} already holds files (a finished run?)", remedy=Remedy.REPLACE)
+
+
+@contextmanager
+def staged_folder(out: Path, *, overwrite: bool) -> Iterator[Path]:
+    """Yield a new hidden folder beside ``out``; on success it replaces ``out``.
+
+    A failure or an interruption deletes it and leaves ``out`` as it was (a kill -9 leaves
+    the hidden ``.<name>.*.tmp`` folder behind, never a change to ``out``).
+    """
+    check_destination(out, overwrite=overwrite)
+    try:
+        out.parent.mkdir(parents=True, exist_ok=True)
+        folder = Path(tempfile.mkdtemp(prefix=f".{out.name}.", suffix=".tmp", dir=out.parent))
+    except OSError as error:
+        raise RunError(f"{out}: cannot write there ({error.strerror or error})") from None
+    make_shareable(folder)
+    try:
+        yield folder
+        if out.is_dir() and any(out.iterdir()):
+            old = out.parent / f".{out.name}.{uuid.uuid4().hex}.old"
+            os.replace(out, old)
+            os.replace(folder, out)
+            shutil.rmtree(old, ignore_errors=True)
+        else:
+            os.replace(folder, out)  # onto nothing, or onto an empty folder
+    except BaseException:
+        shutil.rmtree(folder, ignore_errors=True)
+        raise
