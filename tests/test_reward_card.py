@@ -118,3 +118,23 @@ def test_card_round_trips_and_a_train_run_writes_one(tmp_path: Path) -> None:
     assert "prediction:" in result.output
     bad = CliRunner().invoke(app, ["reward-card", str(tmp_path), "--table", "x", "--out", "y"])
     assert bad.exit_code == 1 and "not a reward run" in bad.output
+
+
+def test_fan_out_runs_write_the_same_card_bytes_naming_the_real_table(tmp_path: Path) -> None:
+    # A fan-out run trains on a worker's scratch copy of the table; its card must name the
+    # table given, not the copy, so the same inputs give the same bytes.
+    from pokerirl.datasets.ingest import ingest
+    from pokerirl.game.synth import write_synthetic_month
+    from pokerirl.irl import AIRLConfig
+    from pokerirl.poker import train_runs
+
+    month = write_synthetic_month(tmp_path, hands=200, seed=1)
+    table = tmp_path / "table.parquet"
+    ingest([month], table)
+    config = AIRLConfig.for_algo("hairl", epochs=1)
+    for name in ("a", "b"):
+        train_runs(table, tmp_path / name, runs=2, config=config, progress=False)
+    for k in range(2):
+        first = (tmp_path / "a" / f"run-{k}" / CARD_FILE).read_bytes()
+        assert first == (tmp_path / "b" / f"run-{k}" / CARD_FILE).read_bytes()
+        assert str(table) in json.loads(first)["source"]

@@ -34,7 +34,7 @@ from __future__ import annotations
 import io
 import json
 import os
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 from typing import Any
 
@@ -398,14 +398,19 @@ def read_card(folder: str | os.PathLike[str]) -> RewardCard | None:
         return None
 
 
-def run_card(run_dir: str | os.PathLike[str], table: str | os.PathLike[str]) -> RewardCard:
+def run_card(
+    run_dir: str | os.PathLike[str], table: str | os.PathLike[str], *, label: str | None = None
+) -> RewardCard:
     """The card of a run folder's reward over its validation hands (``split.json``) of
-    ``table``, the decision table it was trained on."""
+    ``table``, the decision table it was trained on; ``label`` names the table in the card
+    (default: ``table``'s path; a worker's scratch copy passes the real table's path)."""
     from pokerirl.agents.rewards import load_reward_source
 
     split = json.loads((Path(run_dir) / "split.json").read_text())
     groups = {str(g) for g in split["validation_groups"]}
     states = CardStates.from_table(table, groups=groups)
+    if label is not None:
+        states = replace(states, source=f"{label} ({len(groups)} hands)")
     record = json.loads((Path(run_dir) / "config.json").read_text())
     reward = load_reward_source(run_dir)
     reward.name = f"{record['algo']} reward (seed {record['hyperparameters']['seed']})"

@@ -120,12 +120,15 @@ def train_table_into(
     summary = train_into(
         data, folder, algo=algo, config=config, device=device, progress=progress, data_path=table
     )
-    write_reward_card(folder, table_file or table)
+    write_reward_card(folder, table_file or table, label=None if table is None else str(table))
     return summary
 
 
-def write_reward_card(folder: Path, table: str | os.PathLike[str] | None) -> None:
-    """The run's reward card over its validation hands, when ``table`` has the cards."""
+def write_reward_card(
+    folder: Path, table: str | os.PathLike[str] | None, *, label: str | None = None
+) -> None:
+    """The run's reward card over its validation hands, when ``table`` has the cards
+    (``label``: the table's name in the card, when ``table`` is a scratch copy)."""
     import pyarrow as pa
     import pyarrow.parquet as pq
 
@@ -138,7 +141,7 @@ def write_reward_card(folder: Path, table: str | os.PathLike[str] | None) -> Non
     if all(name in names for name in CARD_COLUMNS):
         from pokerirl.agents.reward_card import run_card, write_card
 
-        write_card(run_card(folder, table), folder)
+        write_card(run_card(folder, table, label=label), folder)
 
 
 # --------------------------------------------------------------------------- several runs
