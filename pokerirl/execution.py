@@ -360,7 +360,7 @@ def sweep_leftovers(temp: str | os.PathLike[str] | None = None) -> list[Path]:
     """Remove the scratch and private-Ray folders in ``temp`` (default: the temporary folder)
     left by processes that are gone: the pid in the name is not running, and nobody holds the
     folder's lock. Returns the folders removed."""
-    removed = []
+    removed: list[Path] = []
     try:
         entries = list(Path(temp or tempfile.gettempdir()).iterdir())
     except OSError:
@@ -439,7 +439,7 @@ def _map_local(
     # Not a plain fork: a forked child can deadlock on the driver's torch thread pools. A fork
     # server is a clean process that imports the unit's module once; workers fork from it.
     # (It exits when the driver dies, and its workers with it.)
-    context = multiprocessing.get_context(
+    context: Any = multiprocessing.get_context(
         "forkserver" if "forkserver" in multiprocessing.get_all_start_methods() else "spawn"
     )
     if context.get_start_method() == "forkserver" and fn.__module__ not in ("__main__", None):

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
+from typing import Any
 
 import typer
 
@@ -314,7 +315,7 @@ def train(
         fail(INTERRUPTED, 130)
     from pokerirl.agents.reward_card import read_card
 
-    single = {"metrics": summary.metrics, "baselines": summary.baselines}
+    single: dict[str, Any] = {"metrics": summary.metrics, "baselines": summary.baselines}
     for run in summary.runs or (single,):
         last, base = run["metrics"][-1], run["baselines"]
         name = f"{algo} {Path(run['out']).name}" if "out" in run else algo

@@ -514,7 +514,7 @@ class _Loop:
         width = self.action_vectors.shape[1]
         draws: dict[str, list[Tensor]] = {"perm": [], "u": [], "eps": [], "pi_eps": [], "sig": []}
         for gen in self.generators:
-            kw = {"generator": gen, "device": self.device}
+            kw: dict[str, Any] = {"generator": gen, "device": self.device}
             draws["perm"].append(torch.randperm(n, **kw)[: steps * batch].view(steps, batch))
             if self.discrete:
                 if self.adversarial:  # behaviour cloning draws its shuffles only
@@ -646,7 +646,8 @@ class _Loop:
 
     def fast_step(self, batch: dict[str, Tensor], draw: dict[str, Tensor], step: int) -> Tensor:
         """:meth:`step` with the hand-derived gradients of :mod:`pokerirl.irl.fast`."""
-        reward, policy = self.rewards.modules[0], self.policies.modules[0]
+        reward: Any = self.rewards.modules[0]  # fast.supports() checked their types
+        policy: Any = self.policies.modules[0]
         obs, expert = batch["obs"][0], batch["expert"][0]
         mask = batch["mask"][0] if "mask" in batch else None
         env = batch["env"][0] if "env" in batch else None

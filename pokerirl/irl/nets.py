@@ -28,6 +28,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import torch
 from torch import Tensor, nn
@@ -219,6 +220,8 @@ class GaussianPolicy(nn.Module):
             obs_dim, hidden, self.action_dim, activation=activation, layer_norm=layer_norm
         )
         self.log_std = nn.Parameter(torch.full((self.action_dim,), -0.5))
+        self.low: Tensor
+        self.high: Tensor
         self.register_buffer("low", torch.tensor(low, dtype=torch.float32))
         self.register_buffer("high", torch.tensor(high, dtype=torch.float32))
 
@@ -242,7 +245,7 @@ def build_nets(
 
     Initialized from torch's global generator: seed it first (``torch.manual_seed``).
     """
-    style = {"activation": spec.activation, "layer_norm": spec.layer_norm}
+    style: dict[str, Any] = {"activation": spec.activation, "layer_norm": spec.layer_norm}
     reward: nn.Module
     if spec.reward_family == "shaped":
         reward = ShapedReward(

@@ -198,8 +198,8 @@ def save_run(
     if isinstance(getattr(policy, "low", None), Tensor):
         space: dict[str, Any] = {
             "type": "box",
-            "low": policy.low.tolist(),  # type: ignore[union-attr]
-            "high": policy.high.tolist(),  # type: ignore[union-attr]
+            "low": policy.get_buffer("low").tolist(),
+            "high": policy.get_buffer("high").tolist(),
         }
     else:
         space = {"type": "discrete", "num_actions": int(policy.action_dim)}  # type: ignore[arg-type]
@@ -311,7 +311,7 @@ def _architecture_problem(arch: Mapping[str, Any]) -> str | None:
         return "'action_space.num_actions' must be an integer"
     if space["type"] == "box":
         low, high = space.get("low"), space.get("high")
-        if not (_numbers(low) and _numbers(high) and len(low) == len(high)):
+        if not (_numbers(low) and _numbers(high) and len(low or ()) == len(high or ())):
             return "'action_space.low' and 'high' must be equal-length lists of numbers"
     for key in ("reward_hidden", "policy_hidden"):
         if not widths(arch.get(key)):

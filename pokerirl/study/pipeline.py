@@ -262,7 +262,9 @@ def _read_jsonl(path: Path) -> list[dict[str, Any]]:
     return [json.loads(line) for line in path.read_text().splitlines() if line.strip()]
 
 
-def mean_std(values: Sequence[float] | np.ndarray, axis: int | None = None) -> dict[str, Any]:
+def mean_std(
+    values: Sequence[float] | Sequence[Sequence[float]] | np.ndarray, axis: int | None = None
+) -> dict[str, Any]:
     """Mean and sample std (ddof 1; 0 for one value), as floats or lists."""
     array = np.asarray(values, dtype=float)
     count = array.shape[0] if axis == 0 else array.size
