@@ -198,3 +198,6 @@ def test_bad_input() -> None:
         LockstepDQN("Pendulum-v1", MOUNTAIN, seeds=[0])
     with pytest.raises(ValueError, match="rewards: 1 for 2 runs"):
         LockstepDQN("CartPole-v1", MOUNTAIN, seeds=[0, 1], rewards=[None])
+    with pytest.raises(ValueError, match=r"missing q_net.q_net.0.bias, q_net.q_net.2.weight"):
+        LockstepDQN("CartPole-v1", dataclasses.replace(MOUNTAIN, net_arch=(8,)), seeds=[0],
+                    weights=[{"q_net.q_net.0.weight": torch.zeros(8, 4)}])

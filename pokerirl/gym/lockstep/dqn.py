@@ -1,4 +1,4 @@
-"""DQN for R runs in lock-step: stacked Q-networks (R, in, out) driven by ``torch.baddbmm``.
+"""DQN for R runs in lock-step: stacked Q-networks (R, out, in) driven by ``torch.baddbmm``.
 
 Follows SB3 2.9's DQN (dqn/dqn.py, common/off_policy_algorithm.py, common/buffers.py
 ``ReplayBuffer``, dqn/policies.py) for the settings ``pokerirl.gym.presets.DQNSettings`` holds,
@@ -205,6 +205,12 @@ class LockstepDQN:
         if weights is None:
             weights = [self._init_weights(seed) for seed in self.seeds]
         weights = [dict(w) for w in weights]
+        for r, w in enumerate(weights):
+            missing = [f"q_net.{key}.{part}" for key in layer_keys(n_layers)
+                       for part in ("weight", "bias") if f"q_net.{key}.{part}" not in w]
+            if missing:
+                raise ValueError(f"weights[{r}]: not an SB3 DQNPolicy state_dict of net_arch "
+                                 f"{self.hidden} (missing {', '.join(missing)})")
         for w in weights:
             for key in layer_keys(n_layers):  # target as SB3 builds it: a copy of q_net
                 for part in ("weight", "bias"):
