@@ -16,8 +16,9 @@ from pokerirl.gym.experts import make_model
 from pokerirl.gym.lockstep.dqn import LockstepDQN, clip_grad_norm_per_run, exploration_rate
 from pokerirl.gym.presets import TASKS, DQNSettings, RLSettings
 
-MOUNTAIN = TASKS["MountainCar-v0"].rl.dqn
-assert MOUNTAIN is not None
+_PRESET = TASKS["MountainCar-v0"].rl.dqn
+assert _PRESET is not None
+MOUNTAIN: DQNSettings = _PRESET
 CARTPOLE = dataclasses.replace(DQNSettings(), learning_rate=2.3e-3, batch_size=64,
                                buffer_size=20_000, learning_starts=1000, gamma=0.99,
                                target_update_interval=10, train_freq=256, gradient_steps=128,
@@ -80,18 +81,20 @@ def test_clip_grad_norm_per_run_matches_torch() -> None:
     """Each run's slices clipped as torch's clip_grad_norm_ clips that run's own parameters."""
     gen = torch.Generator().manual_seed(0)
     shapes, scales = [(3, 2, 8), (3, 1, 8), (3, 8, 3)], torch.tensor([0.1, 10.0, 100.0])
+    grads = [torch.randn(shape, generator=gen) * scales.view(3, 1, 1) for shape in shapes]
     params = [torch.nn.Parameter(torch.zeros(shape)) for shape in shapes]
-    for p in params:
-        p.grad = torch.randn(p.shape, generator=gen) * scales.view(3, 1, 1)
+    for p, grad in zip(params, grads, strict=True):
+        p.grad = grad.clone()
     alone = [[torch.nn.Parameter(p.data[r].clone()) for p in params] for r in range(3)]
     for r, run in enumerate(alone):
-        for p, q in zip(run, params, strict=True):
-            p.grad = q.grad[r].clone()
+        for p, grad in zip(run, grads, strict=True):
+            p.grad = grad[r].clone()
     clip_grad_norm_per_run(params, 10.0, 3)
     for r, run in enumerate(alone):
         norm = torch.nn.utils.clip_grad_norm_(run, 10.0)
         assert (norm > 10) == (r > 0)  # run 0 below the bound, runs 1 and 2 above it
         for p, q in zip(run, params, strict=True):
+            assert p.grad is not None and q.grad is not None
             torch.testing.assert_close(q.grad[r], p.grad, atol=1e-6, rtol=1e-6)
 
 
@@ -116,7 +119,7 @@ def test_exploration_and_target_updates_match_sb3(monkeypatch: pytest.MonkeyPatc
             self.seen: list[tuple[int, float]] = []
 
         def _on_step(self) -> bool:
-            self.seen.append((self.model.num_timesteps, self.model.exploration_rate))
+            self.seen.append((model.num_timesteps, model.exploration_rate))
             return True
 
     record = Record()

@@ -150,6 +150,7 @@ class StackedQNet(torch.nn.Module):
     def run_state_dict(self, r: int, prefix: str) -> dict[str, torch.Tensor]:
         out = {}
         for key, layer in zip(layer_keys(len(self.layers)), self.layers, strict=True):
+            assert isinstance(layer, _StackedLinear)
             out[f"{prefix}{key}.weight"] = layer.run_weight(r)
             out[f"{prefix}{key}.bias"] = layer.bias.data[r, 0].clone()
         return out
