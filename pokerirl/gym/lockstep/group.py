@@ -37,6 +37,21 @@ class LockstepAlgo(Protocol):
     def predict(self, obs: np.ndarray) -> np.ndarray: ...
 
 
+def lockstep_class(algo: str) -> type:
+    """LockstepPPO or LockstepDQN; one line when the lock-step DQN is not there yet."""
+    if algo == "dqn":
+        try:
+            from pokerirl.gym.lockstep.dqn import LockstepDQN  # type: ignore[import-not-found]
+        except ModuleNotFoundError as error:
+            if error.name != "pokerirl.gym.lockstep.dqn":
+                raise
+            raise ValueError(NO_DQN) from None
+        return LockstepDQN
+    from pokerirl.gym.lockstep.ppo import LockstepPPO
+
+    return LockstepPPO
+
+
 def make_group(
     env_id: str,
     settings: RLSettings,
@@ -45,18 +60,8 @@ def make_group(
     rewards: Sequence[RewardCallable | None],
 ) -> LockstepAlgo:
     """The lock-step algorithm of ``settings.algo`` for these runs."""
-    if settings.algo == "dqn":
-        try:
-            from pokerirl.gym.lockstep.dqn import LockstepDQN  # type: ignore[import-not-found]
-        except ModuleNotFoundError as error:
-            if error.name != "pokerirl.gym.lockstep.dqn":
-                raise
-            raise ValueError(NO_DQN) from None
-        return LockstepDQN(env_id, settings.dqn, seeds=seeds, rewards=rewards)
-    from pokerirl.gym.lockstep.ppo import LockstepPPO
-
-    assert settings.ppo is not None
-    return LockstepPPO(env_id, settings.ppo, seeds=seeds, rewards=rewards)
+    algo_settings = settings.dqn if settings.algo == "dqn" else settings.ppo
+    return lockstep_class(settings.algo)(env_id, algo_settings, seeds=seeds, rewards=rewards)
 
 
 class GroupEvaluator:
