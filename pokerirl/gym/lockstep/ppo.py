@@ -77,6 +77,11 @@ class StackedLinear(torch.nn.Module):
         self.bias = bias  # (R, 1, out)
 
     def forward(self, x: torch.Tensor) -> torch.Tensor:
+        if self.weight.shape[-1] == 1:
+            # One output (the value head): a row-wise dot product. baddbmm's kernel for a
+            # (B, in) x (in, 1) product differs between R = 1 and R > 1, and with it the
+            # rounding; this keeps run r of a group bit-equal to a group of one.
+            return (x * self.weight.transpose(1, 2)).sum(-1, keepdim=True) + self.bias
         return torch.baddbmm(self.bias, x, self.weight)
 
 
@@ -131,7 +136,11 @@ class StackedPolicy(torch.nn.Module):
         if log_std is not None:
             stacked["log_std"] = log_std  # (R, act_dim)
         R = len(weights)
-        self.flat = torch.cat([t.reshape(R, -1).float() for t in stacked.values()], 1)
+        flat = torch.cat([t.reshape(R, -1).float() for t in stacked.values()], 1)
+        # Rows padded to a multiple of 64 floats, so every run's row meets the vectorised
+        # kernels (fused Adam's) at the same lanes, with no scalar tail, whatever R: run r of
+        # a group then rounds exactly as a group of one (the padding's grads stay zero).
+        self.flat = torch.nn.functional.pad(flat, (0, -flat.shape[1] % 64))
         self.flat_grad = torch.zeros_like(self.flat)
         params: dict[str, torch.nn.Parameter] = {}
         offset = 0
