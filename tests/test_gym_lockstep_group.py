@@ -203,7 +203,7 @@ def test_gym_rl_lockstep_resumes_the_missing_run_only(tmp_path: Path) -> None:
 
 
 STUDY = ["gym", "study", "Acrobot-v1", "--runs", "2", "--transitions", "1200", "--epochs", "1",
-         "--eval-episodes", "1", "--timesteps", "1024", "--jobs", "1", "--quiet",
+         "--eval-episodes", "1", "--timesteps", "1024", "--jobs", "2", "--quiet",
          "--rl-backend", "lockstep"]
 
 
