@@ -235,3 +235,17 @@ def test_gym_study_lockstep_reuses_every_unit(tmp_path: Path) -> None:
     refused = CliRunner().invoke(app, [*STUDY[:-2], "--out", str(out)])
     assert refused.exit_code == 1
     assert "backend 'lockstep' -> None" in refused.output.strip().splitlines()[-1]
+
+
+def test_a_group_is_one_folder_of_runs() -> None:
+    """Study: one group per task and reward kind; sweep: one per point (its own rl/ folder)."""
+    from pokerirl.gym.study import rl_jobs, study_preset
+
+    preset = study_preset("quick", tasks=("Acrobot-v1",), runs=3)
+    jobs = [job for root in ("points/a", "points/b")
+            for job in rl_jobs(Path(root), "Acrobot-v1", "env", None, preset, backend="lockstep")]
+    groups: dict[tuple, list[int]] = {}
+    for job in jobs:
+        groups.setdefault(job.group_key(), []).append(job.seed)
+    assert sorted(groups.values()) == [[0, 1, 2], [0, 1, 2]]
+    assert {job.config(None)["backend"] for job in jobs} == {"lockstep"}
