@@ -155,23 +155,31 @@ class StackedPolicy(torch.nn.Module):
                                                                 params[f"{name}.bias"])
         self.log_std = params.get("log_std")  # (R, act_dim), None for discrete actions
 
-    def _mlp(self, net: str, x: torch.Tensor) -> torch.Tensor:
-        for i in range(len(self.arch.hidden)):
-            x = self.act(self.layers[f"mlp_extractor_{net}_{2 * i}"](x))
+        # The layers' forwards in order, called directly: nn.Module's __call__ and ModuleDict
+        # lookups were a fifth of a rollout step's Python time.
+        self._pi = [self.layers[f"mlp_extractor_policy_net_{2 * i}"].forward
+                    for i in range(len(arch.hidden))]
+        self._vf = [self.layers[f"mlp_extractor_value_net_{2 * i}"].forward
+                    for i in range(len(arch.hidden))]
+        self._action = self.layers["action_net"].forward
+        self._value = self.layers["value_net"].forward
+
+    def _mlp(self, layers: list[Callable[[torch.Tensor], torch.Tensor]], x: torch.Tensor
+             ) -> torch.Tensor:
+        for layer in layers:
+            x = self.act(layer(x))
         return x
 
     def forward(self, obs: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
         """obs (R, B, obs_dim) -> (logits or means (R, B, act_dim), values (R, B))."""
-        head = self.layers["action_net"](self._mlp("policy_net", obs))
-        values = self.layers["value_net"](self._mlp("value_net", obs)).squeeze(-1)
-        return head, values
+        return self.head(obs), self.values(obs)
 
     def values(self, obs: torch.Tensor) -> torch.Tensor:
-        return self.layers["value_net"](self._mlp("value_net", obs)).squeeze(-1)
+        return self._value(self._mlp(self._vf, obs)).squeeze(-1)
 
     def head(self, obs: torch.Tensor) -> torch.Tensor:
         """Logits or means (R, B, act_dim) only: what acting deterministically needs."""
-        return self.layers["action_net"](self._mlp("policy_net", obs))
+        return self._action(self._mlp(self._pi, obs))
 
     def log_prob_entropy(self, head: torch.Tensor, actions: torch.Tensor
                          ) -> tuple[torch.Tensor, torch.Tensor]:
