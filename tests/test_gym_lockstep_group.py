@@ -152,6 +152,12 @@ def test_dqn_without_the_lockstep_dqn_is_one_line(tmp_path: Path) -> None:
                                       str(out), "--rl-backend", "lockstep"])  # fmt: skip
     assert result.exit_code == 1 and result.output.strip() == f"error: {NO_DQN}"
     assert not out.exists()
+    for command in (["gym", "study", "MountainCar-v0"],
+                    ["sweep", "MountainCar-v0", "--param", "alpha=0,1"]):  # before any work
+        result = CliRunner().invoke(app, [*command, "--out", str(out), "--rl-backend",
+                                          "lockstep", "--quiet"])  # fmt: skip
+        assert result.exit_code == 1 and NO_DQN in result.output.strip().splitlines()[-1]
+        assert not out.exists()
 
 
 def test_sb3_rl_records_are_as_before() -> None:
