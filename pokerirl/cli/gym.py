@@ -30,6 +30,24 @@ gym_app = typer.Typer(
 app.add_typer(gym_app, name="gym")
 
 
+# sb3 stays the default until docs/lockstep.md's equivalence table holds for every task; then
+# lockstep becomes it (issue 19).
+RL_BACKEND = typer.Option(
+    "sb3", "--rl-backend", metavar="sb3|lockstep",
+    help="How RL runs train: SB3, one run at a time, or lockstep: a task's runs together in "
+    "one process (PPO only, for now).",
+)  # fmt: skip
+
+
+def _rl_backend(name: str) -> str:
+    """Refuse an unknown --rl-backend in one line (exit 2)."""
+    from pokerirl.gym.rl import RL_BACKENDS
+
+    if name not in RL_BACKENDS:
+        fail(f"--rl-backend must be one of {', '.join(RL_BACKENDS)}, got {name!r}", 2)
+    return name
+
+
 def _known_task(env: str) -> None:
     """Refuse an env id the toolkit has no settings for, naming the ones it has (exit 2)."""
     if env not in TASKS:
@@ -197,11 +215,16 @@ def gym_rl(
     eval_episodes: int = typer.Option(5, min=1, help="Episodes per point."),
     overwrite: bool = typer.Option(False, help="Replace runs trained with other settings."),
     threads: int = typer.Option(1, min=1, help="torch threads."),
+    rl_backend: str = RL_BACKEND,
 ) -> None:
     """Train SB3 PPO (DQN for MountainCar) on a learned reward; the curve is the true return.
 
-    Resumable: a rerun with the same settings keeps the finished runs; other settings are
-    refused unless --overwrite (OUT/rl.job.json records them)."""
+    With --rl-backend lockstep the unfinished runs train together in one process (run k is
+    the same run either way it is grouped). Resumable: a rerun with the same settings keeps
+    the finished runs; other settings (the backend too) are refused unless --overwrite
+    (OUT/rl.job.json records them)."""
+    from contextlib import ExitStack
+
     from pokerirl.gym.experts import CONFIG_FILE, METRICS_FILE, MODEL_FILE
     from pokerirl.gym.job import claim
     from pokerirl.gym.rl import mean_std, train_rl
@@ -209,6 +232,7 @@ def gym_rl(
 
     if (reward_run is None) == (not env_reward):
         fail("give exactly one of --reward-run DIR and --env-reward")
+    _rl_backend(rl_backend)
     _known_task(env)
     _folder_out(out)
     _gym_threads(threads)
@@ -231,27 +255,53 @@ def gym_rl(
             "timesteps": timesteps or TASKS[env].rl.timesteps,
             "evaluations": evaluations,
             "eval_episodes": eval_episodes,
+            # Only for lockstep: folders written before the switch keep their identity.
+            **({} if rl_backend == "sb3" else {"backend": rl_backend}),
         }
+        if rl_backend == "lockstep":
+            from pokerirl.gym.lockstep.group import lockstep_class, train_rl_group
+
+            lockstep_class(TASKS[env].rl.algo)  # no lock-step DQN yet: one line, before claim
         claim(out, "rl.job.json", identity, outputs=["run-*"], overwrite=overwrite)
-        finals: list[float] = []
+        reward_name = "env" if reward is None else str(reward_run)
+        found: dict[int, float] = {}
+        todo = []
         for k in range(runs):
             run = out / f"run-{k}"
             tidy(out, key=run.name)  # what a killed rerun left
             if all((run / name).is_file() for name in files):
-                finals.append(float(json.loads((run / CONFIG_FILE).read_text())["final_return"]))
-                continue
-            with staged_folder(run) as stage:  # a run is there whole, or not at all
-                result = train_rl(
+                found[k] = float(json.loads((run / CONFIG_FILE).read_text())["final_return"])
+            else:
+                todo.append(k)
+        if rl_backend == "sb3":
+            for k in todo:
+                with staged_folder(out / f"run-{k}") as stage:  # a run is whole, or not at all
+                    result = train_rl(
+                        env,
+                        reward=reward,
+                        reward_name=reward_name,
+                        seed=k,
+                        timesteps=timesteps,
+                        evaluations=evaluations,
+                        eval_episodes=eval_episodes,
+                        out=stage,
+                    )
+                found[k] = result.final_return
+        elif todo:
+            with ExitStack() as stack:  # every run of the group lands whole, or none does
+                stages = [stack.enter_context(staged_folder(out / f"run-{k}")) for k in todo]
+                results = train_rl_group(
                     env,
-                    reward=reward,
-                    reward_name="env" if reward is None else str(reward_run),
-                    seed=k,
+                    rewards=[reward] * len(todo),
+                    reward_names=[reward_name] * len(todo),
+                    seeds=todo,
                     timesteps=timesteps,
                     evaluations=evaluations,
                     eval_episodes=eval_episodes,
-                    out=stage,
+                    outs=stages,
                 )
-            finals.append(result.final_return)
+            found.update({k: result.final_return for k, result in zip(todo, results, strict=True)})
+        finals = [found[k] for k in range(runs)]
     except (ValueError, ImportError, KeyError) as error:
         fail(str(error))
     except KeyboardInterrupt:
@@ -441,12 +491,14 @@ def gym_study(
     ray: str | None = GYM_RAY,
     overwrite: bool = GYM_OVERWRITE,
     quiet: bool = GYM_QUIET,
+    rl_backend: str = RL_BACKEND,
 ) -> None:
     """The paper's Gymnasium study: shipped expert -> data -> IRL (AIRL and H-AIRL) -> RL (env
     reward, AIRL and H-AIRL rewards) -> summary.json, figures/ and report.md beside the
     authors' finals. Resumable: finished units are kept."""
     from pokerirl.gym.study import run_gym_study
 
+    _rl_backend(rl_backend)
     try:
         preset = _gym_preset(
             preset_name, task, runs=runs, seed=seed, transitions=transitions, epochs=epochs,
@@ -459,6 +511,7 @@ def gym_study(
             overwrite=overwrite,
             progress=not quiet,
             say=echo,
+            rl_backend=rl_backend,
         )
     except (ValueError, ImportError, OSError, execution.ExecutionError) as error:
         fail(error_line(error, out))
@@ -487,12 +540,14 @@ def sweep(
     ray: str | None = GYM_RAY,
     overwrite: bool = GYM_OVERWRITE,
     quiet: bool = GYM_QUIET,
+    rl_backend: str = RL_BACKEND,
 ) -> None:
     """One-factor-at-a-time ablation of H-AIRL (the paper's Figure 5): each point runs the IRL
     phase, then RL on its learned rewards; writes sweep.csv, sweep.json and PARAM.png."""
     from pokerirl.gym.study import GymStudyError
     from pokerirl.gym.sweep import parse_param, run_sweep
 
+    _rl_backend(rl_backend)
     try:
         params: dict[str, tuple[float, ...]] = {}
         for text in param:
@@ -513,6 +568,7 @@ def sweep(
             overwrite=overwrite,
             progress=not quiet,
             say=echo,
+            rl_backend=rl_backend,
         )
     except (ValueError, ImportError, OSError, execution.ExecutionError) as error:
         fail(error_line(error, out))

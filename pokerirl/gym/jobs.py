@@ -5,7 +5,10 @@ runs on any :mod:`pokerirl.execution` backend, with no shared filesystem):
 
 - :func:`collect_unit`: the shipped expert's transitions (``gym collect``) as Parquet bytes;
 - :func:`irl_unit`: one algorithm's IRL runs in lock-step (``gym irl``), as a folder's files;
-- :func:`rl_unit`: one RL run (``gym rl``) on the env reward or on one IRL run's reward.
+- :func:`rl_unit`: one RL run (``gym rl``) on the env reward or on one IRL run's reward;
+- :func:`rl_group_unit`: with the lock-step RL backend, one group of RL runs (one task, one
+  reward kind, one ``rl/<reward>`` folder: its unfinished runs) trained together, whose runs
+  are saved each into its own run folder with its own record, as :func:`rl_unit`'s are.
 
 The driver writes what comes back, with a unit record (``unit.json``, or ``expert.unit.json``
 beside the data) holding a fingerprint of everything the unit's result depends on: the task,
@@ -154,6 +157,40 @@ def rl_unit(
         return _folder_files(out)
 
 
+def rl_group_unit(
+    env_id: str,
+    reward_files: Sequence[dict[str, bytes] | None],
+    reward_names: Sequence[str],
+    seeds: Sequence[int],
+    settings: RLSettings,
+    evaluations: int,
+    eval_episodes: int,
+) -> dict[str, bytes]:
+    """R RL runs in lock-step (``pokerirl.gym.lockstep.group``), run r on ``reward_files[r]``
+    with seed ``seeds[r]``: the files of each run folder, as ``<r>/<name>``."""
+    from pokerirl.gym.lockstep.group import train_rl_group
+    from pokerirl.irl import load_reward
+
+    with tempfile.TemporaryDirectory(prefix="pokerirl-gym-rl-group-") as scratch:
+        rewards = [
+            None if files is None
+            else load_reward(write_files(Path(scratch) / f"reward-run-{r}", files))
+            for r, files in enumerate(reward_files)
+        ]  # fmt: skip
+        outs = [Path(scratch) / "runs" / str(r) for r in range(len(seeds))]
+        train_rl_group(
+            env_id,
+            rewards=rewards,
+            reward_names=reward_names,
+            seeds=seeds,
+            settings=settings,
+            evaluations=evaluations,
+            eval_episodes=eval_episodes,
+            outs=outs,
+        )
+        return _folder_files(Path(scratch) / "runs")
+
+
 # --------------------------------------------------------------------------- jobs
 
 
@@ -222,6 +259,7 @@ class RLJob:
     evaluations: int
     eval_episodes: int
     folder: Path
+    backend: str = "sb3"  # or "lockstep": see pokerirl.gym.rl.RL_BACKENDS
 
     def reward_files(self) -> dict[str, bytes] | None:
         if self.reward_run is None:
@@ -243,7 +281,16 @@ class RLJob:
             "settings": asdict(self.settings),
             "evaluations": self.evaluations,
             "eval_episodes": self.eval_episodes,
+            # Only for lock-step runs: sb3 records (every study made before) stay valid, and
+            # the two backends' runs never pass for each other.
+            **({} if self.backend == "sb3" else {"backend": self.backend}),
         }
+
+    def group_key(self) -> tuple[Any, ...]:
+        """Runs that train as one lock-step group: one task, reward kind, folder of runs and
+        settings."""
+        return (self.env, self.reward, str(self.folder.parent), repr(self.settings),
+                self.evaluations, self.eval_episodes)  # fmt: skip
 
     def reward_name(self) -> str:
         if self.reward_run is None:
@@ -369,7 +416,28 @@ def run_rl_jobs(
     progress: bool = False,
 ) -> int:
     """Train every RL job that is not finished with its settings and reward; returns how many
-    were reused."""
+    were reused. Lock-step jobs (``job.backend``) train in groups (:meth:`RLJob.group_key`)
+    of their unfinished runs, one unit per group."""
+    from pokerirl.gym.rl import RL_BACKENDS
+
+    for job in jobs:
+        if job.backend not in RL_BACKENDS:
+            raise JobError(f"unknown RL backend {job.backend!r}; choose one of "
+                           f"{', '.join(RL_BACKENDS)}")  # fmt: skip
+    sb3 = [job for job in jobs if job.backend == "sb3"]
+    lockstep = [job for job in jobs if job.backend != "sb3"]
+    reused = 0
+    if sb3:
+        reused += _run_sb3_jobs(sb3, backend=backend, overwrite=overwrite, progress=progress)
+    if lockstep:
+        reused += _run_group_jobs(lockstep, backend=backend, overwrite=overwrite,
+                                  progress=progress)  # fmt: skip
+    return reused
+
+
+def _run_sb3_jobs(
+    jobs: Sequence[RLJob], *, backend: Backend, overwrite: bool, progress: bool
+) -> int:
     inputs = [job.reward_files() for job in jobs]
 
     def unit_args(i: int) -> tuple[Any, ...]:
@@ -388,3 +456,47 @@ def run_rl_jobs(
         overwrite=overwrite,
         progress=progress,
     )
+
+
+def _run_group_jobs(
+    jobs: Sequence[RLJob], *, backend: Backend, overwrite: bool, progress: bool
+) -> int:
+    """The unfinished runs of each group as one unit; each run saved to its own folder with
+    its own record (so resuming, and the folders, are as with sb3)."""
+    inputs = [job.reward_files() for job in jobs]
+    configs = [job.config(files) for job, files in zip(jobs, inputs, strict=True)]
+    groups: dict[tuple[Any, ...], list[int]] = {}
+    for i, (job, config) in enumerate(zip(jobs, configs, strict=True)):
+        try:
+            if load_unit_folder(job.folder, config, overwrite=overwrite) is None:
+                groups.setdefault(job.group_key(), []).append(i)
+        except UnitConflict as error:
+            raise JobError(str(error)) from None
+    members = list(groups.values())
+    todo = sum(len(m) for m in members)
+
+    def unit_args(group: list[int]) -> tuple[Any, ...]:
+        first = jobs[group[0]]
+        return (first.env, [inputs[i] for i in group], [jobs[i].reward_name() for i in group],
+                [jobs[i].seed for i in group], first.settings, first.evaluations,
+                first.eval_episodes)  # fmt: skip
+
+    def save(index: int, files: dict[str, bytes]) -> None:
+        for r, i in enumerate(members[index]):
+            prefix = f"{r}/"
+            run = {name[len(prefix):]: data for name, data in files.items()
+                   if name.startswith(prefix)}  # fmt: skip
+            hashed, timed = _split_timings(run)
+            save_unit_folder(jobs[i].folder, hashed, configs[i], unhashed=timed)
+
+    map_units(
+        rl_group_unit,
+        [unit_args(group) for group in members],
+        backend=backend,
+        progress=progress,
+        desc="RL groups",
+        reused=len(jobs) - todo,
+        on_result=save,
+        labels=[f"{jobs[g[0]].env} {jobs[g[0]].reward} lock-step x{len(g)}" for g in members],
+    )
+    return len(jobs) - todo

@@ -32,6 +32,11 @@ from pokerirl.gym.presets import TASKS, RLSettings
 from pokerirl.gym.rewards import RewardCallable, learned_reward_env
 
 EVAL_SEED = 2_000_000  # evaluation episodes' seeds, apart from the experts' and the data's
+# How the RL phase trains: SB3, one run per call (train_rl), or R runs of one task in one
+# process (pokerirl.gym.lockstep.group.train_rl_group). sb3 stays the default until the
+# lock-step backend's equivalence table (docs/lockstep.md) holds for every task.
+RL_BACKENDS = ("sb3", "lockstep")
+DEFAULT_RL_BACKEND = "sb3"
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -85,7 +90,7 @@ def train_rl(
     timesteps = timesteps or settings.timesteps
     if timesteps < 1 or evaluations < 1 or eval_episodes < 1:
         raise ValueError("timesteps, evaluations and eval_episodes must be positive")
-    _check_reward(env_id, reward)
+    check_reward(env_id, reward)
     venv = DummyVecEnv([lambda: Monitor(make_env(env_id))])
     if reward is not None:
         venv = learned_reward_env(venv, reward)
@@ -125,7 +130,7 @@ def train_rl(
     return result
 
 
-def _check_reward(env_id: str, reward: RewardCallable | None) -> None:
+def check_reward(env_id: str, reward: RewardCallable | None) -> None:
     """Fail in one line, before training, on an unknown env or a reward that does not fit it."""
     env = make_env(env_id)
     try:
@@ -145,6 +150,23 @@ def _check_reward(env_id: str, reward: RewardCallable | None) -> None:
 
 
 def _save(out: Path, result: RLResult, settings: RLSettings, model: Any) -> None:
+    state = {k: v.detach().cpu().clone() for k, v in model.policy.state_dict().items()}
+    save_run(out, result, settings, state)
+
+
+def save_run(
+    out: Path,
+    result: RLResult,
+    settings: RLSettings,
+    state: dict[str, Any],
+    *,
+    backend: str = "sb3",
+) -> None:
+    """Write a run folder: ``metrics.jsonl``, ``model.pt`` (``state``, the SB3 policy's
+    state_dict) and ``config.json``; a lock-step run's config also says ``"backend"`` (an
+    SB3 run's is left as it always was)."""
+    if backend not in RL_BACKENDS:
+        raise ValueError(f"unknown RL backend {backend!r}; choose one of {', '.join(RL_BACKENDS)}")
     out.mkdir(parents=True, exist_ok=True)
     record = {
         "env": result.env,
@@ -157,8 +179,8 @@ def _save(out: Path, result: RLResult, settings: RLSettings, model: Any) -> None
         "policy_kwargs": policy_kwargs(settings),
         "train_episode_returns": list(result.train_episode_returns),
         "versions": gym_versions(),
+        **({} if backend == "sb3" else {"backend": backend}),  # sb3 records stay as before
     }
-    state = {k: v.detach().cpu().clone() for k, v in model.policy.state_dict().items()}
     write_text(out / METRICS_FILE, "".join(json.dumps(asdict(p)) + "\n" for p in result.curve))
     write_torch(out / MODEL_FILE, state)
     write_text(out / CONFIG_FILE, json.dumps(record, indent=2) + "\n")

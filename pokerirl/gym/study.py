@@ -135,9 +135,17 @@ def irl_job(
 
 
 def rl_jobs(
-    root: Path, env: str, reward: str, irl: IRLJob | None, preset: StudyPreset
+    root: Path,
+    env: str,
+    reward: str,
+    irl: IRLJob | None,
+    preset: StudyPreset,
+    *,
+    backend: str = "sb3",
 ) -> list[RLJob]:
-    """RL run k on the env reward (``irl`` None) or on ``irl``'s run k, seed ``seed + k``."""
+    """RL run k on the env reward (``irl`` None) or on ``irl``'s run k, seed ``seed + k``,
+    trained by the RL ``backend`` (lockstep: the unfinished runs of ``rl/<reward>`` as one
+    group; each run folder keeps its own record either way)."""
     return [
         RLJob(
             env=env,
@@ -148,6 +156,7 @@ def rl_jobs(
             evaluations=preset.rl_evaluations,
             eval_episodes=preset.irl(env).eval_episodes,
             folder=root / "rl" / reward / f"run-{k}",
+            backend=backend,
         )
         for k in range(preset.runs)
     ]
@@ -164,10 +173,13 @@ def run_gym_study(
     overwrite: bool = False,
     progress: bool = False,
     say: Say = lambda message: None,
+    rl_backend: str = "sb3",
 ) -> GymStudyResult:
     """Run (or resume) the study of ``preset.tasks`` into ``out``; ``say`` hears a line per step.
 
-    Units run on ``backend`` (default: this process); results do not depend on it.
+    Units run on ``backend`` (default: this process); results do not depend on it. The RL
+    runs train with ``rl_backend`` (``pokerirl.gym.rl.RL_BACKENDS``; sb3, one unit per run, or
+    lockstep, one unit per task and reward kind), which is part of their records.
 
     Raises:
         GymStudyError: ``out`` is a file, or a unit was made with other settings or inputs
@@ -176,6 +188,7 @@ def run_gym_study(
     from pokerirl.gym.experts import require_gym
 
     require_gym()
+    check_rl_backend(rl_backend, preset.tasks, preset)
     backend = backend or Backend()
     out = Path(out)
     if out.exists() and not out.is_dir():
@@ -203,9 +216,11 @@ def run_gym_study(
             job
             for env in tasks
             for reward in REWARDS
-            for job in rl_jobs(roots[env], env, reward, irl.get((env, reward)), preset)
+            for job in rl_jobs(roots[env], env, reward, irl.get((env, reward)), preset,
+                               backend=rl_backend)  # fmt: skip
         ]
-        say(f"[3/{STEPS}] RL: env reward, AIRL and H-AIRL rewards, {preset.runs} runs each")
+        say(f"[3/{STEPS}] RL: env reward, AIRL and H-AIRL rewards, {preset.runs} runs each"
+            + ("" if rl_backend == "sb3" else f" ({rl_backend} backend)"))
         reused = run_rl_jobs(rl, **options)
         _said_reused(say, reused, len(rl))
     except ValueError as error:
@@ -216,6 +231,7 @@ def run_gym_study(
     summaries = {}
     for env in tasks:
         summary = task_summary(roots[env], env, preset)
+        summary["settings"]["rl_backend"] = rl_backend
         summary["reward_map"] = draw_reward_map(roots[env], env)
         write_text(roots[env] / "summary.json", json.dumps(summary, indent=2) + "\n")
         draw_figures(roots[env], summary)
@@ -257,6 +273,24 @@ def load_gym_study(folder: str | os.PathLike[str]) -> tuple[dict[str, Any], str]
         return found, render_report({found["env"]: found}, found["preset"])
     except (OSError, ValueError, KeyError, TypeError) as error:
         raise GymStudyError(f"{path}: not a readable gym study summary ({error})") from None
+
+
+def check_rl_backend(rl_backend: str, tasks: Sequence[str], preset: StudyPreset) -> None:
+    """Refuse, before any work, an unknown RL backend or one that cannot train a task."""
+    from pokerirl.gym.rl import RL_BACKENDS
+
+    if rl_backend not in RL_BACKENDS:
+        raise GymStudyError(
+            f"unknown RL backend {rl_backend!r}; choose one of {', '.join(RL_BACKENDS)}"
+        )
+    if rl_backend == "lockstep":
+        from pokerirl.gym.lockstep.group import lockstep_class
+
+        try:
+            for algo in sorted({preset.rl(env).algo for env in tasks}):
+                lockstep_class(algo)
+        except ValueError as error:
+            raise GymStudyError(str(error)) from None
 
 
 def _said_reused(say: Say, reused: int, total: int) -> None:
@@ -528,7 +562,9 @@ def _budget(summary: dict[str, Any]) -> str:
         f"{irl['batch_size']}, α {irl['alpha']}, β {irl['beta']}, σ {irl['sigma_start']} → "
         f"{irl['sigma_end']} (H-AIRL), each epoch's policy over {irl['eval_episodes']} "
         f"episodes; RL {rl['algo'].upper()} for {rl['timesteps']:,} steps, each point "
-        f"{summary['settings']['rl_eval_episodes']} deterministic episodes."
+        f"{summary['settings']['rl_eval_episodes']} deterministic episodes"
+        + ("." if summary["settings"].get("rl_backend", "sb3") == "sb3"
+           else f" ({summary['settings']['rl_backend']} RL backend).")
     )
 
 

@@ -36,7 +36,14 @@ from pokerirl.gym.irl import irl_config
 from pokerirl.gym.jobs import DATA_FILE, Say, run_data_jobs, run_irl_jobs, run_rl_jobs
 from pokerirl.gym.presets import TASKS, StudyPreset
 from pokerirl.gym.rl import mean_std
-from pokerirl.gym.study import GymStudyError, data_job, irl_job, rl_curves, rl_jobs
+from pokerirl.gym.study import (
+    GymStudyError,
+    check_rl_backend,
+    data_job,
+    irl_job,
+    rl_curves,
+    rl_jobs,
+)
 
 SWEEP_FORMAT = "pokerirl-gym-sweep/1"
 PARAMS = ("alpha", "beta", "sigma_start", "sigma_end")
@@ -134,13 +141,16 @@ def run_sweep(
     overwrite: bool = False,
     progress: bool = False,
     say: Say = lambda message: None,
+    rl_backend: str = "sb3",
 ) -> SweepResult:
-    """Run (or resume) the sweep of ``params`` on ``env`` with ``preset``'s budgets."""
+    """Run (or resume) the sweep of ``params`` on ``env`` with ``preset``'s budgets; the RL runs
+    train with ``rl_backend`` (lockstep: each point's unfinished runs as one group)."""
     from pokerirl.gym.experts import require_gym
 
     require_gym()
     if env not in TASKS:
         raise GymStudyError(f"unknown task {env!r}; choose one of {', '.join(TASKS)}")
+    check_rl_backend(rl_backend, (env,), preset)
     if not params:
         raise GymStudyError("give at least one --param, e.g. --param alpha=0,0.5,1")
     backend = backend or Backend()
@@ -168,7 +178,8 @@ def run_sweep(
         rl = [
             job
             for p in unique
-            for job in rl_jobs(out / "points" / p.name, env, "hairl", irl[p.name], preset)
+            for job in rl_jobs(out / "points" / p.name, env, "hairl", irl[p.name], preset,
+                               backend=rl_backend)  # fmt: skip
         ]
         say(f"[3/4] RL: {len(rl)} runs on the points' rewards")
         run_rl_jobs(rl, **options)
@@ -186,6 +197,7 @@ def run_sweep(
         "runs": preset.runs,
         "seeds": [preset.seed + k for k in range(preset.runs)],
         "base": {key: float(getattr(preset.irl(env), key)) for key in PARAMS},
+        "rl_backend": rl_backend,
         "expert_return": expert["expert_return"],
         "random_return": expert["baselines"]["random"]["mean"],
         "rows": rows,

@@ -1,0 +1,166 @@
+"""The RL phase for R runs of one task in lock-step: :func:`train_rl_group`.
+
+Per run it produces what :func:`pokerirl.gym.rl.train_rl` produces: the true-return curve
+(deterministic evaluations of ``eval_episodes`` episodes, seeds ``EVAL_SEED + i``, at the same
+timesteps as ``train_rl``'s callback, ``num_timesteps % every == 0`` before the budget, and one
+at the end), the training episodes' env returns, and, given ``outs``, a run folder laid out as
+``train_rl`` writes it (``config.json`` with ``"backend": "lockstep"``, an SB3-loadable
+``model.pt``, ``metrics.jsonl``). The R runs' evaluation episodes are played together too: one
+batched ``predict`` per step for every run and episode still going.
+
+Run r of a group equals a group of one with seed r (each run has its own random streams), which
+is what lets a resumed study train only its unfinished runs as a group.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any, Protocol
+
+import numpy as np
+
+from pokerirl.gym.presets import TASKS, RLSettings
+from pokerirl.gym.rewards import RewardCallable
+from pokerirl.gym.rl import EVAL_SEED, CurvePoint, RLResult, check_reward, save_run
+
+BACKEND = "lockstep"
+NO_DQN = "the lock-step backend has no DQN yet; use --rl-backend sb3"
+
+
+class LockstepAlgo(Protocol):
+    """What the runner needs of LockstepPPO and LockstepDQN."""
+
+    def learn(self, total_timesteps: int, *, callback: Any = None) -> Any: ...
+
+    def predict(self, obs: np.ndarray) -> np.ndarray: ...
+
+
+def lockstep_class(algo: str) -> type:
+    """LockstepPPO or LockstepDQN; one line when the lock-step DQN is not there yet."""
+    if algo == "dqn":
+        try:
+            from pokerirl.gym.lockstep.dqn import LockstepDQN  # type: ignore[import-not-found]
+        except ModuleNotFoundError as error:
+            if error.name != "pokerirl.gym.lockstep.dqn":
+                raise
+            raise ValueError(NO_DQN) from None
+        return LockstepDQN
+    from pokerirl.gym.lockstep.ppo import LockstepPPO
+
+    return LockstepPPO
+
+
+def make_group(
+    env_id: str,
+    settings: RLSettings,
+    *,
+    seeds: Sequence[int],
+    rewards: Sequence[RewardCallable | None],
+) -> LockstepAlgo:
+    """The lock-step algorithm of ``settings.algo`` for these runs."""
+    algo_settings = settings.dqn if settings.algo == "dqn" else settings.ppo
+    return lockstep_class(settings.algo)(env_id, algo_settings, seeds=seeds, rewards=rewards)
+
+
+class GroupEvaluator:
+    """Deterministic episodes of every run at once: run r's episode i from
+    ``reset(seed=seed + i)``, as :func:`pokerirl.gym.experts.evaluate` plays them one by one."""
+
+    def __init__(self, env_id: str, runs: int, *, episodes: int, seed: int) -> None:
+        from pokerirl.gym.experts import make_env
+
+        self.runs, self.episodes, self.seed = runs, episodes, seed
+        self.envs = [[make_env(env_id) for _ in range(episodes)] for _ in range(runs)]
+
+    def __call__(self, algo: LockstepAlgo) -> np.ndarray:
+        """Returns (runs, episodes) of ``algo``'s deterministic actions."""
+        R, E = self.runs, self.episodes
+        obs = np.stack([
+            np.stack([np.asarray(env.reset(seed=self.seed + i)[0], dtype=np.float32)
+                      for i, env in enumerate(row)])
+            for row in self.envs
+        ])  # fmt: skip
+        totals = np.zeros((R, E))
+        running = np.ones((R, E), dtype=bool)
+        while running.any():
+            # Finished episodes keep their last observation: acted on, never stepped.
+            actions = algo.predict(obs)
+            for r, i in zip(*np.nonzero(running), strict=True):
+                nxt, reward, terminated, truncated, _ = self.envs[r][i].step(actions[r, i])
+                totals[r, i] += float(reward)
+                obs[r, i] = nxt
+                running[r, i] = not (terminated or truncated)
+        return totals
+
+    def close(self) -> None:
+        for row in self.envs:
+            for env in row:
+                env.close()
+
+
+def train_rl_group(
+    env_id: str,
+    *,
+    rewards: Sequence[RewardCallable | None],
+    reward_names: Sequence[str],
+    seeds: Sequence[int],
+    settings: RLSettings | None = None,
+    timesteps: int | None = None,
+    evaluations: int = 10,
+    eval_episodes: int = 5,
+    outs: Sequence[str | os.PathLike[str]] | None = None,
+) -> list[RLResult]:
+    """R = ``len(seeds)`` runs of ``train_rl`` in lock-step: run r trains on ``rewards[r]``
+    (``None``: the env reward) with seed ``seeds[r]``; ``outs[r]``, when given, gets its run
+    folder."""
+    from pokerirl.gym.experts import require_gym
+
+    require_gym()
+    settings = settings or TASKS[env_id].rl
+    timesteps = timesteps or settings.timesteps
+    if timesteps < 1 or evaluations < 1 or eval_episodes < 1:
+        raise ValueError("timesteps, evaluations and eval_episodes must be positive")
+    R = len(seeds)
+    if R < 1 or len(rewards) != R or len(reward_names) != R or (outs is not None
+                                                               and len(outs) != R):
+        raise ValueError(f"a lock-step group needs one reward, name (and folder) per seed; "
+                         f"got {R} seeds, {len(rewards)} rewards, {len(reward_names)} names")
+    for reward in {id(reward): reward for reward in rewards}.values():
+        check_reward(env_id, reward)
+    algo = make_group(env_id, settings, seeds=seeds, rewards=rewards)
+    every = max(timesteps // evaluations, 1)
+    curves: list[list[CurvePoint]] = [[] for _ in range(R)]
+    evaluator = GroupEvaluator(env_id, R, episodes=eval_episodes, seed=EVAL_SEED)
+
+    def evaluate_now(steps: int) -> None:
+        returns = evaluator(algo)
+        for r in range(R):  # Evaluation's mean and (population) std, as train_rl records
+            curves[r].append(CurvePoint(timesteps=steps, return_mean=float(np.mean(returns[r])),
+                                        return_std=float(np.std(returns[r]))))
+
+    def on_step(steps: int) -> None:
+        if steps % every == 0 and steps < timesteps:
+            evaluate_now(steps)
+
+    try:
+        group = algo.learn(timesteps, callback=on_step)
+        evaluate_now(group.timesteps)
+    finally:
+        evaluator.close()
+    results = [
+        RLResult(
+            env=env_id,
+            reward=reward_names[r],
+            seed=int(seeds[r]),
+            timesteps=timesteps,
+            curve=tuple(curves[r]),
+            train_episode_returns=tuple(float(x) for x in group.episode_returns[r]),
+        )
+        for r in range(R)
+    ]
+    if outs is not None:
+        for r, out in enumerate(outs):
+            save_run(Path(out), results[r], settings, group.state_dicts[r], backend=BACKEND)
+    return results
