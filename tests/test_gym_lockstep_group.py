@@ -5,7 +5,6 @@ depend on their group, and gym rl / gym study resume lock-step groups run by run
 from __future__ import annotations
 
 import dataclasses
-import importlib.util
 import json
 import os
 from pathlib import Path
@@ -23,7 +22,7 @@ from pokerirl.execution import pinned_threads  # noqa: E402
 from pokerirl.gym.experts import build_policy, evaluate, policy_kwargs  # noqa: E402
 from pokerirl.gym.jobs import RLJob  # noqa: E402
 from pokerirl.gym.lockstep import LockstepPPO  # noqa: E402
-from pokerirl.gym.lockstep.group import NO_DQN, train_rl_group  # noqa: E402
+from pokerirl.gym.lockstep.group import train_rl_group  # noqa: E402
 from pokerirl.gym.presets import TASKS, PPOSettings, RLSettings  # noqa: E402
 from pokerirl.gym.rl import EVAL_SEED, train_rl  # noqa: E402
 
@@ -142,22 +141,28 @@ def test_learn_calls_back_after_every_step() -> None:
     assert seen == list(range(1, 513)) and result.timesteps == 512
 
 
-@pytest.mark.skipif(importlib.util.find_spec("pokerirl.gym.lockstep.dqn") is not None,
-                    reason="the lock-step DQN is there")
-def test_dqn_without_the_lockstep_dqn_is_one_line(tmp_path: Path) -> None:
-    with pytest.raises(ValueError, match=NO_DQN):
-        group("MountainCar-v0", TASKS["MountainCar-v0"].rl, [0])
-    out = tmp_path / "mc"
-    result = CliRunner().invoke(app, ["gym", "rl", "MountainCar-v0", "--env-reward", "--out",
-                                      str(out), "--rl-backend", "lockstep"])  # fmt: skip
-    assert result.exit_code == 1 and result.output.strip() == f"error: {NO_DQN}"
-    assert not out.exists()
-    for command in (["gym", "study", "MountainCar-v0"],
-                    ["sweep", "MountainCar-v0", "--param", "alpha=0,1"]):  # before any work
-        result = CliRunner().invoke(app, [*command, "--out", str(out), "--rl-backend",
-                                          "lockstep", "--quiet"])  # fmt: skip
-        assert result.exit_code == 1 and NO_DQN in result.output.strip().splitlines()[-1]
-        assert not out.exists()
+def test_mountaincar_dqn_runs_in_lock_step_and_sb3_loads_the_folders(tmp_path: Path) -> None:
+    """gym rl --rl-backend lockstep trains the DQN task as one group: each folder's model.pt
+    loads into SB3's DQN policy, whose deterministic episodes replay the curve's last point,
+    and run 1 is what a group of one with seed 1 writes."""
+    out = tmp_path / "mc"  # 1,200 steps: 200 after learning_starts, 100 gradient steps
+    args = ["gym", "rl", "MountainCar-v0", "--env-reward", "--runs", "2", "--timesteps", "1200",
+            "--evaluations", "1", "--eval-episodes", "1", "--rl-backend", "lockstep"]
+    result = CliRunner().invoke(app, [*args, "--out", str(out)])
+    assert result.exit_code == 0, result.output
+    for k in range(2):
+        config = json.loads((out / f"run-{k}" / "config.json").read_text())
+        assert config["backend"] == "lockstep" and config["algo"] == "dqn"
+        policy = build_policy("MountainCar-v0", "dqn", config["policy_kwargs"])
+        policy.load_state_dict(torch.load(out / f"run-{k}" / "model.pt", weights_only=True),
+                               strict=True)  # fmt: skip
+        replay = evaluate(policy, "MountainCar-v0", episodes=1, seed=EVAL_SEED)
+        assert replay.mean == pytest.approx(config["final_return"])
+    group("MountainCar-v0", TASKS["MountainCar-v0"].rl, [1], [tmp_path / "alone"],
+          timesteps=1200, evaluations=1, episodes=1)  # fmt: skip
+    trained = (out / "run-1" / "model.pt").read_bytes()
+    assert trained == (tmp_path / "alone" / "model.pt").read_bytes()
+    assert trained != (out / "run-0" / "model.pt").read_bytes()
 
 
 def test_sb3_rl_records_are_as_before() -> None:

@@ -259,9 +259,8 @@ def gym_rl(
             **({} if rl_backend == "sb3" else {"backend": rl_backend}),
         }
         if rl_backend == "lockstep":
-            from pokerirl.gym.lockstep.group import lockstep_class, train_rl_group
+            from pokerirl.gym.lockstep.group import train_rl_group
 
-            lockstep_class(TASKS[env].rl.algo)  # no lock-step DQN yet: one line, before claim
         claim(out, "rl.job.json", identity, outputs=["run-*"], overwrite=overwrite)
         reward_name = "env" if reward is None else str(reward_run)
         found: dict[int, float] = {}

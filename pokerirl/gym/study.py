@@ -188,7 +188,7 @@ def run_gym_study(
     from pokerirl.gym.experts import require_gym
 
     require_gym()
-    check_rl_backend(rl_backend, preset.tasks, preset)
+    check_rl_backend(rl_backend)
     backend = backend or Backend()
     out = Path(out)
     if out.exists() and not out.is_dir():
@@ -275,22 +275,14 @@ def load_gym_study(folder: str | os.PathLike[str]) -> tuple[dict[str, Any], str]
         raise GymStudyError(f"{path}: not a readable gym study summary ({error})") from None
 
 
-def check_rl_backend(rl_backend: str, tasks: Sequence[str], preset: StudyPreset) -> None:
-    """Refuse, before any work, an unknown RL backend or one that cannot train a task."""
+def check_rl_backend(rl_backend: str) -> None:
+    """Refuse an unknown RL backend before any work."""
     from pokerirl.gym.rl import RL_BACKENDS
 
     if rl_backend not in RL_BACKENDS:
         raise GymStudyError(
             f"unknown RL backend {rl_backend!r}; choose one of {', '.join(RL_BACKENDS)}"
         )
-    if rl_backend == "lockstep":
-        from pokerirl.gym.lockstep.group import lockstep_class
-
-        try:
-            for algo in sorted({preset.rl(env).algo for env in tasks}):
-                lockstep_class(algo)
-        except ValueError as error:
-            raise GymStudyError(str(error)) from None
 
 
 def _said_reused(say: Say, reused: int, total: int) -> None:

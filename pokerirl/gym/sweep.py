@@ -150,7 +150,7 @@ def run_sweep(
     require_gym()
     if env not in TASKS:
         raise GymStudyError(f"unknown task {env!r}; choose one of {', '.join(TASKS)}")
-    check_rl_backend(rl_backend, (env,), preset)
+    check_rl_backend(rl_backend)
     if not params:
         raise GymStudyError("give at least one --param, e.g. --param alpha=0,0.5,1")
     backend = backend or Backend()

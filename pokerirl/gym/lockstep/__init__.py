@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from pokerirl.gym.lockstep.dqn import DQNGroupResult, LockstepDQN
 from pokerirl.gym.lockstep.ppo import LockstepPPO, PPOGroupResult, sb3_state_dict
 
-__all__ = ["LockstepPPO", "PPOGroupResult", "sb3_state_dict"]
+__all__ = ["DQNGroupResult", "LockstepDQN", "LockstepPPO", "PPOGroupResult", "sb3_state_dict"]

@@ -26,7 +26,6 @@ from pokerirl.gym.rewards import RewardCallable
 from pokerirl.gym.rl import EVAL_SEED, CurvePoint, RLResult, check_reward, save_run
 
 BACKEND = "lockstep"
-NO_DQN = "the lock-step backend has no DQN yet; use --rl-backend sb3"
 
 
 class LockstepAlgo(Protocol):
@@ -38,14 +37,10 @@ class LockstepAlgo(Protocol):
 
 
 def lockstep_class(algo: str) -> type:
-    """LockstepPPO or LockstepDQN; one line when the lock-step DQN is not there yet."""
+    """LockstepPPO (``ppo``) or LockstepDQN (``dqn``)."""
     if algo == "dqn":
-        try:
-            from pokerirl.gym.lockstep.dqn import LockstepDQN  # type: ignore[import-not-found]
-        except ModuleNotFoundError as error:
-            if error.name != "pokerirl.gym.lockstep.dqn":
-                raise
-            raise ValueError(NO_DQN) from None
+        from pokerirl.gym.lockstep.dqn import LockstepDQN
+
         return LockstepDQN
     from pokerirl.gym.lockstep.ppo import LockstepPPO
 
