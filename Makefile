@@ -20,10 +20,12 @@ demo: install
 
 test: install-dev
 	$(BIN)/ruff check pokerirl tests benchmarks
+	$(BIN)/mypy pokerirl
 	$(BIN)/python -m pytest -q
 
 lint: install-dev
 	$(BIN)/ruff check pokerirl tests benchmarks
+	$(BIN)/mypy pokerirl
 
 bench: install
 	$(BIN)/python benchmarks/ingest.py

@@ -87,15 +87,15 @@ def train_rl(
     from pokerirl.gym.experts import evaluate
 
     settings = settings or TASKS[env_id].rl
-    timesteps = timesteps or settings.timesteps
-    if timesteps < 1 or evaluations < 1 or eval_episodes < 1:
+    budget: int = timesteps or settings.timesteps
+    if budget < 1 or evaluations < 1 or eval_episodes < 1:
         raise ValueError("timesteps, evaluations and eval_episodes must be positive")
     check_reward(env_id, reward)
-    venv = DummyVecEnv([lambda: Monitor(make_env(env_id))])
+    venv: Any = DummyVecEnv([lambda: Monitor(make_env(env_id))])
     if reward is not None:
         venv = learned_reward_env(venv, reward)
     model = make_model(env_id, settings, seed=seed, env=venv)
-    every = max(timesteps // evaluations, 1)
+    every = max(budget // evaluations, 1)
     curve: list[CurvePoint] = []
     train_returns: list[float] = []
 
@@ -110,18 +110,18 @@ def train_rl(
             for info in self.locals["infos"]:
                 if "episode" in info:  # Monitor: the true env return of a training episode
                     train_returns.append(float(info["episode"]["r"]))
-            if self.num_timesteps % every == 0 and self.num_timesteps < timesteps:
+            if self.num_timesteps % every == 0 and self.num_timesteps < budget:
                 evaluate_now()
             return True
 
-    model.learn(total_timesteps=timesteps, callback=Curve())
+    model.learn(total_timesteps=budget, callback=Curve())
     evaluate_now()
     venv.close()
     result = RLResult(
         env=env_id,
         reward=reward_name,
         seed=seed,
-        timesteps=timesteps,
+        timesteps=budget,
         curve=tuple(curve),
         train_episode_returns=tuple(train_returns),
     )
@@ -175,7 +175,7 @@ def save_run(
         "seed": result.seed,
         "timesteps": result.timesteps,
         "final_return": result.final_return,
-        "settings": asdict(settings.dqn if settings.algo == "dqn" else settings.ppo),
+        "settings": asdict(settings.own),
         "policy_kwargs": policy_kwargs(settings),
         "train_episode_returns": list(result.train_episode_returns),
         "versions": gym_versions(),

@@ -196,7 +196,7 @@ def run_gym_study(
     tasks = preset.tasks
     roots = {env: task_root(out, env, tasks) for env in tasks}
     names = ", ".join(tasks)
-    options = {"backend": backend, "overwrite": overwrite, "progress": progress}
+    options: dict[str, Any] = {"backend": backend, "overwrite": overwrite, "progress": progress}
     try:
         data = [data_job(roots[env], env, preset) for env in tasks]
         say(f"[1/{STEPS}] expert data: {names}")

@@ -160,7 +160,7 @@ def run_sweep(
     points = sweep_points(env, params, preset)
     unique = list({point.name: point for point in points}.values())
     data = out / DATA_FILE
-    options = {"backend": backend, "overwrite": overwrite, "progress": progress}
+    options: dict[str, Any] = {"backend": backend, "overwrite": overwrite, "progress": progress}
     irl = {
         p.name: irl_job(out / "points" / p.name, env, "hairl", preset, data=data, **p.settings)
         for p in unique

@@ -199,7 +199,7 @@ class StackedPolicy(torch.nn.Module):
         """Run r's parameters under SB3 MlpPolicy's state_dict keys."""
         out: dict[str, torch.Tensor] = {}
         for name in self.names:
-            layer = self.layers[name.replace(".", "_")]
+            layer: Any = self.layers[name.replace(".", "_")]
             out[f"{name}.weight"] = layer.weight.data[r].T.contiguous().clone()
             out[f"{name}.bias"] = layer.bias.data[r, 0].clone()
         if self.log_std is not None:
@@ -314,8 +314,8 @@ class LockstepPPO:
         if len(self.rewards) != self.R:
             raise ValueError(f"rewards: {len(self.rewards)} for {self.R} runs")
         self.envs = [_RunEnvs(env_id, n_envs, seed) for seed in self.seeds]
-        space_a = self.envs[0].envs[0].action_space
-        space_o = self.envs[0].envs[0].observation_space
+        space_a: Any = self.envs[0].envs[0].action_space  # Discrete or Box
+        space_o: Any = self.envs[0].envs[0].observation_space
         self.discrete = isinstance(space_a, gym.spaces.Discrete)
         act_dim = int(space_a.n) if self.discrete else int(np.prod(space_a.shape))
         self.low = None if self.discrete else space_a.low
@@ -361,6 +361,7 @@ class LockstepPPO:
             return np.minimum((cdf < u).sum(-1), self.arch.act_dim - 1)
         noise = np.stack([rng.standard_normal((self.n_envs, self.arch.act_dim))
                           for rng in self.rngs])
+        assert self.policy.log_std is not None  # continuous actions have a log σ
         std = np.exp(self.policy.log_std.detach().numpy())[:, None, :]
         return (h + std * noise).astype(np.float32)
 
