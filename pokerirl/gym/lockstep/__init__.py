@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from pokerirl.gym.lockstep.dqn import DQNGroupResult, LockstepDQN
-from pokerirl.gym.lockstep.ppo import LockstepPPO, PPOGroupResult, sb3_state_dict
+from pokerirl.gym.lockstep.dqn import LockstepDQN
+from pokerirl.gym.lockstep.ppo import GroupResult, LockstepPPO, sb3_state_dict
 
-__all__ = ["DQNGroupResult", "LockstepDQN", "LockstepPPO", "PPOGroupResult", "sb3_state_dict"]
+__all__ = ["GroupResult", "LockstepDQN", "LockstepPPO", "sb3_state_dict"]

@@ -41,14 +41,13 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
 
 import gymnasium as gym
 import numpy as np
 import torch
 import torch.nn.functional as F
 
-from pokerirl.gym.lockstep.ppo import RewardFn
+from pokerirl.gym.lockstep.ppo import GroupResult, RewardFn
 from pokerirl.gym.presets import DQNSettings
 
 # SB3 DQN's defaults for what DQNSettings leaves out.
@@ -154,18 +153,6 @@ class StackedQNet(torch.nn.Module):
             out[f"{prefix}{key}.weight"] = layer.run_weight(r)
             out[f"{prefix}{key}.bias"] = layer.bias.data[r, 0].clone()
         return out
-
-
-@dataclass(frozen=True, kw_only=True)
-class DQNGroupResult:
-    """Per run: seed, SB3-loadable DQNPolicy state_dict, finished-episode env returns; steps."""
-
-    seeds: tuple[int, ...]
-    state_dicts: tuple[dict[str, torch.Tensor], ...]
-    episode_returns: tuple[tuple[float, ...], ...]
-    timesteps: int
-    env_seconds: float
-    update_seconds: float
 
 
 class LockstepDQN:
@@ -405,7 +392,7 @@ class LockstepDQN:
 
     # ------------------------------------------------------------------ loop
 
-    def learn(self, total_timesteps: int, *, callback: Callback | None = None) -> DQNGroupResult:
+    def learn(self, total_timesteps: int, *, callback: Callback | None = None) -> GroupResult:
         """SB3's ``OffPolicyAlgorithm.learn`` for every run; ``callback(timesteps)`` after each
         env step (where SB3 calls ``callback.on_step``: before storing the transition)."""
         if self._learned:
@@ -432,8 +419,8 @@ class LockstepDQN:
                 self.update_seconds += time.perf_counter() - t0
         return self.result()
 
-    def result(self) -> DQNGroupResult:
-        return DQNGroupResult(
+    def result(self) -> GroupResult:
+        return GroupResult(
             seeds=self.seeds, state_dicts=tuple(self.run_state_dict(r) for r in range(self.R)),
             episode_returns=tuple(tuple(f) for f in self.finished), timesteps=self.timesteps,
             env_seconds=self.env_seconds, update_seconds=self.update_seconds)

@@ -213,8 +213,9 @@ def sb3_state_dict(policy: StackedPolicy, r: int) -> dict[str, torch.Tensor]:
 
 
 @dataclass(frozen=True, kw_only=True)
-class PPOGroupResult:
-    """Per run: seed, SB3-loadable state_dict, finished-episode returns (env reward), steps."""
+class GroupResult:
+    """A lock-step group's outcome (PPO or DQN): per run its seed, SB3-loadable policy
+    state_dict and finished-episode returns (env reward); the steps and the time split."""
 
     seeds: tuple[int, ...]
     state_dicts: tuple[dict[str, torch.Tensor], ...]
@@ -479,7 +480,7 @@ class LockstepPPO:
         return {key: value.detach().numpy() for key, value in last.items()}
 
     def learn(self, total_timesteps: int, *, callback: StepCallback | None = None
-              ) -> PPOGroupResult:
+              ) -> GroupResult:
         """SB3's loop: rollouts of n_steps until total_timesteps (rounded up to a rollout);
         ``callback(timesteps)`` after every env step (timesteps per run so far)."""
         while self.timesteps < total_timesteps:
@@ -489,9 +490,9 @@ class LockstepPPO:
             self.update_seconds += time.perf_counter() - t0
         return self.result()
 
-    def result(self) -> PPOGroupResult:
+    def result(self) -> GroupResult:
         """Every run's state so far."""
-        return PPOGroupResult(
+        return GroupResult(
             seeds=self.seeds,
             state_dicts=tuple(self.policy.run_state_dict(r) for r in range(self.R)),
             episode_returns=tuple(tuple(e.finished) for e in self.envs),
