@@ -34,7 +34,7 @@ from __future__ import annotations
 import io
 import json
 import os
-from dataclasses import asdict, dataclass, replace
+from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
 
@@ -143,9 +143,14 @@ class CardStates:
 
     @classmethod
     def from_table(
-        cls, path: str | os.PathLike[str], *, groups: set[str] | None = None
+        cls,
+        path: str | os.PathLike[str],
+        *,
+        groups: set[str] | None = None,
+        label: str | None = None,
     ) -> CardStates:
-        """The rows of a decision table (``pokerirl ingest``'s), or of its hands ``groups``."""
+        """The rows of a decision table (``pokerirl ingest``'s), or of its hands ``groups``;
+        ``label`` names the table in ``source`` (default: ``path``)."""
         from pokerirl.parquet import fixed_width, read_parquet
 
         table = read_parquet(path, TABLE_COLUMNS, what="table")
@@ -162,7 +167,7 @@ class CardStates:
             legal_mask=fixed_width(table, "legal_mask", NUM_ACTIONS, str(path))[index],
             cards=cards_from_text(hole, board),
             expert=table.column("action_id").to_numpy()[index],
-            source=f"{path}" + ("" if groups is None else f" ({len(groups)} hands)"),
+            source=f"{label or path}" + ("" if groups is None else f" ({len(groups)} hands)"),
         )
 
 
@@ -408,9 +413,7 @@ def run_card(
 
     split = json.loads((Path(run_dir) / "split.json").read_text())
     groups = {str(g) for g in split["validation_groups"]}
-    states = CardStates.from_table(table, groups=groups)
-    if label is not None:
-        states = replace(states, source=f"{label} ({len(groups)} hands)")
+    states = CardStates.from_table(table, groups=groups, label=label)
     record = json.loads((Path(run_dir) / "config.json").read_text())
     reward = load_reward_source(run_dir)
     reward.name = f"{record['algo']} reward (seed {record['hyperparameters']['seed']})"
