@@ -243,7 +243,7 @@ def test_gym_study_lockstep_reuses_every_unit(tmp_path: Path) -> None:
     assert "5 of 6 finished already, reused" in resumed.output
     assert {p: p.read_bytes() for p in out.rglob("*") if p.is_file()} == before
     # sb3 runs never pass for lock-step ones
-    refused = CliRunner().invoke(app, [*STUDY[:-2], "--out", str(out)])
+    refused = CliRunner().invoke(app, [*STUDY[:-2], "--rl-backend", "sb3", "--out", str(out)])
     assert refused.exit_code == 1
     assert "backend 'lockstep' -> None" in refused.output.strip().splitlines()[-1]
 
@@ -260,3 +260,12 @@ def test_a_group_is_one_folder_of_runs() -> None:
         groups.setdefault(job.group_key(), []).append(job.seed)
     assert sorted(groups.values()) == [[0, 1, 2], [0, 1, 2]]
     assert {job.config(None)["backend"] for job in jobs} == {"lockstep"}
+
+
+def test_the_cli_default_backend_is_the_librarys() -> None:
+    """The CLI spells the default out (importing pokerirl.gym.rl would load SB3): keep the two
+    in step. Since the equivalence table held, lockstep is the default everywhere."""
+    from pokerirl.cli.gym import RL_BACKEND
+    from pokerirl.gym.rl import DEFAULT_RL_BACKEND
+
+    assert RL_BACKEND.default == DEFAULT_RL_BACKEND == "lockstep"

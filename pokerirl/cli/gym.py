@@ -30,12 +30,12 @@ gym_app = typer.Typer(
 app.add_typer(gym_app, name="gym")
 
 
-# sb3 stays the default until docs/lockstep.md's equivalence table holds for every task; then
-# lockstep becomes it (issue 19).
+# Spelled out rather than imported: pokerirl.gym.rl pulls in SB3, and the CLI imports lazily
+# (tests/test_gym_lockstep_group.py checks it equals DEFAULT_RL_BACKEND).
 RL_BACKEND = typer.Option(
-    "sb3", "--rl-backend", metavar="sb3|lockstep",
-    help="How RL runs train: SB3, one run at a time, or lockstep: a task's runs together in "
-    "one process (PPO only, for now).",
+    "lockstep", "--rl-backend", metavar="sb3|lockstep",
+    help="How RL runs train: lockstep, a task's runs together in one process (PPO and DQN, "
+    "SB3's semantics), or sb3, one run at a time (the reference).",
 )  # fmt: skip
 
 

@@ -33,10 +33,10 @@ from pokerirl.gym.rewards import RewardCallable, learned_reward_env
 
 EVAL_SEED = 2_000_000  # evaluation episodes' seeds, apart from the experts' and the data's
 # How the RL phase trains: SB3, one run per call (train_rl), or R runs of one task in one
-# process (pokerirl.gym.lockstep.group.train_rl_group). sb3 stays the default until the
-# lock-step backend's equivalence table (docs/lockstep.md) holds for every task.
+# process (pokerirl.gym.lockstep.group.train_rl_group). lockstep is the default since its
+# equivalence table with SB3 (docs/lockstep.md) holds on Acrobot, Pendulum and MountainCar.
 RL_BACKENDS = ("sb3", "lockstep")
-DEFAULT_RL_BACKEND = "sb3"
+DEFAULT_RL_BACKEND = "lockstep"
 
 
 @dataclass(frozen=True, kw_only=True)

@@ -48,7 +48,7 @@ from pokerirl.gym.jobs import (
     run_rl_jobs,
 )
 from pokerirl.gym.presets import PRESETS, TASK_ORDER, TASKS, MeanStd, StudyPreset
-from pokerirl.gym.rl import mean_std
+from pokerirl.gym.rl import DEFAULT_RL_BACKEND, mean_std
 
 SUMMARY_FORMAT = "pokerirl-gym-study/1"
 ALGOS = ("airl", "hairl")
@@ -173,7 +173,7 @@ def run_gym_study(
     overwrite: bool = False,
     progress: bool = False,
     say: Say = lambda message: None,
-    rl_backend: str = "sb3",
+    rl_backend: str = DEFAULT_RL_BACKEND,
 ) -> GymStudyResult:
     """Run (or resume) the study of ``preset.tasks`` into ``out``; ``say`` hears a line per step.
 

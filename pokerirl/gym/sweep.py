@@ -35,7 +35,7 @@ from pokerirl.execution import Backend
 from pokerirl.gym.irl import irl_config
 from pokerirl.gym.jobs import DATA_FILE, Say, run_data_jobs, run_irl_jobs, run_rl_jobs
 from pokerirl.gym.presets import TASKS, StudyPreset
-from pokerirl.gym.rl import mean_std
+from pokerirl.gym.rl import DEFAULT_RL_BACKEND, mean_std
 from pokerirl.gym.study import (
     GymStudyError,
     check_rl_backend,
@@ -141,7 +141,7 @@ def run_sweep(
     overwrite: bool = False,
     progress: bool = False,
     say: Say = lambda message: None,
-    rl_backend: str = "sb3",
+    rl_backend: str = DEFAULT_RL_BACKEND,
 ) -> SweepResult:
     """Run (or resume) the sweep of ``params`` on ``env`` with ``preset``'s budgets; the RL runs
     train with ``rl_backend`` (lockstep: each point's unfinished runs as one group)."""
