@@ -329,7 +329,7 @@ def train_gym_irl(
 
         def env_returns(record: EpochRecord) -> list[Mapping[str, float]]:
             # The nets' parameters were written back: evaluate each policy in the env.
-            extras = []
+            extras: list[Mapping[str, float]] = []
             for policy in record.policies:
                 was_training = policy.training
                 policy.eval()

@@ -8,7 +8,7 @@ read back by position in a dict.
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, fields
+from dataclasses import dataclass
 from typing import Any, NamedTuple, Protocol
 
 from torch import Tensor, nn
@@ -31,7 +31,14 @@ class Batch:
 
     def at(self, step: int) -> Batch:
         """The rows at first index ``step`` (one step of an epoch's batches, or one run)."""
-        return Batch(**{f.name: _index(getattr(self, f.name), step) for f in fields(self)})
+        return Batch(
+            obs=self.obs[step],
+            expert=self.expert[step],
+            mask=_index(self.mask, step),
+            env=_index(self.env, step),
+            next_obs=_index(self.next_obs, step),
+            dones=_index(self.dones, step),
+        )
 
 
 def _index(value: Tensor | None, i: int) -> Tensor | None:
