@@ -26,7 +26,7 @@ import functools
 import json
 import math
 import os
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
@@ -44,6 +44,7 @@ from pokerirl.irl.airl import default_nets, train_many
 from pokerirl.irl.config import AIRLConfig
 from pokerirl.irl.nets import fold_obs_standardization
 from pokerirl.irl.plots import plot_bands, plot_curves
+from pokerirl.irl.records import EpochRecord
 from pokerirl.irl.run import (
     BASELINES_FILE,
     METRICS_FILE,
@@ -326,9 +327,10 @@ def train_gym_irl(
             write_text(folder / SPLIT_FILE, json.dumps({"validation_groups": val_groups}) + "\n")
             write_text(folder / BASELINES_FILE, json.dumps(found, indent=2) + "\n")
 
-        def on_epoch(all_metrics: list[dict[str, Any]]) -> None:
+        def env_returns(record: EpochRecord) -> list[Mapping[str, float]]:
             # The nets' parameters were written back: evaluate each policy in the env.
-            for k, (policy, metrics) in enumerate(zip(policies, all_metrics, strict=True)):
+            extras: list[Mapping[str, float]] = []
+            for policy in record.policies:
                 was_training = policy.training
                 policy.eval()
                 returns = episode_returns(
@@ -337,8 +339,13 @@ def train_gym_irl(
                     episodes=settings.eval_episodes,
                 )
                 policy.train(was_training)
-                metrics["eval_return"] = float(returns.mean())
-                metrics["eval_return_std"] = float(returns.std())
+                extras.append(
+                    {"eval_return": float(returns.mean()), "eval_return_std": float(returns.std())}
+                )
+            return extras
+
+        def on_epoch(all_metrics: list[dict[str, Any]]) -> None:
+            for k, metrics in enumerate(all_metrics):
                 lines[k].append(json.dumps(metrics))
                 write_text(folders[k] / METRICS_FILE, "\n".join(lines[k]) + "\n")
 
@@ -352,6 +359,7 @@ def train_gym_irl(
             device=device,
             progress=progress,
             on_epoch=on_epoch,
+            callback=env_returns,
         )
         data_info = {
             "env": env_id,

@@ -1,9 +1,11 @@
 """AIRL / Hybrid-AIRL reward learning on expert :class:`Transitions`.
 
-:mod:`pokerirl.irl.airl` is the trainer (one run, or R in lock-step), :mod:`~.nets` the
-default networks, :mod:`~.transitions` the data, :mod:`~.run` the run folders and
-:func:`load_reward`. It knows nothing of poker or Gymnasium (``tests/test_layers.py``): poker
-tables and ``pokerirl train`` are :mod:`pokerirl.poker`, environments :mod:`pokerirl.gym`.
+:mod:`pokerirl.irl.airl` is the trainer (one run, or R in lock-step; its pieces are
+:mod:`~.losses`, :mod:`~.stacked` nets, :mod:`~.records`, :mod:`~.evaluate` and
+:mod:`~.baselines`), :mod:`~.nets` the default networks (:class:`RewardNet`, :mod:`~.reward`),
+:mod:`~.transitions` the data, :mod:`~.run` the run folders and :func:`load_reward`.
+It knows nothing of poker or Gymnasium (``tests/test_layers.py``): poker tables and
+``pokerirl train`` are :mod:`pokerirl.poker`, environments :mod:`pokerirl.gym`.
 For example::
 
     from pokerirl.irl import load_reward
@@ -35,6 +37,8 @@ from pokerirl.irl.nets import (
     build_nets,
     project_to_simplex,
 )
+from pokerirl.irl.records import Batch, EpochCallback, EpochRecord, StepLosses
+from pokerirl.irl.reward import RewardFn, RewardNet
 from pokerirl.irl.run import (
     RewardFunction,
     RunError,
@@ -49,16 +53,22 @@ from pokerirl.irl.transitions import Transitions
 __all__ = [
     "ALGOS",
     "AIRLConfig",
+    "Batch",
     "ConfigError",
     "DiscretePolicy",
+    "EpochCallback",
+    "EpochRecord",
     "GaussianPolicy",
     "ManyResult",
     "NetSpec",
+    "RewardFn",
     "RewardFunction",
+    "RewardNet",
     "RunError",
     "RunSummary",
     "ShapedReward",
     "StateActionReward",
+    "StepLosses",
     "TrainResult",
     "Transitions",
     "baselines",

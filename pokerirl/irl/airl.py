@@ -38,7 +38,6 @@ True
 
 from __future__ import annotations
 
-import copy
 import math
 import time
 from collections.abc import Callable, Sequence
@@ -46,252 +45,67 @@ from dataclasses import dataclass, field, replace
 from typing import Any
 
 import torch
-import torch.nn.functional as F
 from torch import Tensor, nn
 from tqdm.auto import tqdm
 
 from pokerirl.irl import fast
+from pokerirl.irl.baselines import baselines
 from pokerirl.irl.config import AIRLConfig
+from pokerirl.irl.evaluate import evaluate
+from pokerirl.irl.losses import (
+    LOG_2PI,
+    LOSS_KEYS,
+    discriminator_loss,
+    gaussian_log_prob,
+    noise_schedule,
+    sample_one_hot,
+)
 from pokerirl.irl.nets import MASKED_LOGIT, build_nets, project_to_simplex
 from pokerirl.irl.optim import FlatAdam
+from pokerirl.irl.records import (
+    DISCRIMINATOR_METRICS,
+    Batch,
+    EpochCallback,
+    EpochRecord,
+    StepLosses,
+    pack_step,
+    unpack_steps,
+)
+from pokerirl.irl.stacked import (
+    StackedLayerNorm,
+    StackedLinear,
+    StackedNets,
+    stack_modules,
+)
 from pokerirl.irl.transitions import Transitions
 
-LOG_2PI = math.log(2 * math.pi)
-LOSS_KEYS = (
-    "disc_loss",
-    "disc_airl_loss",
-    "disc_env_loss",
-    "policy_loss",
-    "policy_adv_loss",
-    "policy_sup_loss",
-)
+_Nets = StackedNets  # the name before the split
 
-
-# --------------------------------------------------------------------------- pure pieces
-
-
-def noise_schedule(
-    batch_size: int,
-    sigma_start: float,
-    sigma_end: float,
-    *,
-    kind: str = "linear",
-    decay: float = 0.1,
-) -> Tensor:
-    """σ_i for the i-th sample of a batch.
-
-    ``linear`` (the paper): from σ_start on the first sample to σ_end on the last.
-    ``authors`` (their code): σ_i = σ_start / (1 + k·b·i), b = (σ_start − σ_end)/(σ_end·B);
-    the trainer shuffles these across the batch.
-
-    >>> noise_schedule(5, 1.0, 0.2)
-    tensor([1.0000, 0.8000, 0.6000, 0.4000, 0.2000])
-    >>> noise_schedule(3, 1.0, 0.5, kind="authors", decay=1.0)
-    tensor([1.0000, 0.7500, 0.6000])
-    """
-    if sigma_start == 0:
-        return torch.zeros(batch_size)
-    if kind == "authors":
-        b = (sigma_start - sigma_end) / (sigma_end * batch_size)
-        return sigma_start / (1 + decay * b * torch.arange(batch_size, dtype=torch.float32))
-    if batch_size == 1:
-        return torch.tensor([sigma_start])
-    return torch.linspace(sigma_start, sigma_end, batch_size)
-
-
-def discriminator_loss(
-    f_expert: Tensor,
-    log_pi_expert: Tensor,
-    f_policy: Tensor,
-    log_pi_policy: Tensor,
-    *,
-    beta: float = 0.0,
-    env_reward: Tensor | None = None,
-) -> tuple[Tensor, Tensor, Tensor]:
-    """(total, L_AIRL, env MSE), means over the last dimension.
-
-    L_AIRL = −E_E[log D(s, a_E)] − E_π[log(1 − D(s, ã))] with D = σ(f − log π), the
-    log-space form of exp f / (exp f + π). total = (1−β)·L_AIRL + β·E_E[(f − r_env)²].
-
-    >>> zero = torch.zeros(1)
-    >>> round(discriminator_loss(zero, zero, zero, zero)[0].item(), 4)  # D = 1/2: 2 ln 2
-    1.3863
-    """
-    airl = -(
-        F.logsigmoid(f_expert - log_pi_expert).mean(-1)
-        + F.logsigmoid(log_pi_policy - f_policy).mean(-1)
-    )
-    if env_reward is None:
-        return airl, airl, torch.zeros_like(airl)
-    env = (f_expert - env_reward).square().mean(-1)
-    return (1 - beta) * airl + beta * env, airl, env
-
-
-def gaussian_log_prob(action: Tensor, mean: Tensor, log_std: Tensor) -> Tensor:
-    """Diagonal Gaussian log-density, summed over the last dimension."""
-    z = (action - mean) * torch.exp(-log_std)
-    return (-0.5 * z.square() - log_std - 0.5 * LOG_2PI).sum(-1)
-
-
-def sample_one_hot(probs: Tensor, u: Tensor) -> Tensor:
-    """One-hots of actions drawn from ``probs`` (..., K) by inverse CDF with uniforms ``u``.
-
-    With u below the last cumulative probability the pick always has positive probability,
-    so it is never an illegal action.
-    """
-    cumulative = probs.cumsum(-1)
-    picked = (cumulative <= u[..., None] * cumulative[..., -1:]).sum(-1, keepdim=True)
-    return torch.zeros_like(probs).scatter_(-1, picked.clamp_max(probs.shape[-1] - 1), 1.0)
-
-
-# --------------------------------------------------------------------------- stacked nets
-
-
-class _Nets:
-    """R copies of a (reward or policy) architecture, called with a leading run dimension.
-
-    Inputs carry the run dimension first (or none where ``shared``); a reward's state
-    arguments also carry an action-row axis of size 1, so that they broadcast against the
-    (M, B, k) action rows both inside one run and across runs.
-
-    One run calls the module itself. Several runs made of the default nets' layers (Linear,
-    LayerNorm, activations) become one module whose parameters have a leading run dimension
-    (``stack_modules``: batched matrix products, one kernel per layer for all runs); any
-    other architecture goes through ``vmap(functional_call)`` over stacked parameters.
-    Either way ``params`` are the leaves the optimizer updates.
-    """
-
-    def __init__(self, modules: Sequence[nn.Module]) -> None:
-        self.modules = list(modules)
-        self.stacked: nn.Module | None = None
-        if len(self.modules) == 1:
-            self.params = list(self.modules[0].parameters())
-            return
-        self.stacked = stack_modules(self.modules)
-        if self.stacked is not None:
-            self.params = list(self.stacked.parameters())
-            return
-        self.base = copy.deepcopy(self.modules[0]).to("meta")
-        params, self.buffers = torch.func.stack_module_state(self.modules)
-        self.vmapped = params
-        self.params = list(params.values())
-
-    def __call__(self, *args: Tensor | None, shared: Sequence[bool] = ()) -> Any:
-        """Call with args of (R, ...) (or without R where ``shared[i]``)."""
-        shared = tuple(shared) + (False,) * (len(args) - len(shared))
-        runs = len(self.modules)
-        if runs == 1:
-            inner = (a if s or a is None else a[0] for a, s in zip(args, shared, strict=True))
-            return _unsqueeze(self.modules[0](*inner))
-        if self.stacked is not None:
-            return self.stacked(
-                *(a.expand(runs, *a.shape) if s and a is not None else a
-                  for a, s in zip(args, shared, strict=True))
-            )  # fmt: skip
-        dims = tuple(None if s or a is None else 0 for a, s in zip(args, shared, strict=True))
-
-        def call(params: dict, buffers: dict, *inner: Tensor | None) -> Any:
-            return torch.func.functional_call(self.base, (params, buffers), inner)
-
-        return torch.func.vmap(call, in_dims=(0, 0, *dims))(self.vmapped, self.buffers, *args)
-
-    @torch.no_grad()
-    def write_back(self) -> None:
-        """Copy the runs' parameters into the R modules (no-op for one run)."""
-        if len(self.modules) == 1:
-            return
-        source = dict(self.stacked.named_parameters()) if self.stacked is not None else self.vmapped
-        for r, module in enumerate(self.modules):
-            for name, value in module.named_parameters():
-                value.copy_(source[name][r])
-
-
-class StackedLinear(nn.Module):
-    """R linear maps applied run by run to x of (R, ..., in): one batched product."""
-
-    def __init__(self, layers: Sequence[nn.Linear]) -> None:
-        super().__init__()
-        self.weight = nn.Parameter(torch.stack([m.weight.detach() for m in layers]))
-        self.bias = (
-            None
-            if layers[0].bias is None
-            else nn.Parameter(torch.stack([m.bias.detach() for m in layers]))  # type: ignore[union-attr]
-        )
-
-    def forward(self, x: Tensor) -> Tensor:
-        runs, out_dim = self.weight.shape[:2]
-        flat = x.reshape(runs, -1, x.shape[-1])
-        weight = self.weight.transpose(1, 2)
-        if self.bias is None:
-            y = torch.bmm(flat, weight)
-        else:
-            y = torch.baddbmm(self.bias[:, None, :], flat, weight)
-        return y.view(*x.shape[:-1], out_dim)
-
-
-class StackedLayerNorm(nn.Module):
-    """R layer norms (with their own affine parameters) over x of (R, ..., H)."""
-
-    def __init__(self, layers: Sequence[nn.LayerNorm]) -> None:
-        super().__init__()
-        self.shape, self.eps = layers[0].normalized_shape, layers[0].eps
-        self.weight = nn.Parameter(torch.stack([m.weight.detach() for m in layers]))
-        self.bias = nn.Parameter(torch.stack([m.bias.detach() for m in layers]))
-
-    def forward(self, x: Tensor) -> Tensor:
-        view = (x.shape[0],) + (1,) * (x.ndim - 2) + (x.shape[-1],)
-        normed = F.layer_norm(x, self.shape, eps=self.eps)
-        return torch.addcmul(self.bias.view(view), normed, self.weight.view(view))
-
-
-_STACKABLE = (nn.Sequential, nn.Identity, nn.ReLU, nn.Tanh, nn.LeakyReLU)
-
-
-def stack_modules(modules: Sequence[nn.Module]) -> nn.Module | None:
-    """One module computing all R ``modules`` (same architecture) on inputs with a leading
-    run dimension, or None when an architecture is not made of known layers.
-
-    Known: the default nets (whose forward code broadcasts over leading dimensions),
-    Sequential, Linear, LayerNorm (elementwise affine) and parameter-free activations.
-    """
-    from pokerirl.irl.nets import DiscretePolicy, GaussianPolicy, ShapedReward, StateActionReward
-
-    known = (*_STACKABLE, DiscretePolicy, GaussianPolicy, ShapedReward, StateActionReward)
-    for module in modules[0].modules():
-        if (
-            isinstance(module, nn.LayerNorm)
-            and module.elementwise_affine
-            and module.bias is not None
-        ):
-            continue
-        if type(module) is not nn.Linear and type(module) not in known:
-            return None
-    stacked = copy.deepcopy(modules[0])
-
-    def convert(target: nn.Module, sources: list[nn.Module]) -> None:
-        for name, child in list(target.named_children()):
-            originals = [getattr(source, name) for source in sources]
-            if type(child) is nn.Linear:
-                setattr(target, name, StackedLinear(originals))
-            elif isinstance(child, nn.LayerNorm):
-                setattr(target, name, StackedLayerNorm(originals))
-            else:
-                convert(child, originals)
-        for name, _ in list(target.named_parameters(recurse=False)):
-            value = torch.stack([getattr(source, name).detach() for source in sources])
-            setattr(target, name, nn.Parameter(value))
-        for name, _ in list(target.named_buffers(recurse=False)):
-            target.register_buffer(name, torch.stack([getattr(s, name) for s in sources]))
-
-    convert(stacked, list(modules))
-    return stacked
-
-
-def _unsqueeze(out: Any) -> Any:
-    if isinstance(out, tuple):
-        return tuple(o.unsqueeze(0) for o in out)
-    return out.unsqueeze(0)
-
+# Importable from here as before the split (losses, stacked nets, evaluation, baselines).
+__all__ = [
+    "LOG_2PI",
+    "LOSS_KEYS",
+    "Batch",
+    "EpochCallback",
+    "EpochRecord",
+    "ManyResult",
+    "StackedLayerNorm",
+    "StackedLinear",
+    "StackedNets",
+    "StepLosses",
+    "TrainResult",
+    "baselines",
+    "default_nets",
+    "discriminator_loss",
+    "evaluate",
+    "gaussian_log_prob",
+    "noise_schedule",
+    "resolve_device",
+    "sample_one_hot",
+    "stack_modules",
+    "train",
+    "train_many",
+]
 
 # --------------------------------------------------------------------------- results
 
@@ -362,6 +176,7 @@ def train(
     device: str | torch.device = "cpu",
     progress: bool = True,
     on_epoch: Callable[[dict[str, Any]], None] | None = None,
+    callback: EpochCallback | None = None,
 ) -> TrainResult:
     """Train ``reward`` and ``policy`` (default: :func:`default_nets`) on ``train_data``;
     evaluate on ``val_data`` each epoch. Deterministic on CPU for a given seed and data.
@@ -369,7 +184,8 @@ def train(
     ``adversarial=False`` skips the discriminator (behaviour cloning when α = 1).
     ``fast_path``: use the hand-derived gradients of :mod:`pokerirl.irl.fast` where they
     cover the nets (the default poker nets, one run, on CPU); autograd otherwise.
-    ``on_epoch`` gets each epoch's metrics dict as soon as it is ready.
+    ``on_epoch`` gets each epoch's metrics dict as soon as it is ready; ``callback`` (an
+    :class:`EpochCallback`) may add metrics to it first.
     """
     if reward is None or policy is None:
         default_reward, default_policy = default_nets(train_data, config)
@@ -387,6 +203,7 @@ def train(
         device=device,
         progress=progress,
         on_epoch=None if on_epoch is None else (lambda ms: on_epoch(ms[0])),
+        callback=callback,
     )
     return many.runs[0]
 
@@ -404,12 +221,14 @@ def train_many(
     device: str | torch.device = "cpu",
     progress: bool = True,
     on_epoch: Callable[[list[dict[str, Any]]], None] | None = None,
+    callback: EpochCallback | None = None,
 ) -> ManyResult:
     """R = len(seeds) runs of ``config`` on the same data, in lock-step.
 
     Run r uses ``seeds[r]`` for its shuffles and noise (and, with default nets, its
     initialization), so it is the run ``train`` would make with that seed, up to floating
-    point. The nets must share one architecture. ``on_epoch`` gets the R metrics dicts.
+    point. The nets must share one architecture. After each epoch ``callback`` (an
+    :class:`EpochCallback`) may add metrics per run; then ``on_epoch`` gets the R metrics dicts.
     """
     device = resolve_device(device)
     if len(train_data) == 0 or len(val_data) == 0:
@@ -432,12 +251,12 @@ def train_many(
         val_data,
         config=config,
         seeds=seeds,
-        rewards=_Nets(rewards),
-        policies=_Nets(policies),
+        rewards=StackedNets(rewards),
+        policies=StackedNets(policies),
         adversarial=adversarial,
         device=device,
         fast_path=fast_path,
-    ).run(progress=progress, on_epoch=on_epoch)
+    ).run(progress=progress, on_epoch=on_epoch, callback=callback)
 
 
 class _Loop:
@@ -450,8 +269,8 @@ class _Loop:
         *,
         config: AIRLConfig,
         seeds: list[int],
-        rewards: _Nets,
-        policies: _Nets,
+        rewards: StackedNets,
+        policies: StackedNets,
         adversarial: bool,
         device: torch.device,
         fast_path: bool = False,
@@ -530,23 +349,26 @@ class _Loop:
 
     # ------------------------------------------------------------------ one batch
 
-    def gather(self, rows: Tensor) -> dict[str, Tensor]:
+    def gather(self, rows: Tensor) -> Batch:
         """The training tensors at ``rows`` (any shape of indices)."""
-        batch = {"obs": self.obs[rows], "expert": self.action_vectors[rows]}
-        for name in ("mask", "env", "next_obs", "dones"):
-            value = getattr(self, name)
-            if value is not None:
-                batch[name] = value[rows]
-        return batch
+        optional = {
+            name: None if value is None else value[rows]
+            for name, value in (
+                ("mask", self.mask),
+                ("env", self.env),
+                ("next_obs", self.next_obs),
+                ("dones", self.dones),
+            )
+        }
+        return Batch(obs=self.obs[rows], expert=self.action_vectors[rows], **optional)
 
-    def step(self, batch: dict[str, Tensor], draw: dict[str, Tensor], step: int) -> Tensor:
+    def step(self, batch: Batch, draw: dict[str, Tensor], step: int) -> Tensor:
         """One discriminator and one policy update on a batch of (R, B) rows.
 
-        Returns (R, 4B + 3): f on expert and policy rows, log π of both, then the policy
-        loss, its adversarial and its supervised part.
+        Returns (R, 4B + 3), :func:`~pokerirl.irl.records.pack_step`'s row: f on expert and
+        policy rows, log π of both, then the :class:`StepLosses`.
         """
-        obs, expert = batch["obs"], batch["expert"]
-        mask, env = batch.get("mask"), batch.get("env")
+        obs, expert, mask, env = batch.obs, batch.expert, batch.mask, batch.env
         zero = obs.new_zeros(self.runs)
 
         # 1. the policy at s (kept with its graph for step 3)
@@ -584,9 +406,8 @@ class _Loop:
                         log_pi_seen = gaussian_log_prob(seen, m, ls)
             both = torch.stack((expert, seen), dim=1)  # (R, 2, B, k)
             if self.shaped:
-                f = self.rewards(
-                    obs[:, None], both, batch["next_obs"][:, None], batch["dones"][:, None]
-                )
+                assert batch.next_obs is not None and batch.dones is not None  # train_many checks
+                f = self.rewards(obs[:, None], both, batch.next_obs[:, None], batch.dones[:, None])
             else:
                 f = self.rewards(obs[:, None], both)
             d_loss, d_airl, d_env = discriminator_loss(
@@ -628,8 +449,7 @@ class _Loop:
         self.policy_opt.zero_grad()
         p_loss.sum().backward(inputs=self.policies.params)
         self.policy_opt.step()
-        policy_record = torch.stack((p_loss, adversarial, supervised), dim=1).detach()
-        return torch.cat((disc_record, policy_record), dim=1)
+        return pack_step(disc_record, StepLosses(p_loss, adversarial, supervised))
 
     def discrete_seen(
         self, probs: Tensor, mask: Tensor | None, draw: dict[str, Tensor], step: int
@@ -644,13 +464,12 @@ class _Loop:
             seen = project_to_simplex(seen + sigma[..., None] * draw["eps"][step], mask)
         return seen
 
-    def fast_step(self, batch: dict[str, Tensor], draw: dict[str, Tensor], step: int) -> Tensor:
+    def fast_step(self, batch: Batch, draw: dict[str, Tensor], step: int) -> Tensor:
         """:meth:`step` with the hand-derived gradients of :mod:`pokerirl.irl.fast`."""
         reward: Any = self.rewards.modules[0]  # fast.supports() checked their types
         policy: Any = self.policies.modules[0]
-        obs, expert = batch["obs"][0], batch["expert"][0]
-        mask = batch["mask"][0] if "mask" in batch else None
-        env = batch["env"][0] if "env" in batch else None
+        one = batch.at(0)  # the one run
+        obs, expert, mask, env = one.obs, one.expert, one.mask, one.env
         acts = fast.mlp_forward(policy.mlp, obs)
         logits = acts[-1] if mask is None else acts[-1].masked_fill(~mask, MASKED_LOGIT)
         log_pi = torch.log_softmax(logits, dim=-1)
@@ -677,12 +496,13 @@ class _Loop:
         supervised = -(expert * log_pi).sum(-1).mean()
         adversarial = (probs * (log_pi - g)).sum(-1).mean() if self.alpha < 1 else g[0, 0]
         p_loss = (1 - self.alpha) * adversarial + self.alpha * supervised
-        return torch.cat((disc_record, torch.stack((p_loss, adversarial, supervised))))[None]
+        return pack_step(disc_record, StepLosses(p_loss, adversarial, supervised))[None]
 
     def epoch_stats(self, record: Tensor, perm: Tensor) -> dict[str, list[float]]:
         """Epoch means per run of the losses and discriminator accuracies."""
-        b = self.batch
-        f_expert, f_seen, lp_expert, lp_seen = record[..., : 4 * b].split(b, dim=-1)
+        disc, losses = unpack_steps(record, self.batch)
+        f_expert, f_seen = disc.f_expert, disc.f_policy
+        lp_expert, lp_seen = disc.log_pi_expert, disc.log_pi_policy
         env = None if self.env is None else self.env[perm]  # (steps, R, B)
         d_loss, d_airl, d_env = discriminator_loss(
             f_expert, lp_expert, f_seen, lp_seen, beta=self.beta, env_reward=env
@@ -696,22 +516,50 @@ class _Loop:
             "reward_expert": f_expert.mean((0, 2)),
             "reward_policy": f_seen.mean((0, 2)),
             "reward_gap": (f_expert - f_seen).mean((0, 2)),  # expert minus policy
-            "policy_loss": record[..., -3].mean(0),
-            "policy_adv_loss": record[..., -2].mean(0),
-            "policy_sup_loss": record[..., -1].mean(0),
+            **{name: value.mean(0) for name, value in losses._asdict().items()},
         }
         if not self.adversarial:
-            for key in list(values)[:8]:
+            for key in DISCRIMINATOR_METRICS:
                 values[key] = torch.zeros(self.runs)
         return {key: value.tolist() for key, value in values.items()}
 
     # ------------------------------------------------------------------ the loop
+
+    def add_extras(
+        self,
+        epoch: int,
+        seconds: float,
+        epoch_metrics: list[dict[str, Any]],
+        callback: EpochCallback,
+    ) -> None:
+        """Ask ``callback`` for the epoch's extra metrics and add them, run by run."""
+        record = EpochRecord(
+            epoch=epoch,
+            metrics=tuple(dict(m) for m in epoch_metrics),  # copies: the callback reads only
+            rewards=tuple(self.rewards.modules),
+            policies=tuple(self.policies.modules),
+            seconds=seconds,
+        )
+        extras = callback(record)
+        if extras is None:
+            return
+        extras = list(extras)
+        if len(extras) != self.runs:
+            raise ValueError(
+                f"the epoch callback returned {len(extras)} metric sets for {self.runs} runs"
+            )
+        for metrics, extra in zip(epoch_metrics, extras, strict=True):
+            clash = sorted(set(extra) & set(metrics))
+            if clash:
+                raise ValueError(f"the epoch callback's metric {clash[0]!r} is the trainer's")
+            metrics.update(extra)
 
     def run(
         self,
         *,
         progress: bool,
         on_epoch: Callable[[list[dict[str, Any]]], None] | None,
+        callback: EpochCallback | None = None,
     ) -> ManyResult:
         results = [
             TrainResult(
@@ -736,7 +584,7 @@ class _Loop:
             batches = self.gather(draw["perm"]) if self.gather_epoch else None
             for step in range(self.steps):
                 if batches is not None:
-                    batch = {name: value[step] for name, value in batches.items()}
+                    batch = batches.at(step)
                 else:
                     batch = self.gather(draw["perm"][step])
                 if self.fast:
@@ -756,9 +604,12 @@ class _Loop:
                 metrics: dict[str, Any] = {"epoch": epoch}
                 metrics.update({key: values[r] for key, values in stats.items()})
                 metrics.update(evaluate(result.reward, result.policy, self.val))
+                epoch_metrics.append(metrics)
+            if callback is not None:
+                self.add_extras(epoch, seconds, epoch_metrics, callback)
+            for result, metrics in zip(results, epoch_metrics, strict=True):
                 result.metrics.append(metrics)
                 result.epoch_seconds.append(seconds / self.runs)
-                epoch_metrics.append(metrics)
             if on_epoch is not None:
                 on_epoch(epoch_metrics)
             first = epoch_metrics[0]
@@ -771,93 +622,6 @@ class _Loop:
             result.reward.eval()
             result.policy.eval()
         return many
-
-
-# --------------------------------------------------------------------------- evaluation
-
-
-@torch.no_grad()
-def evaluate(
-    reward: nn.Module, policy: nn.Module, val: Transitions, *, chunk: int = 65536
-) -> dict[str, Any]:
-    """Validation metrics of one run.
-
-    Discrete: ``val_alignment`` (argmax π over legal actions = the expert's action),
-    ``val_reward_alignment`` (argmax over legal actions of the reward g(s, ·) = the expert's),
-    ``val_policy_dist`` (mean π), ``val_policy_argmax_dist`` and ``val_expert_dist``
-    (action histograms). Continuous: ``val_mse`` of the mean action and ``log_std``, the
-    policy's mean log σ.
-    """
-    was_training = reward.training, policy.training
-    reward.eval()
-    policy.eval()
-    device = next(policy.parameters()).device
-    try:
-        if not val.discrete:
-            errors = []
-            for i in range(0, len(val), chunk):
-                mean, log_std = policy(val.obs[i : i + chunk].to(device))
-                errors.append((mean - val.actions[i : i + chunk].to(device)).square().sum(-1))
-            # log σ: collapsing σ lets -log π alone win D and invert the reward (issue 20)
-            return {"val_mse": torch.cat(errors).mean().item(), "log_std": log_std.mean().item()}
-        k = val.action_dim
-        eye = torch.eye(k, device=device)[:, None, :]
-        log_probs, reward_ids = [], []
-        for i in range(0, len(val), chunk):
-            obs = val.obs[i : i + chunk].to(device)
-            mask = None if val.legal_mask is None else val.legal_mask[i : i + chunk].to(device)
-            log_probs.append(policy(obs, mask))
-            g = reward(obs, eye).T  # (B, K)
-            if mask is not None:
-                g = g.masked_fill(~mask, -math.inf)
-            reward_ids.append(g.argmax(-1))
-        log_pi = torch.cat(log_probs)
-        expert = val.actions.to(device)
-        predicted = log_pi.argmax(-1)
-        return {
-            "val_alignment": (predicted == expert).float().mean().item(),
-            "val_reward_alignment": (torch.cat(reward_ids) == expert).float().mean().item(),
-            "val_policy_dist": log_pi.exp().mean(0).tolist(),
-            "val_policy_argmax_dist": _histogram(predicted, k),
-            "val_expert_dist": _histogram(expert, k),
-        }
-    finally:
-        reward.train(was_training[0])
-        policy.train(was_training[1])
-
-
-def _histogram(ids: Tensor, num_actions: int) -> list[float]:
-    return (torch.bincount(ids, minlength=num_actions).float() / max(len(ids), 1)).tolist()
-
-
-def baselines(train_data: Transitions, val_data: Transitions) -> dict[str, float]:
-    """Validation alignment of the rule baselines (discrete actions).
-
-    ``majority``: always the most frequent training action. ``legal_majority``: for each set
-    of legal actions, the most frequent expert action among training rows with that set
-    (the overall majority among legal actions for a set never seen in training).
-    """
-    k = train_data.action_dim
-    counts = torch.bincount(train_data.actions, minlength=k).float()
-    expert = val_data.actions
-    result = {"majority": (expert == counts.argmax()).float().mean().item()}
-    if train_data.legal_mask is None or val_data.legal_mask is None:
-        result["legal_majority"] = result["majority"]
-        return result
-    weights = 2 ** torch.arange(k)
-    train_key = (train_data.legal_mask.long() * weights).sum(-1)
-    val_key = (val_data.legal_mask.long() * weights).sum(-1)
-    table = torch.zeros(2**k, k)
-    table.index_put_((train_key, train_data.actions), torch.ones(len(train_key)), accumulate=True)
-    table += counts * 1e-6  # unseen sets fall back to the overall counts; ties to majority
-    table = table.masked_fill(~_mask_of(torch.arange(2**k), k), -1.0)
-    predicted = table[val_key].argmax(-1)
-    result["legal_majority"] = (predicted == expert).float().mean().item()
-    return result
-
-
-def _mask_of(keys: Tensor, k: int) -> Tensor:
-    return (keys[:, None] >> torch.arange(k)) & 1 == 1
 
 
 def resolve_device(device: str | torch.device) -> torch.device:

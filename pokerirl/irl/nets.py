@@ -30,6 +30,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
+import numpy as np
 import torch
 from torch import Tensor, nn
 
@@ -87,7 +88,30 @@ def build_mlp(
     return nn.Sequential(*layers)
 
 
-class StateActionReward(nn.Module):
+class _RewardMethods:
+    """What makes a reward module a :class:`pokerirl.irl.reward.RewardNet`: g and numpy."""
+
+    def transferable(self, obs: Tensor, action: Tensor) -> Tensor:
+        """g(s, a): f without the shaping terms (f itself for ``state_action``)."""
+        return self(obs, action)  # type: ignore[operator]
+
+    def predict(
+        self,
+        obs: np.ndarray,
+        action: np.ndarray,
+        next_obs: np.ndarray | None = None,
+        done: np.ndarray | None = None,
+    ) -> np.ndarray:
+        """float32 rewards of numpy inputs: f with ``next_obs`` and ``done``, else g."""
+        extra: tuple[Tensor, ...] = ()
+        if next_obs is not None and done is not None:
+            extra = (torch.as_tensor(next_obs).float(), torch.as_tensor(done).bool())
+        with torch.inference_mode():
+            out = self(torch.as_tensor(obs).float(), torch.as_tensor(action).float(), *extra)  # type: ignore[operator]
+        return out.numpy().astype(np.float32, copy=False)
+
+
+class StateActionReward(_RewardMethods, nn.Module):
     """f(s, a): an MLP over [s, a], giving a scalar.
 
     The first layer is two maps, ``W_s s + b`` and ``W_a a`` (the same as one layer on the
@@ -127,7 +151,7 @@ class StateActionReward(nn.Module):
         return self.head(hidden).squeeze(-1)
 
 
-class ShapedReward(nn.Module):
+class ShapedReward(_RewardMethods, nn.Module):
     """f(s, a, s') = g(s, a) + γ·(1 − done)·h(s') − h(s), AIRL's disentangled reward.
 
     g is a :class:`StateActionReward`, h a state-only MLP. Called without s' and done, it is g.

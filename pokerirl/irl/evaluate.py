@@ -1,0 +1,65 @@
+"""Validation metrics of one trained (reward, policy) pair."""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import torch
+from torch import Tensor, nn
+
+from pokerirl.irl.transitions import Transitions
+
+
+@torch.no_grad()
+def evaluate(
+    reward: nn.Module, policy: nn.Module, val: Transitions, *, chunk: int = 65536
+) -> dict[str, Any]:
+    """Validation metrics of one run.
+
+    Discrete: ``val_alignment`` (argmax π over legal actions = the expert's action),
+    ``val_reward_alignment`` (argmax over legal actions of the reward g(s, ·) = the expert's),
+    ``val_policy_dist`` (mean π), ``val_policy_argmax_dist`` and ``val_expert_dist``
+    (action histograms). Continuous: ``val_mse`` of the mean action and ``log_std``, the
+    policy's mean log σ.
+    """
+    was_training = reward.training, policy.training
+    reward.eval()
+    policy.eval()
+    device = next(policy.parameters()).device
+    try:
+        if not val.discrete:
+            errors = []
+            for i in range(0, len(val), chunk):
+                mean, log_std = policy(val.obs[i : i + chunk].to(device))
+                errors.append((mean - val.actions[i : i + chunk].to(device)).square().sum(-1))
+            # log σ: collapsing σ lets -log π alone win D and invert the reward (issue 20)
+            return {"val_mse": torch.cat(errors).mean().item(), "log_std": log_std.mean().item()}
+        k = val.action_dim
+        eye = torch.eye(k, device=device)[:, None, :]
+        log_probs, reward_ids = [], []
+        for i in range(0, len(val), chunk):
+            obs = val.obs[i : i + chunk].to(device)
+            mask = None if val.legal_mask is None else val.legal_mask[i : i + chunk].to(device)
+            log_probs.append(policy(obs, mask))
+            g = reward(obs, eye).T  # (B, K)
+            if mask is not None:
+                g = g.masked_fill(~mask, -math.inf)
+            reward_ids.append(g.argmax(-1))
+        log_pi = torch.cat(log_probs)
+        expert = val.actions.to(device)
+        predicted = log_pi.argmax(-1)
+        return {
+            "val_alignment": (predicted == expert).float().mean().item(),
+            "val_reward_alignment": (torch.cat(reward_ids) == expert).float().mean().item(),
+            "val_policy_dist": log_pi.exp().mean(0).tolist(),
+            "val_policy_argmax_dist": _histogram(predicted, k),
+            "val_expert_dist": _histogram(expert, k),
+        }
+    finally:
+        reward.train(was_training[0])
+        policy.train(was_training[1])
+
+
+def _histogram(ids: Tensor, num_actions: int) -> list[float]:
+    return (torch.bincount(ids, minlength=num_actions).float() / max(len(ids), 1)).tolist()

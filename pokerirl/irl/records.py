@@ -1,0 +1,121 @@
+"""Typed records the trainer passes around: one batch of rows, one step's losses, one epoch.
+
+The trainer packs a step's numbers into one tensor row (one write per step, cheap on small
+nets); :class:`StepLosses` and :class:`DiscriminatorRecord` name its parts, so nothing is
+read back by position in a dict.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any, NamedTuple, Protocol
+
+from torch import Tensor, nn
+
+
+@dataclass(frozen=True, slots=True)
+class Batch:
+    """Training rows at some indices; every tensor has the indices' shape first.
+
+    ``expert`` holds the expert's action vectors (one-hots for discrete actions); the
+    optional tensors are there when the data has them.
+    """
+
+    obs: Tensor
+    expert: Tensor
+    mask: Tensor | None = None
+    env: Tensor | None = None  # the environment's reward r_env
+    next_obs: Tensor | None = None
+    dones: Tensor | None = None
+
+    def at(self, step: int) -> Batch:
+        """The rows at first index ``step`` (one step of an epoch's batches, or one run)."""
+        return Batch(
+            obs=self.obs[step],
+            expert=self.expert[step],
+            mask=_index(self.mask, step),
+            env=_index(self.env, step),
+            next_obs=_index(self.next_obs, step),
+            dones=_index(self.dones, step),
+        )
+
+
+def _index(value: Tensor | None, i: int) -> Tensor | None:
+    return None if value is None else value[i]
+
+
+class StepLosses(NamedTuple):
+    """One policy step's losses, each (R,) or (..., R): total, adversarial and supervised."""
+
+    policy_loss: Tensor
+    policy_adv_loss: Tensor
+    policy_sup_loss: Tensor
+
+
+class DiscriminatorRecord(NamedTuple):
+    """A discriminator step's rows, each (..., B): f and log π on expert and policy actions.
+
+    The epoch's discriminator metrics are computed once from these (not per step)."""
+
+    f_expert: Tensor
+    f_policy: Tensor
+    log_pi_expert: Tensor
+    log_pi_policy: Tensor
+
+
+def pack_step(disc: Tensor, losses: StepLosses) -> Tensor:
+    """One step's row, (..., 4B + 3): the discriminator's rows (f expert, f policy, log π
+    expert, log π policy, B each) then the three policy losses."""
+    import torch
+
+    return torch.cat((disc, torch.stack(tuple(losses), dim=-1).detach()), dim=-1)
+
+
+def unpack_steps(record: Tensor, batch: int) -> tuple[DiscriminatorRecord, StepLosses]:
+    """The named parts of rows made by :func:`pack_step`."""
+    disc = DiscriminatorRecord(*record[..., : 4 * batch].split(batch, dim=-1))
+    losses = StepLosses(*(record[..., 4 * batch + i] for i in range(len(StepLosses._fields))))
+    return disc, losses
+
+
+DISCRIMINATOR_METRICS = (
+    "disc_loss",
+    "disc_airl_loss",
+    "disc_env_loss",
+    "disc_acc_expert",
+    "disc_acc_policy",
+    "reward_expert",
+    "reward_policy",
+    "reward_gap",
+)  # zero when the discriminator is off (behaviour cloning)
+
+
+@dataclass(frozen=True, kw_only=True)
+class EpochRecord:
+    """What an :class:`EpochCallback` sees after an epoch (the nets are written back).
+
+    ``metrics[r]`` is run r's metrics so far (read it, don't change it: return extras);
+    ``rewards[r]`` and ``policies[r]`` its nets, in training mode; ``seconds`` the epoch's
+    optimization time for all runs together."""
+
+    epoch: int
+    metrics: tuple[Mapping[str, Any], ...]
+    rewards: tuple[nn.Module, ...]
+    policies: tuple[nn.Module, ...]
+    seconds: float
+
+    @property
+    def runs(self) -> int:
+        return len(self.metrics)
+
+
+class EpochCallback(Protocol):
+    """Called by the trainer after each epoch (SB3's callback idea).
+
+    Returns None, or one mapping per run of extra metrics for that epoch: they are added to
+    each run's metrics (after the trainer's own, in their order) before ``on_epoch`` sees them.
+    Its work is not timed in ``epoch_seconds``.
+    """
+
+    def __call__(self, record: EpochRecord) -> Sequence[Mapping[str, Any]] | None: ...
