@@ -12,15 +12,16 @@ fresh games against random, seats drawn per game (RLCard's ``tournament``); the 
 every evaluation that beats 0.8 x the best payoff so far is kept (``kept.pt``), beside the
 final one (``model.pt``); ``play`` says which one the folder's agent plays.
 
-Both run through :func:`pokerirl.execution.map_units`: each agent is a unit, trained with
+Both run through :func:`pokerirl.store.run_units`: each agent is a unit, trained with
 torch on ``threads`` threads (one by default) in a private folder from its own seed, from the
 bytes of its reward run and opponent; the driver writes the folder. So the weights do not
 depend on the backend, the job count or the machine's cores. A folder is written beside its
 target and swapped in at the end, with ``unit.json`` (the fingerprint of everything that
-determines the agent, and the sha256 of each file) and ``timings.json`` (wall-clock figures,
-kept out of ``config.json`` so that fingerprints never cover them). A rerun reuses an agent
-whose fingerprint matches, retrains one whose files are corrupt, and refuses one trained
-with other settings unless ``overwrite``.
+determines the agent, the reward run's and the opponent's fingerprints as its inputs, and the
+sha256 of each file) and ``timings.json`` (wall-clock figures, kept out of ``config.json`` so
+that fingerprints never cover them). A rerun reuses an agent whose fingerprint matches (a
+folder of an older pokerirl too), retrains one whose files are corrupt, and refuses one
+trained with other settings unless ``overwrite``.
 
 >>> import tempfile
 >>> out = Path(tempfile.mkdtemp()) / "dqn"
@@ -80,16 +81,11 @@ from pokerirl.agents.rewards import (
     reward_source_fingerprint,
 )
 from pokerirl.atomic import atomic_path
-from pokerirl.execution import (
-    Backend,
-    load_unit_folder,
-    map_units,
-    read_files,
-    save_unit_folder,
-    write_files,
-)
+from pokerirl.errors import report as error_report
+from pokerirl.execution import Backend, read_files, write_files
 from pokerirl.game import make_agent, play_match
 from pokerirl.game.agents import Agent
+from pokerirl.store import Unit, UnitConflict, UnitOutput, run_units
 
 REWARD_MODES = ("sparse", "learned")
 PROTOCOLS = ("pokerirl", "authors")
@@ -393,15 +389,6 @@ class _TrainUnit:
     progress: bool
 
 
-@dataclass(frozen=True, kw_only=True)
-class TrainedAgent:
-    """A unit's output, returned to the driver: the folder's files, timings, last metrics."""
-
-    files: dict[str, bytes]
-    timings: dict[str, Any]
-    summary: dict[str, Any]
-
-
 def agent_unit_config(
     config: TrainConfig, *, reward_fingerprint: str | None, opponent: str, threads: int
 ) -> dict[str, Any]:
@@ -459,16 +446,13 @@ def _train_many(
     if reward_fn is not None:
         backend = dataclasses.replace(backend, kind="local", address=None, jobs=1)
 
-    results: dict[int, dict[str, Any] | None] = {}
-    todo: list[tuple[int, Path, dict[str, Any], _TrainUnit]] = []
-    for key, (folder, config) in units.items():
+    inputs = {"reward_run": reward_print, "opponent": opponent_print}
+    agents = []
+    for folder, config in units.values():
         unit_config = agent_unit_config(
             config, reward_fingerprint=reward_print, opponent=opponent_print,
             threads=backend.threads,
         )  # fmt: skip
-        if load_unit_folder(folder, unit_config, overwrite=overwrite) is not None:
-            results[key] = None
-            continue
         unit = _TrainUnit(
             config=config,
             reward_files=tuple(reward_files.items()),
@@ -477,29 +461,36 @@ def _train_many(
             threads=backend.threads,
             progress=progress and len(units) == 1 and backend.kind == "local",
         )
-        todo.append((key, folder, unit_config, unit))
+        agents.append(
+            Unit(
+                key=str(folder),
+                target=folder,
+                config={k: v for k, v in unit_config.items() if k not in inputs},
+                inputs=inputs,
+                fn=_train_unit,
+                args=(unit, reward_fn),
+            )
+        )
+    try:
+        done = run_units(
+            agents, backend, overwrite=overwrite, progress=progress and len(units) > 1,
+            desc="agents",
+        ).done  # fmt: skip
+    except UnitConflict as error:
+        raise UnitConflict(_advised(error)) from None
+    return {key: agent.extra for key, agent in zip(units, done, strict=True)}
 
-    def save(index: int, trained: TrainedAgent) -> None:
-        key, folder, unit_config, _ = todo[index]
-        timings = (json.dumps(trained.timings, indent=2) + "\n").encode()
-        save_unit_folder(folder, trained.files, unit_config, unhashed={TIMINGS_FILE: timings})
-        results[key] = trained.summary
 
-    map_units(
-        _train_unit,
-        [(unit, reward_fn) for *_, unit in todo],
-        backend=backend,
-        progress=progress and len(units) > 1,
-        desc="agents",
-        reused=len(results),
-        on_result=save,
-        labels=[str(folder) for _, folder, _, _ in todo],
-    )
-    return {key: results[key] for key in units}
+def _advised(error: UnitConflict) -> str:
+    """The conflict's line with the command line's advice: ``pokerirl agent train`` prints
+    the message as it is (it adds no advice of its own yet)."""
+    found = error_report(error)
+    return str(error) if found is None else found[1]
 
 
-def _train_unit(unit: _TrainUnit, reward_fn: RewardFn | None = None) -> TrainedAgent:
-    """Train one agent in a private folder and return its files (runs in a worker)."""
+def _train_unit(unit: _TrainUnit, reward_fn: RewardFn | None = None) -> UnitOutput[dict[str, Any]]:
+    """Train one agent in a private folder and return its files, its timings (never
+    fingerprinted) and its last metrics line (runs in a worker)."""
     config = unit.config
     reward: PokerReward | None = None
     with tempfile.TemporaryDirectory(prefix="pokerirl-agent-") as private:
@@ -527,7 +518,8 @@ def _train_unit(unit: _TrainUnit, reward_fn: RewardFn | None = None) -> TrainedA
         )
         kept = (KEPT_FILE,) if (out / KEPT_FILE).is_file() else ()
         files = read_files(out, (*AGENT_OUTPUTS, *kept))
-    return TrainedAgent(files=files, timings=timings, summary=summary)
+    timed = {TIMINGS_FILE: (json.dumps(timings, indent=2) + "\n").encode()}
+    return UnitOutput(files=files, unhashed=timed, extra=summary)
 
 
 @dataclass(kw_only=True)

@@ -45,14 +45,7 @@ import torch
 
 from pokerirl.atomic import make_shareable, write_text
 from pokerirl.errors import Remedy
-from pokerirl.execution import (
-    Backend,
-    UnitConflict,
-    bytes_fingerprint,
-    load_unit_folder,
-    map_units,
-    save_unit_folder,
-)
+from pokerirl.execution import Backend
 from pokerirl.irl.airl import resolve_device
 from pokerirl.irl.config import AIRLConfig
 from pokerirl.irl.plots import plot_bands
@@ -69,6 +62,7 @@ from pokerirl.irl.run import (
 )
 from pokerirl.irl.transitions import Transitions
 from pokerirl.poker.data import read_table
+from pokerirl.store import Unit, UnitConflict, UnitOutput, digest, run_units
 
 CARD_COLUMNS = ("hole_cards", "board")  # what the card reads beyond the trainer's columns
 
@@ -149,12 +143,12 @@ def write_reward_card(
 
 def train_unit(
     table: bytes, table_path: str, algo: str, settings: dict[str, Any], device: str
-) -> dict[str, Any]:
+) -> UnitOutput[None]:
     """One run of a fan-out: a top-level, picklable function of plain arguments.
 
-    The table arrives as bytes and the run folder leaves as bytes (``files``; the driver
-    writes them), so a worker needs no shared filesystem. Pins torch to one thread
-    (restored after) and seeds from ``settings["seed"]``.
+    The table arrives as bytes and the run folder leaves as bytes (the driver writes them;
+    ``timings.json`` unfingerprinted), so a worker needs no shared filesystem. Pins torch to
+    one thread (restored after) and seeds from ``settings["seed"]``.
     """
     threads = torch.get_num_threads()
     torch.set_num_threads(1)
@@ -176,7 +170,8 @@ def train_unit(
             files = {f.name: f.read_bytes() for f in sorted(run.iterdir()) if f.is_file()}
     finally:
         torch.set_num_threads(threads)
-    return {"files": files}
+    timings = {TIMINGS_FILE: files.pop(TIMINGS_FILE)}
+    return UnitOutput(files=files, unhashed=timings)
 
 
 def _run_result(folder: Path) -> dict[str, Any]:
@@ -212,8 +207,8 @@ def train_runs(
     """``runs`` runs of ``config`` with seeds ``seed + k`` into ``out_dir/run-<k>``, then
     ``summary.json`` and ``alignment_bands.png``. One run keeps the single-folder layout.
 
-    Each run is a unit of :func:`pokerirl.execution.map_units` on ``backend`` (default: in
-    this process): written atomically with a record of its settings and table, reused by a
+    Each run is a unit of :func:`pokerirl.store.run_units` on ``backend`` (default: in this
+    process): written atomically with a record of its settings and table, reused by a
     rerun with the same ones, recomputed when corrupt, refused when made with other
     settings unless ``overwrite``. Results do not depend on the backend.
     """
@@ -240,40 +235,24 @@ def train_runs(
         )
     read_table(table)  # a bad table fails once, before any unit starts
     table_bytes = Path(table).read_bytes()
-    shared = {"algo": algo, "device": device, "table": bytes_fingerprint(table_bytes)}
-    unit_configs = [
-        {**shared, "settings": {**config.to_dict(), "seed": config.seed + k}} for k in range(runs)
-    ]
     folders = [out / f"run-{k}" for k in range(runs)]
+    units = []
+    for k, folder in enumerate(folders):
+        settings = {**config.to_dict(), "seed": config.seed + k}
+        units.append(
+            Unit(
+                key=folder.name,
+                target=folder,
+                config={"algo": algo, "device": device, "settings": settings},
+                inputs={"table": digest(table_bytes)},
+                fn=train_unit,
+                args=(table_bytes, str(Path(table).resolve()), algo, settings, device),
+            )
+        )
     try:
-        todo = [
-            k
-            for k in range(runs)
-            if load_unit_folder(folders[k], unit_configs[k], overwrite=overwrite) is None
-        ]
+        run_units(units, backend, overwrite=overwrite, progress=progress, desc=f"{algo} runs")
     except UnitConflict as error:
-        raise RunError(str(error)) from None
-
-    def save(index: int, result: dict[str, Any]) -> None:
-        k = todo[index]
-        files = dict(result["files"])
-        timings = {TIMINGS_FILE: files.pop(TIMINGS_FILE)}
-        save_unit_folder(folders[k], files, unit_configs[k], unhashed=timings)
-
-    units = [
-        (table_bytes, str(Path(table).resolve()), algo, unit_configs[k]["settings"], device)
-        for k in todo
-    ]
-    map_units(
-        train_unit,
-        units,
-        backend=backend or Backend(),
-        progress=progress,
-        desc=f"{algo} runs",
-        reused=runs - len(todo),
-        on_result=save,
-        labels=[f"run-{k}" for k in todo],
-    )
+        raise RunError(str(error), remedy=error.remedy) from None
     for folder in folders:  # runs of an older pokerirl, reused: add their card
         if not (folder / "reward_card.json").is_file():
             write_reward_card(folder, table)

@@ -115,6 +115,9 @@ class Unit(Generic[E]):
     ``config`` and ``inputs`` (content digests of what it reads, such as
     ``{"table": digest(table_bytes)}``) are JSON; together they are its identity
     (:func:`pokerirl.store.record.identity_of`), and a name may not be in both.
+    ``accepts``: whether a finished record's ``result`` is one the caller can use; a record
+    of the right fingerprint whose result is not (one no write of this unit leaves) is
+    recomputed.
     """
 
     key: str
@@ -125,6 +128,7 @@ class Unit(Generic[E]):
     fn: Callable[..., UnitOutput[E]] | None = None
     args: tuple[Any, ...] = ()
     legacy: tuple[LegacyRecord, ...] = ()
+    accepts: Callable[[Json], bool] | None = None
 
     @cached_property
     def identity(self) -> dict[str, Any]:
@@ -214,7 +218,10 @@ def check(unit: Unit[Any], *, overwrite: bool = False) -> Check:
             return Check(fate=Fate.RECOMPUTED, why=str(error))
         raise
     if record is not None:
-        return _judge(unit, record, unit.fingerprint, unit.identity, str(target), overwrite)
+        found = _judge(unit, record, unit.fingerprint, unit.identity, str(target), overwrite)
+        if found.fate is Fate.REUSED and unit.accepts and not unit.accepts(record.result):
+            return Check(fate=Fate.RECOMPUTED, why="its result is not one this unit writes")
+        return found
     for legacy in unit.legacy:
         old = read_record(legacy.path)
         if old is not None:

@@ -11,7 +11,7 @@ experiments' means (n = N, the replicates that carry the training variance).
 Repeat r of experiment k plays deals of seed ``AUTHORS_SEED + 1000 k + r`` with seats drawn
 per game (:func:`pokerirl.game.play_match` with ``seating="random"``); agent sets (folders of
 ``seed-<k>`` agents) give experiment k their ``seed-k`` agent. Each (matchup, experiment) is a
-unit of :func:`pokerirl.execution.map_units`, saved to
+unit of :func:`pokerirl.store.run_units`, saved to
 ``<out>/experiments/<A>-vs-<B>/experiment-<k>.json`` when it finishes and reused by a rerun
 whose agents (by fingerprint), games and repeats match.
 
@@ -33,20 +33,22 @@ import tempfile
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 
 from pokerirl.agents import ShippedAgent, agent_fingerprint, land_agent, resolve_agent, ship_agent
 from pokerirl.atomic import write_text
-from pokerirl.execution import Backend, UnitConflict, load_unit, make_record, map_units, save_record
+from pokerirl.execution import Backend
 from pokerirl.game.match import play_match
+from pokerirl.store import Json, Layout, Unit, UnitConflict, UnitOutput, run_units
 from pokerirl.tournaments.lineup import (
     TournamentError,
     agent_label,
     agent_spec_for_seed,
     check_specs,
 )
+from pokerirl.tournaments.runner import _advised
 
 REPEATS, GAMES = 50, 1_000  # the authors' 50 x run_tournament(num_games=1000)
 AUTHORS_SEED = 7_000_000  # deal seeds of the repeats: AUTHORS_SEED + 1000 k + r
@@ -145,8 +147,9 @@ def repeat_seed(experiment: int, repeat: int) -> int:
 
 def _play_experiment(
     config: dict[str, Any], shipped_a: ShippedAgent, shipped_b: ShippedAgent
-) -> list[float]:
-    """One experiment's repeats (a unit: in this process or a worker)."""
+) -> UnitOutput[None]:
+    """One experiment's repeats (a unit: in this process or a worker); the record keeps
+    each repeat's mean mbb/h as its result."""
     with tempfile.TemporaryDirectory(prefix="pokerirl-authors-") as private:
         agent_a = land_agent(shipped_a, Path(private, "a"))
         agent_b = land_agent(shipped_b, Path(private, "b"))
@@ -161,7 +164,13 @@ def _play_experiment(
             seating="random",
         )
         results.append(match.mbb_per_hand)
-    return results
+    return UnitOutput(result=results)
+
+
+def _is_repeats(result: Json) -> bool:
+    """Whether a saved experiment can be reused: a list of repeats (a record of the right
+    settings that holds something else, which no write leaves, is replayed)."""
+    return isinstance(result, list)
 
 
 def _experiment(config: dict[str, Any], repeats_mbb: list[float]) -> AuthorsExperiment:
@@ -224,40 +233,36 @@ def run_authors_tournament(
                 raise TournamentError(str(error)) from None
         return shipped[resolved]
 
-    done: dict[tuple[int, int], AuthorsExperiment] = {}
-    cells: list[tuple[int, int, Path, dict[str, Any]]] = []
-    units = []
-    for m, (a, b) in enumerate(matchups):
-        for k in experiments:
-            (print_a, ship_a), (print_b, ship_b) = agent(a, k), agent(b, k)
-            config = {"kind": UNIT_KIND, "experiment": k, "repeats": repeats, "games": games,
-                      "fingerprint_a": print_a, "fingerprint_b": print_b}  # fmt: skip
-            path = out / "experiments" / names[m] / f"experiment-{k}.json"
-            try:
-                record = load_unit(path, config, overwrite=overwrite)
-            except UnitConflict as error:
-                raise TournamentError(str(error)) from None
-            if record is not None and isinstance(record.get("result"), list):
-                done[m, k] = _experiment(config, record["result"])
-                continue
-            cells.append((m, k, path, config))
-            units.append((config, ship_a, ship_b))
-
-    def save(index: int, result: list[float]) -> None:
-        m, k, path, config = cells[index]
-        save_record(path, make_record(config, result=result))
-        done[m, k] = _experiment(config, result)
-
-    map_units(
-        _play_experiment,
-        units,
-        backend=backend or Backend(),
-        progress=progress,
-        desc="authors' tournament",
-        reused=len(done),
-        on_result=save,
-        labels=[f"{names[m]} experiment {k}" for m, k, _, _ in cells],
-    )
+    cells = [(m, k) for m in range(len(matchups)) for k in experiments]
+    configs, units = [], []
+    for m, k in cells:
+        (print_a, ship_a), (print_b, ship_b) = agent(matchups[m][0], k), agent(matchups[m][1], k)
+        settings = {"kind": UNIT_KIND, "experiment": k, "repeats": repeats, "games": games}
+        agents = {"fingerprint_a": print_a, "fingerprint_b": print_b}
+        configs.append({**settings, **agents})
+        units.append(
+            Unit(
+                key=f"{names[m]} experiment {k}",
+                target=out / "experiments" / names[m] / f"experiment-{k}.json",
+                layout=Layout.RECORD,
+                config=settings,
+                inputs=agents,
+                fn=_play_experiment,
+                args=(configs[-1], ship_a, ship_b),
+                accepts=_is_repeats,
+            )
+        )
+    try:  # each experiment is saved as it finishes: resumable from there
+        report = run_units(
+            units, backend or Backend(), overwrite=overwrite, progress=progress,
+            desc="authors' tournament",
+        )  # fmt: skip
+    except UnitConflict as error:
+        raise TournamentError(_advised(error)) from None
+    done = {  # every result is a list: reused only then (_is_repeats), written as one
+        cell: _experiment(config, cast("list[float]", item.record.result))
+        for cell, config, item in zip(cells, configs, report.done, strict=True)
+    }
     found = {
         names[m]: AuthorsMatchup(
             agent_a=agent_label(a),

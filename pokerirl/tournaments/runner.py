@@ -15,13 +15,14 @@ Statistics (see :mod:`pokerirl.tournaments.stats`):
   over the pooled tests (one per matchup). The paper's threshold p < 0.05/20 (one matchup, 20
   seeds) is the per-seed family's; its payoff ± SE is the pooled line.
 
-Execution: each (matchup, seed) is a unit of :func:`pokerirl.execution.map_units`, on local
+Execution: each (matchup, seed) is a unit of :func:`pokerirl.store.run_units`, on local
 processes or Ray; the units get the agents' bytes (read here once), so workers need no shared
 filesystem, and play on one torch thread, so results do not depend on the backend.
 
 Resuming: each seed's result is saved to ``<out>/seeds/<A>-vs-<B>/seed-<k>.json`` as soon as
-it finishes: a unit record (:mod:`pokerirl.execution`) whose fingerprint covers the agents'
-fingerprints, hands, duplicate mode and batch size. A rerun reuses a saved seed when those
+it finishes: a unit record (:mod:`pokerirl.store`) whose fingerprint covers the agents'
+fingerprints, hands, duplicate mode and batch size (seed files of the writers before the
+store keep theirs). A rerun reuses a saved seed when those
 match; when they do not it refuses (:class:`TournamentError`), unless ``overwrite=True``,
 which recomputes that seed. A saved seed that is not a valid record (corrupt, truncated,
 ``[]``, a string, an older format) cannot have come from a finished write, which is atomic:
@@ -48,15 +49,10 @@ from typing import Any
 import numpy as np
 
 from pokerirl.agents import ShippedAgent, agent_fingerprint, land_agent, resolve_agent, ship_agent
-from pokerirl.execution import (
-    Backend,
-    UnitConflict,
-    load_unit,
-    make_record,
-    map_units,
-    save_record,
-)
+from pokerirl.errors import report as error_report
+from pokerirl.execution import Backend
 from pokerirl.game.match import DEFAULT_BATCH_SIZE, check_match_size, play_match
+from pokerirl.store import Json, Layout, Unit, UnitConflict, UnitOutput, run_units
 from pokerirl.tournaments.lineup import (
     TournamentError,
     agent_label,
@@ -121,8 +117,11 @@ def _torch_for_play() -> Iterator[None]:
         torch.set_num_threads(threads)
 
 
-def _play_seed(key: SeedKey, shipped_a: ShippedAgent, shipped_b: ShippedAgent) -> SeedResult:
-    """Play one seed (a unit: in this process or a worker) from the agents' bytes."""
+def _play_seed(
+    key: SeedKey, shipped_a: ShippedAgent, shipped_b: ShippedAgent
+) -> UnitOutput[tuple[float, float]]:
+    """Play one seed (a unit: in this process or a worker) from the agents' bytes; its
+    estimate is saved, its seconds and hands/s go to ``timings.json`` only."""
     with tempfile.TemporaryDirectory(prefix="pokerirl-seed-") as private:
         agent_a = land_agent(shipped_a, Path(private, "a"))
         agent_b = land_agent(shipped_b, Path(private, "b"))
@@ -138,12 +137,8 @@ def _play_seed(key: SeedKey, shipped_a: ShippedAgent, shipped_b: ShippedAgent) -
             duplicate=key.duplicate,
             batch_size=key.batch_size,
         )
-    return SeedResult(
-        key=key,
-        estimate=estimate(1000.0 * result.units_bb),
-        seconds=result.seconds,
-        hands_per_second=result.hands_per_second,
-    )
+    outcome = {"estimate": asdict(estimate(1000.0 * result.units_bb))}
+    return UnitOutput(result=outcome, extra=(result.seconds, result.hands_per_second))
 
 
 # --- saved seeds ---------------------------------------------------------------------------
@@ -153,28 +148,47 @@ def _seed_path(out: Path, folder: str, seed: int) -> Path:
     return out / "seeds" / folder / f"seed-{seed}.json"
 
 
-def _seed_config(key: SeedKey) -> dict[str, Any]:
-    return {"kind": SEED_KIND, **asdict(key)}
+def _seed_unit(
+    out: Path, folder: str, key: SeedKey, shipped_a: ShippedAgent, shipped_b: ShippedAgent
+) -> Unit[tuple[float, float]]:
+    """Seed ``key.seed`` of a matchup: a record unit whose result is its estimate. Its
+    identity is what the record of the writers before the store held (``kind`` and the key's
+    fields), so their seed files are reused."""
+    settings = asdict(key)
+    agents = {name: settings.pop(name) for name in ("fingerprint_a", "fingerprint_b")}
+    return Unit(
+        key=f"{folder} seed {key.seed}",
+        target=_seed_path(out, folder, key.seed),
+        layout=Layout.RECORD,
+        config={"kind": SEED_KIND, **settings},
+        inputs=agents,
+        fn=_play_seed,
+        args=(key, shipped_a, shipped_b),
+        accepts=_has_estimate,
+    )
 
 
-def _save_seed(path: Path, result: SeedResult) -> None:
-    outcome = {"estimate": asdict(result.estimate)}  # no timings: the same bytes every run
-    save_record(path, make_record(_seed_config(result.key), result=outcome))
-
-
-def _load_seed(path: Path, key: SeedKey, *, overwrite: bool) -> SeedResult | None:
-    """The saved result for ``key``, or None to (re)compute; refuses another configuration."""
+def _estimate(result: Json) -> Estimate | None:
+    """The estimate of a saved seed's result (older files also hold timings: ignored), or
+    None when it has none."""
+    saved: Any = result.get("estimate") if isinstance(result, dict) else None
     try:
-        record = load_unit(path, _seed_config(key), overwrite=overwrite)
-    except UnitConflict as error:
-        raise TournamentError(str(error)) from None
-    if record is None:
-        return None
-    try:
-        saved = record["result"]["estimate"]  # older files also hold timings: ignored
-        return SeedResult(key=key, estimate=Estimate(**{**saved, "ci95": tuple(saved["ci95"])}))
+        return Estimate(**{**saved, "ci95": tuple(saved["ci95"])})
     except (KeyError, TypeError, ValueError):
-        return None  # a record without a usable result: recompute it
+        return None
+
+
+def _has_estimate(result: Json) -> bool:
+    """Whether a saved seed can be reused: one without an estimate (a record no finished
+    write leaves) is recomputed."""
+    return _estimate(result) is not None
+
+
+def _advised(error: UnitConflict) -> str:
+    """The conflict's line with the command line's advice: ``pokerirl tournament`` prints the
+    message as it is (it adds no advice of its own yet)."""
+    found = error_report(error)
+    return str(error) if found is None else found[1]
 
 
 def _folder_names(matchups: Sequence[tuple[str, str]]) -> list[str]:
@@ -314,44 +328,42 @@ def run_tournament(
 
     backend = backend or Backend(jobs=jobs)
     folders = _folder_names(matchups)
-    done: dict[Cell, SeedResult] = {}
-    cells: list[Cell] = []
-    units: list[tuple[SeedKey, ShippedAgent, ShippedAgent]] = []
-    for m, (a, b) in enumerate(matchups):
-        for seed in seeds:
-            (print_a, shipped_a), (print_b, shipped_b) = prints[a][seed], prints[b][seed]
-            key = SeedKey(
-                seed=seed,
-                fingerprint_a=print_a,
-                fingerprint_b=print_b,
-                hands=hands,
-                duplicate=duplicate,
-                batch_size=batch_size,
-            )
-            saved = _load_seed(_seed_path(out, folders[m], seed), key, overwrite=overwrite)
-            if saved is not None:
-                done[m, seed] = saved
-            else:
-                cells.append((m, seed))
-                units.append((key, shipped_a, shipped_b))
-
-    def save(index: int, result: SeedResult) -> None:
-        m, seed = cells[index]
-        _save_seed(_seed_path(out, folders[m], seed), result)  # resumable from here
-        done[m, seed] = result
+    cells = [(m, seed) for m in range(len(matchups)) for seed in seeds]
+    keys, units = [], []
+    for m, seed in cells:
+        a, b = matchups[m]
+        (print_a, shipped_a), (print_b, shipped_b) = prints[a][seed], prints[b][seed]
+        key = SeedKey(
+            seed=seed,
+            fingerprint_a=print_a,
+            fingerprint_b=print_b,
+            hands=hands,
+            duplicate=duplicate,
+            batch_size=batch_size,
+        )
+        keys.append(key)
+        units.append(_seed_unit(out, folders[m], key, shipped_a, shipped_b))
 
     started = time.perf_counter()
-    map_units(
-        _play_seed,
-        units,
-        backend=backend,
-        progress=progress,
-        desc="tournament seeds",
-        reused=len(done),
-        on_result=save,
-        labels=[f"{folders[m]} seed {seed}" for m, seed in cells],
-    )
+    try:  # each seed is saved as it finishes: resumable from there
+        found = run_units(
+            units, backend, overwrite=overwrite, progress=progress, desc="tournament seeds"
+        )
+    except UnitConflict as error:
+        raise TournamentError(_advised(error)) from None
     wall = time.perf_counter() - started
+    done: dict[Cell, SeedResult] = {}
+    played: list[Cell] = []
+    for cell, key, item in zip(cells, keys, found.done, strict=True):
+        saved = _estimate(item.record.result)
+        if saved is None:  # reused only with one (accepts=), and _play_seed writes one
+            raise TournamentError(f"{item.unit.target}: a saved seed without an estimate")
+        seconds, hands_per_second = item.extra or (None, None)
+        done[cell] = SeedResult(
+            key=key, estimate=saved, seconds=seconds, hands_per_second=hands_per_second
+        )
+        if item.extra is not None:
+            played.append(cell)
 
     report = _build_report(
         matchups,
@@ -363,9 +375,9 @@ def run_tournament(
         batch_size=batch_size,
         timing={
             "wall_seconds": wall,
-            "hands_played": len(units) * hands,
-            "hands_per_second": len(units) * hands / wall if wall > 0 else 0.0,
-            "seeds_reused": len(matchups) * len(seeds) - len(units),
+            "hands_played": len(played) * hands,
+            "hands_per_second": len(played) * hands / wall if wall > 0 else 0.0,
+            "seeds_reused": len(cells) - len(played),
             "jobs": jobs,
             "backend": backend.describe(),
             "seeds_played": [
@@ -375,7 +387,7 @@ def run_tournament(
                     "seconds": done[m, seed].seconds,
                     "hands_per_second": done[m, seed].hands_per_second,
                 }
-                for m, seed in cells
+                for m, seed in played
             ],
         },
     )
