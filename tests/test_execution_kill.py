@@ -17,7 +17,7 @@ import pytest
 from typer.testing import CliRunner
 
 from pokerirl.cli import app
-from pokerirl.execution import load_unit_folder
+from pokerirl.store import Fate, Unit, check
 
 pytestmark = pytest.mark.slow
 
@@ -181,9 +181,11 @@ def test_ctrl_c_stops_cleanly_and_keeps_finished_seeds(tmp_path: Path) -> None:
     while any(alive(pid) for pid in workers) and time.monotonic() < deadline:
         time.sleep(0.05)
     assert not [pid for pid in workers if alive(pid)]
-    config = json.loads((_finished_seeds(out)[0] / "unit.json").read_text())["config"]
+    record = json.loads((_finished_seeds(out)[0] / "unit.json").read_text())
     for folder in _finished_seeds(out):
-        assert load_unit_folder(folder, {**config, "seed": int(folder.name[5:])}) is not None
+        config = {**record["config"], "seed": int(folder.name[5:])}
+        unit = Unit(key=folder.name, target=folder, config=config, inputs=record["inputs"])
+        assert check(unit).fate is Fate.REUSED
 
 
 def test_a_killed_overwrite_leaves_the_finished_agent_byte_for_byte(tmp_path: Path) -> None:
