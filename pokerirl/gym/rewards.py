@@ -8,16 +8,17 @@ env executes them), returning ``(n,)`` floats. :func:`pokerirl.irl.load_reward` 
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from typing import TYPE_CHECKING
 
 import numpy as np
 import torch
 
+from pokerirl.irl.reward import RewardFn
+
 if TYPE_CHECKING:
     from stable_baselines3.common.vec_env import VecEnv
 
-RewardCallable = Callable[[np.ndarray, np.ndarray], np.ndarray]
+RewardCallable = RewardFn  # the IRL core's reward callable, under the gym modules' name
 ENV_REWARD_KEY = "env_reward"  # each step's info keeps the environment's own reward here
 
 

@@ -79,8 +79,6 @@ from pokerirl.irl.stacked import (
 )
 from pokerirl.irl.transitions import Transitions
 
-_Nets = StackedNets  # the name before the split
-
 # Importable from here as before the split (losses, stacked nets, evaluation, baselines).
 __all__ = [
     "LOG_2PI",

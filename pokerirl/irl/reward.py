@@ -8,8 +8,8 @@
   :class:`~pokerirl.irl.nets.ShapedReward`) satisfy it.
 * :data:`RewardFn`: a batched reward *callable* on numpy, ``(obs, actions) -> rewards``, what
   RL consumers take (:class:`pokerirl.irl.run.RewardFunction` is one, made by
-  :func:`~pokerirl.irl.load_reward`). The other layers' ``RewardFn`` (agents) and
-  ``RewardCallable`` (gym) are this shape; :data:`RewardCallable` is kept as an alias.
+  :func:`~pokerirl.irl.load_reward`). gym's ``RewardCallable`` is this type; agents'
+  ``RewardFn`` widens it with the poker reward objects.
 
 >>> from pokerirl.irl.nets import StateActionReward
 >>> net = StateActionReward(obs_dim=3, action_dim=2, hidden=(4,))
@@ -28,7 +28,6 @@ import numpy as np
 from torch import Tensor
 
 RewardFn = Callable[[np.ndarray, np.ndarray], np.ndarray]
-RewardCallable = RewardFn  # gym's name for the same shape
 
 
 @runtime_checkable

@@ -44,8 +44,7 @@ import numpy as np
 import torch
 
 from pokerirl.gym.presets import PPOSettings
-
-RewardFn = Callable[[np.ndarray, np.ndarray], np.ndarray]  # rewards.RewardCallable's shape
+from pokerirl.irl.reward import RewardFn
 
 
 class _Tanh(torch.autograd.Function):
