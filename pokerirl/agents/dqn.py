@@ -340,14 +340,8 @@ def train_dqn(
         progress: show a tqdm bar over hands on stderr.
         on_hands: called as ``on_hands(hands_done, learner)`` after every lock-step batch.
     """
-    if hands < 1:
-        raise ValueError(f"hands must be at least 1, got {hands}")
-    if not 0.0 <= payoff_weight <= 1.0:
-        raise ValueError(f"payoff weight must be in [0, 1], got {payoff_weight}")
-    if isinstance(opponent, str) and opponent != SELF_PLAY:
-        raise ValueError(f"opponent must be an agent or {SELF_PLAY!r}, got {opponent!r}")
-    if raise_counts not in RAISE_COUNTS:
-        raise ValueError(f"raise_counts must be one of {', '.join(RAISE_COUNTS)}")
+    _check_training(hands=hands, payoff_weight=payoff_weight, opponent=opponent,
+                    raise_counts=raise_counts)  # fmt: skip
     reward = as_poker_reward(reward_fn)
     torch.manual_seed(seed)
     streams = np.random.SeedSequence(seed, spawn_key=(TRAIN_STREAM,)).spawn(2)
@@ -425,6 +419,20 @@ def train_dqn(
             if on_hands is not None:
                 on_hands(start + count, learner)
     return learner
+
+
+def _check_training(
+    *, hands: int, payoff_weight: float, opponent: Agent | str, raise_counts: str
+) -> None:
+    """``train_dqn``'s arguments that no type checks, in one line each."""
+    if hands < 1:
+        raise ValueError(f"hands must be at least 1, got {hands}")
+    if not 0.0 <= payoff_weight <= 1.0:
+        raise ValueError(f"payoff weight must be in [0, 1], got {payoff_weight}")
+    if isinstance(opponent, str) and opponent != SELF_PLAY:
+        raise ValueError(f"opponent must be an agent or {SELF_PLAY!r}, got {opponent!r}")
+    if raise_counts not in RAISE_COUNTS:
+        raise ValueError(f"raise_counts must be one of {', '.join(RAISE_COUNTS)}")
 
 
 @dataclass(kw_only=True)

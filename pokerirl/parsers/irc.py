@@ -704,6 +704,37 @@ def _parse_pdb_numbers(fields: list[str]) -> tuple[int, int, int, tuple[int, ...
     return int(fields[3]), chips_in, chips_won, cards
 
 
+def _two_roster_players(lines: list[_PdbFields], roster_names: list[str] | None) -> bool:
+    """Whether the hand's pdb lines are two different players, both on a two-name roster."""
+    nick_a, nick_b = lines[0][0][0], lines[-1][0][0]
+    return (
+        len(lines) == 2
+        and roster_names is not None
+        and len(roster_names) == 2
+        and nick_a != nick_b
+        and nick_a in roster_names
+        and nick_b in roster_names
+    )
+
+
+def _showdown_inconsistency(
+    board: tuple[int, ...],
+    hole: tuple[int, ...],
+    *,
+    both_shown: bool,
+    chips: tuple[int, int, int, int],
+) -> str | None:
+    """Why a showdown cannot have happened as logged, or None. ``chips``: in and won, a and b."""
+    in_a, in_b, won_a, won_b = chips
+    if len(board) != 5:
+        return "showdown without five board cards"
+    if in_a + in_b != won_a + won_b:
+        return "chips won differ from chips put in"
+    if len({*hole, *board}) != (9 if both_shown else 8):  # a concealed pair is -1, -1
+        return "a card dealt twice"
+    return None
+
+
 def _classify_hand(
     timestamp: int,
     hdb_fields: list[str],
@@ -730,15 +761,7 @@ def _classify_hand(
             return "malformed_line"
     if len(lines) < 2:
         return "missing_pdb_line"
-    nick_a, nick_b = lines[0][0][0], lines[-1][0][0]
-    if (
-        len(lines) > 2
-        or roster_names is None
-        or len(roster_names) != 2
-        or nick_a == nick_b
-        or nick_a not in roster_names
-        or nick_b not in roster_names
-    ):
+    if not _two_roster_players(lines, roster_names):
         return "roster_mismatch"
     if parsed[0][0] > parsed[1][0]:
         lines, parsed = lines[::-1], parsed[::-1]
@@ -759,14 +782,10 @@ def _classify_hand(
         return "malformed_line"
     if not replay.showdown or (cards_a is None and cards_b is None):
         return "cards_concealed"
-    reason = None
     hole = (cards_a or (-1, -1)) + (cards_b or (-1, -1))
-    if len(board) != 5:
-        reason = "showdown without five board cards"
-    elif in_a + in_b != won_a + won_b:
-        reason = "chips won differ from chips put in"
-    elif len({*hole, *board}) != (9 if cards_a and cards_b else 8):  # a concealed pair is -1, -1
-        reason = "a card dealt twice"
+    reason = _showdown_inconsistency(
+        board, hole, both_shown=bool(cards_a and cards_b), chips=(in_a, in_b, won_a, won_b)
+    )
     if reason is not None:
         stats.inconsistent_reasons[reason] += 1
         return "inconsistent_hand"

@@ -57,6 +57,137 @@ class Replay:
     max_raises: int  # the most raises in any single round
 
 
+def _opening_chips(blinds: tuple[bool, bool]) -> list[int]:
+    """Chips each position has in the pot before the first action, in small blinds."""
+    if blinds == (True, True):
+        return [1, 2]
+    if blinds == (True, False):
+        return [2, 0]  # a lone blind is a full big blind
+    if blinds == (False, True):
+        return [0, 2]
+    return [0, 0]
+
+
+def _street_texts(
+    strings: tuple[str, ...], street: int, blinds: tuple[bool, bool]
+) -> tuple[str, str]:
+    """The two positions' actions on ``street``, without the posted blinds."""
+    texts = ["" if t == "-" else t for t in strings[2 * street : 2 * street + 2]]
+    if street == 0:
+        texts = [t[1:] if posted else t for t, posted in zip(texts, blinds, strict=True)]
+        if "B" in texts[0] or "B" in texts[1]:
+            raise ReplayError("blind posted twice")
+    elif "B" in texts[0] or "B" in texts[1]:
+        raise ReplayError("blind after preflop")
+    return texts[0], texts[1]
+
+
+def _action(code: str, facing: bool) -> int:
+    """RLCard's action id for one IRC action code."""
+    if code == "k":
+        if facing:
+            raise ReplayError("check facing a bet")
+        return CHECK
+    if code == "c":
+        return CALL if facing else CHECK
+    if code in "br":
+        return RAISE
+    if code == "A":
+        return CALL if facing else RAISE
+    return FOLD
+
+
+class _Replayer:
+    """The hand's state while its streets are replayed, one action at a time."""
+
+    def __init__(self, blinds: tuple[bool, bool]) -> None:
+        self.blinds = blinds
+        self.street_in = _opening_chips(blinds)
+        self.chips_in = list(self.street_in)
+        self.raise_nums = [0] * NUM_ROUNDS
+        self.decisions: list[Decision] = []
+        self.hand_over = False
+        self.all_in = [False, False]
+        self.last_street = 0
+        self.max_raises = 0
+
+    def play_street(self, street: int, texts: tuple[str, str]) -> None:
+        if self.hand_over or any(self.all_in):
+            # After a fold only quits may trail; after an all-in nobody acts.
+            allowed = _FOLDS if self.hand_over else frozenset()
+            if not (set(texts[0]) | set(texts[1])) <= allowed:
+                raise ReplayError("action after the hand ended")
+            return
+        self.last_street = street
+        if street > 0:
+            self.street_in = [0, 0]
+        cursor = [0, 0]
+        to_act = [True, True]
+        # A lone blind by position 1 was its pass-1 action, so position 2 acts first preflop.
+        seat = 1 if street == 0 and self.blinds == (True, False) else 0
+        while to_act[0] or to_act[1]:
+            if not to_act[seat]:
+                seat = 1 - seat
+                continue
+            if cursor[seat] >= len(texts[seat]):
+                raise ReplayError(f"street {street} ends before the round is closed")
+            code = texts[seat][cursor[seat]]
+            cursor[seat] += 1
+            if self._act(street, seat, code, to_act):
+                break
+            seat = 1 - seat
+        self._check_leftovers(street, texts, cursor)
+
+    def _act(self, street: int, seat: int, code: str, to_act: list[bool]) -> bool:
+        """Play ``code`` for ``seat``; True when it ends the hand."""
+        other = 1 - seat
+        facing = self.street_in[other] > self.street_in[seat]
+        action = _action(code, facing)
+        if code == "A":
+            self.all_in[seat] = True
+        legal = [facing, self.raise_nums[street] < MAX_RAISES, True, not facing]
+        legal[action] = True
+        self.decisions.append(
+            Decision(
+                position=seat + 1,
+                street=street,
+                action_id=action,
+                raise_nums=tuple(min(n, MAX_RAISES) for n in self.raise_nums),  # type: ignore[arg-type]
+                legal_mask=tuple(legal),  # type: ignore[arg-type]
+                raises_uncapped=self.raise_nums[street],
+            )
+        )
+        to_act[seat] = False
+        if action == FOLD:
+            self.hand_over = True
+            return True
+        if action == CALL:
+            self.chips_in[seat] += self.street_in[other] - self.street_in[seat]
+            self.street_in[seat] = self.street_in[other]
+        elif action == RAISE:
+            new_level = max(self.street_in) + BET_IN_SMALL_BLINDS[street]
+            self.chips_in[seat] += new_level - self.street_in[seat]
+            self.street_in[seat] = new_level
+            self.raise_nums[street] += 1
+            self.max_raises = max(self.max_raises, self.raise_nums[street])
+            to_act[other] = not self.all_in[other]
+        if self.all_in[other]:
+            to_act[seat] = False
+        return False
+
+    def _check_leftovers(self, street: int, texts: tuple[str, str], cursor: list[int]) -> None:
+        # Quits may trail a fold, and an ``A`` after a closed round marks a player whose last
+        # call put them all-in. Nothing else may trail.
+        for seat in (0, 1):
+            rest = texts[seat][cursor[seat] :]
+            if not rest or (self.hand_over and set(rest) <= _FOLDS):
+                continue
+            if rest == "A" and not self.hand_over:
+                self.all_in[seat] = True
+                continue
+            raise ReplayError(f"extra actions {rest!r} on street {street}")
+
+
 @lru_cache(maxsize=1 << 16)
 def replay_actions(strings: tuple[str, str, str, str, str, str, str, str]) -> Replay:
     """Replay ``(pos1 preflop, pos2 preflop, pos1 flop, pos2 flop, ..., pos2 river)``.
@@ -67,119 +198,16 @@ def replay_actions(strings: tuple[str, str, str, str, str, str, str, str]) -> Re
     for text in strings:
         if text != "-" and not set(text) <= _ACTIONS | {"B"}:
             raise ReplayError(f"unknown action code in {text!r}")
-    pre1, pre2 = strings[0], strings[1]
-    blinds = (pre1.startswith("B"), pre2.startswith("B"))
-    if blinds == (True, True):
-        street_in = [1, 2]
-    elif blinds == (True, False):
-        street_in = [2, 0]  # a lone blind is a full big blind
-    elif blinds == (False, True):
-        street_in = [0, 2]
-    else:
-        street_in = [0, 0]
-    chips_in = list(street_in)
-    raise_nums = [0] * NUM_ROUNDS
-    decisions: list[Decision] = []
-    hand_over = False
-    all_in = [False, False]
-    last_street = 0
-    max_raises = 0
-
+    blinds = (strings[0].startswith("B"), strings[1].startswith("B"))
+    hand = _Replayer(blinds)
     for street in range(NUM_ROUNDS):
-        texts = [strings[2 * street], strings[2 * street + 1]]
-        texts = ["" if t == "-" else t for t in texts]
-        if street == 0:
-            texts = [t[1:] if posted else t for t, posted in zip(texts, blinds, strict=True)]
-            if "B" in texts[0] or "B" in texts[1]:
-                raise ReplayError("blind posted twice")
-        elif "B" in texts[0] or "B" in texts[1]:
-            raise ReplayError("blind after preflop")
-        if hand_over or any(all_in):
-            # After a fold only quits may trail; after an all-in nobody acts.
-            allowed = _FOLDS if hand_over else frozenset()
-            if not (set(texts[0]) | set(texts[1])) <= allowed:
-                raise ReplayError("action after the hand ended")
-            continue
-        last_street = street
-        if street > 0:
-            street_in = [0, 0]
-        cursor = [0, 0]
-        to_act = [True, True]
-        # A lone blind by position 1 was its pass-1 action, so position 2 acts first preflop.
-        seat = 1 if street == 0 and blinds == (True, False) else 0
-        while True:
-            if not to_act[0] and not to_act[1]:
-                break
-            if not to_act[seat]:
-                seat = 1 - seat
-                continue
-            text = texts[seat]
-            if cursor[seat] >= len(text):
-                raise ReplayError(f"street {street} ends before the round is closed")
-            code = text[cursor[seat]]
-            cursor[seat] += 1
-            other = 1 - seat
-            facing = street_in[other] > street_in[seat]
-            if code == "k":
-                if facing:
-                    raise ReplayError("check facing a bet")
-                action = CHECK
-            elif code == "c":
-                action = CALL if facing else CHECK
-            elif code in "br":
-                action = RAISE
-            elif code == "A":
-                action = CALL if facing else RAISE
-                all_in[seat] = True
-            else:
-                action = FOLD
-            legal = [facing, raise_nums[street] < MAX_RAISES, True, not facing]
-            legal[action] = True
-            decisions.append(
-                Decision(
-                    position=seat + 1,
-                    street=street,
-                    action_id=action,
-                    raise_nums=tuple(min(n, MAX_RAISES) for n in raise_nums),  # type: ignore[arg-type]
-                    legal_mask=tuple(legal),  # type: ignore[arg-type]
-                    raises_uncapped=raise_nums[street],
-                )
-            )
-            to_act[seat] = False
-            if action == FOLD:
-                hand_over = True
-                break
-            if action == CALL:
-                chips_in[seat] += street_in[other] - street_in[seat]
-                street_in[seat] = street_in[other]
-            elif action == RAISE:
-                bet = BET_IN_SMALL_BLINDS[street]
-                new_level = max(street_in) + bet
-                chips_in[seat] += new_level - street_in[seat]
-                street_in[seat] = new_level
-                raise_nums[street] += 1
-                max_raises = max(max_raises, raise_nums[street])
-                to_act[other] = not all_in[other]
-            if all_in[other]:
-                to_act[seat] = False
-            seat = other
-        # Left over: quits may trail a fold, and an ``A`` after a closed round marks a player
-        # whose last call put them all-in. Nothing else may trail.
-        for seat_index in (0, 1):
-            rest = texts[seat_index][cursor[seat_index] :]
-            if not rest or (hand_over and set(rest) <= _FOLDS):
-                continue
-            if rest == "A" and not hand_over:
-                all_in[seat_index] = True
-                continue
-            raise ReplayError(f"extra actions {rest!r} on street {street}")
-
+        hand.play_street(street, _street_texts(strings, street, blinds))
     return Replay(
-        decisions=tuple(decisions),
-        chips_in=(chips_in[0], chips_in[1]),
-        showdown=not hand_over,
-        last_street=last_street,
+        decisions=tuple(hand.decisions),
+        chips_in=(hand.chips_in[0], hand.chips_in[1]),
+        showdown=not hand.hand_over,
+        last_street=hand.last_street,
         blinds_posted=blinds,
-        all_in=any(all_in),
-        max_raises=max_raises,
+        all_in=any(hand.all_in),
+        max_raises=hand.max_raises,
     )
