@@ -27,9 +27,9 @@ from typing import Any
 import torch
 
 from pokerirl.agents.dqn import GreedyQAgent, QNetwork
+from pokerirl.agents.registry import CONFIG_FILE, KEPT_FILE, MODEL_FILE
 from pokerirl.atomic import write_bytes, write_torch
 
-MODEL_FILE, CONFIG_FILE, KEPT_FILE = "model.pt", "config.json", "kept.pt"
 PLAYS = ("final", "kept")
 METRICS_FILE, CURVE_FILE = "metrics.jsonl", "learning_curve.png"
 FORMAT = "pokerirl-dqn"

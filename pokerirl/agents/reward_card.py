@@ -410,11 +410,12 @@ def run_card(
     ``table``, the decision table it was trained on; ``label`` names the table in the card
     (default: ``table``'s path; a worker's scratch copy passes the real table's path)."""
     from pokerirl.agents.rewards import load_reward_source
+    from pokerirl.irl.run import CONFIG_FILE, SPLIT_FILE
 
-    split = json.loads((Path(run_dir) / "split.json").read_text())
+    split = json.loads((Path(run_dir) / SPLIT_FILE).read_text())
     groups = {str(g) for g in split["validation_groups"]}
     states = CardStates.from_table(table, groups=groups, label=label)
-    record = json.loads((Path(run_dir) / "config.json").read_text())
+    record = json.loads((Path(run_dir) / CONFIG_FILE).read_text())
     reward = load_reward_source(run_dir)
     reward.name = f"{record['algo']} reward (seed {record['hyperparameters']['seed']})"
     return reward_card(reward, states)

@@ -38,7 +38,6 @@ from pokerirl.encoding import MAX_RAISES, NUM_ACTIONS, NUM_ROUNDS, OBS_SIZE, RAI
 TRANSFORMS = ("raw", "centered", "log_softmax")
 RAISE_COUNTS = ("decision", "end-of-hand")
 AUTHORS_PREFIX = "authors:"
-REWARD_RUN_FILES = ("reward.pt", "config.json")  # what identifies a learned-reward run
 AUTHORS_FILE = "authors.model"  # a shipped authors: file's name in a worker's folder
 
 
@@ -175,6 +174,8 @@ def _authors_path(spec: str | os.PathLike[str]) -> Path:
 
 def reward_source_files(spec: str | os.PathLike[str]) -> dict[str, bytes]:
     """The bytes of a reward source, to carry to a worker (checked first, in one line)."""
+    from pokerirl.irl.run import REWARD_RUN_FILES
+
     reward_source_fingerprint(spec)
     if is_authors_spec(spec):
         return {AUTHORS_FILE: _authors_path(spec).read_bytes()}
@@ -192,6 +193,7 @@ def reward_source_fingerprint(spec: str | os.PathLike[str]) -> str:
     """``sha256:<hex>`` of an ``authors:`` file, or of a run's ``reward.pt`` and
     ``config.json``; ``ValueError`` (one line) when ``spec`` is neither."""
     from pokerirl.agents.checkpoint import files_fingerprint
+    from pokerirl.irl.run import REWARD_RUN_FILES
 
     if is_authors_spec(spec):
         path = _authors_path(spec)
@@ -209,8 +211,10 @@ def _check_poker_run(run: Path) -> None:
     """``ValueError`` (one line) for a run whose reward is not on poker decisions: a
     Gymnasium run (its task named), or one on other observations or actions. What cannot be
     read is left to :func:`pokerirl.irl.load_reward`, which names the problem."""
+    from pokerirl.irl.run import CONFIG_FILE
+
     try:
-        record = json.loads((run / "config.json").read_bytes())
+        record = json.loads((run / CONFIG_FILE).read_bytes())
         data, architecture = record.get("data") or {}, record.get("architecture") or {}
         task = data.get("env")
         sizes = architecture.get("obs_dim"), architecture["action_space"].get("num_actions")

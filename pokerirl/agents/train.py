@@ -70,7 +70,6 @@ from pokerirl.agents.dqn import (
 from pokerirl.agents.registry import agent_fingerprint, resolve_agent
 from pokerirl.agents.rewards import (
     RAISE_COUNTS,
-    REWARD_RUN_FILES,  # noqa: F401 - re-exported: pokerirl.agents.train.REWARD_RUN_FILES
     TRANSFORMS,
     PokerReward,
     TransformedReward,
@@ -85,6 +84,7 @@ from pokerirl.errors import report as error_report
 from pokerirl.execution import Backend, read_files, write_files
 from pokerirl.game import make_agent, play_match
 from pokerirl.game.agents import Agent
+from pokerirl.irl.run import REWARD_RUN_FILES  # noqa: F401 - re-exported: pokerirl.agents.train.REWARD_RUN_FILES
 from pokerirl.store import Unit, UnitConflict, UnitOutput, run_units
 
 REWARD_MODES = ("sparse", "learned")

@@ -41,6 +41,7 @@ PARQUET_OPTIONS: dict[str, Any] = {
     "use_dictionary": _STRING_COLUMNS,
     "write_statistics": ["hand_id", "timestamp", "player", "street", "action_id", "channel"],
 }
+_WORK_TABLE, _WORK_SUMMARY = "table.parquet", "summary.json"  # inside the private work folder
 SPILL_BYTES = 512 * 1024 * 1024  # months held in memory before they go to temporary parts
 
 
@@ -142,7 +143,7 @@ def _ingest(
                 months = [_spill(item, work_dir) for item in months]
                 in_memory = 0
     summary = _summary(stats, sources, out_path, counts)
-    table_file, summary_file = work_dir / "table.parquet", work_dir / "summary.json"
+    table_file, summary_file = work_dir / _WORK_TABLE, work_dir / _WORK_SUMMARY
     with (
         _file(table_file, "wb") as sink,
         pq.ParquetWriter(sink, SCHEMA, **PARQUET_OPTIONS) as writer,

@@ -52,6 +52,7 @@ FORMAT_VERSION = 2
 REWARD_FILE, POLICY_FILE, CONFIG_FILE = "reward.pt", "policy.pt", "config.json"
 METRICS_FILE, BASELINES_FILE, SPLIT_FILE = "metrics.jsonl", "baselines.json", "split.json"
 TIMINGS_FILE, SUMMARY_FILE = "timings.json", "summary.json"
+REWARD_RUN_FILES = (REWARD_FILE, CONFIG_FILE)  # what identifies a learned-reward run
 
 
 class RunError(PokerIRLError, ValueError):

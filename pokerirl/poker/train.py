@@ -43,6 +43,7 @@ from typing import Any
 import numpy as np
 import torch
 
+from pokerirl.agents.reward_card import CARD_FILE
 from pokerirl.atomic import make_shareable, write_text
 from pokerirl.errors import Remedy
 from pokerirl.execution import Backend
@@ -254,7 +255,7 @@ def train_runs(
     except UnitConflict as error:
         raise RunError(str(error), remedy=error.remedy) from None
     for folder in folders:  # runs of an older pokerirl, reused: add their card
-        if not (folder / "reward_card.json").is_file():
+        if not (folder / CARD_FILE).is_file():
             write_reward_card(folder, table)
     results = [_run_result(folder) for folder in folders]
     summary = summarize(results)

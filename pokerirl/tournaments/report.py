@@ -25,6 +25,8 @@ from pokerirl.tournaments.lineup import TournamentError
 
 REPORT_FORMAT = "pokerirl-tournament/1"
 TIMINGS_FILE = "timings.json"
+REPORT_FILE, MARKDOWN_FILE = "report.json", "report.md"
+SEEDS_TABLE, SEEDS_FIGURE = "per_seed.csv", "per_seed.png"
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -134,10 +136,10 @@ def write_report(report: TournamentReport, out: Path) -> None:
     out.mkdir(parents=True, exist_ok=True)
     if report.timing:
         atomic.write_text(out / TIMINGS_FILE, json.dumps(report.timing, indent=2) + "\n")
-    atomic.write_text(out / "report.md", render_markdown(report))
-    atomic.write_text(out / "per_seed.csv", render_csv(report))
-    atomic.write_bytes(out / "per_seed.png", render_png(report))
-    atomic.write_text(out / "report.json", render_json(report))
+    atomic.write_text(out / MARKDOWN_FILE, render_markdown(report))
+    atomic.write_text(out / SEEDS_TABLE, render_csv(report))
+    atomic.write_bytes(out / SEEDS_FIGURE, render_png(report))
+    atomic.write_text(out / REPORT_FILE, render_json(report))
 
 
 def load_report(out: Path | str) -> TournamentReport:
@@ -147,11 +149,11 @@ def load_report(out: Path | str) -> TournamentReport:
         TournamentError: one line naming ``report.json`` if it is missing, not JSON, or not a
             whole report.
     """
-    path = Path(out) / "report.json"
+    path = Path(out) / REPORT_FILE
     try:
         data = json.loads(path.read_text())
     except FileNotFoundError:
-        raise TournamentError(f"{out}: no report.json (run pokerirl tournament first)") from None
+        raise TournamentError(f"{out}: no {REPORT_FILE} (run pokerirl tournament first)") from None
     except (OSError, json.JSONDecodeError) as error:
         raise TournamentError(f"{path}: cannot read the report ({error})") from None
     if not isinstance(data, dict):
