@@ -438,6 +438,7 @@ def _train_many(
         if reward_fn is None:
             load_reward_fn(first.reward_run)  # errors name the user's files, not a worker's copy
             reward_files = reward_source_files(first.reward_run)
+    opponent_print: str
     if first.opponent == SELF_PLAY:
         opponent, opponent_print = None, SELF_PLAY
     else:

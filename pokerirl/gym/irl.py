@@ -41,7 +41,7 @@ from pokerirl.gym.presets import TASKS, IRLSettings
 from pokerirl.gym.quality import write_reward_quality
 from pokerirl.gym.rl import EVAL_SEED
 from pokerirl.irl.airl import default_nets, train_many
-from pokerirl.irl.config import AIRLConfig
+from pokerirl.irl.config import AIRLConfig, Algo, NoiseSchedule
 from pokerirl.irl.nets import fold_obs_standardization
 from pokerirl.irl.plots import plot_bands, plot_curves
 from pokerirl.irl.records import EpochRecord
@@ -92,12 +92,12 @@ def irl_config(algo: str, settings: IRLSettings, *, seed: int) -> AIRLConfig:
         "policy_lr": settings.learning_rate,
         "reward_weight_decay": settings.reward_weight_decay,
         "batch_size": settings.batch_size,
-        "noise_schedule": "authors",
+        "noise_schedule": NoiseSchedule.AUTHORS,
         "noise_decay": settings.sigma_decay,
         "log_std_min": settings.log_std_min,
         "seed": seed,
     }
-    if algo == "hairl":
+    if algo == Algo.HAIRL:
         overrides.update(
             alpha=settings.alpha,
             beta=settings.beta,

@@ -53,7 +53,7 @@ from pokerirl.atomic import write_text
 from pokerirl.gym.collect import read_transitions
 from pokerirl.gym.experts import make_env
 from pokerirl.gym.presets import TASKS
-from pokerirl.irl.nets import fold_obs_standardization
+from pokerirl.irl.nets import RewardFamily, fold_obs_standardization
 from pokerirl.irl.run import (
     CONFIG_FILE,
     REWARD_FILE,
@@ -474,7 +474,7 @@ def write_reward_quality(
         raise QualityError(f"expert data not found: {data_path}")
     gamma = task_gamma(env_id)
     truth = true_reward(env_id, gamma)
-    family = record["architecture"].get("reward_family", "state_action")
+    family = record["architecture"].get("reward_family", RewardFamily.STATE_ACTION)
     rng = np.random.default_rng(seed)
     torch_threads = torch.get_num_threads()
 
@@ -525,7 +525,7 @@ def write_reward_quality(
 
     try:
         torch.set_num_threads(1)  # one summation order: the same bytes on any machine
-        shaped = family == "shaped"
+        shaped = family == RewardFamily.SHAPED
         f_full = _as_transition_reward(load_reward(run, full=shaped), full=shaped)
         g = _as_transition_reward(load_reward(run), full=False)
         initial = _as_transition_reward(initial_reward(record), full=False)

@@ -50,7 +50,7 @@ from tqdm.auto import tqdm
 
 from pokerirl.irl import fast
 from pokerirl.irl.baselines import baselines
-from pokerirl.irl.config import AIRLConfig
+from pokerirl.irl.config import AIRLConfig, NoiseForm, NoiseSchedule
 from pokerirl.irl.evaluate import evaluate
 from pokerirl.irl.losses import (
     LOG_2PI,
@@ -60,7 +60,7 @@ from pokerirl.irl.losses import (
     noise_schedule,
     sample_one_hot,
 )
-from pokerirl.irl.nets import MASKED_LOGIT, build_nets, project_to_simplex
+from pokerirl.irl.nets import MASKED_LOGIT, RewardFamily, build_nets, project_to_simplex
 from pokerirl.irl.optim import FlatAdam
 from pokerirl.irl.records import (
     DISCRIMINATOR_METRICS,
@@ -240,7 +240,7 @@ def train_many(
         policies = [b[1] for b in built] if policies is None else policies
     if not len(rewards) == len(policies) == len(seeds):
         raise ValueError("give one reward net and one policy per seed")
-    if config.reward_family == "shaped" and train_data.next_obs is None:
+    if config.reward_family == RewardFamily.SHAPED and train_data.next_obs is None:
         raise ValueError("the shaped reward family needs transitions with next_obs and done")
     for module in (*rewards, *policies):
         module.to(device).train()
@@ -281,7 +281,7 @@ class _Loop:
         self.discrete = data.discrete
         self.beta = config.beta if data.rewards is not None else 0.0
         self.alpha = config.alpha
-        self.shaped = config.reward_family == "shaped"
+        self.shaped = config.reward_family == RewardFamily.SHAPED
         self.batch = min(config.batch_size, len(data))
         self.steps = len(data) // self.batch  # drop the ragged tail; the next shuffle covers it
         self.noisy = config.sigma_start > 0 and adversarial
@@ -318,7 +318,7 @@ class _Loop:
             fast_path
             and self.runs == 1
             and device.type == "cpu"
-            and config.reward_family == "state_action"
+            and config.reward_family == RewardFamily.STATE_ACTION
             and config.supervised_form == "mean_mse"  # the hand-derived gradients' term
             and fast.supports(rewards.modules[0], policies.modules[0])
         )
@@ -340,7 +340,7 @@ class _Loop:
                 draws["pi_eps"].append(torch.randn(steps, batch, width, **kw))
             if self.noisy:
                 draws["eps"].append(torch.randn(steps, batch, width, **kw))
-                if self.config.noise_schedule == "authors":
+                if self.config.noise_schedule == NoiseSchedule.AUTHORS:
                     order = torch.rand(steps, batch, **kw).argsort(dim=1)
                     draws["sig"].append(self.sigma[order])
         return {k: torch.stack(v, dim=1) for k, v in draws.items() if v}  # (steps, R, ...)
@@ -392,7 +392,7 @@ class _Loop:
                     log_pi_seen = None
                     if self.noisy:
                         sigma = draw["sig"][step] if "sig" in draw else self.sigma
-                        if self.config.noise_form == "authors":
+                        if self.config.noise_form == NoiseForm.AUTHORS:
                             # σ in units of high, no clipping, log π of the clean sample.
                             log_pi_seen = gaussian_log_prob(seen, m, ls)
                             seen = seen + sigma[..., None] * self.high * draw["eps"][step]

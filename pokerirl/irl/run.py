@@ -42,7 +42,7 @@ from pokerirl.atomic import write_text, write_torch
 from pokerirl.errors import PokerIRLError
 from pokerirl.irl.airl import TrainResult, baselines, default_nets, train
 from pokerirl.irl.config import AIRLConfig
-from pokerirl.irl.nets import ACTIVATIONS, REWARD_FAMILIES, NetSpec, build_nets
+from pokerirl.irl.nets import ACTIVATIONS, REWARD_FAMILIES, NetSpec, RewardFamily, build_nets
 from pokerirl.irl.plots import plot_curves
 from pokerirl.irl.transitions import Transitions
 from pokerirl.parquet import first_line
@@ -321,7 +321,7 @@ def _architecture_problem(arch: Mapping[str, Any]) -> str | None:
         return f"'activation' must be one of {', '.join(ACTIVATIONS)}"
     if not isinstance(arch.get("layer_norm", False), bool):
         return "'layer_norm' must be true or false"
-    if arch.get("reward_family", "state_action") not in REWARD_FAMILIES:
+    if arch.get("reward_family", RewardFamily.STATE_ACTION) not in REWARD_FAMILIES:
         return f"'reward_family' must be one of {', '.join(REWARD_FAMILIES)}"
     gamma = arch.get("gamma", 0.99)
     if not isinstance(gamma, int | float) or isinstance(gamma, bool):
@@ -347,7 +347,7 @@ def build_from_record(record: Mapping[str, Any]) -> tuple[nn.Module, nn.Module]:
         policy_hidden=tuple(arch["policy_hidden"]),
         activation=arch.get("activation", "relu"),
         layer_norm=arch.get("layer_norm", False),
-        reward_family=arch.get("reward_family", "state_action"),
+        reward_family=arch.get("reward_family", RewardFamily.STATE_ACTION),
         gamma=float(arch.get("gamma", 0.99)),
     )
     discrete = space["type"] == "discrete"

@@ -48,7 +48,7 @@ from pokerirl.atomic import make_shareable, write_text
 from pokerirl.errors import Remedy
 from pokerirl.execution import Backend
 from pokerirl.irl.airl import resolve_device
-from pokerirl.irl.config import AIRLConfig
+from pokerirl.irl.config import AIRLConfig, Algo
 from pokerirl.irl.plots import plot_bands
 from pokerirl.irl.run import (
     BASELINES_FILE,
@@ -75,7 +75,7 @@ def train_table(
     table: str | os.PathLike[str],
     out_dir: str | os.PathLike[str],
     *,
-    algo: str = "hairl",
+    algo: str = Algo.HAIRL,
     config: AIRLConfig | None = None,
     device: str = "cpu",
     progress: bool = True,
@@ -198,7 +198,7 @@ def train_runs(
     out_dir: str | os.PathLike[str],
     *,
     runs: int,
-    algo: str = "hairl",
+    algo: str = Algo.HAIRL,
     config: AIRLConfig | None = None,
     device: str = "cpu",
     progress: bool = True,
