@@ -44,13 +44,14 @@ from pokerirl.irl.airl import default_nets, train_many
 from pokerirl.irl.config import AIRLConfig, Algo, NoiseSchedule
 from pokerirl.irl.nets import fold_obs_standardization
 from pokerirl.irl.plots import plot_bands, plot_curves
-from pokerirl.irl.records import EpochRecord
+from pokerirl.irl.records import EpochMetrics, EpochRecord
 from pokerirl.irl.run import (
     BASELINES_FILE,
     METRICS_FILE,
     SPLIT_FILE,
     SUMMARY_FILE,
     RunError,
+    RunResult,
     data_record,
     run_baselines,
     save_run,
@@ -344,9 +345,9 @@ def train_gym_irl(
                 )
             return extras
 
-        def on_epoch(all_metrics: list[dict[str, Any]]) -> None:
+        def on_epoch(all_metrics: list[EpochMetrics]) -> None:
             for k, metrics in enumerate(all_metrics):
-                lines[k].append(json.dumps(metrics))
+                lines[k].append(json.dumps(metrics.to_json()))
                 write_text(folders[k] / METRICS_FILE, "\n".join(lines[k]) + "\n")
 
         many = train_many(
@@ -378,31 +379,42 @@ def train_gym_irl(
             plot_curves(result.metrics, folders[k], baselines=shares)
             # The learned reward against the true one (EPIC, Pearson): reward_quality.json.
             write_reward_quality(folders[k], env_id=env_id, data_path=data_path)
-            results.append({"seed": seeds[k], "metrics": result.metrics, "baselines": found})
-        summary = summarize(results)
+            results.append(
+                RunResult(
+                    out=str(out / folders[k].name),
+                    seed=seeds[k],
+                    metrics=tuple(result.metrics),
+                    baselines=found,
+                    samples_per_second=result.samples_per_second,
+                    train_rows=len(train_data),
+                    val_rows=len(val_data),
+                )
+            )
+        over_runs = summarize(results)
         finals = {
             name: {
-                "mean": summary["metrics"][key]["mean"][-1],
-                "std": summary["metrics"][key]["std"][-1],
+                "mean": over_runs.metrics[key].mean[-1],
+                "std": over_runs.metrics[key].std[-1],
             }
             for name, key in (
                 ("irl_final_return", "eval_return"),
                 ("final_alignment", "val_alignment"),
             )
-            if key in summary["metrics"]
+            if key in over_runs.metrics
         }
         summary = {
             "env": env_id,
             "algo": algo,
             "expert_return": found["expert"],
             **finals,
-            **summary,
+            **over_runs.to_json(),
         }
         write_text(stage / SUMMARY_FILE, json.dumps(summary, indent=2) + "\n")
         plot_returns(summary, stage / RETURNS_FILE)
         if discrete:
             plot_bands(
-                {**summary, "baselines": {k: summary["baselines"][k] for k in shares}}, stage
+                {**summary, "baselines": {k: over_runs.baselines[k].to_json() for k in shares}},
+                stage,
             )
     return GymIRLResult(
         out=out,

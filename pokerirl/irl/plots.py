@@ -63,7 +63,7 @@ def _baseline_lines(axes: Any, baselines: Mapping[str, float]) -> None:
 
 
 def plot_curves(
-    metrics: Sequence[dict[str, Any]],
+    metrics: Sequence[Mapping[str, Any]],
     out_dir: str | os.PathLike[str],
     *,
     baselines: Mapping[str, float] | None = None,

@@ -44,6 +44,7 @@ from pokerirl.irl.airl import TrainResult, baselines, default_nets, train
 from pokerirl.irl.config import AIRLConfig
 from pokerirl.irl.nets import ACTIVATIONS, REWARD_FAMILIES, NetSpec, RewardFamily, build_nets
 from pokerirl.irl.plots import plot_curves
+from pokerirl.irl.records import EpochMetrics
 from pokerirl.irl.transitions import Transitions
 from pokerirl.parquet import first_line
 from pokerirl.versions import package_versions
@@ -60,18 +61,118 @@ class RunError(PokerIRLError, ValueError):
     caller could get past it, a :class:`~pokerirl.errors.Remedy`)."""
 
 
+@dataclass(frozen=True, kw_only=True)
+class RunResult:
+    """One finished run of several: its folder, seed, metrics, baselines, speed and split."""
+
+    out: str
+    seed: int
+    metrics: tuple[EpochMetrics, ...]
+    baselines: Mapping[str, float]
+    samples_per_second: float
+    train_rows: int
+    val_rows: int
+
+    def to_json(self) -> dict[str, object]:
+        return {
+            "out": self.out,
+            "seed": self.seed,
+            "metrics": [m.to_json() for m in self.metrics],
+            "baselines": dict(self.baselines),
+            "samples_per_second": self.samples_per_second,
+            "train_rows": self.train_rows,
+            "val_rows": self.val_rows,
+        }
+
+    @classmethod
+    def from_json(cls, data: Mapping[str, Any]) -> RunResult:
+        return cls(
+            out=data["out"],
+            seed=data["seed"],
+            metrics=tuple(EpochMetrics.from_json(m) for m in data["metrics"]),
+            baselines=dict(data["baselines"]),
+            samples_per_second=data["samples_per_second"],
+            train_rows=data["train_rows"],
+            val_rows=data["val_rows"],
+        )
+
+
 @dataclass(frozen=True)
 class RunSummary:
     """What :func:`train_into` did (for several runs, :func:`pokerirl.poker.train_runs`: the
-    first run, and all of them)."""
+    first run, and all of them in ``results``)."""
 
     out_dir: Path
-    metrics: list[dict[str, Any]]
+    metrics: list[EpochMetrics]
     baselines: dict[str, float]
     samples_per_second: float
     train_rows: int
     val_rows: int
-    runs: tuple[dict[str, Any], ...] = ()  # several runs: each run's unit result
+    results: tuple[RunResult, ...] = ()  # several runs: each run's result
+
+    @property
+    def runs(self) -> tuple[Mapping[str, Any], ...]:
+        """``results`` as JSON (read by key by the command line; prefer ``results``)."""
+        return tuple(result.to_json() for result in self.results)
+
+
+@dataclass(frozen=True, kw_only=True)
+class MeanStd:
+    """Mean and sample standard deviation over runs."""
+
+    mean: float
+    std: float
+
+    def to_json(self) -> dict[str, float]:
+        return {"mean": self.mean, "std": self.std}
+
+    @classmethod
+    def from_json(cls, data: Mapping[str, Any]) -> MeanStd:
+        return cls(mean=data["mean"], std=data["std"])
+
+
+@dataclass(frozen=True, kw_only=True)
+class CurveStats:
+    """Mean and sample standard deviation over runs of one metric, epoch by epoch."""
+
+    mean: tuple[float, ...]
+    std: tuple[float, ...]
+
+    def to_json(self) -> dict[str, list[float]]:
+        return {"mean": list(self.mean), "std": list(self.std)}
+
+    @classmethod
+    def from_json(cls, data: Mapping[str, Any]) -> CurveStats:
+        return cls(mean=tuple(data["mean"]), std=tuple(data["std"]))
+
+
+@dataclass(frozen=True, kw_only=True)
+class RunsSummary:
+    """Several runs summarized (``summary.json``): each scalar metric per epoch and each
+    baseline, as mean and sample std (ddof 1) over runs."""
+
+    seeds: tuple[int, ...]
+    epochs: tuple[int, ...]
+    metrics: Mapping[str, CurveStats]
+    baselines: Mapping[str, MeanStd]
+
+    def to_json(self) -> dict[str, object]:
+        return {
+            "runs": len(self.seeds),
+            "seeds": list(self.seeds),
+            "epochs": list(self.epochs),
+            "metrics": {key: curve.to_json() for key, curve in self.metrics.items()},
+            "baselines": {key: stats.to_json() for key, stats in self.baselines.items()},
+        }
+
+    @classmethod
+    def from_json(cls, data: Mapping[str, Any]) -> RunsSummary:
+        return cls(
+            seeds=tuple(data["seeds"]),
+            epochs=tuple(data["epochs"]),
+            metrics={key: CurveStats.from_json(c) for key, c in data["metrics"].items()},
+            baselines={key: MeanStd.from_json(s) for key, s in data["baselines"].items()},
+        )
 
 
 # --------------------------------------------------------------------------- one run
@@ -102,9 +203,9 @@ def train_into(
 
     lines: list[str] = []
 
-    def log_epoch(metrics: dict[str, Any]) -> None:
+    def log_epoch(metrics: EpochMetrics) -> None:
         # Rewrite the whole (small) file each epoch: readable live, never half-written.
-        lines.append(json.dumps(metrics))
+        lines.append(json.dumps(metrics.to_json()))
         write_text(folder / METRICS_FILE, "\n".join(lines) + "\n")
 
     result = train(
@@ -134,7 +235,7 @@ def data_record(
     val_data: Transitions,
     *,
     path: str | os.PathLike[str] | None,
-) -> dict[str, Any]:
+) -> dict[str, object]:
     """What a run's ``config.json`` says of its data: where, which bytes, how it was split."""
     return {
         "path": None if path is None else str(Path(path).resolve()),
@@ -226,7 +327,7 @@ def save_run(
         "versions": package_versions(),
         "result": {
             "epochs": len(result.metrics),
-            "final_metrics": result.metrics[-1] if result.metrics else None,
+            "final_metrics": result.metrics[-1].to_json() if result.metrics else None,
             "baselines": dict(baselines or {}),
         },
     }
@@ -242,26 +343,26 @@ def save_run(
 # --------------------------------------------------------------------------- several runs: summary
 
 
-def summarize(results: Sequence[Mapping[str, Any]]) -> dict[str, Any]:
+def summarize(results: Sequence[RunResult]) -> RunsSummary:
     """Mean and sample std (ddof 1) over runs of each scalar metric per epoch and of each
     baseline."""
-    metrics = [r["metrics"] for r in results]
-    keys = [k for k, v in metrics[0][0].items() if isinstance(v, int | float) and k != "epoch"]
+    metrics = [r.metrics for r in results]
     by_metric = {}
-    for key in keys:
+    for key in metrics[0][0].scalars():
         values = np.array([[m[key] for m in run] for run in metrics], dtype=float)
-        by_metric[key] = {"mean": values.mean(0).tolist(), "std": _std(values).tolist()}
+        by_metric[key] = CurveStats(
+            mean=tuple(values.mean(0).tolist()), std=tuple(_std(values).tolist())
+        )
     by_baseline = {}
-    for key in results[0]["baselines"]:
-        values = np.array([[r["baselines"][key]] for r in results], dtype=float)
-        by_baseline[key] = {"mean": float(values.mean()), "std": float(_std(values)[0])}
-    return {
-        "runs": len(results),
-        "seeds": [r["seed"] for r in results],
-        "epochs": [m["epoch"] for m in metrics[0]],
-        "metrics": by_metric,
-        "baselines": by_baseline,
-    }
+    for key in results[0].baselines:
+        values = np.array([[r.baselines[key]] for r in results], dtype=float)
+        by_baseline[key] = MeanStd(mean=float(values.mean()), std=float(_std(values)[0]))
+    return RunsSummary(
+        seeds=tuple(r.seed for r in results),
+        epochs=tuple(m.epoch for m in metrics[0]),
+        metrics=by_metric,
+        baselines=by_baseline,
+    )
 
 
 def _std(values: np.ndarray) -> np.ndarray:
