@@ -36,7 +36,7 @@ import torch
 from torch import Tensor, nn
 
 from pokerirl.atomic import atomic_path, make_shareable, write_text
-from pokerirl.gym.experts import make_env, shipped_manifest
+from pokerirl.gym.experts import make_env, shipped_experts
 from pokerirl.gym.presets import TASKS, IRLSettings
 from pokerirl.gym.quality import write_reward_quality
 from pokerirl.gym.rl import EVAL_SEED
@@ -252,10 +252,10 @@ def expert_return(env_id: str, data_path: str | os.PathLike[str]) -> float:
         )
         return float(sums.mean())
     try:
-        entries = [e for e in shipped_manifest() if e["env"] == env_id]
+        entries = [e for e in shipped_experts() if e.env == env_id]
     except ValueError:
         entries = []
-    return float(entries[0]["return_mean"]) if entries else math.nan
+    return float(entries[0].return_mean) if entries else math.nan
 
 
 # --------------------------------------------------------------------------- training
