@@ -15,6 +15,7 @@ from __future__ import annotations
 import csv
 import io
 import json
+from collections.abc import Mapping
 from dataclasses import asdict, dataclass, field, fields, replace
 from pathlib import Path
 from typing import Any, Literal
@@ -76,6 +77,49 @@ class MatchupReport:
 
 
 @dataclass(frozen=True, kw_only=True)
+class TournamentSettings:
+    """What every seed of a tournament played: hands per seed, the seeds, duplicate deals or
+    not, the engine's batch, and the significance level."""
+
+    hands: int
+    seeds: tuple[int, ...]
+    duplicate: bool
+    batch_size: int
+    alpha: float
+
+    def to_json(self) -> dict[str, object]:
+        return {
+            "hands": self.hands,
+            "seeds": list(self.seeds),
+            "duplicate": self.duplicate,
+            "batch_size": self.batch_size,
+            "alpha": self.alpha,
+        }
+
+    @classmethod
+    def from_json(cls, data: Mapping[str, Any]) -> TournamentSettings:
+        return cls(**{**_pick(cls, data), "seeds": tuple(data["seeds"])})
+
+
+@dataclass(frozen=True, kw_only=True)
+class FamilySizes:
+    """The two families of tests: per seed (seeds x matchups) and pooled (matchups), each
+    with its Bonferroni threshold."""
+
+    per_seed_tests: int
+    per_seed_threshold: float
+    pooled_tests: int
+    pooled_threshold: float
+
+    def to_json(self) -> dict[str, object]:
+        return asdict(self)
+
+    @classmethod
+    def from_json(cls, data: Mapping[str, Any]) -> FamilySizes:
+        return cls(**_pick(cls, data))
+
+
+@dataclass(frozen=True, kw_only=True)
 class TournamentReport:
     """Everything ``pokerirl tournament`` found, ready to write or print.
 
@@ -87,11 +131,11 @@ class TournamentReport:
     which :func:`load_report` reads back when it is there.
     """
 
-    config: dict[str, Any]
-    family: dict[str, Any]
+    config: TournamentSettings
+    family: FamilySizes
     matchups: tuple[MatchupReport, ...]
-    versions: dict[str, str | None]
-    timing: dict[str, Any] = field(default_factory=dict)
+    versions: Mapping[str, str | None]
+    timing: Mapping[str, Any] = field(default_factory=dict)  # timings.json, as read
 
     def to_dict(self) -> dict[str, Any]:
         """Plain JSON-ready data (tuples become lists), without the timings."""
@@ -102,7 +146,7 @@ class TournamentReport:
         return {"format": REPORT_FORMAT, **json.loads(json.dumps(data))}
 
     @classmethod
-    def from_dict(cls, data: dict[str, Any]) -> TournamentReport:
+    def from_dict(cls, data: Mapping[str, Any]) -> TournamentReport:
         """The inverse of :meth:`to_dict`."""
         if data.get("format") != REPORT_FORMAT:
             raise TournamentError(f"not a {REPORT_FORMAT} report (format {data.get('format')!r})")
@@ -116,14 +160,22 @@ class TournamentReport:
             )
             for m in data["matchups"]
         )
-        return cls(**{**_pick(cls, data), "matchups": matchups, "timing": {}})
+        return cls(
+            **{
+                **_pick(cls, data),
+                "config": TournamentSettings.from_json(data["config"]),
+                "family": FamilySizes.from_json(data["family"]),
+                "matchups": matchups,
+                "timing": {},
+            }
+        )
 
 
-def _pick(kind: type, data: dict[str, Any]) -> dict[str, Any]:
+def _pick(kind: type, data: Mapping[str, Any]) -> dict[str, Any]:
     return {f.name: data[f.name] for f in fields(kind) if f.name in data}
 
 
-def _line(kind: type[Line], data: dict[str, Any]) -> Line:
+def _line(kind: type[Line], data: Mapping[str, Any]) -> Line:
     return kind(**{**_pick(kind, data), "ci95": tuple(data["ci95"])})
 
 
@@ -216,12 +268,12 @@ def _threshold(alpha: float, tests: int) -> str:
 
 def render_markdown(report: TournamentReport) -> str:
     config, family = report.config, report.family
-    alpha, seeds = config["alpha"], config["seeds"]
-    per_seed_rule = _threshold(alpha, family["per_seed_tests"])
-    pooled_rule = _threshold(alpha, family["pooled_tests"])
+    alpha, seeds = config.alpha, config.seeds
+    per_seed_rule = _threshold(alpha, family.per_seed_tests)
+    pooled_rule = _threshold(alpha, family.pooled_tests)
     names = ", ".join(f"{m.agent_a} vs {m.agent_b}" for m in report.matchups)
-    unit = "duplicate pair (a deal played from both seats)" if config["duplicate"] else "hand"
-    seating = "duplicate deals" if config["duplicate"] else "seats alternating, no duplicate"
+    unit = "duplicate pair (a deal played from both seats)" if config.duplicate else "hand"
+    seating = "duplicate deals" if config.duplicate else "seats alternating, no duplicate"
     pooled_how = (
         f"the mean of the {len(seeds)} per-seed means, with its standard error and a t-test "
         f"over those {len(seeds)} values (df {len(seeds) - 1}): seeds are the replicates"
@@ -231,7 +283,7 @@ def render_markdown(report: TournamentReport) -> str:
     out = [
         f"# Tournament: {names}",
         "",
-        f"{config['hands']:,} hands per seed, seeds {format_seeds(seeds)} ({len(seeds)}), "
+        f"{config.hands:,} hands per seed, seeds {format_seeds(seeds)} ({len(seeds)}), "
         f"{seating}. Payoffs are the first agent's, in milli-big-blinds per hand (mbb/h).",
         "",
         "## Results",
@@ -249,13 +301,13 @@ def render_markdown(report: TournamentReport) -> str:
         )
     out += [
         "",
-        f"Pooled: {pooled_how}. Bonferroni and Holm over the {family['pooled_tests']} pooled "
+        f"Pooled: {pooled_how}. Bonferroni and Holm over the {family.pooled_tests} pooled "
         f"test(s), one per matchup.",
         "",
         "## Per seed",
         "",
         f"Unit: one {unit}; standard errors, CIs and two-sided t-tests are over the units of "
-        f"each seed. Bonferroni and Holm over all {family['per_seed_tests']} per-seed tests "
+        f"each seed. Bonferroni and Holm over all {family.per_seed_tests} per-seed tests "
         f"({len(seeds)} seeds x {len(report.matchups)} matchup(s)): significant if "
         f"{per_seed_rule} (the paper's 0.05/20 is this threshold for one matchup and 20 "
         "seeds).",
@@ -284,7 +336,7 @@ def render_markdown(report: TournamentReport) -> str:
             out.append(f"- {m.agent_a} vs {m.agent_b}, {side} = `{spec}`: {shown}")
     versions = ", ".join(f"{name} {version}" for name, version in report.versions.items())
     out += [
-        f"- batch size {config['batch_size']}; versions: {versions}",
+        f"- batch size {config.batch_size}; versions: {versions}",
         f"- wall-clock figures of the last run (and the seeds it reused): {TIMINGS_FILE}",
         "",
     ]
@@ -333,7 +385,7 @@ def render_png(report: TournamentReport) -> bytes:
     """
     from matplotlib.figure import Figure
 
-    figure = Figure(figsize=(max(6.0, 0.35 * len(report.config["seeds"]) + 3), 4.0))
+    figure = Figure(figsize=(max(6.0, 0.35 * len(report.config.seeds) + 3), 4.0))
     axes = figure.subplots()
     width = 0.6 / max(1, len(report.matchups))
     for i, m in enumerate(report.matchups):
@@ -351,7 +403,7 @@ def render_png(report: TournamentReport) -> bytes:
     axes.axhline(0.0, color="black", linewidth=0.8)
     axes.set_xlabel("seed")
     axes.set_ylabel("mbb/h (first agent), 95% CI")
-    axes.set_title(f"{report.config['hands']:,} hands per seed; dashed: pooled mean")
+    axes.set_title(f"{report.config.hands:,} hands per seed; dashed: pooled mean")
     axes.legend(fontsize="small")
     figure.tight_layout()
     buffer = io.BytesIO()
