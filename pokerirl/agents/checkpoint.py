@@ -21,6 +21,7 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
@@ -44,7 +45,7 @@ def is_finished(folder: str | os.PathLike[str]) -> bool:
 def save_agent(
     folder: str | os.PathLike[str],
     network: QNetwork,
-    config: dict[str, Any],
+    config: Mapping[str, Any],
     *,
     kept: dict[str, torch.Tensor] | None = None,
 ) -> None:

@@ -36,7 +36,6 @@ import json
 import os
 from dataclasses import asdict, dataclass
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
@@ -421,7 +420,7 @@ def run_card(
     return reward_card(reward, states)
 
 
-def card_summary(cards: list[RewardCard]) -> dict[str, Any]:
+def card_summary(cards: list[RewardCard]) -> dict[str, object]:
     """Mean and std over runs of a card's numbers, for the study report."""
 
     def stat(values: list[float]) -> dict[str, float]:

@@ -429,7 +429,7 @@ def train_gym_irl(
     )
 
 
-def plot_returns(summary: dict[str, Any], path: Path) -> Path:
+def plot_returns(summary: Mapping[str, Any], path: Path) -> Path:
     """Mean ± std over runs of the evaluation return per epoch, the expert and random lines."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure

@@ -167,7 +167,7 @@ class AIRLConfig:
         unknown = sorted(set(overrides) - set(_HINTS))
         if unknown:
             raise ConfigError(f"unknown setting(s) {', '.join(unknown)}; known: {sorted(_HINTS)}")
-        base: dict[str, Any] = {}
+        base: dict[str, float] = {}
         if algo == Algo.AIRL:
             base = {"alpha": 0.0, "beta": 0.0, "sigma_start": 0.0, "sigma_end": 0.0}
         return cls(**{**base, **overrides})
@@ -182,7 +182,7 @@ class AIRLConfig:
             gamma=self.gamma,
         )
 
-    def to_dict(self) -> dict[str, Any]:
+    def to_dict(self) -> dict[str, object]:
         """The settings as JSON, without the continuous-action options (issue 20) that hold
         their defaults: run records and fingerprints written before them stay valid."""
         return {
@@ -193,7 +193,7 @@ class AIRLConfig:
 
 
 # Fields added after runs were recorded, with the defaults that reproduce those runs.
-_ADDED_LATER: dict[str, Any] = {
+_ADDED_LATER: dict[str, object] = {
     "noise_form": NoiseForm.OURS,
     "supervised_form": SupervisedForm.MEAN_MSE,
     "log_std_min": -20.0,
@@ -201,7 +201,7 @@ _ADDED_LATER: dict[str, Any] = {
 }
 
 
-_HINTS: dict[str, Any] = typing.get_type_hints(AIRLConfig)
+_HINTS: dict[str, object] = typing.get_type_hints(AIRLConfig)
 
 
 def _checked(name: str, hint: Any, value: Any) -> Any:

@@ -298,7 +298,7 @@ def save_run(
         write_torch(out / name, state)
     policy = result.policy
     if isinstance(getattr(policy, "low", None), Tensor):
-        space: dict[str, Any] = {
+        space: dict[str, object] = {
             "type": "box",
             "low": policy.get_buffer("low").tolist(),
             "high": policy.get_buffer("high").tolist(),
