@@ -43,6 +43,7 @@ import tempfile
 import time
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
+from enum import StrEnum
 from pathlib import Path
 from typing import Any
 
@@ -58,6 +59,7 @@ from pokerirl.agents.checkpoint import (
     METRICS_FILE,
     MODEL_FILE,
     PLAYS,
+    Plays,
     save_agent,
 )
 from pokerirl.agents.dqn import (
@@ -73,6 +75,8 @@ from pokerirl.agents.rewards import (
     RAISE_COUNTS,
     TRANSFORMS,
     PokerReward,
+    RaiseCounts,
+    Transform,
     TransformedReward,
     as_poker_reward,
     landed_spec,
@@ -88,8 +92,23 @@ from pokerirl.game.agents import Agent
 from pokerirl.irl.run import REWARD_RUN_FILES  # noqa: F401 - re-exported: pokerirl.agents.train.REWARD_RUN_FILES
 from pokerirl.store import Unit, UnitConflict, UnitOutput, run_units
 
-REWARD_MODES = ("sparse", "learned")
-PROTOCOLS = ("pokerirl", "authors")
+
+class RewardMode(StrEnum):
+    """What an agent learns from: the payoff at the end of a hand, or a learned reward."""
+
+    SPARSE = "sparse"
+    LEARNED = "learned"
+
+
+class TrainingProtocol(StrEnum):
+    """How an agent is evaluated and kept: ours (duplicate deals), or the authors'."""
+
+    POKERIRL = "pokerirl"
+    AUTHORS = "authors"
+
+
+REWARD_MODES: tuple[str, ...] = tuple(RewardMode)
+PROTOCOLS: tuple[str, ...] = tuple(TrainingProtocol)
 TIMINGS_FILE = "timings.json"
 AGENT_OUTPUTS = (MODEL_FILE, CONFIG_FILE, METRICS_FILE, CURVE_FILE)
 KEEP_RATIO = 0.8  # the authors' rule: keep a model whose payoff beats 0.8 x the best so far
@@ -111,7 +130,7 @@ class TrainConfig:
 
     hands: int
     seed: int
-    reward: str = "sparse"
+    reward: str = RewardMode.SPARSE
     reward_run: str | None = None
     payoff_weight: float = 0.0
     opponent: str = "random"
@@ -119,17 +138,17 @@ class TrainConfig:
     eval_hands: int = 20_000
     eval_seed: int = 1_000_003
     dqn: DQNConfig = field(default_factory=DQNConfig)
-    reward_transform: str = "raw"
-    raise_counts: str = "decision"
-    protocol: str = "pokerirl"
-    play: str = "final"
+    reward_transform: str = Transform.RAW
+    raise_counts: str = RaiseCounts.DECISION
+    protocol: str = TrainingProtocol.POKERIRL
+    play: str = Plays.FINAL
 
     def __post_init__(self) -> None:
         if self.reward not in REWARD_MODES:
             raise ValueError(f"unknown reward mode {self.reward!r} (sparse or learned)")
-        if self.reward == "sparse" and self.reward_run is not None:
+        if self.reward == RewardMode.SPARSE and self.reward_run is not None:
             raise ValueError("--reward-run needs --reward learned")
-        if self.reward == "sparse" and self.payoff_weight != 0.0:
+        if self.reward == RewardMode.SPARSE and self.payoff_weight != 0.0:
             raise ValueError("--payoff-weight needs --reward learned")
         if not 0.0 <= self.payoff_weight <= 1.0:
             raise ValueError(f"payoff weight must be in [0, 1], got {self.payoff_weight}")
@@ -139,7 +158,7 @@ class TrainConfig:
             raise ValueError("seeds must be non-negative")
         if self.protocol not in PROTOCOLS:
             raise ValueError(f"unknown protocol {self.protocol!r} ({', '.join(PROTOCOLS)})")
-        duplicate = self.protocol == "pokerirl"
+        duplicate = self.protocol == TrainingProtocol.POKERIRL
         if self.eval_hands < 2 or (duplicate and self.eval_hands % 2):
             raise ValueError(f"eval_hands must be even and at least 2, got {self.eval_hands}")
         if self.reward_transform not in TRANSFORMS:
@@ -148,13 +167,13 @@ class TrainConfig:
             )
         if self.raise_counts not in RAISE_COUNTS:
             raise ValueError(f"--raise-counts must be one of {', '.join(RAISE_COUNTS)}")
-        if self.reward == "sparse" and (
-            self.reward_transform != "raw" or self.raise_counts != "decision"
+        if self.reward == RewardMode.SPARSE and (
+            self.reward_transform != Transform.RAW or self.raise_counts != RaiseCounts.DECISION
         ):
             raise ValueError("--reward-transform and --raise-counts need --reward learned")
         if self.play not in PLAYS:
             raise ValueError(f"--play must be one of {', '.join(PLAYS)}")
-        if self.play == "kept" and self.protocol != "authors":
+        if self.play == Plays.KEPT and self.protocol != TrainingProtocol.AUTHORS:
             raise ValueError("--play kept needs --protocol authors (its kept checkpoint)")
 
 
@@ -176,8 +195,8 @@ AGENT_PRESETS: dict[str, Mapping[str, Any]] = {
         "hands": 5_000,
         "eval_every": 100,
         "eval_hands": 1_000,
-        "protocol": "authors",
-        "play": "kept",
+        "protocol": TrainingProtocol.AUTHORS,
+        "play": Plays.KEPT,
         "dqn": AUTHORS_DQN,
     },
 }
@@ -335,7 +354,9 @@ def reward_run_fingerprint(run_dir: str | os.PathLike[str]) -> str:
     return reward_source_fingerprint(run_dir)
 
 
-def load_reward_fn(run_dir: str | os.PathLike[str], transform: str = "raw") -> PokerReward:
+def load_reward_fn(
+    run_dir: str | os.PathLike[str], transform: str = Transform.RAW
+) -> PokerReward:
     """f_θ of a run folder or ``authors:FILE``, after ``transform`` over the legal actions."""
     return TransformedReward(load_reward_source(run_dir), transform)
 
@@ -347,7 +368,7 @@ def _evaluate(
     or, for the authors' protocol, fresh games (seed ``eval_seed + index``) with seats drawn
     per game, as RLCard's ``tournament``."""
     greedy = learner.greedy_agent()
-    authors = config.protocol == "authors"
+    authors = config.protocol == TrainingProtocol.AUTHORS
     results = {}
     for label, opponent in opponents.items():
         result = play_match(
@@ -372,7 +393,7 @@ def evaluation_points(config: TrainConfig) -> list[int]:
     >>> evaluation_points(TrainConfig(hands=250, seed=0, eval_every=100, protocol="authors"))
     [1, 101, 201, 250]
     """
-    if config.protocol == "authors":
+    if config.protocol == TrainingProtocol.AUTHORS:
         points = list(range(1, config.hands + 1, config.eval_every))
     else:
         points = list(range(config.eval_every, config.hands, config.eval_every))
@@ -549,7 +570,7 @@ def _train_many(
     # Bad input fails here, in one line, before any worker starts.
     reward_files: dict[str, bytes] = {}
     reward_print = None
-    if first.reward == "learned":
+    if first.reward == RewardMode.LEARNED:
         if first.reward_run is None:
             raise ValueError("--reward learned needs --reward-run RUN_DIR (or authors:FILE)")
         reward_print = reward_run_fingerprint(first.reward_run)
@@ -613,7 +634,7 @@ def _train_unit(unit: _TrainUnit, reward_fn: RewardFn | None = None) -> UnitOutp
     config = unit.config
     reward: PokerReward | None = None
     with tempfile.TemporaryDirectory(prefix="pokerirl-agent-") as private:
-        if config.reward == "learned":
+        if config.reward == RewardMode.LEARNED:
             if reward_fn is None:
                 landed = write_files(Path(private, "reward-run"), dict(unit.reward_files))
                 reward = load_reward_source(landed_spec(str(config.reward_run), landed))
@@ -682,7 +703,7 @@ def _train_into(
     seconds: list[float] = []
     started = time.perf_counter()
     points = evaluation_points(config)
-    keeper = _Keeper() if config.protocol == "authors" else None
+    keeper = _Keeper() if config.protocol == TrainingProtocol.AUTHORS else None
 
     def evaluate(hands_done: int, learner: DQNLearner) -> None:
         due = [p for p in points if p <= hands_done]
