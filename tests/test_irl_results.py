@@ -98,3 +98,23 @@ def test_train_runs_files_read_back_typed(tmp_path: Path) -> None:
     # The command line reads the runs by key: the same results, as JSON.
     assert summary.runs == tuple(r.to_json() for r in summary.results)
     assert summary.runs[1]["metrics"][-1]["epoch"] == 2 and "out" in summary.runs[1]
+
+
+def test_the_settings_enums_are_their_names_in_json_and_fingerprints() -> None:
+    from pokerirl.irl import AIRLConfig
+    from pokerirl.irl.config import ALGOS, Algo, NoiseSchedule
+    from pokerirl.irl.nets import RewardFamily
+    from pokerirl.store import fingerprint
+
+    assert json.dumps(Algo.AIRL) == '"airl"' and ALGOS == ("airl", "hairl")
+    config = AIRLConfig(noise_schedule="authors", reward_family="shaped")
+    assert config.noise_schedule is NoiseSchedule.AUTHORS
+    assert config.reward_family is RewardFamily.SHAPED
+    assert json.dumps(config.to_dict()) == json.dumps(
+        {k: str(v) if isinstance(v, str) else v for k, v in config.to_dict().items()}
+    )
+    # `pokerirl train`'s unit identity, as main fingerprinted it before the enums.
+    unit = {"algo": Algo.HAIRL, "device": "cpu", "settings": AIRLConfig.for_algo("hairl").to_dict()}
+    assert fingerprint(unit) == (
+        "sha256:ccea3d3748da9efb737962c9362b235fe8a291d38c79b7d2ec3492b7dd8082d8"
+    )
