@@ -372,7 +372,7 @@ def _std(values: np.ndarray) -> np.ndarray:
 # --------------------------------------------------------------------------- loading
 
 
-def load_run_config(run_dir: str | os.PathLike[str]) -> dict[str, Any]:
+def load_run_config(run_dir: str | os.PathLike[str]) -> Mapping[str, Any]:
     """The ``config.json`` of a run (format 1 or 2), checked; ``RunError`` naming the file."""
     path = Path(run_dir) / CONFIG_FILE
     if not path.is_file() and (Path(run_dir) / SUMMARY_FILE).is_file():
