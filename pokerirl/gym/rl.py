@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import json
 import os
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import asdict, dataclass
 from enum import StrEnum
 from pathlib import Path
@@ -169,7 +169,7 @@ def save_run(
     out: Path,
     result: RLResult,
     settings: RLSettings,
-    state: dict[str, Any],
+    state: Mapping[str, Any],
     *,
     backend: str = RLBackend.SB3,
 ) -> None:

@@ -137,7 +137,7 @@ class TournamentReport:
     versions: Mapping[str, str | None]
     timing: Mapping[str, Any] = field(default_factory=dict)  # timings.json, as read
 
-    def to_dict(self) -> dict[str, Any]:
+    def to_dict(self) -> dict[str, object]:
         """Plain JSON-ready data (tuples become lists), without the timings."""
         data = asdict(self)
         del data["timing"]
