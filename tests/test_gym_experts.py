@@ -16,12 +16,18 @@ from pokerirl.cli import app  # noqa: E402
 from pokerirl.gym.experts import (  # noqa: E402
     CONFIG_FILE,
     FINAL_EVAL_SEED,
+    MANIFEST_FILE,
     MANIFEST_KEYS,
     MODEL_FILE,
+    ExpertRecord,
+    ManifestEntry,
     evaluate,
     load_expert,
+    manifest_entry,
     shipped_dir,
+    shipped_experts,
     shipped_manifest,
+    write_manifest,
 )
 from pokerirl.gym.presets import TASKS  # noqa: E402
 
@@ -46,6 +52,8 @@ def acrobot(tmp_path_factory: pytest.TempPathFactory) -> Path:
 @pytest.mark.slow
 def test_expert_folder_records_its_training_and_reloads_to_the_same_returns(acrobot: Path) -> None:
     record = json.loads((acrobot / CONFIG_FILE).read_text())
+    assert ExpertRecord.from_json(record).to_json() == record  # every key, in order
+    assert list(ExpertRecord.from_json(record).to_json()) == list(record)
     assert {**record, "settings": None}.keys() >= set(MANIFEST_KEYS)
     assert (record["env"], record["algo"], record["seed"], record["timesteps"]) == (
         "Acrobot-v1", "ppo", 0, 1536,
@@ -107,6 +115,24 @@ def test_shipped_manifest_matches_the_shipped_files() -> None:
         }
         assert entry["episodes"] == len(record["evaluation"]["returns"]) >= 20
         assert entry["settings"]["hyper"] == record["hyper"]
+
+
+def test_expert_records_and_the_manifest_round_trip_to_the_same_bytes(tmp_path: Path) -> None:
+    for env_id in TASKS:
+        text = (shipped_dir() / env_id / CONFIG_FILE).read_text()
+        record = ExpertRecord.from_json(json.loads(text))
+        assert json.dumps(record.to_json(), indent=2) + "\n" == text
+        assert record.env == env_id and len(record.evaluation.returns) == record.episodes
+        entry = ManifestEntry.from_json(manifest_entry(json.loads(text)))
+        assert entry in shipped_experts() and entry.to_json() == manifest_entry(record.to_json())
+        (tmp_path / env_id).mkdir()
+        (tmp_path / env_id / CONFIG_FILE).write_text(text)
+    # The manifest rebuilt from the records is the shipped one, byte for byte.
+    write_manifest(tmp_path)
+    shipped = (shipped_dir() / MANIFEST_FILE).read_text()
+    assert (tmp_path / MANIFEST_FILE).read_text() == shipped
+    entries = [e.to_json() for e in shipped_experts()]
+    assert json.dumps(entries, indent=2) + "\n" == shipped
 
 
 @pytest.mark.slow

@@ -17,11 +17,13 @@ pytest.importorskip("gymnasium")
 from pokerirl.gym.quality import (  # noqa: E402
     QUALITY_FILE,
     QualityError,
+    RewardQuality,
     Rollouts,
     canonicalize,
     epic_distance,
     make_coverage,
     pearson,
+    read_quality,
     roll_out,
     task_gamma,
     true_reward,
@@ -174,6 +176,20 @@ def test_unknown_task_and_missing_run_are_one_line(tmp_path: Path) -> None:
     assert not (tmp_path / QUALITY_FILE).exists()
 
 
+def test_reward_quality_round_trips_with_null_scores_as_nan() -> None:
+    found = {
+        "format": "pokerirl-reward-quality/1", "env": "Pendulum-v1", "algo": "hairl",
+        "reward_family": "state_action", "pearson_expert": None, "pearson_policy": 0.5,
+        "epic": 0.25, "epic_g": 0.25, "epic_random_baseline": 0.7, "epic_expert_coverage": 0.3,
+        "epic_random_baseline_expert_coverage": 0.71, "gamma": 0.95, "seed": 0, "samples": 10,
+        "coverage": {"size": 4}, "true_reward": {"kind": "exact"},
+        "true_reward_check": {"what": "r"}, "reward_sha256": "ab",
+    }  # fmt: skip
+    quality = RewardQuality.from_json(found)
+    assert math.isnan(quality.pearson_expert) and quality.epic == 0.25
+    assert quality.to_json() == found and list(quality.to_json()) == list(found)
+
+
 @pytest.mark.slow
 def test_a_real_tiny_pendulum_irl_run_is_scored(tmp_path: Path) -> None:
     pytest.importorskip("stable_baselines3")
@@ -208,3 +224,8 @@ def test_a_real_tiny_pendulum_irl_run_is_scored(tmp_path: Path) -> None:
     assert "uniform over the action box" in found["coverage"]["actions"]
     write_reward_quality(run, env_id="Pendulum-v1", samples=400, episodes=2)
     assert (run / QUALITY_FILE).read_bytes() == first  # same inputs, same bytes
+    # The file reads back typed, and writes back the same bytes.
+    typed = read_quality(run)
+    assert typed is not None and typed.reward_family == "state_action"
+    assert json.dumps(typed.to_json(), indent=2, ensure_ascii=False) + "\n" == first.decode()
+    assert typed.to_json() == quality.to_json() == found

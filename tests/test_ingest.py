@@ -22,7 +22,7 @@ from irc_fixtures import (
     write_month,
 )
 from pokerirl.cli import app
-from pokerirl.datasets.ingest import ingest, summary_path
+from pokerirl.datasets.ingest import IngestSummary, ingest, ingest_table, summary_path
 from pokerirl.datasets.table import REQUIRED_COLUMNS
 from pokerirl.encoding import CALL, CHECK, RAISE
 from pokerirl.parsers.irc import IngestError
@@ -75,6 +75,19 @@ def test_summary_file_matches_and_schema_has_required_columns(
     assert str(schema.field("raise_nums").type) == "fixed_size_list<element: int8>[4]"
     assert summary["rows"] == pq.read_metadata(out).num_rows
     assert sum(summary["rows_per_action"].values()) == summary["rows"]
+
+
+def test_the_summary_reads_back_typed_and_writes_the_same_bytes(
+    ingested: tuple[Path, dict], tmp_path: Path
+) -> None:
+    out, summary = ingested
+    text = summary_path(out).read_text()
+    typed = IngestSummary.from_json(json.loads(text))
+    assert json.dumps(typed.to_json(), indent=2) + "\n" == text
+    assert typed.kept_hands == 5 and typed.dropped["duplicate_hand"] == 1
+    assert typed.to_json() == summary
+    again = ingest_table(typed.sources, tmp_path / "again.parquet")
+    assert again.months == typed.months and again.rows == typed.rows
 
 
 def test_seat_comes_from_pdb_not_roster_order(ingested: tuple[Path, dict]) -> None:

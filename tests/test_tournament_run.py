@@ -23,6 +23,7 @@ from pokerirl.tournaments import (
     load_report,
     run_tournament,
 )
+from pokerirl.tournaments.report import FamilySizes, TournamentSettings
 
 HANDS = 2_000
 
@@ -78,13 +79,13 @@ def test_pooled_test_is_over_seed_means_and_families_are_corrected(tmp_path: Pat
         assert m.pooled.p_value == pytest.approx(reference.pvalue, rel=1e-9)
     lines = [s for m in report.matchups for s in m.seeds]
     p = [s.p_value for s in lines]
-    assert report.family["per_seed_tests"] == len(lines) == 8
-    assert report.family["per_seed_threshold"] == pytest.approx(0.05 / 8)
+    assert report.family.per_seed_tests == len(lines) == 8
+    assert report.family.per_seed_threshold == pytest.approx(0.05 / 8)
     np.testing.assert_allclose([s.p_value_bonferroni for s in lines], bonferroni(p))
     np.testing.assert_allclose([s.p_value_holm for s in lines], holm(p))
     assert [s.significant_bonferroni for s in lines] == [x < 0.05 / 8 for x in p]
     pooled = [m.pooled for m in report.matchups]
-    assert report.family["pooled_tests"] == 2
+    assert report.family.pooled_tests == 2
     np.testing.assert_allclose(
         [x.p_value_bonferroni for x in pooled], bonferroni([x.p_value for x in pooled])
     )
@@ -207,3 +208,21 @@ def test_a_killed_run_leaves_whole_seed_files_and_resumes(tmp_path: Path) -> Non
     for line in resumed.matchups[0].seeds:
         if line.seed in saved:
             assert saved[line.seed]["result"]["estimate"]["mbb_per_hand"] == line.mbb_per_hand
+
+
+def test_the_report_reads_back_typed_and_writes_the_same_bytes(tmp_path: Path) -> None:
+    report = run_tournament([("raise", "random")], hands=200, seeds=[1, 2], out=tmp_path)
+    assert report.config == TournamentSettings(
+        hands=200, seeds=(1, 2), duplicate=True, batch_size=report.config.batch_size, alpha=0.05
+    )
+    assert report.family == FamilySizes(
+        per_seed_tests=2, per_seed_threshold=0.025, pooled_tests=1, pooled_threshold=0.05
+    )
+    text = (tmp_path / "report.json").read_text()
+    data = json.loads(text)
+    assert list(data["config"]) == ["hands", "seeds", "duplicate", "batch_size", "alpha"]
+    assert TournamentSettings.from_json(data["config"]).to_json() == data["config"]
+    assert FamilySizes.from_json(data["family"]).to_json() == data["family"]
+    loaded = load_report(tmp_path)
+    assert (loaded.config, loaded.family) == (report.config, report.family)
+    assert json.dumps(loaded.to_dict(), indent=2) + "\n" == text

@@ -23,11 +23,18 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from pokerirl.agents.registry import RLCARD_PREFIX, agent_fingerprint, resolve_agent
+from pokerirl.agents.registry import (
+    CONFIG_FILE,
+    KEPT_FILE,
+    MODEL_FILE,
+    RLCARD_PREFIX,
+    agent_fingerprint,
+    resolve_agent,
+)
 from pokerirl.game.agents import BUILT_IN_AGENTS, Agent
 
-AGENT_FILES = ("model.pt", "config.json")  # what an agent folder's agent is made of (and
-KEPT_FILE = "kept.pt"  # the authors' kept checkpoint, when there is one)
+AGENT_FILES = (MODEL_FILE, CONFIG_FILE)  # what an agent folder's agent is made of (and
+# KEPT_FILE, the authors' kept checkpoint, when there is one)
 
 
 @dataclass(frozen=True, kw_only=True)

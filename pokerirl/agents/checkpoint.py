@@ -21,16 +21,26 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+from collections.abc import Mapping
+from enum import StrEnum
 from pathlib import Path
 from typing import Any
 
 import torch
 
 from pokerirl.agents.dqn import GreedyQAgent, QNetwork
+from pokerirl.agents.registry import CONFIG_FILE, KEPT_FILE, MODEL_FILE
 from pokerirl.atomic import write_bytes, write_torch
 
-MODEL_FILE, CONFIG_FILE, KEPT_FILE = "model.pt", "config.json", "kept.pt"
-PLAYS = ("final", "kept")
+
+class Plays(StrEnum):
+    """Which checkpoint an agent plays: the final model, or the authors' kept one."""
+
+    FINAL = "final"
+    KEPT = "kept"
+
+
+PLAYS: tuple[str, ...] = tuple(Plays)
 METRICS_FILE, CURVE_FILE = "metrics.jsonl", "learning_curve.png"
 FORMAT = "pokerirl-dqn"
 FORMAT_VERSION = 1
@@ -44,7 +54,7 @@ def is_finished(folder: str | os.PathLike[str]) -> bool:
 def save_agent(
     folder: str | os.PathLike[str],
     network: QNetwork,
-    config: dict[str, Any],
+    config: Mapping[str, Any],
     *,
     kept: dict[str, torch.Tensor] | None = None,
 ) -> None:
@@ -96,7 +106,7 @@ def load_agent(folder: str | os.PathLike[str]) -> GreedyQAgent:
     if not is_finished(folder):
         raise ValueError(f"{folder}: not an agent folder (needs {MODEL_FILE} and {CONFIG_FILE})")
     hidden, plays = _read_config(folder / CONFIG_FILE)
-    checkpoint = folder / (KEPT_FILE if plays == "kept" else MODEL_FILE)
+    checkpoint = folder / (KEPT_FILE if plays == Plays.KEPT else MODEL_FILE)
     state = _read_state_dict(checkpoint)
     network = QNetwork(hidden=hidden)
     try:
@@ -140,10 +150,10 @@ def _read_config(path: Path) -> tuple[tuple[int, ...], str]:
         or not all(type(width) is int and width > 0 for width in hidden)
     ):
         raise _bad(path, f"hidden must be a list of positive integers, got {str(hidden)[:60]}")
-    plays = config.get("plays", "final")
+    plays = config.get("plays", Plays.FINAL)
     if plays not in PLAYS:
         raise _bad(path, f"plays must be final or kept, got {str(plays)[:40]!r}")
-    if plays == "kept" and not (path.parent / KEPT_FILE).is_file():
+    if plays == Plays.KEPT and not (path.parent / KEPT_FILE).is_file():
         raise _bad(path, f"plays the kept checkpoint, but there is no {KEPT_FILE}")
     return tuple(hidden), plays
 

@@ -28,6 +28,7 @@ import copy
 import functools
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from enum import StrEnum
 
 import numpy as np
 import torch
@@ -45,7 +46,15 @@ RewardFn = Callable[[np.ndarray, np.ndarray], np.ndarray] | PokerReward
 """A learned reward: f(obs (B, 72) uint8, actions (B,) int64) -> (B,) float rewards, or a
 :class:`pokerirl.agents.rewards.PokerReward` (which may read the cards and legal actions)."""
 
-SELF_PLAY = "self"  # opponent spec: a frozen greedy copy of the learner
+
+
+class Opponent(StrEnum):
+    """Opponent specs that name no agent."""
+
+    SELF = "self"  # a frozen greedy copy of the learner
+
+
+SELF_PLAY = Opponent.SELF
 TRAIN_STREAM = 2  # spawn-key word of the trainer's randomness (deals use 0, match agents 1)
 
 

@@ -11,6 +11,8 @@ from pathlib import Path
 from pokerirl.game.agents import BUILT_IN_AGENTS, Agent, make_agent
 
 RLCARD_PREFIX = "rlcard:"
+# An agent folder's files, named here (torch-free) so that shipping an agent needs no torch.
+MODEL_FILE, CONFIG_FILE, KEPT_FILE = "model.pt", "config.json", "kept.pt"
 
 
 def resolve_agent(spec: str) -> Agent:

@@ -36,7 +36,6 @@ import json
 import os
 from dataclasses import asdict, dataclass
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
@@ -410,17 +409,18 @@ def run_card(
     ``table``, the decision table it was trained on; ``label`` names the table in the card
     (default: ``table``'s path; a worker's scratch copy passes the real table's path)."""
     from pokerirl.agents.rewards import load_reward_source
+    from pokerirl.irl.run import CONFIG_FILE, SPLIT_FILE
 
-    split = json.loads((Path(run_dir) / "split.json").read_text())
+    split = json.loads((Path(run_dir) / SPLIT_FILE).read_text())
     groups = {str(g) for g in split["validation_groups"]}
     states = CardStates.from_table(table, groups=groups, label=label)
-    record = json.loads((Path(run_dir) / "config.json").read_text())
+    record = json.loads((Path(run_dir) / CONFIG_FILE).read_text())
     reward = load_reward_source(run_dir)
     reward.name = f"{record['algo']} reward (seed {record['hyperparameters']['seed']})"
     return reward_card(reward, states)
 
 
-def card_summary(cards: list[RewardCard]) -> dict[str, Any]:
+def card_summary(cards: list[RewardCard]) -> dict[str, object]:
     """Mean and std over runs of a card's numbers, for the study report."""
 
     def stat(values: list[float]) -> dict[str, float]:

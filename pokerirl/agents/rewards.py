@@ -29,16 +29,32 @@ import json
 import os
 from collections.abc import Callable
 from dataclasses import dataclass
+from enum import StrEnum
 from pathlib import Path
 
 import numpy as np
 
 from pokerirl.encoding import MAX_RAISES, NUM_ACTIONS, NUM_ROUNDS, OBS_SIZE, RAISE_OFFSET
 
-TRANSFORMS = ("raw", "centered", "log_softmax")
-RAISE_COUNTS = ("decision", "end-of-hand")
+
+class Transform(StrEnum):
+    """What f becomes over each state's legal actions before the learner sees it."""
+
+    RAW = "raw"
+    CENTERED = "centered"  # minus its mean over the legal actions
+    LOG_SOFTMAX = "log_softmax"
+
+
+class RaiseCounts(StrEnum):
+    """Which raise counts f reads: the state's at the decision, or the hand's at its end."""
+
+    DECISION = "decision"
+    END_OF_HAND = "end-of-hand"
+
+
+TRANSFORMS: tuple[str, ...] = tuple(Transform)
+RAISE_COUNTS: tuple[str, ...] = tuple(RaiseCounts)
 AUTHORS_PREFIX = "authors:"
-REWARD_RUN_FILES = ("reward.pt", "config.json")  # what identifies a learned-reward run
 AUTHORS_FILE = "authors.model"  # a shipped authors: file's name in a worker's folder
 
 
@@ -130,9 +146,9 @@ def transform_values(values: np.ndarray, legal_mask: np.ndarray, transform: str)
         raise ValueError(f"unknown reward transform {transform!r} ({', '.join(TRANSFORMS)})")
     legal_mask = np.asarray(legal_mask, dtype=bool)
     values = np.where(legal_mask, np.asarray(values, dtype=np.float64), np.nan)
-    if transform == "centered":
+    if transform == Transform.CENTERED:
         values = values - np.nanmean(values, axis=1, keepdims=True)
-    elif transform == "log_softmax":
+    elif transform == Transform.LOG_SOFTMAX:
         top = np.nanmax(values, axis=1, keepdims=True)
         values = values - top - np.log(np.nansum(np.exp(values - top), axis=1, keepdims=True))
     return values.astype(np.float32)
@@ -145,11 +161,11 @@ class TransformedReward(PokerReward):
         if transform not in TRANSFORMS:
             raise ValueError(f"unknown reward transform {transform!r} ({', '.join(TRANSFORMS)})")
         self.base, self.transform = base, transform
-        self.name = base.name if transform == "raw" else f"{base.name} ({transform})"
+        self.name = base.name if transform == Transform.RAW else f"{base.name} ({transform})"
         self.fingerprint, self.needs_cards = base.fingerprint, base.needs_cards
 
     def __call__(self, decisions: Decisions, actions: np.ndarray) -> np.ndarray:
-        if self.transform == "raw":
+        if self.transform == Transform.RAW:
             return self.base(decisions, actions)
         values = transform_values(self.base.action_values(decisions), decisions.legal_mask,
                                   self.transform)  # fmt: skip
@@ -157,7 +173,7 @@ class TransformedReward(PokerReward):
 
     def action_values(self, decisions: Decisions) -> np.ndarray:
         values = self.base.action_values(decisions)
-        if self.transform == "raw":
+        if self.transform == Transform.RAW:
             return values
         return transform_values(values, decisions.legal_mask, self.transform)
 
@@ -175,6 +191,8 @@ def _authors_path(spec: str | os.PathLike[str]) -> Path:
 
 def reward_source_files(spec: str | os.PathLike[str]) -> dict[str, bytes]:
     """The bytes of a reward source, to carry to a worker (checked first, in one line)."""
+    from pokerirl.irl.run import REWARD_RUN_FILES
+
     reward_source_fingerprint(spec)
     if is_authors_spec(spec):
         return {AUTHORS_FILE: _authors_path(spec).read_bytes()}
@@ -192,6 +210,7 @@ def reward_source_fingerprint(spec: str | os.PathLike[str]) -> str:
     """``sha256:<hex>`` of an ``authors:`` file, or of a run's ``reward.pt`` and
     ``config.json``; ``ValueError`` (one line) when ``spec`` is neither."""
     from pokerirl.agents.checkpoint import files_fingerprint
+    from pokerirl.irl.run import REWARD_RUN_FILES
 
     if is_authors_spec(spec):
         path = _authors_path(spec)
@@ -209,8 +228,10 @@ def _check_poker_run(run: Path) -> None:
     """``ValueError`` (one line) for a run whose reward is not on poker decisions: a
     Gymnasium run (its task named), or one on other observations or actions. What cannot be
     read is left to :func:`pokerirl.irl.load_reward`, which names the problem."""
+    from pokerirl.irl.run import CONFIG_FILE
+
     try:
-        record = json.loads((run / "config.json").read_bytes())
+        record = json.loads((run / CONFIG_FILE).read_bytes())
         data, architecture = record.get("data") or {}, record.get("architecture") or {}
         task = data.get("env")
         sizes = architecture.get("obs_dim"), architecture["action_space"].get("num_actions")

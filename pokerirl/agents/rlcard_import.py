@@ -17,6 +17,7 @@ import hashlib
 import os
 import re
 import warnings
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
@@ -34,7 +35,7 @@ class UntrustedCheckpointWarning(UserWarning):
     """An RLCard checkpoint is about to be unpickled: it can run any code it holds."""
 
 
-def _read_checkpoint(path: Path) -> dict[str, Any]:
+def _read_checkpoint(path: Path) -> Mapping[str, Any]:
     if not path.is_file():
         raise ValueError(f"{path}: no such RLCard checkpoint file")
     warnings.warn(
@@ -87,7 +88,7 @@ def _convert_state_dict(qnet_state: dict[str, torch.Tensor]) -> dict[str, torch.
     return converted
 
 
-def rlcard_checkpoint_config(checkpoint: dict[str, Any]) -> dict[str, Any]:
+def rlcard_checkpoint_config(checkpoint: Mapping[str, Any]) -> dict[str, float]:
     """The hyper-parameters of an RLCard checkpoint, with its epsilon fields un-swapped."""
     estimator = checkpoint["q_estimator"]
     low, high = checkpoint["epsilon_start"], checkpoint["epsilon_end"]  # min, max: see above
@@ -118,7 +119,7 @@ def load_rlcard_dqn(path: str | os.PathLike[str]) -> GreedyQAgent:
     return _agent_and_checkpoint(Path(path))[0]
 
 
-def _agent_and_checkpoint(path: Path) -> tuple[GreedyQAgent, dict[str, Any]]:
+def _agent_and_checkpoint(path: Path) -> tuple[GreedyQAgent, Mapping[str, Any]]:
     checkpoint = _read_checkpoint(path)
     estimator = checkpoint["q_estimator"]
     network = QNetwork(hidden=tuple(int(width) for width in estimator["mlp_layers"]))

@@ -41,7 +41,9 @@ import json
 import os
 import tempfile
 import time
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
+from enum import StrEnum
 from pathlib import Path
 from typing import Any
 
@@ -57,6 +59,7 @@ from pokerirl.agents.checkpoint import (
     METRICS_FILE,
     MODEL_FILE,
     PLAYS,
+    Plays,
     save_agent,
 )
 from pokerirl.agents.dqn import (
@@ -70,9 +73,10 @@ from pokerirl.agents.dqn import (
 from pokerirl.agents.registry import agent_fingerprint, resolve_agent
 from pokerirl.agents.rewards import (
     RAISE_COUNTS,
-    REWARD_RUN_FILES,  # noqa: F401 - re-exported: pokerirl.agents.train.REWARD_RUN_FILES
     TRANSFORMS,
     PokerReward,
+    RaiseCounts,
+    Transform,
     TransformedReward,
     as_poker_reward,
     landed_spec,
@@ -85,10 +89,26 @@ from pokerirl.errors import report as error_report
 from pokerirl.execution import Backend, read_files, write_files
 from pokerirl.game import make_agent, play_match
 from pokerirl.game.agents import Agent
+from pokerirl.irl.run import REWARD_RUN_FILES  # noqa: F401 - re-exported: pokerirl.agents.train.REWARD_RUN_FILES
 from pokerirl.store import Unit, UnitConflict, UnitOutput, run_units
 
-REWARD_MODES = ("sparse", "learned")
-PROTOCOLS = ("pokerirl", "authors")
+
+class RewardMode(StrEnum):
+    """What an agent learns from: the payoff at the end of a hand, or a learned reward."""
+
+    SPARSE = "sparse"
+    LEARNED = "learned"
+
+
+class TrainingProtocol(StrEnum):
+    """How an agent is evaluated and kept: ours (duplicate deals), or the authors'."""
+
+    POKERIRL = "pokerirl"
+    AUTHORS = "authors"
+
+
+REWARD_MODES: tuple[str, ...] = tuple(RewardMode)
+PROTOCOLS: tuple[str, ...] = tuple(TrainingProtocol)
 TIMINGS_FILE = "timings.json"
 AGENT_OUTPUTS = (MODEL_FILE, CONFIG_FILE, METRICS_FILE, CURVE_FILE)
 KEEP_RATIO = 0.8  # the authors' rule: keep a model whose payoff beats 0.8 x the best so far
@@ -110,7 +130,7 @@ class TrainConfig:
 
     hands: int
     seed: int
-    reward: str = "sparse"
+    reward: str = RewardMode.SPARSE
     reward_run: str | None = None
     payoff_weight: float = 0.0
     opponent: str = "random"
@@ -118,17 +138,17 @@ class TrainConfig:
     eval_hands: int = 20_000
     eval_seed: int = 1_000_003
     dqn: DQNConfig = field(default_factory=DQNConfig)
-    reward_transform: str = "raw"
-    raise_counts: str = "decision"
-    protocol: str = "pokerirl"
-    play: str = "final"
+    reward_transform: str = Transform.RAW
+    raise_counts: str = RaiseCounts.DECISION
+    protocol: str = TrainingProtocol.POKERIRL
+    play: str = Plays.FINAL
 
     def __post_init__(self) -> None:
         if self.reward not in REWARD_MODES:
             raise ValueError(f"unknown reward mode {self.reward!r} (sparse or learned)")
-        if self.reward == "sparse" and self.reward_run is not None:
+        if self.reward == RewardMode.SPARSE and self.reward_run is not None:
             raise ValueError("--reward-run needs --reward learned")
-        if self.reward == "sparse" and self.payoff_weight != 0.0:
+        if self.reward == RewardMode.SPARSE and self.payoff_weight != 0.0:
             raise ValueError("--payoff-weight needs --reward learned")
         if not 0.0 <= self.payoff_weight <= 1.0:
             raise ValueError(f"payoff weight must be in [0, 1], got {self.payoff_weight}")
@@ -138,7 +158,7 @@ class TrainConfig:
             raise ValueError("seeds must be non-negative")
         if self.protocol not in PROTOCOLS:
             raise ValueError(f"unknown protocol {self.protocol!r} ({', '.join(PROTOCOLS)})")
-        duplicate = self.protocol == "pokerirl"
+        duplicate = self.protocol == TrainingProtocol.POKERIRL
         if self.eval_hands < 2 or (duplicate and self.eval_hands % 2):
             raise ValueError(f"eval_hands must be even and at least 2, got {self.eval_hands}")
         if self.reward_transform not in TRANSFORMS:
@@ -147,13 +167,13 @@ class TrainConfig:
             )
         if self.raise_counts not in RAISE_COUNTS:
             raise ValueError(f"--raise-counts must be one of {', '.join(RAISE_COUNTS)}")
-        if self.reward == "sparse" and (
-            self.reward_transform != "raw" or self.raise_counts != "decision"
+        if self.reward == RewardMode.SPARSE and (
+            self.reward_transform != Transform.RAW or self.raise_counts != RaiseCounts.DECISION
         ):
             raise ValueError("--reward-transform and --raise-counts need --reward learned")
         if self.play not in PLAYS:
             raise ValueError(f"--play must be one of {', '.join(PLAYS)}")
-        if self.play == "kept" and self.protocol != "authors":
+        if self.play == Plays.KEPT and self.protocol != TrainingProtocol.AUTHORS:
             raise ValueError("--play kept needs --protocol authors (its kept checkpoint)")
 
 
@@ -165,7 +185,7 @@ AUTHORS_DQN = DQNConfig(
     epsilon_decay_steps=5_000,
     concurrent_hands=1,  # one hand at a time, as RLCard plays (evaluation points fall on it)
 )
-AGENT_PRESETS: dict[str, dict[str, Any]] = {
+AGENT_PRESETS: dict[str, Mapping[str, Any]] = {
     # Ours: 50,000 hands, RLCard's constructor defaults but train_every 16 (docs/agents.md).
     "default": {"hands": 50_000},
     # The authors' train_rl.py (silue-dev/hairl) with their DQNAgent subclass's settings:
@@ -175,11 +195,93 @@ AGENT_PRESETS: dict[str, dict[str, Any]] = {
         "hands": 5_000,
         "eval_every": 100,
         "eval_hands": 1_000,
-        "protocol": "authors",
-        "play": "kept",
+        "protocol": TrainingProtocol.AUTHORS,
+        "play": Plays.KEPT,
         "dqn": AUTHORS_DQN,
     },
 }
+
+
+@dataclass(frozen=True, kw_only=True)
+class Score:
+    """The greedy policy's result against one opponent."""
+
+    mbb_per_hand: float
+    std_error: float
+
+    def to_json(self) -> dict[str, float]:
+        return {"mbb_per_hand": self.mbb_per_hand, "std_error": self.std_error}
+
+    @classmethod
+    def from_json(cls, data: Mapping[str, Any]) -> Score:
+        return cls(mbb_per_hand=data["mbb_per_hand"], std_error=data["std_error"])
+
+
+@dataclass(frozen=True, kw_only=True)
+class MetricsLine:
+    """One evaluation during training: a line of ``metrics.jsonl``, and the ``final`` and
+    ``kept`` of an agent's ``config.json``. ``eval`` maps each opponent's label (``random``
+    first) to its score; ``keep_rule`` (the authors' protocol only) says whether the line was
+    offered to their keep rule."""
+
+    hands: int
+    transitions: int
+    updates: int
+    epsilon: float
+    loss: float | None  # None before the first update (JSON has no NaN)
+    eval: Mapping[str, Score]
+    keep_rule: bool | None = None
+
+    def to_json(self) -> dict[str, object]:
+        """The line as written, keys in this order (``keep_rule`` only when set)."""
+        found: dict[str, object] = {
+            "hands": self.hands,
+            "transitions": self.transitions,
+            "updates": self.updates,
+            "epsilon": self.epsilon,
+            "loss": self.loss,
+            "eval": {label: score.to_json() for label, score in self.eval.items()},
+        }
+        if self.keep_rule is not None:
+            found["keep_rule"] = self.keep_rule
+        return found
+
+    @classmethod
+    def from_json(cls, data: Mapping[str, Any]) -> MetricsLine:
+        return cls(
+            hands=data["hands"],
+            transitions=data["transitions"],
+            updates=data["updates"],
+            epsilon=data["epsilon"],
+            loss=data["loss"],
+            eval={label: Score.from_json(score) for label, score in data["eval"].items()},
+            keep_rule=data.get("keep_rule"),
+        )
+
+
+@dataclass(frozen=True, kw_only=True)
+class Timings:
+    """An agent's ``timings.json`` (never fingerprinted): the whole run, and the seconds
+    since the start at each evaluation."""
+
+    seconds: float
+    hands_per_second: float | None
+    evaluations: tuple[tuple[int, float], ...]  # (hands, seconds)
+
+    def to_json(self) -> dict[str, object]:
+        return {
+            "seconds": self.seconds,
+            "hands_per_second": self.hands_per_second,
+            "evaluations": [{"hands": h, "seconds": s} for h, s in self.evaluations],
+        }
+
+    @classmethod
+    def from_json(cls, data: Mapping[str, Any]) -> Timings:
+        return cls(
+            seconds=data["seconds"],
+            hands_per_second=data["hands_per_second"],
+            evaluations=tuple((e["hands"], e["seconds"]) for e in data["evaluations"]),
+        )
 
 
 def agent_preset(name: str, **overrides: Any) -> TrainConfig:
@@ -252,19 +354,21 @@ def reward_run_fingerprint(run_dir: str | os.PathLike[str]) -> str:
     return reward_source_fingerprint(run_dir)
 
 
-def load_reward_fn(run_dir: str | os.PathLike[str], transform: str = "raw") -> PokerReward:
+def load_reward_fn(
+    run_dir: str | os.PathLike[str], transform: str = Transform.RAW
+) -> PokerReward:
     """f_θ of a run folder or ``authors:FILE``, after ``transform`` over the legal actions."""
     return TransformedReward(load_reward_source(run_dir), transform)
 
 
 def _evaluate(
-    learner: DQNLearner, opponents: dict[str, Any], config: TrainConfig, index: int
-) -> dict[str, dict[str, float]]:
+    learner: DQNLearner, opponents: Mapping[str, Agent], config: TrainConfig, index: int
+) -> dict[str, Score]:
     """The greedy policy against each opponent: duplicate hands of the fixed evaluation seed,
     or, for the authors' protocol, fresh games (seed ``eval_seed + index``) with seats drawn
     per game, as RLCard's ``tournament``."""
     greedy = learner.greedy_agent()
-    authors = config.protocol == "authors"
+    authors = config.protocol == TrainingProtocol.AUTHORS
     results = {}
     for label, opponent in opponents.items():
         result = play_match(
@@ -275,7 +379,7 @@ def _evaluate(
             duplicate=not authors,
             seating="random" if authors else "alternate",
         )
-        results[label] = {"mbb_per_hand": result.mbb_per_hand, "std_error": result.std_error}
+        results[label] = Score(mbb_per_hand=result.mbb_per_hand, std_error=result.std_error)
     return results
 
 
@@ -289,14 +393,14 @@ def evaluation_points(config: TrainConfig) -> list[int]:
     >>> evaluation_points(TrainConfig(hands=250, seed=0, eval_every=100, protocol="authors"))
     [1, 101, 201, 250]
     """
-    if config.protocol == "authors":
+    if config.protocol == TrainingProtocol.AUTHORS:
         points = list(range(1, config.hands + 1, config.eval_every))
     else:
         points = list(range(config.eval_every, config.hands, config.eval_every))
     return points if points and points[-1] == config.hands else [*points, config.hands]
 
 
-def plot_learning_curve(metrics: list[dict[str, Any]], path: Path) -> None:
+def plot_learning_curve(metrics: Sequence[MetricsLine], path: Path) -> None:
     """mbb/h (± one standard error) of every evaluation against training hands, as a PNG."""
     import matplotlib
 
@@ -304,10 +408,10 @@ def plot_learning_curve(metrics: list[dict[str, Any]], path: Path) -> None:
     import matplotlib.pyplot as plt
 
     figure, axes = plt.subplots(figsize=(6, 4))
-    for label in metrics[0]["eval"]:
-        hands = [m["hands"] for m in metrics]
-        mbb = np.array([m["eval"][label]["mbb_per_hand"] for m in metrics])
-        error = np.array([m["eval"][label]["std_error"] for m in metrics])
+    for label in metrics[0].eval:
+        hands = [m.hands for m in metrics]
+        mbb = np.array([m.eval[label].mbb_per_hand for m in metrics])
+        error = np.array([m.eval[label].std_error for m in metrics])
         axes.plot(hands, mbb, marker="o", label=f"vs {label}")
         axes.fill_between(hands, mbb - error, mbb + error, alpha=0.25)
     axes.axhline(0.0, color="grey", linewidth=0.8)
@@ -329,14 +433,31 @@ def train_agent(
     overwrite: bool = False,
     backend: Backend | None = None,
 ) -> dict[str, Any] | None:
-    """Train one agent into the folder ``out``; return its last evaluation's metrics line,
-    or None when ``out`` already holds this agent (same fingerprint).
+    """Train one agent into the folder ``out``; return its last evaluation's metrics line
+    as JSON (:func:`train_agent_metrics` returns it typed), or None when ``out`` already
+    holds this agent (same fingerprint).
 
     In learned mode, ``reward_fn`` is f_θ (then the agent trains in this process); without
     it, f_θ is loaded from ``config.reward_run``. ``out`` is replaced only at the end, whole;
     a finished agent of other settings is refused unless ``overwrite``. ``backend``: where
     it trains and on how many torch threads (default: here, on one).
     """
+    line = train_agent_metrics(
+        out, config, reward_fn=reward_fn, progress=progress, overwrite=overwrite, backend=backend
+    )
+    return None if line is None else line.to_json()
+
+
+def train_agent_metrics(
+    out: str | os.PathLike[str],
+    config: TrainConfig,
+    *,
+    reward_fn: RewardFn | None = None,
+    progress: bool = False,
+    overwrite: bool = False,
+    backend: Backend | None = None,
+) -> MetricsLine | None:
+    """:func:`train_agent`, its last evaluation typed."""
     return _train_many(
         {config.seed: (Path(out), config)},
         backend=backend or Backend(),
@@ -360,8 +481,26 @@ def train_seeds(
     ``jobs`` local processes).
 
     Seeds already finished with the same settings are reused (their value is ``None``); the
-    others map to their last evaluation. One progress bar counts seeds.
+    others map to their last evaluation, as JSON (:func:`train_seeds_metrics`: typed). One
+    progress bar counts seeds.
     """
+    lines = train_seeds_metrics(
+        out, config, seeds, jobs=jobs, progress=progress, overwrite=overwrite, backend=backend
+    )
+    return {seed: None if line is None else line.to_json() for seed, line in lines.items()}
+
+
+def train_seeds_metrics(
+    out: str | os.PathLike[str],
+    config: TrainConfig,
+    seeds: list[int],
+    *,
+    jobs: int = 1,
+    progress: bool = False,
+    overwrite: bool = False,
+    backend: Backend | None = None,
+) -> dict[int, MetricsLine | None]:
+    """:func:`train_seeds`, the last evaluations typed."""
     if jobs < 1:
         raise ValueError(f"jobs must be at least 1, got {jobs}")
     out = Path(out)
@@ -391,7 +530,7 @@ class _TrainUnit:
 
 def agent_unit_config(
     config: TrainConfig, *, reward_fingerprint: str | None, opponent: str, threads: int
-) -> dict[str, Any]:
+) -> dict[str, object]:
     """Everything that determines an agent's bytes, fingerprinted in its ``unit.json``.
 
     Inputs count by content (the reward run's and the opponent's fingerprints), not by path.
@@ -423,7 +562,7 @@ def _train_many(
     reward_fn: RewardFn | None,
     overwrite: bool,
     progress: bool,
-) -> dict[int, dict[str, Any] | None]:
+) -> dict[int, MetricsLine | None]:
     """Train the agents not already finished, each into its folder; reused ones map to None."""
     if not units:
         return {}
@@ -431,13 +570,14 @@ def _train_many(
     # Bad input fails here, in one line, before any worker starts.
     reward_files: dict[str, bytes] = {}
     reward_print = None
-    if first.reward == "learned":
+    if first.reward == RewardMode.LEARNED:
         if first.reward_run is None:
             raise ValueError("--reward learned needs --reward-run RUN_DIR (or authors:FILE)")
         reward_print = reward_run_fingerprint(first.reward_run)
         if reward_fn is None:
             load_reward_fn(first.reward_run)  # errors name the user's files, not a worker's copy
             reward_files = reward_source_files(first.reward_run)
+    opponent_print: str
     if first.opponent == SELF_PLAY:
         opponent, opponent_print = None, SELF_PLAY
     else:
@@ -488,13 +628,13 @@ def _advised(error: UnitConflict) -> str:
     return str(error) if found is None else found[1]
 
 
-def _train_unit(unit: _TrainUnit, reward_fn: RewardFn | None = None) -> UnitOutput[dict[str, Any]]:
+def _train_unit(unit: _TrainUnit, reward_fn: RewardFn | None = None) -> UnitOutput[MetricsLine]:
     """Train one agent in a private folder and return its files, its timings (never
     fingerprinted) and its last metrics line (runs in a worker)."""
     config = unit.config
     reward: PokerReward | None = None
     with tempfile.TemporaryDirectory(prefix="pokerirl-agent-") as private:
-        if config.reward == "learned":
+        if config.reward == RewardMode.LEARNED:
             if reward_fn is None:
                 landed = write_files(Path(private, "reward-run"), dict(unit.reward_files))
                 reward = load_reward_source(landed_spec(str(config.reward_run), landed))
@@ -518,7 +658,7 @@ def _train_unit(unit: _TrainUnit, reward_fn: RewardFn | None = None) -> UnitOutp
         )
         kept = (KEPT_FILE,) if (out / KEPT_FILE).is_file() else ()
         files = read_files(out, (*AGENT_OUTPUTS, *kept))
-    timed = {TIMINGS_FILE: (json.dumps(timings, indent=2) + "\n").encode()}
+    timed = {TIMINGS_FILE: (json.dumps(timings.to_json(), indent=2) + "\n").encode()}
     return UnitOutput(files=files, unhashed=timed, extra=summary)
 
 
@@ -530,10 +670,10 @@ class _Keeper:
 
     best: float = float("-inf")
     state: dict[str, torch.Tensor] | None = None
-    line: dict[str, Any] | None = None
+    line: MetricsLine | None = None
 
-    def offer(self, learner: DQNLearner, line: dict[str, Any]) -> None:
-        payoff = line["eval"]["random"]["mbb_per_hand"]
+    def offer(self, learner: DQNLearner, line: MetricsLine) -> None:
+        payoff = line.eval["random"].mbb_per_hand
         if payoff > KEEP_RATIO * self.best:
             self.state = {k: v.detach().clone() for k, v in learner.q_net.state_dict().items()}
             self.line = line
@@ -549,22 +689,21 @@ def _train_into(
     opponent: Agent | str,
     threads: int,
     progress: bool,
-) -> tuple[dict[str, Any], dict[str, Any]]:
+) -> tuple[MetricsLine, Timings]:
     """Train into the new folder ``out``; return the last metrics line and the timings."""
-    self_play = opponent == SELF_PLAY
     # The frozen self-play copy changes all the time: evaluate against random only then.
-    opponents: dict[str, Any] = {"random": make_agent("random")}
-    if not self_play and config.opponent != "random":
+    opponents: dict[str, Agent] = {"random": make_agent("random")}
+    if not isinstance(opponent, str) and config.opponent != "random":
         opponents[config.opponent] = opponent
 
     out.mkdir(parents=True)
     metrics_path = out / METRICS_FILE
     metrics_path.write_text("")
-    metrics: list[dict[str, Any]] = []
+    metrics: list[MetricsLine] = []
     seconds: list[float] = []
     started = time.perf_counter()
     points = evaluation_points(config)
-    keeper = _Keeper() if config.protocol == "authors" else None
+    keeper = _Keeper() if config.protocol == TrainingProtocol.AUTHORS else None
 
     def evaluate(hands_done: int, learner: DQNLearner) -> None:
         due = [p for p in points if p <= hands_done]
@@ -572,23 +711,25 @@ def _train_into(
             return
         del points[: len(due)]
         seconds.append(round(time.perf_counter() - started, 3))  # timings.json, not here
-        line = {
-            "hands": hands_done,
-            "transitions": learner.total_t,
-            "updates": learner.train_t,
-            "epsilon": epsilon_at(config.dqn, learner.total_t),
-            "loss": None if np.isnan(learner.last_loss) else learner.last_loss,  # JSON has no NaN
-            "eval": _evaluate(learner, opponents, config, len(metrics)),
-        }
+        keep_rule = None
         if keeper is not None:
             # The authors never evaluate their last hands' model: the end is not offered.
             is_final = hands_done == config.hands and (config.hands - 1) % config.eval_every
-            line["keep_rule"] = not is_final
-            if not is_final:
-                keeper.offer(learner, line)
+            keep_rule = not is_final
+        line = MetricsLine(
+            hands=hands_done,
+            transitions=learner.total_t,
+            updates=learner.train_t,
+            epsilon=epsilon_at(config.dqn, learner.total_t),
+            loss=None if np.isnan(learner.last_loss) else learner.last_loss,
+            eval=_evaluate(learner, opponents, config, len(metrics)),
+            keep_rule=keep_rule,
+        )
+        if keeper is not None and keep_rule:
+            keeper.offer(learner, line)
         metrics.append(line)
         with metrics_path.open("a") as stream:
-            stream.write(json.dumps(line) + "\n")
+            stream.write(json.dumps(line.to_json()) + "\n")
         plot_learning_curve(metrics, out / CURVE_FILE)
 
     learner = train_dqn(
@@ -627,17 +768,15 @@ def _train_into(
             "protocol": config.protocol,
         },
         "dqn": dataclasses.asdict(config.dqn),
-        "final": metrics[-1],
+        "final": metrics[-1].to_json(),
         "plays": config.play,
-        "kept": None if keeper is None else keeper.line,
+        "kept": None if keeper is None or keeper.line is None else keeper.line.to_json(),
     }
     save_agent(out, learner.q_net, record, kept=None if keeper is None else keeper.state)
     total = time.perf_counter() - started
-    timings = {
-        "seconds": round(total, 3),
-        "hands_per_second": round(config.hands / total, 1) if total > 0 else None,
-        "evaluations": [
-            {"hands": m["hands"], "seconds": t} for m, t in zip(metrics, seconds, strict=True)
-        ],
-    }
+    timings = Timings(
+        seconds=round(total, 3),
+        hands_per_second=round(config.hands / total, 1) if total > 0 else None,
+        evaluations=tuple((m.hands, t) for m, t in zip(metrics, seconds, strict=True)),
+    )
     return metrics[-1], timings

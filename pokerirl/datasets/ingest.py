@@ -9,8 +9,9 @@ import json
 import os
 import shutil
 import tempfile
-from collections.abc import Iterator, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from contextlib import contextmanager
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -35,13 +36,70 @@ from pokerirl.parsers.irc import (
 # Dictionary encoding and statistics only where they pay: the obs and mask lists are most of
 # the bytes, and encoding them is most of the write time.
 _STRING_COLUMNS = ["hand_id", "player", "action", "hole_cards", "board", "channel"]
-PARQUET_OPTIONS: dict[str, Any] = {
+PARQUET_OPTIONS: Mapping[str, Any] = {
     "compression": "zstd",
     "compression_level": 1,
     "use_dictionary": _STRING_COLUMNS,
     "write_statistics": ["hand_id", "timestamp", "player", "street", "action_id", "channel"],
 }
+_WORK_TABLE, _WORK_SUMMARY = "table.parquet", "summary.json"  # inside the private work folder
 SPILL_BYTES = 512 * 1024 * 1024  # months held in memory before they go to temporary parts
+
+
+@dataclass(frozen=True, kw_only=True)
+class IngestSummary:
+    """Where every hand went: ``TABLE.summary.json``, keys in this order."""
+
+    table: str
+    sources: tuple[str, ...]
+    months: tuple[str, ...]
+    hands_read: Mapping[str, int]  # per channel
+    hands_read_total: int
+    heads_up_hands: int
+    kept_hands: int
+    rows: int
+    rows_per_action: Mapping[str, int]
+    dropped: Mapping[str, int]  # per reason
+    buckets_total: int
+    buckets_add_up: bool
+    inconsistent_reasons: Mapping[str, int]
+    skipped_channels: Mapping[str, int]
+    malformed_lines: int
+    malformed_examples: tuple[str, ...]
+    decisions_dropped_concealed: int
+    single_blind_hands: int
+    chips_mismatch_hands: int
+    orphan_pdb_lines: int
+
+    def to_json(self) -> dict[str, object]:
+        return {
+            "table": self.table,
+            "sources": list(self.sources),
+            "months": list(self.months),
+            "hands_read": dict(self.hands_read),
+            "hands_read_total": self.hands_read_total,
+            "heads_up_hands": self.heads_up_hands,
+            "kept_hands": self.kept_hands,
+            "rows": self.rows,
+            "rows_per_action": dict(self.rows_per_action),
+            "dropped": dict(self.dropped),
+            "buckets_total": self.buckets_total,
+            "buckets_add_up": self.buckets_add_up,
+            "inconsistent_reasons": dict(self.inconsistent_reasons),
+            "skipped_channels": dict(self.skipped_channels),
+            "malformed_lines": self.malformed_lines,
+            "malformed_examples": list(self.malformed_examples),
+            "decisions_dropped_concealed": self.decisions_dropped_concealed,
+            "single_blind_hands": self.single_blind_hands,
+            "chips_mismatch_hands": self.chips_mismatch_hands,
+            "orphan_pdb_lines": self.orphan_pdb_lines,
+        }
+
+    @classmethod
+    def from_json(cls, data: Mapping[str, Any]) -> IngestSummary:
+        listed = ("sources", "months", "malformed_examples")
+        found: dict[str, Any] = {k: tuple(v) if k in listed else v for k, v in data.items()}
+        return cls(**found)
 
 
 def summary_path(table_path: str | os.PathLike[str]) -> Path:
@@ -56,7 +114,18 @@ def ingest(
     *,
     strict: bool = False,
     progress: bool = False,
-) -> dict[str, Any]:
+) -> dict[str, object]:
+    """:func:`ingest_table`, its summary as JSON (as the file holds it)."""
+    return ingest_table(sources, out, strict=strict, progress=progress).to_json()
+
+
+def ingest_table(
+    sources: Sequence[str | os.PathLike[str]],
+    out: str | os.PathLike[str],
+    *,
+    strict: bool = False,
+    progress: bool = False,
+) -> IngestSummary:
     """Read IRC sources, write the table to ``out`` and its summary beside it; return the summary.
 
     Months are parsed one at a time; their tables are held until they pass ``SPILL_BYTES``,
@@ -120,7 +189,7 @@ def _ingest(
     *,
     strict: bool,
     progress: bool,
-) -> dict[str, Any]:
+) -> IngestSummary:
     stats = IngestStats(strict=strict)
     seen: dict[str, np.ndarray] = {}
     # (month key, arrival order, table in memory or spilled part file)
@@ -142,7 +211,7 @@ def _ingest(
                 months = [_spill(item, work_dir) for item in months]
                 in_memory = 0
     summary = _summary(stats, sources, out_path, counts)
-    table_file, summary_file = work_dir / "table.parquet", work_dir / "summary.json"
+    table_file, summary_file = work_dir / _WORK_TABLE, work_dir / _WORK_SUMMARY
     with (
         _file(table_file, "wb") as sink,
         pq.ParquetWriter(sink, SCHEMA, **PARQUET_OPTIONS) as writer,
@@ -152,7 +221,7 @@ def _ingest(
                 with _file(data, "rb") as part:
                     data = pq.read_table(part)
             writer.write_table(data)
-    summary_file.write_text(json.dumps(summary, indent=2) + "\n", encoding="utf-8")
+    summary_file.write_text(json.dumps(summary.to_json(), indent=2) + "\n", encoding="utf-8")
     # Files in the work folder are 0666 less the umask already (mkdtemp only restricts the
     # folder). Old summary out, new table in, new summary in: see ingest().
     summary_path(out_path).unlink(missing_ok=True)
@@ -191,28 +260,28 @@ def _summary(
     sources: Sequence[str | os.PathLike[str]],
     out_path: Path,
     rows_per_action: dict[str, int],
-) -> dict[str, Any]:
+) -> IngestSummary:
     hands_total = sum(stats.hands_read.values())
     buckets = {KEPT: stats.buckets[KEPT]} | {r: stats.buckets[r] for r in DROP_REASONS}
-    return {
-        "table": str(out_path),
-        "sources": [str(s) for s in sources],
-        "months": stats.months,
-        "hands_read": dict(sorted(stats.hands_read.items())),
-        "hands_read_total": hands_total,
-        "heads_up_hands": stats.heads_up_hands,
-        "kept_hands": stats.buckets[KEPT],
-        "rows": sum(rows_per_action.values()),
-        "rows_per_action": rows_per_action,
-        "dropped": {reason: stats.buckets[reason] for reason in DROP_REASONS},
-        "buckets_total": sum(buckets.values()),
-        "buckets_add_up": sum(buckets.values()) == hands_total,
-        "inconsistent_reasons": dict(stats.inconsistent_reasons.most_common()),
-        "skipped_channels": dict(sorted(stats.skipped_channels.items())),
-        "malformed_lines": stats.malformed_lines,
-        "malformed_examples": stats.malformed_examples,
-        "decisions_dropped_concealed": stats.decisions_concealed,
-        "single_blind_hands": stats.single_blind_hands,
-        "chips_mismatch_hands": stats.chips_mismatch_hands,
-        "orphan_pdb_lines": stats.orphan_pdb_lines,
-    }
+    return IngestSummary(
+        table=str(out_path),
+        sources=tuple(str(s) for s in sources),
+        months=tuple(stats.months),
+        hands_read=dict(sorted(stats.hands_read.items())),
+        hands_read_total=hands_total,
+        heads_up_hands=stats.heads_up_hands,
+        kept_hands=stats.buckets[KEPT],
+        rows=sum(rows_per_action.values()),
+        rows_per_action=rows_per_action,
+        dropped={reason: stats.buckets[reason] for reason in DROP_REASONS},
+        buckets_total=sum(buckets.values()),
+        buckets_add_up=sum(buckets.values()) == hands_total,
+        inconsistent_reasons=dict(stats.inconsistent_reasons.most_common()),
+        skipped_channels=dict(sorted(stats.skipped_channels.items())),
+        malformed_lines=stats.malformed_lines,
+        malformed_examples=tuple(stats.malformed_examples),
+        decisions_dropped_concealed=stats.decisions_concealed,
+        single_blind_hands=stats.single_blind_hands,
+        chips_mismatch_hands=stats.chips_mismatch_hands,
+        orphan_pdb_lines=stats.orphan_pdb_lines,
+    )

@@ -19,6 +19,7 @@ import json
 import os
 import pickle
 import warnings
+from collections.abc import Mapping
 from dataclasses import asdict, dataclass, replace
 from importlib import resources
 from pathlib import Path
@@ -44,17 +45,139 @@ FINAL_EVAL_SEED = 1_000_000
 
 @dataclass(frozen=True, kw_only=True)
 class Expert:
-    """A loaded expert: its SB3 policy (eval mode, CPU) and its config record."""
+    """A loaded expert: its SB3 policy (eval mode, CPU) and its config record, as read (an
+    expert folder needs only ``env``, ``algo`` and ``policy_kwargs`` to load; one written by
+    :func:`train_expert` reads as an :class:`ExpertRecord`)."""
 
     env_id: str
     algo: str
     policy: BasePolicy
-    record: dict[str, Any]
+    record: Mapping[str, Any]
 
     def act(self, obs: np.ndarray, *, deterministic: bool = True) -> np.ndarray:
         """Actions for a batch of observations ``(n, obs_dim)``."""
         actions, _ = self.policy.predict(obs, deterministic=deterministic)
         return actions
+
+
+@dataclass(frozen=True, kw_only=True)
+class ExpertEvaluation:
+    """How an expert was chosen and scored: the periodic evaluations during training (the
+    best state is kept), then deterministic episodes on fresh seeds."""
+
+    periodic_every: int
+    periodic_episodes: int
+    best_periodic_return: float
+    final_seed: int
+    deterministic: bool
+    returns: tuple[float, ...]
+
+    def to_json(self) -> dict[str, object]:
+        return {
+            "periodic_every": self.periodic_every,
+            "periodic_episodes": self.periodic_episodes,
+            "best_periodic_return": self.best_periodic_return,
+            "final_seed": self.final_seed,
+            "deterministic": self.deterministic,
+            "returns": list(self.returns),
+        }
+
+    @classmethod
+    def from_json(cls, data: Mapping[str, Any]) -> ExpertEvaluation:
+        return cls(
+            periodic_every=data["periodic_every"],
+            periodic_episodes=data["periodic_episodes"],
+            best_periodic_return=data["best_periodic_return"],
+            final_seed=data["final_seed"],
+            deterministic=data["deterministic"],
+            returns=tuple(data["returns"]),
+        )
+
+
+@dataclass(frozen=True, kw_only=True)
+class ManifestEntry:
+    """One shipped expert in ``manifest.json``: :data:`MANIFEST_KEYS`, then ``settings``
+    (``hyper`` first, then the hyper-parameters it was trained with)."""
+
+    env: str
+    algo: str
+    return_mean: float
+    return_std: float
+    episodes: int
+    seed: int
+    timesteps: int
+    settings: Mapping[str, Any]
+
+    def to_json(self) -> dict[str, object]:
+        return {
+            "env": self.env,
+            "algo": self.algo,
+            "return_mean": self.return_mean,
+            "return_std": self.return_std,
+            "episodes": self.episodes,
+            "seed": self.seed,
+            "timesteps": self.timesteps,
+            "settings": dict(self.settings),
+        }
+
+    @classmethod
+    def from_json(cls, data: Mapping[str, Any]) -> ManifestEntry:
+        return cls(**{key: data[key] for key in (*MANIFEST_KEYS, "settings")})
+
+
+@dataclass(frozen=True, kw_only=True)
+class ExpertRecord:
+    """An expert folder's ``config.json``, as :func:`train_expert` writes it."""
+
+    env: str
+    algo: str
+    return_mean: float
+    return_std: float
+    episodes: int
+    seed: int
+    timesteps: int
+    target: float  # the authors' expert return
+    hyper: str
+    settings: Mapping[str, Any]
+    policy_kwargs: Mapping[str, Any]
+    evaluation: ExpertEvaluation
+    versions: Mapping[str, str | None]
+
+    def to_json(self) -> dict[str, object]:
+        return {
+            "env": self.env,
+            "algo": self.algo,
+            "return_mean": self.return_mean,
+            "return_std": self.return_std,
+            "episodes": self.episodes,
+            "seed": self.seed,
+            "timesteps": self.timesteps,
+            "target": self.target,
+            "hyper": self.hyper,
+            "settings": dict(self.settings),
+            "policy_kwargs": dict(self.policy_kwargs),
+            "evaluation": self.evaluation.to_json(),
+            "versions": dict(self.versions),
+        }
+
+    @classmethod
+    def from_json(cls, data: Mapping[str, Any]) -> ExpertRecord:
+        return cls(
+            env=data["env"],
+            algo=data["algo"],
+            return_mean=data["return_mean"],
+            return_std=data["return_std"],
+            episodes=data["episodes"],
+            seed=data["seed"],
+            timesteps=data["timesteps"],
+            target=data["target"],
+            hyper=data["hyper"],
+            settings=data["settings"],
+            policy_kwargs=data["policy_kwargs"],
+            evaluation=ExpertEvaluation.from_json(data["evaluation"]),
+            versions=data["versions"],
+        )
+
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -102,7 +225,7 @@ def make_env(env_id: str) -> gymnasium.Env:
 # --------------------------------------------------------------------------- architecture
 
 
-def policy_kwargs(settings: RLSettings) -> dict[str, Any]:
+def policy_kwargs(settings: RLSettings) -> dict[str, object]:
     """The JSON form of the SB3 ``policy_kwargs`` for these settings (see :func:`_sb3_kwargs`)."""
     if settings.dqn is not None:
         return {"net_arch": list(settings.dqn.net_arch)}
@@ -118,7 +241,7 @@ def policy_kwargs(settings: RLSettings) -> dict[str, Any]:
     }
 
 
-def _sb3_kwargs(kwargs: dict[str, Any]) -> dict[str, Any]:
+def _sb3_kwargs(kwargs: Mapping[str, Any]) -> dict[str, Any]:
     activations = {"tanh": torch.nn.Tanh, "leaky_relu": torch.nn.LeakyReLU, "relu": torch.nn.ReLU}
     out = dict(kwargs)
     if "activation_fn" in out:
@@ -126,7 +249,7 @@ def _sb3_kwargs(kwargs: dict[str, Any]) -> dict[str, Any]:
     return out
 
 
-def build_policy(env_id: str, algo: str, kwargs: dict[str, Any]) -> BasePolicy:
+def build_policy(env_id: str, algo: str, kwargs: Mapping[str, Any]) -> BasePolicy:
     """A fresh SB3 policy of the class ``algo`` trains, for ``env_id``'s spaces."""
     env = make_env(env_id)
     try:
@@ -136,7 +259,7 @@ def build_policy(env_id: str, algo: str, kwargs: dict[str, Any]) -> BasePolicy:
     from stable_baselines3.common.policies import ActorCriticPolicy
     from stable_baselines3.dqn.policies import DQNPolicy
 
-    classes: dict[str, Any] = {"dqn": DQNPolicy, "ppo": ActorCriticPolicy}
+    classes: dict[str, type[BasePolicy]] = {"dqn": DQNPolicy, "ppo": ActorCriticPolicy}
     if algo not in classes:
         raise ValueError(f"unknown expert algorithm {algo!r} (ppo or dqn)")
     policy: BasePolicy = classes[algo](*spaces, lr_schedule=lambda _: 0.0, **_sb3_kwargs(kwargs))
@@ -241,7 +364,31 @@ def train_expert(
     eval_every: int | None = None,
     eval_episodes: int = 5,
     final_episodes: int = 20,
-) -> dict[str, Any]:
+) -> Mapping[str, Any]:
+    """:func:`train_expert_record`, its record as JSON (the command line reads it by key)."""
+    return train_expert_record(
+        out,
+        env_id,
+        seed=seed,
+        timesteps=timesteps,
+        hyper=hyper,
+        eval_every=eval_every,
+        eval_episodes=eval_episodes,
+        final_episodes=final_episodes,
+    ).to_json()
+
+
+def train_expert_record(
+    out: str | os.PathLike[str],
+    env_id: str,
+    *,
+    seed: int = 0,
+    timesteps: int | None = None,
+    hyper: str = "paper",
+    eval_every: int | None = None,
+    eval_episodes: int = 5,
+    final_episodes: int = 20,
+) -> ExpertRecord:
     """Train an SB3 expert for ``env_id`` into ``out``; return its config record.
 
     Every ``eval_every`` steps (default: a twentieth of the budget) the policy plays
@@ -286,32 +433,31 @@ def train_expert(
     model.policy.set_training_mode(False)
     final = evaluate(model.policy, env_id, episodes=final_episodes, seed=FINAL_EVAL_SEED)
 
-    algo = settings.algo
-    record = {
-        "env": env_id,
-        "algo": algo,
-        "return_mean": final.mean,
-        "return_std": final.std,
-        "episodes": final_episodes,
-        "seed": seed,
-        "timesteps": timesteps,
-        "target": TASKS[env_id].expert_target,
-        "hyper": hyper,
-        "settings": asdict(settings.own),
-        "policy_kwargs": policy_kwargs(settings),
-        "evaluation": {
-            "periodic_every": every,
-            "periodic_episodes": eval_episodes,
-            "best_periodic_return": max(h["return_mean"] for h in history),
-            "final_seed": FINAL_EVAL_SEED,
-            "deterministic": True,
-            "returns": list(final.returns),
-        },
-        "versions": gym_versions(),
-    }
+    record = ExpertRecord(
+        env=env_id,
+        algo=settings.algo,
+        return_mean=final.mean,
+        return_std=final.std,
+        episodes=final_episodes,
+        seed=seed,
+        timesteps=timesteps,
+        target=TASKS[env_id].expert_target,
+        hyper=hyper,
+        settings=asdict(settings.own),
+        policy_kwargs=policy_kwargs(settings),
+        evaluation=ExpertEvaluation(
+            periodic_every=every,
+            periodic_episodes=eval_episodes,
+            best_periodic_return=max(h["return_mean"] for h in history),
+            final_seed=FINAL_EVAL_SEED,
+            deterministic=True,
+            returns=final.returns,
+        ),
+        versions=gym_versions(),
+    )
     write_text(out / METRICS_FILE, "".join(json.dumps(h) + "\n" for h in history))
     write_torch(out / MODEL_FILE, best)
-    write_text(out / CONFIG_FILE, json.dumps(record, indent=2) + "\n")
+    write_text(out / CONFIG_FILE, json.dumps(record.to_json(), indent=2) + "\n")
     return record
 
 
@@ -337,15 +483,20 @@ def shipped_dir() -> Path:
     return Path(str(resources.files("pokerirl.gym") / "experts"))
 
 
-def shipped_manifest() -> list[dict[str, Any]]:
-    """The shipped experts' manifest: one object per expert with :data:`MANIFEST_KEYS`.
-
-    Each object also holds ``settings`` (the hyper-parameters it was trained with).
+def shipped_manifest() -> list[Mapping[str, Any]]:
+    """The shipped experts' manifest as JSON: one object per expert with
+    :data:`MANIFEST_KEYS`, then ``settings`` (:func:`shipped_experts`: typed).
     """
     path = shipped_dir() / MANIFEST_FILE
     if not path.is_file():
         raise ValueError(f"{path}: no shipped experts in this installation")
-    return json.loads(path.read_text())
+    manifest: list[Mapping[str, Any]] = json.loads(path.read_text())
+    return manifest
+
+
+def shipped_experts() -> tuple[ManifestEntry, ...]:
+    """The shipped experts' manifest, in task order."""
+    return tuple(ManifestEntry.from_json(entry) for entry in shipped_manifest())
 
 
 def resolve_expert_dir(expert: str | os.PathLike[str], env_id: str) -> Path:
@@ -397,14 +548,14 @@ def load_expert(folder: str | os.PathLike[str]) -> Expert:
     return Expert(env_id=record["env"], algo=record["algo"], policy=policy, record=record)
 
 
-def manifest_entry(record: dict[str, Any]) -> dict[str, Any]:
+def manifest_entry(record: Mapping[str, Any]) -> dict[str, object]:
     """The manifest's object for one expert record: :data:`MANIFEST_KEYS`, plus its settings."""
-    entry = {key: record[key] for key in MANIFEST_KEYS}
+    entry: dict[str, object] = {key: record[key] for key in MANIFEST_KEYS}
     entry["settings"] = {"hyper": record["hyper"], **record["settings"]}
     return entry
 
 
-def write_manifest(folder: str | os.PathLike[str]) -> list[dict[str, Any]]:
+def write_manifest(folder: str | os.PathLike[str]) -> list[dict[str, object]]:
     """Write ``folder/manifest.json`` from the expert folders inside it, in task order."""
     from pokerirl.gym.presets import TASK_ORDER
 

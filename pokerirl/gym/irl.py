@@ -36,21 +36,22 @@ import torch
 from torch import Tensor, nn
 
 from pokerirl.atomic import atomic_path, make_shareable, write_text
-from pokerirl.gym.experts import make_env, shipped_manifest
+from pokerirl.gym.experts import make_env, shipped_experts
 from pokerirl.gym.presets import TASKS, IRLSettings
 from pokerirl.gym.quality import write_reward_quality
 from pokerirl.gym.rl import EVAL_SEED
 from pokerirl.irl.airl import default_nets, train_many
-from pokerirl.irl.config import AIRLConfig
+from pokerirl.irl.config import AIRLConfig, Algo, NoiseSchedule
 from pokerirl.irl.nets import fold_obs_standardization
 from pokerirl.irl.plots import plot_bands, plot_curves
-from pokerirl.irl.records import EpochRecord
+from pokerirl.irl.records import EpochMetrics, EpochRecord
 from pokerirl.irl.run import (
     BASELINES_FILE,
     METRICS_FILE,
     SPLIT_FILE,
     SUMMARY_FILE,
     RunError,
+    RunResult,
     data_record,
     run_baselines,
     save_run,
@@ -92,12 +93,12 @@ def irl_config(algo: str, settings: IRLSettings, *, seed: int) -> AIRLConfig:
         "policy_lr": settings.learning_rate,
         "reward_weight_decay": settings.reward_weight_decay,
         "batch_size": settings.batch_size,
-        "noise_schedule": "authors",
+        "noise_schedule": NoiseSchedule.AUTHORS,
         "noise_decay": settings.sigma_decay,
         "log_std_min": settings.log_std_min,
         "seed": seed,
     }
-    if algo == "hairl":
+    if algo == Algo.HAIRL:
         overrides.update(
             alpha=settings.alpha,
             beta=settings.beta,
@@ -251,10 +252,10 @@ def expert_return(env_id: str, data_path: str | os.PathLike[str]) -> float:
         )
         return float(sums.mean())
     try:
-        entries = [e for e in shipped_manifest() if e["env"] == env_id]
+        entries = [e for e in shipped_experts() if e.env == env_id]
     except ValueError:
         entries = []
-    return float(entries[0]["return_mean"]) if entries else math.nan
+    return float(entries[0].return_mean) if entries else math.nan
 
 
 # --------------------------------------------------------------------------- training
@@ -344,9 +345,9 @@ def train_gym_irl(
                 )
             return extras
 
-        def on_epoch(all_metrics: list[dict[str, Any]]) -> None:
+        def on_epoch(all_metrics: list[EpochMetrics]) -> None:
             for k, metrics in enumerate(all_metrics):
-                lines[k].append(json.dumps(metrics))
+                lines[k].append(json.dumps(metrics.to_json()))
                 write_text(folders[k] / METRICS_FILE, "\n".join(lines[k]) + "\n")
 
         many = train_many(
@@ -378,31 +379,42 @@ def train_gym_irl(
             plot_curves(result.metrics, folders[k], baselines=shares)
             # The learned reward against the true one (EPIC, Pearson): reward_quality.json.
             write_reward_quality(folders[k], env_id=env_id, data_path=data_path)
-            results.append({"seed": seeds[k], "metrics": result.metrics, "baselines": found})
-        summary = summarize(results)
+            results.append(
+                RunResult(
+                    out=str(out / folders[k].name),
+                    seed=seeds[k],
+                    metrics=tuple(result.metrics),
+                    baselines=found,
+                    samples_per_second=result.samples_per_second,
+                    train_rows=len(train_data),
+                    val_rows=len(val_data),
+                )
+            )
+        over_runs = summarize(results)
         finals = {
             name: {
-                "mean": summary["metrics"][key]["mean"][-1],
-                "std": summary["metrics"][key]["std"][-1],
+                "mean": over_runs.metrics[key].mean[-1],
+                "std": over_runs.metrics[key].std[-1],
             }
             for name, key in (
                 ("irl_final_return", "eval_return"),
                 ("final_alignment", "val_alignment"),
             )
-            if key in summary["metrics"]
+            if key in over_runs.metrics
         }
         summary = {
             "env": env_id,
             "algo": algo,
             "expert_return": found["expert"],
             **finals,
-            **summary,
+            **over_runs.to_json(),
         }
         write_text(stage / SUMMARY_FILE, json.dumps(summary, indent=2) + "\n")
         plot_returns(summary, stage / RETURNS_FILE)
         if discrete:
             plot_bands(
-                {**summary, "baselines": {k: summary["baselines"][k] for k in shares}}, stage
+                {**summary, "baselines": {k: over_runs.baselines[k].to_json() for k in shares}},
+                stage,
             )
     return GymIRLResult(
         out=out,
@@ -417,7 +429,7 @@ def train_gym_irl(
     )
 
 
-def plot_returns(summary: dict[str, Any], path: Path) -> Path:
+def plot_returns(summary: Mapping[str, Any], path: Path) -> Path:
     """Mean ± std over runs of the evaluation return per epoch, the expert and random lines."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure

@@ -41,8 +41,8 @@ import hashlib
 import json
 import math
 import os
-from collections.abc import Callable
-from dataclasses import asdict, dataclass
+from collections.abc import Callable, Mapping
+from dataclasses import asdict, dataclass, fields
 from pathlib import Path
 from typing import Any
 
@@ -53,7 +53,7 @@ from pokerirl.atomic import write_text
 from pokerirl.gym.collect import read_transitions
 from pokerirl.gym.experts import make_env
 from pokerirl.gym.presets import TASKS
-from pokerirl.irl.nets import fold_obs_standardization
+from pokerirl.irl.nets import RewardFamily, fold_obs_standardization
 from pokerirl.irl.run import (
     CONFIG_FILE,
     REWARD_FILE,
@@ -394,7 +394,7 @@ def _as_transition_reward(function: RewardFunction, *, full: bool) -> Transition
     return reward
 
 
-def initial_reward(record: dict[str, Any]) -> RewardFunction:
+def initial_reward(record: Mapping[str, Any]) -> RewardFunction:
     """The run's reward net as it was before training: same architecture, built from the
     run's seed as :func:`pokerirl.irl.airl.default_nets` does, standardization folded in."""
     space = record["architecture"]["action_space"]
@@ -430,10 +430,25 @@ class RewardQuality:
     gamma: float
     seed: int
     samples: int
-    coverage: dict[str, Any]
-    true_reward: dict[str, Any]
-    true_reward_check: dict[str, Any]
+    coverage: Mapping[str, Any]
+    true_reward: Mapping[str, Any]
+    true_reward_check: Mapping[str, Any]
     reward_sha256: str  # of the run's reward.pt: a stale file is one whose digest differs
+
+    def to_json(self) -> dict[str, object]:
+        """The file's object: ``format`` first, the scores rounded (NaN: null)."""
+        record: dict[str, object] = {"format": QUALITY_FORMAT, **asdict(self)}
+        for key in SCORES:
+            record[key] = _number(getattr(self, key))
+        return record
+
+    @classmethod
+    def from_json(cls, data: Mapping[str, Any]) -> RewardQuality:
+        """A file's object (null scores read as NaN)."""
+        found = {item.name: data[item.name] for item in fields(cls)}
+        for key in SCORES:
+            found[key] = math.nan if found[key] is None else found[key]
+        return cls(**found)
 
 
 def _number(x: float) -> float | None:
@@ -474,7 +489,7 @@ def write_reward_quality(
         raise QualityError(f"expert data not found: {data_path}")
     gamma = task_gamma(env_id)
     truth = true_reward(env_id, gamma)
-    family = record["architecture"].get("reward_family", "state_action")
+    family = record["architecture"].get("reward_family", RewardFamily.STATE_ACTION)
     rng = np.random.default_rng(seed)
     torch_threads = torch.get_num_threads()
 
@@ -525,7 +540,7 @@ def write_reward_quality(
 
     try:
         torch.set_num_threads(1)  # one summation order: the same bytes on any machine
-        shaped = family == "shaped"
+        shaped = family == RewardFamily.SHAPED
         f_full = _as_transition_reward(load_reward(run, full=shaped), full=shaped)
         g = _as_transition_reward(load_reward(run), full=False)
         initial = _as_transition_reward(initial_reward(record), full=False)
@@ -618,19 +633,17 @@ def write_reward_quality(
 
 
 def write_quality(path: Path, quality: RewardQuality) -> None:
-    record = {"format": QUALITY_FORMAT, **asdict(quality)}
-    for key in SCORES:
-        record[key] = _number(record[key])
-    write_text(path, json.dumps(record, indent=2, ensure_ascii=False) + "\n")
+    write_text(path, json.dumps(quality.to_json(), indent=2, ensure_ascii=False) + "\n")
 
 
 def reward_digest(run_dir: str | os.PathLike[str]) -> str:
     return hashlib.sha256((Path(run_dir) / REWARD_FILE).read_bytes()).hexdigest()
 
 
-def read_reward_quality(run_dir: str | os.PathLike[str]) -> dict[str, Any] | None:
-    """A run's ``reward_quality.json``; None when missing, unreadable, made for another
-    ``reward.pt`` than the folder's, or lacking a score (an older file)."""
+def read_reward_quality(run_dir: str | os.PathLike[str]) -> Mapping[str, Any] | None:
+    """A run's ``reward_quality.json`` as JSON (:func:`read_quality`: typed); None when
+    missing, unreadable, made for another ``reward.pt`` than the folder's, or lacking a score
+    (an older file)."""
     try:
         found = json.loads((Path(run_dir) / QUALITY_FILE).read_text(encoding="utf-8"))
         if not isinstance(found, dict) or found.get("format") != QUALITY_FORMAT:
@@ -641,9 +654,18 @@ def read_reward_quality(run_dir: str | os.PathLike[str]) -> dict[str, Any] | Non
         return None
 
 
+def read_quality(run_dir: str | os.PathLike[str]) -> RewardQuality | None:
+    """:func:`read_reward_quality`, typed; None as there, or for a file lacking a field."""
+    found = read_reward_quality(run_dir)
+    try:
+        return None if found is None else RewardQuality.from_json(found)
+    except KeyError:
+        return None
+
+
 def run_quality(
     run_dir: str | os.PathLike[str], *, env_id: str, data_path: str | os.PathLike[str] | None
-) -> dict[str, Any]:
+) -> Mapping[str, Any]:
     """The run's ``reward_quality.json``, computed and written first when missing or stale
     (runs made before the file existed)."""
     found = read_reward_quality(run_dir)

@@ -29,6 +29,7 @@ from typing import Any
 import numpy as np
 
 from pokerirl.atomic import write_bytes
+from pokerirl.irl.config import Algo
 from pokerirl.irl.run import CONFIG_FILE, RunError, load_reward, load_run_config
 
 # Names of the actions and of the observation's two coordinates, where the task is known.
@@ -36,7 +37,7 @@ ACTION_NAMES: dict[str, tuple[str, ...]] = {
     "MountainCar-v0": ("push left", "no push", "push right"),
 }
 AXIS_NAMES: dict[str, tuple[str, str]] = {"MountainCar-v0": ("position", "velocity")}
-ALGO_LABELS = {"airl": "AIRL", "hairl": "H-AIRL"}
+ALGO_LABELS: dict[str, str] = {Algo.AIRL: "AIRL", Algo.HAIRL: "H-AIRL"}
 # One colour per action id (colour-blind safe: blue, grey, vermilion, then more).
 COLOURS = ("#0072B2", "#BBBBBB", "#D55E00", "#009E73", "#CC79A7", "#F0E442")
 RUN_FOLDER = re.compile(r"run-(\d+)")

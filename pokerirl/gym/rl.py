@@ -10,8 +10,9 @@ from __future__ import annotations
 
 import json
 import os
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import asdict, dataclass
+from enum import StrEnum
 from pathlib import Path
 from typing import Any
 
@@ -35,8 +36,18 @@ EVAL_SEED = 2_000_000  # evaluation episodes' seeds, apart from the experts' and
 # How the RL phase trains: SB3, one run per call (train_rl), or R runs of one task in one
 # process (pokerirl.gym.lockstep.group.train_rl_group). lockstep is the default since its
 # equivalence table with SB3 (docs/lockstep.md) holds on Acrobot, Pendulum and MountainCar.
-RL_BACKENDS = ("sb3", "lockstep")
-DEFAULT_RL_BACKEND = "lockstep"
+
+
+class RLBackend(StrEnum):
+    """How RL runs train: ``sb3`` (one SB3 run per unit) or ``lockstep`` (many in one process,
+    :mod:`pokerirl.gym.lockstep`)."""
+
+    SB3 = "sb3"
+    LOCKSTEP = "lockstep"
+
+
+RL_BACKENDS: tuple[str, ...] = tuple(RLBackend)
+DEFAULT_RL_BACKEND = RLBackend.LOCKSTEP
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -158,9 +169,9 @@ def save_run(
     out: Path,
     result: RLResult,
     settings: RLSettings,
-    state: dict[str, Any],
+    state: Mapping[str, Any],
     *,
-    backend: str = "sb3",
+    backend: str = RLBackend.SB3,
 ) -> None:
     """Write a run folder: ``metrics.jsonl``, ``model.pt`` (``state``, the SB3 policy's
     state_dict) and ``config.json``; a lock-step run's config also says ``"backend"`` (an
@@ -179,7 +190,7 @@ def save_run(
         "policy_kwargs": policy_kwargs(settings),
         "train_episode_returns": list(result.train_episode_returns),
         "versions": gym_versions(),
-        **({} if backend == "sb3" else {"backend": backend}),  # sb3 records stay as before
+        **({} if backend == RLBackend.SB3 else {"backend": backend}),  # sb3 records stay as before
     }
     write_text(out / METRICS_FILE, "".join(json.dumps(asdict(p)) + "\n" for p in result.curve))
     write_torch(out / MODEL_FILE, state)

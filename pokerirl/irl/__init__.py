@@ -37,11 +37,13 @@ from pokerirl.irl.nets import (
     build_nets,
     project_to_simplex,
 )
-from pokerirl.irl.records import Batch, EpochCallback, EpochRecord, StepLosses
+from pokerirl.irl.records import Batch, EpochCallback, EpochMetrics, EpochRecord, StepLosses
 from pokerirl.irl.reward import RewardFn, RewardNet
 from pokerirl.irl.run import (
     RewardFunction,
     RunError,
+    RunResult,
+    RunsSummary,
     RunSummary,
     load_policy,
     load_reward,
@@ -57,6 +59,7 @@ __all__ = [
     "ConfigError",
     "DiscretePolicy",
     "EpochCallback",
+    "EpochMetrics",
     "EpochRecord",
     "GaussianPolicy",
     "ManyResult",
@@ -65,7 +68,9 @@ __all__ = [
     "RewardFunction",
     "RewardNet",
     "RunError",
+    "RunResult",
     "RunSummary",
+    "RunsSummary",
     "ShapedReward",
     "StateActionReward",
     "StepLosses",

@@ -50,7 +50,7 @@ from tqdm.auto import tqdm
 
 from pokerirl.irl import fast
 from pokerirl.irl.baselines import baselines
-from pokerirl.irl.config import AIRLConfig
+from pokerirl.irl.config import AIRLConfig, NoiseForm, NoiseSchedule
 from pokerirl.irl.evaluate import evaluate
 from pokerirl.irl.losses import (
     LOG_2PI,
@@ -60,12 +60,13 @@ from pokerirl.irl.losses import (
     noise_schedule,
     sample_one_hot,
 )
-from pokerirl.irl.nets import MASKED_LOGIT, build_nets, project_to_simplex
+from pokerirl.irl.nets import MASKED_LOGIT, RewardFamily, build_nets, project_to_simplex
 from pokerirl.irl.optim import FlatAdam
 from pokerirl.irl.records import (
     DISCRIMINATOR_METRICS,
     Batch,
     EpochCallback,
+    EpochMetrics,
     EpochRecord,
     StepLosses,
     pack_step,
@@ -110,14 +111,14 @@ __all__ = [
 
 @dataclass
 class TrainResult:
-    """One run: the trained nets and one metrics dict per epoch."""
+    """One run: the trained nets and its metrics, one :class:`EpochMetrics` per epoch."""
 
     reward: nn.Module
     policy: nn.Module
     config: AIRLConfig
     beta_used: float  # β actually used: 0 when the data has no rewards
     gradients: str = "autograd"  # or "hand-derived" (pokerirl.irl.fast)
-    metrics: list[dict[str, Any]] = field(default_factory=list)
+    metrics: list[EpochMetrics] = field(default_factory=list)
     epoch_seconds: list[float] = field(default_factory=list)  # optimization only
     samples_per_epoch: int = 0
 
@@ -173,7 +174,7 @@ def train(
     fast_path: bool = True,
     device: str | torch.device = "cpu",
     progress: bool = True,
-    on_epoch: Callable[[dict[str, Any]], None] | None = None,
+    on_epoch: Callable[[EpochMetrics], None] | None = None,
     callback: EpochCallback | None = None,
 ) -> TrainResult:
     """Train ``reward`` and ``policy`` (default: :func:`default_nets`) on ``train_data``;
@@ -182,7 +183,7 @@ def train(
     ``adversarial=False`` skips the discriminator (behaviour cloning when α = 1).
     ``fast_path``: use the hand-derived gradients of :mod:`pokerirl.irl.fast` where they
     cover the nets (the default poker nets, one run, on CPU); autograd otherwise.
-    ``on_epoch`` gets each epoch's metrics dict as soon as it is ready; ``callback`` (an
+    ``on_epoch`` gets each epoch's metrics as soon as they are ready; ``callback`` (an
     :class:`EpochCallback`) may add metrics to it first.
     """
     if reward is None or policy is None:
@@ -218,7 +219,7 @@ def train_many(
     fast_path: bool = True,
     device: str | torch.device = "cpu",
     progress: bool = True,
-    on_epoch: Callable[[list[dict[str, Any]]], None] | None = None,
+    on_epoch: Callable[[list[EpochMetrics]], None] | None = None,
     callback: EpochCallback | None = None,
 ) -> ManyResult:
     """R = len(seeds) runs of ``config`` on the same data, in lock-step.
@@ -226,7 +227,7 @@ def train_many(
     Run r uses ``seeds[r]`` for its shuffles and noise (and, with default nets, its
     initialization), so it is the run ``train`` would make with that seed, up to floating
     point. The nets must share one architecture. After each epoch ``callback`` (an
-    :class:`EpochCallback`) may add metrics per run; then ``on_epoch`` gets the R metrics dicts.
+    :class:`EpochCallback`) may add metrics per run; then ``on_epoch`` gets the R runs' metrics.
     """
     device = resolve_device(device)
     if len(train_data) == 0 or len(val_data) == 0:
@@ -240,7 +241,7 @@ def train_many(
         policies = [b[1] for b in built] if policies is None else policies
     if not len(rewards) == len(policies) == len(seeds):
         raise ValueError("give one reward net and one policy per seed")
-    if config.reward_family == "shaped" and train_data.next_obs is None:
+    if config.reward_family == RewardFamily.SHAPED and train_data.next_obs is None:
         raise ValueError("the shaped reward family needs transitions with next_obs and done")
     for module in (*rewards, *policies):
         module.to(device).train()
@@ -281,7 +282,7 @@ class _Loop:
         self.discrete = data.discrete
         self.beta = config.beta if data.rewards is not None else 0.0
         self.alpha = config.alpha
-        self.shaped = config.reward_family == "shaped"
+        self.shaped = config.reward_family == RewardFamily.SHAPED
         self.batch = min(config.batch_size, len(data))
         self.steps = len(data) // self.batch  # drop the ragged tail; the next shuffle covers it
         self.noisy = config.sigma_start > 0 and adversarial
@@ -318,7 +319,7 @@ class _Loop:
             fast_path
             and self.runs == 1
             and device.type == "cpu"
-            and config.reward_family == "state_action"
+            and config.reward_family == RewardFamily.STATE_ACTION
             and config.supervised_form == "mean_mse"  # the hand-derived gradients' term
             and fast.supports(rewards.modules[0], policies.modules[0])
         )
@@ -340,7 +341,7 @@ class _Loop:
                 draws["pi_eps"].append(torch.randn(steps, batch, width, **kw))
             if self.noisy:
                 draws["eps"].append(torch.randn(steps, batch, width, **kw))
-                if self.config.noise_schedule == "authors":
+                if self.config.noise_schedule == NoiseSchedule.AUTHORS:
                     order = torch.rand(steps, batch, **kw).argsort(dim=1)
                     draws["sig"].append(self.sigma[order])
         return {k: torch.stack(v, dim=1) for k, v in draws.items() if v}  # (steps, R, ...)
@@ -392,7 +393,7 @@ class _Loop:
                     log_pi_seen = None
                     if self.noisy:
                         sigma = draw["sig"][step] if "sig" in draw else self.sigma
-                        if self.config.noise_form == "authors":
+                        if self.config.noise_form == NoiseForm.AUTHORS:
                             # σ in units of high, no clipping, log π of the clean sample.
                             log_pi_seen = gaussian_log_prob(seen, m, ls)
                             seen = seen + sigma[..., None] * self.high * draw["eps"][step]
@@ -527,7 +528,7 @@ class _Loop:
         self,
         epoch: int,
         seconds: float,
-        epoch_metrics: list[dict[str, Any]],
+        epoch_metrics: list[dict[str, object]],
         callback: EpochCallback,
     ) -> None:
         """Ask ``callback`` for the epoch's extra metrics and add them, run by run."""
@@ -556,7 +557,7 @@ class _Loop:
         self,
         *,
         progress: bool,
-        on_epoch: Callable[[list[dict[str, Any]]], None] | None,
+        on_epoch: Callable[[list[EpochMetrics]], None] | None,
         callback: EpochCallback | None = None,
     ) -> ManyResult:
         results = [
@@ -597,16 +598,17 @@ class _Loop:
             self.rewards.write_back()
             self.policies.write_back()
             stats = self.epoch_stats(record, draw["perm"])
-            epoch_metrics = []
+            growing = []
             for r, result in enumerate(results):
-                metrics: dict[str, Any] = {"epoch": epoch}
+                metrics: dict[str, object] = {"epoch": epoch}
                 metrics.update({key: values[r] for key, values in stats.items()})
                 metrics.update(evaluate(result.reward, result.policy, self.val))
-                epoch_metrics.append(metrics)
+                growing.append(metrics)
             if callback is not None:
-                self.add_extras(epoch, seconds, epoch_metrics, callback)
-            for result, metrics in zip(results, epoch_metrics, strict=True):
-                result.metrics.append(metrics)
+                self.add_extras(epoch, seconds, growing, callback)
+            epoch_metrics = [EpochMetrics.from_json(metrics) for metrics in growing]
+            for result, line in zip(results, epoch_metrics, strict=True):
+                result.metrics.append(line)
                 result.epoch_seconds.append(seconds / self.runs)
             if on_epoch is not None:
                 on_epoch(epoch_metrics)

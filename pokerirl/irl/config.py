@@ -26,24 +26,61 @@ import tomllib
 import typing
 from collections.abc import Mapping
 from dataclasses import dataclass
+from enum import StrEnum
 from pathlib import Path
 from typing import Any
 
 from pokerirl.errors import PokerIRLError
-from pokerirl.irl.nets import ACTIVATIONS, REWARD_FAMILIES, NetSpec
+from pokerirl.irl.nets import ACTIVATIONS, REWARD_FAMILIES, NetSpec, RewardFamily
 
-ALGOS: tuple[str, ...] = ("airl", "hairl")
-NOISE_SCHEDULES: tuple[str, ...] = ("linear", "authors")
-DISC_ACTIONS: tuple[str, ...] = ("sample", "distribution")
-# Continuous actions only (issue 20). "ours": σ in box widths (high - low), the noised action
-# clipped to the box, log π at the noised action. "authors" (silue-dev/hairl src/hairl.py): σ
-# in units of ``high``, no clipping, log π of the clean sample.
-NOISE_FORMS: tuple[str, ...] = ("ours", "authors")
-# The supervised term. "mean_mse" (ours): continuous, the batch mean of ‖μ − a_E‖²; discrete,
-# the cross-entropy of π at a_E. "sum_mse" (the authors'): mse_loss(x, a_E, reduction="sum"),
-# summed over the batch, where x is the reparameterized sample (continuous: it also penalizes
-# σ²) or π's probabilities against the one-hot a_E (discrete).
-SUPERVISED_FORMS: tuple[str, ...] = ("mean_mse", "sum_mse")
+
+class Algo(StrEnum):
+    """The reward learners: AIRL, and H-AIRL (AIRL with supervision and noise)."""
+
+    AIRL = "airl"
+    HAIRL = "hairl"
+
+
+class NoiseSchedule(StrEnum):
+    """How σ decays along a batch: ``linear`` (the paper) or ``authors`` (their code)."""
+
+    LINEAR = "linear"
+    AUTHORS = "authors"
+
+
+class DiscAction(StrEnum):
+    """What the discriminator sees of π."""
+
+    SAMPLE = "sample"
+    DISTRIBUTION = "distribution"
+
+
+class NoiseForm(StrEnum):
+    """Continuous actions only (issue 20). ``ours``: σ in box widths (high - low), the noised
+    action clipped to the box, log π at the noised action. ``authors`` (silue-dev/hairl
+    src/hairl.py): σ in units of ``high``, no clipping, log π of the clean sample."""
+
+    OURS = "ours"
+    AUTHORS = "authors"
+
+
+class SupervisedForm(StrEnum):
+    """The supervised term. ``mean_mse`` (ours): continuous, the batch mean of ‖μ − a_E‖²;
+    discrete, the cross-entropy of π at a_E. ``sum_mse`` (the authors'): mse_loss(x, a_E,
+    reduction="sum"), summed over the batch, where x is the reparameterized sample
+    (continuous: it also penalizes σ²) or π's probabilities against the one-hot a_E
+    (discrete)."""
+
+    MEAN_MSE = "mean_mse"
+    SUM_MSE = "sum_mse"
+
+
+# The names, for messages and choices (a StrEnum member is its value: "airl" in ALGOS).
+ALGOS: tuple[str, ...] = tuple(Algo)
+NOISE_SCHEDULES: tuple[str, ...] = tuple(NoiseSchedule)
+DISC_ACTIONS: tuple[str, ...] = tuple(DiscAction)
+NOISE_FORMS: tuple[str, ...] = tuple(NoiseForm)
+SUPERVISED_FORMS: tuple[str, ...] = tuple(SupervisedForm)
 
 
 class ConfigError(PokerIRLError, ValueError):
@@ -59,7 +96,7 @@ class AIRLConfig:
     policy_hidden: tuple[int, ...] = (64,)
     activation: str = "relu"
     layer_norm: bool = False
-    reward_family: str = "state_action"
+    reward_family: RewardFamily = RewardFamily.STATE_ACTION
     gamma: float = 0.99
     # optimization
     reward_lr: float = 1e-3
@@ -72,11 +109,11 @@ class AIRLConfig:
     beta: float = 0.0  # weight of the (f - r_env)² term in the discriminator loss
     sigma_start: float = 1.0  # noise σ on the first sample of a batch (in action ranges)
     sigma_end: float = 0.1  # ... and on the last
-    noise_schedule: str = "linear"  # "linear" (the paper) or "authors" (their code)
+    noise_schedule: NoiseSchedule = NoiseSchedule.LINEAR
     noise_decay: float = 0.1  # k of the authors' schedule: 0.1 poker, 0.01 Gymnasium
-    disc_action: str = "sample"  # what the discriminator sees of π: "sample" or "distribution"
-    noise_form: str = "ours"  # continuous actions: see NOISE_FORMS
-    supervised_form: str = "mean_mse"  # see SUPERVISED_FORMS
+    disc_action: DiscAction = DiscAction.SAMPLE
+    noise_form: NoiseForm = NoiseForm.OURS
+    supervised_form: SupervisedForm = SupervisedForm.MEAN_MSE
     # Continuous policies' log σ is clamped to [log_std_min, log_std_max] in training (the
     # defaults never bind in practice; -5 keeps -log π from winning D alone, issue 20).
     log_std_min: float = -20.0
@@ -95,7 +132,7 @@ class AIRLConfig:
             "0 <= alpha <= 1": 0 <= self.alpha <= 1,
             "0 <= beta <= 1": 0 <= self.beta <= 1,
             "sigma_start >= sigma_end >= 0": self.sigma_start >= self.sigma_end >= 0,
-            "sigma_end > 0 for the authors' schedule": self.noise_schedule != "authors"
+            "sigma_end > 0 for the authors' schedule": self.noise_schedule != NoiseSchedule.AUTHORS
             or self.sigma_end > 0
             or self.sigma_start == 0,
             "noise_decay > 0": self.noise_decay > 0,
@@ -130,8 +167,8 @@ class AIRLConfig:
         unknown = sorted(set(overrides) - set(_HINTS))
         if unknown:
             raise ConfigError(f"unknown setting(s) {', '.join(unknown)}; known: {sorted(_HINTS)}")
-        base: dict[str, Any] = {}
-        if algo == "airl":
+        base: dict[str, float] = {}
+        if algo == Algo.AIRL:
             base = {"alpha": 0.0, "beta": 0.0, "sigma_start": 0.0, "sigma_end": 0.0}
         return cls(**{**base, **overrides})
 
@@ -145,7 +182,7 @@ class AIRLConfig:
             gamma=self.gamma,
         )
 
-    def to_dict(self) -> dict[str, Any]:
+    def to_dict(self) -> dict[str, object]:
         """The settings as JSON, without the continuous-action options (issue 20) that hold
         their defaults: run records and fingerprints written before them stay valid."""
         return {
@@ -156,15 +193,15 @@ class AIRLConfig:
 
 
 # Fields added after runs were recorded, with the defaults that reproduce those runs.
-_ADDED_LATER: dict[str, Any] = {
-    "noise_form": "ours",
-    "supervised_form": "mean_mse",
+_ADDED_LATER: dict[str, object] = {
+    "noise_form": NoiseForm.OURS,
+    "supervised_form": SupervisedForm.MEAN_MSE,
     "log_std_min": -20.0,
     "log_std_max": 2.0,
 }
 
 
-_HINTS: dict[str, Any] = typing.get_type_hints(AIRLConfig)
+_HINTS: dict[str, object] = typing.get_type_hints(AIRLConfig)
 
 
 def _checked(name: str, hint: Any, value: Any) -> Any:
@@ -185,6 +222,11 @@ def _checked(name: str, hint: Any, value: Any) -> Any:
         if isinstance(value, str):
             return value
         raise ConfigError(f"{name} must be a string, got {value!r}")
+    if isinstance(hint, type) and issubclass(hint, StrEnum):
+        if not isinstance(value, str):
+            raise ConfigError(f"{name} must be a string, got {value!r}")
+        # An unknown name stays a str: the field checks name the choices.
+        return hint(value) if value in hint.__members__.values() else value
     # tuple[int, ...]: hidden widths
     if isinstance(value, list | tuple) and all(
         isinstance(w, int) and not isinstance(w, bool) for w in value

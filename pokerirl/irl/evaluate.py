@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import math
-from typing import Any
 
 import torch
 from torch import Tensor, nn
@@ -14,7 +13,7 @@ from pokerirl.irl.transitions import Transitions
 @torch.no_grad()
 def evaluate(
     reward: nn.Module, policy: nn.Module, val: Transitions, *, chunk: int = 65536
-) -> dict[str, Any]:
+) -> dict[str, float | list[float]]:
     """Validation metrics of one run.
 
     Discrete: ``val_alignment`` (argmax π over legal actions = the expert's action),

@@ -12,6 +12,8 @@ import torch
 import torch.nn.functional as F
 from torch import Tensor
 
+from pokerirl.irl.config import NoiseSchedule
+
 LOG_2PI = math.log(2 * math.pi)
 LOSS_KEYS = (
     "disc_loss",
@@ -28,7 +30,7 @@ def noise_schedule(
     sigma_start: float,
     sigma_end: float,
     *,
-    kind: str = "linear",
+    kind: str = NoiseSchedule.LINEAR,
     decay: float = 0.1,
 ) -> Tensor:
     """σ_i for the i-th sample of a batch.
@@ -44,7 +46,7 @@ def noise_schedule(
     """
     if sigma_start == 0:
         return torch.zeros(batch_size)
-    if kind == "authors":
+    if kind == NoiseSchedule.AUTHORS:
         b = (sigma_start - sigma_end) / (sigma_end * batch_size)
         return sigma_start / (1 + decay * b * torch.arange(batch_size, dtype=torch.float32))
     if batch_size == 1:

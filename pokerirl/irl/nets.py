@@ -28,6 +28,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from enum import StrEnum
 from typing import Any
 
 import numpy as np
@@ -41,7 +42,16 @@ ACTIVATIONS: dict[str, type[nn.Module]] = {
     "tanh": nn.Tanh,
     "leaky_relu": nn.LeakyReLU,
 }
-REWARD_FAMILIES: tuple[str, ...] = ("state_action", "shaped")
+
+
+class RewardFamily(StrEnum):
+    """What the reward net reads: f(s, a), or the shaped g(s, a) + γ h(s') - h(s)."""
+
+    STATE_ACTION = "state_action"
+    SHAPED = "shaped"
+
+
+REWARD_FAMILIES: tuple[str, ...] = tuple(RewardFamily)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -52,7 +62,7 @@ class NetSpec:
     policy_hidden: tuple[int, ...] = (64,)
     activation: str = "relu"
     layer_norm: bool = False
-    reward_family: str = "state_action"
+    reward_family: RewardFamily = RewardFamily.STATE_ACTION
     gamma: float = 0.99  # discount of the shaped family
 
     def __post_init__(self) -> None:
@@ -60,6 +70,7 @@ class NetSpec:
             raise ValueError(f"activation must be one of {', '.join(ACTIVATIONS)}")
         if self.reward_family not in REWARD_FAMILIES:
             raise ValueError(f"reward_family must be one of {', '.join(REWARD_FAMILIES)}")
+        object.__setattr__(self, "reward_family", RewardFamily(self.reward_family))
         if not self.reward_hidden or min(self.reward_hidden + self.policy_hidden, default=1) < 1:
             raise ValueError("hidden widths must be >= 1, with at least one reward layer")
 
@@ -271,7 +282,7 @@ def build_nets(
     """
     style: dict[str, Any] = {"activation": spec.activation, "layer_norm": spec.layer_norm}
     reward: nn.Module
-    if spec.reward_family == "shaped":
+    if spec.reward_family == RewardFamily.SHAPED:
         reward = ShapedReward(
             obs_dim=obs_dim,
             action_dim=action_dim,

@@ -12,9 +12,10 @@ from matplotlib.figure import Figure
 
 from pokerirl.atomic import atomic_path
 
+ALIGNMENT_FIGURE = "alignment.png"
 # file name -> (title, y label, [(metric key, legend label)])
 CURVES: dict[str, tuple[str, str, list[tuple[str, str]]]] = {
-    "alignment.png": (
+    ALIGNMENT_FIGURE: (
         "Validation action alignment",
         "share of states",
         [
@@ -62,7 +63,7 @@ def _baseline_lines(axes: Any, baselines: Mapping[str, float]) -> None:
 
 
 def plot_curves(
-    metrics: Sequence[dict[str, Any]],
+    metrics: Sequence[Mapping[str, Any]],
     out_dir: str | os.PathLike[str],
     *,
     baselines: Mapping[str, float] | None = None,
@@ -79,7 +80,7 @@ def plot_curves(
         figure, axes = _figure()
         for key, label in present:
             axes.plot(epochs, [m[key] for m in metrics], marker=".", label=label)
-        if name == "alignment.png" and baselines:
+        if name == ALIGNMENT_FIGURE and baselines:
             _baseline_lines(axes, baselines)
         written.append(_save(figure, axes, out_dir / name, title, ylabel))
     return written
@@ -89,7 +90,7 @@ def plot_bands(summary: Mapping[str, Any], out_dir: str | os.PathLike[str]) -> P
     """Mean ± std over runs of the alignment metrics, with the baselines' means as lines."""
     epochs = summary["epochs"]
     series = [
-        (key, label) for key, label in CURVES["alignment.png"][2] if key in summary["metrics"]
+        (key, label) for key, label in CURVES[ALIGNMENT_FIGURE][2] if key in summary["metrics"]
     ]
     if not series:
         return None

@@ -7,7 +7,7 @@ read back by position in a dict.
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any, NamedTuple, Protocol
 
@@ -89,6 +89,53 @@ DISCRIMINATOR_METRICS = (
     "reward_policy",
     "reward_gap",
 )  # zero when the discriminator is off (behaviour cloning)
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class EpochMetrics(Mapping[str, Any]):
+    """One epoch of one run: a line of ``metrics.jsonl``.
+
+    ``metrics`` are the trainer's metrics (losses, discriminator, validation: which ones
+    depends on the actions and on the adversary), then an :class:`EpochCallback`'s extras,
+    in that order. The set is open, so a metric is read by name, ``metrics["val_alignment"]``:
+    the record is also a read-only mapping that starts with ``epoch`` (and equals the dict of
+    its line).
+
+    >>> line = EpochMetrics.from_json({"epoch": 1, "disc_loss": 0.5, "val_alignment": 0.75})
+    >>> line.epoch, line["val_alignment"], line.scalars()
+    (1, 0.75, {'disc_loss': 0.5, 'val_alignment': 0.75})
+    >>> line.to_json()
+    {'epoch': 1, 'disc_loss': 0.5, 'val_alignment': 0.75}
+    """
+
+    epoch: int
+    metrics: Mapping[str, Any]
+
+    def __post_init__(self) -> None:
+        if "epoch" in self.metrics:
+            raise ValueError("an epoch's metrics cannot hold another 'epoch'")
+
+    def __getitem__(self, key: str) -> Any:
+        return self.epoch if key == "epoch" else self.metrics[key]
+
+    def __iter__(self) -> Iterator[str]:
+        yield "epoch"
+        yield from self.metrics
+
+    def __len__(self) -> int:
+        return 1 + len(self.metrics)
+
+    def scalars(self) -> dict[str, float]:
+        """The numeric metrics (not ``epoch``), in order: what a summary averages."""
+        return {k: v for k, v in self.metrics.items() if isinstance(v, int | float)}
+
+    def to_json(self) -> dict[str, object]:
+        """The line as written, ``epoch`` first."""
+        return {"epoch": self.epoch, **self.metrics}
+
+    @classmethod
+    def from_json(cls, data: Mapping[str, Any]) -> EpochMetrics:
+        return cls(epoch=data["epoch"], metrics={k: v for k, v in data.items() if k != "epoch"})
 
 
 @dataclass(frozen=True, kw_only=True)

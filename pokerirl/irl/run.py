@@ -42,8 +42,9 @@ from pokerirl.atomic import write_text, write_torch
 from pokerirl.errors import PokerIRLError
 from pokerirl.irl.airl import TrainResult, baselines, default_nets, train
 from pokerirl.irl.config import AIRLConfig
-from pokerirl.irl.nets import ACTIVATIONS, REWARD_FAMILIES, NetSpec, build_nets
+from pokerirl.irl.nets import ACTIVATIONS, REWARD_FAMILIES, NetSpec, RewardFamily, build_nets
 from pokerirl.irl.plots import plot_curves
+from pokerirl.irl.records import EpochMetrics
 from pokerirl.irl.transitions import Transitions
 from pokerirl.parquet import first_line
 from pokerirl.versions import package_versions
@@ -52,6 +53,7 @@ FORMAT_VERSION = 2
 REWARD_FILE, POLICY_FILE, CONFIG_FILE = "reward.pt", "policy.pt", "config.json"
 METRICS_FILE, BASELINES_FILE, SPLIT_FILE = "metrics.jsonl", "baselines.json", "split.json"
 TIMINGS_FILE, SUMMARY_FILE = "timings.json", "summary.json"
+REWARD_RUN_FILES = (REWARD_FILE, CONFIG_FILE)  # what identifies a learned-reward run
 
 
 class RunError(PokerIRLError, ValueError):
@@ -59,18 +61,118 @@ class RunError(PokerIRLError, ValueError):
     caller could get past it, a :class:`~pokerirl.errors.Remedy`)."""
 
 
+@dataclass(frozen=True, kw_only=True)
+class RunResult:
+    """One finished run of several: its folder, seed, metrics, baselines, speed and split."""
+
+    out: str
+    seed: int
+    metrics: tuple[EpochMetrics, ...]
+    baselines: Mapping[str, float]
+    samples_per_second: float
+    train_rows: int
+    val_rows: int
+
+    def to_json(self) -> dict[str, object]:
+        return {
+            "out": self.out,
+            "seed": self.seed,
+            "metrics": [m.to_json() for m in self.metrics],
+            "baselines": dict(self.baselines),
+            "samples_per_second": self.samples_per_second,
+            "train_rows": self.train_rows,
+            "val_rows": self.val_rows,
+        }
+
+    @classmethod
+    def from_json(cls, data: Mapping[str, Any]) -> RunResult:
+        return cls(
+            out=data["out"],
+            seed=data["seed"],
+            metrics=tuple(EpochMetrics.from_json(m) for m in data["metrics"]),
+            baselines=dict(data["baselines"]),
+            samples_per_second=data["samples_per_second"],
+            train_rows=data["train_rows"],
+            val_rows=data["val_rows"],
+        )
+
+
 @dataclass(frozen=True)
 class RunSummary:
     """What :func:`train_into` did (for several runs, :func:`pokerirl.poker.train_runs`: the
-    first run, and all of them)."""
+    first run, and all of them in ``results``)."""
 
     out_dir: Path
-    metrics: list[dict[str, Any]]
+    metrics: list[EpochMetrics]
     baselines: dict[str, float]
     samples_per_second: float
     train_rows: int
     val_rows: int
-    runs: tuple[dict[str, Any], ...] = ()  # several runs: each run's unit result
+    results: tuple[RunResult, ...] = ()  # several runs: each run's result
+
+    @property
+    def runs(self) -> tuple[Mapping[str, Any], ...]:
+        """``results`` as JSON (read by key by the command line; prefer ``results``)."""
+        return tuple(result.to_json() for result in self.results)
+
+
+@dataclass(frozen=True, kw_only=True)
+class MeanStd:
+    """Mean and sample standard deviation over runs."""
+
+    mean: float
+    std: float
+
+    def to_json(self) -> dict[str, float]:
+        return {"mean": self.mean, "std": self.std}
+
+    @classmethod
+    def from_json(cls, data: Mapping[str, Any]) -> MeanStd:
+        return cls(mean=data["mean"], std=data["std"])
+
+
+@dataclass(frozen=True, kw_only=True)
+class CurveStats:
+    """Mean and sample standard deviation over runs of one metric, epoch by epoch."""
+
+    mean: tuple[float, ...]
+    std: tuple[float, ...]
+
+    def to_json(self) -> dict[str, list[float]]:
+        return {"mean": list(self.mean), "std": list(self.std)}
+
+    @classmethod
+    def from_json(cls, data: Mapping[str, Any]) -> CurveStats:
+        return cls(mean=tuple(data["mean"]), std=tuple(data["std"]))
+
+
+@dataclass(frozen=True, kw_only=True)
+class RunsSummary:
+    """Several runs summarized (``summary.json``): each scalar metric per epoch and each
+    baseline, as mean and sample std (ddof 1) over runs."""
+
+    seeds: tuple[int, ...]
+    epochs: tuple[int, ...]
+    metrics: Mapping[str, CurveStats]
+    baselines: Mapping[str, MeanStd]
+
+    def to_json(self) -> dict[str, object]:
+        return {
+            "runs": len(self.seeds),
+            "seeds": list(self.seeds),
+            "epochs": list(self.epochs),
+            "metrics": {key: curve.to_json() for key, curve in self.metrics.items()},
+            "baselines": {key: stats.to_json() for key, stats in self.baselines.items()},
+        }
+
+    @classmethod
+    def from_json(cls, data: Mapping[str, Any]) -> RunsSummary:
+        return cls(
+            seeds=tuple(data["seeds"]),
+            epochs=tuple(data["epochs"]),
+            metrics={key: CurveStats.from_json(c) for key, c in data["metrics"].items()},
+            baselines={key: MeanStd.from_json(s) for key, s in data["baselines"].items()},
+        )
 
 
 # --------------------------------------------------------------------------- one run
@@ -101,9 +203,9 @@ def train_into(
 
     lines: list[str] = []
 
-    def log_epoch(metrics: dict[str, Any]) -> None:
+    def log_epoch(metrics: EpochMetrics) -> None:
         # Rewrite the whole (small) file each epoch: readable live, never half-written.
-        lines.append(json.dumps(metrics))
+        lines.append(json.dumps(metrics.to_json()))
         write_text(folder / METRICS_FILE, "\n".join(lines) + "\n")
 
     result = train(
@@ -133,7 +235,7 @@ def data_record(
     val_data: Transitions,
     *,
     path: str | os.PathLike[str] | None,
-) -> dict[str, Any]:
+) -> dict[str, object]:
     """What a run's ``config.json`` says of its data: where, which bytes, how it was split."""
     return {
         "path": None if path is None else str(Path(path).resolve()),
@@ -196,7 +298,7 @@ def save_run(
         write_torch(out / name, state)
     policy = result.policy
     if isinstance(getattr(policy, "low", None), Tensor):
-        space: dict[str, Any] = {
+        space: dict[str, object] = {
             "type": "box",
             "low": policy.get_buffer("low").tolist(),
             "high": policy.get_buffer("high").tolist(),
@@ -225,7 +327,7 @@ def save_run(
         "versions": package_versions(),
         "result": {
             "epochs": len(result.metrics),
-            "final_metrics": result.metrics[-1] if result.metrics else None,
+            "final_metrics": result.metrics[-1].to_json() if result.metrics else None,
             "baselines": dict(baselines or {}),
         },
     }
@@ -241,26 +343,26 @@ def save_run(
 # --------------------------------------------------------------------------- several runs: summary
 
 
-def summarize(results: Sequence[Mapping[str, Any]]) -> dict[str, Any]:
+def summarize(results: Sequence[RunResult]) -> RunsSummary:
     """Mean and sample std (ddof 1) over runs of each scalar metric per epoch and of each
     baseline."""
-    metrics = [r["metrics"] for r in results]
-    keys = [k for k, v in metrics[0][0].items() if isinstance(v, int | float) and k != "epoch"]
+    metrics = [r.metrics for r in results]
     by_metric = {}
-    for key in keys:
+    for key in metrics[0][0].scalars():
         values = np.array([[m[key] for m in run] for run in metrics], dtype=float)
-        by_metric[key] = {"mean": values.mean(0).tolist(), "std": _std(values).tolist()}
+        by_metric[key] = CurveStats(
+            mean=tuple(values.mean(0).tolist()), std=tuple(_std(values).tolist())
+        )
     by_baseline = {}
-    for key in results[0]["baselines"]:
-        values = np.array([[r["baselines"][key]] for r in results], dtype=float)
-        by_baseline[key] = {"mean": float(values.mean()), "std": float(_std(values)[0])}
-    return {
-        "runs": len(results),
-        "seeds": [r["seed"] for r in results],
-        "epochs": [m["epoch"] for m in metrics[0]],
-        "metrics": by_metric,
-        "baselines": by_baseline,
-    }
+    for key in results[0].baselines:
+        values = np.array([[r.baselines[key]] for r in results], dtype=float)
+        by_baseline[key] = MeanStd(mean=float(values.mean()), std=float(_std(values)[0]))
+    return RunsSummary(
+        seeds=tuple(r.seed for r in results),
+        epochs=tuple(m.epoch for m in metrics[0]),
+        metrics=by_metric,
+        baselines=by_baseline,
+    )
 
 
 def _std(values: np.ndarray) -> np.ndarray:
@@ -270,7 +372,7 @@ def _std(values: np.ndarray) -> np.ndarray:
 # --------------------------------------------------------------------------- loading
 
 
-def load_run_config(run_dir: str | os.PathLike[str]) -> dict[str, Any]:
+def load_run_config(run_dir: str | os.PathLike[str]) -> Mapping[str, Any]:
     """The ``config.json`` of a run (format 1 or 2), checked; ``RunError`` naming the file."""
     path = Path(run_dir) / CONFIG_FILE
     if not path.is_file() and (Path(run_dir) / SUMMARY_FILE).is_file():
@@ -320,7 +422,7 @@ def _architecture_problem(arch: Mapping[str, Any]) -> str | None:
         return f"'activation' must be one of {', '.join(ACTIVATIONS)}"
     if not isinstance(arch.get("layer_norm", False), bool):
         return "'layer_norm' must be true or false"
-    if arch.get("reward_family", "state_action") not in REWARD_FAMILIES:
+    if arch.get("reward_family", RewardFamily.STATE_ACTION) not in REWARD_FAMILIES:
         return f"'reward_family' must be one of {', '.join(REWARD_FAMILIES)}"
     gamma = arch.get("gamma", 0.99)
     if not isinstance(gamma, int | float) or isinstance(gamma, bool):
@@ -346,7 +448,7 @@ def build_from_record(record: Mapping[str, Any]) -> tuple[nn.Module, nn.Module]:
         policy_hidden=tuple(arch["policy_hidden"]),
         activation=arch.get("activation", "relu"),
         layer_norm=arch.get("layer_norm", False),
-        reward_family=arch.get("reward_family", "state_action"),
+        reward_family=arch.get("reward_family", RewardFamily.STATE_ACTION),
         gamma=float(arch.get("gamma", 0.99)),
     )
     discrete = space["type"] == "discrete"

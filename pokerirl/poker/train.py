@@ -34,7 +34,7 @@ import os
 import shutil
 import tempfile
 import uuid
-from collections.abc import Iterator
+from collections.abc import Iterator, Mapping
 from contextlib import contextmanager
 from dataclasses import replace
 from pathlib import Path
@@ -43,12 +43,14 @@ from typing import Any
 import numpy as np
 import torch
 
+from pokerirl.agents.reward_card import CARD_FILE
 from pokerirl.atomic import make_shareable, write_text
 from pokerirl.errors import Remedy
 from pokerirl.execution import Backend
 from pokerirl.irl.airl import resolve_device
-from pokerirl.irl.config import AIRLConfig
+from pokerirl.irl.config import AIRLConfig, Algo
 from pokerirl.irl.plots import plot_bands
+from pokerirl.irl.records import EpochMetrics
 from pokerirl.irl.run import (
     BASELINES_FILE,
     CONFIG_FILE,
@@ -56,6 +58,7 @@ from pokerirl.irl.run import (
     SUMMARY_FILE,
     TIMINGS_FILE,
     RunError,
+    RunResult,
     RunSummary,
     summarize,
     train_into,
@@ -74,7 +77,7 @@ def train_table(
     table: str | os.PathLike[str],
     out_dir: str | os.PathLike[str],
     *,
-    algo: str = "hairl",
+    algo: str = Algo.HAIRL,
     config: AIRLConfig | None = None,
     device: str = "cpu",
     progress: bool = True,
@@ -142,7 +145,7 @@ def write_reward_card(
 
 
 def train_unit(
-    table: bytes, table_path: str, algo: str, settings: dict[str, Any], device: str
+    table: bytes, table_path: str, algo: str, settings: Mapping[str, Any], device: str
 ) -> UnitOutput[None]:
     """One run of a fan-out: a top-level, picklable function of plain arguments.
 
@@ -174,22 +177,21 @@ def train_unit(
     return UnitOutput(files=files, unhashed=timings)
 
 
-def _run_result(folder: Path) -> dict[str, Any]:
-    """What :func:`~pokerirl.irl.run.summarize` needs of a finished run folder."""
+def _run_result(folder: Path) -> RunResult:
+    """A finished run folder, as :func:`~pokerirl.irl.run.summarize` reads it."""
     record = json.loads((folder / CONFIG_FILE).read_text(encoding="utf-8"))
     timings_path = folder / TIMINGS_FILE
     timings = json.loads(timings_path.read_text()) if timings_path.is_file() else {}
-    return {
-        "out": str(folder),
-        "seed": record["hyperparameters"]["seed"],
-        "metrics": [
-            json.loads(line) for line in (folder / METRICS_FILE).read_text().splitlines() if line
-        ],
-        "baselines": json.loads((folder / BASELINES_FILE).read_text()),
-        "samples_per_second": timings.get("samples_per_second", float("nan")),
-        "train_rows": record["data"]["train_rows"],
-        "val_rows": record["data"]["val_rows"],
-    }
+    lines = (folder / METRICS_FILE).read_text().splitlines()
+    return RunResult(
+        out=str(folder),
+        seed=record["hyperparameters"]["seed"],
+        metrics=tuple(EpochMetrics.from_json(json.loads(line)) for line in lines if line),
+        baselines=json.loads((folder / BASELINES_FILE).read_text()),
+        samples_per_second=timings.get("samples_per_second", float("nan")),
+        train_rows=record["data"]["train_rows"],
+        val_rows=record["data"]["val_rows"],
+    )
 
 
 def train_runs(
@@ -197,7 +199,7 @@ def train_runs(
     out_dir: str | os.PathLike[str],
     *,
     runs: int,
-    algo: str = "hairl",
+    algo: str = Algo.HAIRL,
     config: AIRLConfig | None = None,
     device: str = "cpu",
     progress: bool = True,
@@ -254,21 +256,21 @@ def train_runs(
     except UnitConflict as error:
         raise RunError(str(error), remedy=error.remedy) from None
     for folder in folders:  # runs of an older pokerirl, reused: add their card
-        if not (folder / "reward_card.json").is_file():
+        if not (folder / CARD_FILE).is_file():
             write_reward_card(folder, table)
     results = [_run_result(folder) for folder in folders]
-    summary = summarize(results)
+    summary = summarize(results).to_json()
     write_text(out / SUMMARY_FILE, json.dumps(summary, indent=2) + "\n")
     plot_bands(summary, out)
     first = results[0]
     return RunSummary(
         out_dir=out,
-        metrics=first["metrics"],
-        baselines=first["baselines"],
-        samples_per_second=float(np.nanmean([r["samples_per_second"] for r in results])),
-        train_rows=first["train_rows"],
-        val_rows=first["val_rows"],
-        runs=tuple(results),
+        metrics=list(first.metrics),
+        baselines=dict(first.baselines),
+        samples_per_second=float(np.nanmean([r.samples_per_second for r in results])),
+        train_rows=first.train_rows,
+        val_rows=first.val_rows,
+        results=tuple(results),
     )
 
 

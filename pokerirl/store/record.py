@@ -82,12 +82,12 @@ def digest(data: bytes) -> str:
     return f"sha256:{hashlib.sha256(data).hexdigest()}"
 
 
-def identity_of(config: Mapping[str, Any], inputs: Mapping[str, Any]) -> dict[str, Any]:
+def identity_of(config: Mapping[str, Any], inputs: Mapping[str, Any]) -> dict[str, Json]:
     """``{**config, **inputs}`` as plain JSON (tuples become lists), refusing a name in both."""
     both = sorted(config.keys() & inputs.keys())
     if both:
         raise ValueError(f"{both[0]!r} is both a setting and an input of the unit")
-    plain: dict[str, Any] = json.loads(json.dumps({**config, **inputs}, allow_nan=False))
+    plain: dict[str, Json] = json.loads(json.dumps({**config, **inputs}, allow_nan=False))
     return plain
 
 
@@ -130,11 +130,11 @@ class UnitRecord:
         )
 
     @property
-    def identity(self) -> dict[str, Any]:
+    def identity(self) -> dict[str, Json]:
         """What the fingerprint covers: ``{**config, **inputs}``."""
         return {**self.config, **self.inputs}
 
-    def to_json(self) -> dict[str, Any]:
+    def to_json(self) -> dict[str, Json]:
         """The record as written (always :data:`RECORD_FORMAT`)."""
         return {
             "format": RECORD_FORMAT,
@@ -207,13 +207,13 @@ def _text(value: Any) -> str:
     return value
 
 
-def _object(value: Any) -> dict[str, Any]:
+def _object(value: Any) -> dict[str, Json]:
     if not isinstance(value, dict):
         raise TypeError("object")
     return value
 
 
-def _stage_record(data: dict[str, Any]) -> UnitRecord:
+def _stage_record(data: Mapping[str, Any]) -> UnitRecord:
     try:
         stage, settings = _text(data["stage"]), _object(data["settings"])
         finished = data.get("finished") is True
@@ -258,9 +258,9 @@ def describe_changes(old: Any, new: Any, *, limit: int = 4) -> str:
     return ", ".join(parts) or "fingerprint differs"
 
 
-def _flatten(value: Any, prefix: str = "") -> dict[str, Any]:
+def _flatten(value: Any, prefix: str = "") -> dict[str, Json]:
     if isinstance(value, Mapping):
-        out: dict[str, Any] = {}
+        out: dict[str, Json] = {}
         for key, item in value.items():
             out.update(_flatten(item, f"{prefix}{key}."))
         return out

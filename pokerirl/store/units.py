@@ -131,7 +131,7 @@ class Unit(Generic[E]):
     accepts: Callable[[Json], bool] | None = None
 
     @cached_property
-    def identity(self) -> dict[str, Any]:
+    def identity(self) -> dict[str, Json]:
         return identity_of(self.config, self.inputs)
 
     @cached_property

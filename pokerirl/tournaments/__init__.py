@@ -6,7 +6,7 @@ Holm corrections, and the report files (``pokerirl tournament``, ``pokerirl repo
 ...     report = run_tournament([("raise", "random")], hands=2_000, seeds=parse_seeds("0-2"),
 ...                             out=out)
 >>> m = report.matchups[0]
->>> (m.agent_a, m.agent_b, len(m.seeds), m.pooled.n, report.family["per_seed_tests"])
+>>> (m.agent_a, m.agent_b, len(m.seeds), m.pooled.n, report.family.per_seed_tests)
 ('raise', 'random', 3, 3, 3)
 """
 

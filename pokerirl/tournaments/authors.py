@@ -30,7 +30,7 @@ import json
 import math
 import re
 import tempfile
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any, cast
@@ -113,7 +113,7 @@ class AuthorsMatchup:
             return float("nan")
         return float(means.std(ddof=1) / math.sqrt(means.size))
 
-    def summary(self) -> dict[str, Any]:
+    def summary(self) -> dict[str, object]:
         """The names the study's ``report.json`` keeps (``table1_authors.<matchup>``)."""
         se = self.se_over_experiments
         return {
@@ -128,11 +128,11 @@ class AuthorsMatchup:
             "agent_b": self.agent_b,
         }
 
-    def to_json(self) -> dict[str, Any]:
+    def to_json(self) -> dict[str, object]:
         return {**asdict(self), "summary": self.summary()}
 
     @classmethod
-    def from_json(cls, data: dict[str, Any]) -> AuthorsMatchup:
+    def from_json(cls, data: Mapping[str, Any]) -> AuthorsMatchup:
         fields = {k: v for k, v in data.items() if k != "summary"}
         fields["experiments"] = tuple(
             AuthorsExperiment(**{**e, "repeats_mbb": tuple(e["repeats_mbb"])})
@@ -146,7 +146,7 @@ def repeat_seed(experiment: int, repeat: int) -> int:
 
 
 def _play_experiment(
-    config: dict[str, Any], shipped_a: ShippedAgent, shipped_b: ShippedAgent
+    config: Mapping[str, Any], shipped_a: ShippedAgent, shipped_b: ShippedAgent
 ) -> UnitOutput[None]:
     """One experiment's repeats (a unit: in this process or a worker); the record keeps
     each repeat's mean mbb/h as its result."""
@@ -173,7 +173,7 @@ def _is_repeats(result: Json) -> bool:
     return isinstance(result, list)
 
 
-def _experiment(config: dict[str, Any], repeats_mbb: list[float]) -> AuthorsExperiment:
+def _experiment(config: Mapping[str, Any], repeats_mbb: list[float]) -> AuthorsExperiment:
     return AuthorsExperiment(
         experiment=config["experiment"],
         repeats_mbb=tuple(float(x) for x in repeats_mbb),

@@ -15,6 +15,7 @@ from __future__ import annotations
 import csv
 import io
 import json
+from collections.abc import Mapping
 from dataclasses import asdict, dataclass, field, fields, replace
 from pathlib import Path
 from typing import Any, Literal
@@ -25,6 +26,8 @@ from pokerirl.tournaments.lineup import TournamentError
 
 REPORT_FORMAT = "pokerirl-tournament/1"
 TIMINGS_FILE = "timings.json"
+REPORT_FILE, MARKDOWN_FILE = "report.json", "report.md"
+SEEDS_TABLE, SEEDS_FIGURE = "per_seed.csv", "per_seed.png"
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -74,6 +77,49 @@ class MatchupReport:
 
 
 @dataclass(frozen=True, kw_only=True)
+class TournamentSettings:
+    """What every seed of a tournament played: hands per seed, the seeds, duplicate deals or
+    not, the engine's batch, and the significance level."""
+
+    hands: int
+    seeds: tuple[int, ...]
+    duplicate: bool
+    batch_size: int
+    alpha: float
+
+    def to_json(self) -> dict[str, object]:
+        return {
+            "hands": self.hands,
+            "seeds": list(self.seeds),
+            "duplicate": self.duplicate,
+            "batch_size": self.batch_size,
+            "alpha": self.alpha,
+        }
+
+    @classmethod
+    def from_json(cls, data: Mapping[str, Any]) -> TournamentSettings:
+        return cls(**{**_pick(cls, data), "seeds": tuple(data["seeds"])})
+
+
+@dataclass(frozen=True, kw_only=True)
+class FamilySizes:
+    """The two families of tests: per seed (seeds x matchups) and pooled (matchups), each
+    with its Bonferroni threshold."""
+
+    per_seed_tests: int
+    per_seed_threshold: float
+    pooled_tests: int
+    pooled_threshold: float
+
+    def to_json(self) -> dict[str, object]:
+        return asdict(self)
+
+    @classmethod
+    def from_json(cls, data: Mapping[str, Any]) -> FamilySizes:
+        return cls(**_pick(cls, data))
+
+
+@dataclass(frozen=True, kw_only=True)
 class TournamentReport:
     """Everything ``pokerirl tournament`` found, ready to write or print.
 
@@ -85,13 +131,13 @@ class TournamentReport:
     which :func:`load_report` reads back when it is there.
     """
 
-    config: dict[str, Any]
-    family: dict[str, Any]
+    config: TournamentSettings
+    family: FamilySizes
     matchups: tuple[MatchupReport, ...]
-    versions: dict[str, str | None]
-    timing: dict[str, Any] = field(default_factory=dict)
+    versions: Mapping[str, str | None]
+    timing: Mapping[str, Any] = field(default_factory=dict)  # timings.json, as read
 
-    def to_dict(self) -> dict[str, Any]:
+    def to_dict(self) -> dict[str, object]:
         """Plain JSON-ready data (tuples become lists), without the timings."""
         data = asdict(self)
         del data["timing"]
@@ -100,7 +146,7 @@ class TournamentReport:
         return {"format": REPORT_FORMAT, **json.loads(json.dumps(data))}
 
     @classmethod
-    def from_dict(cls, data: dict[str, Any]) -> TournamentReport:
+    def from_dict(cls, data: Mapping[str, Any]) -> TournamentReport:
         """The inverse of :meth:`to_dict`."""
         if data.get("format") != REPORT_FORMAT:
             raise TournamentError(f"not a {REPORT_FORMAT} report (format {data.get('format')!r})")
@@ -114,14 +160,22 @@ class TournamentReport:
             )
             for m in data["matchups"]
         )
-        return cls(**{**_pick(cls, data), "matchups": matchups, "timing": {}})
+        return cls(
+            **{
+                **_pick(cls, data),
+                "config": TournamentSettings.from_json(data["config"]),
+                "family": FamilySizes.from_json(data["family"]),
+                "matchups": matchups,
+                "timing": {},
+            }
+        )
 
 
-def _pick(kind: type, data: dict[str, Any]) -> dict[str, Any]:
+def _pick(kind: type, data: Mapping[str, Any]) -> dict[str, Any]:
     return {f.name: data[f.name] for f in fields(kind) if f.name in data}
 
 
-def _line(kind: type[Line], data: dict[str, Any]) -> Line:
+def _line(kind: type[Line], data: Mapping[str, Any]) -> Line:
     return kind(**{**_pick(kind, data), "ci95": tuple(data["ci95"])})
 
 
@@ -134,10 +188,10 @@ def write_report(report: TournamentReport, out: Path) -> None:
     out.mkdir(parents=True, exist_ok=True)
     if report.timing:
         atomic.write_text(out / TIMINGS_FILE, json.dumps(report.timing, indent=2) + "\n")
-    atomic.write_text(out / "report.md", render_markdown(report))
-    atomic.write_text(out / "per_seed.csv", render_csv(report))
-    atomic.write_bytes(out / "per_seed.png", render_png(report))
-    atomic.write_text(out / "report.json", render_json(report))
+    atomic.write_text(out / MARKDOWN_FILE, render_markdown(report))
+    atomic.write_text(out / SEEDS_TABLE, render_csv(report))
+    atomic.write_bytes(out / SEEDS_FIGURE, render_png(report))
+    atomic.write_text(out / REPORT_FILE, render_json(report))
 
 
 def load_report(out: Path | str) -> TournamentReport:
@@ -147,11 +201,11 @@ def load_report(out: Path | str) -> TournamentReport:
         TournamentError: one line naming ``report.json`` if it is missing, not JSON, or not a
             whole report.
     """
-    path = Path(out) / "report.json"
+    path = Path(out) / REPORT_FILE
     try:
         data = json.loads(path.read_text())
     except FileNotFoundError:
-        raise TournamentError(f"{out}: no report.json (run pokerirl tournament first)") from None
+        raise TournamentError(f"{out}: no {REPORT_FILE} (run pokerirl tournament first)") from None
     except (OSError, json.JSONDecodeError) as error:
         raise TournamentError(f"{path}: cannot read the report ({error})") from None
     if not isinstance(data, dict):
@@ -214,12 +268,12 @@ def _threshold(alpha: float, tests: int) -> str:
 
 def render_markdown(report: TournamentReport) -> str:
     config, family = report.config, report.family
-    alpha, seeds = config["alpha"], config["seeds"]
-    per_seed_rule = _threshold(alpha, family["per_seed_tests"])
-    pooled_rule = _threshold(alpha, family["pooled_tests"])
+    alpha, seeds = config.alpha, config.seeds
+    per_seed_rule = _threshold(alpha, family.per_seed_tests)
+    pooled_rule = _threshold(alpha, family.pooled_tests)
     names = ", ".join(f"{m.agent_a} vs {m.agent_b}" for m in report.matchups)
-    unit = "duplicate pair (a deal played from both seats)" if config["duplicate"] else "hand"
-    seating = "duplicate deals" if config["duplicate"] else "seats alternating, no duplicate"
+    unit = "duplicate pair (a deal played from both seats)" if config.duplicate else "hand"
+    seating = "duplicate deals" if config.duplicate else "seats alternating, no duplicate"
     pooled_how = (
         f"the mean of the {len(seeds)} per-seed means, with its standard error and a t-test "
         f"over those {len(seeds)} values (df {len(seeds) - 1}): seeds are the replicates"
@@ -229,7 +283,7 @@ def render_markdown(report: TournamentReport) -> str:
     out = [
         f"# Tournament: {names}",
         "",
-        f"{config['hands']:,} hands per seed, seeds {format_seeds(seeds)} ({len(seeds)}), "
+        f"{config.hands:,} hands per seed, seeds {format_seeds(seeds)} ({len(seeds)}), "
         f"{seating}. Payoffs are the first agent's, in milli-big-blinds per hand (mbb/h).",
         "",
         "## Results",
@@ -247,13 +301,13 @@ def render_markdown(report: TournamentReport) -> str:
         )
     out += [
         "",
-        f"Pooled: {pooled_how}. Bonferroni and Holm over the {family['pooled_tests']} pooled "
+        f"Pooled: {pooled_how}. Bonferroni and Holm over the {family.pooled_tests} pooled "
         f"test(s), one per matchup.",
         "",
         "## Per seed",
         "",
         f"Unit: one {unit}; standard errors, CIs and two-sided t-tests are over the units of "
-        f"each seed. Bonferroni and Holm over all {family['per_seed_tests']} per-seed tests "
+        f"each seed. Bonferroni and Holm over all {family.per_seed_tests} per-seed tests "
         f"({len(seeds)} seeds x {len(report.matchups)} matchup(s)): significant if "
         f"{per_seed_rule} (the paper's 0.05/20 is this threshold for one matchup and 20 "
         "seeds).",
@@ -282,7 +336,7 @@ def render_markdown(report: TournamentReport) -> str:
             out.append(f"- {m.agent_a} vs {m.agent_b}, {side} = `{spec}`: {shown}")
     versions = ", ".join(f"{name} {version}" for name, version in report.versions.items())
     out += [
-        f"- batch size {config['batch_size']}; versions: {versions}",
+        f"- batch size {config.batch_size}; versions: {versions}",
         f"- wall-clock figures of the last run (and the seeds it reused): {TIMINGS_FILE}",
         "",
     ]
@@ -331,7 +385,7 @@ def render_png(report: TournamentReport) -> bytes:
     """
     from matplotlib.figure import Figure
 
-    figure = Figure(figsize=(max(6.0, 0.35 * len(report.config["seeds"]) + 3), 4.0))
+    figure = Figure(figsize=(max(6.0, 0.35 * len(report.config.seeds) + 3), 4.0))
     axes = figure.subplots()
     width = 0.6 / max(1, len(report.matchups))
     for i, m in enumerate(report.matchups):
@@ -349,7 +403,7 @@ def render_png(report: TournamentReport) -> bytes:
     axes.axhline(0.0, color="black", linewidth=0.8)
     axes.set_xlabel("seed")
     axes.set_ylabel("mbb/h (first agent), 95% CI")
-    axes.set_title(f"{report.config['hands']:,} hands per seed; dashed: pooled mean")
+    axes.set_title(f"{report.config.hands:,} hands per seed; dashed: pooled mean")
     axes.legend(fontsize="small")
     figure.tight_layout()
     buffer = io.BytesIO()

@@ -41,7 +41,7 @@ import re
 import sys
 import tempfile
 import time
-from collections.abc import Iterator, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
@@ -60,10 +60,12 @@ from pokerirl.tournaments.lineup import (
     check_specs,
 )
 from pokerirl.tournaments.report import (
+    FamilySizes,
     Line,
     MatchupReport,
     SeedLine,
     TournamentReport,
+    TournamentSettings,
     write_report,
 )
 from pokerirl.tournaments.stats import Estimate, bonferroni, estimate, holm
@@ -262,19 +264,19 @@ def _validate(
 Cell = tuple[int, int]  # (matchup index, seed)
 
 
-def _corrected(estimates: list[Estimate], alpha: float) -> list[dict[str, Any]]:
-    """Each estimate's fields with Bonferroni and Holm over the whole list (one family)."""
+def _corrected(estimates: list[Estimate], alpha: float) -> list[Line]:
+    """Each estimate with Bonferroni and Holm over the whole list (one family)."""
     p = np.array([e.p_value for e in estimates])
     p_bonferroni, p_holm = bonferroni(p), holm(p)
     threshold = alpha / len(estimates)
     return [
-        {
+        Line(
             **asdict(e),
-            "p_value_bonferroni": float(p_bonferroni[i]),
-            "p_value_holm": float(p_holm[i]),
-            "significant_bonferroni": bool(e.p_value < threshold),
-            "significant_holm": bool(p_holm[i] < alpha),
-        }
+            p_value_bonferroni=float(p_bonferroni[i]),
+            p_value_holm=float(p_holm[i]),
+            significant_bonferroni=bool(e.p_value < threshold),
+            significant_holm=bool(p_holm[i] < alpha),
+        )
         for i, e in enumerate(estimates)
     ]
 
@@ -404,7 +406,7 @@ def _build_report(
     duplicate: bool,
     alpha: float,
     batch_size: int,
-    timing: dict[str, Any],
+    timing: Mapping[str, Any],
 ) -> TournamentReport:
     cells = [(m, seed) for m in range(len(matchups)) for seed in seeds]
     per_seed = dict(zip(cells, _corrected([done[c].estimate for c in cells], alpha), strict=True))
@@ -421,7 +423,7 @@ def _build_report(
     for m, (a, b) in enumerate(matchups):
         lines = tuple(
             SeedLine(
-                **per_seed[m, seed],
+                **asdict(per_seed[m, seed]),
                 seed=seed,
                 hands=hands,
                 fingerprint_a=done[m, seed].key.fingerprint_a,
@@ -435,25 +437,22 @@ def _build_report(
                 agent_b=agent_label(b),
                 spec_a=a,
                 spec_b=b,
-                pooled=Line(**pooled[m]),
+                pooled=pooled[m],
                 pooled_over="seeds" if len(seeds) > 1 else "units of the only seed",
                 seeds=lines,
             )
         )
     return TournamentReport(
-        config={
-            "hands": hands,
-            "seeds": list(seeds),
-            "duplicate": duplicate,
-            "batch_size": batch_size,
-            "alpha": alpha,
-        },
-        family={
-            "per_seed_tests": len(cells),
-            "per_seed_threshold": alpha / len(cells),
-            "pooled_tests": len(matchups),
-            "pooled_threshold": alpha / len(matchups),
-        },
+        config=TournamentSettings(
+            hands=hands, seeds=tuple(seeds), duplicate=duplicate, batch_size=batch_size,
+            alpha=alpha,
+        ),  # fmt: skip
+        family=FamilySizes(
+            per_seed_tests=len(cells),
+            per_seed_threshold=alpha / len(cells),
+            pooled_tests=len(matchups),
+            pooled_threshold=alpha / len(matchups),
+        ),
         matchups=tuple(reports),
         versions=package_versions(),
         timing=timing,

@@ -23,9 +23,9 @@ import numpy as np
 
 from pokerirl.gym.presets import TASKS, RLSettings
 from pokerirl.gym.rewards import RewardCallable
-from pokerirl.gym.rl import EVAL_SEED, CurvePoint, RLResult, check_reward, save_run
+from pokerirl.gym.rl import EVAL_SEED, CurvePoint, RLBackend, RLResult, check_reward, save_run
 
-BACKEND = "lockstep"
+BACKEND = RLBackend.LOCKSTEP
 
 
 class LockstepAlgo(Protocol):
