@@ -7,8 +7,8 @@ from pathlib import Path
 
 import pytest
 
-from pokerirl.demo import DemoConfig, run_demo
-from pokerirl.study import preset
+from pokerirl.studies.demo import DemoConfig, run_demo
+from pokerirl.studies.poker import preset
 
 
 @pytest.mark.slow

@@ -20,11 +20,11 @@ pytest.importorskip("stable_baselines3")
 from pokerirl.cli import app  # noqa: E402
 from pokerirl.execution import pinned_threads  # noqa: E402
 from pokerirl.gym.experts import build_policy, evaluate, policy_kwargs  # noqa: E402
-from pokerirl.gym.jobs import RLJob  # noqa: E402
 from pokerirl.gym.lockstep import LockstepPPO  # noqa: E402
 from pokerirl.gym.lockstep.group import train_rl_group  # noqa: E402
 from pokerirl.gym.presets import TASKS, PPOSettings, RLSettings  # noqa: E402
 from pokerirl.gym.rl import EVAL_SEED, train_rl  # noqa: E402
+from pokerirl.studies.gym_units import RLJob  # noqa: E402
 
 CARTPOLE = RLSettings(
     algo="ppo",
@@ -250,7 +250,7 @@ def test_gym_study_lockstep_reuses_every_unit(tmp_path: Path) -> None:
 
 def test_a_group_is_one_folder_of_runs() -> None:
     """Study: one group per task and reward kind; sweep: one per point (its own rl/ folder)."""
-    from pokerirl.gym.study import rl_jobs, study_preset
+    from pokerirl.studies.gym import rl_jobs, study_preset
 
     preset = study_preset("quick", tasks=("Acrobot-v1",), runs=3)
     jobs = [job for root in ("points/a", "points/b")

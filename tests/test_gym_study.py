@@ -16,8 +16,8 @@ pytest.importorskip("stable_baselines3")
 
 from pokerirl.cli import app  # noqa: E402
 from pokerirl.execution import Backend  # noqa: E402
-from pokerirl.gym.jobs import DATA_FILE  # noqa: E402
-from pokerirl.gym.study import (  # noqa: E402
+from pokerirl.irl import load_reward  # noqa: E402
+from pokerirl.studies.gym import (  # noqa: E402
     REWARDS,
     GymStudyError,
     authors_budget,
@@ -25,8 +25,8 @@ from pokerirl.gym.study import (  # noqa: E402
     run_gym_study,
     study_preset,
 )
-from pokerirl.gym.sweep import parse_param, sweep_points  # noqa: E402
-from pokerirl.irl import load_reward  # noqa: E402
+from pokerirl.studies.gym_units import DATA_FILE  # noqa: E402
+from pokerirl.studies.sweep import parse_param, sweep_points  # noqa: E402
 
 TINY = ["--runs", "2", "--transitions", "1500", "--epochs", "2", "--eval-episodes", "2"]
 TINY += ["--timesteps", "2000", "--jobs", "2", "--quiet"]

@@ -35,7 +35,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("irl",),
     ("agents", "gym", "poker"),  # poker: decision tables as Transitions, `pokerirl train`
     ("tournaments",),
-    ("studies", "study", "demo"),
+    ("studies",),
     ("cli", "__main__"),
 )
 LAYER = {component: rank for rank, names in enumerate(LAYERS) for component in names}
@@ -44,7 +44,7 @@ LAYER = {component: rank for rank, names in enumerate(LAYERS) for component in n
 # (named here too, so that a change to LAYERS cannot let them in) nothing above it.
 IRL_FORBIDDEN = frozenset(
     {"encoding", "parsers", "datasets", "game"}  # poker, below irl/
-    | {"agents", "gym", "poker", "tournaments", "study", "studies", "demo", "cli", "__main__"}
+    | {"agents", "gym", "poker", "tournaments", "studies", "cli", "__main__"}
 )
 
 # (module, component it must not import) -> why it still does. Empty: add an entry only with

@@ -169,7 +169,7 @@ def _set(document: Any, path: tuple[Any, ...], value: Any) -> Any:
 def test_report_on_a_damaged_gym_summary_is_one_line_never_a_crash(
     study: Path, tmp_path: Path
 ) -> None:
-    from pokerirl.gym.study import GymStudyError, load_gym_study
+    from pokerirl.studies.gym import GymStudyError, load_gym_study
 
     summary = json.loads((study / "summary.json").read_text())
     load_gym_study(study)  # the real one renders

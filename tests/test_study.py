@@ -10,8 +10,8 @@ from typer.testing import CliRunner
 
 from pokerirl.cli import app
 from pokerirl.game.synth import write_synthetic_month
-from pokerirl.study import StudyError, load_study_report, parse_seeds, preset, run_study
-from pokerirl.study.report import FIGURES
+from pokerirl.studies.poker import StudyError, load_study_report, parse_seeds, preset, run_study
+from pokerirl.studies.poker.report import FIGURES
 from pokerirl.tournaments import load_report
 
 TOY = dict(

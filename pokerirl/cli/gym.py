@@ -91,8 +91,8 @@ def gym_expert(
         expert_settings,
         train_expert,
     )
-    from pokerirl.gym.job import claim
     from pokerirl.store import staged_files, tidy
+    from pokerirl.studies.gym_job import claim
 
     _known_task(env)
     _folder_out(out)
@@ -226,9 +226,9 @@ def gym_rl(
     from contextlib import ExitStack
 
     from pokerirl.gym.experts import CONFIG_FILE, METRICS_FILE, MODEL_FILE
-    from pokerirl.gym.job import claim
     from pokerirl.gym.rl import mean_std, train_rl
     from pokerirl.store import digest, staged_folder, tidy
+    from pokerirl.studies.gym_job import claim
 
     if (reward_run is None) == (not env_reward):
         fail("give exactly one of --reward-run DIR and --env-reward")
@@ -463,7 +463,7 @@ GYM_QUIET = typer.Option(False, "--quiet", "-q", help="No progress bars.")
 
 def _gym_preset(name: str, task: str, **overrides: int | None) -> Any:
     """The study preset ``name`` for ``task`` (or all) with the command line's overrides."""
-    from pokerirl.gym.study import parse_tasks, study_preset
+    from pokerirl.studies.gym import parse_tasks, study_preset
 
     preset = study_preset(name, tasks=parse_tasks(task), **overrides)
     if preset.seed + preset.runs - 1 > MAX_SEED:  # run k uses seed + k
@@ -495,7 +495,7 @@ def gym_study(
     """The paper's Gymnasium study: shipped expert -> data -> IRL (AIRL and H-AIRL) -> RL (env
     reward, AIRL and H-AIRL rewards) -> summary.json, figures/ and report.md beside the
     authors' finals. Resumable: finished units are kept."""
-    from pokerirl.gym.study import run_gym_study
+    from pokerirl.studies.gym import run_gym_study
 
     _rl_backend(rl_backend)
     try:
@@ -543,8 +543,8 @@ def sweep(
 ) -> None:
     """One-factor-at-a-time ablation of H-AIRL (the paper's Figure 5): each point runs the IRL
     phase, then RL on its learned rewards; writes sweep.csv, sweep.json and PARAM.png."""
-    from pokerirl.gym.study import GymStudyError
-    from pokerirl.gym.sweep import parse_param, run_sweep
+    from pokerirl.studies.gym import GymStudyError
+    from pokerirl.studies.sweep import parse_param, run_sweep
 
     _rl_backend(rl_backend)
     try:

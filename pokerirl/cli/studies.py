@@ -57,7 +57,7 @@ def demo(
     tournament -> panel -> report.md, report.json and figures; then OUT/gym: expert data ->
     AIRL and H-AIRL -> DQN on each reward -> OUT/gym/report.md. A rerun skips finished work.
     """
-    from pokerirl.demo import DemoConfig, run_demo, run_gym_demo
+    from pokerirl.studies.demo import DemoConfig, run_demo, run_gym_demo
 
     with _one_line_errors(out):
         result = run_demo(
@@ -124,7 +124,7 @@ def study(
     DQN agents (sparse, AIRL and H-AIRL rewards), Table 1, the panel, and a report beside the
     paper's numbers (report.md, report.json, panel.csv, figures/), with the reward cards.
     --preset authors adds the authors' tournament protocol. Resumable by stage."""
-    from pokerirl.study import parse_seeds, preset, run_study
+    from pokerirl.studies.poker import parse_seeds, preset, run_study
 
     sources_given = []
     for item in reward_run:
@@ -184,7 +184,7 @@ def transfer(
     visits and by its action shares, beside the expert bots, always-call and a sparse DQN.
     Writes OUT/transfer.json and transfer.md; a rerun reuses the trained agents."""
     from pokerirl.seeds import parse_seeds
-    from pokerirl.study.transfer import TransferConfig, parse_list, run_transfer
+    from pokerirl.studies.poker.transfer import TransferConfig, parse_list, run_transfer
 
     with usage_errors():
         config = TransferConfig(
@@ -213,8 +213,8 @@ def report(
     output_format: str = typer.Option("markdown", "--format", help="markdown or json."),
 ) -> None:
     """Print a study or tournament report (Markdown, or JSON for scripts)."""
-    from pokerirl.gym.study import is_gym_study, load_gym_study
-    from pokerirl.study import is_study_report, load_study_report, render_markdown
+    from pokerirl.studies.gym import is_gym_study, load_gym_study
+    from pokerirl.studies.poker import is_study_report, load_study_report, render_markdown
     from pokerirl.tournaments import load_report, render_report
 
     if output_format not in ("markdown", "text", "json"):

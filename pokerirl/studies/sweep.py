@@ -13,7 +13,7 @@ preset value) are computed once. ``out`` gets::
     sweep.json                           the same, with the settings and the curves' finals
     <parameter>.png                      the finals against the parameter's values
 
-Every unit is resumable as in the study (:mod:`pokerirl.gym.jobs`).
+Every unit is resumable as in the study (:mod:`pokerirl.studies.gym_units`).
 """
 
 from __future__ import annotations
@@ -33,10 +33,9 @@ import numpy as np
 from pokerirl.atomic import atomic_path, write_text
 from pokerirl.execution import Backend
 from pokerirl.gym.irl import irl_config
-from pokerirl.gym.jobs import DATA_FILE, Say, run_data_jobs, run_irl_jobs, run_rl_jobs
 from pokerirl.gym.presets import TASKS, StudyPreset
 from pokerirl.gym.rl import DEFAULT_RL_BACKEND, mean_std
-from pokerirl.gym.study import (
+from pokerirl.studies.gym import (
     GymStudyError,
     check_rl_backend,
     data_job,
@@ -44,6 +43,7 @@ from pokerirl.gym.study import (
     rl_curves,
     rl_jobs,
 )
+from pokerirl.studies.gym_units import DATA_FILE, Say, run_data_jobs, run_irl_jobs, run_rl_jobs
 
 SWEEP_FORMAT = "pokerirl-gym-sweep/1"
 PARAMS = ("alpha", "beta", "sigma_start", "sigma_end")

@@ -31,7 +31,7 @@ import numpy as np
 
 from pokerirl.atomic import write_text
 from pokerirl.execution import Backend, fingerprint
-from pokerirl.study.config import (
+from pokerirl.studies.poker.config import (
     AGENT_KINDS,
     BUILT_INS,
     IRL_ALGOS,

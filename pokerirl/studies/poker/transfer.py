@@ -36,7 +36,7 @@ import numpy as np
 from pokerirl.atomic import write_text
 from pokerirl.encoding import ACTIONS
 from pokerirl.execution import Backend
-from pokerirl.study.config import AGENT_PRESETS
+from pokerirl.studies.poker.config import AGENT_PRESETS
 
 TRANSFER_FILE, TRANSFER_MARKDOWN = "transfer.json", "transfer.md"
 EVAL_SEED = 4_242_424

@@ -18,7 +18,7 @@ One task writes into ``out`` itself; several write ``out/<env>/`` each (the same
                                          2-d observations and discrete actions: MountainCar)
     summary.json, report.md
 
-Every unit (data, IRL, RL run) is resumable on its own (:mod:`pokerirl.gym.jobs`): a rerun
+Every unit (data, IRL, RL run) is resumable on its own (:mod:`pokerirl.studies.gym_units`): a rerun
 keeps the finished ones and refuses, in one line, units made with other settings unless
 ``overwrite``.
 """
@@ -37,7 +37,9 @@ import numpy as np
 
 from pokerirl.atomic import write_text
 from pokerirl.execution import Backend
-from pokerirl.gym.jobs import (
+from pokerirl.gym.presets import PRESETS, TASK_ORDER, TASKS, MeanStd, StudyPreset
+from pokerirl.gym.rl import DEFAULT_RL_BACKEND, mean_std
+from pokerirl.studies.gym_units import (
     DATA_FILE,
     DataJob,
     IRLJob,
@@ -47,8 +49,6 @@ from pokerirl.gym.jobs import (
     run_irl_jobs,
     run_rl_jobs,
 )
-from pokerirl.gym.presets import PRESETS, TASK_ORDER, TASKS, MeanStd, StudyPreset
-from pokerirl.gym.rl import DEFAULT_RL_BACKEND, mean_std
 
 SUMMARY_FORMAT = "pokerirl-gym-study/1"
 ALGOS = ("airl", "hairl")
@@ -262,7 +262,7 @@ def is_gym_study(folder: str | os.PathLike[str]) -> bool:
 
 def load_gym_study(folder: str | os.PathLike[str]) -> tuple[dict[str, Any], str]:
     """A finished study's ``summary.json`` and its report rendered again (``pokerirl report``)."""
-    from pokerirl.gym.summary_check import check_summary
+    from pokerirl.studies.gym_summary_check import check_summary
 
     path = Path(folder) / "summary.json"
     try:

@@ -9,9 +9,9 @@ from typing import Any
 
 from pokerirl import atomic
 from pokerirl.encoding import ACTIONS
-from pokerirl.study import paper
-from pokerirl.study.config import AGENT_KINDS, IRL_ALGOS, StudyConfig, StudyError
-from pokerirl.study.pipeline import mean_std
+from pokerirl.studies.poker import paper
+from pokerirl.studies.poker.config import AGENT_KINDS, IRL_ALGOS, StudyConfig, StudyError
+from pokerirl.studies.poker.pipeline import mean_std
 
 REPORT_FORMAT = "pokerirl-study-report/1"
 FIGURES = {
