@@ -216,13 +216,14 @@ def test_bad_inputs_are_one_line(tmp_path: Path) -> None:
         (["gym", "study", "Pong-v5", "--out", str(tmp_path / "a")], "unknown task 'Pong-v5'"),
         (["gym", "study", "MountainCar-v0", "--preset", "huge", "--out", str(tmp_path / "b")],
          "unknown preset 'huge'"),
-        (["sweep", "MountainCar-v0", "--param", "gamma=0.9", "--out", str(tmp_path / "c")],
+        (["gym", "sweep", "MountainCar-v0", "--param", "gamma=0.9", "--out", str(tmp_path / "c")],
          "bad --param 'gamma=0.9'"),
-        (["sweep", "MountainCar-v0", "--param", "alpha=0,2", "--out", str(tmp_path / "d")],
+        (["gym", "sweep", "MountainCar-v0", "--param", "alpha=0,2", "--out", str(tmp_path / "d")],
          "alpha must be in [0, 1], got 2"),
-        (["sweep", "MountainCar-v0", "--param", "beta=0", "--param", "beta=1", "--out",
+        (["gym", "sweep", "MountainCar-v0", "--param", "beta=0", "--param", "beta=1", "--out",
           str(tmp_path / "e")], "given twice"),
-        (["sweep", "MountainCar-v0", "--param", "sigma_end=0.04,2", "--out", str(tmp_path / "f")],
+        (["gym", "sweep", "MountainCar-v0", "--param", "sigma_end=0.04,2", "--out",
+          str(tmp_path / "f")],
          "point alpha=0.1_beta=0.25_sigma_start=1_sigma_end=2: invalid AIRL config"),
     ]  # fmt: skip
     for args, message in cases:
@@ -237,6 +238,48 @@ def test_bad_inputs_are_one_line(tmp_path: Path) -> None:
     result = runner.invoke(app, ["gym", "study", "MountainCar-v0", "--out", str(afile)])
     assert result.exit_code == 1 and "is not a folder" in result.output
     assert afile.read_text() == "x"
+
+
+SWEEP_WARNING = "warning: 'pokerirl sweep' is deprecated; use 'pokerirl gym sweep'"
+
+
+def test_sweep_is_a_gym_command_and_the_old_name_a_hidden_alias_that_warns_once(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    import pokerirl.studies.sweep as sweep
+    from pokerirl.studies.sweep import SweepResult
+
+    calls: list[tuple[tuple, dict]] = []
+
+    def fake_sweep(*args: object, **kwargs: object) -> SweepResult:
+        calls.append((args, kwargs))
+        return SweepResult(out=tmp_path, env="MountainCar-v0", rows=(), figures=())
+
+    monkeypatch.setattr(sweep, "run_sweep", fake_sweep)
+    runner = CliRunner()
+    args = ["MountainCar-v0", "--param", "alpha=0,1", "--out", str(tmp_path), "--runs", "3",
+            "--seed", "7", "--epochs", "2", "--jobs", "1", "-q", "--rl-backend", "sb3"]  # fmt: skip
+    new = runner.invoke(app, ["gym", "sweep", *args])
+    assert new.exit_code == 0, new.output
+    assert new.stderr == ""
+    old = runner.invoke(app, ["sweep", *args])
+    assert old.exit_code == 0, old.output
+    assert old.stderr == SWEEP_WARNING + "\n"  # exactly one line
+    assert old.stdout == new.stdout
+    (new_args, new_kwargs), (old_args, old_kwargs) = calls
+    assert new_args[1] == {"alpha": (0.0, 1.0)} and new_args[2].runs == 3
+    assert new_args[2].seed == 7 and new_kwargs["rl_backend"] == "sb3"
+    new_kwargs.pop("backend"), old_kwargs.pop("backend")
+    assert (old_args, old_kwargs) == (new_args, new_kwargs)  # every option passed through
+    # The alias refuses as gym sweep does, after its warning line.
+    bad = runner.invoke(app, ["sweep", "MountainCar-v0", "--param", "gamma=1", "--out",
+                              str(tmp_path)])  # fmt: skip
+    assert bad.exit_code == 1
+    assert bad.stderr.splitlines()[0] == SWEEP_WARNING
+    assert bad.stderr.splitlines()[1].startswith("error: bad --param 'gamma=1'")
+    # Listed under gym only.
+    assert " sweep " not in runner.invoke(app, ["--help"]).output
+    assert " sweep " in runner.invoke(app, ["gym", "--help"]).output
 
 
 def test_parse_tasks_and_points() -> None:
@@ -258,7 +301,8 @@ def test_parse_tasks_and_points() -> None:
 @pytest.mark.slow
 def test_sweep_runs_irl_then_rl_per_point_and_shares_the_preset_point(tmp_path: Path) -> None:
     out = tmp_path / "sweep"
-    args = ["sweep", "MountainCar-v0", "--param", "alpha=0.1,1", "--param", "sigma_end=0.04,0.5"]
+    args = ["gym", "sweep", "MountainCar-v0", "--param", "alpha=0.1,1"]
+    args += ["--param", "sigma_end=0.04,0.5"]
     args += ["--out", str(out), "--runs", "2", "--transitions", "1500", "--epochs", "2"]
     args += ["--eval-episodes", "2", "--timesteps", "1000", "--jobs", "2", "-q"]
     result = CliRunner().invoke(app, args)

@@ -1,7 +1,8 @@
-"""The Gymnasium commands: pokerirl gym ... and the sweep."""
+"""The Gymnasium commands: pokerirl gym ... (the study and the sweep among them)."""
 
 from __future__ import annotations
 
+import functools
 import json
 from pathlib import Path
 from typing import Any
@@ -521,8 +522,8 @@ def gym_study(
     echo(f"report: {out / 'report.md'}")
 
 
-@app.command()
-def sweep(
+@gym_app.command("sweep")
+def gym_sweep(
     env: str = typer.Argument(..., help="The task, e.g. MountainCar-v0."),
     param: list[str] = typer.Option(
         ..., "--param", help="NAME=V1,V2,...: alpha, beta, sigma_start or sigma_end; repeatable."
@@ -583,3 +584,14 @@ def sweep(
             line += f", alignment {100 * row['final_alignment_mean']:.1f}%"
         echo(line)
     echo(f"wrote {out / 'sweep.csv'} and {', '.join(str(p) for p in result.figures)}")
+
+
+SWEEP_DEPRECATED = "'pokerirl sweep' is deprecated; use 'pokerirl gym sweep'"
+
+
+@app.command("sweep", hidden=True)
+@functools.wraps(gym_sweep)
+def sweep(*args: Any, **kwargs: Any) -> None:
+    # The old name of gym sweep, kept for scripts: the same options, one warning line first.
+    typer.secho(f"warning: {SWEEP_DEPRECATED}", err=True, fg=typer.colors.YELLOW)
+    gym_sweep(*args, **kwargs)
