@@ -19,7 +19,7 @@ from pokerirl.execution import Backend  # noqa: E402
 from pokerirl.irl import load_reward  # noqa: E402
 from pokerirl.studies.gym import (  # noqa: E402
     REWARDS,
-    GymStudyError,
+    StudyError,
     authors_budget,
     parse_tasks,
     run_gym_study,
@@ -288,7 +288,7 @@ def test_parse_tasks_and_points() -> None:
     assert all(authors_budget(env, paper) for env in paper.tasks)
     assert not authors_budget("Acrobot-v1", study_preset("paper", runs=3))
     assert not authors_budget("Acrobot-v1", study_preset("paper", rl_timesteps=1000))
-    with pytest.raises(GymStudyError):
+    with pytest.raises(StudyError):
         parse_tasks("CartPole-v1")
     assert parse_param("sigma_end=0.5, 0.04") == ("sigma_end", (0.5, 0.04))
     points = sweep_points("MountainCar-v0", {"alpha": (0.1, 1.0)}, study_preset("quick"))

@@ -170,7 +170,8 @@ def _set(document: Any, path: tuple[Any, ...], value: Any) -> Any:
 def test_report_on_a_damaged_gym_summary_is_one_line_never_a_crash(
     study: Path, tmp_path: Path
 ) -> None:
-    from pokerirl.studies.gym import GymStudyError, load_gym_study
+    from pokerirl.studies.common import StudyError
+    from pokerirl.studies.gym import load_gym_study
 
     summary = json.loads((study / "summary.json").read_text())
     load_gym_study(study)  # the real one renders
@@ -183,7 +184,7 @@ def test_report_on_a_damaged_gym_summary_is_one_line_never_a_crash(
             tried += 1
             try:
                 load_gym_study(folder)
-            except GymStudyError as error:
+            except StudyError as error:
                 assert "\n" not in str(error) and "summary.json" in str(error)
     assert tried > 300
     for path, bad, needle in [

@@ -10,7 +10,8 @@ from typer.testing import CliRunner
 
 from pokerirl.cli import app
 from pokerirl.game.synth import write_synthetic_month
-from pokerirl.studies.poker import StudyError, load_study_report, parse_seeds, preset, run_study
+from pokerirl.seeds import seeds_as_written
+from pokerirl.studies.poker import StudyError, load_study_report, preset, run_study
 from pokerirl.studies.poker.report import FIGURES
 from pokerirl.tournaments import load_report
 
@@ -154,9 +155,20 @@ def test_bad_settings_are_one_line() -> None:
         preset("fast")
     with pytest.raises(StudyError, match="runs >= 1"):
         preset("quick", runs=0)
-    with pytest.raises(StudyError, match="bad --seeds 'a-b'"):
-        parse_seeds("a-b")
-    assert parse_seeds("0-2,5") == (0, 1, 2, 5)
+    with pytest.raises(ValueError, match="bad seed range 'a-b'"):
+        seeds_as_written("a-b")
+    assert seeds_as_written("5,0-2") == (5, 0, 1, 2)  # the study keeps the order written
+    with pytest.raises(StudyError, match="seeds distinct"):
+        preset("quick", seeds=seeds_as_written("0-2,1"))
+
+
+def test_cli_refuses_repeated_seeds_before_any_work(tmp_path: Path) -> None:
+    out = tmp_path / "out"
+    args = ["study", str(tmp_path / "missing"), "--out", str(out), "--seeds", "0-2,1", "-q"]
+    result = CliRunner().invoke(app, args)
+    assert result.exit_code == 2
+    assert result.output == "error: bad study settings: seeds distinct\n"
+    assert not out.exists()
 
 
 def test_cli_refuses_a_missing_source(tmp_path: Path) -> None:

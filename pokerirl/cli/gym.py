@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import functools
 import json
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
@@ -462,6 +464,17 @@ GYM_OVERWRITE = typer.Option(False, "--overwrite", help="Recompute units whose s
 GYM_QUIET = typer.Option(False, "--quiet", "-q", help="No progress bars.")
 
 
+@contextmanager
+def _study_errors(out: Path) -> Iterator[None]:
+    """What the gym study and the sweep stop on, in one line (finished units are kept)."""
+    try:
+        yield
+    except (ValueError, ImportError, OSError, execution.ExecutionError) as error:
+        fail(error_line(error, out))
+    except KeyboardInterrupt:
+        fail(INTERRUPTED, 130)
+
+
 def _gym_preset(name: str, task: str, **overrides: int | None) -> Any:
     """The study preset ``name`` for ``task`` (or all) with the command line's overrides."""
     from pokerirl.studies.gym import parse_tasks, study_preset
@@ -499,7 +512,7 @@ def gym_study(
     from pokerirl.studies.gym import run_gym_study
 
     _rl_backend(rl_backend)
-    try:
+    with _study_errors(out):
         preset = _gym_preset(
             preset_name, task, runs=runs, seed=seed, transitions=transitions, epochs=epochs,
             eval_episodes=eval_episodes, rl_timesteps=timesteps,
@@ -513,10 +526,6 @@ def gym_study(
             say=echo,
             rl_backend=rl_backend,
         )
-    except (ValueError, ImportError, OSError, execution.ExecutionError) as error:
-        fail(error_line(error, out))
-    except KeyboardInterrupt:
-        fail(INTERRUPTED, 130)
     echo("")
     echo(result.markdown)
     echo(f"report: {out / 'report.md'}")
@@ -544,16 +553,16 @@ def gym_sweep(
 ) -> None:
     """One-factor-at-a-time ablation of H-AIRL (the paper's Figure 5): each point runs the IRL
     phase, then RL on its learned rewards; writes sweep.csv, sweep.json and PARAM.png."""
-    from pokerirl.studies.gym import GymStudyError
+    from pokerirl.studies.common import StudyError
     from pokerirl.studies.sweep import parse_param, run_sweep
 
     _rl_backend(rl_backend)
-    try:
+    with _study_errors(out):
         params: dict[str, tuple[float, ...]] = {}
         for text in param:
             name, values = parse_param(text)
             if name in params:
-                raise GymStudyError(f"--param {name} is given twice; list its values once")
+                raise StudyError(f"--param {name} is given twice; list its values once")
             params[name] = values
         preset = _gym_preset(
             preset_name, env, runs=runs, seed=seed, transitions=transitions, epochs=epochs,
@@ -570,10 +579,6 @@ def gym_sweep(
             say=echo,
             rl_backend=rl_backend,
         )
-    except (ValueError, ImportError, OSError, execution.ExecutionError) as error:
-        fail(error_line(error, out))
-    except KeyboardInterrupt:
-        fail(INTERRUPTED, 130)
     for row in result.rows:
         line = (
             f"{row['param']}={row['value']:g}: IRL return {row['irl_final_return_mean']:.1f} "

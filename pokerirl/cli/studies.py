@@ -124,7 +124,8 @@ def study(
     DQN agents (sparse, AIRL and H-AIRL rewards), Table 1, the panel, and a report beside the
     paper's numbers (report.md, report.json, panel.csv, figures/), with the reward cards.
     --preset authors adds the authors' tournament protocol. Resumable by stage."""
-    from pokerirl.studies.poker import parse_seeds, preset, run_study
+    from pokerirl.seeds import seeds_as_written
+    from pokerirl.studies.poker import preset, run_study
 
     sources_given = []
     for item in reward_run:
@@ -134,7 +135,8 @@ def study(
         config = preset(
             preset_name,
             runs=runs,
-            seeds=None if seeds is None else parse_seeds(seeds),
+            # As written: the first seeds the agents, and a repeat is refused, not dropped.
+            seeds=None if seeds is None else seeds_as_written(seeds),
             hands=hands,
             jobs=jobs,
             reward_sources=tuple(sources_given) or None,

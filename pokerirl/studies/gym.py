@@ -38,7 +38,18 @@ import numpy as np
 from pokerirl.atomic import write_text
 from pokerirl.execution import Backend
 from pokerirl.gym.presets import PRESETS, TASK_ORDER, TASKS, MeanStd, StudyPreset
-from pokerirl.gym.rl import DEFAULT_RL_BACKEND, mean_std
+from pokerirl.gym.rl import DEFAULT_RL_BACKEND
+from pokerirl.studies.common import (
+    METRICS_JSONL,
+    REPORT_MD,
+    SUMMARY_JSON,
+    StudyError,
+    band,
+    markdown_table,
+    mean_std,
+    read_jsonl,
+    with_overrides,
+)
 from pokerirl.studies.gym_units import (
     DATA_FILE,
     DataJob,
@@ -65,10 +76,6 @@ MAP_GRID = 101  # cells per axis of the reward map
 STEPS = 4
 
 
-class GymStudyError(ValueError):
-    """Bad study settings, or a study folder that does not fit them; the message is one line."""
-
-
 @dataclass(frozen=True, kw_only=True)
 class GymStudyResult:
     """What :func:`run_gym_study` wrote: one summary per task, and the report."""
@@ -84,13 +91,7 @@ def study_preset(name: str, **overrides: Any) -> StudyPreset:
     >>> study_preset("quick", runs=2).runs
     2
     """
-    if name not in PRESETS:
-        raise GymStudyError(f"unknown preset {name!r}; choose one of {', '.join(PRESETS)}")
-    changes = {key: value for key, value in overrides.items() if value is not None}
-    try:
-        return replace(PRESETS[name], **changes)
-    except (TypeError, ValueError) as error:
-        raise GymStudyError(str(error)) from None
+    return with_overrides(PRESETS, name, **overrides)
 
 
 def parse_tasks(text: str) -> tuple[str, ...]:
@@ -102,7 +103,7 @@ def parse_tasks(text: str) -> tuple[str, ...]:
     if text == "all":
         return TASK_ORDER
     if text not in TASKS:
-        raise GymStudyError(f"unknown task {text!r}; choose one of {', '.join(TASKS)} or all")
+        raise StudyError(f"unknown task {text!r}; choose one of {', '.join(TASKS)} or all")
     return (text,)
 
 
@@ -182,7 +183,7 @@ def run_gym_study(
     lockstep, one unit per task and reward kind), which is part of their records.
 
     Raises:
-        GymStudyError: ``out`` is a file, or a unit was made with other settings or inputs
+        StudyError: ``out`` is a file, or a unit was made with other settings or inputs
             (without ``overwrite``); the message names it.
     """
     from pokerirl.gym.experts import require_gym
@@ -192,7 +193,7 @@ def run_gym_study(
     backend = backend or Backend()
     out = Path(out)
     if out.exists() and not out.is_dir():
-        raise GymStudyError(f"{out} exists and is not a folder; choose another --out")
+        raise StudyError(f"{out} exists and is not a folder; choose another --out")
     tasks = preset.tasks
     roots = {env: task_root(out, env, tasks) for env in tasks}
     names = ", ".join(tasks)
@@ -224,19 +225,19 @@ def run_gym_study(
         reused = run_rl_jobs(rl, **options)
         _said_reused(say, reused, len(rl))
     except ValueError as error:
-        raise GymStudyError(str(error)) from None
+        raise StudyError(str(error)) from None
 
-    report = out / "report.md"
+    report = out / REPORT_MD
     say(f"[4/{STEPS}] report -> {report}")
     summaries = {}
     for env in tasks:
         summary = task_summary(roots[env], env, preset)
         summary["settings"]["rl_backend"] = rl_backend
         summary["reward_map"] = draw_reward_map(roots[env], env)
-        write_text(roots[env] / "summary.json", json.dumps(summary, indent=2) + "\n")
+        write_text(roots[env] / SUMMARY_JSON, json.dumps(summary, indent=2) + "\n")
         draw_figures(roots[env], summary)
         if len(tasks) > 1:
-            write_text(roots[env] / "report.md", render_report({env: summary}, preset.name))
+            write_text(roots[env] / REPORT_MD, render_report({env: summary}, preset.name))
         summaries[env] = summary
     if len(tasks) > 1:
         overall = {
@@ -245,7 +246,7 @@ def run_gym_study(
             "runs": preset.runs,
             "tasks": summaries,
         }
-        write_text(out / "summary.json", json.dumps(overall, indent=2) + "\n")
+        write_text(out / SUMMARY_JSON, json.dumps(overall, indent=2) + "\n")
     markdown = render_report(summaries, preset.name, prefix="" if len(tasks) == 1 else None)
     write_text(report, markdown)
     return GymStudyResult(out=out, summaries=summaries, markdown=markdown)
@@ -254,7 +255,7 @@ def run_gym_study(
 def is_gym_study(folder: str | os.PathLike[str]) -> bool:
     """Whether ``folder`` holds a gym study's ``summary.json``."""
     try:
-        found = json.loads((Path(folder) / "summary.json").read_text())
+        found = json.loads((Path(folder) / SUMMARY_JSON).read_text())
     except (OSError, ValueError):
         return False
     return isinstance(found, dict) and found.get("format") == SUMMARY_FORMAT
@@ -264,7 +265,7 @@ def load_gym_study(folder: str | os.PathLike[str]) -> tuple[dict[str, Any], str]
     """A finished study's ``summary.json`` and its report rendered again (``pokerirl report``)."""
     from pokerirl.studies.gym_summary_check import check_summary
 
-    path = Path(folder) / "summary.json"
+    path = Path(folder) / SUMMARY_JSON
     try:
         found = json.loads(path.read_text())
         check_summary(found)  # once, on reading: the renderer trusts what passes
@@ -272,7 +273,7 @@ def load_gym_study(folder: str | os.PathLike[str]) -> tuple[dict[str, Any], str]
             return found, render_report(found["tasks"], found["preset"], prefix=None)
         return found, render_report({found["env"]: found}, found["preset"])
     except (OSError, ValueError, KeyError, TypeError) as error:
-        raise GymStudyError(f"{path}: not a readable gym study summary ({error})") from None
+        raise StudyError(f"{path}: not a readable gym study summary ({error})") from None
 
 
 def check_rl_backend(rl_backend: str) -> None:
@@ -280,7 +281,7 @@ def check_rl_backend(rl_backend: str) -> None:
     from pokerirl.gym.rl import RL_BACKENDS
 
     if rl_backend not in RL_BACKENDS:
-        raise GymStudyError(
+        raise StudyError(
             f"unknown RL backend {rl_backend!r}; choose one of {', '.join(RL_BACKENDS)}"
         )
 
@@ -293,13 +294,9 @@ def _said_reused(say: Say, reused: int, total: int) -> None:
 # --------------------------------------------------------------------------- summaries
 
 
-def _read_jsonl(path: Path) -> list[dict[str, Any]]:
-    return [json.loads(line) for line in path.read_text().splitlines() if line.strip()]
-
-
 def rl_curves(root: Path, reward: str, runs: int) -> dict[str, Any]:
     """The RL runs' true-return curves: timesteps, per-run values, mean and std per point."""
-    lines = [_read_jsonl(root / "rl" / reward / f"run-{k}" / "metrics.jsonl") for k in range(runs)]
+    lines = [read_jsonl(root / "rl" / reward / f"run-{k}" / METRICS_JSONL) for k in range(runs)]
     points = min(len(line) for line in lines)
     values = np.array([[p["return_mean"] for p in line[:points]] for line in lines])
     std = values.std(0, ddof=1) if runs > 1 else np.zeros(points)
@@ -322,7 +319,7 @@ def task_summary(root: Path, env: str, preset: StudyPreset) -> dict[str, Any]:
     algos: dict[str, Any] = {}
     irl_summaries = {}
     for algo in ALGOS:
-        irl = json.loads((root / "irl" / algo / "summary.json").read_text())
+        irl = json.loads((root / "irl" / algo / SUMMARY_JSON).read_text())
         irl_summaries[algo] = irl
         metrics = irl["metrics"]
         rl = rl_curves(root, algo, preset.runs)
@@ -427,7 +424,7 @@ def authors_budget(env: str, preset: StudyPreset) -> bool:
 
 
 def _per_run_final(folder: Path, runs: int, key: str) -> list[float]:
-    return [_read_jsonl(folder / f"run-{k}" / "metrics.jsonl")[-1][key] for k in range(runs)]
+    return [read_jsonl(folder / f"run-{k}" / METRICS_JSONL)[-1][key] for k in range(runs)]
 
 
 def draw_reward_map(root: Path, env: str) -> dict[str, Any] | None:
@@ -540,9 +537,7 @@ def task_table(summary: dict[str, Any]) -> list[str]:
         ("random policy", _value({"mean": summary["random_return"]}),
          _value({"mean": paper["random_return"]}))
     )  # fmt: skip
-    lines = ["| | ours | the authors |", "|---|---|---|"]
-    lines += [f"| {name} | {ours} | {theirs} |" for name, ours, theirs in rows]
-    return lines
+    return markdown_table(["", "ours", "the authors"], rows)
 
 
 def _budget(summary: dict[str, Any]) -> str:
@@ -614,11 +609,6 @@ def draw_figures(root: Path, summary: dict[str, Any]) -> None:
         FigureCanvasAgg(fig)
         return fig, fig.add_subplot()
 
-    def band(axes: Any, x: Sequence[float], curve: dict[str, Any], label: str, color: str) -> None:
-        mean, std = np.asarray(curve["mean"]), np.asarray(curve["std"])
-        axes.plot(x, mean, color=color, label=label)
-        axes.fill_between(x, mean - std, mean + std, color=color, alpha=0.2)
-
     def save(fig: Figure, axes: Any, name: str, title: str, xlabel: str, ylabel: str) -> None:
         axes.set(title=f"{summary['env']}: {title}", xlabel=xlabel, ylabel=ylabel)
         axes.grid(alpha=0.3)
@@ -641,7 +631,8 @@ def draw_figures(root: Path, summary: dict[str, Any]) -> None:
     fig, axes = figure()
     for algo in ALGOS:
         curves = summary["algos"][algo]["curves"]
-        band(axes, curves["irl_epochs"], curves["irl_return"], LABELS[algo], COLORS[algo])
+        band(axes, curves["irl_epochs"], curves["irl_return"], LABELS[algo], color=COLORS[algo],
+             alpha=0.2)  # fmt: skip
     lines(axes)
     save(fig, axes, "irl_returns", f"IRL-phase return ({runs})", "epoch", "return")
 
@@ -649,7 +640,8 @@ def draw_figures(root: Path, summary: dict[str, Any]) -> None:
         fig, axes = figure()
         for algo in ALGOS:
             curves = summary["algos"][algo]["curves"]
-            band(axes, curves["irl_epochs"], curves["alignment"], LABELS[algo], COLORS[algo])
+            band(axes, curves["irl_epochs"], curves["alignment"], LABELS[algo],
+                 color=COLORS[algo], alpha=0.2)  # fmt: skip
         baselines = summary["algos"]["hairl"]["baselines"]
         for name, style in (("bc", "-."), ("majority", ":")):
             value = baselines[name]["mean"]
@@ -662,6 +654,6 @@ def draw_figures(root: Path, summary: dict[str, Any]) -> None:
     for reward in REWARDS:
         source = summary["env_reward"] if reward == "env" else summary["algos"][reward]
         curve = source["curves"]["rl"]
-        band(axes, curve["timesteps"], curve, LABELS[reward], COLORS[reward])
+        band(axes, curve["timesteps"], curve, LABELS[reward], color=COLORS[reward], alpha=0.2)
     lines(axes)
     save(fig, axes, "rl_returns", f"RL-phase true return ({runs})", "timesteps", "return")

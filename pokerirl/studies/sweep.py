@@ -34,9 +34,9 @@ from pokerirl.atomic import atomic_path, write_text
 from pokerirl.execution import Backend
 from pokerirl.gym.irl import irl_config
 from pokerirl.gym.presets import TASKS, StudyPreset
-from pokerirl.gym.rl import DEFAULT_RL_BACKEND, mean_std
+from pokerirl.gym.rl import DEFAULT_RL_BACKEND
+from pokerirl.studies.common import SUMMARY_JSON, StudyError, mean_std
 from pokerirl.studies.gym import (
-    GymStudyError,
     check_rl_backend,
     data_job,
     irl_job,
@@ -98,23 +98,23 @@ def parse_param(text: str) -> tuple[str, tuple[float, ...]]:
     name, sign, values = text.partition("=")
     name = name.strip()
     if not sign or name not in PARAMS:
-        raise GymStudyError(
+        raise StudyError(
             f"bad --param {text!r}; write NAME=V1,V2,... with NAME one of {', '.join(PARAMS)}"
         )
     try:
         parsed = tuple(float(v) for v in values.split(",") if v.strip())
     except ValueError:
-        raise GymStudyError(f"bad --param {text!r}: the values must be numbers") from None
+        raise StudyError(f"bad --param {text!r}: the values must be numbers") from None
     if not parsed:
-        raise GymStudyError(f"bad --param {text!r}: no values")
+        raise StudyError(f"bad --param {text!r}: no values")
     if len(set(parsed)) != len(parsed):
-        raise GymStudyError(f"bad --param {text!r}: a value is repeated")
+        raise StudyError(f"bad --param {text!r}: a value is repeated")
     bad = [
         v for v in parsed if not math.isfinite(v) or v < 0 or (name in ("alpha", "beta") and v > 1)
     ]
     if bad:
         bounds = "in [0, 1]" if name in ("alpha", "beta") else "at least 0"
-        raise GymStudyError(f"bad --param {text!r}: {name} must be {bounds}, got {bad[0]:g}")
+        raise StudyError(f"bad --param {text!r}: {name} must be {bounds}, got {bad[0]:g}")
     return name, parsed
 
 
@@ -149,14 +149,14 @@ def run_sweep(
 
     require_gym()
     if env not in TASKS:
-        raise GymStudyError(f"unknown task {env!r}; choose one of {', '.join(TASKS)}")
+        raise StudyError(f"unknown task {env!r}; choose one of {', '.join(TASKS)}")
     check_rl_backend(rl_backend)
     if not params:
-        raise GymStudyError("give at least one --param, e.g. --param alpha=0,0.5,1")
+        raise StudyError("give at least one --param, e.g. --param alpha=0,0.5,1")
     backend = backend or Backend()
     out = Path(out)
     if out.exists() and not out.is_dir():
-        raise GymStudyError(f"{out} exists and is not a folder; choose another --out")
+        raise StudyError(f"{out} exists and is not a folder; choose another --out")
     points = sweep_points(env, params, preset)
     unique = list({point.name: point for point in points}.values())
     data = out / DATA_FILE
@@ -169,7 +169,7 @@ def run_sweep(
         try:
             irl_config("hairl", job.settings, seed=preset.seed)
         except ValueError as error:
-            raise GymStudyError(f"point {name}: {error}") from None
+            raise StudyError(f"point {name}: {error}") from None
     try:
         say(f"[1/4] expert data: {env}")
         run_data_jobs([data_job(out, env, preset)], **options)
@@ -184,12 +184,12 @@ def run_sweep(
         say(f"[3/4] RL: {len(rl)} runs on the points' rewards")
         run_rl_jobs(rl, **options)
     except ValueError as error:
-        raise GymStudyError(str(error)) from None
+        raise StudyError(str(error)) from None
 
     say(f"[4/4] {CSV_FILE}, {JSON_FILE} and one figure per parameter -> {out}")
     rows = [point_row(out, point, preset, discrete=TASKS[env].discrete) for point in points]
     write_text(out / CSV_FILE, _csv(rows))
-    expert = json.loads((irl[unique[0].name].folder / "summary.json").read_text())
+    expert = json.loads((irl[unique[0].name].folder / SUMMARY_JSON).read_text())
     record = {
         "format": SWEEP_FORMAT,
         "env": env,
@@ -212,7 +212,7 @@ def point_row(
 ) -> dict[str, Any]:
     """The point's finals: IRL-phase return, RL-phase return, alignment (discrete tasks)."""
     root = out / "points" / point.name
-    irl = json.loads((root / "irl" / "hairl" / "summary.json").read_text())
+    irl = json.loads((root / "irl" / "hairl" / SUMMARY_JSON).read_text())
     rl = mean_std(rl_curves(root, "hairl", preset.runs)["per_run_final"])
     row: dict[str, Any] = {
         "param": point.param,

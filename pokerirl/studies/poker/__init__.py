@@ -17,7 +17,7 @@ from typing import Any
 
 from pokerirl.execution import Backend
 from pokerirl.studies.poker import figures
-from pokerirl.studies.poker.config import PRESETS, StudyConfig, StudyError, parse_seeds, preset
+from pokerirl.studies.poker.config import PRESETS, StudyConfig, StudyError, preset
 from pokerirl.studies.poker.pipeline import (
     STAGES,
     Execution,
@@ -51,7 +51,6 @@ __all__ = [
     "StudyResult",
     "is_study_report",
     "load_study_report",
-    "parse_seeds",
     "preset",
     "render_markdown",
     "run_study",

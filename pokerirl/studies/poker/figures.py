@@ -10,6 +10,7 @@ import numpy as np
 
 from pokerirl.atomic import write_bytes
 from pokerirl.encoding import ACTIONS
+from pokerirl.studies.common import band
 
 ALGO_LABELS = {"airl": "AIRL", "hairl": "H-AIRL"}
 KIND_LABELS = {"dqn": "DQN", "airl_dqn": "AIRL-DQN", "hairl_dqn": "H-AIRL-DQN"}
@@ -32,12 +33,6 @@ def _save(figure: Any, path: Path) -> None:
     write_bytes(path, buffer.getvalue())
 
 
-def _band(axis: Any, x: Any, curve: dict[str, Any], label: str) -> None:
-    mean, std = np.asarray(curve["mean"]), np.asarray(curve["std"])
-    axis.plot(x, mean, label=label)
-    axis.fill_between(x, mean - std, mean + std, alpha=0.25)
-
-
 def _trained(irl: dict[str, Any]) -> dict[str, str]:
     """The algorithms whose IRL runs the study trained (not replaced by a given reward)."""
     return {algo: label for algo, label in ALGO_LABELS.items() if "replaced" not in irl[algo]}
@@ -50,7 +45,7 @@ def irl_alignment(irl: dict[str, Any], path: Path) -> None:
     trained = _trained(irl)
     for algo, label in trained.items():
         curve = irl[algo]["curves"]["val_alignment"]
-        _band(axis, np.arange(1, len(curve["mean"]) + 1), curve, label)
+        band(axis, np.arange(1, len(curve["mean"]) + 1), curve, label)
     styles = {"majority": ":", "legal_majority": "--", "bc": "-."}
     for name, style in styles.items() if trained else ():
         value = irl[list(trained)[-1]]["baselines"][name]["mean"]
@@ -67,7 +62,7 @@ def irl_discriminator(irl: dict[str, Any], path: Path) -> None:
     for algo, label in _trained(irl).items():
         for key, side in (("disc_acc_expert", "expert"), ("disc_acc_policy", "policy")):
             curve = irl[algo]["curves"][key]
-            _band(axis, np.arange(1, len(curve["mean"]) + 1), curve, f"{label}, {side}")
+            band(axis, np.arange(1, len(curve["mean"]) + 1), curve, f"{label}, {side}")
     axis.set(xlabel="epoch", ylabel="accuracy", title="IRL: discriminator accuracy", ylim=(0, 1))
     axis.legend(fontsize=8)
     _save(figure, path)
@@ -107,7 +102,7 @@ def rl_curves(agents: dict[str, Any], path: Path) -> None:
     figure, axis = plt.subplots(figsize=(6.4, 4))
     for kind, label in KIND_LABELS.items():
         curve = agents["curves"][kind]
-        _band(axis, curve["hands"], curve, label)
+        band(axis, curve["hands"], curve, label)
     for name, style in (("call", ":"), ("raise", "--")):
         value = agents["references"][name]["mbb_per_hand"]
         axis.axhline(value, color="grey", linestyle=style, label=f"always-{name} {value:,.0f}")

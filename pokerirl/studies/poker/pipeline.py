@@ -27,10 +27,15 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-import numpy as np
-
 from pokerirl.atomic import write_text
 from pokerirl.execution import Backend, fingerprint
+from pokerirl.studies.common import (
+    BASELINES_JSON,
+    METRICS_JSONL,
+    SUMMARY_JSON,
+    mean_std,
+    read_jsonl,
+)
 from pokerirl.studies.poker.config import (
     AGENT_KINDS,
     BUILT_INS,
@@ -258,28 +263,11 @@ def run_paths(out: Path, runs: int) -> list[Path]:
     return [out] if runs == 1 else [out / f"run-{k}" for k in range(runs)]
 
 
-def _read_jsonl(path: Path) -> list[dict[str, Any]]:
-    return [json.loads(line) for line in path.read_text().splitlines() if line.strip()]
-
-
-def mean_std(
-    values: Sequence[float] | Sequence[Sequence[float]] | np.ndarray, axis: int | None = None
-) -> dict[str, Any]:
-    """Mean and sample std (ddof 1; 0 for one value), as floats or lists."""
-    array = np.asarray(values, dtype=float)
-    count = array.shape[0] if axis == 0 else array.size
-    mean = array.mean(axis=axis)
-    std = array.std(axis=axis, ddof=1) if count > 1 else np.zeros_like(mean)
-    if axis is None:
-        return {"mean": float(mean), "std": float(std)}
-    return {"mean": mean.tolist(), "std": std.tolist()}
-
-
 def summarize_irl(out: Path, runs: int) -> dict[str, Any]:
     """Per-epoch mean/std over runs of the curves the report draws, final values per run,
     mean action distributions and the baselines."""
-    metrics = [_read_jsonl(p / "metrics.jsonl") for p in run_paths(out, runs)]
-    found_baselines = [json.loads((p / "baselines.json").read_text()) for p in run_paths(out, runs)]
+    metrics = [read_jsonl(p / METRICS_JSONL) for p in run_paths(out, runs)]
+    found_baselines = [json.loads((p / BASELINES_JSON).read_text()) for p in run_paths(out, runs)]
     epochs = min(len(m) for m in metrics)
     curves = {}
     for key in ("val_alignment", "disc_acc_expert", "disc_acc_policy", "val_reward_alignment"):
@@ -327,7 +315,7 @@ def irl_stage(study: Study, ingested: dict[str, Any]) -> dict[str, Any]:
                 **{k: v for k, v in chosen.items() if v is not None},
             }
             settings = load_config(algo, overrides=overrides)
-            done = out / ("summary.json" if config.runs > 1 else "config.json")
+            done = out / (SUMMARY_JSON if config.runs > 1 else "config.json")
             if not done.is_file():  # train_runs stages its folder: present means finished
                 study.say(f"      {algo}: {config.runs} runs -> {out}")
                 out.parent.mkdir(parents=True, exist_ok=True)
@@ -370,13 +358,13 @@ def replaced_irl(study: Study, algo: str, source: str, out: Path) -> dict[str, A
 
 def _final_vs_random(agent_set: Path, seeds: Sequence[int]) -> list[float]:
     return [
-        _read_jsonl(agent_set / f"seed-{s}" / "metrics.jsonl")[-1]["eval"]["random"]["mbb_per_hand"]
+        read_jsonl(agent_set / f"seed-{s}" / METRICS_JSONL)[-1]["eval"]["random"]["mbb_per_hand"]
         for s in seeds
     ]
 
 
 def _curve(agent_set: Path, seeds: Sequence[int]) -> dict[str, Any]:
-    lines = [_read_jsonl(agent_set / f"seed-{s}" / "metrics.jsonl") for s in seeds]
+    lines = [read_jsonl(agent_set / f"seed-{s}" / METRICS_JSONL) for s in seeds]
     points = min(len(line) for line in lines)
     values = [[line[i]["eval"]["random"]["mbb_per_hand"] for i in range(points)] for line in lines]
     return {"hands": [lines[0][i]["hands"] for i in range(points)], **mean_std(values, axis=0)}

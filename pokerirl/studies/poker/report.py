@@ -9,9 +9,9 @@ from typing import Any
 
 from pokerirl import atomic
 from pokerirl.encoding import ACTIONS
+from pokerirl.studies.common import REPORT_JSON, REPORT_MD, markdown_table, mean_std
 from pokerirl.studies.poker import paper
 from pokerirl.studies.poker.config import AGENT_KINDS, IRL_ALGOS, StudyConfig, StudyError
-from pokerirl.studies.poker.pipeline import mean_std
 
 REPORT_FORMAT = "pokerirl-study-report/1"
 FIGURES = {
@@ -298,12 +298,15 @@ def render_markdown(report: dict[str, Any]) -> str:
     ]
     panel = report["panel"]
     names = panel["agents"]
-    lines += ["| | " + " | ".join(names) + " |", "|---" * (len(names) + 1) + "|"]
-    for name, row, errors in zip(names, panel["mbb_per_hand"], panel["std_error"], strict=True):
-        cells = [
-            "-" if v is None else f"{v:+,.0f} ± {e:,.0f}" for v, e in zip(row, errors, strict=True)
-        ]
-        lines.append(f"| {name} | " + " | ".join(cells) + " |")
+    lines += markdown_table(
+        ["", *names],
+        (
+            [name, *("-" if v is None else f"{v:+,.0f} ± {e:,.0f}"
+                     for v, e in zip(row, errors, strict=True))]
+            for name, row, errors in zip(names, panel["mbb_per_hand"], panel["std_error"],
+                                         strict=True)
+        ),
+    )  # fmt: skip
     lines += [
         "",
         f"{panel['hands']:,} hands per seed per pair, {n_seeds} seeds; cross-table in "
@@ -420,14 +423,14 @@ def authors_markdown(report: dict[str, Any]) -> list[str]:
 def write_study_report(root: Path, report: dict[str, Any], panel: dict[str, Any]) -> None:
     """``panel.csv``, ``report.md``, then ``report.json`` last: it marks a finished study."""
     atomic.write_text(root / PANEL_CSV, panel_csv(panel))
-    atomic.write_text(root / "report.md", render_markdown(report))
-    atomic.write_text(root / "report.json", json.dumps(report, indent=2) + "\n")
+    atomic.write_text(root / REPORT_MD, render_markdown(report))
+    atomic.write_text(root / REPORT_JSON, json.dumps(report, indent=2) + "\n")
 
 
 def is_study_report(folder: Path | str) -> bool:
     """Whether ``folder/report.json`` is a study report (not a tournament's)."""
     try:
-        data = json.loads((Path(folder) / "report.json").read_text())
+        data = json.loads((Path(folder) / REPORT_JSON).read_text())
     except (OSError, json.JSONDecodeError):
         return False
     return isinstance(data, dict) and data.get("format") == REPORT_FORMAT
@@ -435,7 +438,7 @@ def is_study_report(folder: Path | str) -> bool:
 
 def load_study_report(folder: Path | str) -> dict[str, Any]:
     """The study report in ``folder``; one-line :class:`StudyError` when it is not one."""
-    path = Path(folder) / "report.json"
+    path = Path(folder) / REPORT_JSON
     try:
         data = json.loads(path.read_text())
     except FileNotFoundError:
