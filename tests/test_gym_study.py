@@ -99,7 +99,7 @@ def test_rl_runs_learn_from_their_own_irl_runs_reward(mountaincar: Path) -> None
         unit = json.loads((mountaincar / "rl" / "hairl" / f"run-{k}" / "unit.json").read_text())
         reward_pt = mountaincar / "irl" / "hairl" / f"run-{k}" / "reward.pt"
         digest = "sha256:" + hashlib.sha256(reward_pt.read_bytes()).hexdigest()
-        assert unit["config"]["reward_run"]["reward.pt"] == digest
+        assert unit["inputs"]["reward_run"]["reward.pt"] == digest
     env_record = json.loads((mountaincar / "rl" / "env" / "run-0" / "config.json").read_text())
     assert env_record["reward"] == "env"
     # Same seed, same settings: only the reward differs, and it changes what DQN learns.

@@ -18,6 +18,7 @@ from pokerirl.cli.app import (
     RAY_HELP,
     SEED_OPTION,
     _backend,
+    advised,
     app,
     display,
     echo,
@@ -469,8 +470,10 @@ def _study_errors(out: Path) -> Iterator[None]:
     """What the gym study and the sweep stop on, in one line (finished units are kept)."""
     try:
         yield
-    except (ValueError, ImportError, OSError, execution.ExecutionError) as error:
+    except OSError as error:
         fail(error_line(error, out))
+    except (ValueError, ImportError, execution.ExecutionError) as error:
+        fail(advised(error))  # a unit's conflict: with the advice for its remedy
     except KeyboardInterrupt:
         fail(INTERRUPTED, 130)
 

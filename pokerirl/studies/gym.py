@@ -36,6 +36,7 @@ from typing import Any
 import numpy as np
 
 from pokerirl.atomic import write_text
+from pokerirl.errors import PokerIRLError
 from pokerirl.execution import Backend
 from pokerirl.gym.presets import PRESETS, TASK_ORDER, TASKS, MeanStd, StudyPreset
 from pokerirl.gym.rl import DEFAULT_RL_BACKEND
@@ -224,6 +225,8 @@ def run_gym_study(
             + ("" if rl_backend == "sb3" else f" ({rl_backend} backend)"))
         reused = run_rl_jobs(rl, **options)
         _said_reused(say, reused, len(rl))
+    except PokerIRLError:
+        raise  # a unit's conflict keeps its remedy for the command line's advice
     except ValueError as error:
         raise StudyError(str(error)) from None
 

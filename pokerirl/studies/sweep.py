@@ -31,6 +31,7 @@ from typing import Any
 import numpy as np
 
 from pokerirl.atomic import atomic_path, write_text
+from pokerirl.errors import PokerIRLError
 from pokerirl.execution import Backend
 from pokerirl.gym.irl import irl_config
 from pokerirl.gym.presets import TASKS, StudyPreset
@@ -183,6 +184,8 @@ def run_sweep(
         ]
         say(f"[3/4] RL: {len(rl)} runs on the points' rewards")
         run_rl_jobs(rl, **options)
+    except PokerIRLError:
+        raise  # a unit's conflict keeps its remedy for the command line's advice
     except ValueError as error:
         raise StudyError(str(error)) from None
 
