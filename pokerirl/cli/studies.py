@@ -16,6 +16,7 @@ from pokerirl.cli.app import (
     RAY_HELP,
     SEED_OPTION,
     _backend,
+    advised,
     app,
     echo,
     error_line,
@@ -33,8 +34,10 @@ def _one_line_errors(out: Path) -> Iterator[None]:
 
     try:
         yield
-    except (ValueError, OSError, execution.ExecutionError, IngestError) as error:
+    except OSError as error:
         fail(error_line(error, out))
+    except (ValueError, execution.ExecutionError, IngestError) as error:
+        fail(advised(error))  # a unit's conflict: with the advice for its remedy
     except KeyboardInterrupt:
         fail(INTERRUPTED, 130)
 

@@ -80,8 +80,10 @@ def run_study(
     depend on it.
 
     Raises:
-        StudyError: bad settings, or a stage already run with other settings (without
-            ``overwrite``). Lower layers' errors (IngestError, TournamentError...) pass through.
+        StudyError: bad settings.
+        UnitConflict: a unit made with other settings or inputs (without ``overwrite``), or a
+            stage record of an older pokerirl made with other settings. Lower layers' errors
+            (IngestError, TournamentError, RunError...) pass through.
     """
     from pokerirl.parsers.irc import check_sources
 
@@ -96,7 +98,7 @@ def run_study(
     study = Study(
         root,
         config,
-        Execution(backend or Backend(jobs=config.jobs), progress=progress),
+        Execution(backend or Backend(jobs=config.jobs), progress=progress, overwrite=overwrite),
         overwrite,
         say,
     )

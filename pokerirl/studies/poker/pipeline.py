@@ -3,15 +3,18 @@
 The ``authors`` stage (the authors' tournament protocol) runs when the settings ask for it
 (``authors_repeats`` > 0: the ``authors`` preset).
 
-Each stage writes its outputs under the study folder and a record ``stages/<stage>.json``
-holding a fingerprint of its settings and of the fingerprints of the stages it reads. A rerun:
+Each stage is units of :mod:`pokerirl.store`, each with its own record: the table
+(``expert.parquet``, its record ``expert.unit.json``), the IRL runs (``irl/<algo>/run-<k>``, or
+``irl/<algo>`` for one run), the agent seeds, the tournament seeds and experiments. A stage's
+result (what the report reads) is recomputed from its units' outputs on every run. A rerun
+reuses every unit finished with the same settings and inputs, runs the missing ones, and
+refuses, in one line naming it, a unit made with other settings or inputs unless
+``overwrite``: then that unit is recomputed, and so is every unit that reads it (their inputs
+hold its digest).
 
-* skips a stage whose record is finished with the same fingerprint (and whose outputs exist);
-* resumes a stage that was started with the same fingerprint but not finished (the units
-  below skip what is done: finished agent seeds, saved tournament seeds, finished IRL runs);
-* refuses a stage whose fingerprint changed (a setting or an input), with one line naming it,
-  unless ``overwrite``: then that stage's outputs are deleted and it is recomputed, and so is
-  every stage after it, since their fingerprints include its own.
+A study folder of an older pokerirl holds ``stages/<stage>.json`` records instead of the
+table's and the single IRL run's own: those units are reused when that stage record finished
+with the same settings, and refused in one line naming it when not.
 
 Every call that trains or plays goes through :class:`Execution`, the one place that decides
 where units run (processes now; the execution layer's backends later).
@@ -21,18 +24,16 @@ from __future__ import annotations
 
 import json
 import os
-import shutil
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from pokerirl.atomic import write_text
-from pokerirl.execution import Backend, fingerprint
+from pokerirl.execution import Backend
+from pokerirl.store import Fate, Layout, LegacyRecord, Unit, check, digest, fingerprint, writing
 from pokerirl.studies.common import (
     BASELINES_JSON,
     METRICS_JSONL,
-    SUMMARY_JSON,
     mean_std,
     read_jsonl,
 )
@@ -54,7 +55,7 @@ STAGES = ("ingest", "irl", "agents", "tournament", "panel", "report")
 AUTHORS_STAGES = ("ingest", "irl", "agents", "tournament", "authors", "panel", "report")
 TABLE1_NAMES = ("hairl_dqn", "airl_dqn")  # the matchups against the sparse DQN
 PLAYING_HANDS = 20_000  # duplicate hands of the playing checkpoint against random (authors)
-RECORD_FORMAT = "pokerirl-study-stage/1"
+STAGES_FOLDER = "stages"  # where an older pokerirl kept its stage records
 TABLE = "expert.parquet"
 AGENT_FOLDERS = {"dqn": "dqn", "airl_dqn": "airl-dqn", "hairl_dqn": "hairl-dqn"}
 SHORT_DQN = "dqn-short"  # sparse DQN at the paper's training length
@@ -69,14 +70,13 @@ class Execution:
 
     backend: Backend = field(default_factory=Backend)
     progress: bool = False
+    overwrite: bool = False  # recompute units made with other settings instead of refusing
 
     def train_runs(
         self, table: Path, out: Path, *, algo: str, runs: int, config: AIRLConfig
     ) -> None:
         from pokerirl.poker.train import train_runs
 
-        # The stage record guards the settings; units of other settings are this stage's own
-        # earlier attempt, recomputed (finished runs of the same settings are reused).
         train_runs(
             table,
             out,
@@ -84,14 +84,15 @@ class Execution:
             algo=algo,
             config=config,
             progress=self.progress,
-            overwrite=True,
+            overwrite=self.overwrite,
             backend=self.backend,
         )
 
     def train_seeds(self, out: Path, config: TrainConfig, seeds: Sequence[int]) -> None:
         from pokerirl.agents.train import train_seeds
 
-        train_seeds(out, config, list(seeds), backend=self.backend, progress=self.progress)
+        train_seeds(out, config, list(seeds), backend=self.backend, progress=self.progress,
+                    overwrite=self.overwrite)  # fmt: skip
 
     def tournament(
         self,
@@ -110,6 +111,7 @@ class Execution:
             seeds=seeds,
             out=out,
             duplicate=duplicate,
+            overwrite=self.overwrite,
             backend=self.backend,
             progress=self.progress,
         )
@@ -135,13 +137,13 @@ class Execution:
             games=games,
             out=out,
             duplicate=duplicate,
-            overwrite=True,  # the stage record guards the settings
+            overwrite=self.overwrite,
             backend=self.backend,
             progress=self.progress,
         )
 
 
-# --------------------------------------------------------------------------- stage records
+# --------------------------------------------------------------------------- the study
 
 
 def stage_names(config: StudyConfig) -> tuple[str, ...]:
@@ -150,8 +152,8 @@ def stage_names(config: StudyConfig) -> tuple[str, ...]:
 
 
 def _non_default(config: StudyConfig, *names: str) -> dict[str, Any]:
-    """The settings among ``names`` that differ from their defaults: stage fingerprints of
-    studies made before they existed stay the same."""
+    """The settings among ``names`` that differ from their defaults: the stage records of
+    studies made before they existed stay valid."""
     import dataclasses
 
     defaults = {f.name: f.default for f in dataclasses.fields(StudyConfig)}
@@ -184,78 +186,42 @@ class Study:
     overwrite: bool = False
     say: Say = lambda message: None
 
-    def stage(
-        self,
-        name: str,
-        settings: dict[str, Any],
-        outputs: Sequence[Path],
-        compute: Callable[[], dict[str, Any]],
-    ) -> dict[str, Any]:
-        """Run ``compute`` unless a finished record with the same fingerprint exists; return
-        its result (a JSON-ready dict) and the fingerprint under ``"fingerprint"``."""
+    def step(self, name: str) -> None:
+        """Say that stage ``name`` starts: ``[2/6] irl``."""
         names = stage_names(self.config)
-        number = f"[{names.index(name) + 1}/{len(names)}]"
-        wanted = fingerprint({"stage": name, "settings": settings})
-        path = self.root / "stages" / f"{name}.json"
-        record = _read_record(path)
-        if record is not None:
-            if record["fingerprint"] == wanted:
-                if record.get("finished") and all(p.exists() for p in outputs):
-                    self.say(f"{number} {name}: done already, skipped")
-                    return {**record["result"], "fingerprint": wanted}
-            elif not self.overwrite:
-                raise StudyError(
-                    f"{path}: stage {name} was run with other settings or inputs; pass "
-                    "--overwrite to recompute it and the stages after it, or choose another --out"
-                )
-            else:
-                for output in outputs:
-                    if output.is_dir():
-                        shutil.rmtree(output)
-                    else:
-                        output.unlink(missing_ok=True)
-        path.parent.mkdir(parents=True, exist_ok=True)
-        started = {"format": RECORD_FORMAT, "stage": name, "fingerprint": wanted}
-        write_text(path, json.dumps({**started, "settings": settings, "finished": False}) + "\n")
-        self.say(f"{number} {name}")
-        try:
-            result = compute()
-        except BaseException:
-            # A first attempt that wrote none of its outputs (sources that are not IRC data,
-            # an interruption before the first unit) leaves no record to refuse a fixed rerun.
-            if record is None and not any(p.exists() for p in outputs):
-                path.unlink(missing_ok=True)
-            raise
-        body = {**started, "settings": settings, "finished": True, "result": result}
-        write_text(path, json.dumps(body, indent=1) + "\n")
-        return {**result, "fingerprint": wanted}
+        self.say(f"[{names.index(name) + 1}/{len(names)}] {name}")
 
-
-def _read_record(path: Path) -> dict[str, Any] | None:
-    try:
-        record = json.loads(path.read_text())
-    except FileNotFoundError:
-        return None
-    except (OSError, json.JSONDecodeError) as error:
-        raise StudyError(f"{path}: cannot read the stage record ({error})") from None
-    if not isinstance(record, dict) or record.get("format") != RECORD_FORMAT:
-        raise StudyError(f"{path}: not a study stage record")
-    return record
+    def legacy(self, name: str, settings: dict[str, Any]) -> LegacyRecord:
+        """The record an older pokerirl kept for stage ``name``, with the identity it wrote."""
+        path = self.root / STAGES_FOLDER / f"{name}.json"
+        return LegacyRecord(path=path, identity={"stage": name, "settings": settings})
 
 
 # --------------------------------------------------------------------------- stages
 
 
 def ingest_stage(study: Study, sources: Sequence[str | os.PathLike[str]]) -> dict[str, Any]:
-    from pokerirl.datasets.ingest import ingest
+    """The table and its summary: a ``file`` unit, ingested in this process. ``fingerprint``:
+    the stage print an older pokerirl's later stages were made with."""
+    from pokerirl.datasets.ingest import ingest, summary_path
 
-    table = study.root / TABLE
-
-    def compute() -> dict[str, Any]:
-        return {"summary": ingest(sources, table, progress=study.execution.progress)}
-
-    settings = {"sources": _sources_fingerprint(sources)}
-    return study.stage("ingest", settings, [table], compute)
+    study.step("ingest")
+    sources_print = _sources_fingerprint(sources)
+    legacy = study.legacy("ingest", {"sources": sources_print})
+    unit: Unit[None] = Unit(
+        key="ingest",
+        target=study.root / TABLE,
+        layout=Layout.FILE,
+        config={"unit": "poker-study-ingest", **sources_print},
+        legacy=(legacy,),
+    )
+    if check(unit, overwrite=study.overwrite).fate is Fate.REUSED:
+        study.say("      the table is finished already, reused")
+    else:
+        with writing(unit) as folder:
+            ingest(sources, folder / TABLE, progress=study.execution.progress)
+    summary = json.loads(summary_path(study.root / TABLE).read_text())
+    return {"summary": summary, "fingerprint": fingerprint(legacy.identity)}
 
 
 def run_paths(out: Path, runs: int) -> list[Path]:
@@ -315,15 +281,16 @@ def irl_stage(study: Study, ingested: dict[str, Any]) -> dict[str, Any]:
                 **{k: v for k, v in chosen.items() if v is not None},
             }
             settings = load_config(algo, overrides=overrides)
-            done = out / (SUMMARY_JSON if config.runs > 1 else "config.json")
-            if not done.is_file():  # train_runs stages its folder: present means finished
-                study.say(f"      {algo}: {config.runs} runs -> {out}")
-                out.parent.mkdir(parents=True, exist_ok=True)
+            study.say(f"      {algo}: {config.runs} runs -> {out}")
+            out.parent.mkdir(parents=True, exist_ok=True)
+            if config.runs == 1:
+                single_run(study, algo, settings, out, legacy)
+            else:  # run-<k> units, each with its record
                 study.execution.train_runs(table, out, algo=algo, runs=config.runs, config=settings)
             found[algo] = summarize_irl(out, config.runs)
         return found
 
-    settings = {
+    stage = {
         "runs": config.runs,
         "epochs": config.irl_epochs,
         "seed": config.irl_seed,
@@ -331,8 +298,34 @@ def irl_stage(study: Study, ingested: dict[str, Any]) -> dict[str, Any]:
         **_non_default(config, "irl_settings"),
     }
     if config.reward_sources:
-        settings["reward_sources"] = reward_source_prints(config)
-    return study.stage("irl", settings, outputs, compute)
+        stage["reward_sources"] = reward_source_prints(config)
+    legacy = study.legacy("irl", stage)
+    study.step("irl")
+    return compute()
+
+
+def single_run(
+    study: Study, algo: str, settings: AIRLConfig, out: Path, legacy: LegacyRecord
+) -> None:
+    """One IRL run into ``out`` itself: a ``folder`` unit trained in this process (an older
+    pokerirl's has no record of its own: its ``stages/irl.json`` vouches for it)."""
+    from pokerirl.irl.run import TIMINGS_FILE
+    from pokerirl.poker import read_table
+    from pokerirl.poker.train import train_table_into
+
+    table = study.root / TABLE
+    unit: Unit[None] = Unit(
+        key=f"{algo} run",
+        target=out,
+        config={"unit": "poker-study-irl", "algo": algo, "settings": settings.to_dict()},
+        inputs={"table": digest(table.read_bytes())},
+        legacy=(legacy,),
+    )
+    if check(unit, overwrite=study.overwrite).fate is Fate.REUSED:
+        return
+    with writing(unit, unhashed={TIMINGS_FILE}) as folder:
+        train_table_into(read_table(table), folder, algo=algo, config=settings,
+                         progress=study.execution.progress, table=table)  # fmt: skip
 
 
 def reward_source_prints(config: StudyConfig) -> dict[str, str]:
@@ -459,18 +452,8 @@ def agents_stage(study: Study, irl: dict[str, Any]) -> dict[str, Any]:
             found["playing_hands"] = PLAYING_HANDS
         return found
 
-    settings = {
-        "seeds": list(config.seeds),
-        "runs": config.runs,
-        "agent_hands": config.agent_hands,
-        "short_agent_hands": config.short_agent_hands,
-        "eval_every": config.eval_every,
-        "eval_hands": config.eval_hands,
-        "upstream": irl["fingerprint"],
-        **_non_default(config, "agent_preset", "reward_transform"),
-        **({"reference_hands": reference_hands} if authors else {}),
-    }
-    return study.stage("agents", settings, [folder], compute)
+    study.step("agents")
+    return compute()
 
 
 def _line(line: Any) -> dict[str, Any]:
@@ -505,13 +488,8 @@ def tournament_stage(study: Study, agents: dict[str, Any]) -> dict[str, Any]:
             }
         return found
 
-    settings = {
-        "hands": config.hands,
-        "seeds": list(config.seeds),
-        "duplicate": config.duplicate,
-        "upstream": agents["fingerprint"],
-    }
-    return study.stage("tournament", settings, [out], compute)
+    study.step("tournament")
+    return compute()
 
 
 def authors_stage(
@@ -543,13 +521,8 @@ def authors_stage(
             for name, matchup in found.items()
         }
 
-    settings = {
-        "repeats": config.authors_repeats,
-        "games": config.authors_games,
-        "seeds": list(config.seeds),
-        "upstream": [agents["fingerprint"], tournament["fingerprint"]],
-    }
-    return study.stage("authors", settings, [out], compute)
+    study.step("authors")
+    return compute()
 
 
 def reward_cards(root: Path, config: StudyConfig) -> dict[str, Any]:
@@ -598,10 +571,5 @@ def panel_stage(study: Study, agents: dict[str, Any]) -> dict[str, Any]:
             se[i][j] = se[j][i] = matchup.pooled.std_error
         return {"agents": [name for name, _ in members], "mbb_per_hand": mbb, "std_error": se}
 
-    settings = {
-        "hands": config.panel_hands,
-        "seeds": list(config.seeds),
-        "duplicate": config.duplicate,
-        "upstream": agents["fingerprint"],
-    }
-    return study.stage("panel", settings, [out], compute)
+    study.step("panel")
+    return compute()
