@@ -182,10 +182,6 @@ def test_irl_imports_nothing_of_poker_gym_or_above() -> None:
 # see pokerirl.errors.Remedy). Checked in these components; (module, function) -> why not yet.
 FLAG_FREE = ("irl", "poker", "datasets", "parquet", "store", "execution")
 FLAG_EXCEPTIONS: dict[tuple[str, str], str] = {
-    # The legacy unit records: tournaments/ and gym/jobs.py re-wrap str(error) into errors
-    # without a remedy; the store port (pokerirl.store, flag-free) replaces them.
-    ("pokerirl.execution", "load_unit"): "legacy records, re-wrapped by their callers",
-    ("pokerirl.execution", "load_unit_folder"): "legacy records, re-wrapped by their callers",
     ("pokerirl.execution", "ray_head"): "names Ray's own command, `ray start --head`",
 }
 FLAG = re.compile(r"(?<![\w-])--[a-z]")
