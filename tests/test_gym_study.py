@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+from dataclasses import fields
 from pathlib import Path
 
 import numpy as np
@@ -26,7 +27,7 @@ from pokerirl.studies.gym import (  # noqa: E402
     study_preset,
 )
 from pokerirl.studies.gym_units import DATA_FILE  # noqa: E402
-from pokerirl.studies.sweep import parse_param, sweep_points  # noqa: E402
+from pokerirl.studies.sweep import CSV_COLUMNS, SweepRow, parse_param, sweep_points  # noqa: E402
 
 TINY = ["--runs", "2", "--transitions", "1500", "--epochs", "2", "--eval-episodes", "2"]
 TINY += ["--timesteps", "2000", "--jobs", "2", "--quiet"]
@@ -291,6 +292,8 @@ def test_parse_tasks_and_points() -> None:
     with pytest.raises(StudyError):
         parse_tasks("CartPole-v1")
     assert parse_param("sigma_end=0.5, 0.04") == ("sigma_end", (0.5, 0.04))
+    # A sweep row's fields are sweep.csv's columns, in order (and sweep.json's row names).
+    assert tuple(f.name for f in fields(SweepRow)) == CSV_COLUMNS
     points = sweep_points("MountainCar-v0", {"alpha": (0.1, 1.0)}, study_preset("quick"))
     assert [p.name for p in points] == [
         "alpha=0.1_beta=0.25_sigma_start=1_sigma_end=0.04",

@@ -584,12 +584,12 @@ def gym_sweep(
         )
     for row in result.rows:
         line = (
-            f"{row['param']}={row['value']:g}: IRL return {row['irl_final_return_mean']:.1f} "
-            f"+- {row['irl_final_return_std']:.1f}, RL return {row['rl_final_return_mean']:.1f} "
-            f"+- {row['rl_final_return_std']:.1f}"
+            f"{row.param}={row.value:g}: IRL return {row.irl_final_return_mean:.1f} "
+            f"+- {row.irl_final_return_std:.1f}, RL return {row.rl_final_return_mean:.1f} "
+            f"+- {row.rl_final_return_std:.1f}"
         )
-        if row["final_alignment_mean"] is not None:
-            line += f", alignment {100 * row['final_alignment_mean']:.1f}%"
+        if row.final_alignment_mean is not None:
+            line += f", alignment {100 * row.final_alignment_mean:.1f}%"
         echo(line)
     echo(f"wrote {out / 'sweep.csv'} and {', '.join(str(p) for p in result.figures)}")
 

@@ -297,18 +297,33 @@ def _said_reused(say: Say, reused: int, total: int) -> None:
 # --------------------------------------------------------------------------- summaries
 
 
-def rl_curves(root: Path, reward: str, runs: int) -> dict[str, Any]:
+@dataclass(frozen=True, kw_only=True)
+class RLCurves:
+    """One reward kind's RL runs: the true return at each evaluation (mean and std over runs)
+    and each run's last value."""
+
+    timesteps: list[int]
+    mean: list[float]
+    std: list[float]
+    per_run_final: list[float]
+
+    def curve(self) -> dict[str, list[float] | list[int]]:
+        """The curve as ``summary.json`` holds it (``curves.rl``)."""
+        return {"timesteps": self.timesteps, "mean": self.mean, "std": self.std}
+
+
+def rl_curves(root: Path, reward: str, runs: int) -> RLCurves:
     """The RL runs' true-return curves: timesteps, per-run values, mean and std per point."""
     lines = [read_jsonl(root / "rl" / reward / f"run-{k}" / METRICS_JSONL) for k in range(runs)]
     points = min(len(line) for line in lines)
     values = np.array([[p["return_mean"] for p in line[:points]] for line in lines])
     std = values.std(0, ddof=1) if runs > 1 else np.zeros(points)
-    return {
-        "timesteps": [p["timesteps"] for p in lines[0][:points]],
-        "mean": values.mean(0).tolist(),
-        "std": std.tolist(),
-        "per_run_final": values[:, -1].tolist(),
-    }
+    return RLCurves(
+        timesteps=[p["timesteps"] for p in lines[0][:points]],
+        mean=values.mean(0).tolist(),
+        std=std.tolist(),
+        per_run_final=values[:, -1].tolist(),
+    )
 
 
 def _paper(value: MeanStd) -> dict[str, float | None]:
@@ -328,14 +343,14 @@ def task_summary(root: Path, env: str, preset: StudyPreset) -> dict[str, Any]:
         rl = rl_curves(root, algo, preset.runs)
         entry: dict[str, Any] = {
             "irl_final_return": irl["irl_final_return"],
-            "rl_final_return": mean_std(rl["per_run_final"]),
+            "rl_final_return": mean_std(rl.per_run_final),
             "baselines": irl["baselines"],
             "irl_per_run_final": _per_run_final(root / "irl" / algo, preset.runs, "eval_return"),
-            "rl_per_run_final": rl["per_run_final"],
+            "rl_per_run_final": rl.per_run_final,
             "curves": {
                 "irl_epochs": irl["epochs"],
                 "irl_return": metrics["eval_return"],
-                "rl": {key: rl[key] for key in ("timesteps", "mean", "std")},
+                "rl": rl.curve(),
             },
         }
         if task.discrete:
@@ -367,9 +382,9 @@ def task_summary(root: Path, env: str, preset: StudyPreset) -> dict[str, Any]:
         "random_return": baselines["random"]["mean"],
         "algos": algos,
         "env_reward": {
-            "rl_final_return": mean_std(env_rl["per_run_final"]),
-            "rl_per_run_final": env_rl["per_run_final"],
-            "curves": {"rl": {key: env_rl[key] for key in ("timesteps", "mean", "std")}},
+            "rl_final_return": mean_std(env_rl.per_run_final),
+            "rl_per_run_final": env_rl.per_run_final,
+            "curves": {"rl": env_rl.curve()},
         },
         "settings": {  # through JSON: tuples become lists, as in summary.json
             "irl": json.loads(json.dumps(asdict(preset.irl(env)))),

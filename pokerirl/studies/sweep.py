@@ -24,7 +24,7 @@ import json
 import math
 import os
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
 
@@ -81,12 +81,38 @@ class SweepPoint:
 
 
 @dataclass(frozen=True, kw_only=True)
+class SweepRow:
+    """One (parameter, value): its point and the finals over runs (alignment: discrete
+    tasks only). The fields are ``sweep.csv``'s columns and ``sweep.json``'s row names."""
+
+    param: str
+    value: float
+    point: str
+    runs: int
+    irl_final_return_mean: float
+    irl_final_return_std: float
+    rl_final_return_mean: float
+    rl_final_return_std: float
+    final_alignment_mean: float | None = None
+    final_alignment_std: float | None = None
+    final_reward_alignment_mean: float | None = None
+    final_reward_alignment_std: float | None = None
+
+    def to_json(self) -> dict[str, float | str | int | None]:
+        return asdict(self)
+
+    @classmethod
+    def from_json(cls, data: Mapping[str, Any]) -> SweepRow:
+        return cls(**{name: data[name] for name in CSV_COLUMNS})
+
+
+@dataclass(frozen=True, kw_only=True)
 class SweepResult:
     """What :func:`run_sweep` wrote: one row per (parameter, value)."""
 
     out: Path
     env: str
-    rows: tuple[dict[str, Any], ...]
+    rows: tuple[SweepRow, ...]
     figures: tuple[Path, ...]
 
 
@@ -203,7 +229,7 @@ def run_sweep(
         "rl_backend": rl_backend,
         "expert_return": expert["expert_return"],
         "random_return": expert["baselines"]["random"]["mean"],
-        "rows": rows,
+        "rows": [row.to_json() for row in rows],
     }
     write_text(out / JSON_FILE, json.dumps(record, indent=2) + "\n")
     figures = tuple(plot_param(record, param, out / f"{param}.png") for param in params)
@@ -212,37 +238,39 @@ def run_sweep(
 
 def point_row(
     out: Path, point: SweepPoint, preset: StudyPreset, *, discrete: bool
-) -> dict[str, Any]:
+) -> SweepRow:
     """The point's finals: IRL-phase return, RL-phase return, alignment (discrete tasks)."""
     root = out / "points" / point.name
     irl = json.loads((root / "irl" / "hairl" / SUMMARY_JSON).read_text())
-    rl = mean_std(rl_curves(root, "hairl", preset.runs)["per_run_final"])
-    row: dict[str, Any] = {
-        "param": point.param,
-        "value": point.value,
-        "point": point.name,
-        "runs": preset.runs,
-        "irl_final_return_mean": irl["irl_final_return"]["mean"],
-        "irl_final_return_std": irl["irl_final_return"]["std"],
-        "rl_final_return_mean": rl["mean"],
-        "rl_final_return_std": rl["std"],
-    }
+    rl = mean_std(rl_curves(root, "hairl", preset.runs).per_run_final)
+    alignment: dict[str, float | None] = {}
     for name, key in (
         ("final_alignment", "val_alignment"),
         ("final_reward_alignment", "val_reward_alignment"),
     ):
         curve = irl["metrics"].get(key) if discrete else None
-        row[f"{name}_mean"] = None if curve is None else curve["mean"][-1]
-        row[f"{name}_std"] = None if curve is None else curve["std"][-1]
-    return row
+        alignment[f"{name}_mean"] = None if curve is None else curve["mean"][-1]
+        alignment[f"{name}_std"] = None if curve is None else curve["std"][-1]
+    return SweepRow(
+        param=point.param,
+        value=point.value,
+        point=point.name,
+        runs=preset.runs,
+        irl_final_return_mean=irl["irl_final_return"]["mean"],
+        irl_final_return_std=irl["irl_final_return"]["std"],
+        rl_final_return_mean=rl["mean"],
+        rl_final_return_std=rl["std"],
+        **alignment,
+    )
 
 
-def _csv(rows: Sequence[Mapping[str, Any]]) -> str:
+def _csv(rows: Sequence[SweepRow]) -> str:
     buffer = io.StringIO()
     writer = csv.DictWriter(buffer, fieldnames=CSV_COLUMNS, lineterminator="\n")
     writer.writeheader()
     for row in rows:
-        writer.writerow({key: "" if row[key] is None else row[key] for key in CSV_COLUMNS})
+        cells = row.to_json()
+        writer.writerow({key: "" if cells[key] is None else cells[key] for key in CSV_COLUMNS})
     return buffer.getvalue()
 
 

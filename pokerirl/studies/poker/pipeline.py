@@ -45,6 +45,20 @@ from pokerirl.studies.poker.config import (
     StudyError,
     irl_overrides,
 )
+from pokerirl.studies.poker.results import (
+    AgentsResult,
+    Curve,
+    HandsCurve,
+    Ingested,
+    IRLResult,
+    IRLRuns,
+    Panel,
+    Reference,
+    Replaced,
+    Spread,
+    Table1Line,
+    TrainingLength,
+)
 
 if TYPE_CHECKING:  # the layers below load lazily: ``pokerirl report`` needs none of them
     from pokerirl.agents.train import TrainConfig
@@ -200,9 +214,8 @@ class Study:
 # --------------------------------------------------------------------------- stages
 
 
-def ingest_stage(study: Study, sources: Sequence[str | os.PathLike[str]]) -> dict[str, Any]:
-    """The table and its summary: a ``file`` unit, ingested in this process. ``fingerprint``:
-    the stage print an older pokerirl's later stages were made with."""
+def ingest_stage(study: Study, sources: Sequence[str | os.PathLike[str]]) -> Ingested:
+    """The table and its summary: a ``file`` unit, ingested in this process."""
     from pokerirl.datasets.ingest import ingest, summary_path
 
     study.step("ingest")
@@ -221,7 +234,7 @@ def ingest_stage(study: Study, sources: Sequence[str | os.PathLike[str]]) -> dic
         with writing(unit) as folder:
             ingest(sources, folder / TABLE, progress=study.execution.progress)
     summary = json.loads(summary_path(study.root / TABLE).read_text())
-    return {"summary": summary, "fingerprint": fingerprint(legacy.identity)}
+    return Ingested(summary=summary, fingerprint=fingerprint(legacy.identity))
 
 
 def run_paths(out: Path, runs: int) -> list[Path]:
@@ -229,47 +242,39 @@ def run_paths(out: Path, runs: int) -> list[Path]:
     return [out] if runs == 1 else [out / f"run-{k}" for k in range(runs)]
 
 
-def summarize_irl(out: Path, runs: int) -> dict[str, Any]:
+def summarize_irl(out: Path, runs: int) -> IRLRuns:
     """Per-epoch mean/std over runs of the curves the report draws, final values per run,
     mean action distributions and the baselines."""
     metrics = [read_jsonl(p / METRICS_JSONL) for p in run_paths(out, runs)]
     found_baselines = [json.loads((p / BASELINES_JSON).read_text()) for p in run_paths(out, runs)]
     epochs = min(len(m) for m in metrics)
-    curves = {}
+    curves: dict[str, Curve] = {}
     for key in ("val_alignment", "disc_acc_expert", "disc_acc_policy", "val_reward_alignment"):
         if key in metrics[0][0]:
-            values = [[line[key] for line in run[:epochs]] for run in metrics]
-            curves[key] = mean_std(values, axis=0)
-    final = {key: [run[epochs - 1][key] for run in metrics] for key in curves}
-    dists = {}
+            curves[key] = Curve.of([[line[key] for line in run[:epochs]] for run in metrics])
+    dists: dict[str, Curve] = {}
     for key in ("val_expert_dist", "val_policy_dist"):
         if key in metrics[0][-1]:
-            dists[key] = mean_std([run[epochs - 1][key] for run in metrics], axis=0)
-    return {
-        "runs": runs,
-        "epochs": epochs,
-        "curves": curves,
-        "final": {key: {"values": v, **mean_std(v)} for key, v in final.items()},
-        "action_dist": dists,
-        "baselines": {
-            key: {
-                "values": [b[key] for b in found_baselines],
-                **mean_std([b[key] for b in found_baselines]),
-            }
-            for key in found_baselines[0]
-        },
-    }
+            dists[key] = Curve.of([run[epochs - 1][key] for run in metrics])
+    return IRLRuns(
+        runs=runs,
+        epochs=epochs,
+        curves=curves,
+        final={key: Spread.of([run[epochs - 1][key] for run in metrics]) for key in curves},
+        action_dist=dists,
+        baselines={key: Spread.of([b[key] for b in found_baselines]) for key in found_baselines[0]},
+    )
 
 
-def irl_stage(study: Study, ingested: dict[str, Any]) -> dict[str, Any]:
+def irl_stage(study: Study, ingested: Ingested) -> IRLResult:
     from pokerirl.irl import load_config
 
     config = study.config
     table = study.root / TABLE
     outputs = [study.root / "irl" / algo for algo in IRL_ALGOS]
 
-    def compute() -> dict[str, Any]:
-        found = {}
+    def compute() -> IRLResult:
+        found: IRLResult = {}
         for algo, out in zip(IRL_ALGOS, outputs, strict=True):
             source = config.reward_source(algo)
             if source is not None:
@@ -294,7 +299,7 @@ def irl_stage(study: Study, ingested: dict[str, Any]) -> dict[str, Any]:
         "runs": config.runs,
         "epochs": config.irl_epochs,
         "seed": config.irl_seed,
-        "upstream": ingested["fingerprint"],
+        "upstream": ingested.fingerprint,
         **_non_default(config, "irl_settings"),
     }
     if config.reward_sources:
@@ -338,7 +343,7 @@ def reward_source_prints(config: StudyConfig) -> dict[str, str]:
         raise StudyError(str(error)) from None
 
 
-def replaced_irl(study: Study, algo: str, source: str, out: Path) -> dict[str, Any]:
+def replaced_irl(study: Study, algo: str, source: str, out: Path) -> Replaced:
     """An algorithm whose IRL runs a given reward replaces: its card over the whole table."""
     from pokerirl.agents.reward_card import CardStates, reward_card, write_card
     from pokerirl.agents.rewards import load_reward_source
@@ -346,7 +351,7 @@ def replaced_irl(study: Study, algo: str, source: str, out: Path) -> dict[str, A
     study.say(f"      {algo}: replaced by {source}")
     card = reward_card(load_reward_source(source), CardStates.from_table(study.root / TABLE))
     write_card(card, out)
-    return {"replaced": source}
+    return Replaced(source=source)
 
 
 def _final_vs_random(agent_set: Path, seeds: Sequence[int]) -> list[float]:
@@ -356,11 +361,12 @@ def _final_vs_random(agent_set: Path, seeds: Sequence[int]) -> list[float]:
     ]
 
 
-def _curve(agent_set: Path, seeds: Sequence[int]) -> dict[str, Any]:
+def _curve(agent_set: Path, seeds: Sequence[int]) -> HandsCurve:
     lines = [read_jsonl(agent_set / f"seed-{s}" / METRICS_JSONL) for s in seeds]
     points = min(len(line) for line in lines)
     values = [[line[i]["eval"]["random"]["mbb_per_hand"] for i in range(points)] for line in lines]
-    return {"hands": [lines[0][i]["hands"] for i in range(points)], **mean_std(values, axis=0)}
+    return HandsCurve(hands=[lines[0][i]["hands"] for i in range(points)],
+                      **mean_std(values, axis=0))  # fmt: skip
 
 
 def _playing_vs_random(agent_set: Path, seeds: Sequence[int]) -> list[float]:
@@ -377,7 +383,7 @@ def _playing_vs_random(agent_set: Path, seeds: Sequence[int]) -> list[float]:
     ]  # fmt: skip
 
 
-def agents_stage(study: Study, irl: dict[str, Any]) -> dict[str, Any]:
+def agents_stage(study: Study, irl: IRLResult) -> AgentsResult:
     from pokerirl.agents.train import TrainConfig, agent_preset
     from pokerirl.game import make_agent, play_match
 
@@ -413,7 +419,7 @@ def agents_stage(study: Study, irl: dict[str, Any]) -> dict[str, Any]:
             if group:
                 study.execution.train_seeds(out, replace(learned, reward_run=str(run)), group)
 
-    def compute() -> dict[str, Any]:
+    def compute() -> AgentsResult:
         for kind, out in sets.items():
             algo = None if kind == "dqn" else kind.removesuffix("_dqn")
             study.say(
@@ -431,98 +437,92 @@ def agents_stage(study: Study, irl: dict[str, Any]) -> dict[str, Any]:
                 make_agent(name), make_agent("random"), hands=reference_hands,
                 seed=TrainConfig.eval_seed,
             )  # fmt: skip
-            references[name] = {"mbb_per_hand": result.mbb_per_hand, "std_error": result.std_error}
-        found = {
-            "final_vs_random": {
+            references[name] = Reference(
+                mbb_per_hand=result.mbb_per_hand, std_error=result.std_error
+            )
+        return AgentsResult(
+            final_vs_random={
                 kind: _final_vs_random(out, config.seeds) for kind, out in sets.items()
             },
-            "curves": {kind: _curve(out, config.seeds) for kind, out in sets.items()},
-            "training_length": {
-                "agent_hands": config.agent_hands,
-                "short_agent_hands": config.short_agent_hands,
-                "long": _final_vs_random(sets["dqn"], config.seeds),
-                "short": _final_vs_random(sets["dqn"] if short_is_long else short, config.seeds),
-            },
-            "references": references,
-        }
-        if authors:
-            found["playing_vs_random"] = {
+            curves={kind: _curve(out, config.seeds) for kind, out in sets.items()},
+            training_length=TrainingLength(
+                agent_hands=config.agent_hands,
+                short_agent_hands=config.short_agent_hands,
+                long=_final_vs_random(sets["dqn"], config.seeds),
+                short=_final_vs_random(sets["dqn"] if short_is_long else short, config.seeds),
+            ),
+            references=references,
+            playing_vs_random={
                 kind: _playing_vs_random(out, config.seeds) for kind, out in sets.items()
-            }
-            found["playing_hands"] = PLAYING_HANDS
-        return found
+            } if authors else None,
+            playing_hands=PLAYING_HANDS if authors else None,
+        )  # fmt: skip
 
     study.step("agents")
     return compute()
 
 
-def _line(line: Any) -> dict[str, Any]:
+def _table1_line(matchup: Any) -> Table1Line:
+    line = matchup.pooled
+    return Table1Line(
+        mbb_per_hand=line.mbb_per_hand,
+        std_error=line.std_error,
+        p_value=line.p_value,
+        p_bonferroni=line.p_value_bonferroni,
+        p_holm=line.p_value_holm,
+        n=line.n,
+        per_seed=[s.mbb_per_hand for s in matchup.seeds],
+        seeds_significant_bonferroni=matchup.seeds_significant_bonferroni,
+    )
+
+
+def tournament_stage(study: Study, agents: AgentsResult) -> dict[str, Table1Line]:
+    """Table 1: each learned-reward DQN against the sparse one (``agents``: the stage before,
+    whose units the tournament's seeds read)."""
+    config = study.config
+    folder = study.root / "agents"
+    baseline = str(folder / AGENT_FOLDERS["dqn"])
+    study.step("tournament")
+    report = study.execution.tournament(
+        [(str(folder / AGENT_FOLDERS[name]), baseline) for name in TABLE1_NAMES],
+        hands=config.hands,
+        seeds=config.seeds,
+        out=study.root / "tournament",
+        duplicate=config.duplicate,
+    )
     return {
-        "mbb_per_hand": line.mbb_per_hand,
-        "std_error": line.std_error,
-        "p_value": line.p_value,
-        "p_bonferroni": line.p_value_bonferroni,
-        "p_holm": line.p_value_holm,
-        "n": line.n,
+        f"{name}_vs_dqn": _table1_line(matchup)
+        for name, matchup in zip(TABLE1_NAMES, report.matchups, strict=True)
     }
 
 
-def tournament_stage(study: Study, agents: dict[str, Any]) -> dict[str, Any]:
-    config = study.config
-    out = study.root / "tournament"
-    folder = study.root / "agents"
-    baseline = str(folder / AGENT_FOLDERS["dqn"])
-    names = TABLE1_NAMES
-
-    def compute() -> dict[str, Any]:
-        matchups = [(str(folder / AGENT_FOLDERS[name]), baseline) for name in names]
-        report = study.execution.tournament(
-            matchups, hands=config.hands, seeds=config.seeds, out=out, duplicate=config.duplicate
-        )
-        found = {}
-        for name, matchup in zip(names, report.matchups, strict=True):
-            found[f"{name}_vs_dqn"] = {
-                **_line(matchup.pooled),
-                "per_seed": [s.mbb_per_hand for s in matchup.seeds],
-                "seeds_significant_bonferroni": matchup.seeds_significant_bonferroni,
-            }
-        return found
-
-    study.step("tournament")
-    return compute()
-
-
 def authors_stage(
-    study: Study, agents: dict[str, Any], tournament: dict[str, Any]
-) -> dict[str, Any]:
+    study: Study, agents: AgentsResult, tournament: dict[str, Table1Line]
+) -> dict[str, dict[str, Any]]:
     """The authors' tournament: for each experiment (seed) k, 50 x 1,000 non-duplicate games
-    of each learned-reward DQN against the sparse one, seats drawn per game."""
+    of each learned-reward DQN against the sparse one, seats drawn per game. Each matchup's
+    summary is the tournaments layer's own (``AuthorsMatchup.summary``), with every repeat."""
     config = study.config
-    out = study.root / "authors"
     folder = study.root / "agents"
     baseline = str(folder / AGENT_FOLDERS["dqn"])
     names = [f"{name}_vs_dqn" for name in TABLE1_NAMES]
-
-    def compute() -> dict[str, Any]:
-        found = study.execution.authors_tournament(
-            [(str(folder / AGENT_FOLDERS[name]), baseline) for name in TABLE1_NAMES],
-            names=names,
-            experiments=config.seeds,
-            repeats=config.authors_repeats,
-            games=config.authors_games,
-            out=out,
-            duplicate={name: tournament[name]["mbb_per_hand"] for name in names},
-        )
-        return {
-            name: {
-                **matchup.summary(),
-                "repeats_by_experiment": [list(e.repeats_mbb) for e in matchup.experiments],
-            }
-            for name, matchup in found.items()
-        }
-
     study.step("authors")
-    return compute()
+    found = study.execution.authors_tournament(
+        [(str(folder / AGENT_FOLDERS[name]), baseline) for name in TABLE1_NAMES],
+        names=names,
+        experiments=config.seeds,
+        repeats=config.authors_repeats,
+        games=config.authors_games,
+        out=study.root / "authors",
+        duplicate={name: tournament[name].mbb_per_hand for name in names},
+    )
+    return {
+        name: {
+            **matchup.summary(),
+            "repeats_by_experiment": [list(e.repeats_mbb) for e in matchup.experiments],
+        }
+        for name, matchup in found.items()
+    }
 
 
 def reward_cards(root: Path, config: StudyConfig) -> dict[str, Any]:
@@ -549,27 +549,23 @@ def panel_agents(root: Path) -> list[tuple[str, str]]:
     return kinds + [(name, name) for name in BUILT_INS]
 
 
-def panel_stage(study: Study, agents: dict[str, Any]) -> dict[str, Any]:
+def panel_stage(study: Study, agents: AgentsResult) -> Panel:
+    """Every panel member against every other, once per pair."""
     config = study.config
-    out = study.root / "panel"
     members = panel_agents(study.root)
-
-    def compute() -> dict[str, Any]:
-        pairs = [(i, j) for i in range(len(members)) for j in range(i + 1, len(members))]
-        report = study.execution.tournament(
-            [(members[i][1], members[j][1]) for i, j in pairs],
-            hands=config.panel_hands,
-            seeds=config.seeds,
-            out=out / "tournament",
-            duplicate=config.duplicate,
-        )
-        size = len(members)
-        mbb: list[list[float | None]] = [[None] * size for _ in range(size)]
-        se: list[list[float | None]] = [[None] * size for _ in range(size)]
-        for (i, j), matchup in zip(pairs, report.matchups, strict=True):
-            mbb[i][j], mbb[j][i] = matchup.pooled.mbb_per_hand, -matchup.pooled.mbb_per_hand
-            se[i][j] = se[j][i] = matchup.pooled.std_error
-        return {"agents": [name for name, _ in members], "mbb_per_hand": mbb, "std_error": se}
-
     study.step("panel")
-    return compute()
+    pairs = [(i, j) for i in range(len(members)) for j in range(i + 1, len(members))]
+    report = study.execution.tournament(
+        [(members[i][1], members[j][1]) for i, j in pairs],
+        hands=config.panel_hands,
+        seeds=config.seeds,
+        out=study.root / "panel" / "tournament",
+        duplicate=config.duplicate,
+    )
+    size = len(members)
+    mbb: list[list[float | None]] = [[None] * size for _ in range(size)]
+    se: list[list[float | None]] = [[None] * size for _ in range(size)]
+    for (i, j), matchup in zip(pairs, report.matchups, strict=True):
+        mbb[i][j], mbb[j][i] = matchup.pooled.mbb_per_hand, -matchup.pooled.mbb_per_hand
+        se[i][j] = se[j][i] = matchup.pooled.std_error
+    return Panel(agents=[name for name, _ in members], mbb_per_hand=mbb, std_error=se)
