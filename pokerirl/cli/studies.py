@@ -47,7 +47,7 @@ def demo(
     out: Path = typer.Option(Path("demo-output"), "--out", "-o", help="Where the demo writes."),
     seed: int = typer.Option(0, "--seed", **SEED_OPTION, help="Seed of the synthetic data."),
     jobs: int = typer.Option(2, "--jobs", min=1, help="Processes for agent training and play."),
-    overwrite: bool = typer.Option(False, "--overwrite", help="Recompute changed stages."),
+    overwrite: bool = typer.Option(False, "--overwrite", help="Recompute changed units."),
     gym: bool = typer.Option(
         True, "--gym/--no-gym", help="Also run the Gymnasium study's quick preset (~8 min)."
     ),
@@ -119,14 +119,14 @@ def study(
     jobs: int = typer.Option(2, "--jobs", min=1, help="Processes for training and play."),
     ray: str | None = typer.Option(None, "--ray", metavar="ADDRESS", help=RAY_HELP),
     overwrite: bool = typer.Option(
-        False, "--overwrite", help="Recompute a stage whose settings changed, and those after it."
+        False, "--overwrite", help="Recompute changed units, and the units that read them."
     ),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bars."),
 ) -> None:
     """The paper's poker study in one command: ingest, IRL (AIRL and H-AIRL, several runs),
     DQN agents (sparse, AIRL and H-AIRL rewards), Table 1, the panel, and a report beside the
     paper's numbers (report.md, report.json, panel.csv, figures/), with the reward cards.
-    --preset authors adds the authors' tournament protocol. Resumable by stage."""
+    --preset authors adds the authors' tournament protocol. Resumable: finished units are kept."""
     from pokerirl.seeds import seeds_as_written
     from pokerirl.studies.poker import preset, run_study
 
