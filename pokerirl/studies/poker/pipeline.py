@@ -267,34 +267,13 @@ def summarize_irl(out: Path, runs: int) -> IRLRuns:
 
 
 def irl_stage(study: Study, ingested: Ingested) -> IRLResult:
+    """Each algorithm's IRL runs (``run-<k>`` units, or one run as ``irl/<algo>`` itself), or
+    the reward that replaces them; ``ingested``: the stage before, for an older study's
+    ``stages/irl.json``."""
     from pokerirl.irl import load_config
 
     config = study.config
     table = study.root / TABLE
-    outputs = [study.root / "irl" / algo for algo in IRL_ALGOS]
-
-    def compute() -> IRLResult:
-        found: IRLResult = {}
-        for algo, out in zip(IRL_ALGOS, outputs, strict=True):
-            source = config.reward_source(algo)
-            if source is not None:
-                found[algo] = replaced_irl(study, algo, source, out)
-                continue
-            chosen = {"epochs": config.irl_epochs, "seed": config.irl_seed}
-            overrides = {
-                **irl_overrides(config.irl_settings, algo),
-                **{k: v for k, v in chosen.items() if v is not None},
-            }
-            settings = load_config(algo, overrides=overrides)
-            study.say(f"      {algo}: {config.runs} runs -> {out}")
-            out.parent.mkdir(parents=True, exist_ok=True)
-            if config.runs == 1:
-                single_run(study, algo, settings, out, legacy)
-            else:  # run-<k> units, each with its record
-                study.execution.train_runs(table, out, algo=algo, runs=config.runs, config=settings)
-            found[algo] = summarize_irl(out, config.runs)
-        return found
-
     stage = {
         "runs": config.runs,
         "epochs": config.irl_epochs,
@@ -306,7 +285,27 @@ def irl_stage(study: Study, ingested: Ingested) -> IRLResult:
         stage["reward_sources"] = reward_source_prints(config)
     legacy = study.legacy("irl", stage)
     study.step("irl")
-    return compute()
+    found: IRLResult = {}
+    for algo in IRL_ALGOS:
+        out = study.root / "irl" / algo
+        source = config.reward_source(algo)
+        if source is not None:
+            found[algo] = replaced_irl(study, algo, source, out)
+            continue
+        chosen = {"epochs": config.irl_epochs, "seed": config.irl_seed}
+        overrides = {
+            **irl_overrides(config.irl_settings, algo),
+            **{k: v for k, v in chosen.items() if v is not None},
+        }
+        settings = load_config(algo, overrides=overrides)
+        study.say(f"      {algo}: {config.runs} runs -> {out}")
+        out.parent.mkdir(parents=True, exist_ok=True)
+        if config.runs == 1:
+            single_run(study, algo, settings, out, legacy)
+        else:  # run-<k> units, each with its record
+            study.execution.train_runs(table, out, algo=algo, runs=config.runs, config=settings)
+        found[algo] = summarize_irl(out, config.runs)
+    return found
 
 
 def single_run(
@@ -384,6 +383,8 @@ def _playing_vs_random(agent_set: Path, seeds: Sequence[int]) -> list[float]:
 
 
 def agents_stage(study: Study, irl: IRLResult) -> AgentsResult:
+    """Every agent kind's seeds (units of ``agents.train``), learned-reward seed s on IRL run
+    s mod runs of ``irl``'s algorithm; then their results against random, read again."""
     from pokerirl.agents.train import TrainConfig, agent_preset
     from pokerirl.game import make_agent, play_match
 
@@ -419,47 +420,42 @@ def agents_stage(study: Study, irl: IRLResult) -> AgentsResult:
             if group:
                 study.execution.train_seeds(out, replace(learned, reward_run=str(run)), group)
 
-    def compute() -> AgentsResult:
-        for kind, out in sets.items():
-            algo = None if kind == "dqn" else kind.removesuffix("_dqn")
-            study.say(
-                f"      {kind}: {len(config.seeds)} seeds x {config.agent_hands:,} hands -> {out}"
-            )
-            train(out, config.agent_hands, algo)
-        if not short_is_long:
-            study.say(
-                f"      dqn (short): {len(config.seeds)} seeds x {config.short_agent_hands:,} hands"
-            )
-            train(short, config.short_agent_hands, None)
-        references = {}
-        for name in ("call", "raise"):
-            result = play_match(
-                make_agent(name), make_agent("random"), hands=reference_hands,
-                seed=TrainConfig.eval_seed,
-            )  # fmt: skip
-            references[name] = Reference(
-                mbb_per_hand=result.mbb_per_hand, std_error=result.std_error
-            )
-        return AgentsResult(
-            final_vs_random={
-                kind: _final_vs_random(out, config.seeds) for kind, out in sets.items()
-            },
-            curves={kind: _curve(out, config.seeds) for kind, out in sets.items()},
-            training_length=TrainingLength(
-                agent_hands=config.agent_hands,
-                short_agent_hands=config.short_agent_hands,
-                long=_final_vs_random(sets["dqn"], config.seeds),
-                short=_final_vs_random(sets["dqn"] if short_is_long else short, config.seeds),
-            ),
-            references=references,
-            playing_vs_random={
-                kind: _playing_vs_random(out, config.seeds) for kind, out in sets.items()
-            } if authors else None,
-            playing_hands=PLAYING_HANDS if authors else None,
-        )  # fmt: skip
-
     study.step("agents")
-    return compute()
+    for kind, out in sets.items():
+        algo = None if kind == "dqn" else kind.removesuffix("_dqn")
+        study.say(
+            f"      {kind}: {len(config.seeds)} seeds x {config.agent_hands:,} hands -> {out}"
+        )
+        train(out, config.agent_hands, algo)
+    if not short_is_long:
+        study.say(
+            f"      dqn (short): {len(config.seeds)} seeds x {config.short_agent_hands:,} hands"
+        )
+        train(short, config.short_agent_hands, None)
+    references = {}
+    for name in ("call", "raise"):
+        result = play_match(
+            make_agent(name), make_agent("random"), hands=reference_hands,
+            seed=TrainConfig.eval_seed,
+        )  # fmt: skip
+        references[name] = Reference(mbb_per_hand=result.mbb_per_hand, std_error=result.std_error)
+    return AgentsResult(
+        final_vs_random={
+            kind: _final_vs_random(out, config.seeds) for kind, out in sets.items()
+        },
+        curves={kind: _curve(out, config.seeds) for kind, out in sets.items()},
+        training_length=TrainingLength(
+            agent_hands=config.agent_hands,
+            short_agent_hands=config.short_agent_hands,
+            long=_final_vs_random(sets["dqn"], config.seeds),
+            short=_final_vs_random(sets["dqn"] if short_is_long else short, config.seeds),
+        ),
+        references=references,
+        playing_vs_random={
+            kind: _playing_vs_random(out, config.seeds) for kind, out in sets.items()
+        } if authors else None,
+        playing_hands=PLAYING_HANDS if authors else None,
+    )  # fmt: skip
 
 
 def _table1_line(matchup: Any) -> Table1Line:
