@@ -26,6 +26,7 @@ from pokerirl.studies.gym import (  # noqa: E402
     run_gym_study,
     study_preset,
 )
+from pokerirl.studies.gym_results import TaskSummary  # noqa: E402
 from pokerirl.studies.gym_units import DATA_FILE  # noqa: E402
 from pokerirl.studies.sweep import CSV_COLUMNS, SweepRow, parse_param, sweep_points  # noqa: E402
 
@@ -149,6 +150,9 @@ def test_figures_and_report_beside_the_authors(mountaincar: Path) -> None:
     assert again.exit_code == 0 and again.output == report
     as_json = CliRunner().invoke(app, ["report", str(mountaincar), "--format", "json"])
     assert json.loads(as_json.output) == summary
+    # The typed summary reads it and writes it back to the same bytes (names and their order).
+    text = (mountaincar / "summary.json").read_text()
+    assert json.dumps(TaskSummary.from_json(summary).to_json(), indent=2) + "\n" == text
 
 
 def test_rerun_reuses_every_unit_and_changed_settings_are_refused(mountaincar: Path) -> None:
@@ -198,7 +202,7 @@ def test_two_tasks_acrobot_and_mountaincar_each_get_a_folder(tmp_path: Path) -> 
         folder = tmp_path / env
         assert (folder / DATA_FILE).is_file() and (folder / "report.md").is_file()
         summary = json.loads((folder / "summary.json").read_text())
-        assert summary == overall["tasks"][env] == result.summaries[env]
+        assert summary == overall["tasks"][env] == result.summaries[env].to_json()
         assert summary["env_reward"]["curves"]["rl"]["timesteps"][-1] == 1024
     acrobot = overall["tasks"]["Acrobot-v1"]
     assert acrobot["reward_map"] is None  # 6-d observations: no map

@@ -28,7 +28,7 @@ from __future__ import annotations
 import json
 import math
 import os
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 from typing import Any
@@ -38,7 +38,8 @@ import numpy as np
 from pokerirl.atomic import write_text
 from pokerirl.errors import PokerIRLError
 from pokerirl.execution import Backend
-from pokerirl.gym.presets import PRESETS, TASK_ORDER, TASKS, MeanStd, StudyPreset
+from pokerirl.gym.presets import PRESETS, TASK_ORDER, TASKS, StudyPreset
+from pokerirl.gym.presets import MeanStd as PaperValue
 from pokerirl.gym.rl import DEFAULT_RL_BACKEND
 from pokerirl.studies.common import (
     METRICS_JSONL,
@@ -50,6 +51,17 @@ from pokerirl.studies.common import (
     mean_std,
     read_jsonl,
     with_overrides,
+)
+from pokerirl.studies.gym_results import (
+    QUALITY_KEYS,
+    AlgoSummary,
+    Band,
+    EnvRewardSummary,
+    MeanStd,
+    PaperFinals,
+    RewardMapSummary,
+    StudySettings,
+    TaskSummary,
 )
 from pokerirl.studies.gym_units import (
     DATA_FILE,
@@ -82,7 +94,7 @@ class GymStudyResult:
     """What :func:`run_gym_study` wrote: one summary per task, and the report."""
 
     out: Path
-    summaries: dict[str, dict[str, Any]]  # env -> the task's summary.json
+    summaries: dict[str, TaskSummary]  # env -> the task's summary.json
     markdown: str
 
 
@@ -234,10 +246,8 @@ def run_gym_study(
     say(f"[4/{STEPS}] report -> {report}")
     summaries = {}
     for env in tasks:
-        summary = task_summary(roots[env], env, preset)
-        summary["settings"]["rl_backend"] = rl_backend
-        summary["reward_map"] = draw_reward_map(roots[env], env)
-        write_text(roots[env] / SUMMARY_JSON, json.dumps(summary, indent=2) + "\n")
+        summary = task_summary(roots[env], env, preset, rl_backend=rl_backend)
+        write_text(roots[env] / SUMMARY_JSON, json.dumps(summary.to_json(), indent=2) + "\n")
         draw_figures(roots[env], summary)
         if len(tasks) > 1:
             write_text(roots[env] / REPORT_MD, render_report({env: summary}, preset.name))
@@ -247,7 +257,7 @@ def run_gym_study(
             "format": SUMMARY_FORMAT,
             "preset": preset.name,
             "runs": preset.runs,
-            "tasks": summaries,
+            "tasks": {env: summary.to_json() for env, summary in summaries.items()},
         }
         write_text(out / SUMMARY_JSON, json.dumps(overall, indent=2) + "\n")
     markdown = render_report(summaries, preset.name, prefix="" if len(tasks) == 1 else None)
@@ -273,9 +283,11 @@ def load_gym_study(folder: str | os.PathLike[str]) -> tuple[dict[str, Any], str]
         found = json.loads(path.read_text())
         check_summary(found)  # once, on reading: the renderer trusts what passes
         if "tasks" in found:
-            return found, render_report(found["tasks"], found["preset"], prefix=None)
-        return found, render_report({found["env"]: found}, found["preset"])
-    except (OSError, ValueError, KeyError, TypeError) as error:
+            tasks = {env: TaskSummary.from_json(task) for env, task in found["tasks"].items()}
+            return found, render_report(tasks, found["preset"], prefix=None)
+        return found, render_report({found["env"]: TaskSummary.from_json(found)}, found["preset"])
+    except (OSError, ValueError, KeyError, TypeError, AttributeError) as error:
+        # check_summary names the fields the report reads; the others fail here, one line too.
         raise StudyError(f"{path}: not a readable gym study summary ({error})") from None
 
 
@@ -307,9 +319,9 @@ class RLCurves:
     std: list[float]
     per_run_final: list[float]
 
-    def curve(self) -> dict[str, list[float] | list[int]]:
+    def band(self) -> Band:
         """The curve as ``summary.json`` holds it (``curves.rl``)."""
-        return {"timesteps": self.timesteps, "mean": self.mean, "std": self.std}
+        return Band(timesteps=self.timesteps, mean=self.mean, std=self.std)
 
 
 def rl_curves(root: Path, reward: str, runs: int) -> RLCurves:
@@ -326,111 +338,115 @@ def rl_curves(root: Path, reward: str, runs: int) -> RLCurves:
     )
 
 
-def _paper(value: MeanStd) -> dict[str, float | None]:
-    return {"mean": value.mean, "std": value.std}
+def _paper(value: PaperValue) -> MeanStd:
+    return MeanStd(value.mean, value.std)
 
 
-def task_summary(root: Path, env: str, preset: StudyPreset) -> dict[str, Any]:
+def task_summary(
+    root: Path, env: str, preset: StudyPreset, *, rl_backend: str = DEFAULT_RL_BACKEND
+) -> TaskSummary:
     """The task's ``summary.json``: final values (mean ± std over runs) of every phase, the
-    curves behind the figures, the baselines, the settings, and the authors' finals."""
+    curves behind the figures, the baselines, the settings, and the authors' finals; with the
+    reward map drawn (Figure 4) where the task has one."""
     task = TASKS[env]
-    algos: dict[str, Any] = {}
+    algos: dict[str, AlgoSummary] = {}
     irl_summaries = {}
     for algo in ALGOS:
         irl = json.loads((root / "irl" / algo / SUMMARY_JSON).read_text())
         irl_summaries[algo] = irl
         metrics = irl["metrics"]
         rl = rl_curves(root, algo, preset.runs)
-        entry: dict[str, Any] = {
-            "irl_final_return": irl["irl_final_return"],
-            "rl_final_return": mean_std(rl.per_run_final),
-            "baselines": irl["baselines"],
-            "irl_per_run_final": _per_run_final(root / "irl" / algo, preset.runs, "eval_return"),
-            "rl_per_run_final": rl.per_run_final,
-            "curves": {
-                "irl_epochs": irl["epochs"],
-                "irl_return": metrics["eval_return"],
-                "rl": rl.curve(),
-            },
-        }
-        if task.discrete:
-            entry["final_alignment"] = irl["final_alignment"]
-            entry["final_reward_alignment"] = {
-                "mean": metrics["val_reward_alignment"]["mean"][-1],
-                "std": metrics["val_reward_alignment"]["std"][-1],
-            }
-            entry["curves"]["alignment"] = metrics["val_alignment"]
-        for key in ("disc_acc_expert", "disc_acc_policy"):
-            if key in metrics:
-                entry[f"final_{key}"] = {
-                    "mean": metrics[key]["mean"][-1],
-                    "std": metrics[key]["std"][-1],
-                }
-        entry.update(reward_quality(root, env, algo, preset.runs))
-        algos[algo] = entry
+        algos[algo] = AlgoSummary(
+            irl_final_return=MeanStd.from_json(irl["irl_final_return"]),
+            rl_final_return=MeanStd.from_json(mean_std(rl.per_run_final)),
+            baselines={name: MeanStd.from_json(v) for name, v in irl["baselines"].items()},
+            irl_per_run_final=_per_run_final(root / "irl" / algo, preset.runs, "eval_return"),
+            rl_per_run_final=rl.per_run_final,
+            irl_epochs=irl["epochs"],
+            irl_return=Band.from_json(metrics["eval_return"]),
+            rl_curve=rl.band(),
+            alignment=Band.from_json(metrics["val_alignment"]) if task.discrete else None,
+            final_alignment=MeanStd.from_json(irl["final_alignment"]) if task.discrete else None,
+            final_reward_alignment=_last(metrics["val_reward_alignment"])
+            if task.discrete
+            else None,
+            final_disc_acc={key: _last(metrics[key]) for key in QUALITY_KEYS if key in metrics},
+            **reward_quality(root, env, algo, preset.runs),
+        )
     env_rl = rl_curves(root, "env", preset.runs)
     baselines = irl_summaries["hairl"]["baselines"]
     paper = task.paper
-    return {
-        "format": SUMMARY_FORMAT,
-        "env": env,
-        "preset": preset.name,
-        "runs": preset.runs,
-        "seeds": [preset.seed + k for k in range(preset.runs)],
-        "discrete": task.discrete,
-        "expert_return": irl_summaries["hairl"]["expert_return"],
-        "random_return": baselines["random"]["mean"],
-        "algos": algos,
-        "env_reward": {
-            "rl_final_return": mean_std(env_rl.per_run_final),
-            "rl_per_run_final": env_rl.per_run_final,
-            "curves": {"rl": env_rl.curve()},
-        },
-        "settings": {  # through JSON: tuples become lists, as in summary.json
-            "irl": json.loads(json.dumps(asdict(preset.irl(env)))),
-            "rl": json.loads(json.dumps(asdict(preset.rl(env)))),
-            "rl_evaluations": preset.rl_evaluations,
-            "rl_eval_episodes": preset.irl(env).eval_episodes,
-            "seed": preset.seed,
-            "authors_budget": authors_budget(env, preset),
-        },
-        "paper": {
-            "irl_final_return": {"airl": _paper(paper.irl_airl), "hairl": _paper(paper.irl_hairl)},
-            "expert_return": paper.irl_expert.mean,
-            "rl_final_return": {
+    return TaskSummary(
+        format=SUMMARY_FORMAT,
+        env=env,
+        preset=preset.name,
+        runs=preset.runs,
+        seeds=[preset.seed + k for k in range(preset.runs)],
+        discrete=task.discrete,
+        expert_return=irl_summaries["hairl"]["expert_return"],
+        random_return=baselines["random"]["mean"],
+        algos=algos,
+        env_reward=EnvRewardSummary(
+            rl_final_return=MeanStd.from_json(mean_std(env_rl.per_run_final)),
+            rl_per_run_final=env_rl.per_run_final,
+            rl_curve=env_rl.band(),
+        ),
+        settings=StudySettings(  # through JSON: tuples become lists, as in summary.json
+            irl=json.loads(json.dumps(asdict(preset.irl(env)))),
+            rl=json.loads(json.dumps(asdict(preset.rl(env)))),
+            rl_evaluations=preset.rl_evaluations,
+            rl_eval_episodes=preset.irl(env).eval_episodes,
+            seed=preset.seed,
+            authors_budget=authors_budget(env, preset),
+            rl_backend=rl_backend,
+        ),
+        paper=PaperFinals(
+            irl_final_return={"airl": _paper(paper.irl_airl), "hairl": _paper(paper.irl_hairl)},
+            expert_return=paper.irl_expert.mean,
+            rl_final_return={
                 "airl": _paper(paper.rl_airl),
                 "hairl": _paper(paper.rl_hairl),
                 "env_reward": _paper(paper.rl_env_reward),
             },
-            "final_alignment": {"airl": paper.alignment_airl, "hairl": paper.alignment_hairl}
+            final_alignment={"airl": paper.alignment_airl, "hairl": paper.alignment_hairl}
             if task.discrete
             else None,
-            "random_return": task.random_return,
-        },
-    }
+            random_return=task.random_return,
+        ),
+        reward_map=draw_reward_map(root, env),
+    )
+
+
+def _last(curve: dict[str, list[float]]) -> MeanStd:
+    """A per-epoch curve's last point."""
+    return MeanStd(curve["mean"][-1], curve["std"][-1])
 
 
 def reward_quality(root: Path, env: str, algo: str, runs: int) -> dict[str, Any]:
-    """Mean and std over runs of each IRL run's ``reward_quality.json`` (computed there first
-    when a run lacks it, e.g. one made before it existed), the per-run values and the
-    coverage used. A value null in a run (a constant reward) is left out of its mean."""
+    """:class:`AlgoSummary`'s ``quality`` (by score) and ``reward_quality`` (per run, γ,
+    coverage, the true reward)."""
+    # Mean and std over runs of each IRL run's ``reward_quality.json`` (computed there first
+    # when a run lacks it, e.g. one made before it existed); a value null in a run (a constant
+    # reward) is left out of its mean.
     from pokerirl.gym.quality import SCORES, run_quality
 
     found = [
         run_quality(root / "irl" / algo / f"run-{k}", env_id=env, data_path=root / DATA_FILE)
         for k in range(runs)
     ]
-    out: dict[str, Any] = {}
+    quality = {}
     for key in SCORES:
         values = [q[key] for q in found if q.get(key) is not None]
-        out[key] = mean_std(values) if values else {"mean": None, "std": None}
-    out["reward_quality"] = {
-        "per_run": {key: [q.get(key) for q in found] for key in SCORES},
-        "gamma": found[0]["gamma"],
-        "coverage": found[0]["coverage"],
-        "true_reward": found[0]["true_reward"],
+        quality[key] = MeanStd.from_json(mean_std(values)) if values else MeanStd(None)
+    return {
+        "quality": quality,
+        "reward_quality": {
+            "per_run": {key: [q.get(key) for q in found] for key in SCORES},
+            "gamma": found[0]["gamma"],
+            "coverage": found[0]["coverage"],
+            "true_reward": found[0]["true_reward"],
+        },
     }
-    return out
 
 
 def authors_budget(env: str, preset: StudyPreset) -> bool:
@@ -445,7 +461,7 @@ def _per_run_final(folder: Path, runs: int, key: str) -> list[float]:
     return [read_jsonl(folder / f"run-{k}" / METRICS_JSONL)[-1][key] for k in range(runs)]
 
 
-def draw_reward_map(root: Path, env: str) -> dict[str, Any] | None:
+def draw_reward_map(root: Path, env: str) -> RewardMapSummary | None:
     """Figure 4 for a task with a bounded 2-d observation and discrete actions (MountainCar):
     the action each algorithm's mean f prefers over the state lattice, beside the shipped
     expert's; returns the agreements (None for other tasks)."""
@@ -461,27 +477,26 @@ def draw_reward_map(root: Path, env: str) -> dict[str, Any] | None:
     plot_reward_map(result, path)
     constant = result.constant_agreement
     assert constant is not None  # the shipped expert's panel is drawn
-    return {
-        "grid": MAP_GRID,
-        "agreement": {
-            algo: {"mean_f": panel.agreement, "runs": list(panel.run_agreements)}
-            for algo, panel in zip(ALGOS, result.panels, strict=True)
-        },
-        "constant_action": constant[0],
-        "constant_agreement": constant[1],
-    }
+    panels = dict(zip(ALGOS, result.panels, strict=True))
+    return RewardMapSummary(
+        grid=MAP_GRID,
+        agreement={algo: panel.agreement for algo, panel in panels.items()},
+        run_agreements={algo: list(panel.run_agreements) for algo, panel in panels.items()},
+        constant_action=constant[0],
+        constant_agreement=constant[1],
+    )
 
 
 # --------------------------------------------------------------------------- report
 
 
-def _value(value: dict[str, Any] | None, *, percent: bool = False, digits: int = 1) -> str:
-    if value is None or value.get("mean") is None:
+def _value(value: MeanStd | None, *, percent: bool = False, digits: int = 1) -> str:
+    if value is None or value.mean is None:
         return "–"
     scale = 100.0 if percent else 1.0
-    text = f"{scale * value['mean']:,.{digits}f}"
-    if value.get("std") is not None:
-        text += f" ± {scale * value['std']:,.{digits}f}"
+    text = f"{scale * value.mean:,.{digits}f}"
+    if value.std is not None:
+        text += f" ± {scale * value.std:,.{digits}f}"
     return text + ("%" if percent else "")
 
 
@@ -489,92 +504,98 @@ def _paper_percent(value: float | None) -> str:
     return "–" if value is None else f"{value:.1f}%"
 
 
-def task_table(summary: dict[str, Any]) -> list[str]:
+def _percent(share: float | None) -> float | None:
+    return None if share is None else 100 * share
+
+
+def task_table(summary: TaskSummary) -> list[str]:
     """Our finals beside the authors', one row per figure of the paper."""
-    algos, paper = summary["algos"], summary["paper"]
-    expert = {"mean": summary["expert_return"], "std": None}
+    airl, hairl, paper = summary.algos["airl"], summary.algos["hairl"], summary.paper
     rows = [
-        ("IRL-phase return, AIRL", _value(algos["airl"]["irl_final_return"]),
-         _value(paper["irl_final_return"]["airl"])),
-        ("IRL-phase return, H-AIRL", _value(algos["hairl"]["irl_final_return"]),
-         _value(paper["irl_final_return"]["hairl"])),
-        ("expert (its data's episodes)", _value(expert), _value({"mean": paper["expert_return"]})),
-        ("RL-phase return, AIRL reward", _value(algos["airl"]["rl_final_return"]),
-         _value(paper["rl_final_return"]["airl"])),
-        ("RL-phase return, H-AIRL reward", _value(algos["hairl"]["rl_final_return"]),
-         _value(paper["rl_final_return"]["hairl"])),
-        ("RL-phase return, env reward", _value(summary["env_reward"]["rl_final_return"]),
-         _value(paper["rl_final_return"]["env_reward"])),
+        ("IRL-phase return, AIRL", _value(airl.irl_final_return),
+         _value(paper.irl_final_return["airl"])),
+        ("IRL-phase return, H-AIRL", _value(hairl.irl_final_return),
+         _value(paper.irl_final_return["hairl"])),
+        ("expert (its data's episodes)", _value(MeanStd(summary.expert_return)),
+         _value(MeanStd(paper.expert_return))),
+        ("RL-phase return, AIRL reward", _value(airl.rl_final_return),
+         _value(paper.rl_final_return["airl"])),
+        ("RL-phase return, H-AIRL reward", _value(hairl.rl_final_return),
+         _value(paper.rl_final_return["hairl"])),
+        ("RL-phase return, env reward", _value(summary.env_reward.rl_final_return),
+         _value(paper.rl_final_return["env_reward"])),
     ]  # fmt: skip
-    if summary["discrete"]:
-        bc = summary["algos"]["hairl"]["baselines"]["bc"]
+    if summary.discrete:
+        alignment = paper.final_alignment or {}
         rows += [
-            ("alignment, AIRL policy", _value(algos["airl"]["final_alignment"], percent=True),
-             _paper_percent(paper["final_alignment"]["airl"])),
-            ("alignment, H-AIRL policy", _value(algos["hairl"]["final_alignment"], percent=True),
-             _paper_percent(paper["final_alignment"]["hairl"])),
-            ("alignment, behaviour cloning (same net and epochs)", _value(bc, percent=True),
-             "not reported"),
+            ("alignment, AIRL policy", _value(airl.final_alignment, percent=True),
+             _paper_percent(alignment.get("airl"))),
+            ("alignment, H-AIRL policy", _value(hairl.final_alignment, percent=True),
+             _paper_percent(alignment.get("hairl"))),
+            ("alignment, behaviour cloning (same net and epochs)",
+             _value(hairl.baselines["bc"], percent=True), "not reported"),
             ("alignment, reward argmax: AIRL / H-AIRL",
-             f"{_value(algos['airl']['final_reward_alignment'], percent=True)} / "
-             f"{_value(algos['hairl']['final_reward_alignment'], percent=True)}", "not reported"),
+             f"{_value(airl.final_reward_alignment, percent=True)} / "
+             f"{_value(hairl.final_reward_alignment, percent=True)}", "not reported"),
         ]  # fmt: skip
-    if "epic" in algos["airl"]:
+    if "epic" in airl.quality:
+        a, h = airl.quality, hairl.quality
         rows += [
             ("EPIC distance to the true reward (0 same up to shaping and scale, 0.71 "
              "unrelated, 1 opposite): AIRL / H-AIRL",
-             f"{_value(algos['airl']['epic'], digits=3)} / "
-             f"{_value(algos['hairl']['epic'], digits=3)}", "not reported"),
+             f"{_value(a['epic'], digits=3)} / {_value(h['epic'], digits=3)}", "not reported"),
             ("EPIC of a random reward net (same architecture, the runs' initial nets): "
              "AIRL / H-AIRL",
-             f"{_value(algos['airl']['epic_random_baseline'], digits=3)} / "
-             f"{_value(algos['hairl']['epic_random_baseline'], digits=3)}", "not reported"),
+             f"{_value(a['epic_random_baseline'], digits=3)} / "
+             f"{_value(h['epic_random_baseline'], digits=3)}", "not reported"),
             ("EPIC on the expert's states and transitions only: AIRL / H-AIRL / random net",
-             f"{_value(algos['airl']['epic_expert_coverage'], digits=3)} / "
-             f"{_value(algos['hairl']['epic_expert_coverage'], digits=3)} / "
-             f"{_value(algos['airl']['epic_random_baseline_expert_coverage'], digits=3)}",
+             f"{_value(a['epic_expert_coverage'], digits=3)} / "
+             f"{_value(h['epic_expert_coverage'], digits=3)} / "
+             f"{_value(a['epic_random_baseline_expert_coverage'], digits=3)}",
              "not reported"),
             ("Pearson of f and the true reward on expert / policy transitions: AIRL",
-             f"{_value(algos['airl']['pearson_expert'], digits=3)} / "
-             f"{_value(algos['airl']['pearson_policy'], digits=3)}", "not reported"),
+             f"{_value(a['pearson_expert'], digits=3)} / "
+             f"{_value(a['pearson_policy'], digits=3)}", "not reported"),
             ("Pearson of f and the true reward on expert / policy transitions: H-AIRL",
-             f"{_value(algos['hairl']['pearson_expert'], digits=3)} / "
-             f"{_value(algos['hairl']['pearson_policy'], digits=3)}", "not reported"),
+             f"{_value(h['pearson_expert'], digits=3)} / "
+             f"{_value(h['pearson_policy'], digits=3)}", "not reported"),
         ]  # fmt: skip
-    found = summary.get("reward_map")
+    found = summary.reward_map
     if found is not None:
-        agree = found["agreement"]
+        agree = found.agreement
         rows.append(
-            (f"reward map: cells where f prefers the expert's action ({found['grid']}² lattice), "
+            (f"reward map: cells where f prefers the expert's action ({found.grid}² lattice), "
              "AIRL / H-AIRL",
-             f"{100 * agree['airl']['mean_f']:.1f}% / {100 * agree['hairl']['mean_f']:.1f}% "
-             f"(a constant {found['constant_action']!r}: {100 * found['constant_agreement']:.1f}%)",
+             f"{_paper_percent(_percent(agree['airl']))} / "
+             f"{_paper_percent(_percent(agree['hairl']))} "
+             f"(a constant {found.constant_action!r}: {100 * found.constant_agreement:.1f}%)",
              "Figure 4: maps only"),
         )  # fmt: skip
     rows.append(
-        ("random policy", _value({"mean": summary["random_return"]}),
-         _value({"mean": paper["random_return"]}))
+        ("random policy", _value(MeanStd(summary.random_return)),
+         _value(MeanStd(paper.random_return)))
     )  # fmt: skip
     return markdown_table(["", "ours", "the authors"], rows)
 
 
-def _budget(summary: dict[str, Any]) -> str:
-    irl, rl = summary["settings"]["irl"], summary["settings"]["rl"]
-    seeds = summary["seeds"]
+def _budget(summary: TaskSummary) -> str:
+    settings = summary.settings
+    irl, rl = settings.irl, settings.rl
+    seeds = summary.seeds
+    backend = settings.rl_backend or "sb3"
     return (
-        f"{summary['runs']} runs per algorithm (seeds {seeds[0]}–{seeds[-1]}); expert data "
+        f"{summary.runs} runs per algorithm (seeds {seeds[0]}–{seeds[-1]}); expert data "
         f"{irl['transitions']:,} transitions; IRL {irl['epochs']} epochs, batch "
         f"{irl['batch_size']}, α {irl['alpha']}, β {irl['beta']}, σ {irl['sigma_start']} → "
         f"{irl['sigma_end']} (H-AIRL), each epoch's policy over {irl['eval_episodes']} "
         f"episodes; RL {rl['algo'].upper()} for {rl['timesteps']:,} steps, each point "
-        f"{summary['settings']['rl_eval_episodes']} deterministic episodes"
-        + ("." if summary["settings"].get("rl_backend", "sb3") == "sb3"
-           else f" ({summary['settings']['rl_backend']} RL backend).")
+        f"{settings.rl_eval_episodes} deterministic episodes"
+        + ("." if backend == "sb3" else f" ({backend} RL backend).")
     )
 
 
 def render_report(
-    summaries: dict[str, dict[str, Any]], preset: str, *, prefix: str | None = ""
+    summaries: Mapping[str, TaskSummary], preset: str, *, prefix: str | None = ""
 ) -> str:
     """``report.md``: per task, the budget, our finals beside the authors', the figures.
 
@@ -589,11 +610,11 @@ def render_report(
     for env, summary in summaries.items():
         where = f"{env}/" if prefix is None else prefix
         lines += ["", f"## {env}", "", _budget(summary), ""]
-        if not summary["settings"]["authors_budget"]:
+        if not summary.settings.authors_budget:
             lines += ["**Not the authors' budget or number of runs** (theirs: 10 runs, "
                       "docs/gym.md): compare the directions, not the digits.", ""]  # fmt: skip
         lines += task_table(summary)
-        quality = summary["algos"]["airl"].get("reward_quality")
+        quality = summary.algos["airl"].reward_quality
         if quality is not None:
             truth = quality["true_reward"]
             cover = quality["coverage"]
@@ -604,9 +625,9 @@ def render_report(
         if note:
             lines += ["", note]
         lines += [""]
-        figures = ["irl_returns", "alignment", "rl_returns"] if summary["discrete"] else [
+        figures = ["irl_returns", "alignment", "rl_returns"] if summary.discrete else [
             "irl_returns", "rl_returns"]  # fmt: skip
-        if summary.get("reward_map") is not None:
+        if summary.reward_map is not None:
             figures.append("reward_map")
         lines += [f"![{name}]({where}{FIGURES[name]})" for name in figures]
     return "\n".join(lines) + "\n"
@@ -615,7 +636,7 @@ def render_report(
 # --------------------------------------------------------------------------- figures
 
 
-def draw_figures(root: Path, summary: dict[str, Any]) -> None:
+def draw_figures(root: Path, summary: TaskSummary) -> None:
     """IRL-phase returns, alignment (discrete tasks) and RL-phase returns, mean ± std bands."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
@@ -628,7 +649,7 @@ def draw_figures(root: Path, summary: dict[str, Any]) -> None:
         return fig, fig.add_subplot()
 
     def save(fig: Figure, axes: Any, name: str, title: str, xlabel: str, ylabel: str) -> None:
-        axes.set(title=f"{summary['env']}: {title}", xlabel=xlabel, ylabel=ylabel)
+        axes.set(title=f"{summary.env}: {title}", xlabel=xlabel, ylabel=ylabel)
         axes.grid(alpha=0.3)
         axes.legend(fontsize="small")
         fig.tight_layout()
@@ -639,30 +660,31 @@ def draw_figures(root: Path, summary: dict[str, Any]) -> None:
 
     def lines(axes: Any) -> None:
         for value, label, style in (
-            (summary["expert_return"], "expert", "--"),
-            (summary["random_return"], "random", ":"),
+            (summary.expert_return, "expert", "--"),
+            (summary.random_return, "random", ":"),
         ):
             if math.isfinite(value):
                 axes.axhline(value, color="grey", linestyle=style, linewidth=1, label=label)
 
-    runs = f"mean ± std of {summary['runs']} runs"
+    runs = f"mean ± std of {summary.runs} runs"
     fig, axes = figure()
     for algo in ALGOS:
-        curves = summary["algos"][algo]["curves"]
-        band(axes, curves["irl_epochs"], curves["irl_return"], LABELS[algo], color=COLORS[algo],
-             alpha=0.2)  # fmt: skip
+        found = summary.algos[algo]
+        band(axes, found.irl_epochs, found.irl_return.to_json(), LABELS[algo],
+             color=COLORS[algo], alpha=0.2)  # fmt: skip
     lines(axes)
     save(fig, axes, "irl_returns", f"IRL-phase return ({runs})", "epoch", "return")
 
-    if summary["discrete"]:
+    if summary.discrete:
         fig, axes = figure()
         for algo in ALGOS:
-            curves = summary["algos"][algo]["curves"]
-            band(axes, curves["irl_epochs"], curves["alignment"], LABELS[algo],
+            found = summary.algos[algo]
+            assert found.alignment is not None  # a discrete task's
+            band(axes, found.irl_epochs, found.alignment.to_json(), LABELS[algo],
                  color=COLORS[algo], alpha=0.2)  # fmt: skip
-        baselines = summary["algos"]["hairl"]["baselines"]
+        baselines = summary.algos["hairl"].baselines
         for name, style in (("bc", "-."), ("majority", ":")):
-            value = baselines[name]["mean"]
+            value = baselines[name].mean
             axes.axhline(
                 value, color="grey", linestyle=style, linewidth=1, label=f"{name} {value:.3f}"
             )
@@ -670,8 +692,9 @@ def draw_figures(root: Path, summary: dict[str, Any]) -> None:
 
     fig, axes = figure()
     for reward in REWARDS:
-        source = summary["env_reward"] if reward == "env" else summary["algos"][reward]
-        curve = source["curves"]["rl"]
-        band(axes, curve["timesteps"], curve, LABELS[reward], color=COLORS[reward], alpha=0.2)
+        curve = summary.env_reward.rl_curve if reward == "env" else summary.algos[reward].rl_curve
+        assert curve.timesteps is not None  # an RL curve's
+        band(axes, curve.timesteps, curve.to_json(), LABELS[reward], color=COLORS[reward],
+             alpha=0.2)  # fmt: skip
     lines(axes)
     save(fig, axes, "rl_returns", f"RL-phase true return ({runs})", "timesteps", "return")
