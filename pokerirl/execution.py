@@ -35,26 +35,17 @@ to :data:`RETRIES` more times, on a fresh worker; then the run stops with one li
 raises stops the run with its own exception. Units finished before a stop are kept: callers
 save each result as it arrives (``on_result``), so a rerun resumes from them.
 
-**Unit records.** :func:`save_unit_folder` and :func:`load_unit` give the resume rules shared
-by every command: a unit is finished only when its outputs and its record (``unit.json``: a
-fingerprint of its configuration and inputs, and the sha256 of each output file) were written;
-a rerun reuses it when the fingerprint matches, recomputes it when it is half-written or
-corrupt, and refuses it, in one line, when it was made with another configuration, unless
-``overwrite``. Folders are written beside their target and swapped in at the end, so a killed
-run leaves the previous folder as it was.
+**Unit records** are the store's (:mod:`pokerirl.store`: ``Unit``, ``run_units``), which runs
+its units with :func:`map_units`.
 
 >>> map_units(pow, [(2, 3), (3, 2)], backend=Backend())
 [8, 9]
->>> fingerprint({"b": 1, "a": [2]}) == fingerprint({"a": [2], "b": 1})
-True
 """
 
 from __future__ import annotations
 
 import atexit
 import contextlib
-import hashlib
-import json
 import os
 import pickle
 import shutil
@@ -76,8 +67,6 @@ from pokerirl import atomic
 R = TypeVar("R")
 
 RETRIES = 2  # a unit whose worker dies runs at most 1 + RETRIES times
-RECORD_FILE = "unit.json"
-RECORD_FORMAT = "pokerirl-unit/1"
 LOCAL_RAY = "local"
 SCRATCH_PREFIX = "pokerirl-scratch-"  # + the owner's pid: a worker's temporary files
 PRIVATE_RAY_PREFIX = "pokerirl-ray-"  # + the driver's pid: a private Ray instance's folder
@@ -85,10 +74,6 @@ PRIVATE_RAY_PREFIX = "pokerirl-ray-"  # + the driver's pid: a private Ray instan
 
 class ExecutionError(RuntimeError):
     """A unit could not be run (its worker kept dying, Ray is missing); one line."""
-
-
-class UnitConflict(ValueError):
-    """A finished unit was made with another configuration; one line."""
 
 
 # --- backends ------------------------------------------------------------------------------
@@ -861,17 +846,7 @@ def _descendants(pid: int) -> set[int]:
     return found
 
 
-# --- unit records and fingerprints ---------------------------------------------------------
-
-
-def fingerprint(config: Any) -> str:
-    """``sha256:<hex>`` of ``config`` as canonical JSON (sorted keys, no spaces)."""
-    text = json.dumps(config, sort_keys=True, separators=(",", ":"), allow_nan=False)
-    return f"sha256:{hashlib.sha256(text.encode()).hexdigest()}"
-
-
-def bytes_fingerprint(data: bytes) -> str:
-    return f"sha256:{hashlib.sha256(data).hexdigest()}"
+# --- how a unit's inputs and outputs travel ------------------------------------------------
 
 
 def read_files(folder: str | os.PathLike[str], names: Sequence[str]) -> dict[str, bytes]:
@@ -889,169 +864,3 @@ def write_files(folder: str | os.PathLike[str], files: Mapping[str, bytes]) -> P
         path.parent.mkdir(parents=True, exist_ok=True)
         path.write_bytes(data)
     return folder
-
-
-def make_record(
-    config: Mapping[str, Any],
-    *,
-    files: Mapping[str, bytes] | None = None,
-    result: Any = None,
-) -> dict[str, Any]:
-    """A unit record: its fingerprint (of ``config``), ``config`` itself, the sha256 of each
-    output file and, for units that are a single file, the ``result``."""
-    return {
-        "format": RECORD_FORMAT,
-        "fingerprint": fingerprint(config),
-        "config": dict(config),
-        "files": {name: bytes_fingerprint(data) for name, data in sorted((files or {}).items())},
-        "result": result,
-    }
-
-
-def load_unit(
-    record_path: str | os.PathLike[str],
-    config: Mapping[str, Any],
-    *,
-    overwrite: bool = False,
-    what: str | None = None,
-) -> dict[str, Any] | None:
-    """The record of a finished unit at ``record_path`` to reuse, or None to (re)compute it.
-
-    None when the record is missing, unreadable, or a file it lists is missing or has other
-    bytes (half-written or corrupt: recompute). A valid record of another configuration is
-    refused with :class:`UnitConflict` naming what changed, unless ``overwrite``.
-    """
-    path = Path(record_path)
-    try:
-        record = json.loads(path.read_text())
-        if not isinstance(record, dict) or record.get("format") != RECORD_FORMAT:
-            return None
-        saved_print, saved_config = record["fingerprint"], record["config"]
-        for name, digest in record["files"].items():
-            if bytes_fingerprint((path.parent / name).read_bytes()) != digest:
-                return None
-    except (OSError, ValueError, KeyError, TypeError, AttributeError):
-        return None
-    if saved_print == fingerprint(config):
-        return record
-    if overwrite:
-        return None
-    changed = describe_changes(saved_config, json.loads(json.dumps(config)))  # tuples: lists
-    raise UnitConflict(
-        f"{what or path} was made with another configuration ({changed}); "
-        "use another --out, or --overwrite to recompute it"
-    )
-
-
-def describe_changes(old: Any, new: Any, *, limit: int = 4) -> str:
-    """``key old -> new, ...`` over the leaves of two JSON-like configs.
-
-    >>> describe_changes({"a": 1, "d": {"x": 2}}, {"a": 1, "d": {"x": 3}})
-    'd.x 2 -> 3'
-    """
-    flat_old, flat_new = _flatten(old), _flatten(new)
-    keys = sorted(
-        k for k in flat_old.keys() | flat_new.keys() if flat_old.get(k) != flat_new.get(k)
-    )
-    parts = [f"{k} {flat_old.get(k)!r} -> {flat_new.get(k)!r}" for k in keys[:limit]]
-    if len(keys) > limit:
-        parts.append(f"{len(keys) - limit} more")
-    return ", ".join(parts) or "fingerprint differs"
-
-
-def _flatten(value: Any, prefix: str = "") -> dict[str, Any]:
-    if isinstance(value, Mapping):
-        out: dict[str, Any] = {}
-        for key, item in value.items():
-            out.update(_flatten(item, f"{prefix}{key}."))
-        return out
-    return {prefix.rstrip("."): value}
-
-
-def save_record(path: str | os.PathLike[str], record: Mapping[str, Any]) -> None:
-    """Write a single-file unit's record atomically."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    atomic.write_text(path, json.dumps(record, indent=2, sort_keys=True) + "\n")
-
-
-def save_unit_folder(
-    folder: str | os.PathLike[str],
-    files: Mapping[str, bytes],
-    config: Mapping[str, Any],
-    *,
-    unhashed: Mapping[str, bytes] | None = None,
-) -> None:
-    """Replace ``folder`` with ``files``, ``unhashed`` files (timings) and a record last.
-
-    Everything is written into a new folder beside ``folder``, which is then swapped in: a
-    reader never sees a mix of old and new files, and a kill leaves the old folder whole
-    (:func:`tidy_folder` finishes or undoes an interrupted swap).
-    """
-    folder = Path(folder)
-    folder.parent.mkdir(parents=True, exist_ok=True)
-    tidy_folder(folder)
-    with atomic.naming(folder):  # errors name the folder, not the staging one
-        staging = Path(tempfile.mkdtemp(prefix=f".{folder.name}.new-", dir=folder.parent))
-        try:
-            atomic.make_shareable(staging)
-            write_files(staging, {**files, **(unhashed or {})})
-            record = make_record(config, files=files)
-            text = json.dumps(record, indent=2, sort_keys=True) + "\n"
-            (staging / RECORD_FILE).write_text(text)
-            if folder.exists():
-                old = Path(tempfile.mkdtemp(prefix=f".{folder.name}.old-", dir=folder.parent))
-                os.rename(folder, old / "x")
-                os.rename(staging, folder)
-                shutil.rmtree(old, ignore_errors=True)
-            else:
-                os.rename(staging, folder)
-        except BaseException:
-            shutil.rmtree(staging, ignore_errors=True)
-            raise
-
-
-def tidy_folder(folder: str | os.PathLike[str]) -> None:
-    """Clear what a killed :func:`save_unit_folder` left beside ``folder``: put back an old
-    folder moved aside but not yet replaced, and delete unfinished new ones."""
-    folder = Path(folder)
-    if not folder.parent.is_dir():
-        return
-    for leftover in sorted(folder.parent.glob(f".{folder.name}.old-*")):
-        if not folder.exists() and (leftover / "x").is_dir():
-            os.rename(leftover / "x", folder)
-        shutil.rmtree(leftover, ignore_errors=True)
-    for leftover in folder.parent.glob(f".{folder.name}.new-*"):
-        shutil.rmtree(leftover, ignore_errors=True)
-
-
-def load_unit_folder(
-    folder: str | os.PathLike[str],
-    config: Mapping[str, Any],
-    *,
-    overwrite: bool = False,
-) -> dict[str, Any] | None:
-    """:func:`load_unit` for a unit that is a folder (its record is ``unit.json`` inside).
-
-    A folder that holds files but no record was not written by a unit (an older pokerirl, or
-    a user's folder): it is refused unless ``overwrite``, and even then only when it holds
-    plain files and no subfolders, so a mistyped ``--out`` never replaces a tree.
-    """
-    folder = Path(folder)
-    tidy_folder(folder)
-    if folder.exists() and not folder.is_dir():
-        raise UnitConflict(f"{folder} exists and is not a folder")
-    if not folder.exists() or not any(folder.iterdir()):
-        return None
-    if (folder / RECORD_FILE).is_file():
-        return load_unit(folder / RECORD_FILE, config, overwrite=overwrite, what=str(folder))
-    if overwrite and all(child.is_file() for child in folder.iterdir()):
-        return None
-    raise UnitConflict(
-        f"{folder} already holds files but no {RECORD_FILE} (not written by this pokerirl); "
-        + (
-            "it has subfolders, so it is never replaced: use another --out"
-            if overwrite
-            else "use another --out, or --overwrite to replace it"
-        )
-    )

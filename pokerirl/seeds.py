@@ -2,6 +2,8 @@
 
 >>> parse_seeds("0-3,7,10-11")
 (0, 1, 2, 3, 7, 10, 11)
+>>> seeds_as_written("7,0-2,1")
+(7, 0, 1, 2, 1)
 >>> format_seeds([0, 1, 2, 3, 7, 10, 11])
 '0-3,7,10-11'
 """
@@ -17,7 +19,13 @@ def parse_seeds(text: str) -> tuple[int, ...]:
 
     Raises ``ValueError`` on an empty range (``"5-3"``), a negative seed or junk.
     """
-    seeds: set[int] = set()
+    return tuple(sorted(set(seeds_as_written(text))))
+
+
+def seeds_as_written(text: str) -> tuple[int, ...]:
+    """The seeds of :func:`parse_seeds` in the order written, repeats kept: for a caller whose
+    order matters (the poker study: its first seed seeds the agents) or that refuses repeats."""
+    seeds: list[int] = []
     for part in text.split(","):
         match = re.fullmatch(r"\s*(\d+)\s*(?:-\s*(\d+)\s*)?", part)
         if match is None:
@@ -28,8 +36,8 @@ def parse_seeds(text: str) -> tuple[int, ...]:
         last = int(match[2]) if match[2] is not None else first
         if last < first:
             raise ValueError(f"empty seed range {part.strip()!r}")
-        seeds.update(range(first, last + 1))
-    return tuple(sorted(seeds))
+        seeds.extend(range(first, last + 1))
+    return tuple(seeds)
 
 
 def format_seeds(seeds: Sequence[int]) -> str:

@@ -7,8 +7,8 @@ from pathlib import Path
 
 import pytest
 
-from pokerirl.demo import DemoConfig, run_demo
-from pokerirl.study import preset
+from pokerirl.studies.demo import DemoConfig, run_demo
+from pokerirl.studies.poker import preset
 
 
 @pytest.mark.slow
@@ -25,7 +25,10 @@ def test_demo_is_the_study_on_synthetic_data(tmp_path: Path) -> None:
     assert report == result.report and report["preset"] == "quick"
     assert report["seeds"] == [0, 1]
     assert (tmp_path / "report.md").read_text() == result.markdown
-    # A rerun reuses the synthetic month, so every stage is skipped.
+    # A rerun reuses the synthetic month, so every unit is reused: nothing written again.
+    units = {p: p.stat().st_mtime_ns for p in tmp_path.rglob("*")
+             if p.suffix in (".pt", ".parquet") or p.name.endswith("unit.json")}  # fmt: skip
     said.clear()
     run_demo(tmp_path, config, say=said.append)
-    assert sum("skipped" in line for line in said) == 5
+    assert "      the table is finished already, reused" in said
+    assert {p: p.stat().st_mtime_ns for p in units} == units

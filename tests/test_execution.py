@@ -1,11 +1,10 @@
 """pokerirl.execution on local processes: order, thread pinning, private working folders,
-retries when a worker dies, errors, and the unit records that decide reuse, recompute or
-refuse. (The real Ray cluster is in test_execution_ray.py, killed drivers in
-test_execution_kill.py.)"""
+retries when a worker dies, and errors. (The unit records that decide reuse, recompute or
+refuse are the store's, in test_store_*.py; the real Ray cluster is in test_execution_ray.py,
+killed drivers in test_execution_kill.py.)"""
 
 from __future__ import annotations
 
-import json
 import os
 import pickle
 import signal
@@ -13,20 +12,7 @@ from pathlib import Path
 
 import pytest
 
-from pokerirl.execution import (
-    RECORD_FILE,
-    Backend,
-    ExecutionError,
-    UnitConflict,
-    choose_backend,
-    load_unit,
-    load_unit_folder,
-    make_record,
-    map_units,
-    save_record,
-    save_unit_folder,
-    tidy_folder,
-)
+from pokerirl.execution import Backend, ExecutionError, choose_backend, map_units
 
 TWO = Backend(jobs=2)
 
@@ -141,73 +127,6 @@ def test_choose_backend() -> None:
         choose_backend(ray=" ", environ={})
     with pytest.raises(ValueError, match="jobs must be at least 1"):
         choose_backend(jobs=0, environ={})
-
-
-CONFIG = {"seed": 1, "nested": {"width": [64, 64]}}
-
-
-def test_folder_units_reuse_recompute_or_refuse(tmp_path: Path) -> None:
-    unit = tmp_path / "seed-1"
-    assert load_unit_folder(unit, CONFIG) is None  # missing: compute
-    save_unit_folder(unit, {"model.pt": b"weights"}, CONFIG, unhashed={"timings.json": b"{}"})
-    record = load_unit_folder(unit, CONFIG)
-    assert record is not None and list(record["files"]) == ["model.pt"]
-    assert sorted(p.name for p in unit.iterdir()) == ["model.pt", "timings.json", RECORD_FILE]
-    (unit / "timings.json").write_text("other timings")  # not covered: still finished
-    assert load_unit_folder(unit, CONFIG) is not None
-    other = {"seed": 1, "nested": {"width": (64, 32)}}
-    with pytest.raises(
-        UnitConflict, match=r"seed-1 was made .*nested.width \[64, 64\] -> \[64, 32\]"
-    ):
-        load_unit_folder(unit, other)
-    assert load_unit_folder(unit, other, overwrite=True) is None
-    (unit / "model.pt").write_bytes(b"weighTs")  # corrupt: recompute, never refuse
-    assert load_unit_folder(unit, other) is None
-    (unit / "model.pt").unlink()  # half-written
-    assert load_unit_folder(unit, CONFIG) is None
-    (unit / RECORD_FILE).write_text("[]")
-    assert load_unit_folder(unit, CONFIG) is None
-
-
-def test_a_folder_without_a_record_is_never_replaced_silently(tmp_path: Path) -> None:
-    theirs = tmp_path / "agent"
-    theirs.mkdir()
-    (theirs / "model.pt").write_bytes(b"an older agent")
-    with pytest.raises(UnitConflict, match=r"no unit.json .*--overwrite to replace it"):
-        load_unit_folder(theirs, CONFIG)
-    assert load_unit_folder(theirs, CONFIG, overwrite=True) is None
-    (theirs / "sub").mkdir()
-    with pytest.raises(UnitConflict, match="has subfolders, so it is never replaced"):
-        load_unit_folder(theirs, CONFIG, overwrite=True)
-
-
-def test_a_swap_killed_half_way_is_undone_and_leftovers_go(tmp_path: Path) -> None:
-    unit = tmp_path / "agent"
-    save_unit_folder(unit, {"model.pt": b"old"}, CONFIG)
-    old = {p.name: p.read_bytes() for p in unit.iterdir()}
-    # What a kill between the two renames of a swap leaves: the old folder moved aside.
-    aside = tmp_path / ".agent.old-x1"
-    aside.mkdir()
-    os.rename(unit, aside / "x")
-    (tmp_path / ".agent.new-y2").mkdir()  # and an unfinished new one
-    tidy_folder(unit)
-    assert {p.name: p.read_bytes() for p in unit.iterdir()} == old
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["agent"]
-    save_unit_folder(unit, {"model.pt": b"new"}, {**CONFIG, "seed": 2})
-    assert (unit / "model.pt").read_bytes() == b"new"
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["agent"]
-
-
-def test_file_units_keep_their_result(tmp_path: Path) -> None:
-    path = tmp_path / "seeds" / "seed-0.json"
-    save_record(path, make_record(CONFIG, result={"mean": 1.5}))
-    assert load_unit(path, CONFIG)["result"] == {"mean": 1.5}
-    assert json.loads(path.read_text())["fingerprint"].startswith("sha256:")
-    with pytest.raises(UnitConflict, match="seed 1 -> 2"):
-        load_unit(path, {**CONFIG, "seed": 2})
-    for damage in ("", "{", '"text"', "[]", '{"format": "pokerirl-unit/1"}'):
-        path.write_text(damage)
-        assert load_unit(path, CONFIG) is None
 
 
 def not_picklable(k: int) -> object:

@@ -20,11 +20,11 @@ pytest.importorskip("stable_baselines3")
 from pokerirl.cli import app  # noqa: E402
 from pokerirl.execution import pinned_threads  # noqa: E402
 from pokerirl.gym.experts import build_policy, evaluate, policy_kwargs  # noqa: E402
-from pokerirl.gym.jobs import RLJob  # noqa: E402
 from pokerirl.gym.lockstep import LockstepPPO  # noqa: E402
 from pokerirl.gym.lockstep.group import train_rl_group  # noqa: E402
 from pokerirl.gym.presets import TASKS, PPOSettings, RLSettings  # noqa: E402
 from pokerirl.gym.rl import EVAL_SEED, train_rl  # noqa: E402
+from pokerirl.studies.gym_units import RLJob  # noqa: E402
 
 CARTPOLE = RLSettings(
     algo="ppo",
@@ -171,10 +171,11 @@ def test_sb3_rl_records_are_as_before() -> None:
     job = RLJob(env="Acrobot-v1", reward="env", reward_run=None, seed=0,
                 settings=TASKS["Acrobot-v1"].rl, evaluations=2, eval_episodes=1,
                 folder=Path("rl/env/run-0"))  # fmt: skip
-    assert set(job.config(None)) == {"unit", "env", "reward", "reward_run", "seed", "settings",
-                                     "evaluations", "eval_episodes"}  # fmt: skip
-    lockstep = dataclasses.replace(job, backend="lockstep").config(None)
-    assert lockstep == {**job.config(None), "backend": "lockstep"}
+    identity = job.unit(None).identity  # the fingerprinted config and inputs together
+    assert set(identity) == {"unit", "env", "reward", "reward_run", "seed", "settings",
+                             "evaluations", "eval_episodes"}  # fmt: skip
+    lockstep = dataclasses.replace(job, backend="lockstep").unit(None).identity
+    assert lockstep == {**identity, "backend": "lockstep"}
 
 
 def _snapshot(folder: Path) -> dict[str, tuple[bytes, int]]:
@@ -250,7 +251,7 @@ def test_gym_study_lockstep_reuses_every_unit(tmp_path: Path) -> None:
 
 def test_a_group_is_one_folder_of_runs() -> None:
     """Study: one group per task and reward kind; sweep: one per point (its own rl/ folder)."""
-    from pokerirl.gym.study import rl_jobs, study_preset
+    from pokerirl.studies.gym import rl_jobs, study_preset
 
     preset = study_preset("quick", tasks=("Acrobot-v1",), runs=3)
     jobs = [job for root in ("points/a", "points/b")
@@ -259,7 +260,7 @@ def test_a_group_is_one_folder_of_runs() -> None:
     for job in jobs:
         groups.setdefault(job.group_key(), []).append(job.seed)
     assert sorted(groups.values()) == [[0, 1, 2], [0, 1, 2]]
-    assert {job.config(None)["backend"] for job in jobs} == {"lockstep"}
+    assert {job.config()["backend"] for job in jobs} == {"lockstep"}
 
 
 def test_the_cli_default_backend_is_the_librarys() -> None:

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+from dataclasses import fields
 from pathlib import Path
 
 import numpy as np
@@ -16,17 +17,18 @@ pytest.importorskip("stable_baselines3")
 
 from pokerirl.cli import app  # noqa: E402
 from pokerirl.execution import Backend  # noqa: E402
-from pokerirl.gym.jobs import DATA_FILE  # noqa: E402
-from pokerirl.gym.study import (  # noqa: E402
+from pokerirl.irl import load_reward  # noqa: E402
+from pokerirl.studies.gym import (  # noqa: E402
     REWARDS,
-    GymStudyError,
+    StudyError,
     authors_budget,
     parse_tasks,
     run_gym_study,
     study_preset,
 )
-from pokerirl.gym.sweep import parse_param, sweep_points  # noqa: E402
-from pokerirl.irl import load_reward  # noqa: E402
+from pokerirl.studies.gym_results import TaskSummary  # noqa: E402
+from pokerirl.studies.gym_units import DATA_FILE  # noqa: E402
+from pokerirl.studies.sweep import CSV_COLUMNS, SweepRow, parse_param, sweep_points  # noqa: E402
 
 TINY = ["--runs", "2", "--transitions", "1500", "--epochs", "2", "--eval-episodes", "2"]
 TINY += ["--timesteps", "2000", "--jobs", "2", "--quiet"]
@@ -99,7 +101,7 @@ def test_rl_runs_learn_from_their_own_irl_runs_reward(mountaincar: Path) -> None
         unit = json.loads((mountaincar / "rl" / "hairl" / f"run-{k}" / "unit.json").read_text())
         reward_pt = mountaincar / "irl" / "hairl" / f"run-{k}" / "reward.pt"
         digest = "sha256:" + hashlib.sha256(reward_pt.read_bytes()).hexdigest()
-        assert unit["config"]["reward_run"]["reward.pt"] == digest
+        assert unit["inputs"]["reward_run"]["reward.pt"] == digest
     env_record = json.loads((mountaincar / "rl" / "env" / "run-0" / "config.json").read_text())
     assert env_record["reward"] == "env"
     # Same seed, same settings: only the reward differs, and it changes what DQN learns.
@@ -148,6 +150,9 @@ def test_figures_and_report_beside_the_authors(mountaincar: Path) -> None:
     assert again.exit_code == 0 and again.output == report
     as_json = CliRunner().invoke(app, ["report", str(mountaincar), "--format", "json"])
     assert json.loads(as_json.output) == summary
+    # The typed summary reads it and writes it back to the same bytes (names and their order).
+    text = (mountaincar / "summary.json").read_text()
+    assert json.dumps(TaskSummary.from_json(summary).to_json(), indent=2) + "\n" == text
 
 
 def test_rerun_reuses_every_unit_and_changed_settings_are_refused(mountaincar: Path) -> None:
@@ -197,7 +202,7 @@ def test_two_tasks_acrobot_and_mountaincar_each_get_a_folder(tmp_path: Path) -> 
         folder = tmp_path / env
         assert (folder / DATA_FILE).is_file() and (folder / "report.md").is_file()
         summary = json.loads((folder / "summary.json").read_text())
-        assert summary == overall["tasks"][env] == result.summaries[env]
+        assert summary == overall["tasks"][env] == result.summaries[env].to_json()
         assert summary["env_reward"]["curves"]["rl"]["timesteps"][-1] == 1024
     acrobot = overall["tasks"]["Acrobot-v1"]
     assert acrobot["reward_map"] is None  # 6-d observations: no map
@@ -216,13 +221,14 @@ def test_bad_inputs_are_one_line(tmp_path: Path) -> None:
         (["gym", "study", "Pong-v5", "--out", str(tmp_path / "a")], "unknown task 'Pong-v5'"),
         (["gym", "study", "MountainCar-v0", "--preset", "huge", "--out", str(tmp_path / "b")],
          "unknown preset 'huge'"),
-        (["sweep", "MountainCar-v0", "--param", "gamma=0.9", "--out", str(tmp_path / "c")],
+        (["gym", "sweep", "MountainCar-v0", "--param", "gamma=0.9", "--out", str(tmp_path / "c")],
          "bad --param 'gamma=0.9'"),
-        (["sweep", "MountainCar-v0", "--param", "alpha=0,2", "--out", str(tmp_path / "d")],
+        (["gym", "sweep", "MountainCar-v0", "--param", "alpha=0,2", "--out", str(tmp_path / "d")],
          "alpha must be in [0, 1], got 2"),
-        (["sweep", "MountainCar-v0", "--param", "beta=0", "--param", "beta=1", "--out",
+        (["gym", "sweep", "MountainCar-v0", "--param", "beta=0", "--param", "beta=1", "--out",
           str(tmp_path / "e")], "given twice"),
-        (["sweep", "MountainCar-v0", "--param", "sigma_end=0.04,2", "--out", str(tmp_path / "f")],
+        (["gym", "sweep", "MountainCar-v0", "--param", "sigma_end=0.04,2", "--out",
+          str(tmp_path / "f")],
          "point alpha=0.1_beta=0.25_sigma_start=1_sigma_end=2: invalid AIRL config"),
     ]  # fmt: skip
     for args, message in cases:
@@ -239,15 +245,59 @@ def test_bad_inputs_are_one_line(tmp_path: Path) -> None:
     assert afile.read_text() == "x"
 
 
+SWEEP_WARNING = "warning: 'pokerirl sweep' is deprecated; use 'pokerirl gym sweep'"
+
+
+def test_sweep_is_a_gym_command_and_the_old_name_a_hidden_alias_that_warns_once(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    import pokerirl.studies.sweep as sweep
+    from pokerirl.studies.sweep import SweepResult
+
+    calls: list[tuple[tuple, dict]] = []
+
+    def fake_sweep(*args: object, **kwargs: object) -> SweepResult:
+        calls.append((args, kwargs))
+        return SweepResult(out=tmp_path, env="MountainCar-v0", rows=(), figures=())
+
+    monkeypatch.setattr(sweep, "run_sweep", fake_sweep)
+    runner = CliRunner()
+    args = ["MountainCar-v0", "--param", "alpha=0,1", "--out", str(tmp_path), "--runs", "3",
+            "--seed", "7", "--epochs", "2", "--jobs", "1", "-q", "--rl-backend", "sb3"]  # fmt: skip
+    new = runner.invoke(app, ["gym", "sweep", *args])
+    assert new.exit_code == 0, new.output
+    assert new.stderr == ""
+    old = runner.invoke(app, ["sweep", *args])
+    assert old.exit_code == 0, old.output
+    assert old.stderr == SWEEP_WARNING + "\n"  # exactly one line
+    assert old.stdout == new.stdout
+    (new_args, new_kwargs), (old_args, old_kwargs) = calls
+    assert new_args[1] == {"alpha": (0.0, 1.0)} and new_args[2].runs == 3
+    assert new_args[2].seed == 7 and new_kwargs["rl_backend"] == "sb3"
+    new_kwargs.pop("backend"), old_kwargs.pop("backend")
+    assert (old_args, old_kwargs) == (new_args, new_kwargs)  # every option passed through
+    # The alias refuses as gym sweep does, after its warning line.
+    bad = runner.invoke(app, ["sweep", "MountainCar-v0", "--param", "gamma=1", "--out",
+                              str(tmp_path)])  # fmt: skip
+    assert bad.exit_code == 1
+    assert bad.stderr.splitlines()[0] == SWEEP_WARNING
+    assert bad.stderr.splitlines()[1].startswith("error: bad --param 'gamma=1'")
+    # Listed under gym only.
+    assert " sweep " not in runner.invoke(app, ["--help"]).output
+    assert " sweep " in runner.invoke(app, ["gym", "--help"]).output
+
+
 def test_parse_tasks_and_points() -> None:
     assert len(parse_tasks("all")) == 6
     paper = study_preset("paper")
     assert all(authors_budget(env, paper) for env in paper.tasks)
     assert not authors_budget("Acrobot-v1", study_preset("paper", runs=3))
     assert not authors_budget("Acrobot-v1", study_preset("paper", rl_timesteps=1000))
-    with pytest.raises(GymStudyError):
+    with pytest.raises(StudyError):
         parse_tasks("CartPole-v1")
     assert parse_param("sigma_end=0.5, 0.04") == ("sigma_end", (0.5, 0.04))
+    # A sweep row's fields are sweep.csv's columns, in order (and sweep.json's row names).
+    assert tuple(f.name for f in fields(SweepRow)) == CSV_COLUMNS
     points = sweep_points("MountainCar-v0", {"alpha": (0.1, 1.0)}, study_preset("quick"))
     assert [p.name for p in points] == [
         "alpha=0.1_beta=0.25_sigma_start=1_sigma_end=0.04",
@@ -258,7 +308,8 @@ def test_parse_tasks_and_points() -> None:
 @pytest.mark.slow
 def test_sweep_runs_irl_then_rl_per_point_and_shares_the_preset_point(tmp_path: Path) -> None:
     out = tmp_path / "sweep"
-    args = ["sweep", "MountainCar-v0", "--param", "alpha=0.1,1", "--param", "sigma_end=0.04,0.5"]
+    args = ["gym", "sweep", "MountainCar-v0", "--param", "alpha=0.1,1"]
+    args += ["--param", "sigma_end=0.04,0.5"]
     args += ["--out", str(out), "--runs", "2", "--transitions", "1500", "--epochs", "2"]
     args += ["--eval-episodes", "2", "--timesteps", "1000", "--jobs", "2", "-q"]
     result = CliRunner().invoke(app, args)

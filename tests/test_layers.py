@@ -35,7 +35,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("irl",),
     ("agents", "gym", "poker"),  # poker: decision tables as Transitions, `pokerirl train`
     ("tournaments",),
-    ("studies", "study", "demo"),
+    ("studies",),
     ("cli", "__main__"),
 )
 LAYER = {component: rank for rank, names in enumerate(LAYERS) for component in names}
@@ -44,7 +44,7 @@ LAYER = {component: rank for rank, names in enumerate(LAYERS) for component in n
 # (named here too, so that a change to LAYERS cannot let them in) nothing above it.
 IRL_FORBIDDEN = frozenset(
     {"encoding", "parsers", "datasets", "game"}  # poker, below irl/
-    | {"agents", "gym", "poker", "tournaments", "study", "studies", "demo", "cli", "__main__"}
+    | {"agents", "gym", "poker", "tournaments", "studies", "cli", "__main__"}
 )
 
 # (module, component it must not import) -> why it still does. Empty: add an entry only with
@@ -182,10 +182,6 @@ def test_irl_imports_nothing_of_poker_gym_or_above() -> None:
 # see pokerirl.errors.Remedy). Checked in these components; (module, function) -> why not yet.
 FLAG_FREE = ("irl", "poker", "datasets", "parquet", "store", "execution")
 FLAG_EXCEPTIONS: dict[tuple[str, str], str] = {
-    # The legacy unit records: tournaments/ and gym/jobs.py re-wrap str(error) into errors
-    # without a remedy; the store port (pokerirl.store, flag-free) replaces them.
-    ("pokerirl.execution", "load_unit"): "legacy records, re-wrapped by their callers",
-    ("pokerirl.execution", "load_unit_folder"): "legacy records, re-wrapped by their callers",
     ("pokerirl.execution", "ray_head"): "names Ray's own command, `ray start --head`",
 }
 FLAG = re.compile(r"(?<![\w-])--[a-z]")

@@ -359,8 +359,9 @@ COMMANDS = [
         lambda i, t: ["gym", "study", "MountainCar-v0", "--out", str(t), *GYM_STUDY_FAST],
     ),
     Command(
-        "sweep",
+        "gym sweep",
         lambda i, t: [
+            "gym",
             "sweep",
             "MountainCar-v0",
             "--param",

@@ -49,7 +49,8 @@ def _bad_values(out: Path, afile: Path) -> list[tuple[list[str], str]]:
         ([*collect, "-n", str(10**14)], "less than or equal to 10000000"),
         ([*study, "--seed", str(MAX_SEED + 1)], "'--seed'"),
         ([*study, "--seed", str(MAX_SEED), "--runs", "2"], "run seeds must be at most"),
-        (["sweep", "MountainCar-v0", "--param", "alpha=1", "--out", str(out), "--seed", "-1"],
+        (["gym", "sweep", "MountainCar-v0", "--param", "alpha=1", "--out", str(out),
+          "--seed", "-1"],
          "'--seed'"),
         ([*study, "--transitions", str(10**14)], "'--transitions'"),
         ([*rl, "--timesteps", "0"], "'--timesteps'"),
@@ -169,7 +170,8 @@ def _set(document: Any, path: tuple[Any, ...], value: Any) -> Any:
 def test_report_on_a_damaged_gym_summary_is_one_line_never_a_crash(
     study: Path, tmp_path: Path
 ) -> None:
-    from pokerirl.gym.study import GymStudyError, load_gym_study
+    from pokerirl.studies.common import StudyError
+    from pokerirl.studies.gym import load_gym_study
 
     summary = json.loads((study / "summary.json").read_text())
     load_gym_study(study)  # the real one renders
@@ -182,7 +184,7 @@ def test_report_on_a_damaged_gym_summary_is_one_line_never_a_crash(
             tried += 1
             try:
                 load_gym_study(folder)
-            except GymStudyError as error:
+            except StudyError as error:
                 assert "\n" not in str(error) and "summary.json" in str(error)
     assert tried > 300
     for path, bad, needle in [

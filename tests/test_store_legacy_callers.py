@@ -1,11 +1,15 @@
 """Callers ported onto pokerirl.store keep the folders written before the port: a unit folder
 or seed file whose record is main's ``pokerirl-unit/1`` (``execution.make_record``, the writer
-every one of them used) is reused by a rerun, not recomputed or refused."""
+every one of them used, copied below as main had it) is reused by a rerun, not recomputed or
+refused."""
 
 from __future__ import annotations
 
+import hashlib
 import json
+from dataclasses import asdict
 from pathlib import Path
+from typing import Any
 
 import pyarrow.parquet as pq
 import pytest
@@ -15,7 +19,7 @@ import pokerirl.tournaments.authors as authors
 from pokerirl.agents.dqn import DQNConfig
 from pokerirl.agents.train import TrainConfig, train_agent
 from pokerirl.datasets.toy import toy_expert_table
-from pokerirl.execution import bytes_fingerprint, make_record, save_record
+from pokerirl.execution import Backend
 from pokerirl.game.match import DEFAULT_BATCH_SIZE
 from pokerirl.irl import load_config
 from pokerirl.poker import train_runs
@@ -30,11 +34,33 @@ AGENT = TrainConfig(
 AGENT_PRINT = "sha256:d36978d0ebbced675f2b2b6d19881d61236f35ce98a60144eb10cf1524ac5637"
 
 
+def bytes_fingerprint(data: bytes) -> str:
+    return f"sha256:{hashlib.sha256(data).hexdigest()}"
+
+
+def make_record(config: dict, *, files: dict | None = None, result: Any = None) -> dict:
+    """main's ``execution.make_record`` (commit 02205d6), the writer of every unit record."""
+    text = json.dumps(config, sort_keys=True, separators=(",", ":"), allow_nan=False)
+    return {
+        "format": "pokerirl-unit/1",
+        "fingerprint": f"sha256:{hashlib.sha256(text.encode()).hexdigest()}",
+        "config": dict(config),
+        "files": {name: bytes_fingerprint(data) for name, data in sorted((files or {}).items())},
+        "result": result,
+    }
+
+
+def save_record(path: Path, record: dict) -> None:
+    """main's ``execution.save_record``."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(json.dumps(record, indent=2, sort_keys=True) + "\n")
+
+
 def _as_main_wrote(record_path: Path, config: dict, names: list[str]) -> None:
     """Replace a unit folder's record with the one main's save_unit_folder wrote."""
     folder = record_path.parent
-    record = make_record(config, files={n: (folder / n).read_bytes() for n in names})
-    record_path.write_text(json.dumps(record, indent=2, sort_keys=True) + "\n")
+    files = {n: (folder / n).read_bytes() for n in names}
+    save_record(record_path, make_record(config, files=files))
 
 
 def test_an_agent_folder_of_main_is_reused(tmp_path: Path) -> None:
@@ -121,3 +147,57 @@ def test_experiment_files_of_main_are_reused(
         [("raise", "call")], experiments=[0], out=tmp_path, repeats=2, games=100
     )
     assert found["raise-vs-call"].experiments[0].repeats_mbb == (7.5, -2.5)
+
+
+def test_a_gym_study_folder_of_main_is_reused(tmp_path: Path) -> None:
+    """Data, IRL and RL units (sb3 and lock-step) whose records main's gym/jobs.py wrote."""
+    pytest.importorskip("gymnasium")
+    pytest.importorskip("stable_baselines3")
+    from pokerirl.studies.gym import data_job, irl_job, rl_jobs, study_preset
+    from pokerirl.studies.gym_units import DATA_FILE, run_data_jobs, run_irl_jobs, run_rl_jobs
+
+    env = "MountainCar-v0"
+    preset = study_preset("quick", tasks=(env,), runs=2, transitions=1_500, epochs=1,
+                          eval_episodes=1, rl_timesteps=400)  # fmt: skip
+    data = data_job(tmp_path, env, preset)
+    irl = irl_job(tmp_path, env, "hairl", preset, data=tmp_path / DATA_FILE)
+    rl = [*rl_jobs(tmp_path, env, "hairl", irl, preset, backend="lockstep"),
+          *rl_jobs(tmp_path, env, "env", None, preset, backend="sb3")]  # fmt: skip
+
+    def study() -> tuple[int, int, int]:
+        backend = Backend()
+        return (run_data_jobs([data], backend=backend), run_irl_jobs([irl], backend=backend),
+                run_rl_jobs(rl, backend=backend))  # fmt: skip
+
+    assert study() == (0, 0, 0)
+    # main's records, each with main's own formula: the input digests inside the config.
+    save_record(tmp_path / "expert.unit.json", make_record(
+        data.config(), files={DATA_FILE: data.path.read_bytes()}))  # fmt: skip
+    main_irl = {
+        "unit": "gym-irl", "env": env, "algo": "hairl", "runs": 2, "seed": preset.seed,
+        "settings": asdict(irl.settings), "data": bytes_fingerprint(data.path.read_bytes()),
+    }  # fmt: skip
+    _as_main_wrote(irl.folder / "unit.json", main_irl, _recorded(irl.folder))
+    for job in rl:
+        main_rl = {
+            "unit": "gym-rl", "env": env, "reward": job.reward, "seed": job.seed,
+            "reward_run": None if job.reward_run is None else {
+                name: bytes_fingerprint((job.reward_run / name).read_bytes())
+                for name in ("config.json", "reward.pt")},
+            "settings": asdict(job.settings), "evaluations": job.evaluations,
+            "eval_episodes": job.eval_episodes,
+            **({"backend": "lockstep"} if job.backend == "lockstep" else {}),
+        }  # fmt: skip
+        _as_main_wrote(job.folder / "unit.json", main_rl, _recorded(job.folder))
+    before = {p: (p.read_bytes(), p.stat().st_mtime_ns) for p in tmp_path.rglob("*") if p.is_file()}
+    assert all(
+        json.loads(p.read_text())["format"] == "pokerirl-unit/1"
+        for p in tmp_path.rglob("*unit.json")
+    )
+    assert study() == (1, 1, 4)  # every unit reused: nothing trained, nothing rewritten
+    after = {p: (p.read_bytes(), p.stat().st_mtime_ns) for p in tmp_path.rglob("*") if p.is_file()}
+    assert after == before
+
+
+def _recorded(folder: Path) -> list[str]:
+    return sorted(json.loads((folder / "unit.json").read_text())["files"])

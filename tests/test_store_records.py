@@ -272,15 +272,3 @@ def test_an_unfinished_stage_is_resumed_and_its_own_record_comes_first(tmp_path:
     assert check(unit).fate is Fate.RUN
     (root / "expert.parquet").write_bytes(b"half")
     assert check(unit).fate is Fate.RECOMPUTED
-
-
-def test_records_written_by_todays_execution_module_are_read(tmp_path: Path) -> None:
-    """The live cross-check while the old writers exist (round 2 deletes them, and this test;
-    the fixtures above keep the guarantee)."""
-    from pokerirl import execution
-
-    folder = tmp_path / "run-1"
-    execution.save_unit_folder(folder, {"reward.pt": b"weights"}, CONFIG_V1)
-    assert (folder / "unit.json").read_text() == FOLDER_RECORD_V1
-    assert check(run_unit(folder)).fate is Fate.REUSED
-    assert fingerprint(CONFIG_V1) == execution.fingerprint(CONFIG_V1)

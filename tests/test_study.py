@@ -10,8 +10,9 @@ from typer.testing import CliRunner
 
 from pokerirl.cli import app
 from pokerirl.game.synth import write_synthetic_month
-from pokerirl.study import StudyError, load_study_report, parse_seeds, preset, run_study
-from pokerirl.study.report import FIGURES
+from pokerirl.seeds import seeds_as_written
+from pokerirl.studies.poker import StudyError, load_study_report, preset, run_study
+from pokerirl.studies.poker.report import FIGURES
 from pokerirl.tournaments import load_report
 
 TOY = dict(
@@ -114,24 +115,38 @@ def test_report_json_has_the_issue_names_and_the_tournaments_numbers(
     assert "duplicate" in markdown and "5,000 episodes" in markdown
 
 
+def units_of(out: Path) -> dict[Path, tuple[bytes, int]]:
+    """Every unit's record and outputs that training or playing writes (bytes, mtime): the
+    summaries recomputed from them on every run are left out."""
+    names = ("unit.json", "*.unit.json", "seed-*.json", "experiment-*.json", "*.pt", "*.parquet")
+    found = {p for name in names for p in out.rglob(name)
+             if p.is_file() and "stages" not in p.parts}  # fmt: skip
+    return {p: (p.read_bytes(), p.stat().st_mtime_ns) for p in sorted(found)}
+
+
 @pytest.mark.slow
-def test_rerun_skips_every_stage_and_a_changed_setting_is_refused(
+def test_rerun_reuses_every_unit_and_a_changed_setting_is_refused(
     finished: tuple[Path, Path, list[str]],
 ) -> None:
     month, out, _ = finished
     before = (out / "report.json").read_bytes()
+    units = units_of(out)
     said: list[str] = []
     run_study([month], out, preset("quick", **TOY), say=said.append)
-    assert sum("skipped" in line for line in said) == 5
+    assert [line[:5] for line in said if line.startswith("[")] == [f"[{k}/6]" for k in range(1, 7)]
+    assert units_of(out) == units  # nothing trained, played or rewritten
+    assert not (out / "stages").exists()  # unit records suffice
     assert (out / "report.json").read_bytes() == before  # same inputs, same bytes
     changed = preset("quick", **{**TOY, "panel_hands": 300})
-    with pytest.raises(StudyError, match=r"panel.json: stage panel was run with other settings"):
+    with pytest.raises(ValueError, match=r"panel/tournament/seeds/.*was made with another "
+                                         r"configuration \(hands 200 -> 300\)"):  # fmt: skip
         run_study([month], out, changed)
-    assert (out / "report.json").read_bytes() == before
-    # --overwrite recomputes the changed stage only; the stages before it are skipped.
-    said.clear()
-    result = run_study([month], out, changed, overwrite=True, say=said.append)
-    assert sum("skipped" in line for line in said) == 4 and said[-2] == "[5/6] panel"
+    assert (out / "report.json").read_bytes() == before and units_of(out) == units
+    # --overwrite recomputes the changed units only: the panel's seeds.
+    result = run_study([month], out, changed, overwrite=True)
+    again = units_of(out)
+    assert {p for p in units if again[p] != units[p]} == {
+        p for p in units if "panel" in p.relative_to(out).parts}  # fmt: skip
     assert result.report["panel"]["hands"] == 300
     assert result.report["table1"] == json.loads(before)["table1"]
 
@@ -154,9 +169,20 @@ def test_bad_settings_are_one_line() -> None:
         preset("fast")
     with pytest.raises(StudyError, match="runs >= 1"):
         preset("quick", runs=0)
-    with pytest.raises(StudyError, match="bad --seeds 'a-b'"):
-        parse_seeds("a-b")
-    assert parse_seeds("0-2,5") == (0, 1, 2, 5)
+    with pytest.raises(ValueError, match="bad seed range 'a-b'"):
+        seeds_as_written("a-b")
+    assert seeds_as_written("5,0-2") == (5, 0, 1, 2)  # the study keeps the order written
+    with pytest.raises(StudyError, match="seeds distinct"):
+        preset("quick", seeds=seeds_as_written("0-2,1"))
+
+
+def test_cli_refuses_repeated_seeds_before_any_work(tmp_path: Path) -> None:
+    out = tmp_path / "out"
+    args = ["study", str(tmp_path / "missing"), "--out", str(out), "--seeds", "0-2,1", "-q"]
+    result = CliRunner().invoke(app, args)
+    assert result.exit_code == 2
+    assert result.output == "error: bad study settings: seeds distinct\n"
+    assert not out.exists()
 
 
 def test_cli_refuses_a_missing_source(tmp_path: Path) -> None:
@@ -208,3 +234,50 @@ def test_the_authors_preset_reports_both_statistics(tmp_path: Path) -> None:
         assert (tmp_path / "out" / figure).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert "The authors' protocol" in result.markdown and "Reward cards" in result.markdown
     assert load_study_report(tmp_path / "out")["table1_authors"] == report["table1_authors"]
+
+
+def _main_stage(root: Path, name: str, settings: dict) -> str:
+    """Write ``stages/<name>.json`` as main's ``Study.stage`` finished it; return its print."""
+    import hashlib
+
+    identity = {"stage": name, "settings": settings}
+    text = json.dumps(identity, sort_keys=True, separators=(",", ":"))
+    print_ = f"sha256:{hashlib.sha256(text.encode()).hexdigest()}"
+    body = {"format": "pokerirl-study-stage/1", "stage": name, "fingerprint": print_,
+            "settings": settings, "finished": True, "result": {}}  # fmt: skip
+    (root / "stages").mkdir(exist_ok=True)
+    (root / "stages" / f"{name}.json").write_text(json.dumps(body, indent=1) + "\n")
+    return print_
+
+
+@pytest.mark.slow
+def test_a_study_folder_of_main_is_reused_or_refused_naming_its_stage_record(
+    tmp_path: Path,
+) -> None:
+    """main kept the table's and a single IRL run's record in stages/*.json, not beside them:
+    with those (main's formula), a rerun recomputes no unit; with other settings in them, it
+    is refused in one line naming the stage record."""
+    month = write_synthetic_month(tmp_path / "irc", hands=600, seed=0)
+    out = tmp_path / "out"
+    config = preset("quick", **{**TOY, "runs": 1})
+    first = run_study([month], out, config)
+    # As main left it: no record beside the table or in the single runs, stage records instead.
+    (out / "expert.unit.json").unlink()
+    for algo in ("airl", "hairl"):
+        (out / "irl" / algo / "unit.json").unlink()
+    sources = {"files": [
+        [str(p.resolve()), p.stat().st_size, p.stat().st_mtime_ns]
+        for p in sorted(q for q in month.rglob("*") if q.is_file())]}  # fmt: skip
+    ingest_print = _main_stage(out, "ingest", {"sources": sources})
+    irl = {"runs": 1, "epochs": 2, "seed": 0, "upstream": ingest_print}
+    _main_stage(out, "irl", irl)
+    units = units_of(out)
+    result = run_study([month], out, config)
+    assert units_of(out) == units  # no unit recomputed
+    assert result.report == first.report
+    # main's irl stage made with other settings: refused, naming its record.
+    _main_stage(out, "irl", {**irl, "epochs": 3})
+    with pytest.raises(ValueError, match=r"stages/irl.json was made with another configuration "
+                                         r"\(settings.epochs 3 -> 2\)"):  # fmt: skip
+        run_study([month], out, config)
+    assert units_of(out) == units

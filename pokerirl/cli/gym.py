@@ -1,8 +1,11 @@
-"""The Gymnasium commands: pokerirl gym ... and the sweep."""
+"""The Gymnasium commands: pokerirl gym ... (the study and the sweep among them)."""
 
 from __future__ import annotations
 
+import functools
 import json
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
@@ -15,6 +18,7 @@ from pokerirl.cli.app import (
     RAY_HELP,
     SEED_OPTION,
     _backend,
+    advised,
     app,
     display,
     echo,
@@ -91,8 +95,8 @@ def gym_expert(
         expert_settings,
         train_expert,
     )
-    from pokerirl.gym.job import claim
     from pokerirl.store import staged_files, tidy
+    from pokerirl.studies.gym_job import claim
 
     _known_task(env)
     _folder_out(out)
@@ -226,9 +230,9 @@ def gym_rl(
     from contextlib import ExitStack
 
     from pokerirl.gym.experts import CONFIG_FILE, METRICS_FILE, MODEL_FILE
-    from pokerirl.gym.job import claim
     from pokerirl.gym.rl import mean_std, train_rl
     from pokerirl.store import digest, staged_folder, tidy
+    from pokerirl.studies.gym_job import claim
 
     if (reward_run is None) == (not env_reward):
         fail("give exactly one of --reward-run DIR and --env-reward")
@@ -461,9 +465,22 @@ GYM_OVERWRITE = typer.Option(False, "--overwrite", help="Recompute units whose s
 GYM_QUIET = typer.Option(False, "--quiet", "-q", help="No progress bars.")
 
 
+@contextmanager
+def _study_errors(out: Path) -> Iterator[None]:
+    """What the gym study and the sweep stop on, in one line (finished units are kept)."""
+    try:
+        yield
+    except OSError as error:
+        fail(error_line(error, out))
+    except (ValueError, ImportError, execution.ExecutionError) as error:
+        fail(advised(error))  # a unit's conflict: with the advice for its remedy
+    except KeyboardInterrupt:
+        fail(INTERRUPTED, 130)
+
+
 def _gym_preset(name: str, task: str, **overrides: int | None) -> Any:
     """The study preset ``name`` for ``task`` (or all) with the command line's overrides."""
-    from pokerirl.gym.study import parse_tasks, study_preset
+    from pokerirl.studies.gym import parse_tasks, study_preset
 
     preset = study_preset(name, tasks=parse_tasks(task), **overrides)
     if preset.seed + preset.runs - 1 > MAX_SEED:  # run k uses seed + k
@@ -495,10 +512,10 @@ def gym_study(
     """The paper's Gymnasium study: shipped expert -> data -> IRL (AIRL and H-AIRL) -> RL (env
     reward, AIRL and H-AIRL rewards) -> summary.json, figures/ and report.md beside the
     authors' finals. Resumable: finished units are kept."""
-    from pokerirl.gym.study import run_gym_study
+    from pokerirl.studies.gym import run_gym_study
 
     _rl_backend(rl_backend)
-    try:
+    with _study_errors(out):
         preset = _gym_preset(
             preset_name, task, runs=runs, seed=seed, transitions=transitions, epochs=epochs,
             eval_episodes=eval_episodes, rl_timesteps=timesteps,
@@ -512,17 +529,13 @@ def gym_study(
             say=echo,
             rl_backend=rl_backend,
         )
-    except (ValueError, ImportError, OSError, execution.ExecutionError) as error:
-        fail(error_line(error, out))
-    except KeyboardInterrupt:
-        fail(INTERRUPTED, 130)
     echo("")
     echo(result.markdown)
     echo(f"report: {out / 'report.md'}")
 
 
-@app.command()
-def sweep(
+@gym_app.command("sweep")
+def gym_sweep(
     env: str = typer.Argument(..., help="The task, e.g. MountainCar-v0."),
     param: list[str] = typer.Option(
         ..., "--param", help="NAME=V1,V2,...: alpha, beta, sigma_start or sigma_end; repeatable."
@@ -543,16 +556,16 @@ def sweep(
 ) -> None:
     """One-factor-at-a-time ablation of H-AIRL (the paper's Figure 5): each point runs the IRL
     phase, then RL on its learned rewards; writes sweep.csv, sweep.json and PARAM.png."""
-    from pokerirl.gym.study import GymStudyError
-    from pokerirl.gym.sweep import parse_param, run_sweep
+    from pokerirl.studies.common import StudyError
+    from pokerirl.studies.sweep import parse_param, run_sweep
 
     _rl_backend(rl_backend)
-    try:
+    with _study_errors(out):
         params: dict[str, tuple[float, ...]] = {}
         for text in param:
             name, values = parse_param(text)
             if name in params:
-                raise GymStudyError(f"--param {name} is given twice; list its values once")
+                raise StudyError(f"--param {name} is given twice; list its values once")
             params[name] = values
         preset = _gym_preset(
             preset_name, env, runs=runs, seed=seed, transitions=transitions, epochs=epochs,
@@ -569,17 +582,24 @@ def sweep(
             say=echo,
             rl_backend=rl_backend,
         )
-    except (ValueError, ImportError, OSError, execution.ExecutionError) as error:
-        fail(error_line(error, out))
-    except KeyboardInterrupt:
-        fail(INTERRUPTED, 130)
     for row in result.rows:
         line = (
-            f"{row['param']}={row['value']:g}: IRL return {row['irl_final_return_mean']:.1f} "
-            f"+- {row['irl_final_return_std']:.1f}, RL return {row['rl_final_return_mean']:.1f} "
-            f"+- {row['rl_final_return_std']:.1f}"
+            f"{row.param}={row.value:g}: IRL return {row.irl_final_return_mean:.1f} "
+            f"+- {row.irl_final_return_std:.1f}, RL return {row.rl_final_return_mean:.1f} "
+            f"+- {row.rl_final_return_std:.1f}"
         )
-        if row["final_alignment_mean"] is not None:
-            line += f", alignment {100 * row['final_alignment_mean']:.1f}%"
+        if row.final_alignment_mean is not None:
+            line += f", alignment {100 * row.final_alignment_mean:.1f}%"
         echo(line)
     echo(f"wrote {out / 'sweep.csv'} and {', '.join(str(p) for p in result.figures)}")
+
+
+SWEEP_DEPRECATED = "'pokerirl sweep' is deprecated; use 'pokerirl gym sweep'"
+
+
+@app.command("sweep", hidden=True)
+@functools.wraps(gym_sweep)
+def sweep(*args: Any, **kwargs: Any) -> None:
+    # The old name of gym sweep, kept for scripts: the same options, one warning line first.
+    typer.secho(f"warning: {SWEEP_DEPRECATED}", err=True, fg=typer.colors.YELLOW)
+    gym_sweep(*args, **kwargs)

@@ -16,6 +16,7 @@ from pokerirl.cli.app import (
     RAY_HELP,
     SEED_OPTION,
     _backend,
+    advised,
     app,
     echo,
     error_line,
@@ -33,8 +34,10 @@ def _one_line_errors(out: Path) -> Iterator[None]:
 
     try:
         yield
-    except (ValueError, OSError, execution.ExecutionError, IngestError) as error:
+    except OSError as error:
         fail(error_line(error, out))
+    except (ValueError, execution.ExecutionError, IngestError) as error:
+        fail(advised(error))  # a unit's conflict: with the advice for its remedy
     except KeyboardInterrupt:
         fail(INTERRUPTED, 130)
 
@@ -44,7 +47,7 @@ def demo(
     out: Path = typer.Option(Path("demo-output"), "--out", "-o", help="Where the demo writes."),
     seed: int = typer.Option(0, "--seed", **SEED_OPTION, help="Seed of the synthetic data."),
     jobs: int = typer.Option(2, "--jobs", min=1, help="Processes for agent training and play."),
-    overwrite: bool = typer.Option(False, "--overwrite", help="Recompute changed stages."),
+    overwrite: bool = typer.Option(False, "--overwrite", help="Recompute changed units."),
     gym: bool = typer.Option(
         True, "--gym/--no-gym", help="Also run the Gymnasium study's quick preset (~8 min)."
     ),
@@ -57,7 +60,7 @@ def demo(
     tournament -> panel -> report.md, report.json and figures; then OUT/gym: expert data ->
     AIRL and H-AIRL -> DQN on each reward -> OUT/gym/report.md. A rerun skips finished work.
     """
-    from pokerirl.demo import DemoConfig, run_demo, run_gym_demo
+    from pokerirl.studies.demo import DemoConfig, run_demo, run_gym_demo
 
     with _one_line_errors(out):
         result = run_demo(
@@ -116,15 +119,16 @@ def study(
     jobs: int = typer.Option(2, "--jobs", min=1, help="Processes for training and play."),
     ray: str | None = typer.Option(None, "--ray", metavar="ADDRESS", help=RAY_HELP),
     overwrite: bool = typer.Option(
-        False, "--overwrite", help="Recompute a stage whose settings changed, and those after it."
+        False, "--overwrite", help="Recompute changed units, and the units that read them."
     ),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bars."),
 ) -> None:
     """The paper's poker study in one command: ingest, IRL (AIRL and H-AIRL, several runs),
     DQN agents (sparse, AIRL and H-AIRL rewards), Table 1, the panel, and a report beside the
     paper's numbers (report.md, report.json, panel.csv, figures/), with the reward cards.
-    --preset authors adds the authors' tournament protocol. Resumable by stage."""
-    from pokerirl.study import parse_seeds, preset, run_study
+    --preset authors adds the authors' tournament protocol. Resumable: finished units are kept."""
+    from pokerirl.seeds import seeds_as_written
+    from pokerirl.studies.poker import preset, run_study
 
     sources_given = []
     for item in reward_run:
@@ -134,7 +138,8 @@ def study(
         config = preset(
             preset_name,
             runs=runs,
-            seeds=None if seeds is None else parse_seeds(seeds),
+            # As written: the first seeds the agents, and a repeat is refused, not dropped.
+            seeds=None if seeds is None else seeds_as_written(seeds),
             hands=hands,
             jobs=jobs,
             reward_sources=tuple(sources_given) or None,
@@ -184,7 +189,7 @@ def transfer(
     visits and by its action shares, beside the expert bots, always-call and a sparse DQN.
     Writes OUT/transfer.json and transfer.md; a rerun reuses the trained agents."""
     from pokerirl.seeds import parse_seeds
-    from pokerirl.study.transfer import TransferConfig, parse_list, run_transfer
+    from pokerirl.studies.poker.transfer import TransferConfig, parse_list, run_transfer
 
     with usage_errors():
         config = TransferConfig(
@@ -213,8 +218,8 @@ def report(
     output_format: str = typer.Option("markdown", "--format", help="markdown or json."),
 ) -> None:
     """Print a study or tournament report (Markdown, or JSON for scripts)."""
-    from pokerirl.gym.study import is_gym_study, load_gym_study
-    from pokerirl.study import is_study_report, load_study_report, render_markdown
+    from pokerirl.studies.gym import is_gym_study, load_gym_study
+    from pokerirl.studies.poker import is_study_report, load_study_report, render_markdown
     from pokerirl.tournaments import load_report, render_report
 
     if output_format not in ("markdown", "text", "json"):

@@ -1,4 +1,4 @@
-"""The units of the Gymnasium study and the sweep, and the rules that make them resumable.
+"""The units of the Gymnasium study and the sweep, as units of :mod:`pokerirl.store`.
 
 Three kinds of unit, each a top-level function of plain arguments that returns bytes (so it
 runs on any :mod:`pokerirl.execution` backend, with no shared filesystem):
@@ -10,11 +10,12 @@ runs on any :mod:`pokerirl.execution` backend, with no shared filesystem):
   reward kind, one ``rl/<reward>`` folder: its unfinished runs) trained together, whose runs
   are saved each into its own run folder with its own record, as :func:`rl_unit`'s are.
 
-The driver writes what comes back, with a unit record (``unit.json``, or ``expert.unit.json``
-beside the data) holding a fingerprint of everything the unit's result depends on: the task,
-the settings, the seeds and the sha256 of its inputs. A rerun reuses a unit whose record
-matches, recomputes one that is missing, half-written or corrupt, and refuses, in one line,
-one made with other settings or inputs unless ``overwrite``.
+:func:`pokerirl.store.run_units` writes what comes back, with a unit record (``unit.json``,
+or ``expert.unit.json`` beside the data) holding a fingerprint of everything the unit's result
+depends on: the task, the settings, the seeds and the sha256 of its inputs. A rerun reuses a
+unit whose record matches (those of an older pokerirl, ``pokerirl-unit/1``, too), recomputes
+one that is missing, half-written or corrupt, and refuses, in one line, one made with other
+settings or inputs unless ``overwrite``.
 """
 
 from __future__ import annotations
@@ -26,30 +27,19 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
 
-from pokerirl.atomic import write_bytes
-from pokerirl.execution import (
-    Backend,
-    UnitConflict,
-    bytes_fingerprint,
-    load_unit,
-    load_unit_folder,
-    make_record,
-    map_units,
-    read_files,
-    save_record,
-    save_unit_folder,
-    write_files,
-)
+from pokerirl.execution import Backend, map_units, read_files, write_files
 from pokerirl.gym.presets import IRLSettings, RLSettings
 from pokerirl.irl.run import CONFIG_FILE, REWARD_FILE, TIMINGS_FILE
+from pokerirl.store import Fate, Layout, Unit, UnitOutput, check, digest, run_units, save
+from pokerirl.studies.common import StudyError
 
 DATA_FILE = "expert.parquet"
 DATA_RECORD = "expert.unit.json"
 REWARD_INPUTS = (CONFIG_FILE, REWARD_FILE)  # what load_reward reads of a run folder
 
 
-class JobError(ValueError):
-    """A unit made with other settings, or a folder that does not fit; the message is one line."""
+class JobError(StudyError):
+    """An input a unit cannot read, or an unknown RL backend; the message is one line."""
 
 
 def _folder_files(root: Path) -> dict[str, bytes]:
@@ -61,10 +51,11 @@ def _folder_files(root: Path) -> dict[str, bytes]:
     }
 
 
-def _split_timings(files: dict[str, bytes]) -> tuple[dict[str, bytes], dict[str, bytes]]:
+def _output(files: dict[str, bytes]) -> UnitOutput[None]:
     # Wall-clock seconds: written, never fingerprinted.
     timed = {name: data for name, data in files.items() if Path(name).name == TIMINGS_FILE}
-    return {name: data for name, data in files.items() if name not in timed}, timed
+    kept = {name: data for name, data in files.items() if name not in timed}
+    return UnitOutput(files=kept, unhashed=timed)
 
 
 def expert_fingerprint(env_id: str) -> dict[str, Any]:
@@ -80,7 +71,7 @@ def expert_fingerprint(env_id: str) -> dict[str, Any]:
 # --------------------------------------------------------------------------- the units
 
 
-def collect_unit(env_id: str, transitions: int, seed: int) -> bytes:
+def collect_unit(env_id: str, transitions: int, seed: int) -> UnitOutput[None]:
     """The shipped expert's ``transitions`` transitions (episode k from
     ``reset(seed=seed + k)``), as the bytes of the Parquet table ``gym collect`` writes."""
     from pokerirl.gym.collect import collect
@@ -91,7 +82,7 @@ def collect_unit(env_id: str, transitions: int, seed: int) -> bytes:
         expert = load_expert(resolve_expert_dir("shipped", env_id))
         # deterministic=None: the task's default (continuous: sampled), recorded in the table
         collect(expert, path, transitions=transitions, seed=seed, deterministic=None)
-        return path.read_bytes()
+        return UnitOutput(files={DATA_FILE: path.read_bytes()})
 
 
 def irl_unit(
@@ -102,7 +93,7 @@ def irl_unit(
     runs: int,
     settings: IRLSettings,
     seed: int,
-) -> dict[str, bytes]:
+) -> UnitOutput[None]:
     """``runs`` IRL runs of ``algo`` in lock-step on the expert data (Parquet bytes): the
     files of a ``gym irl`` folder (``run-<k>/...``, ``summary.json``, figures)."""
     from pokerirl.gym.irl import train_gym_irl
@@ -122,7 +113,7 @@ def irl_unit(
             progress=False,
             data_label=data_label,
         )
-        return _folder_files(out)
+        return _output(_folder_files(out))
 
 
 def rl_unit(
@@ -133,7 +124,7 @@ def rl_unit(
     settings: RLSettings,
     evaluations: int,
     eval_episodes: int,
-) -> dict[str, bytes]:
+) -> UnitOutput[None]:
     """One RL run on the env reward (``reward_files`` None) or on the learned reward of the IRL
     run whose ``config.json`` and ``reward.pt`` are given: the files ``gym rl`` writes."""
     from pokerirl.gym.rl import train_rl
@@ -154,7 +145,7 @@ def rl_unit(
             eval_episodes=eval_episodes,
             out=out,
         )
-        return _folder_files(out)
+        return _output(_folder_files(out))
 
 
 def rl_group_unit(
@@ -217,6 +208,17 @@ class DataJob:
             **({} if default_deterministic(self.env) else {"actions": "sampled"}),
         }
 
+    def unit(self) -> Unit[None]:
+        """The store unit: the data file, its record ``expert.unit.json`` beside it."""
+        return Unit(
+            key=f"{self.env} data",
+            target=self.path,
+            layout=Layout.FILE,
+            config=self.config(),
+            fn=collect_unit,
+            args=(self.env, self.transitions, self.seed),
+        )
+
 
 @dataclass(frozen=True, kw_only=True)
 class IRLJob:
@@ -230,8 +232,8 @@ class IRLJob:
     data: Path
     folder: Path
 
-    def config(self, data: bytes) -> dict[str, Any]:
-        """The unit's fingerprinted configuration; ``data`` is the bytes of ``self.data``."""
+    def config(self) -> dict[str, Any]:
+        """The unit's configuration; its input is the data (:meth:`unit`)."""
         return {
             "unit": "gym-irl",
             "env": self.env,
@@ -239,8 +241,19 @@ class IRLJob:
             "runs": self.runs,
             "seed": self.seed,
             "settings": asdict(self.settings),
-            "data": bytes_fingerprint(data),
         }
+
+    def unit(self, data: bytes) -> Unit[None]:
+        """The store unit; ``data`` is the bytes of ``self.data``."""
+        return Unit(
+            key=f"{self.env} {self.algo}",
+            target=self.folder,
+            config=self.config(),
+            inputs={"data": digest(data)},
+            fn=irl_unit,
+            args=(self.env, data, str(self.data.resolve()), self.algo, self.runs,
+                  self.settings, self.seed),
+        )  # fmt: skip
 
     def run(self, k: int) -> Path:
         return self.folder / f"run-{k}"
@@ -269,14 +282,12 @@ class RLJob:
         except OSError as error:
             raise JobError(f"{self.reward_run}: cannot read the IRL run ({error})") from None
 
-    def config(self, reward_files: dict[str, bytes] | None) -> dict[str, Any]:
+    def config(self) -> dict[str, Any]:
+        """The unit's configuration; its input is the reward run's files (:meth:`unit`)."""
         return {
             "unit": "gym-rl",
             "env": self.env,
             "reward": self.reward,
-            "reward_run": None
-            if reward_files is None
-            else {name: bytes_fingerprint(data) for name, data in sorted(reward_files.items())},
             "seed": self.seed,
             "settings": asdict(self.settings),
             "evaluations": self.evaluations,
@@ -285,6 +296,20 @@ class RLJob:
             # the two backends' runs never pass for each other.
             **({} if self.backend == "sb3" else {"backend": self.backend}),
         }
+
+    def unit(self, reward_files: dict[str, bytes] | None) -> Unit[None]:
+        """The store unit of this run; ``reward_files`` are :meth:`reward_files`."""
+        prints = None if reward_files is None else {
+            name: digest(data) for name, data in sorted(reward_files.items())}  # fmt: skip
+        return Unit(
+            key=f"{self.env} {self.reward} seed {self.seed}",
+            target=self.folder,
+            config=self.config(),
+            inputs={"reward_run": prints},
+            fn=rl_unit,
+            args=(self.env, reward_files, self.reward_name(), self.seed, self.settings,
+                  self.evaluations, self.eval_episodes),
+        )  # fmt: skip
 
     def group_key(self) -> tuple[Any, ...]:
         """Runs that train as one lock-step group: one task, reward kind, folder of runs and
@@ -301,46 +326,6 @@ class RLJob:
 Say = Callable[[str], None]
 
 
-def _run_folder_units(
-    fn: Callable[..., dict[str, bytes]],
-    *,
-    folders: Sequence[Path],
-    configs: Sequence[dict[str, Any]],
-    unit_args: Callable[[int], tuple[Any, ...]],
-    labels: Sequence[str],
-    desc: str,
-    backend: Backend,
-    overwrite: bool,
-    progress: bool,
-) -> int:
-    """Run ``fn(*unit_args(i))`` for each unit folder not finished with ``configs[i]`` and save
-    the files it returns there (timings unhashed); returns how many units were reused."""
-    todo = []
-    for i, (folder, config) in enumerate(zip(folders, configs, strict=True)):
-        try:
-            if load_unit_folder(folder, config, overwrite=overwrite) is None:
-                todo.append(i)
-        except UnitConflict as error:
-            raise JobError(str(error)) from None
-
-    def save(index: int, files: dict[str, bytes]) -> None:
-        i = todo[index]
-        hashed, timed = _split_timings(files)
-        save_unit_folder(folders[i], hashed, configs[i], unhashed=timed)
-
-    map_units(
-        fn,
-        [unit_args(i) for i in todo],
-        backend=backend,
-        progress=progress,
-        desc=desc,
-        reused=len(folders) - len(todo),
-        on_result=save,
-        labels=[labels[i] for i in todo],
-    )
-    return len(folders) - len(todo)
-
-
 def run_data_jobs(
     jobs: Sequence[DataJob],
     *,
@@ -349,33 +334,9 @@ def run_data_jobs(
     progress: bool = False,
 ) -> int:
     """Collect every job's data that is not already there; returns how many were reused."""
-    configs = [job.config() for job in jobs]
-    todo = []
-    for job, config in zip(jobs, configs, strict=True):
-        record = job.path.parent / DATA_RECORD
-        try:
-            if load_unit(record, config, overwrite=overwrite, what=str(job.path)) is None:
-                todo.append((job, config))
-        except UnitConflict as error:
-            raise JobError(str(error)) from None
-
-    def save(index: int, data: bytes) -> None:
-        job, config = todo[index]
-        job.path.parent.mkdir(parents=True, exist_ok=True)
-        write_bytes(job.path, data)
-        save_record(job.path.parent / DATA_RECORD, make_record(config, files={DATA_FILE: data}))
-
-    map_units(
-        collect_unit,
-        [(job.env, job.transitions, job.seed) for job, _ in todo],
-        backend=backend,
-        progress=progress,
-        desc="expert data",
-        reused=len(jobs) - len(todo),
-        on_result=save,
-        labels=[f"{job.env} data" for job, _ in todo],
-    )
-    return len(jobs) - len(todo)
+    units = [job.unit() for job in jobs]
+    done = run_units(units, backend, overwrite=overwrite, progress=progress, desc="expert data")
+    return len(done.reused)
 
 
 def run_irl_jobs(
@@ -389,23 +350,8 @@ def run_irl_jobs(
     # Each data file is read once, whether one job or many (both algorithms, all sweep points)
     # train on it: for its fingerprint and for the units that need it.
     data = {path: path.read_bytes() for path in {job.data for job in jobs}}
-
-    def unit_args(i: int) -> tuple[Any, ...]:
-        job = jobs[i]
-        label = str(job.data.resolve())
-        return job.env, data[job.data], label, job.algo, job.runs, job.settings, job.seed
-
-    return _run_folder_units(
-        irl_unit,
-        folders=[job.folder for job in jobs],
-        configs=[job.config(data[job.data]) for job in jobs],
-        unit_args=unit_args,
-        labels=[f"{job.env} {job.algo}" for job in jobs],
-        desc="IRL",
-        backend=backend,
-        overwrite=overwrite,
-        progress=progress,
-    )
+    units = [job.unit(data[job.data]) for job in jobs]
+    return len(run_units(units, backend, overwrite=overwrite, progress=progress, desc="IRL").reused)
 
 
 def run_rl_jobs(
@@ -424,71 +370,48 @@ def run_rl_jobs(
         if job.backend not in RL_BACKENDS:
             raise JobError(f"unknown RL backend {job.backend!r}; choose one of "
                            f"{', '.join(RL_BACKENDS)}")  # fmt: skip
-    sb3 = [job for job in jobs if job.backend == "sb3"]
-    lockstep = [job for job in jobs if job.backend != "sb3"]
+    inputs = [job.reward_files() for job in jobs]
+    units = [job.unit(files) for job, files in zip(jobs, inputs, strict=True)]
+    sb3 = [unit for job, unit in zip(jobs, units, strict=True) if job.backend == "sb3"]
+    lockstep = [run for run in zip(jobs, inputs, units, strict=True) if run[0].backend != "sb3"]
     reused = 0
     if sb3:
-        reused += _run_sb3_jobs(sb3, backend=backend, overwrite=overwrite, progress=progress)
+        done = run_units(sb3, backend, overwrite=overwrite, progress=progress, desc="RL runs")
+        reused += len(done.reused)
     if lockstep:
-        reused += _run_group_jobs(lockstep, backend=backend, overwrite=overwrite,
-                                  progress=progress)  # fmt: skip
+        reused += _run_groups(lockstep, backend=backend, overwrite=overwrite, progress=progress)
     return reused
 
 
-def _run_sb3_jobs(
-    jobs: Sequence[RLJob], *, backend: Backend, overwrite: bool, progress: bool
+GroupRun = tuple[RLJob, dict[str, bytes] | None, Unit[None]]  # a job, its reward files, its unit
+
+
+def _run_groups(
+    jobs: Sequence[GroupRun], *, backend: Backend, overwrite: bool, progress: bool
 ) -> int:
-    inputs = [job.reward_files() for job in jobs]
-
-    def unit_args(i: int) -> tuple[Any, ...]:
-        job = jobs[i]
-        return (job.env, inputs[i], job.reward_name(), job.seed, job.settings, job.evaluations,
-                job.eval_episodes)  # fmt: skip
-
-    return _run_folder_units(
-        rl_unit,
-        folders=[job.folder for job in jobs],
-        configs=[job.config(files) for job, files in zip(jobs, inputs, strict=True)],
-        unit_args=unit_args,
-        labels=[f"{job.env} {job.reward} seed {job.seed}" for job in jobs],
-        desc="RL runs",
-        backend=backend,
-        overwrite=overwrite,
-        progress=progress,
-    )
-
-
-def _run_group_jobs(
-    jobs: Sequence[RLJob], *, backend: Backend, overwrite: bool, progress: bool
-) -> int:
-    """The unfinished runs of each group as one unit; each run saved to its own folder with
-    its own record (so resuming, and the folders, are as with sb3)."""
-    inputs = [job.reward_files() for job in jobs]
-    configs = [job.config(files) for job, files in zip(jobs, inputs, strict=True)]
+    """The unfinished runs of each group trained as one :func:`rl_group_unit`, each run saved
+    to its own folder with its own record (so resuming, and the folders, are as with sb3)."""
+    fates = [check(unit, overwrite=overwrite).fate for _, _, unit in jobs]  # every refusal first
     groups: dict[tuple[Any, ...], list[int]] = {}
-    for i, (job, config) in enumerate(zip(jobs, configs, strict=True)):
-        try:
-            if load_unit_folder(job.folder, config, overwrite=overwrite) is None:
-                groups.setdefault(job.group_key(), []).append(i)
-        except UnitConflict as error:
-            raise JobError(str(error)) from None
+    for i, ((job, _, _), fate) in enumerate(zip(jobs, fates, strict=True)):
+        if fate is not Fate.REUSED:
+            groups.setdefault(job.group_key(), []).append(i)
     members = list(groups.values())
-    todo = sum(len(m) for m in members)
 
     def unit_args(group: list[int]) -> tuple[Any, ...]:
-        first = jobs[group[0]]
-        return (first.env, [inputs[i] for i in group], [jobs[i].reward_name() for i in group],
-                [jobs[i].seed for i in group], first.settings, first.evaluations,
-                first.eval_episodes)  # fmt: skip
+        first = jobs[group[0]][0]
+        return (first.env, [jobs[i][1] for i in group],
+                [jobs[i][0].reward_name() for i in group], [jobs[i][0].seed for i in group],
+                first.settings, first.evaluations, first.eval_episodes)  # fmt: skip
 
-    def save(index: int, files: dict[str, bytes]) -> None:
+    def saved(index: int, files: dict[str, bytes]) -> None:
         for r, i in enumerate(members[index]):
             prefix = f"{r}/"
             run = {name[len(prefix):]: data for name, data in files.items()
                    if name.startswith(prefix)}  # fmt: skip
-            hashed, timed = _split_timings(run)
-            save_unit_folder(jobs[i].folder, hashed, configs[i], unhashed=timed)
+            save(jobs[i][2], _output(run))
 
+    todo = sum(len(m) for m in members)
     map_units(
         rl_group_unit,
         [unit_args(group) for group in members],
@@ -496,7 +419,8 @@ def _run_group_jobs(
         progress=progress,
         desc="RL groups",
         reused=len(jobs) - todo,
-        on_result=save,
-        labels=[f"{jobs[g[0]].env} {jobs[g[0]].reward} lock-step x{len(g)}" for g in members],
+        on_result=saved,
+        labels=[f"{jobs[g[0]][0].env} {jobs[g[0]][0].reward} lock-step x{len(g)}"
+                for g in members],  # fmt: skip
     )
     return len(jobs) - todo

@@ -36,7 +36,8 @@ import numpy as np
 from pokerirl.atomic import write_text
 from pokerirl.encoding import ACTIONS
 from pokerirl.execution import Backend
-from pokerirl.study.config import AGENT_PRESETS
+from pokerirl.studies.common import markdown_table
+from pokerirl.studies.poker.config import AGENT_PRESETS
 
 TRANSFER_FILE, TRANSFER_MARKDOWN = "transfer.json", "transfer.md"
 EVAL_SEED = 4_242_424
@@ -146,14 +147,16 @@ class TransferResult:
             " on which its actions are compared with the expert rules (noiseless). ± is the SE "
             "over seeds.",
             "",
-            "| " + " | ".join(head) + " |",
-            "|" + "---|" * len(head),
         ]
-        for row in self.rows:
-            vs = f"{row.mean_vs_random:+,.0f} ± {row.se_vs_random:,.0f}"
-            agree = [f"{row.mean_agreement(e):.1%}" for e in experts]
-            shares = [f"{row.mean_share(a):.1%}" for a in ACTIONS]
-            lines.append("| " + " | ".join([row.label, vs, *agree, *shares]) + " |")
+        lines += markdown_table(
+            head,
+            (
+                [row.label, f"{row.mean_vs_random:+,.0f} ± {row.se_vs_random:,.0f}",
+                 *[f"{row.mean_agreement(e):.1%}" for e in experts],
+                 *[f"{row.mean_share(a):.1%}" for a in ACTIONS]]
+                for row in self.rows
+            ),
+        )  # fmt: skip
         lines += [
             "",
             f"Best transform (most agreement with the expert rules): **{self.best}**.",

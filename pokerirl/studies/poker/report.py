@@ -9,9 +9,19 @@ from typing import Any
 
 from pokerirl import atomic
 from pokerirl.encoding import ACTIONS
-from pokerirl.study import paper
-from pokerirl.study.config import AGENT_KINDS, IRL_ALGOS, StudyConfig, StudyError
-from pokerirl.study.pipeline import mean_std
+from pokerirl.studies.common import REPORT_JSON, REPORT_MD, markdown_table, mean_std
+from pokerirl.studies.poker import paper
+from pokerirl.studies.poker.config import AGENT_KINDS, IRL_ALGOS, StudyConfig, StudyError
+from pokerirl.studies.poker.results import (
+    AgentsResult,
+    Ingested,
+    IRLResult,
+    IRLRuns,
+    Panel,
+    Replaced,
+    Spread,
+    Table1Line,
+)
 
 REPORT_FORMAT = "pokerirl-study-report/1"
 FIGURES = {
@@ -31,12 +41,12 @@ AUTHORS_FIGURE = "figures/authors_tournament.png"
 def build_report(
     config: StudyConfig,
     *,
-    ingested: dict[str, Any],
-    irl: dict[str, Any],
-    agents: dict[str, Any],
-    tournament: dict[str, Any],
-    panel: dict[str, Any],
-    authors: dict[str, Any] | None = None,
+    ingested: Ingested,
+    irl: IRLResult,
+    agents: AgentsResult,
+    tournament: dict[str, Table1Line],
+    panel: Panel,
+    authors: dict[str, dict[str, Any]] | None = None,
     cards: dict[str, Any] | None = None,
 ) -> dict[str, Any]:
     """The whole report as a JSON-ready dict; the issue's keys at the top level.
@@ -44,19 +54,23 @@ def build_report(
     ``authors``: the authors' tournament stage's result (``table1_authors``); ``cards``: the
     reward cards' summaries per algorithm (``reward_cards``).
     """
-    table1 = {name: {**tournament[name], "paper": paper.TABLE1[name]} for name in paper.TABLE1}
+    table1 = {
+        name: {**tournament[name].to_json(), "paper": paper.TABLE1[name]} for name in paper.TABLE1
+    }
     irl_part: dict[str, Any] = {}
-    trained = [algo for algo in IRL_ALGOS if "replaced" not in irl[algo]]
+    runs = {algo: found for algo, found in irl.items() if isinstance(found, IRLRuns)}
+    trained = [algo for algo in IRL_ALGOS if algo in runs]
     for algo in IRL_ALGOS:
-        if algo not in trained:
-            irl_part[algo] = {"replaced_by": irl[algo]["replaced"]}
+        found = irl[algo]
+        if isinstance(found, Replaced):
+            irl_part[algo] = {"replaced_by": found.source}
             continue
-        final = irl[algo]["final"]
+        final = found.final
         irl_part[algo] = {
-            "final_val_alignment": {k: final["val_alignment"][k] for k in ("mean", "std")},
-            "final_disc_acc_expert": {k: final["disc_acc_expert"][k] for k in ("mean", "std")},
-            "final_disc_acc_policy": {k: final["disc_acc_policy"][k] for k in ("mean", "std")},
-            "per_run_val_alignment": final["val_alignment"]["values"],
+            "final_val_alignment": _mean_std(final["val_alignment"]),
+            "final_disc_acc_expert": _mean_std(final["disc_acc_expert"]),
+            "final_disc_acc_policy": _mean_std(final["disc_acc_policy"]),
+            "per_run_val_alignment": final["val_alignment"].values,
             "paper": {
                 "final_val_alignment": paper.IRL_ALIGNMENT[algo],
                 "final_disc_acc": paper.DISC_ACC_FINAL[algo],
@@ -64,32 +78,31 @@ def build_report(
         }
     # BC is trained inside every run on that run's split; H-AIRL's runs' BC is the one reported.
     if trained:
-        baselines = irl[trained[-1]]["baselines"]
+        baselines = runs[trained[-1]].baselines
         irl_part["bc"] = {
-            "final_val_alignment": {k: baselines["bc"][k] for k in ("mean", "std")},
-            "per_run_val_alignment": baselines["bc"]["values"],
+            "final_val_alignment": _mean_std(baselines["bc"]),
+            "per_run_val_alignment": baselines["bc"].values,
         }
         irl_part["baselines"] = {
-            name: {k: baselines[name][k] for k in ("mean", "std")}
-            for name in ("majority", "legal_majority")
+            name: _mean_std(baselines[name]) for name in ("majority", "legal_majority")
         }
-        irl_part["epochs"] = irl[trained[-1]]["epochs"]
+        irl_part["epochs"] = runs[trained[-1]].epochs
     irl_part["runs"] = config.runs
     # The authors' preset plays its kept checkpoint: that one is measured against random.
-    vs_random = agents.get("playing_vs_random", agents["final_vs_random"])
+    vs_random = agents.vs_random
     rl: dict[str, Any] = {
         kind: {**mean_std(vs_random[kind]), "paper": paper.RL_VS_RANDOM[kind]}
         for kind in AGENT_KINDS
     }
-    rl["references"] = agents["references"]
+    rl["references"] = {name: ref.to_json() for name, ref in agents.references.items()}
     rl["per_seed"] = {kind: vs_random[kind] for kind in AGENT_KINDS}
     rl["measured"] = (
-        f"the playing checkpoint, {agents['playing_hands']:,} duplicate hands"
-        if "playing_vs_random" in agents
+        f"the playing checkpoint, {agents.playing_hands:,} duplicate hands"
+        if agents.playing_vs_random is not None
         else "the last evaluation of training"
     )
-    length = agents["training_length"]
-    summary = ingested["summary"]
+    length = agents.training_length
+    summary = ingested.summary
     extra: dict[str, Any] = {}
     figures = dict(FIGURES)
     if cards is not None:
@@ -119,27 +132,26 @@ def build_report(
         "irl": irl_part,
         "rl_vs_random": rl,
         "training_length": {
-            "short": {"hands": length["short_agent_hands"], **mean_std(length["short"])},
-            "long": {"hands": length["agent_hands"], **mean_std(length["long"])},
+            "short": {"hands": length.short_agent_hands, **mean_std(length.short)},
+            "long": {"hands": length.agent_hands, **mean_std(length.long)},
             "paper": paper.DQN_TRAINING,
         },
-        "panel": {
-            "agents": panel["agents"],
-            "mbb_per_hand": panel["mbb_per_hand"],
-            "std_error": panel["std_error"],
-            "hands": config.panel_hands,
-        },
+        "panel": {**panel.to_json(), "hands": config.panel_hands},
         "figures": figures,
         "paper": paper.paper_values(),
         **extra,
     }
 
 
-def panel_csv(panel: dict[str, Any]) -> str:
+def _mean_std(spread: Spread) -> dict[str, float]:
+    return {"mean": spread.mean, "std": spread.std}
+
+
+def panel_csv(panel: Panel) -> str:
     """The cross-table: one row per agent, ``mbb ± se`` against each column agent."""
-    names = panel["agents"]
+    names = panel.agents
     lines = [",".join(["agent", *names])]
-    for name, row, errors in zip(names, panel["mbb_per_hand"], panel["std_error"], strict=True):
+    for name, row, errors in zip(names, panel.mbb_per_hand, panel.std_error, strict=True):
         cells = [
             "" if v is None else f"{v:.1f} ± {e:.1f}" for v, e in zip(row, errors, strict=True)
         ]
@@ -298,12 +310,15 @@ def render_markdown(report: dict[str, Any]) -> str:
     ]
     panel = report["panel"]
     names = panel["agents"]
-    lines += ["| | " + " | ".join(names) + " |", "|---" * (len(names) + 1) + "|"]
-    for name, row, errors in zip(names, panel["mbb_per_hand"], panel["std_error"], strict=True):
-        cells = [
-            "-" if v is None else f"{v:+,.0f} ± {e:,.0f}" for v, e in zip(row, errors, strict=True)
-        ]
-        lines.append(f"| {name} | " + " | ".join(cells) + " |")
+    lines += markdown_table(
+        ["", *names],
+        (
+            [name, *("-" if v is None else f"{v:+,.0f} ± {e:,.0f}"
+                     for v, e in zip(row, errors, strict=True))]
+            for name, row, errors in zip(names, panel["mbb_per_hand"], panel["std_error"],
+                                         strict=True)
+        ),
+    )  # fmt: skip
     lines += [
         "",
         f"{panel['hands']:,} hands per seed per pair, {n_seeds} seeds; cross-table in "
@@ -417,17 +432,17 @@ def authors_markdown(report: dict[str, Any]) -> list[str]:
             ""]  # fmt: skip
 
 
-def write_study_report(root: Path, report: dict[str, Any], panel: dict[str, Any]) -> None:
+def write_study_report(root: Path, report: dict[str, Any], panel: Panel) -> None:
     """``panel.csv``, ``report.md``, then ``report.json`` last: it marks a finished study."""
     atomic.write_text(root / PANEL_CSV, panel_csv(panel))
-    atomic.write_text(root / "report.md", render_markdown(report))
-    atomic.write_text(root / "report.json", json.dumps(report, indent=2) + "\n")
+    atomic.write_text(root / REPORT_MD, render_markdown(report))
+    atomic.write_text(root / REPORT_JSON, json.dumps(report, indent=2) + "\n")
 
 
 def is_study_report(folder: Path | str) -> bool:
     """Whether ``folder/report.json`` is a study report (not a tournament's)."""
     try:
-        data = json.loads((Path(folder) / "report.json").read_text())
+        data = json.loads((Path(folder) / REPORT_JSON).read_text())
     except (OSError, json.JSONDecodeError):
         return False
     return isinstance(data, dict) and data.get("format") == REPORT_FORMAT
@@ -435,7 +450,7 @@ def is_study_report(folder: Path | str) -> bool:
 
 def load_study_report(folder: Path | str) -> dict[str, Any]:
     """The study report in ``folder``; one-line :class:`StudyError` when it is not one."""
-    path = Path(folder) / "report.json"
+    path = Path(folder) / REPORT_JSON
     try:
         data = json.loads(path.read_text())
     except FileNotFoundError:

@@ -1,6 +1,6 @@
 """The paper's whole poker study in one call: :func:`run_study` (``pokerirl study``).
 
-Stages (see :mod:`pokerirl.study.pipeline`): ingest -> IRL (AIRL, H-AIRL; several runs) ->
+Stages (see :mod:`pokerirl.studies.poker.pipeline`): ingest -> IRL (AIRL, H-AIRL; several runs) ->
 agents (sparse DQN, AIRL-DQN, H-AIRL-DQN; seed k on IRL run k mod runs) -> tournament
 (Table 1) -> [authors: their tournament protocol, with the ``authors`` preset] -> panel
 (every agent kind and built-in against every other) -> report (``report.md``,
@@ -16,9 +16,9 @@ from pathlib import Path
 from typing import Any
 
 from pokerirl.execution import Backend
-from pokerirl.study import figures
-from pokerirl.study.config import PRESETS, StudyConfig, StudyError, parse_seeds, preset
-from pokerirl.study.pipeline import (
+from pokerirl.studies.poker import figures
+from pokerirl.studies.poker.config import PRESETS, StudyConfig, StudyError, preset
+from pokerirl.studies.poker.pipeline import (
     STAGES,
     Execution,
     Say,
@@ -33,7 +33,7 @@ from pokerirl.study.pipeline import (
     stage_names,
     tournament_stage,
 )
-from pokerirl.study.report import (
+from pokerirl.studies.poker.report import (
     AUTHORS_FIGURE,
     FIGURES,
     build_report,
@@ -51,7 +51,6 @@ __all__ = [
     "StudyResult",
     "is_study_report",
     "load_study_report",
-    "parse_seeds",
     "preset",
     "render_markdown",
     "run_study",
@@ -81,8 +80,10 @@ def run_study(
     depend on it.
 
     Raises:
-        StudyError: bad settings, or a stage already run with other settings (without
-            ``overwrite``). Lower layers' errors (IngestError, TournamentError...) pass through.
+        StudyError: bad settings.
+        UnitConflict: a unit made with other settings or inputs (without ``overwrite``), or a
+            stage record of an older pokerirl made with other settings. Lower layers' errors
+            (IngestError, TournamentError, RunError...) pass through.
     """
     from pokerirl.parsers.irc import check_sources
 
@@ -97,7 +98,7 @@ def run_study(
     study = Study(
         root,
         config,
-        Execution(backend or Backend(jobs=config.jobs), progress=progress),
+        Execution(backend or Backend(jobs=config.jobs), progress=progress, overwrite=overwrite),
         overwrite,
         say,
     )

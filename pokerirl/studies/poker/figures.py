@@ -10,6 +10,8 @@ import numpy as np
 
 from pokerirl.atomic import write_bytes
 from pokerirl.encoding import ACTIONS
+from pokerirl.studies.common import band
+from pokerirl.studies.poker.results import AgentsResult, Curve, IRLResult, IRLRuns, Panel
 
 ALGO_LABELS = {"airl": "AIRL", "hairl": "H-AIRL"}
 KIND_LABELS = {"dqn": "DQN", "airl_dqn": "AIRL-DQN", "hairl_dqn": "H-AIRL-DQN"}
@@ -32,67 +34,65 @@ def _save(figure: Any, path: Path) -> None:
     write_bytes(path, buffer.getvalue())
 
 
-def _band(axis: Any, x: Any, curve: dict[str, Any], label: str) -> None:
-    mean, std = np.asarray(curve["mean"]), np.asarray(curve["std"])
-    axis.plot(x, mean, label=label)
-    axis.fill_between(x, mean - std, mean + std, alpha=0.25)
-
-
-def _trained(irl: dict[str, Any]) -> dict[str, str]:
+def _trained(irl: IRLResult) -> dict[str, tuple[str, IRLRuns]]:
     """The algorithms whose IRL runs the study trained (not replaced by a given reward)."""
-    return {algo: label for algo, label in ALGO_LABELS.items() if "replaced" not in irl[algo]}
+    return {
+        algo: (label, found)
+        for algo, label in ALGO_LABELS.items()
+        if isinstance(found := irl[algo], IRLRuns)
+    }
 
 
-def irl_alignment(irl: dict[str, Any], path: Path) -> None:
+def irl_alignment(irl: IRLResult, path: Path) -> None:
     """Validation alignment over epochs, mean ± std over runs, with the baselines as lines."""
     plt = _pyplot()
     figure, axis = plt.subplots(figsize=(6.4, 4))
     trained = _trained(irl)
-    for algo, label in trained.items():
-        curve = irl[algo]["curves"]["val_alignment"]
-        _band(axis, np.arange(1, len(curve["mean"]) + 1), curve, label)
+    for label, runs in trained.values():
+        curve = runs.curves["val_alignment"]
+        band(axis, np.arange(1, len(curve.mean) + 1), curve.to_json(), label)
     styles = {"majority": ":", "legal_majority": "--", "bc": "-."}
     for name, style in styles.items() if trained else ():
-        value = irl[list(trained)[-1]]["baselines"][name]["mean"]
+        value = list(trained.values())[-1][1].baselines[name].mean
         axis.axhline(value, color="grey", linestyle=style, label=f"{name} {value:.3f}")
     axis.set(xlabel="epoch", ylabel="validation alignment", title="IRL: validation alignment")
     axis.legend(fontsize=8)
     _save(figure, path)
 
 
-def irl_discriminator(irl: dict[str, Any], path: Path) -> None:
+def irl_discriminator(irl: IRLResult, path: Path) -> None:
     """Discriminator accuracy on expert and on policy actions over epochs, mean ± std."""
     plt = _pyplot()
     figure, axis = plt.subplots(figsize=(6.4, 4))
-    for algo, label in _trained(irl).items():
+    for label, runs in _trained(irl).values():
         for key, side in (("disc_acc_expert", "expert"), ("disc_acc_policy", "policy")):
-            curve = irl[algo]["curves"][key]
-            _band(axis, np.arange(1, len(curve["mean"]) + 1), curve, f"{label}, {side}")
+            curve = runs.curves[key]
+            band(axis, np.arange(1, len(curve.mean) + 1), curve.to_json(), f"{label}, {side}")
     axis.set(xlabel="epoch", ylabel="accuracy", title="IRL: discriminator accuracy", ylim=(0, 1))
     axis.legend(fontsize=8)
     _save(figure, path)
 
 
-def irl_actions(irl: dict[str, Any], path: Path) -> None:
+def irl_actions(irl: IRLResult, path: Path) -> None:
     """Validation action distributions (expert, AIRL, H-AIRL mean π) as grouped bars."""
     plt = _pyplot()
     trained = _trained(irl)
-    groups = {}
-    for algo, label in trained.items():
-        groups["expert"] = irl[algo]["action_dist"]["val_expert_dist"]
-        groups[label] = irl[algo]["action_dist"]["val_policy_dist"]
+    groups: dict[str, Curve] = {}
+    for label, runs in trained.values():
+        groups["expert"] = runs.action_dist["val_expert_dist"]
+        groups[label] = runs.action_dist["val_policy_dist"]
     if not groups:
         figure, axis = plt.subplots(figsize=(6.4, 4))
         axis.set_title("no IRL runs: both rewards were given")
         _save(figure, path)
         return
     groups = {"expert": groups.pop("expert"), **groups}
-    count = len(groups["expert"]["mean"])
+    count = len(groups["expert"].mean)
     x = np.arange(count)
     width = 0.8 / len(groups)
     figure, axis = plt.subplots(figsize=(6.4, 4))
     for index, (label, dist) in enumerate(groups.items()):
-        axis.bar(x + index * width, dist["mean"], width, yerr=dist["std"], label=label)
+        axis.bar(x + index * width, dist.mean, width, yerr=dist.std, label=label)
     names = ACTIONS if count == len(ACTIONS) else tuple(str(a) for a in range(count))
     axis.set_xticks(x + width * (len(groups) - 1) / 2, names)
     axis.set(ylabel="share of validation decisions", title="Action distributions")
@@ -100,38 +100,38 @@ def irl_actions(irl: dict[str, Any], path: Path) -> None:
     _save(figure, path)
 
 
-def rl_curves(agents: dict[str, Any], path: Path) -> None:
+def rl_curves(agents: AgentsResult, path: Path) -> None:
     """Learning curves against random, mean ± std over seeds, with always-call and
     always-raise as reference lines (the paper's RL figure)."""
     plt = _pyplot()
     figure, axis = plt.subplots(figsize=(6.4, 4))
     for kind, label in KIND_LABELS.items():
-        curve = agents["curves"][kind]
-        _band(axis, curve["hands"], curve, label)
+        curve = agents.curves[kind]
+        band(axis, curve.hands, curve.to_json(), label)
     for name, style in (("call", ":"), ("raise", "--")):
-        value = agents["references"][name]["mbb_per_hand"]
+        value = agents.references[name].mbb_per_hand
         axis.axhline(value, color="grey", linestyle=style, label=f"always-{name} {value:,.0f}")
     axis.set(xlabel="training hands", ylabel="mbb/hand vs random", title="RL against random")
     axis.legend(fontsize=8)
     _save(figure, path)
 
 
-def panel_heatmap(panel: dict[str, Any], path: Path) -> None:
+def panel_heatmap(panel: Panel, path: Path) -> None:
     """The panel's cross-table (row agent's mbb/h against the column agent) as a heat map."""
     plt = _pyplot()
-    names = panel["agents"]
+    names = panel.agents
     matrix = np.array(
-        [[np.nan if v is None else v for v in row] for row in panel["mbb_per_hand"]], dtype=float
+        [[np.nan if v is None else v for v in row] for row in panel.mbb_per_hand], dtype=float
     )
     limit = float(np.nanmax(np.abs(matrix))) if np.isfinite(matrix).any() else 1.0
     figure, axis = plt.subplots(figsize=(6.4, 5.4))
     image = axis.imshow(matrix, cmap="RdBu", vmin=-limit, vmax=limit or 1.0)
     axis.set_xticks(range(len(names)), names, rotation=45, ha="right")
     axis.set_yticks(range(len(names)), names)
-    for i, row in enumerate(panel["mbb_per_hand"]):
+    for i, row in enumerate(panel.mbb_per_hand):
         for j, value in enumerate(row):
             if value is not None:
-                error = panel["std_error"][i][j]
+                error = panel.std_error[i][j]
                 axis.text(
                     j, i, f"{value:,.0f}\n±{error:,.0f}", ha="center", va="center", fontsize=7
                 )

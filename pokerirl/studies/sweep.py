@@ -13,7 +13,7 @@ preset value) are computed once. ``out`` gets::
     sweep.json                           the same, with the settings and the curves' finals
     <parameter>.png                      the finals against the parameter's values
 
-Every unit is resumable as in the study (:mod:`pokerirl.gym.jobs`).
+Every unit is resumable as in the study (:mod:`pokerirl.studies.gym_units`).
 """
 
 from __future__ import annotations
@@ -24,26 +24,27 @@ import json
 import math
 import os
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from pokerirl.atomic import atomic_path, write_text
+from pokerirl.errors import PokerIRLError
 from pokerirl.execution import Backend
 from pokerirl.gym.irl import irl_config
-from pokerirl.gym.jobs import DATA_FILE, Say, run_data_jobs, run_irl_jobs, run_rl_jobs
 from pokerirl.gym.presets import TASKS, StudyPreset
-from pokerirl.gym.rl import DEFAULT_RL_BACKEND, mean_std
-from pokerirl.gym.study import (
-    GymStudyError,
+from pokerirl.gym.rl import DEFAULT_RL_BACKEND
+from pokerirl.studies.common import SUMMARY_JSON, StudyError, mean_std
+from pokerirl.studies.gym import (
     check_rl_backend,
     data_job,
     irl_job,
     rl_curves,
     rl_jobs,
 )
+from pokerirl.studies.gym_units import DATA_FILE, Say, run_data_jobs, run_irl_jobs, run_rl_jobs
 
 SWEEP_FORMAT = "pokerirl-gym-sweep/1"
 PARAMS = ("alpha", "beta", "sigma_start", "sigma_end")
@@ -80,12 +81,38 @@ class SweepPoint:
 
 
 @dataclass(frozen=True, kw_only=True)
+class SweepRow:
+    """One (parameter, value): its point and the finals over runs (alignment: discrete
+    tasks only). The fields are ``sweep.csv``'s columns and ``sweep.json``'s row names."""
+
+    param: str
+    value: float
+    point: str
+    runs: int
+    irl_final_return_mean: float
+    irl_final_return_std: float
+    rl_final_return_mean: float
+    rl_final_return_std: float
+    final_alignment_mean: float | None = None
+    final_alignment_std: float | None = None
+    final_reward_alignment_mean: float | None = None
+    final_reward_alignment_std: float | None = None
+
+    def to_json(self) -> dict[str, float | str | int | None]:
+        return asdict(self)
+
+    @classmethod
+    def from_json(cls, data: Mapping[str, Any]) -> SweepRow:
+        return cls(**{name: data[name] for name in CSV_COLUMNS})
+
+
+@dataclass(frozen=True, kw_only=True)
 class SweepResult:
     """What :func:`run_sweep` wrote: one row per (parameter, value)."""
 
     out: Path
     env: str
-    rows: tuple[dict[str, Any], ...]
+    rows: tuple[SweepRow, ...]
     figures: tuple[Path, ...]
 
 
@@ -98,23 +125,23 @@ def parse_param(text: str) -> tuple[str, tuple[float, ...]]:
     name, sign, values = text.partition("=")
     name = name.strip()
     if not sign or name not in PARAMS:
-        raise GymStudyError(
+        raise StudyError(
             f"bad --param {text!r}; write NAME=V1,V2,... with NAME one of {', '.join(PARAMS)}"
         )
     try:
         parsed = tuple(float(v) for v in values.split(",") if v.strip())
     except ValueError:
-        raise GymStudyError(f"bad --param {text!r}: the values must be numbers") from None
+        raise StudyError(f"bad --param {text!r}: the values must be numbers") from None
     if not parsed:
-        raise GymStudyError(f"bad --param {text!r}: no values")
+        raise StudyError(f"bad --param {text!r}: no values")
     if len(set(parsed)) != len(parsed):
-        raise GymStudyError(f"bad --param {text!r}: a value is repeated")
+        raise StudyError(f"bad --param {text!r}: a value is repeated")
     bad = [
         v for v in parsed if not math.isfinite(v) or v < 0 or (name in ("alpha", "beta") and v > 1)
     ]
     if bad:
         bounds = "in [0, 1]" if name in ("alpha", "beta") else "at least 0"
-        raise GymStudyError(f"bad --param {text!r}: {name} must be {bounds}, got {bad[0]:g}")
+        raise StudyError(f"bad --param {text!r}: {name} must be {bounds}, got {bad[0]:g}")
     return name, parsed
 
 
@@ -149,14 +176,14 @@ def run_sweep(
 
     require_gym()
     if env not in TASKS:
-        raise GymStudyError(f"unknown task {env!r}; choose one of {', '.join(TASKS)}")
+        raise StudyError(f"unknown task {env!r}; choose one of {', '.join(TASKS)}")
     check_rl_backend(rl_backend)
     if not params:
-        raise GymStudyError("give at least one --param, e.g. --param alpha=0,0.5,1")
+        raise StudyError("give at least one --param, e.g. --param alpha=0,0.5,1")
     backend = backend or Backend()
     out = Path(out)
     if out.exists() and not out.is_dir():
-        raise GymStudyError(f"{out} exists and is not a folder; choose another --out")
+        raise StudyError(f"{out} exists and is not a folder; choose another --out")
     points = sweep_points(env, params, preset)
     unique = list({point.name: point for point in points}.values())
     data = out / DATA_FILE
@@ -169,7 +196,7 @@ def run_sweep(
         try:
             irl_config("hairl", job.settings, seed=preset.seed)
         except ValueError as error:
-            raise GymStudyError(f"point {name}: {error}") from None
+            raise StudyError(f"point {name}: {error}") from None
     try:
         say(f"[1/4] expert data: {env}")
         run_data_jobs([data_job(out, env, preset)], **options)
@@ -183,13 +210,15 @@ def run_sweep(
         ]
         say(f"[3/4] RL: {len(rl)} runs on the points' rewards")
         run_rl_jobs(rl, **options)
+    except PokerIRLError:
+        raise  # a unit's conflict keeps its remedy for the command line's advice
     except ValueError as error:
-        raise GymStudyError(str(error)) from None
+        raise StudyError(str(error)) from None
 
     say(f"[4/4] {CSV_FILE}, {JSON_FILE} and one figure per parameter -> {out}")
     rows = [point_row(out, point, preset, discrete=TASKS[env].discrete) for point in points]
     write_text(out / CSV_FILE, _csv(rows))
-    expert = json.loads((irl[unique[0].name].folder / "summary.json").read_text())
+    expert = json.loads((irl[unique[0].name].folder / SUMMARY_JSON).read_text())
     record = {
         "format": SWEEP_FORMAT,
         "env": env,
@@ -200,7 +229,7 @@ def run_sweep(
         "rl_backend": rl_backend,
         "expert_return": expert["expert_return"],
         "random_return": expert["baselines"]["random"]["mean"],
-        "rows": rows,
+        "rows": [row.to_json() for row in rows],
     }
     write_text(out / JSON_FILE, json.dumps(record, indent=2) + "\n")
     figures = tuple(plot_param(record, param, out / f"{param}.png") for param in params)
@@ -209,37 +238,39 @@ def run_sweep(
 
 def point_row(
     out: Path, point: SweepPoint, preset: StudyPreset, *, discrete: bool
-) -> dict[str, Any]:
+) -> SweepRow:
     """The point's finals: IRL-phase return, RL-phase return, alignment (discrete tasks)."""
     root = out / "points" / point.name
-    irl = json.loads((root / "irl" / "hairl" / "summary.json").read_text())
-    rl = mean_std(rl_curves(root, "hairl", preset.runs)["per_run_final"])
-    row: dict[str, Any] = {
-        "param": point.param,
-        "value": point.value,
-        "point": point.name,
-        "runs": preset.runs,
-        "irl_final_return_mean": irl["irl_final_return"]["mean"],
-        "irl_final_return_std": irl["irl_final_return"]["std"],
-        "rl_final_return_mean": rl["mean"],
-        "rl_final_return_std": rl["std"],
-    }
+    irl = json.loads((root / "irl" / "hairl" / SUMMARY_JSON).read_text())
+    rl = mean_std(rl_curves(root, "hairl", preset.runs).per_run_final)
+    alignment: dict[str, float | None] = {}
     for name, key in (
         ("final_alignment", "val_alignment"),
         ("final_reward_alignment", "val_reward_alignment"),
     ):
         curve = irl["metrics"].get(key) if discrete else None
-        row[f"{name}_mean"] = None if curve is None else curve["mean"][-1]
-        row[f"{name}_std"] = None if curve is None else curve["std"][-1]
-    return row
+        alignment[f"{name}_mean"] = None if curve is None else curve["mean"][-1]
+        alignment[f"{name}_std"] = None if curve is None else curve["std"][-1]
+    return SweepRow(
+        param=point.param,
+        value=point.value,
+        point=point.name,
+        runs=preset.runs,
+        irl_final_return_mean=irl["irl_final_return"]["mean"],
+        irl_final_return_std=irl["irl_final_return"]["std"],
+        rl_final_return_mean=rl["mean"],
+        rl_final_return_std=rl["std"],
+        **alignment,
+    )
 
 
-def _csv(rows: Sequence[Mapping[str, Any]]) -> str:
+def _csv(rows: Sequence[SweepRow]) -> str:
     buffer = io.StringIO()
     writer = csv.DictWriter(buffer, fieldnames=CSV_COLUMNS, lineterminator="\n")
     writer.writeheader()
     for row in rows:
-        writer.writerow({key: "" if row[key] is None else row[key] for key in CSV_COLUMNS})
+        cells = row.to_json()
+        writer.writerow({key: "" if cells[key] is None else cells[key] for key in CSV_COLUMNS})
     return buffer.getvalue()
 
 

@@ -18,7 +18,7 @@ One task writes into ``out`` itself; several write ``out/<env>/`` each (the same
                                          2-d observations and discrete actions: MountainCar)
     summary.json, report.md
 
-Every unit (data, IRL, RL run) is resumable on its own (:mod:`pokerirl.gym.jobs`): a rerun
+Every unit (data, IRL, RL run) is resumable on its own (:mod:`pokerirl.studies.gym_units`): a rerun
 keeps the finished ones and refuses, in one line, units made with other settings unless
 ``overwrite``.
 """
@@ -28,7 +28,7 @@ from __future__ import annotations
 import json
 import math
 import os
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 from typing import Any
@@ -36,8 +36,34 @@ from typing import Any
 import numpy as np
 
 from pokerirl.atomic import write_text
+from pokerirl.errors import PokerIRLError
 from pokerirl.execution import Backend
-from pokerirl.gym.jobs import (
+from pokerirl.gym.presets import PRESETS, TASK_ORDER, TASKS, StudyPreset
+from pokerirl.gym.presets import MeanStd as PaperValue
+from pokerirl.gym.rl import DEFAULT_RL_BACKEND
+from pokerirl.studies.common import (
+    METRICS_JSONL,
+    REPORT_MD,
+    SUMMARY_JSON,
+    StudyError,
+    band,
+    markdown_table,
+    mean_std,
+    read_jsonl,
+    with_overrides,
+)
+from pokerirl.studies.gym_results import (
+    QUALITY_KEYS,
+    AlgoSummary,
+    Band,
+    EnvRewardSummary,
+    MeanStd,
+    PaperFinals,
+    RewardMapSummary,
+    StudySettings,
+    TaskSummary,
+)
+from pokerirl.studies.gym_units import (
     DATA_FILE,
     DataJob,
     IRLJob,
@@ -47,8 +73,6 @@ from pokerirl.gym.jobs import (
     run_irl_jobs,
     run_rl_jobs,
 )
-from pokerirl.gym.presets import PRESETS, TASK_ORDER, TASKS, MeanStd, StudyPreset
-from pokerirl.gym.rl import DEFAULT_RL_BACKEND, mean_std
 
 SUMMARY_FORMAT = "pokerirl-gym-study/1"
 ALGOS = ("airl", "hairl")
@@ -65,16 +89,12 @@ MAP_GRID = 101  # cells per axis of the reward map
 STEPS = 4
 
 
-class GymStudyError(ValueError):
-    """Bad study settings, or a study folder that does not fit them; the message is one line."""
-
-
 @dataclass(frozen=True, kw_only=True)
 class GymStudyResult:
     """What :func:`run_gym_study` wrote: one summary per task, and the report."""
 
     out: Path
-    summaries: dict[str, dict[str, Any]]  # env -> the task's summary.json
+    summaries: dict[str, TaskSummary]  # env -> the task's summary.json
     markdown: str
 
 
@@ -84,13 +104,7 @@ def study_preset(name: str, **overrides: Any) -> StudyPreset:
     >>> study_preset("quick", runs=2).runs
     2
     """
-    if name not in PRESETS:
-        raise GymStudyError(f"unknown preset {name!r}; choose one of {', '.join(PRESETS)}")
-    changes = {key: value for key, value in overrides.items() if value is not None}
-    try:
-        return replace(PRESETS[name], **changes)
-    except (TypeError, ValueError) as error:
-        raise GymStudyError(str(error)) from None
+    return with_overrides(PRESETS, name, **overrides)
 
 
 def parse_tasks(text: str) -> tuple[str, ...]:
@@ -102,7 +116,7 @@ def parse_tasks(text: str) -> tuple[str, ...]:
     if text == "all":
         return TASK_ORDER
     if text not in TASKS:
-        raise GymStudyError(f"unknown task {text!r}; choose one of {', '.join(TASKS)} or all")
+        raise StudyError(f"unknown task {text!r}; choose one of {', '.join(TASKS)} or all")
     return (text,)
 
 
@@ -182,7 +196,7 @@ def run_gym_study(
     lockstep, one unit per task and reward kind), which is part of their records.
 
     Raises:
-        GymStudyError: ``out`` is a file, or a unit was made with other settings or inputs
+        StudyError: ``out`` is a file, or a unit was made with other settings or inputs
             (without ``overwrite``); the message names it.
     """
     from pokerirl.gym.experts import require_gym
@@ -192,7 +206,7 @@ def run_gym_study(
     backend = backend or Backend()
     out = Path(out)
     if out.exists() and not out.is_dir():
-        raise GymStudyError(f"{out} exists and is not a folder; choose another --out")
+        raise StudyError(f"{out} exists and is not a folder; choose another --out")
     tasks = preset.tasks
     roots = {env: task_root(out, env, tasks) for env in tasks}
     names = ", ".join(tasks)
@@ -223,29 +237,29 @@ def run_gym_study(
             + ("" if rl_backend == "sb3" else f" ({rl_backend} backend)"))
         reused = run_rl_jobs(rl, **options)
         _said_reused(say, reused, len(rl))
+    except PokerIRLError:
+        raise  # a unit's conflict keeps its remedy for the command line's advice
     except ValueError as error:
-        raise GymStudyError(str(error)) from None
+        raise StudyError(str(error)) from None
 
-    report = out / "report.md"
+    report = out / REPORT_MD
     say(f"[4/{STEPS}] report -> {report}")
     summaries = {}
     for env in tasks:
-        summary = task_summary(roots[env], env, preset)
-        summary["settings"]["rl_backend"] = rl_backend
-        summary["reward_map"] = draw_reward_map(roots[env], env)
-        write_text(roots[env] / "summary.json", json.dumps(summary, indent=2) + "\n")
+        summary = task_summary(roots[env], env, preset, rl_backend=rl_backend)
+        write_text(roots[env] / SUMMARY_JSON, json.dumps(summary.to_json(), indent=2) + "\n")
         draw_figures(roots[env], summary)
         if len(tasks) > 1:
-            write_text(roots[env] / "report.md", render_report({env: summary}, preset.name))
+            write_text(roots[env] / REPORT_MD, render_report({env: summary}, preset.name))
         summaries[env] = summary
     if len(tasks) > 1:
         overall = {
             "format": SUMMARY_FORMAT,
             "preset": preset.name,
             "runs": preset.runs,
-            "tasks": summaries,
+            "tasks": {env: summary.to_json() for env, summary in summaries.items()},
         }
-        write_text(out / "summary.json", json.dumps(overall, indent=2) + "\n")
+        write_text(out / SUMMARY_JSON, json.dumps(overall, indent=2) + "\n")
     markdown = render_report(summaries, preset.name, prefix="" if len(tasks) == 1 else None)
     write_text(report, markdown)
     return GymStudyResult(out=out, summaries=summaries, markdown=markdown)
@@ -254,7 +268,7 @@ def run_gym_study(
 def is_gym_study(folder: str | os.PathLike[str]) -> bool:
     """Whether ``folder`` holds a gym study's ``summary.json``."""
     try:
-        found = json.loads((Path(folder) / "summary.json").read_text())
+        found = json.loads((Path(folder) / SUMMARY_JSON).read_text())
     except (OSError, ValueError):
         return False
     return isinstance(found, dict) and found.get("format") == SUMMARY_FORMAT
@@ -262,17 +276,19 @@ def is_gym_study(folder: str | os.PathLike[str]) -> bool:
 
 def load_gym_study(folder: str | os.PathLike[str]) -> tuple[dict[str, Any], str]:
     """A finished study's ``summary.json`` and its report rendered again (``pokerirl report``)."""
-    from pokerirl.gym.summary_check import check_summary
+    from pokerirl.studies.gym_summary_check import check_summary
 
-    path = Path(folder) / "summary.json"
+    path = Path(folder) / SUMMARY_JSON
     try:
         found = json.loads(path.read_text())
         check_summary(found)  # once, on reading: the renderer trusts what passes
         if "tasks" in found:
-            return found, render_report(found["tasks"], found["preset"], prefix=None)
-        return found, render_report({found["env"]: found}, found["preset"])
-    except (OSError, ValueError, KeyError, TypeError) as error:
-        raise GymStudyError(f"{path}: not a readable gym study summary ({error})") from None
+            tasks = {env: TaskSummary.from_json(task) for env, task in found["tasks"].items()}
+            return found, render_report(tasks, found["preset"], prefix=None)
+        return found, render_report({found["env"]: TaskSummary.from_json(found)}, found["preset"])
+    except (OSError, ValueError, KeyError, TypeError, AttributeError) as error:
+        # check_summary names the fields the report reads; the others fail here, one line too.
+        raise StudyError(f"{path}: not a readable gym study summary ({error})") from None
 
 
 def check_rl_backend(rl_backend: str) -> None:
@@ -280,7 +296,7 @@ def check_rl_backend(rl_backend: str) -> None:
     from pokerirl.gym.rl import RL_BACKENDS
 
     if rl_backend not in RL_BACKENDS:
-        raise GymStudyError(
+        raise StudyError(
             f"unknown RL backend {rl_backend!r}; choose one of {', '.join(RL_BACKENDS)}"
         )
 
@@ -293,129 +309,144 @@ def _said_reused(say: Say, reused: int, total: int) -> None:
 # --------------------------------------------------------------------------- summaries
 
 
-def _read_jsonl(path: Path) -> list[dict[str, Any]]:
-    return [json.loads(line) for line in path.read_text().splitlines() if line.strip()]
+@dataclass(frozen=True, kw_only=True)
+class RLCurves:
+    """One reward kind's RL runs: the true return at each evaluation (mean and std over runs)
+    and each run's last value."""
+
+    timesteps: list[int]
+    mean: list[float]
+    std: list[float]
+    per_run_final: list[float]
+
+    def band(self) -> Band:
+        """The curve as ``summary.json`` holds it (``curves.rl``)."""
+        return Band(timesteps=self.timesteps, mean=self.mean, std=self.std)
 
 
-def rl_curves(root: Path, reward: str, runs: int) -> dict[str, Any]:
+def rl_curves(root: Path, reward: str, runs: int) -> RLCurves:
     """The RL runs' true-return curves: timesteps, per-run values, mean and std per point."""
-    lines = [_read_jsonl(root / "rl" / reward / f"run-{k}" / "metrics.jsonl") for k in range(runs)]
+    lines = [read_jsonl(root / "rl" / reward / f"run-{k}" / METRICS_JSONL) for k in range(runs)]
     points = min(len(line) for line in lines)
     values = np.array([[p["return_mean"] for p in line[:points]] for line in lines])
     std = values.std(0, ddof=1) if runs > 1 else np.zeros(points)
-    return {
-        "timesteps": [p["timesteps"] for p in lines[0][:points]],
-        "mean": values.mean(0).tolist(),
-        "std": std.tolist(),
-        "per_run_final": values[:, -1].tolist(),
-    }
+    return RLCurves(
+        timesteps=[p["timesteps"] for p in lines[0][:points]],
+        mean=values.mean(0).tolist(),
+        std=std.tolist(),
+        per_run_final=values[:, -1].tolist(),
+    )
 
 
-def _paper(value: MeanStd) -> dict[str, float | None]:
-    return {"mean": value.mean, "std": value.std}
+def _paper(value: PaperValue) -> MeanStd:
+    return MeanStd(value.mean, value.std)
 
 
-def task_summary(root: Path, env: str, preset: StudyPreset) -> dict[str, Any]:
+def task_summary(
+    root: Path, env: str, preset: StudyPreset, *, rl_backend: str = DEFAULT_RL_BACKEND
+) -> TaskSummary:
     """The task's ``summary.json``: final values (mean ± std over runs) of every phase, the
-    curves behind the figures, the baselines, the settings, and the authors' finals."""
+    curves behind the figures, the baselines, the settings, and the authors' finals; with the
+    reward map drawn (Figure 4) where the task has one."""
     task = TASKS[env]
-    algos: dict[str, Any] = {}
+    algos: dict[str, AlgoSummary] = {}
     irl_summaries = {}
     for algo in ALGOS:
-        irl = json.loads((root / "irl" / algo / "summary.json").read_text())
+        irl = json.loads((root / "irl" / algo / SUMMARY_JSON).read_text())
         irl_summaries[algo] = irl
         metrics = irl["metrics"]
         rl = rl_curves(root, algo, preset.runs)
-        entry: dict[str, Any] = {
-            "irl_final_return": irl["irl_final_return"],
-            "rl_final_return": mean_std(rl["per_run_final"]),
-            "baselines": irl["baselines"],
-            "irl_per_run_final": _per_run_final(root / "irl" / algo, preset.runs, "eval_return"),
-            "rl_per_run_final": rl["per_run_final"],
-            "curves": {
-                "irl_epochs": irl["epochs"],
-                "irl_return": metrics["eval_return"],
-                "rl": {key: rl[key] for key in ("timesteps", "mean", "std")},
-            },
-        }
-        if task.discrete:
-            entry["final_alignment"] = irl["final_alignment"]
-            entry["final_reward_alignment"] = {
-                "mean": metrics["val_reward_alignment"]["mean"][-1],
-                "std": metrics["val_reward_alignment"]["std"][-1],
-            }
-            entry["curves"]["alignment"] = metrics["val_alignment"]
-        for key in ("disc_acc_expert", "disc_acc_policy"):
-            if key in metrics:
-                entry[f"final_{key}"] = {
-                    "mean": metrics[key]["mean"][-1],
-                    "std": metrics[key]["std"][-1],
-                }
-        entry.update(reward_quality(root, env, algo, preset.runs))
-        algos[algo] = entry
+        algos[algo] = AlgoSummary(
+            irl_final_return=MeanStd.from_json(irl["irl_final_return"]),
+            rl_final_return=MeanStd.from_json(mean_std(rl.per_run_final)),
+            baselines={name: MeanStd.from_json(v) for name, v in irl["baselines"].items()},
+            irl_per_run_final=_per_run_final(root / "irl" / algo, preset.runs, "eval_return"),
+            rl_per_run_final=rl.per_run_final,
+            irl_epochs=irl["epochs"],
+            irl_return=Band.from_json(metrics["eval_return"]),
+            rl_curve=rl.band(),
+            alignment=Band.from_json(metrics["val_alignment"]) if task.discrete else None,
+            final_alignment=MeanStd.from_json(irl["final_alignment"]) if task.discrete else None,
+            final_reward_alignment=_last(metrics["val_reward_alignment"])
+            if task.discrete
+            else None,
+            final_disc_acc={key: _last(metrics[key]) for key in QUALITY_KEYS if key in metrics},
+            **reward_quality(root, env, algo, preset.runs),
+        )
     env_rl = rl_curves(root, "env", preset.runs)
     baselines = irl_summaries["hairl"]["baselines"]
     paper = task.paper
-    return {
-        "format": SUMMARY_FORMAT,
-        "env": env,
-        "preset": preset.name,
-        "runs": preset.runs,
-        "seeds": [preset.seed + k for k in range(preset.runs)],
-        "discrete": task.discrete,
-        "expert_return": irl_summaries["hairl"]["expert_return"],
-        "random_return": baselines["random"]["mean"],
-        "algos": algos,
-        "env_reward": {
-            "rl_final_return": mean_std(env_rl["per_run_final"]),
-            "rl_per_run_final": env_rl["per_run_final"],
-            "curves": {"rl": {key: env_rl[key] for key in ("timesteps", "mean", "std")}},
-        },
-        "settings": {  # through JSON: tuples become lists, as in summary.json
-            "irl": json.loads(json.dumps(asdict(preset.irl(env)))),
-            "rl": json.loads(json.dumps(asdict(preset.rl(env)))),
-            "rl_evaluations": preset.rl_evaluations,
-            "rl_eval_episodes": preset.irl(env).eval_episodes,
-            "seed": preset.seed,
-            "authors_budget": authors_budget(env, preset),
-        },
-        "paper": {
-            "irl_final_return": {"airl": _paper(paper.irl_airl), "hairl": _paper(paper.irl_hairl)},
-            "expert_return": paper.irl_expert.mean,
-            "rl_final_return": {
+    return TaskSummary(
+        format=SUMMARY_FORMAT,
+        env=env,
+        preset=preset.name,
+        runs=preset.runs,
+        seeds=[preset.seed + k for k in range(preset.runs)],
+        discrete=task.discrete,
+        expert_return=irl_summaries["hairl"]["expert_return"],
+        random_return=baselines["random"]["mean"],
+        algos=algos,
+        env_reward=EnvRewardSummary(
+            rl_final_return=MeanStd.from_json(mean_std(env_rl.per_run_final)),
+            rl_per_run_final=env_rl.per_run_final,
+            rl_curve=env_rl.band(),
+        ),
+        settings=StudySettings(  # through JSON: tuples become lists, as in summary.json
+            irl=json.loads(json.dumps(asdict(preset.irl(env)))),
+            rl=json.loads(json.dumps(asdict(preset.rl(env)))),
+            rl_evaluations=preset.rl_evaluations,
+            rl_eval_episodes=preset.irl(env).eval_episodes,
+            seed=preset.seed,
+            authors_budget=authors_budget(env, preset),
+            rl_backend=rl_backend,
+        ),
+        paper=PaperFinals(
+            irl_final_return={"airl": _paper(paper.irl_airl), "hairl": _paper(paper.irl_hairl)},
+            expert_return=paper.irl_expert.mean,
+            rl_final_return={
                 "airl": _paper(paper.rl_airl),
                 "hairl": _paper(paper.rl_hairl),
                 "env_reward": _paper(paper.rl_env_reward),
             },
-            "final_alignment": {"airl": paper.alignment_airl, "hairl": paper.alignment_hairl}
+            final_alignment={"airl": paper.alignment_airl, "hairl": paper.alignment_hairl}
             if task.discrete
             else None,
-            "random_return": task.random_return,
-        },
-    }
+            random_return=task.random_return,
+        ),
+        reward_map=draw_reward_map(root, env),
+    )
+
+
+def _last(curve: dict[str, list[float]]) -> MeanStd:
+    """A per-epoch curve's last point."""
+    return MeanStd(curve["mean"][-1], curve["std"][-1])
 
 
 def reward_quality(root: Path, env: str, algo: str, runs: int) -> dict[str, Any]:
-    """Mean and std over runs of each IRL run's ``reward_quality.json`` (computed there first
-    when a run lacks it, e.g. one made before it existed), the per-run values and the
-    coverage used. A value null in a run (a constant reward) is left out of its mean."""
+    """:class:`AlgoSummary`'s ``quality`` (by score) and ``reward_quality`` (per run, γ,
+    coverage, the true reward)."""
+    # Mean and std over runs of each IRL run's ``reward_quality.json`` (computed there first
+    # when a run lacks it, e.g. one made before it existed); a value null in a run (a constant
+    # reward) is left out of its mean.
     from pokerirl.gym.quality import SCORES, run_quality
 
     found = [
         run_quality(root / "irl" / algo / f"run-{k}", env_id=env, data_path=root / DATA_FILE)
         for k in range(runs)
     ]
-    out: dict[str, Any] = {}
+    quality = {}
     for key in SCORES:
         values = [q[key] for q in found if q.get(key) is not None]
-        out[key] = mean_std(values) if values else {"mean": None, "std": None}
-    out["reward_quality"] = {
-        "per_run": {key: [q.get(key) for q in found] for key in SCORES},
-        "gamma": found[0]["gamma"],
-        "coverage": found[0]["coverage"],
-        "true_reward": found[0]["true_reward"],
+        quality[key] = MeanStd.from_json(mean_std(values)) if values else MeanStd(None)
+    return {
+        "quality": quality,
+        "reward_quality": {
+            "per_run": {key: [q.get(key) for q in found] for key in SCORES},
+            "gamma": found[0]["gamma"],
+            "coverage": found[0]["coverage"],
+            "true_reward": found[0]["true_reward"],
+        },
     }
-    return out
 
 
 def authors_budget(env: str, preset: StudyPreset) -> bool:
@@ -427,10 +458,10 @@ def authors_budget(env: str, preset: StudyPreset) -> bool:
 
 
 def _per_run_final(folder: Path, runs: int, key: str) -> list[float]:
-    return [_read_jsonl(folder / f"run-{k}" / "metrics.jsonl")[-1][key] for k in range(runs)]
+    return [read_jsonl(folder / f"run-{k}" / METRICS_JSONL)[-1][key] for k in range(runs)]
 
 
-def draw_reward_map(root: Path, env: str) -> dict[str, Any] | None:
+def draw_reward_map(root: Path, env: str) -> RewardMapSummary | None:
     """Figure 4 for a task with a bounded 2-d observation and discrete actions (MountainCar):
     the action each algorithm's mean f prefers over the state lattice, beside the shipped
     expert's; returns the agreements (None for other tasks)."""
@@ -446,27 +477,26 @@ def draw_reward_map(root: Path, env: str) -> dict[str, Any] | None:
     plot_reward_map(result, path)
     constant = result.constant_agreement
     assert constant is not None  # the shipped expert's panel is drawn
-    return {
-        "grid": MAP_GRID,
-        "agreement": {
-            algo: {"mean_f": panel.agreement, "runs": list(panel.run_agreements)}
-            for algo, panel in zip(ALGOS, result.panels, strict=True)
-        },
-        "constant_action": constant[0],
-        "constant_agreement": constant[1],
-    }
+    panels = dict(zip(ALGOS, result.panels, strict=True))
+    return RewardMapSummary(
+        grid=MAP_GRID,
+        agreement={algo: panel.agreement for algo, panel in panels.items()},
+        run_agreements={algo: list(panel.run_agreements) for algo, panel in panels.items()},
+        constant_action=constant[0],
+        constant_agreement=constant[1],
+    )
 
 
 # --------------------------------------------------------------------------- report
 
 
-def _value(value: dict[str, Any] | None, *, percent: bool = False, digits: int = 1) -> str:
-    if value is None or value.get("mean") is None:
+def _value(value: MeanStd | None, *, percent: bool = False, digits: int = 1) -> str:
+    if value is None or value.mean is None:
         return "–"
     scale = 100.0 if percent else 1.0
-    text = f"{scale * value['mean']:,.{digits}f}"
-    if value.get("std") is not None:
-        text += f" ± {scale * value['std']:,.{digits}f}"
+    text = f"{scale * value.mean:,.{digits}f}"
+    if value.std is not None:
+        text += f" ± {scale * value.std:,.{digits}f}"
     return text + ("%" if percent else "")
 
 
@@ -474,94 +504,98 @@ def _paper_percent(value: float | None) -> str:
     return "–" if value is None else f"{value:.1f}%"
 
 
-def task_table(summary: dict[str, Any]) -> list[str]:
+def _percent(share: float | None) -> float | None:
+    return None if share is None else 100 * share
+
+
+def task_table(summary: TaskSummary) -> list[str]:
     """Our finals beside the authors', one row per figure of the paper."""
-    algos, paper = summary["algos"], summary["paper"]
-    expert = {"mean": summary["expert_return"], "std": None}
+    airl, hairl, paper = summary.algos["airl"], summary.algos["hairl"], summary.paper
     rows = [
-        ("IRL-phase return, AIRL", _value(algos["airl"]["irl_final_return"]),
-         _value(paper["irl_final_return"]["airl"])),
-        ("IRL-phase return, H-AIRL", _value(algos["hairl"]["irl_final_return"]),
-         _value(paper["irl_final_return"]["hairl"])),
-        ("expert (its data's episodes)", _value(expert), _value({"mean": paper["expert_return"]})),
-        ("RL-phase return, AIRL reward", _value(algos["airl"]["rl_final_return"]),
-         _value(paper["rl_final_return"]["airl"])),
-        ("RL-phase return, H-AIRL reward", _value(algos["hairl"]["rl_final_return"]),
-         _value(paper["rl_final_return"]["hairl"])),
-        ("RL-phase return, env reward", _value(summary["env_reward"]["rl_final_return"]),
-         _value(paper["rl_final_return"]["env_reward"])),
+        ("IRL-phase return, AIRL", _value(airl.irl_final_return),
+         _value(paper.irl_final_return["airl"])),
+        ("IRL-phase return, H-AIRL", _value(hairl.irl_final_return),
+         _value(paper.irl_final_return["hairl"])),
+        ("expert (its data's episodes)", _value(MeanStd(summary.expert_return)),
+         _value(MeanStd(paper.expert_return))),
+        ("RL-phase return, AIRL reward", _value(airl.rl_final_return),
+         _value(paper.rl_final_return["airl"])),
+        ("RL-phase return, H-AIRL reward", _value(hairl.rl_final_return),
+         _value(paper.rl_final_return["hairl"])),
+        ("RL-phase return, env reward", _value(summary.env_reward.rl_final_return),
+         _value(paper.rl_final_return["env_reward"])),
     ]  # fmt: skip
-    if summary["discrete"]:
-        bc = summary["algos"]["hairl"]["baselines"]["bc"]
+    if summary.discrete:
+        alignment = paper.final_alignment or {}
         rows += [
-            ("alignment, AIRL policy", _value(algos["airl"]["final_alignment"], percent=True),
-             _paper_percent(paper["final_alignment"]["airl"])),
-            ("alignment, H-AIRL policy", _value(algos["hairl"]["final_alignment"], percent=True),
-             _paper_percent(paper["final_alignment"]["hairl"])),
-            ("alignment, behaviour cloning (same net and epochs)", _value(bc, percent=True),
-             "not reported"),
+            ("alignment, AIRL policy", _value(airl.final_alignment, percent=True),
+             _paper_percent(alignment.get("airl"))),
+            ("alignment, H-AIRL policy", _value(hairl.final_alignment, percent=True),
+             _paper_percent(alignment.get("hairl"))),
+            ("alignment, behaviour cloning (same net and epochs)",
+             _value(hairl.baselines["bc"], percent=True), "not reported"),
             ("alignment, reward argmax: AIRL / H-AIRL",
-             f"{_value(algos['airl']['final_reward_alignment'], percent=True)} / "
-             f"{_value(algos['hairl']['final_reward_alignment'], percent=True)}", "not reported"),
+             f"{_value(airl.final_reward_alignment, percent=True)} / "
+             f"{_value(hairl.final_reward_alignment, percent=True)}", "not reported"),
         ]  # fmt: skip
-    if "epic" in algos["airl"]:
+    if "epic" in airl.quality:
+        a, h = airl.quality, hairl.quality
         rows += [
             ("EPIC distance to the true reward (0 same up to shaping and scale, 0.71 "
              "unrelated, 1 opposite): AIRL / H-AIRL",
-             f"{_value(algos['airl']['epic'], digits=3)} / "
-             f"{_value(algos['hairl']['epic'], digits=3)}", "not reported"),
+             f"{_value(a['epic'], digits=3)} / {_value(h['epic'], digits=3)}", "not reported"),
             ("EPIC of a random reward net (same architecture, the runs' initial nets): "
              "AIRL / H-AIRL",
-             f"{_value(algos['airl']['epic_random_baseline'], digits=3)} / "
-             f"{_value(algos['hairl']['epic_random_baseline'], digits=3)}", "not reported"),
+             f"{_value(a['epic_random_baseline'], digits=3)} / "
+             f"{_value(h['epic_random_baseline'], digits=3)}", "not reported"),
             ("EPIC on the expert's states and transitions only: AIRL / H-AIRL / random net",
-             f"{_value(algos['airl']['epic_expert_coverage'], digits=3)} / "
-             f"{_value(algos['hairl']['epic_expert_coverage'], digits=3)} / "
-             f"{_value(algos['airl']['epic_random_baseline_expert_coverage'], digits=3)}",
+             f"{_value(a['epic_expert_coverage'], digits=3)} / "
+             f"{_value(h['epic_expert_coverage'], digits=3)} / "
+             f"{_value(a['epic_random_baseline_expert_coverage'], digits=3)}",
              "not reported"),
             ("Pearson of f and the true reward on expert / policy transitions: AIRL",
-             f"{_value(algos['airl']['pearson_expert'], digits=3)} / "
-             f"{_value(algos['airl']['pearson_policy'], digits=3)}", "not reported"),
+             f"{_value(a['pearson_expert'], digits=3)} / "
+             f"{_value(a['pearson_policy'], digits=3)}", "not reported"),
             ("Pearson of f and the true reward on expert / policy transitions: H-AIRL",
-             f"{_value(algos['hairl']['pearson_expert'], digits=3)} / "
-             f"{_value(algos['hairl']['pearson_policy'], digits=3)}", "not reported"),
+             f"{_value(h['pearson_expert'], digits=3)} / "
+             f"{_value(h['pearson_policy'], digits=3)}", "not reported"),
         ]  # fmt: skip
-    found = summary.get("reward_map")
+    found = summary.reward_map
     if found is not None:
-        agree = found["agreement"]
+        agree = found.agreement
         rows.append(
-            (f"reward map: cells where f prefers the expert's action ({found['grid']}² lattice), "
+            (f"reward map: cells where f prefers the expert's action ({found.grid}² lattice), "
              "AIRL / H-AIRL",
-             f"{100 * agree['airl']['mean_f']:.1f}% / {100 * agree['hairl']['mean_f']:.1f}% "
-             f"(a constant {found['constant_action']!r}: {100 * found['constant_agreement']:.1f}%)",
+             f"{_paper_percent(_percent(agree['airl']))} / "
+             f"{_paper_percent(_percent(agree['hairl']))} "
+             f"(a constant {found.constant_action!r}: {100 * found.constant_agreement:.1f}%)",
              "Figure 4: maps only"),
         )  # fmt: skip
     rows.append(
-        ("random policy", _value({"mean": summary["random_return"]}),
-         _value({"mean": paper["random_return"]}))
+        ("random policy", _value(MeanStd(summary.random_return)),
+         _value(MeanStd(paper.random_return)))
     )  # fmt: skip
-    lines = ["| | ours | the authors |", "|---|---|---|"]
-    lines += [f"| {name} | {ours} | {theirs} |" for name, ours, theirs in rows]
-    return lines
+    return markdown_table(["", "ours", "the authors"], rows)
 
 
-def _budget(summary: dict[str, Any]) -> str:
-    irl, rl = summary["settings"]["irl"], summary["settings"]["rl"]
-    seeds = summary["seeds"]
+def _budget(summary: TaskSummary) -> str:
+    settings = summary.settings
+    irl, rl = settings.irl, settings.rl
+    seeds = summary.seeds
+    backend = settings.rl_backend or "sb3"
     return (
-        f"{summary['runs']} runs per algorithm (seeds {seeds[0]}–{seeds[-1]}); expert data "
+        f"{summary.runs} runs per algorithm (seeds {seeds[0]}–{seeds[-1]}); expert data "
         f"{irl['transitions']:,} transitions; IRL {irl['epochs']} epochs, batch "
         f"{irl['batch_size']}, α {irl['alpha']}, β {irl['beta']}, σ {irl['sigma_start']} → "
         f"{irl['sigma_end']} (H-AIRL), each epoch's policy over {irl['eval_episodes']} "
         f"episodes; RL {rl['algo'].upper()} for {rl['timesteps']:,} steps, each point "
-        f"{summary['settings']['rl_eval_episodes']} deterministic episodes"
-        + ("." if summary["settings"].get("rl_backend", "sb3") == "sb3"
-           else f" ({summary['settings']['rl_backend']} RL backend).")
+        f"{settings.rl_eval_episodes} deterministic episodes"
+        + ("." if backend == "sb3" else f" ({backend} RL backend).")
     )
 
 
 def render_report(
-    summaries: dict[str, dict[str, Any]], preset: str, *, prefix: str | None = ""
+    summaries: Mapping[str, TaskSummary], preset: str, *, prefix: str | None = ""
 ) -> str:
     """``report.md``: per task, the budget, our finals beside the authors', the figures.
 
@@ -576,11 +610,11 @@ def render_report(
     for env, summary in summaries.items():
         where = f"{env}/" if prefix is None else prefix
         lines += ["", f"## {env}", "", _budget(summary), ""]
-        if not summary["settings"]["authors_budget"]:
+        if not summary.settings.authors_budget:
             lines += ["**Not the authors' budget or number of runs** (theirs: 10 runs, "
                       "docs/gym.md): compare the directions, not the digits.", ""]  # fmt: skip
         lines += task_table(summary)
-        quality = summary["algos"]["airl"].get("reward_quality")
+        quality = summary.algos["airl"].reward_quality
         if quality is not None:
             truth = quality["true_reward"]
             cover = quality["coverage"]
@@ -591,9 +625,9 @@ def render_report(
         if note:
             lines += ["", note]
         lines += [""]
-        figures = ["irl_returns", "alignment", "rl_returns"] if summary["discrete"] else [
+        figures = ["irl_returns", "alignment", "rl_returns"] if summary.discrete else [
             "irl_returns", "rl_returns"]  # fmt: skip
-        if summary.get("reward_map") is not None:
+        if summary.reward_map is not None:
             figures.append("reward_map")
         lines += [f"![{name}]({where}{FIGURES[name]})" for name in figures]
     return "\n".join(lines) + "\n"
@@ -602,7 +636,7 @@ def render_report(
 # --------------------------------------------------------------------------- figures
 
 
-def draw_figures(root: Path, summary: dict[str, Any]) -> None:
+def draw_figures(root: Path, summary: TaskSummary) -> None:
     """IRL-phase returns, alignment (discrete tasks) and RL-phase returns, mean ± std bands."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
@@ -614,13 +648,8 @@ def draw_figures(root: Path, summary: dict[str, Any]) -> None:
         FigureCanvasAgg(fig)
         return fig, fig.add_subplot()
 
-    def band(axes: Any, x: Sequence[float], curve: dict[str, Any], label: str, color: str) -> None:
-        mean, std = np.asarray(curve["mean"]), np.asarray(curve["std"])
-        axes.plot(x, mean, color=color, label=label)
-        axes.fill_between(x, mean - std, mean + std, color=color, alpha=0.2)
-
     def save(fig: Figure, axes: Any, name: str, title: str, xlabel: str, ylabel: str) -> None:
-        axes.set(title=f"{summary['env']}: {title}", xlabel=xlabel, ylabel=ylabel)
+        axes.set(title=f"{summary.env}: {title}", xlabel=xlabel, ylabel=ylabel)
         axes.grid(alpha=0.3)
         axes.legend(fontsize="small")
         fig.tight_layout()
@@ -631,28 +660,31 @@ def draw_figures(root: Path, summary: dict[str, Any]) -> None:
 
     def lines(axes: Any) -> None:
         for value, label, style in (
-            (summary["expert_return"], "expert", "--"),
-            (summary["random_return"], "random", ":"),
+            (summary.expert_return, "expert", "--"),
+            (summary.random_return, "random", ":"),
         ):
             if math.isfinite(value):
                 axes.axhline(value, color="grey", linestyle=style, linewidth=1, label=label)
 
-    runs = f"mean ± std of {summary['runs']} runs"
+    runs = f"mean ± std of {summary.runs} runs"
     fig, axes = figure()
     for algo in ALGOS:
-        curves = summary["algos"][algo]["curves"]
-        band(axes, curves["irl_epochs"], curves["irl_return"], LABELS[algo], COLORS[algo])
+        found = summary.algos[algo]
+        band(axes, found.irl_epochs, found.irl_return.to_json(), LABELS[algo],
+             color=COLORS[algo], alpha=0.2)  # fmt: skip
     lines(axes)
     save(fig, axes, "irl_returns", f"IRL-phase return ({runs})", "epoch", "return")
 
-    if summary["discrete"]:
+    if summary.discrete:
         fig, axes = figure()
         for algo in ALGOS:
-            curves = summary["algos"][algo]["curves"]
-            band(axes, curves["irl_epochs"], curves["alignment"], LABELS[algo], COLORS[algo])
-        baselines = summary["algos"]["hairl"]["baselines"]
+            found = summary.algos[algo]
+            assert found.alignment is not None  # a discrete task's
+            band(axes, found.irl_epochs, found.alignment.to_json(), LABELS[algo],
+                 color=COLORS[algo], alpha=0.2)  # fmt: skip
+        baselines = summary.algos["hairl"].baselines
         for name, style in (("bc", "-."), ("majority", ":")):
-            value = baselines[name]["mean"]
+            value = baselines[name].mean
             axes.axhline(
                 value, color="grey", linestyle=style, linewidth=1, label=f"{name} {value:.3f}"
             )
@@ -660,8 +692,9 @@ def draw_figures(root: Path, summary: dict[str, Any]) -> None:
 
     fig, axes = figure()
     for reward in REWARDS:
-        source = summary["env_reward"] if reward == "env" else summary["algos"][reward]
-        curve = source["curves"]["rl"]
-        band(axes, curve["timesteps"], curve, LABELS[reward], COLORS[reward])
+        curve = summary.env_reward.rl_curve if reward == "env" else summary.algos[reward].rl_curve
+        assert curve.timesteps is not None  # an RL curve's
+        band(axes, curve.timesteps, curve.to_json(), LABELS[reward], color=COLORS[reward],
+             alpha=0.2)  # fmt: skip
     lines(axes)
     save(fig, axes, "rl_returns", f"RL-phase true return ({runs})", "timesteps", "return")

@@ -1,5 +1,5 @@
-"""The study (:func:`pokerirl.study.run_study`, quick preset) on built-in synthetic data, then
-the Gymnasium study's quick preset on the shipped MountainCar expert.
+"""The poker study (:func:`pokerirl.studies.poker.run_study`, quick preset) on built-in
+synthetic data, then the Gymnasium study's quick preset on the shipped MountainCar expert.
 
 1. ``synth``: a month of heads-up 10-20 hands between two scripted players, in IRC format
    (written once; a rerun reuses it, so the study's stages resume);
@@ -23,10 +23,10 @@ from typing import TYPE_CHECKING
 
 from pokerirl.execution import Backend
 from pokerirl.game.synth import write_synthetic_month
-from pokerirl.study import PRESETS, StudyConfig, StudyResult, run_study
+from pokerirl.studies.poker import PRESETS, StudyConfig, StudyResult, run_study
 
 if TYPE_CHECKING:  # the gym layer loads only when its demo runs
-    from pokerirl.gym.study import GymStudyResult
+    from pokerirl.studies.gym import GymStudyResult
 
 SYNTH_FOLDER = "irc"
 GYM_FOLDER = "gym"
@@ -79,7 +79,7 @@ def run_gym_demo(
     """The Gymnasium study's quick preset (MountainCar-v0: AIRL and H-AIRL, then DQN on each
     reward and on the env reward, 3 runs each) into ``out/gym``."""
     from pokerirl.gym.presets import PRESETS as GYM_PRESETS
-    from pokerirl.gym.study import run_gym_study
+    from pokerirl.studies.gym import run_gym_study
 
     return run_gym_study(
         Path(out) / GYM_FOLDER,

@@ -15,6 +15,8 @@ import dataclasses
 from dataclasses import dataclass
 from typing import Any
 
+from pokerirl.studies.common import StudyError, with_overrides
+
 AGENT_KINDS = ("dqn", "airl_dqn", "hairl_dqn")  # report.json names
 IRL_ALGOS = ("airl", "hairl")
 BUILT_INS = ("random", "call", "raise")
@@ -57,10 +59,6 @@ def irl_overrides(settings: str, algo: str) -> dict[str, object]:
     if settings == "ours":
         return {}
     return {**AUTHORS_IRL, **(AUTHORS_HAIRL if algo == "hairl" else {})}
-
-
-class StudyError(ValueError):
-    """Bad study input or a study folder that does not fit; the message is one line."""
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -186,8 +184,6 @@ PRESETS: dict[str, StudyConfig] = {
 
 def preset(name: str, **overrides: Any) -> StudyConfig:
     """The preset ``name`` with ``overrides`` (None values ignored)."""
-    if name not in PRESETS:
-        raise StudyError(f"unknown preset {name!r}; choose one of {', '.join(PRESETS)}")
     changes = {k: v for k, v in overrides.items() if v is not None}
     if "seeds" in changes:
         changes["seeds"] = tuple(changes["seeds"])
@@ -195,25 +191,4 @@ def preset(name: str, **overrides: Any) -> StudyConfig:
         changes["seeds"] = tuple(range(changes["runs"]))  # experiment k: IRL run k, seed k
     if "reward_sources" in changes:
         changes["reward_sources"] = tuple(tuple(pair) for pair in changes["reward_sources"])
-    try:
-        return dataclasses.replace(PRESETS[name], **changes)
-    except TypeError as error:
-        raise StudyError(f"bad study setting: {error}") from None
-
-
-def parse_seeds(text: str) -> tuple[int, ...]:
-    """``"0-19"``, ``"0,2,5"`` or ``"0-3,7"`` as seeds.
-
-    >>> parse_seeds("0-3,7")
-    (0, 1, 2, 3, 7)
-    """
-    seeds: list[int] = []
-    try:
-        for part in text.split(","):
-            low, _, high = part.strip().partition("-")
-            seeds.extend(range(int(low), int(high or low) + 1))
-    except ValueError:
-        raise StudyError(f"bad --seeds {text!r}; write e.g. 0-19 or 0,2,5") from None
-    if not seeds:
-        raise StudyError(f"bad --seeds {text!r}; no seeds")
-    return tuple(seeds)
+    return with_overrides(PRESETS, name, **changes)

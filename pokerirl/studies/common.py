@@ -1,0 +1,92 @@
+"""What every study shares: its error, presets with overrides, ``mean_std``, reading the units'
+JSONL metrics, mean ± std bands and Markdown tables.
+
+>>> mean_std([1.0, 3.0])
+{'mean': 2.0, 'std': 1.4142135623730951}
+>>> print("\\n".join(markdown_table(["", "ours"], [["AIRL", "0.5"]])))
+| | ours |
+|---|---|
+| AIRL | 0.5 |
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+from collections.abc import Iterable, Mapping, Sequence
+from pathlib import Path
+from typing import Any, TypeVar
+
+import numpy as np
+
+from pokerirl.errors import PokerIRLError
+
+# The files the studies read in their units' folders and write in their own.
+METRICS_JSONL = "metrics.jsonl"  # an IRL run's epochs, an RL run's or agent's evaluations
+BASELINES_JSON = "baselines.json"  # an IRL run's baselines
+SUMMARY_JSON = "summary.json"  # a gym irl folder's summary, and the gym study's own
+REPORT_MD, REPORT_JSON = "report.md", "report.json"
+
+Preset = TypeVar("Preset")
+
+
+class StudyError(PokerIRLError, ValueError):
+    """Bad study settings, or a study folder that does not fit them; the message is one line."""
+
+
+def with_overrides(presets: Mapping[str, Preset], name: str, **overrides: Any) -> Preset:
+    """The preset ``name`` of ``presets`` (frozen dataclasses) with ``overrides`` (None values
+    ignored); one-line :class:`StudyError` for an unknown name or a bad value."""
+    if name not in presets:
+        raise StudyError(f"unknown preset {name!r}; choose one of {', '.join(presets)}")
+    changes = {key: value for key, value in overrides.items() if value is not None}
+    try:
+        return dataclasses.replace(presets[name], **changes)  # type: ignore[type-var]
+    except TypeError as error:
+        raise StudyError(f"bad study setting: {error}") from None
+    except ValueError as error:  # the preset's own checks
+        raise StudyError(str(error)) from None
+
+
+def mean_std(
+    values: Sequence[float] | Sequence[Sequence[float]] | np.ndarray, axis: int | None = None
+) -> dict[str, Any]:
+    """Mean and sample std (ddof 1; 0 for one value), as floats, or as lists along ``axis``."""
+    array = np.asarray(values, dtype=float)
+    count = array.shape[0] if axis == 0 else array.size
+    mean = array.mean(axis=axis)
+    std = array.std(axis=axis, ddof=1) if count > 1 else np.zeros_like(mean)
+    if axis is None:
+        return {"mean": float(mean), "std": float(std)}
+    return {"mean": mean.tolist(), "std": std.tolist()}
+
+
+def read_jsonl(path: Path) -> list[dict[str, Any]]:
+    """The JSON objects of a ``metrics.jsonl`` (blank lines skipped)."""
+    return [json.loads(line) for line in path.read_text().splitlines() if line.strip()]
+
+
+def band(
+    axes: Any,
+    x: Sequence[float] | np.ndarray,
+    curve: Mapping[str, Any],
+    label: str,
+    *,
+    color: str | None = None,
+    alpha: float = 0.25,
+) -> None:
+    """``curve["mean"]`` as a line and ± ``curve["std"]`` as a shaded band around it."""
+    mean, std = np.asarray(curve["mean"]), np.asarray(curve["std"])
+    # No color: matplotlib's cycles choose (a color=None would paint every band C0).
+    colored = {} if color is None else {"color": color}
+    axes.plot(x, mean, label=label, **colored)
+    axes.fill_between(x, mean - std, mean + std, alpha=alpha, **colored)
+
+
+def markdown_table(head: Sequence[str], rows: Iterable[Sequence[str]]) -> list[str]:
+    """The lines of a Markdown table; an empty cell is written ``| |``."""
+
+    def line(cells: Sequence[str]) -> str:
+        return "|" + "|".join(f" {cell} " if cell else " " for cell in cells) + "|"
+
+    return [line(head), "|" + "---|" * len(head), *(line(row) for row in rows)]

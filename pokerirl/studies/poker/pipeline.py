@@ -1,0 +1,567 @@
+"""The study pipeline: ingest -> irl -> agents -> tournament [-> authors] -> panel -> report.
+
+The ``authors`` stage (the authors' tournament protocol) runs when the settings ask for it
+(``authors_repeats`` > 0: the ``authors`` preset).
+
+Each stage is units of :mod:`pokerirl.store`, each with its own record: the table
+(``expert.parquet``, its record ``expert.unit.json``), the IRL runs (``irl/<algo>/run-<k>``, or
+``irl/<algo>`` for one run), the agent seeds, the tournament seeds and experiments. A stage's
+result (what the report reads) is recomputed from its units' outputs on every run. A rerun
+reuses every unit finished with the same settings and inputs, runs the missing ones, and
+refuses, in one line naming it, a unit made with other settings or inputs unless
+``overwrite``: then that unit is recomputed, and so is every unit that reads it (their inputs
+hold its digest).
+
+A study folder of an older pokerirl holds ``stages/<stage>.json`` records instead of the
+table's and the single IRL run's own: those units are reused when that stage record finished
+with the same settings, and refused in one line naming it when not.
+
+Every call that trains or plays goes through :class:`Execution`, the one place that decides
+where units run (processes now; the execution layer's backends later).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from pokerirl.execution import Backend
+from pokerirl.store import Fate, Layout, LegacyRecord, Unit, check, digest, fingerprint, writing
+from pokerirl.studies.common import (
+    BASELINES_JSON,
+    METRICS_JSONL,
+    mean_std,
+    read_jsonl,
+)
+from pokerirl.studies.poker.config import (
+    AGENT_KINDS,
+    BUILT_INS,
+    IRL_ALGOS,
+    StudyConfig,
+    StudyError,
+    irl_overrides,
+)
+from pokerirl.studies.poker.results import (
+    AgentsResult,
+    Curve,
+    HandsCurve,
+    Ingested,
+    IRLResult,
+    IRLRuns,
+    Panel,
+    Reference,
+    Replaced,
+    Spread,
+    Table1Line,
+    TrainingLength,
+)
+
+if TYPE_CHECKING:  # the layers below load lazily: ``pokerirl report`` needs none of them
+    from pokerirl.agents.train import TrainConfig
+    from pokerirl.irl.config import AIRLConfig
+    from pokerirl.tournaments import TournamentReport
+
+STAGES = ("ingest", "irl", "agents", "tournament", "panel", "report")
+AUTHORS_STAGES = ("ingest", "irl", "agents", "tournament", "authors", "panel", "report")
+TABLE1_NAMES = ("hairl_dqn", "airl_dqn")  # the matchups against the sparse DQN
+PLAYING_HANDS = 20_000  # duplicate hands of the playing checkpoint against random (authors)
+STAGES_FOLDER = "stages"  # where an older pokerirl kept its stage records
+TABLE = "expert.parquet"
+AGENT_FOLDERS = {"dqn": "dqn", "airl_dqn": "airl-dqn", "hairl_dqn": "hairl-dqn"}
+SHORT_DQN = "dqn-short"  # sparse DQN at the paper's training length
+
+Say = Callable[[str], None]
+
+
+@dataclass(frozen=True)
+class Execution:
+    """Where units run. The single place that calls the training and playing entry points, so
+    a backend (local processes or a Ray cluster) is threaded through here and nowhere else."""
+
+    backend: Backend = field(default_factory=Backend)
+    progress: bool = False
+    overwrite: bool = False  # recompute units made with other settings instead of refusing
+
+    def train_runs(
+        self, table: Path, out: Path, *, algo: str, runs: int, config: AIRLConfig
+    ) -> None:
+        from pokerirl.poker.train import train_runs
+
+        train_runs(
+            table,
+            out,
+            runs=runs,
+            algo=algo,
+            config=config,
+            progress=self.progress,
+            overwrite=self.overwrite,
+            backend=self.backend,
+        )
+
+    def train_seeds(self, out: Path, config: TrainConfig, seeds: Sequence[int]) -> None:
+        from pokerirl.agents.train import train_seeds
+
+        train_seeds(out, config, list(seeds), backend=self.backend, progress=self.progress,
+                    overwrite=self.overwrite)  # fmt: skip
+
+    def tournament(
+        self,
+        matchups: Sequence[tuple[str, str]],
+        *,
+        hands: int,
+        seeds: Sequence[int],
+        out: Path,
+        duplicate: bool,
+    ) -> TournamentReport:
+        from pokerirl.tournaments import run_tournament
+
+        return run_tournament(
+            matchups,
+            hands=hands,
+            seeds=seeds,
+            out=out,
+            duplicate=duplicate,
+            overwrite=self.overwrite,
+            backend=self.backend,
+            progress=self.progress,
+        )
+
+    def authors_tournament(
+        self,
+        matchups: Sequence[tuple[str, str]],
+        *,
+        names: Sequence[str],
+        experiments: Sequence[int],
+        repeats: int,
+        games: int,
+        out: Path,
+        duplicate: dict[str, float],
+    ) -> dict[str, Any]:
+        from pokerirl.tournaments import run_authors_tournament
+
+        return run_authors_tournament(
+            matchups,
+            names=names,
+            experiments=experiments,
+            repeats=repeats,
+            games=games,
+            out=out,
+            duplicate=duplicate,
+            overwrite=self.overwrite,
+            backend=self.backend,
+            progress=self.progress,
+        )
+
+
+# --------------------------------------------------------------------------- the study
+
+
+def stage_names(config: StudyConfig) -> tuple[str, ...]:
+    """The stages a study of ``config`` runs, in order."""
+    return AUTHORS_STAGES if config.authors_repeats else STAGES
+
+
+def _non_default(config: StudyConfig, *names: str) -> dict[str, Any]:
+    """The settings among ``names`` that differ from their defaults: the stage records of
+    studies made before they existed stay valid."""
+    import dataclasses
+
+    defaults = {f.name: f.default for f in dataclasses.fields(StudyConfig)}
+    return {
+        name: getattr(config, name) for name in names if getattr(config, name) != defaults[name]
+    }
+
+
+def _sources_fingerprint(sources: Sequence[str | os.PathLike[str]]) -> dict[str, Any]:
+    """Every source file's path, size and modification time (cheap on a large corpus)."""
+    files = []
+    for source in sources:
+        path = Path(source)
+        if not path.exists():
+            raise StudyError(f"{path}: no such file or folder")
+        found = [path] if path.is_file() else sorted(p for p in path.rglob("*") if p.is_file())
+        for item in found:
+            stat = item.stat()
+            files.append([str(item.resolve()), stat.st_size, stat.st_mtime_ns])
+    return {"files": files}
+
+
+@dataclass(frozen=True)
+class Study:
+    """A study folder, its settings, and how to run units."""
+
+    root: Path
+    config: StudyConfig
+    execution: Execution
+    overwrite: bool = False
+    say: Say = lambda message: None
+
+    def step(self, name: str) -> None:
+        """Say that stage ``name`` starts: ``[2/6] irl``."""
+        names = stage_names(self.config)
+        self.say(f"[{names.index(name) + 1}/{len(names)}] {name}")
+
+    def legacy(self, name: str, settings: dict[str, Any]) -> LegacyRecord:
+        """The record an older pokerirl kept for stage ``name``, with the identity it wrote."""
+        path = self.root / STAGES_FOLDER / f"{name}.json"
+        return LegacyRecord(path=path, identity={"stage": name, "settings": settings})
+
+
+# --------------------------------------------------------------------------- stages
+
+
+def ingest_stage(study: Study, sources: Sequence[str | os.PathLike[str]]) -> Ingested:
+    """The table and its summary: a ``file`` unit, ingested in this process."""
+    from pokerirl.datasets.ingest import ingest, summary_path
+
+    study.step("ingest")
+    sources_print = _sources_fingerprint(sources)
+    legacy = study.legacy("ingest", {"sources": sources_print})
+    unit: Unit[None] = Unit(
+        key="ingest",
+        target=study.root / TABLE,
+        layout=Layout.FILE,
+        config={"unit": "poker-study-ingest", **sources_print},
+        legacy=(legacy,),
+    )
+    if check(unit, overwrite=study.overwrite).fate is Fate.REUSED:
+        study.say("      the table is finished already, reused")
+    else:
+        with writing(unit) as folder:
+            ingest(sources, folder / TABLE, progress=study.execution.progress)
+    summary = json.loads(summary_path(study.root / TABLE).read_text())
+    return Ingested(summary=summary, fingerprint=fingerprint(legacy.identity))
+
+
+def run_paths(out: Path, runs: int) -> list[Path]:
+    """The run folders ``train_runs`` writes: ``out`` itself for one run, else ``run-<k>``."""
+    return [out] if runs == 1 else [out / f"run-{k}" for k in range(runs)]
+
+
+def summarize_irl(out: Path, runs: int) -> IRLRuns:
+    """Per-epoch mean/std over runs of the curves the report draws, final values per run,
+    mean action distributions and the baselines."""
+    metrics = [read_jsonl(p / METRICS_JSONL) for p in run_paths(out, runs)]
+    found_baselines = [json.loads((p / BASELINES_JSON).read_text()) for p in run_paths(out, runs)]
+    epochs = min(len(m) for m in metrics)
+    curves: dict[str, Curve] = {}
+    for key in ("val_alignment", "disc_acc_expert", "disc_acc_policy", "val_reward_alignment"):
+        if key in metrics[0][0]:
+            curves[key] = Curve.of([[line[key] for line in run[:epochs]] for run in metrics])
+    dists: dict[str, Curve] = {}
+    for key in ("val_expert_dist", "val_policy_dist"):
+        if key in metrics[0][-1]:
+            dists[key] = Curve.of([run[epochs - 1][key] for run in metrics])
+    return IRLRuns(
+        runs=runs,
+        epochs=epochs,
+        curves=curves,
+        final={key: Spread.of([run[epochs - 1][key] for run in metrics]) for key in curves},
+        action_dist=dists,
+        baselines={key: Spread.of([b[key] for b in found_baselines]) for key in found_baselines[0]},
+    )
+
+
+def irl_stage(study: Study, ingested: Ingested) -> IRLResult:
+    """Each algorithm's IRL runs (``run-<k>`` units, or one run as ``irl/<algo>`` itself), or
+    the reward that replaces them; ``ingested``: the stage before, for an older study's
+    ``stages/irl.json``."""
+    from pokerirl.irl import load_config
+
+    config = study.config
+    table = study.root / TABLE
+    stage = {
+        "runs": config.runs,
+        "epochs": config.irl_epochs,
+        "seed": config.irl_seed,
+        "upstream": ingested.fingerprint,
+        **_non_default(config, "irl_settings"),
+    }
+    if config.reward_sources:
+        stage["reward_sources"] = reward_source_prints(config)
+    legacy = study.legacy("irl", stage)
+    study.step("irl")
+    found: IRLResult = {}
+    for algo in IRL_ALGOS:
+        out = study.root / "irl" / algo
+        source = config.reward_source(algo)
+        if source is not None:
+            found[algo] = replaced_irl(study, algo, source, out)
+            continue
+        chosen = {"epochs": config.irl_epochs, "seed": config.irl_seed}
+        overrides = {
+            **irl_overrides(config.irl_settings, algo),
+            **{k: v for k, v in chosen.items() if v is not None},
+        }
+        settings = load_config(algo, overrides=overrides)
+        study.say(f"      {algo}: {config.runs} runs -> {out}")
+        out.parent.mkdir(parents=True, exist_ok=True)
+        if config.runs == 1:
+            single_run(study, algo, settings, out, legacy)
+        else:  # run-<k> units, each with its record
+            study.execution.train_runs(table, out, algo=algo, runs=config.runs, config=settings)
+        found[algo] = summarize_irl(out, config.runs)
+    return found
+
+
+def single_run(
+    study: Study, algo: str, settings: AIRLConfig, out: Path, legacy: LegacyRecord
+) -> None:
+    """One IRL run into ``out`` itself: a ``folder`` unit trained in this process (an older
+    pokerirl's has no record of its own: its ``stages/irl.json`` vouches for it)."""
+    from pokerirl.irl.run import TIMINGS_FILE
+    from pokerirl.poker import read_table
+    from pokerirl.poker.train import train_table_into
+
+    table = study.root / TABLE
+    unit: Unit[None] = Unit(
+        key=f"{algo} run",
+        target=out,
+        config={"unit": "poker-study-irl", "algo": algo, "settings": settings.to_dict()},
+        inputs={"table": digest(table.read_bytes())},
+        legacy=(legacy,),
+    )
+    if check(unit, overwrite=study.overwrite).fate is Fate.REUSED:
+        return
+    with writing(unit, unhashed={TIMINGS_FILE}) as folder:
+        train_table_into(read_table(table), folder, algo=algo, config=settings,
+                         progress=study.execution.progress, table=table)  # fmt: skip
+
+
+def reward_source_prints(config: StudyConfig) -> dict[str, str]:
+    """The fingerprint of each reward that replaces IRL runs; one-line StudyError if bad."""
+    from pokerirl.agents.rewards import reward_source_fingerprint
+
+    try:
+        return {algo: reward_source_fingerprint(spec) for algo, spec in config.reward_sources}
+    except ValueError as error:
+        raise StudyError(str(error)) from None
+
+
+def replaced_irl(study: Study, algo: str, source: str, out: Path) -> Replaced:
+    """An algorithm whose IRL runs a given reward replaces: its card over the whole table."""
+    from pokerirl.agents.reward_card import CardStates, reward_card, write_card
+    from pokerirl.agents.rewards import load_reward_source
+
+    study.say(f"      {algo}: replaced by {source}")
+    card = reward_card(load_reward_source(source), CardStates.from_table(study.root / TABLE))
+    write_card(card, out)
+    return Replaced(source=source)
+
+
+def _final_vs_random(agent_set: Path, seeds: Sequence[int]) -> list[float]:
+    return [
+        read_jsonl(agent_set / f"seed-{s}" / METRICS_JSONL)[-1]["eval"]["random"]["mbb_per_hand"]
+        for s in seeds
+    ]
+
+
+def _curve(agent_set: Path, seeds: Sequence[int]) -> HandsCurve:
+    lines = [read_jsonl(agent_set / f"seed-{s}" / METRICS_JSONL) for s in seeds]
+    points = min(len(line) for line in lines)
+    values = [[line[i]["eval"]["random"]["mbb_per_hand"] for i in range(points)] for line in lines]
+    return HandsCurve(hands=[lines[0][i]["hands"] for i in range(points)],
+                      **mean_std(values, axis=0))  # fmt: skip
+
+
+def _playing_vs_random(agent_set: Path, seeds: Sequence[int]) -> list[float]:
+    """Each seed's playing checkpoint against random, over duplicate hands (the authors'
+    preset plays its kept model, which its last evaluation did not see)."""
+    from pokerirl.agents import resolve_agent
+    from pokerirl.agents.train import TrainConfig
+    from pokerirl.game import make_agent, play_match
+
+    return [
+        play_match(resolve_agent(str(agent_set / f"seed-{s}")), make_agent("random"),
+                   hands=PLAYING_HANDS, seed=TrainConfig.eval_seed).mbb_per_hand
+        for s in seeds
+    ]  # fmt: skip
+
+
+def agents_stage(study: Study, irl: IRLResult) -> AgentsResult:
+    """Every agent kind's seeds (units of ``agents.train``), learned-reward seed s on IRL run
+    s mod runs of ``irl``'s algorithm; then their results against random, read again."""
+    from pokerirl.agents.train import TrainConfig, agent_preset
+    from pokerirl.game import make_agent, play_match
+
+    config = study.config
+    folder = study.root / "agents"
+    sets = {kind: folder / name for kind, name in AGENT_FOLDERS.items()}
+    short = folder / SHORT_DQN
+    short_is_long = config.short_agent_hands == config.agent_hands
+    # The authors' evaluations are 1,000 games; the references are measured as the agents are.
+    authors = config.agent_preset == "authors"
+    reference_hands = PLAYING_HANDS if authors else config.eval_hands
+
+    def train(out: Path, hands: int, algo: str | None) -> None:
+        base = agent_preset(
+            config.agent_preset,
+            hands=hands,
+            seed=config.seeds[0],
+            eval_every=min(config.eval_every, hands),
+            eval_hands=config.eval_hands,
+        )
+        if algo is None:
+            study.execution.train_seeds(out, base, config.seeds)
+            return
+        learned = replace(base, reward="learned", reward_transform=config.reward_transform)
+        source = config.reward_source(algo)
+        if source is not None:
+            study.execution.train_seeds(out, replace(learned, reward_run=source), config.seeds)
+            return
+        runs = run_paths(study.root / "irl" / algo, config.runs)
+        # Seed s learns from IRL run s mod runs: one call per run, its seeds side by side.
+        for k, run in enumerate(runs):
+            group = [s for s in config.seeds if s % config.runs == k]
+            if group:
+                study.execution.train_seeds(out, replace(learned, reward_run=str(run)), group)
+
+    study.step("agents")
+    for kind, out in sets.items():
+        algo = None if kind == "dqn" else kind.removesuffix("_dqn")
+        study.say(
+            f"      {kind}: {len(config.seeds)} seeds x {config.agent_hands:,} hands -> {out}"
+        )
+        train(out, config.agent_hands, algo)
+    if not short_is_long:
+        study.say(
+            f"      dqn (short): {len(config.seeds)} seeds x {config.short_agent_hands:,} hands"
+        )
+        train(short, config.short_agent_hands, None)
+    references = {}
+    for name in ("call", "raise"):
+        result = play_match(
+            make_agent(name), make_agent("random"), hands=reference_hands,
+            seed=TrainConfig.eval_seed,
+        )  # fmt: skip
+        references[name] = Reference(mbb_per_hand=result.mbb_per_hand, std_error=result.std_error)
+    return AgentsResult(
+        final_vs_random={
+            kind: _final_vs_random(out, config.seeds) for kind, out in sets.items()
+        },
+        curves={kind: _curve(out, config.seeds) for kind, out in sets.items()},
+        training_length=TrainingLength(
+            agent_hands=config.agent_hands,
+            short_agent_hands=config.short_agent_hands,
+            long=_final_vs_random(sets["dqn"], config.seeds),
+            short=_final_vs_random(sets["dqn"] if short_is_long else short, config.seeds),
+        ),
+        references=references,
+        playing_vs_random={
+            kind: _playing_vs_random(out, config.seeds) for kind, out in sets.items()
+        } if authors else None,
+        playing_hands=PLAYING_HANDS if authors else None,
+    )  # fmt: skip
+
+
+def _table1_line(matchup: Any) -> Table1Line:
+    line = matchup.pooled
+    return Table1Line(
+        mbb_per_hand=line.mbb_per_hand,
+        std_error=line.std_error,
+        p_value=line.p_value,
+        p_bonferroni=line.p_value_bonferroni,
+        p_holm=line.p_value_holm,
+        n=line.n,
+        per_seed=[s.mbb_per_hand for s in matchup.seeds],
+        seeds_significant_bonferroni=matchup.seeds_significant_bonferroni,
+    )
+
+
+def tournament_stage(study: Study, agents: AgentsResult) -> dict[str, Table1Line]:
+    """Table 1: each learned-reward DQN against the sparse one (``agents``: the stage before,
+    whose units the tournament's seeds read)."""
+    config = study.config
+    folder = study.root / "agents"
+    baseline = str(folder / AGENT_FOLDERS["dqn"])
+    study.step("tournament")
+    report = study.execution.tournament(
+        [(str(folder / AGENT_FOLDERS[name]), baseline) for name in TABLE1_NAMES],
+        hands=config.hands,
+        seeds=config.seeds,
+        out=study.root / "tournament",
+        duplicate=config.duplicate,
+    )
+    return {
+        f"{name}_vs_dqn": _table1_line(matchup)
+        for name, matchup in zip(TABLE1_NAMES, report.matchups, strict=True)
+    }
+
+
+def authors_stage(
+    study: Study, agents: AgentsResult, tournament: dict[str, Table1Line]
+) -> dict[str, dict[str, Any]]:
+    """The authors' tournament: for each experiment (seed) k, 50 x 1,000 non-duplicate games
+    of each learned-reward DQN against the sparse one, seats drawn per game. Each matchup's
+    summary is the tournaments layer's own (``AuthorsMatchup.summary``), with every repeat."""
+    config = study.config
+    folder = study.root / "agents"
+    baseline = str(folder / AGENT_FOLDERS["dqn"])
+    names = [f"{name}_vs_dqn" for name in TABLE1_NAMES]
+    study.step("authors")
+    found = study.execution.authors_tournament(
+        [(str(folder / AGENT_FOLDERS[name]), baseline) for name in TABLE1_NAMES],
+        names=names,
+        experiments=config.seeds,
+        repeats=config.authors_repeats,
+        games=config.authors_games,
+        out=study.root / "authors",
+        duplicate={name: tournament[name].mbb_per_hand for name in names},
+    )
+    return {
+        name: {
+            **matchup.summary(),
+            "repeats_by_experiment": [list(e.repeats_mbb) for e in matchup.experiments],
+        }
+        for name, matchup in found.items()
+    }
+
+
+def reward_cards(root: Path, config: StudyConfig) -> dict[str, Any]:
+    """Each algorithm's reward cards (its runs' ``reward_card.json``), summarized over runs;
+    None for an algorithm without cards (runs of an older pokerirl, or a table without
+    cards)."""
+    from pokerirl.agents.reward_card import CARD_FIGURE, card_summary, read_card
+
+    found: dict[str, Any] = {}
+    for algo in IRL_ALGOS:
+        out = root / "irl" / algo
+        folders = [out] if config.reward_source(algo) else run_paths(out, config.runs)
+        cards = [card for folder in folders if (card := read_card(folder)) is not None]
+        found[algo] = None
+        if cards:
+            figure = (folders[0] / CARD_FIGURE).relative_to(root)
+            found[algo] = {**card_summary(cards), "figure": str(figure)}
+    return found
+
+
+def panel_agents(root: Path) -> list[tuple[str, str]]:
+    """(name, spec) of every panel member: the agent kinds, then the built-ins."""
+    kinds = [(kind, str(root / "agents" / AGENT_FOLDERS[kind])) for kind in AGENT_KINDS]
+    return kinds + [(name, name) for name in BUILT_INS]
+
+
+def panel_stage(study: Study, agents: AgentsResult) -> Panel:
+    """Every panel member against every other, once per pair."""
+    config = study.config
+    members = panel_agents(study.root)
+    study.step("panel")
+    pairs = [(i, j) for i in range(len(members)) for j in range(i + 1, len(members))]
+    report = study.execution.tournament(
+        [(members[i][1], members[j][1]) for i, j in pairs],
+        hands=config.panel_hands,
+        seeds=config.seeds,
+        out=study.root / "panel" / "tournament",
+        duplicate=config.duplicate,
+    )
+    size = len(members)
+    mbb: list[list[float | None]] = [[None] * size for _ in range(size)]
+    se: list[list[float | None]] = [[None] * size for _ in range(size)]
+    for (i, j), matchup in zip(pairs, report.matchups, strict=True):
+        mbb[i][j], mbb[j][i] = matchup.pooled.mbb_per_hand, -matchup.pooled.mbb_per_hand
+        se[i][j] = se[j][i] = matchup.pooled.std_error
+    return Panel(agents=[name for name, _ in members], mbb_per_hand=mbb, std_error=se)
