@@ -16,7 +16,6 @@ from pokerirl.agents.train import (
     TrainConfig,
     agent_preset,
     train_agent,
-    train_agent_metrics,
 )
 
 torch.set_num_threads(1)
@@ -63,7 +62,7 @@ def test_the_files_written_read_back_typed(tmp_path: Path, protocol: str) -> Non
             hands=256, seed=0, eval_every=128, eval_hands=100, opponent="call",
             dqn=DQNConfig(concurrent_hands=64, hidden=(8,)),
         )  # fmt: skip
-    typed = train_agent_metrics(tmp_path / "agent", config)
+    typed = train_agent(tmp_path / "agent", config)
     assert isinstance(typed, MetricsLine)
     text = (tmp_path / "agent" / "metrics.jsonl").read_text()
     lines = [MetricsLine.from_json(json.loads(line)) for line in text.splitlines()]
@@ -76,5 +75,5 @@ def test_the_files_written_read_back_typed(tmp_path: Path, protocol: str) -> Non
     timings = json.loads((tmp_path / "agent" / "timings.json").read_text())
     assert Timings.from_json(timings).to_json() == timings
     assert [h for h, _ in Timings.from_json(timings).evaluations] == [m.hands for m in lines]
-    # The untyped entry point returns the same line, as JSON; a rerun reuses the agent.
+    # A rerun reuses the agent.
     assert train_agent(tmp_path / "agent", config) is None

@@ -354,9 +354,7 @@ def reward_run_fingerprint(run_dir: str | os.PathLike[str]) -> str:
     return reward_source_fingerprint(run_dir)
 
 
-def load_reward_fn(
-    run_dir: str | os.PathLike[str], transform: str = Transform.RAW
-) -> PokerReward:
+def load_reward_fn(run_dir: str | os.PathLike[str], transform: str = Transform.RAW) -> PokerReward:
     """f_θ of a run folder or ``authors:FILE``, after ``transform`` over the legal actions."""
     return TransformedReward(load_reward_source(run_dir), transform)
 
@@ -432,32 +430,15 @@ def train_agent(
     progress: bool = False,
     overwrite: bool = False,
     backend: Backend | None = None,
-) -> dict[str, Any] | None:
-    """Train one agent into the folder ``out``; return its last evaluation's metrics line
-    as JSON (:func:`train_agent_metrics` returns it typed), or None when ``out`` already
-    holds this agent (same fingerprint).
+) -> MetricsLine | None:
+    """Train one agent into the folder ``out``; return its last evaluation, or None when
+    ``out`` already holds this agent (same fingerprint).
 
     In learned mode, ``reward_fn`` is f_θ (then the agent trains in this process); without
     it, f_θ is loaded from ``config.reward_run``. ``out`` is replaced only at the end, whole;
     a finished agent of other settings is refused unless ``overwrite``. ``backend``: where
     it trains and on how many torch threads (default: here, on one).
     """
-    line = train_agent_metrics(
-        out, config, reward_fn=reward_fn, progress=progress, overwrite=overwrite, backend=backend
-    )
-    return None if line is None else line.to_json()
-
-
-def train_agent_metrics(
-    out: str | os.PathLike[str],
-    config: TrainConfig,
-    *,
-    reward_fn: RewardFn | None = None,
-    progress: bool = False,
-    overwrite: bool = False,
-    backend: Backend | None = None,
-) -> MetricsLine | None:
-    """:func:`train_agent`, its last evaluation typed."""
     return _train_many(
         {config.seed: (Path(out), config)},
         backend=backend or Backend(),
@@ -476,31 +457,13 @@ def train_seeds(
     progress: bool = False,
     overwrite: bool = False,
     backend: Backend | None = None,
-) -> dict[int, dict[str, Any] | None]:
+) -> dict[int, MetricsLine | None]:
     """Train one agent per seed into ``<out>/seed-<k>``, as units on ``backend`` (default:
     ``jobs`` local processes).
 
     Seeds already finished with the same settings are reused (their value is ``None``); the
-    others map to their last evaluation, as JSON (:func:`train_seeds_metrics`: typed). One
-    progress bar counts seeds.
+    others map to their last evaluation. One progress bar counts seeds.
     """
-    lines = train_seeds_metrics(
-        out, config, seeds, jobs=jobs, progress=progress, overwrite=overwrite, backend=backend
-    )
-    return {seed: None if line is None else line.to_json() for seed, line in lines.items()}
-
-
-def train_seeds_metrics(
-    out: str | os.PathLike[str],
-    config: TrainConfig,
-    seeds: list[int],
-    *,
-    jobs: int = 1,
-    progress: bool = False,
-    overwrite: bool = False,
-    backend: Backend | None = None,
-) -> dict[int, MetricsLine | None]:
-    """:func:`train_seeds`, the last evaluations typed."""
     if jobs < 1:
         raise ValueError(f"jobs must be at least 1, got {jobs}")
     out = Path(out)

@@ -3,8 +3,9 @@
 from __future__ import annotations
 
 import json
+from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING
 
 import typer
 
@@ -23,6 +24,9 @@ from pokerirl.cli.app import (
     usage_errors,
 )
 from pokerirl.errors import ADVICE, Remedy
+
+if TYPE_CHECKING:
+    from pokerirl.irl.records import EpochMetrics
 
 
 @app.command()
@@ -313,29 +317,43 @@ def train(
         fail(error_line(error, out))
     except KeyboardInterrupt:
         fail(INTERRUPTED, 130)
+    if summary.results:  # several runs: each one, named by its folder
+        for run in summary.results:
+            _echo_run(f"{algo} {Path(run.out).name}", Path(run.out), run.metrics,
+                      run.baselines, (run.train_rows, run.val_rows))  # fmt: skip
+    else:
+        _echo_run(algo, summary.out_dir, summary.metrics, summary.baselines,
+                  (summary.train_rows, summary.val_rows))  # fmt: skip
+    echo(f"{summary.samples_per_second:,.0f} samples/s; wrote {summary.out_dir}")
+
+
+def _echo_run(
+    name: str,
+    folder: Path,
+    metrics: Sequence[EpochMetrics],
+    baselines: Mapping[str, float],
+    rows: tuple[int, int],
+) -> None:
+    """One IRL run's last epoch, its baselines and its reward card, as ``pokerirl train``
+    prints them."""
     from pokerirl.agents.reward_card import read_card
 
-    single: dict[str, Any] = {"metrics": summary.metrics, "baselines": summary.baselines}
-    for run in summary.runs or (single,):
-        last, base = run["metrics"][-1], run["baselines"]
-        name = f"{algo} {Path(run['out']).name}" if "out" in run else algo
-        rows = run.get("train_rows", summary.train_rows), run.get("val_rows", summary.val_rows)
+    last = metrics[-1]
+    echo(
+        f"{name}: {len(metrics)} epochs on {rows[0]} rows; validation "
+        f"alignment {last['val_alignment']:.3f}, reward alignment "
+        f"{last['val_reward_alignment']:.3f}; baselines "
+        + ", ".join(f"{k} {v:.3f}" for k, v in baselines.items())
+        + f" on {rows[1]} rows"
+    )
+    card = read_card(folder)
+    if card is not None:
+        shares = ", ".join(f"{a} {v:.0%}" for a, v in card.argmax_share.items())
         echo(
-            f"{name}: {len(run['metrics'])} epochs on {rows[0]} rows; validation "
-            f"alignment {last['val_alignment']:.3f}, reward alignment "
-            f"{last['val_reward_alignment']:.3f}; baselines "
-            + ", ".join(f"{k} {v:.3f}" for k, v in base.items())
-            + f" on {rows[1]} rows"
+            f"  reward card: {card.prediction}. argmax over legal actions: {shares}; "
+            f"= expert {card.agree_expert:.1%}, = legal majority "
+            f"{card.agree_legal_majority:.1%} (reward_card.json)"
         )
-        card = read_card(run.get("out", summary.out_dir))
-        if card is not None:
-            shares = ", ".join(f"{a} {v:.0%}" for a, v in card.argmax_share.items())
-            echo(
-                f"  reward card: {card.prediction}. argmax over legal actions: {shares}; "
-                f"= expert {card.agree_expert:.1%}, = legal majority "
-                f"{card.agree_legal_majority:.1%} (reward_card.json)"
-            )
-    echo(f"{summary.samples_per_second:,.0f} samples/s; wrote {summary.out_dir}")
 
 
 # pokerirl train's words for the remedies of its run folders (its lines before the library
@@ -490,7 +508,14 @@ def agent_train(
     With --seeds, seeds run as units (--jobs or --ray); a rerun resumes the set.
     Every setting: --preset, then --config FILE, then the flags (docs/agents.md).
     """
-    from pokerirl.agents.train import agent_preset, load_agent_config, train_agent, train_seeds
+    from pokerirl.agents.registry import CONFIG_FILE, KEPT_FILE, MODEL_FILE
+    from pokerirl.agents.train import (
+        MetricsLine,
+        agent_preset,
+        load_agent_config,
+        train_agent,
+        train_seeds,
+    )
     from pokerirl.execution import ExecutionError
     from pokerirl.seeds import parse_seeds
 
@@ -558,14 +583,14 @@ def agent_train(
             echo(f"{folder}: already finished with these settings, reused")
             continue
         scores = ", ".join(
-            f"vs {name} {e['mbb_per_hand']:+.0f} +- {e['std_error']:.0f} mbb/h"
-            for name, e in line["eval"].items()
+            f"vs {name} {e.mbb_per_hand:+.0f} +- {e.std_error:.0f} mbb/h"
+            for name, e in line.eval.items()
         )
-        echo(f"{folder}: {line['hands']:,} hands, {scores}")
+        echo(f"{folder}: {line.hands:,} hands, {scores}")
         if config.play == "kept":
-            kept = json.loads((folder / "config.json").read_text())["kept"]
+            kept = MetricsLine.from_json(json.loads((folder / CONFIG_FILE).read_text())["kept"])
             echo(
-                f"{folder}: plays kept.pt (after {kept['hands']:,} hands, vs random "
-                f"{kept['eval']['random']['mbb_per_hand']:+.0f} mbb/h in its evaluation); "
-                "model.pt is the final model"
+                f"{folder}: plays {KEPT_FILE} (after {kept.hands:,} hands, vs random "
+                f"{kept.eval['random'].mbb_per_hand:+.0f} mbb/h in its evaluation); "
+                f"{MODEL_FILE} is the final model"
             )

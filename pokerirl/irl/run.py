@@ -110,11 +110,6 @@ class RunSummary:
     val_rows: int
     results: tuple[RunResult, ...] = ()  # several runs: each run's result
 
-    @property
-    def runs(self) -> tuple[Mapping[str, Any], ...]:
-        """``results`` as JSON (read by key by the command line; prefer ``results``)."""
-        return tuple(result.to_json() for result in self.results)
-
 
 @dataclass(frozen=True, kw_only=True)
 class MeanStd:
