@@ -40,19 +40,19 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")  # one core: numpy and torch must 
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 os.environ.setdefault("MKL_NUM_THREADS", "1")
 
-import argparse  # noqa: E402
-import contextlib  # noqa: E402
-import dataclasses  # noqa: E402
-import io  # noqa: E402
-import time  # noqa: E402
-from collections.abc import Iterator  # noqa: E402
-from dataclasses import dataclass  # noqa: E402
+import argparse
+import contextlib
+import dataclasses
+import io
+import time
+from collections.abc import Iterator
+from dataclasses import dataclass
 
-import numpy as np  # noqa: E402
-import torch  # noqa: E402
+import numpy as np
+import torch
 
-from pokerirl.agents.dqn import DQNConfig, GreedyQAgent, QNetwork, train_dqn  # noqa: E402
-from pokerirl.game import make_agent, play_match  # noqa: E402
+from pokerirl.agents.dqn import DQNConfig, GreedyQAgent, QNetwork, train_dqn
+from pokerirl.game import make_agent, play_match
 
 CHECKPOINTS = (1_000, 2_000, 5_000)  # hands at which both learning curves are read
 

@@ -16,13 +16,13 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")  # one core: numpy must not fan ou
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 os.environ.setdefault("MKL_NUM_THREADS", "1")
 
-import argparse  # noqa: E402
-import time  # noqa: E402
-from typing import Any  # noqa: E402
+import argparse
+import time
+from typing import Any
 
-import numpy as np  # noqa: E402
+import numpy as np
 
-from pokerirl.game import make_agent, play_match  # noqa: E402
+from pokerirl.game import make_agent, play_match
 
 
 class RLCardRaiseAgent:

@@ -44,31 +44,32 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")  # one core: numpy and torch must 
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 os.environ.setdefault("MKL_NUM_THREADS", "1")
 
-import argparse  # noqa: E402
-import statistics  # noqa: E402
-import tempfile  # noqa: E402
-import time  # noqa: E402
-import warnings  # noqa: E402
-from dataclasses import replace  # noqa: E402
-from pathlib import Path  # noqa: E402
+import argparse
+import itertools
+import statistics
+import tempfile
+import time
+import warnings
+from dataclasses import replace
+from pathlib import Path
 
-import numpy as np  # noqa: E402
-import torch  # noqa: E402
-from torch import Tensor, nn  # noqa: E402
+import numpy as np
+import torch
+from torch import Tensor, nn
 
-from pokerirl.gym.collect import collect  # noqa: E402
-from pokerirl.gym.experts import load_expert, make_env, make_model, resolve_expert_dir  # noqa: E402
-from pokerirl.gym.irl import irl_config, load_env_transitions  # noqa: E402
-from pokerirl.gym.presets import TASKS  # noqa: E402
-from pokerirl.gym.rewards import RewardCallable, learned_reward_env, module_reward  # noqa: E402
-from pokerirl.irl import AIRLConfig, Transitions, train, train_many  # noqa: E402
-from pokerirl.irl.airl import (  # noqa: E402
+from pokerirl.gym.collect import collect
+from pokerirl.gym.experts import load_expert, make_env, make_model, resolve_expert_dir
+from pokerirl.gym.irl import irl_config, load_env_transitions
+from pokerirl.gym.presets import TASKS
+from pokerirl.gym.rewards import RewardCallable, learned_reward_env, module_reward
+from pokerirl.irl import AIRLConfig, Transitions, train, train_many
+from pokerirl.irl.airl import (
     discriminator_loss,
     gaussian_log_prob,
     noise_schedule,
     sample_one_hot,
 )
-from pokerirl.irl.nets import project_to_simplex  # noqa: E402
+from pokerirl.irl.nets import project_to_simplex
 
 TASK_NAMES = ("Acrobot-v1", "MountainCar-v0", "Pendulum-v1")
 IRL_TASKS = ("MountainCar-v0", "Pendulum-v1")  # one discrete, one continuous
@@ -80,7 +81,7 @@ IRL_TASKS = ("MountainCar-v0", "Pendulum-v1")  # one discrete, one continuous
 def mlp(sizes: list[int]) -> nn.Sequential:
     """Linear layers with ReLU between them, as the authors' MLPs and the core's defaults."""
     layers: list[nn.Module] = []
-    for i, (a, b) in enumerate(zip(sizes[:-1], sizes[1:], strict=True)):
+    for i, (a, b) in enumerate(itertools.pairwise(sizes)):
         layers.append(nn.Linear(a, b))
         if i < len(sizes) - 2:
             layers.append(nn.ReLU())

@@ -40,7 +40,7 @@ def sb3_runs(env_id: str, runs: int, steps: int) -> Timing:
         model = make_model(env_id, TASKS[env_id].rl, seed=seed)
         train = model.train
 
-        def timed_train(train=train) -> None:  # noqa: ANN001
+        def timed_train(train=train) -> None:
             nonlocal update
             start = time.perf_counter()
             train()

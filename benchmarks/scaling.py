@@ -37,10 +37,10 @@ from pathlib import Path
 
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 
-from pokerirl.agents.dqn import DQNConfig  # noqa: E402
-from pokerirl.agents.train import TrainConfig, train_agent, train_seeds  # noqa: E402
-from pokerirl.execution import Backend, ray_head  # noqa: E402
-from pokerirl.tournaments import run_tournament  # noqa: E402
+from pokerirl.agents.dqn import DQNConfig
+from pokerirl.agents.train import TrainConfig, train_agent, train_seeds
+from pokerirl.execution import Backend, ray_head
+from pokerirl.tournaments import run_tournament
 
 
 def timed(run: Callable[[], object]) -> tuple[float, object]:

@@ -17,6 +17,7 @@ The machine may be shared: compare figures from one run only.
 from __future__ import annotations
 
 import argparse
+import itertools
 import tempfile
 import time
 
@@ -39,7 +40,7 @@ class MLPAgent:
         torch.manual_seed(seed)
         sizes = [72, *layers]
         modules: list[torch.nn.Module] = []
-        for fan_in, fan_out in zip(sizes[:-1], sizes[1:], strict=True):
+        for fan_in, fan_out in itertools.pairwise(sizes):
             modules += [torch.nn.Linear(fan_in, fan_out), torch.nn.Tanh()]
         self.net = torch.nn.Sequential(*modules, torch.nn.Linear(sizes[-1], 4)).eval()
         self.name = f"mlp-{seed}"

@@ -104,7 +104,7 @@ def test_state_and_forward_are_the_authors(authors_file: tuple[Path, Discriminat
                 list(r),
             )
             for row, r in zip(cards, raises, strict=True)
-        ]  # fmt: skip
+        ]
     )
     np.testing.assert_array_equal(authors_state(cards, raises), theirs)
 

@@ -61,7 +61,7 @@ def alive(pid: int) -> bool:
     return state != "Z"  # a zombie has ended
 
 
-def _wait_for(condition, process: subprocess.Popen, seconds: float = 120) -> None:  # noqa: ANN001
+def _wait_for(condition, process: subprocess.Popen, seconds: float = 120) -> None:
     deadline = time.monotonic() + seconds
     while not condition():
         assert process.poll() is None, process.stderr.read() if process.stderr else ""

@@ -111,5 +111,5 @@ def test_order_of_cards_does_not_matter() -> None:
 def test_rejects_bad_input() -> None:
     with pytest.raises(ValueError, match="shape"):
         hand_strength(np.zeros((3, 6), dtype=np.int64))
-    with pytest.raises(ValueError, match="0..51"):
+    with pytest.raises(ValueError, match=r"0..51"):
         hand_strength(np.full((1, 7), 52))

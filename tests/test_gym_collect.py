@@ -13,12 +13,12 @@ from typer.testing import CliRunner
 pytest.importorskip("gymnasium")
 pytest.importorskip("stable_baselines3")
 
-import pyarrow as pa  # noqa: E402
-import pyarrow.parquet as pq  # noqa: E402
+import pyarrow as pa
+import pyarrow.parquet as pq
 
-from pokerirl.cli import app  # noqa: E402
-from pokerirl.gym.collect import collect, read_transitions  # noqa: E402
-from pokerirl.gym.experts import (  # noqa: E402
+from pokerirl.cli import app
+from pokerirl.gym.collect import collect, read_transitions
+from pokerirl.gym.experts import (
     Expert,
     build_policy,
     load_expert,

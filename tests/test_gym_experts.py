@@ -12,8 +12,8 @@ from typer.testing import CliRunner
 pytest.importorskip("gymnasium")
 pytest.importorskip("stable_baselines3")
 
-from pokerirl.cli import app  # noqa: E402
-from pokerirl.gym.experts import (  # noqa: E402
+from pokerirl.cli import app
+from pokerirl.gym.experts import (
     CONFIG_FILE,
     FINAL_EVAL_SEED,
     MANIFEST_FILE,
@@ -29,7 +29,7 @@ from pokerirl.gym.experts import (  # noqa: E402
     shipped_manifest,
     write_manifest,
 )
-from pokerirl.gym.presets import TASKS  # noqa: E402
+from pokerirl.gym.presets import TASKS
 
 torch.set_num_threads(1)
 

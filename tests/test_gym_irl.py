@@ -16,18 +16,18 @@ from typer.testing import CliRunner
 pytest.importorskip("gymnasium")
 pytest.importorskip("stable_baselines3")
 
-from pokerirl.cli import app  # noqa: E402
-from pokerirl.gym.collect import collect  # noqa: E402
-from pokerirl.gym.experts import load_expert, resolve_expert_dir  # noqa: E402
-from pokerirl.gym.irl import (  # noqa: E402
+from pokerirl.cli import app
+from pokerirl.gym.collect import collect
+from pokerirl.gym.experts import load_expert, resolve_expert_dir
+from pokerirl.gym.irl import (
     episode_returns,
     irl_config,
     load_env_transitions,
     policy_actions,
     train_gym_irl,
 )
-from pokerirl.gym.presets import PRESETS, TASKS  # noqa: E402
-from pokerirl.irl import load_policy, load_reward  # noqa: E402
+from pokerirl.gym.presets import PRESETS, TASKS
+from pokerirl.irl import load_policy, load_reward
 
 CORE_BASELINES = {"majority", "legal_majority", "bc"}
 

@@ -106,7 +106,7 @@ def test_exploration_and_target_updates_match_sb3(monkeypatch: pytest.MonkeyPatc
     updates: list[int] = []
     original = sb3_dqn.polyak_update
 
-    def recording_update(params, target_params, tau):  # noqa: ANN001, ANN202
+    def recording_update(params, target_params, tau):
         if not updates or updates[-1] != model.num_timesteps:  # params and batch-norm stats
             updates.append(model.num_timesteps)
         original(params, target_params, tau)

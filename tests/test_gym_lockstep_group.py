@@ -17,14 +17,14 @@ from typer.testing import CliRunner
 pytest.importorskip("gymnasium")
 pytest.importorskip("stable_baselines3")
 
-from pokerirl.cli import app  # noqa: E402
-from pokerirl.execution import pinned_threads  # noqa: E402
-from pokerirl.gym.experts import build_policy, evaluate, policy_kwargs  # noqa: E402
-from pokerirl.gym.lockstep import LockstepPPO  # noqa: E402
-from pokerirl.gym.lockstep.group import train_rl_group  # noqa: E402
-from pokerirl.gym.presets import TASKS, PPOSettings, RLSettings  # noqa: E402
-from pokerirl.gym.rl import EVAL_SEED, train_rl  # noqa: E402
-from pokerirl.studies.gym_units import RLJob  # noqa: E402
+from pokerirl.cli import app
+from pokerirl.execution import pinned_threads
+from pokerirl.gym.experts import build_policy, evaluate, policy_kwargs
+from pokerirl.gym.lockstep import LockstepPPO
+from pokerirl.gym.lockstep.group import train_rl_group
+from pokerirl.gym.presets import TASKS, PPOSettings, RLSettings
+from pokerirl.gym.rl import EVAL_SEED, train_rl
+from pokerirl.studies.gym_units import RLJob
 
 CARTPOLE = RLSettings(
     algo="ppo",
@@ -41,7 +41,7 @@ FILES = ("config.json", "metrics.jsonl", "model.pt")
 
 
 @pytest.fixture(autouse=True)
-def one_thread():  # noqa: ANN201
+def one_thread():
     """As the CLI and the units run RL: on busy cores, small ops on two threads crawl."""
     with pinned_threads(1):
         yield

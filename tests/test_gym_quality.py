@@ -14,7 +14,7 @@ import torch
 
 pytest.importorskip("gymnasium")
 
-from pokerirl.gym.quality import (  # noqa: E402
+from pokerirl.gym.quality import (
     QUALITY_FILE,
     QualityError,
     RewardQuality,
@@ -29,8 +29,8 @@ from pokerirl.gym.quality import (  # noqa: E402
     true_reward,
     write_reward_quality,
 )
-from pokerirl.irl.nets import ShapedReward  # noqa: E402
-from pokerirl.irl.run import RewardFunction  # noqa: E402
+from pokerirl.irl.nets import ShapedReward
+from pokerirl.irl.run import RewardFunction
 
 GAMMA = 0.95
 KEYS = {"pearson_expert", "pearson_policy", "epic", "epic_g", "epic_random_baseline"}

@@ -14,13 +14,13 @@ from typer.testing import CliRunner
 pytest.importorskip("gymnasium")
 pytest.importorskip("stable_baselines3")
 
-from pokerirl.cli import app  # noqa: E402
-from pokerirl.gym.experts import load_expert, resolve_expert_dir  # noqa: E402
-from pokerirl.gym.reward_map import plot_reward_map, reward_map  # noqa: E402
-from pokerirl.irl.airl import TrainResult  # noqa: E402
-from pokerirl.irl.config import AIRLConfig  # noqa: E402
-from pokerirl.irl.nets import build_nets  # noqa: E402
-from pokerirl.irl.run import save_run  # noqa: E402
+from pokerirl.cli import app
+from pokerirl.gym.experts import load_expert, resolve_expert_dir
+from pokerirl.gym.reward_map import plot_reward_map, reward_map
+from pokerirl.irl.airl import TrainResult
+from pokerirl.irl.config import AIRLConfig
+from pokerirl.irl.nets import build_nets
+from pokerirl.irl.run import save_run
 
 LEFT, NO_PUSH, RIGHT = 0, 1, 2
 V_SCALE = 1 / 0.07  # MountainCar's velocity is in [-0.07, 0.07]: k·v in [-1, 1]
@@ -61,7 +61,7 @@ def hand_set_run(
     return folder
 
 
-def velocity_rows(result, sign: int) -> np.ndarray:  # noqa: ANN001
+def velocity_rows(result, sign: int) -> np.ndarray:
     """The rows of the map where the velocity has this sign (away from v = 0)."""
     return result.panels[0].preferred[sign * result.ys > 1e-9]
 

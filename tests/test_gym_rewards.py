@@ -12,12 +12,12 @@ import torch
 pytest.importorskip("gymnasium")
 pytest.importorskip("stable_baselines3")
 
-from stable_baselines3.common.monitor import Monitor  # noqa: E402
-from stable_baselines3.common.vec_env import DummyVecEnv  # noqa: E402
+from stable_baselines3.common.monitor import Monitor
+from stable_baselines3.common.vec_env import DummyVecEnv
 
-from pokerirl.gym.experts import make_env  # noqa: E402
-from pokerirl.gym.rewards import ENV_REWARD_KEY, learned_reward_env, module_reward  # noqa: E402
-from pokerirl.gym.rl import train_rl  # noqa: E402
+from pokerirl.gym.experts import make_env
+from pokerirl.gym.rewards import ENV_REWARD_KEY, learned_reward_env, module_reward
+from pokerirl.gym.rl import train_rl
 
 torch.set_num_threads(1)
 

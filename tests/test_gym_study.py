@@ -15,10 +15,10 @@ from typer.testing import CliRunner
 pytest.importorskip("gymnasium")
 pytest.importorskip("stable_baselines3")
 
-from pokerirl.cli import app  # noqa: E402
-from pokerirl.execution import Backend  # noqa: E402
-from pokerirl.irl import load_reward  # noqa: E402
-from pokerirl.studies.gym import (  # noqa: E402
+from pokerirl.cli import app
+from pokerirl.execution import Backend
+from pokerirl.irl import load_reward
+from pokerirl.studies.gym import (
     REWARDS,
     StudyError,
     authors_budget,
@@ -26,9 +26,9 @@ from pokerirl.studies.gym import (  # noqa: E402
     run_gym_study,
     study_preset,
 )
-from pokerirl.studies.gym_results import TaskSummary  # noqa: E402
-from pokerirl.studies.gym_units import DATA_FILE  # noqa: E402
-from pokerirl.studies.sweep import CSV_COLUMNS, SweepRow, parse_param, sweep_points  # noqa: E402
+from pokerirl.studies.gym_results import TaskSummary
+from pokerirl.studies.gym_units import DATA_FILE
+from pokerirl.studies.sweep import CSV_COLUMNS, SweepRow, parse_param, sweep_points
 
 TINY = ["--runs", "2", "--transitions", "1500", "--epochs", "2", "--eval-episodes", "2"]
 TINY += ["--timesteps", "2000", "--jobs", "2", "--quiet"]

@@ -221,7 +221,7 @@ def test_mismatched_checkpoint_is_a_clear_error(run_dir: Path, tmp_path: Path) -
     torch.save({"mlp.0.weight": torch.zeros(2, 2)}, broken / "reward.pt")
     with pytest.raises(ValueError, match="does not match"):
         load_reward(broken)
-    with pytest.raises(RunError, match="config.json"):
+    with pytest.raises(RunError, match=r"config.json"):
         load_reward(tmp_path)
 
 

@@ -237,8 +237,8 @@ def test_lock_step_runs_equal_separate_runs(discrete: bool) -> None:
             torch.testing.assert_close(a, b, atol=1e-4, rtol=1e-4)
         assert run.metrics[-1]["disc_loss"] == pytest.approx(alone.metrics[-1]["disc_loss"],
                                                                rel=1e-4)  # fmt: skip
-    first = list(many.runs[0].reward.parameters())[0]
-    assert not torch.allclose(first, list(many.runs[1].reward.parameters())[0])
+    first = next(iter(many.runs[0].reward.parameters()))
+    assert not torch.allclose(first, next(iter(many.runs[1].reward.parameters())))
 
 
 def test_shaped_family_needs_next_obs() -> None:
@@ -257,7 +257,7 @@ class ConcatReward(torch.nn.Module):
             torch.nn.Linear(obs_dim + action_dim, 8), torch.nn.ELU(), torch.nn.Linear(8, 1)
         )
 
-    def forward(self, obs, action, next_obs=None, done=None):  # noqa: ANN001, ANN201
+    def forward(self, obs, action, next_obs=None, done=None):
         rows = torch.broadcast_shapes(obs.shape[:-1], action.shape[:-1])
         both = (obs.expand(*rows, obs.shape[-1]), action.expand(*rows, action.shape[-1]))
         return self.net(torch.cat(both, dim=-1)).squeeze(-1)

@@ -101,7 +101,7 @@ def test_environment_rollouts_parquet_as_written_by_gym_collect(
     train, val, val_groups = t.split(val_fraction=0.25, seed=0)
     assert len(val_groups) == 2 and set(val.groups.tolist()) == set(val_groups)
     assert not set(train.groups.tolist()) & set(val_groups)
-    with pytest.raises(ValueError, match="lacks required column.*done"):
+    with pytest.raises(ValueError, match=r"lacks required column.*done"):
         Transitions.from_parquet(write(table.drop_columns(["done"]), tmp_path / "bad.parquet"))
 
 

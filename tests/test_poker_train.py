@@ -91,7 +91,7 @@ def test_library_messages_name_no_flag(tmp_path: Path) -> None:
     with pytest.raises(ConfigError) as refused:
         load_config("hairl", config_file=config)
     assert "--" not in str(refused.value) and "'algo'" in str(refused.value)
-    with pytest.raises(ValueError, match="^runs must be at least 1, got 0$"):
+    with pytest.raises(ValueError, match=r"^runs must be at least 1, got 0$"):
         train_runs(tmp_path / "t.parquet", tmp_path / "out", runs=0)
     code, stderr = _train(tmp_path / "t.parquet", tmp_path / "out", "--runs", "2", "--ray", " ")
     assert (code, stderr) == (1, "error: --ray needs an address (HOST:PORT) or 'local'\n")

@@ -443,7 +443,7 @@ def test_rlcard_checkpoint_without_q_estimator_is_one_line_and_warns(tmp_path: P
     torch.save({"agent_type": "DQNAgent", "num_actions": 4}, path)
     with (
         pytest.warns(UntrustedCheckpointWarning, match="runs any code"),
-        pytest.raises(ValueError, match="not an RLCard DQNAgent checkpoint .no q_estimator."),
+        pytest.raises(ValueError, match=r"not an RLCard DQNAgent checkpoint .no q_estimator."),
     ):
         load_rlcard_dqn(path)
     code, lines = run_cli("match", f"rlcard:{path}", "raise", "--hands", "10")

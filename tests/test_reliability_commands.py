@@ -353,7 +353,7 @@ COMMANDS = [
             "--out",
             str(t),
         ],
-    ),  # fmt: skip
+    ),
     Command(
         "gym study",
         lambda i, t: ["gym", "study", "MountainCar-v0", "--out", str(t), *GYM_STUDY_FAST],
@@ -370,7 +370,7 @@ COMMANDS = [
             str(t),
             *GYM_STUDY_FAST,
         ],
-    ),  # fmt: skip
+    ),
 ]
 
 

@@ -167,7 +167,7 @@ def _read_state_dict(path: Path) -> dict[str, torch.Tensor]:
         state = None if empty else torch.load(path, map_location="cpu", weights_only=True)
     except OSError as error:
         raise _bad(path, f"cannot read ({error.strerror or error})") from None
-    except Exception:  # noqa: BLE001 - UnpicklingError, EOFError, RuntimeError from zip, ...
+    except Exception:
         raise _bad(path, "corrupt or truncated (not a model saved by pokerirl)") from None
     if empty:
         raise _bad(path, "empty file (not a model saved by pokerirl)")

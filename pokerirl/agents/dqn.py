@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import copy
 import functools
+import itertools
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from enum import StrEnum
@@ -124,7 +125,7 @@ class QNetwork(nn.Module):
         sizes = (OBS_SIZE, *hidden)
         self.norm = nn.BatchNorm1d(OBS_SIZE)
         layers: list[nn.Module] = []
-        for fan_in, fan_out in zip(sizes[:-1], sizes[1:], strict=True):
+        for fan_in, fan_out in itertools.pairwise(sizes):
             layers += [nn.Linear(fan_in, fan_out), nn.Tanh()]
         layers.append(nn.Linear(sizes[-1], NUM_ACTIONS))
         self.mlp = nn.Sequential(*layers)

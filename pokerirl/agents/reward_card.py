@@ -432,7 +432,7 @@ def card_summary(cards: list[RewardCard]) -> dict[str, object]:
         "runs": len(cards),
         "mean_f": {
             a: stat([f for c in cards if (f := c.mean_f[a]) is not None]) for a in ACTIONS
-        },  # fmt: skip
+        },
         "decision_bonus": stat([c.decision_bonus for c in cards]),
         "argmax_share": {a: stat([c.argmax_share[a] for c in cards]) for a in ACTIONS},
         "agree_expert": stat([c.agree_expert or 0.0 for c in cards]),

@@ -48,7 +48,7 @@ def _read_checkpoint(path: Path) -> Mapping[str, Any]:
         # Trusted files only: RLCard pickles its agent (and its replay memory's namedtuples,
         # whose unpickling imports rlcard.agents, which runs `pip freeze`: about 3 s).
         checkpoint = torch.load(path, map_location="cpu", weights_only=False)
-    except Exception as error:  # noqa: BLE001 - any unpickling failure is a bad file
+    except Exception as error:
         reason = (str(error).strip() or repr(error)).splitlines()[0]
         raise ValueError(f"{path}: cannot read RLCard checkpoint: {reason}") from None
     if not isinstance(checkpoint, dict) or checkpoint.get("agent_type") != "DQNAgent":

@@ -7,9 +7,9 @@ from __future__ import annotations
 
 # isort: off  (the order of registration is the order of `pokerirl --help`)
 from pokerirl.cli import (
-    gym,  # noqa: E402, F401
-    poker,  # noqa: E402, F401
-    studies,  # noqa: E402, F401
+    gym,  # noqa: F401
+    poker,  # noqa: F401
+    studies,  # noqa: F401
 )
 from pokerirl.cli.app import app, fail
 

@@ -246,9 +246,10 @@ def gym_rl(
         reward_identity: Any = "env"
         if reward_run is not None:
             from pokerirl.irl import load_reward
+            from pokerirl.irl.run import REWARD_FILE
 
             reward = load_reward(reward_run)
-            weights = reward_run / "reward.pt"
+            weights = reward_run / REWARD_FILE
             reward_identity = {
                 "run": str(reward_run),
                 "sha256": digest(weights.read_bytes()) if weights.is_file() else None,

@@ -224,7 +224,9 @@ def report(
 
     if output_format not in ("markdown", "text", "json"):
         fail(f"unknown --format {output_format!r}; choose markdown or json", 2)
-    for name in ("summary.json", "report.json"):
+    from pokerirl.studies.common import REPORT_JSON, SUMMARY_JSON
+
+    for name in (SUMMARY_JSON, REPORT_JSON):
         _refuse_corrupt(folder / name)
     try:
         if is_gym_study(folder):

@@ -165,7 +165,7 @@ class ScriptedAgent:
     ) -> np.ndarray:
         if cards is None:  # an Agent's act, called without what this agent must see
             raise ValueError(f"{self.name} sees the cards: pass cards= (see agent_actions)")
-        score, facing, can_raise, passive = self._options(obs, legal_mask, cards)
+        _score, facing, can_raise, passive = self._options(obs, legal_mask, cards)
         action = self.rule(obs, legal_mask, cards)
         noisy = rng.random(len(action)) < self.player.noise
         # Options in synth's order: check or call, fold when facing, raise when allowed.

@@ -55,7 +55,7 @@ RAISE_SIZE_BY_ROUND = np.array([2, 2, 4, 4], dtype=np.int16)
 SHOWDOWN = NUM_ROUNDS  # value of ``round`` once the river has closed
 _HOLE_COLUMNS = np.array([[0, 1], [2, 3]])  # deal columns of each seat's hole cards
 # (round, card) -> visible, for a seat's 2 hole cards then the board; round 4 is after the river.
-_VISIBLE = np.arange(7) < 2 + np.array(BOARD_SIZE_BY_ROUND + (5,))[:, None]
+_VISIBLE = np.arange(7) < 2 + np.array((*BOARD_SIZE_BY_ROUND, 5))[:, None]
 
 
 class IllegalActionError(ValueError):

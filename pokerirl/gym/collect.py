@@ -188,7 +188,7 @@ def collect(
     summary = CollectSummary(
         path=str(out),
         env=expert.env_id,
-        transitions=int(len(rewards)),
+        transitions=len(rewards),
         episodes=int(episode_ids[-1]) + 1,
         seed=seed,
         deterministic=deterministic,

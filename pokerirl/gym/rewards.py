@@ -68,7 +68,7 @@ def learned_reward_env(venv: VecEnv, reward: RewardCallable) -> VecEnv:
             self._actions = np.asarray(actions)
             self.venv.step_async(actions)
 
-        def step_wait(self):  # noqa: ANN202 (SB3's VecEnvStepReturn)
+        def step_wait(self):
             if self._obs is None:
                 raise RuntimeError("step before reset")
             obs, env_rewards, dones, infos = self.venv.step_wait()

@@ -88,6 +88,6 @@ __all__ = [
     "noise_schedule",
     "project_to_simplex",
     "train",
-    "train_many",
     "train_into",
+    "train_many",
 ]

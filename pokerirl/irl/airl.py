@@ -409,7 +409,7 @@ class _Loop:
                 f = self.rewards(obs[:, None], both, batch.next_obs[:, None], batch.dones[:, None])
             else:
                 f = self.rewards(obs[:, None], both)
-            d_loss, d_airl, d_env = discriminator_loss(
+            d_loss, _d_airl, _d_env = discriminator_loss(
                 f[:, 0], log_pi_expert, f[:, 1], log_pi_seen, beta=self.beta, env_reward=env
             )
             self.reward_opt.zero_grad()

@@ -462,7 +462,7 @@ def _load_state(module: nn.Module, path: Path) -> None:
         raise RunError(f"checkpoint not found: {path}")
     try:
         state = torch.load(path, map_location="cpu", weights_only=True)
-    except Exception:  # noqa: BLE001 - torch raises many kinds (and advises unsafe loading)
+    except Exception:
         raise RunError(
             f"{path}: not a readable PyTorch state_dict (corrupt or truncated)"
         ) from None

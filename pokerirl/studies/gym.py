@@ -40,7 +40,7 @@ from pokerirl.errors import PokerIRLError
 from pokerirl.execution import Backend
 from pokerirl.gym.presets import PRESETS, TASK_ORDER, TASKS, StudyPreset
 from pokerirl.gym.presets import MeanStd as PaperValue
-from pokerirl.gym.rl import DEFAULT_RL_BACKEND
+from pokerirl.gym.rl import DEFAULT_RL_BACKEND, RLBackend
 from pokerirl.studies.common import (
     METRICS_JSONL,
     REPORT_MD,
@@ -155,7 +155,7 @@ def rl_jobs(
     irl: IRLJob | None,
     preset: StudyPreset,
     *,
-    backend: str = "sb3",
+    backend: str = RLBackend.SB3,
 ) -> list[RLJob]:
     """RL run k on the env reward (``irl`` None) or on ``irl``'s run k, seed ``seed + k``,
     trained by the RL ``backend`` (lockstep: the unfinished runs of ``rl/<reward>`` as one
@@ -231,10 +231,10 @@ def run_gym_study(
             for env in tasks
             for reward in REWARDS
             for job in rl_jobs(roots[env], env, reward, irl.get((env, reward)), preset,
-                               backend=rl_backend)  # fmt: skip
+                               backend=rl_backend)
         ]
         say(f"[3/{STEPS}] RL: env reward, AIRL and H-AIRL rewards, {preset.runs} runs each"
-            + ("" if rl_backend == "sb3" else f" ({rl_backend} backend)"))
+            + ("" if rl_backend == RLBackend.SB3 else f" ({rl_backend} backend)"))
         reused = run_rl_jobs(rl, **options)
         _said_reused(say, reused, len(rl))
     except PokerIRLError:
@@ -582,7 +582,7 @@ def _budget(summary: TaskSummary) -> str:
     settings = summary.settings
     irl, rl = settings.irl, settings.rl
     seeds = summary.seeds
-    backend = settings.rl_backend or "sb3"
+    backend = settings.rl_backend or RLBackend.SB3
     return (
         f"{summary.runs} runs per algorithm (seeds {seeds[0]}–{seeds[-1]}); expert data "
         f"{irl['transitions']:,} transitions; IRL {irl['epochs']} epochs, batch "
@@ -590,7 +590,7 @@ def _budget(summary: TaskSummary) -> str:
         f"{irl['sigma_end']} (H-AIRL), each epoch's policy over {irl['eval_episodes']} "
         f"episodes; RL {rl['algo'].upper()} for {rl['timesteps']:,} steps, each point "
         f"{settings.rl_eval_episodes} deterministic episodes"
-        + ("." if backend == "sb3" else f" ({backend} RL backend).")
+        + ("." if backend == RLBackend.SB3 else f" ({backend} RL backend).")
     )
 
 

@@ -29,6 +29,7 @@ from typing import Any
 
 from pokerirl.execution import Backend, map_units, read_files, write_files
 from pokerirl.gym.presets import IRLSettings, RLSettings
+from pokerirl.gym.rl import RLBackend
 from pokerirl.irl.run import CONFIG_FILE, REWARD_FILE, TIMINGS_FILE
 from pokerirl.store import Fate, Layout, Unit, UnitOutput, check, digest, run_units, save
 from pokerirl.studies.common import StudyError
@@ -272,7 +273,7 @@ class RLJob:
     evaluations: int
     eval_episodes: int
     folder: Path
-    backend: str = "sb3"  # or "lockstep": see pokerirl.gym.rl.RL_BACKENDS
+    backend: str = RLBackend.SB3
 
     def reward_files(self) -> dict[str, bytes] | None:
         if self.reward_run is None:
@@ -294,7 +295,7 @@ class RLJob:
             "eval_episodes": self.eval_episodes,
             # Only for lock-step runs: sb3 records (every study made before) stay valid, and
             # the two backends' runs never pass for each other.
-            **({} if self.backend == "sb3" else {"backend": self.backend}),
+            **({} if self.backend == RLBackend.SB3 else {"backend": self.backend}),
         }
 
     def unit(self, reward_files: dict[str, bytes] | None) -> Unit[None]:
@@ -372,8 +373,9 @@ def run_rl_jobs(
                            f"{', '.join(RL_BACKENDS)}")  # fmt: skip
     inputs = [job.reward_files() for job in jobs]
     units = [job.unit(files) for job, files in zip(jobs, inputs, strict=True)]
-    sb3 = [unit for job, unit in zip(jobs, units, strict=True) if job.backend == "sb3"]
-    lockstep = [run for run in zip(jobs, inputs, units, strict=True) if run[0].backend != "sb3"]
+    sb3 = [unit for job, unit in zip(jobs, units, strict=True) if job.backend == RLBackend.SB3]
+    runs = zip(jobs, inputs, units, strict=True)
+    lockstep = [run for run in runs if run[0].backend != RLBackend.SB3]
     reused = 0
     if sb3:
         done = run_units(sb3, backend, overwrite=overwrite, progress=progress, desc="RL runs")
@@ -421,6 +423,6 @@ def _run_groups(
         reused=len(jobs) - todo,
         on_result=saved,
         labels=[f"{jobs[g[0]][0].env} {jobs[g[0]][0].reward} lock-step x{len(g)}"
-                for g in members],  # fmt: skip
+                for g in members],
     )
     return len(jobs) - todo

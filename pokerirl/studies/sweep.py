@@ -206,7 +206,7 @@ def run_sweep(
             job
             for p in unique
             for job in rl_jobs(out / "points" / p.name, env, "hairl", irl[p.name], preset,
-                               backend=rl_backend)  # fmt: skip
+                               backend=rl_backend)
         ]
         say(f"[3/4] RL: {len(rl)} runs on the points' rewards")
         run_rl_jobs(rl, **options)

@@ -446,7 +446,7 @@ def _build_report(
         config=TournamentSettings(
             hands=hands, seeds=tuple(seeds), duplicate=duplicate, batch_size=batch_size,
             alpha=alpha,
-        ),  # fmt: skip
+        ),
         family=FamilySizes(
             per_seed_tests=len(cells),
             per_seed_threshold=alpha / len(cells),

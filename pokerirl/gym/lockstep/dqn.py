@@ -81,14 +81,14 @@ class _StackedLinearFn(torch.autograd.Function):
     """
 
     @staticmethod
-    def forward(ctx, x: torch.Tensor, weight: torch.Tensor, bias: torch.Tensor,  # noqa: ANN001
+    def forward(ctx, x: torch.Tensor, weight: torch.Tensor, bias: torch.Tensor,
                 out_in: bool) -> torch.Tensor:
         ctx.save_for_backward(x, weight)
         ctx.out_in = out_in
         return torch.baddbmm(bias, x, weight.transpose(1, 2) if out_in else weight)
 
     @staticmethod
-    def backward(ctx, grad: torch.Tensor):  # noqa: ANN001, ANN205
+    def backward(ctx, grad: torch.Tensor):
         x, weight = ctx.saved_tensors
         gx = gw = gb = None
         if ctx.needs_input_grad[0]:

@@ -237,7 +237,7 @@ class _RunEnvs:
         self.returns = np.zeros(n_envs)
         self.finished: list[float] = []
 
-    def step(self, actions: np.ndarray):  # noqa: ANN201
+    def step(self, actions: np.ndarray):
         n = len(self.envs)
         next_obs = np.empty_like(self.obs)
         rewards = np.zeros(n, dtype=np.float32)
