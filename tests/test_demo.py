@@ -22,7 +22,7 @@ def test_demo_is_the_study_on_synthetic_data(tmp_path: Path) -> None:
     result = run_demo(tmp_path, config, say=said.append)
     assert said[0].startswith("synth: 500 heads-up hands")
     report = json.loads((tmp_path / "report.json").read_text())
-    assert report == result.report and report["preset"] == "quick"
+    assert report == result.report.to_json() and result.report.preset == "quick"
     assert report["seeds"] == [0, 1]
     assert (tmp_path / "report.md").read_text() == result.markdown
     # A rerun reuses the synthetic month, so every unit is reused: nothing written again.

@@ -12,7 +12,8 @@ from pokerirl.cli import app
 from pokerirl.game.synth import write_synthetic_month
 from pokerirl.seeds import seeds_as_written
 from pokerirl.studies.poker import StudyError, load_study_report, preset, run_study
-from pokerirl.studies.poker.report import FIGURES
+from pokerirl.studies.poker.report import FIGURES, render_markdown
+from pokerirl.studies.poker.report_types import StudyReport
 from pokerirl.tournaments import load_report
 
 TOY = dict(
@@ -147,8 +148,8 @@ def test_rerun_reuses_every_unit_and_a_changed_setting_is_refused(
     again = units_of(out)
     assert {p for p in units if again[p] != units[p]} == {
         p for p in units if "panel" in p.relative_to(out).parts}  # fmt: skip
-    assert result.report["panel"]["hands"] == 300
-    assert result.report["table1"] == json.loads(before)["table1"]
+    assert result.report.panel.hands == 300
+    assert result.report.to_json()["table1"] == json.loads(before)["table1"]
 
 
 @pytest.mark.slow
@@ -158,10 +159,44 @@ def test_report_command_prints_the_study_report(finished: tuple[Path, Path, list
     assert result.exit_code == 0, result.output
     assert result.output.startswith("# pokerirl study (quick preset)")
     as_json = CliRunner().invoke(app, ["report", str(out), "--format", "json"])
-    assert json.loads(as_json.output) == load_study_report(out)
+    assert json.loads(as_json.output) == load_study_report(out).to_json()
     # A tournament folder still prints as before.
     tournament = CliRunner().invoke(app, ["report", str(out / "tournament")])
     assert tournament.exit_code == 0 and "hairl-dqn" in tournament.output
+
+
+MAIN_REPORT = Path(__file__).parent / "data" / "study_report_main.json"  # main's, authors toy
+
+
+def _round_trips(folder: Path) -> StudyReport:
+    """``folder/report.json`` loads typed and writes back the same bytes, key order and all."""
+    text = (folder / "report.json").read_text()
+    loaded = load_study_report(folder)
+    assert json.dumps(loaded.to_json(), indent=2) + "\n" == text
+    assert StudyReport.from_json(json.loads(text)) == loaded
+    return loaded
+
+
+def test_a_report_json_written_by_main_round_trips(tmp_path: Path) -> None:
+    (tmp_path / "report.json").write_bytes(MAIN_REPORT.read_bytes())
+    loaded = _round_trips(tmp_path)
+    assert loaded.table1_authors is not None and loaded.reward_cards is not None
+    assert render_markdown(loaded).startswith("# pokerirl study (authors preset)")
+    # An algorithm a given reward replaced, and a report written before "measured": the same.
+    data = json.loads(MAIN_REPORT.read_text())
+    data["irl"]["airl"] = {"replaced_by": "authors:reward.pt"}
+    del data["rl_vs_random"]["measured"]
+    (tmp_path / "report.json").write_text(json.dumps(data, indent=2) + "\n")
+    replaced = _round_trips(tmp_path)
+    assert "replaced by `authors:reward.pt`" in render_markdown(replaced)
+    assert "the last evaluation of training" in render_markdown(replaced)
+
+
+@pytest.mark.slow
+def test_the_study_report_round_trips(finished: tuple[Path, Path, list[str]]) -> None:
+    _, out, _ = finished
+    loaded = _round_trips(out)
+    assert render_markdown(loaded) == (out / "report.md").read_text()
 
 
 def test_bad_settings_are_one_line() -> None:
@@ -233,7 +268,8 @@ def test_the_authors_preset_reports_both_statistics(tmp_path: Path) -> None:
     for figure in report["figures"].values():
         assert (tmp_path / "out" / figure).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert "The authors' protocol" in result.markdown and "Reward cards" in result.markdown
-    assert load_study_report(tmp_path / "out")["table1_authors"] == report["table1_authors"]
+    loaded = load_study_report(tmp_path / "out")
+    assert loaded.to_json() == report == result.report.to_json()
 
 
 def _main_stage(root: Path, name: str, settings: dict) -> str:

@@ -232,8 +232,8 @@ def report(
         if is_gym_study(folder):
             found, markdown = load_gym_study(folder)
         elif is_study_report(folder):
-            found = load_study_report(folder)
-            markdown = render_markdown(found)
+            loaded = load_study_report(folder)
+            found, markdown = loaded.to_json(), render_markdown(loaded)
         else:
             echo(render_report(load_report(folder), output_format), nl=False)
             return

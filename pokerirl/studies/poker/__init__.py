@@ -13,7 +13,6 @@ import os
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
 
 from pokerirl.execution import Backend
 from pokerirl.studies.poker import figures
@@ -42,12 +41,14 @@ from pokerirl.studies.poker.report import (
     render_markdown,
     write_study_report,
 )
+from pokerirl.studies.poker.report_types import StudyReport
 
 __all__ = [
     "PRESETS",
     "STAGES",
     "StudyConfig",
     "StudyError",
+    "StudyReport",
     "StudyResult",
     "is_study_report",
     "load_study_report",
@@ -60,7 +61,7 @@ __all__ = [
 @dataclass(frozen=True)
 class StudyResult:
     root: Path
-    report: dict[str, Any]
+    report: StudyReport
     markdown: str
 
 

@@ -3,15 +3,20 @@
 from __future__ import annotations
 
 import io
+from collections.abc import Mapping
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from pokerirl.atomic import write_bytes
 from pokerirl.encoding import ACTIONS
 from pokerirl.studies.common import band
+from pokerirl.studies.poker.report_types import StudyReport
 from pokerirl.studies.poker.results import AgentsResult, Curve, IRLResult, IRLRuns, Panel
+
+if TYPE_CHECKING:
+    from pokerirl.tournaments import AuthorsMatchup
 
 ALGO_LABELS = {"airl": "AIRL", "hairl": "H-AIRL"}
 KIND_LABELS = {"dqn": "DQN", "airl_dqn": "AIRL-DQN", "hairl_dqn": "H-AIRL-DQN"}
@@ -140,7 +145,9 @@ def panel_heatmap(panel: Panel, path: Path) -> None:
     _save(figure, path)
 
 
-def authors_tournament(authors: dict[str, Any], report: dict[str, Any], path: Path) -> None:
+def authors_tournament(
+    authors: Mapping[str, AuthorsMatchup], report: StudyReport, path: Path
+) -> None:
     """Every pair's result under the authors' protocol: each repeat (dots), each experiment's
     mean, the overall mean with their ± and with the SE over experiments, our duplicate-deal
     figure on the same agents and the paper's."""
@@ -149,31 +156,31 @@ def authors_tournament(authors: dict[str, Any], report: dict[str, Any], path: Pa
     figure, axes = plt.subplots(1, len(labels), figsize=(11, 4.2), sharey=True)
     rng = np.random.default_rng(0)  # jitter only
     for axis, (name, label) in zip(axes, labels.items(), strict=True):
-        row = authors[name]
-        repeats = row["repeats_by_experiment"]
+        row = (report.table1_authors or {})[name]
+        repeats = [list(e.repeats_mbb) for e in authors[name].experiments]
         for k, values in enumerate(repeats):
             x = k + rng.uniform(-0.2, 0.2, len(values))
             axis.scatter(x, values, s=6, alpha=0.35, color="C0")
             axis.scatter([k], [np.mean(values)], marker="D", color="black", zorder=3)
         right = len(repeats) - 0.5
-        mean = row["mean"]
+        mean = row.mean
         axis.axhline(mean, color="C1", label=f"mean {mean:+,.0f}")
-        axis.axhspan(mean - row["paper_style_se"], mean + row["paper_style_se"], color="C1",
-                     alpha=0.5, label=f"their ± {row['paper_style_se']:,.0f}")  # fmt: skip
-        se = row["se_over_experiments"]
+        axis.axhspan(mean - row.paper_style_se, mean + row.paper_style_se, color="C1",
+                     alpha=0.5, label=f"their ± {row.paper_style_se:,.0f}")  # fmt: skip
+        se = row.se_over_experiments
         if se is not None:
             axis.axhspan(mean - se, mean + se, color="C1", alpha=0.15,
                          label=f"SE over experiments {se:,.0f}")  # fmt: skip
-        duplicate = row["duplicate_mbb_per_hand"]
+        duplicate = row.duplicate_mbb_per_hand
         if duplicate is not None:
             axis.axhline(duplicate, color="C2", linestyle="--",
                          label=f"ours, duplicate {duplicate:+,.0f}")  # fmt: skip
-        theirs = report["table1_authors"][name]["paper"]
-        paper_label = f"the paper {theirs['mbb_per_hand']:+,} ± {theirs['std_error']}"
-        axis.axhline(theirs["mbb_per_hand"], color="C3", linestyle=":", label=paper_label)
+        theirs = row.paper
+        paper_label = f"the paper {theirs.mbb_per_hand:+,} ± {theirs.std_error}"
+        axis.axhline(theirs.mbb_per_hand, color="C3", linestyle=":", label=paper_label)
         axis.set(title=label, xlabel="experiment (diamond: its mean)", xlim=(-0.5, right))
         axis.set_xticks(range(len(repeats)))
         axis.legend(fontsize=7)
-    axes[0].set_ylabel(f"mbb/hand of one repeat ({row['games']:,} games)")
+    axes[0].set_ylabel(f"mbb/hand of one repeat ({row.games:,} games)")
     figure.suptitle("The authors' tournament protocol: every repeat of every pair", fontsize=10)
     _save(figure, path)

@@ -45,6 +45,7 @@ from pokerirl.studies.poker.config import (
     StudyError,
     irl_overrides,
 )
+from pokerirl.studies.poker.report_types import CardSummary
 from pokerirl.studies.poker.results import (
     AgentsResult,
     Curve,
@@ -63,7 +64,7 @@ from pokerirl.studies.poker.results import (
 if TYPE_CHECKING:  # the layers below load lazily: ``pokerirl report`` needs none of them
     from pokerirl.agents.train import TrainConfig
     from pokerirl.irl.config import AIRLConfig
-    from pokerirl.tournaments import TournamentReport
+    from pokerirl.tournaments import AuthorsMatchup, TournamentReport
 
 STAGES = ("ingest", "irl", "agents", "tournament", "panel", "report")
 AUTHORS_STAGES = ("ingest", "irl", "agents", "tournament", "authors", "panel", "report")
@@ -140,7 +141,7 @@ class Execution:
         games: int,
         out: Path,
         duplicate: dict[str, float],
-    ) -> dict[str, Any]:
+    ) -> dict[str, AuthorsMatchup]:
         from pokerirl.tournaments import run_authors_tournament
 
         return run_authors_tournament(
@@ -494,16 +495,17 @@ def tournament_stage(study: Study, agents: AgentsResult) -> dict[str, Table1Line
 
 def authors_stage(
     study: Study, agents: AgentsResult, tournament: dict[str, Table1Line]
-) -> dict[str, dict[str, Any]]:
+) -> dict[str, AuthorsMatchup]:
     """The authors' tournament: for each experiment (seed) k, 50 x 1,000 non-duplicate games
     of each learned-reward DQN against the sparse one, seats drawn per game. Each matchup's
-    summary is the tournaments layer's own (``AuthorsMatchup.summary``), with every repeat."""
+    result is the tournaments layer's own (:class:`~pokerirl.tournaments.AuthorsMatchup`), with
+    every repeat."""
     config = study.config
     folder = study.root / "agents"
     baseline = str(folder / AGENT_FOLDERS["dqn"])
     names = [f"{name}_vs_dqn" for name in TABLE1_NAMES]
     study.step("authors")
-    found = study.execution.authors_tournament(
+    return study.execution.authors_tournament(
         [(str(folder / AGENT_FOLDERS[name]), baseline) for name in TABLE1_NAMES],
         names=names,
         experiments=config.seeds,
@@ -512,22 +514,15 @@ def authors_stage(
         out=study.root / "authors",
         duplicate={name: tournament[name].mbb_per_hand for name in names},
     )
-    return {
-        name: {
-            **matchup.summary(),
-            "repeats_by_experiment": [list(e.repeats_mbb) for e in matchup.experiments],
-        }
-        for name, matchup in found.items()
-    }
 
 
-def reward_cards(root: Path, config: StudyConfig) -> dict[str, Any]:
+def reward_cards(root: Path, config: StudyConfig) -> dict[str, CardSummary | None]:
     """Each algorithm's reward cards (its runs' ``reward_card.json``), summarized over runs;
     None for an algorithm without cards (runs of an older pokerirl, or a table without
     cards)."""
     from pokerirl.agents.reward_card import CARD_FIGURE, card_summary, read_card
 
-    found: dict[str, Any] = {}
+    found: dict[str, CardSummary | None] = {}
     for algo in IRL_ALGOS:
         out = root / "irl" / algo
         folders = [out] if config.reward_source(algo) else run_paths(out, config.runs)
@@ -535,7 +530,7 @@ def reward_cards(root: Path, config: StudyConfig) -> dict[str, Any]:
         found[algo] = None
         if cards:
             figure = (folders[0] / CARD_FIGURE).relative_to(root)
-            found[algo] = {**card_summary(cards), "figure": str(figure)}
+            found[algo] = CardSummary.from_json({**card_summary(cards), "figure": str(figure)})
     return found
 
 

@@ -4,14 +4,34 @@
 from __future__ import annotations
 
 import json
+import math
+from collections.abc import Mapping
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING
 
 from pokerirl import atomic
 from pokerirl.encoding import ACTIONS
 from pokerirl.studies.common import REPORT_JSON, REPORT_MD, markdown_table, mean_std
 from pokerirl.studies.poker import paper
 from pokerirl.studies.poker.config import AGENT_KINDS, IRL_ALGOS, StudyConfig, StudyError
+from pokerirl.studies.poker.report_types import (
+    AuthorsRow,
+    BCPart,
+    CardSummary,
+    DataPart,
+    HandsResult,
+    IRLAlgoPart,
+    IRLPart,
+    IRLReplacedPart,
+    MeanStd,
+    PanelPart,
+    PaperLine,
+    RLKindPart,
+    RLPart,
+    StudyReport,
+    Table1Row,
+    TrainingLengthPart,
+)
 from pokerirl.studies.poker.results import (
     AgentsResult,
     Ingested,
@@ -22,6 +42,9 @@ from pokerirl.studies.poker.results import (
     Spread,
     Table1Line,
 )
+
+if TYPE_CHECKING:  # ``pokerirl report`` loads no tournament code
+    from pokerirl.tournaments import AuthorsMatchup
 
 REPORT_FORMAT = "pokerirl-study-report/1"
 FIGURES = {
@@ -44,107 +67,123 @@ def build_report(
     ingested: Ingested,
     irl: IRLResult,
     agents: AgentsResult,
-    tournament: dict[str, Table1Line],
+    tournament: Mapping[str, Table1Line],
     panel: Panel,
-    authors: dict[str, dict[str, Any]] | None = None,
-    cards: dict[str, Any] | None = None,
-) -> dict[str, Any]:
-    """The whole report as a JSON-ready dict; the issue's keys at the top level.
+    authors: Mapping[str, AuthorsMatchup] | None = None,
+    cards: Mapping[str, CardSummary | None] | None = None,
+) -> StudyReport:
+    """The whole report, typed (its JSON: :meth:`StudyReport.to_json`).
 
     ``authors``: the authors' tournament stage's result (``table1_authors``); ``cards``: the
     reward cards' summaries per algorithm (``reward_cards``).
     """
     table1 = {
-        name: {**tournament[name].to_json(), "paper": paper.TABLE1[name]} for name in paper.TABLE1
+        name: Table1Row(line=tournament[name], paper=PaperLine(**paper.TABLE1[name]))
+        for name in paper.TABLE1
     }
-    irl_part: dict[str, Any] = {}
+    algos: dict[str, IRLAlgoPart | IRLReplacedPart] = {}
     runs = {algo: found for algo, found in irl.items() if isinstance(found, IRLRuns)}
     trained = [algo for algo in IRL_ALGOS if algo in runs]
     for algo in IRL_ALGOS:
         found = irl[algo]
         if isinstance(found, Replaced):
-            irl_part[algo] = {"replaced_by": found.source}
+            algos[algo] = IRLReplacedPart(replaced_by=found.source)
             continue
         final = found.final
-        irl_part[algo] = {
-            "final_val_alignment": _mean_std(final["val_alignment"]),
-            "final_disc_acc_expert": _mean_std(final["disc_acc_expert"]),
-            "final_disc_acc_policy": _mean_std(final["disc_acc_policy"]),
-            "per_run_val_alignment": final["val_alignment"].values,
-            "paper": {
-                "final_val_alignment": paper.IRL_ALIGNMENT[algo],
-                "final_disc_acc": paper.DISC_ACC_FINAL[algo],
-            },
-        }
+        algos[algo] = IRLAlgoPart(
+            final_val_alignment=_mean_std(final["val_alignment"]),
+            final_disc_acc_expert=_mean_std(final["disc_acc_expert"]),
+            final_disc_acc_policy=_mean_std(final["disc_acc_policy"]),
+            per_run_val_alignment=final["val_alignment"].values,
+            paper_val_alignment=MeanStd(**paper.IRL_ALIGNMENT[algo]),
+            paper_disc_acc=paper.DISC_ACC_FINAL[algo],
+        )
     # BC is trained inside every run on that run's split; H-AIRL's runs' BC is the one reported.
+    irl_part = IRLPart(algos=algos, runs=config.runs)
     if trained:
         baselines = runs[trained[-1]].baselines
-        irl_part["bc"] = {
-            "final_val_alignment": _mean_std(baselines["bc"]),
-            "per_run_val_alignment": baselines["bc"].values,
-        }
-        irl_part["baselines"] = {
-            name: _mean_std(baselines[name]) for name in ("majority", "legal_majority")
-        }
-        irl_part["epochs"] = runs[trained[-1]].epochs
-    irl_part["runs"] = config.runs
+        irl_part = IRLPart(
+            algos=algos,
+            runs=config.runs,
+            bc=BCPart(final_val_alignment=_mean_std(baselines["bc"]),
+                      per_run_val_alignment=baselines["bc"].values),
+            baselines={
+                name: _mean_std(baselines[name]) for name in ("majority", "legal_majority")
+            },
+            epochs=runs[trained[-1]].epochs,
+        )  # fmt: skip
     # The authors' preset plays its kept checkpoint: that one is measured against random.
     vs_random = agents.vs_random
-    rl: dict[str, Any] = {
-        kind: {**mean_std(vs_random[kind]), "paper": paper.RL_VS_RANDOM[kind]}
-        for kind in AGENT_KINDS
-    }
-    rl["references"] = {name: ref.to_json() for name, ref in agents.references.items()}
-    rl["per_seed"] = {kind: vs_random[kind] for kind in AGENT_KINDS}
-    rl["measured"] = (
-        f"the playing checkpoint, {agents.playing_hands:,} duplicate hands"
-        if agents.playing_vs_random is not None
-        else "the last evaluation of training"
+    rl = RLPart(
+        kinds={
+            kind: RLKindPart(**mean_std(vs_random[kind]), paper=paper.RL_VS_RANDOM[kind])
+            for kind in AGENT_KINDS
+        },
+        references=dict(agents.references),
+        per_seed={kind: vs_random[kind] for kind in AGENT_KINDS},
+        measured=(
+            f"the playing checkpoint, {agents.playing_hands:,} duplicate hands"
+            if agents.playing_vs_random is not None
+            else "the last evaluation of training"
+        ),
     )
     length = agents.training_length
     summary = ingested.summary
-    extra: dict[str, Any] = {}
     figures = dict(FIGURES)
-    if cards is not None:
-        extra["reward_cards"] = cards
+    table1_authors = None
     if authors is not None:
-        extra["table1_authors"] = {
-            name: {
-                **{k: v for k, v in authors[name].items() if k != "repeats_by_experiment"},
-                "paper": paper.TABLE1[name],
-            }
+        table1_authors = {
+            name: _authors_row(authors[name], PaperLine(**paper.TABLE1[name]))
             for name in paper.TABLE1
         }
         figures["authors_tournament"] = AUTHORS_FIGURE
-    return {
-        "format": REPORT_FORMAT,
-        "preset": config.preset,
-        "runs": config.runs,
-        "seeds": list(config.seeds),
-        "hands": config.hands,
-        "settings": config.settings(),
-        "data": {
-            "kept_hands": summary.get("kept_hands"),
-            "rows": summary.get("rows"),
-            "hands_read_total": summary.get("hands_read_total"),
-        },
-        "table1": table1,
-        "irl": irl_part,
-        "rl_vs_random": rl,
-        "training_length": {
-            "short": {"hands": length.short_agent_hands, **mean_std(length.short)},
-            "long": {"hands": length.agent_hands, **mean_std(length.long)},
-            "paper": paper.DQN_TRAINING,
-        },
-        "panel": {**panel.to_json(), "hands": config.panel_hands},
-        "figures": figures,
-        "paper": paper.paper_values(),
-        **extra,
-    }
+    return StudyReport(
+        format=REPORT_FORMAT,
+        preset=config.preset,
+        runs=config.runs,
+        seeds=list(config.seeds),
+        hands=config.hands,
+        settings=config.settings(),
+        data=DataPart(
+            kept_hands=summary.get("kept_hands"),
+            rows=summary.get("rows"),
+            hands_read_total=summary.get("hands_read_total"),
+        ),
+        table1=table1,
+        irl=irl_part,
+        rl_vs_random=rl,
+        training_length=TrainingLengthPart(
+            short=HandsResult(hands=length.short_agent_hands, **mean_std(length.short)),
+            long=HandsResult(hands=length.agent_hands, **mean_std(length.long)),
+            paper=paper.DQN_TRAINING,
+        ),
+        panel=PanelPart(panel=panel, hands=config.panel_hands),
+        figures=figures,
+        paper=paper.paper_values(),
+        reward_cards=cards,
+        table1_authors=table1_authors,
+    )
 
 
-def _mean_std(spread: Spread) -> dict[str, float]:
-    return {"mean": spread.mean, "std": spread.std}
+def _authors_row(matchup: AuthorsMatchup, theirs: PaperLine) -> AuthorsRow:
+    """``AuthorsMatchup.summary``'s numbers, typed, with the paper's line."""
+    se = matchup.se_over_experiments
+    return AuthorsRow(
+        mean=matchup.mean,
+        paper_style_se=matchup.paper_style_se,
+        se_over_experiments=None if math.isnan(se) else se,
+        duplicate_mbb_per_hand=matchup.duplicate_mbb_per_hand,
+        per_experiment=matchup.per_experiment,
+        repeats=matchup.repeats,
+        games=matchup.games,
+        agent_a=matchup.agent_a,
+        agent_b=matchup.agent_b,
+        paper=theirs,
+    )
+
+
+def _mean_std(spread: Spread) -> MeanStd:
+    return MeanStd(mean=spread.mean, std=spread.std)
 
 
 def panel_csv(panel: Panel) -> str:
@@ -159,37 +198,36 @@ def panel_csv(panel: Panel) -> str:
     return "\n".join(lines) + "\n"
 
 
-def _pm(value: dict[str, float], scale: float = 1.0, digits: int = 0) -> str:
-    return f"{value['mean'] * scale:,.{digits}f} ± {value['std'] * scale:,.{digits}f}"
+def _pm(value: MeanStd, scale: float = 1.0, digits: int = 0) -> str:
+    return f"{value.mean * scale:,.{digits}f} ± {value.std * scale:,.{digits}f}"
 
 
 def _p(p: float) -> str:
     return f"{p:.2e}" if p < 1e-3 else f"{p:.3f}"
 
 
-def render_markdown(report: dict[str, Any]) -> str:
+def render_markdown(report: StudyReport) -> str:
     """``report.md``: the paper's numbers beside ours, and what the paper leaves open."""
-    settings = report["settings"]
-    seeds = report["seeds"]
+    settings = report.settings
+    seeds = report.seeds
     n_seeds = len(seeds)
     lines = [
-        f"# pokerirl study ({report['preset']} preset)",
+        f"# pokerirl study ({report.preset} preset)",
         "",
-        f"Data: {report['data']['kept_hands']:,} kept heads-up hands, "
-        f"{report['data']['rows']:,} decisions.",
-        f"Sizes: {report['runs']} IRL runs per algorithm "
-        f"({report['irl']['epochs']} epochs), {n_seeds} agent seeds ({seeds[0]}-{seeds[-1]}) of "
-        f"{settings['agent_hands']:,} training hands, {report['hands']:,} tournament hands per "
+        f"Data: {report.data.kept_hands:,} kept heads-up hands, {report.data.rows:,} decisions.",
+        f"Sizes: {report.runs} IRL runs per algorithm "
+        f"({report.irl.epochs} epochs), {n_seeds} agent seeds ({seeds[0]}-{seeds[-1]}) of "
+        f"{settings['agent_hands']:,} training hands, {report.hands:,} tournament hands per "
         f"seed ({'duplicate deals' if settings['duplicate'] else 'no duplicate deals'}), "
         f"{settings['panel_hands']:,} per seed for each panel pair.",
     ]
-    if report["preset"] == "authors":
-        if report["runs"] < 20:
+    if report.preset == "authors":
+        if report.runs < 20:
             lines.append(
                 f"**Fewer experiments**: the authors ran 20 experiments; this study ran "
-                f"{report['runs']} (`--runs`); these numbers are noisier."
+                f"{report.runs} (`--runs`); these numbers are noisier."
             )
-    elif report["preset"] != "paper":
+    elif report.preset != "paper":
         lines.append(
             "**Reduced sizes**: the paper's protocol is 10 IRL runs, 20 seeds of 50,000 hands and "
             "20 x 1,000,000 tournament hands (`--preset paper`); these numbers are noisier."
@@ -203,16 +241,17 @@ def render_markdown(report: dict[str, Any]) -> str:
     ]
     for name, label in (("hairl_dqn_vs_dqn", "H-AIRL-DQN vs DQN"),
                         ("airl_dqn_vs_dqn", "AIRL-DQN vs DQN")):  # fmt: skip
-        row = report["table1"][name]
-        theirs = row["paper"]
+        row = report.table1[name].line
+        theirs = report.table1[name].paper
         lines.append(
-            f"| {label} | {row['mbb_per_hand']:+,.0f} | {row['std_error']:,.0f} | "
-            f"{_p(row['p_value'])} | {_p(row['p_bonferroni'])} | "
-            f"{row['seeds_significant_bonferroni']}/{n_seeds} | "
-            f"{theirs['mbb_per_hand']:+,} ± {theirs['std_error']} (p < 1e-10) |"
+            f"| {label} | {row.mbb_per_hand:+,.0f} | {row.std_error:,.0f} | "
+            f"{_p(row.p_value)} | {_p(row.p_bonferroni)} | "
+            f"{row.seeds_significant_bonferroni}/{n_seeds} | "
+            f"{theirs.mbb_per_hand:+,} ± {theirs.std_error} (p < 1e-10) |"
         )
     spread = {
-        name: (min(row["per_seed"]), max(row["per_seed"])) for name, row in report["table1"].items()
+        name: (min(row.line.per_seed), max(row.line.per_seed))
+        for name, row in report.table1.items()
     }
     lines += [
         "",
@@ -232,23 +271,25 @@ def render_markdown(report: dict[str, Any]) -> str:
         "| | ours (mean ± std over runs) | the paper |",
         "|---|---|---|",
     ]
-    irl = report["irl"]
-    trained = [(a, label) for a, label in (("airl", "AIRL"), ("hairl", "H-AIRL"))
-               if "replaced_by" not in irl[a]]  # fmt: skip
+    irl = report.irl
+    trained: list[tuple[IRLAlgoPart, str]] = []
     for algo, label in (("airl", "AIRL"), ("hairl", "H-AIRL")):
-        if "replaced_by" in irl[algo]:
-            lines.append(f"| {label} | replaced by `{irl[algo]['replaced_by']}` | |")
+        part = irl.algos[algo]
+        if isinstance(part, IRLReplacedPart):
+            lines.append(f"| {label} | replaced by `{part.replaced_by}` | |")
             continue
-        theirs = irl[algo]["paper"]["final_val_alignment"]
+        trained.append((part, label))
+        ours, published = part.final_val_alignment, part.paper_val_alignment
         lines.append(
-            f"| {label} | {_pm(irl[algo]['final_val_alignment'], 100, 1)}% | "
-            f"{theirs['mean'] * 100:.1f} ± {theirs['std'] * 100:.1f}% |"
+            f"| {label} | {_pm(ours, 100, 1)}% | "
+            f"{published.mean * 100:.1f} ± {published.std * 100:.1f}% |"
         )
-    if "bc" in irl:
-        lines.append(f"| BC (supervised only) | {_pm(irl['bc']['final_val_alignment'], 100, 1)}%"
+    if irl.bc is not None:
+        lines.append(f"| BC (supervised only) | {_pm(irl.bc.final_val_alignment, 100, 1)}%"
                      " | not reported |")  # fmt: skip
         for name in ("majority", "legal_majority"):
-            lines.append(f"| {name} | {_pm(irl['baselines'][name], 100, 1)}% | not reported |")
+            baseline = (irl.baselines or {})[name]
+            lines.append(f"| {name} | {_pm(baseline, 100, 1)}% | not reported |")
     lines += [
         "",
         "Discriminator accuracy at the end of IRL (expert / policy actions):",
@@ -256,13 +297,13 @@ def render_markdown(report: dict[str, Any]) -> str:
         "| | ours, expert | ours, policy | the paper (about) |",
         "|---|---|---|---|",
     ]
-    for algo, label in trained:
+    for part, label in trained:
         lines.append(
-            f"| {label} | {_pm(irl[algo]['final_disc_acc_expert'], 100, 1)}% | "
-            f"{_pm(irl[algo]['final_disc_acc_policy'], 100, 1)}% | "
-            f"{irl[algo]['paper']['final_disc_acc'] * 100:.0f}% |"
+            f"| {label} | {_pm(part.final_disc_acc_expert, 100, 1)}% | "
+            f"{_pm(part.final_disc_acc_policy, 100, 1)}% | "
+            f"{part.paper_disc_acc * 100:.0f}% |"
         )
-    figures = report["figures"]
+    figures = report.figures
     lines += [
         "",
         f"![validation alignment]({figures['irl_alignment']})",
@@ -276,30 +317,32 @@ def render_markdown(report: dict[str, Any]) -> str:
         "| agent | ours | per-seed range | the paper (about) |",
         "|---|---|---|---|",
     ]
-    rl = report["rl_vs_random"]
+    rl = report.rl_vs_random
     for kind, label in LABELS.items():
-        values = rl["per_seed"][kind]
+        values = rl.per_seed[kind]
+        found = rl.kinds[kind]
         lines.append(
-            f"| {label} | {_pm(rl[kind])} | {min(values):+,.0f} to {max(values):+,.0f} | "
-            f"{rl[kind]['paper']:+,} |"
+            f"| {label} | {_pm(MeanStd(mean=found.mean, std=found.std))} | "
+            f"{min(values):+,.0f} to {max(values):+,.0f} | {found.paper:+,} |"
         )
     for name in ("call", "raise"):
-        ref = rl["references"][name]
-        lines.append(f"| always-{name} | {ref['mbb_per_hand']:+,.0f} (SE {ref['std_error']:,.0f})"
+        ref = rl.references[name]
+        lines.append(f"| always-{name} | {ref.mbb_per_hand:+,.0f} (SE {ref.std_error:,.0f})"
                      " | one fixed strategy | not reported |")  # fmt: skip
-    length = report["training_length"]
+    length = report.training_length
     lines += [
         "",
         f"![RL against random]({figures['rl_vs_random']})",
         "",
     ]
-    if length["short"]["hands"] != length["long"]["hands"]:
+    short, long = length.short, length.long
+    if short.hands != long.hands:
         lines += [
-            f"**Training length.** The paper's DQN trains {length['paper']}; ours trains "
-            f"{length['long']['hands']:,} hands. On the same {n_seeds} seeds, the sparse DQN ends "
-            f"at {_pm(length['short'])} mbb/hand against random after "
-            f"{length['short']['hands']:,} hands and {_pm(length['long'])} after "
-            f"{length['long']['hands']:,}.",
+            f"**Training length.** The paper's DQN trains {length.paper}; ours trains "
+            f"{long.hands:,} hands. On the same {n_seeds} seeds, the sparse DQN ends "
+            f"at {_pm(MeanStd(mean=short.mean, std=short.std))} mbb/hand against random after "
+            f"{short.hands:,} hands and {_pm(MeanStd(mean=long.mean, std=long.std))} after "
+            f"{long.hands:,}.",
             "",
         ]
     lines += authors_markdown(report)
@@ -308,20 +351,20 @@ def render_markdown(report: dict[str, Any]) -> str:
         "## Panel: row agent against column agent (mbb/hand ± SE, pooled over seeds)",
         "",
     ]
-    panel = report["panel"]
-    names = panel["agents"]
+    panel = report.panel.panel
+    names = panel.agents
     lines += markdown_table(
         ["", *names],
         (
             [name, *("-" if v is None else f"{v:+,.0f} ± {e:,.0f}"
                      for v, e in zip(row, errors, strict=True))]
-            for name, row, errors in zip(names, panel["mbb_per_hand"], panel["std_error"],
+            for name, row, errors in zip(names, panel.mbb_per_hand, panel.std_error,
                                          strict=True)
         ),
     )  # fmt: skip
     lines += [
         "",
-        f"{panel['hands']:,} hands per seed per pair, {n_seeds} seeds; cross-table in "
+        f"{report.panel.hands:,} hands per seed per pair, {n_seeds} seeds; cross-table in "
         f"`{PANEL_CSV}`.",
         "",
         f"![panel]({figures['panel_heatmap']})",
@@ -330,19 +373,20 @@ def render_markdown(report: dict[str, Any]) -> str:
     return "\n".join(lines)
 
 
-def rl_measured(report: dict[str, Any]) -> str:
-    return report["rl_vs_random"].get("measured", "the last evaluation of training")
+def rl_measured(report: StudyReport) -> str:
+    measured = report.rl_vs_random.measured
+    return "the last evaluation of training" if measured is None else measured
 
 
-def _f(value: Any) -> str:
-    if isinstance(value, dict):
-        return f"{value['mean']:+.2f} ± {value['std']:.2f}"
+def _f(value: MeanStd | None) -> str:
+    if value is not None:
+        return f"{value.mean:+.2f} ± {value.std:.2f}"
     return "n/a" if value is None else str(value)
 
 
-def cards_markdown(report: dict[str, Any]) -> list[str]:
+def cards_markdown(report: StudyReport) -> list[str]:
     """The reward cards section: what each learned reward prefers (mean ± std over runs)."""
-    cards = report.get("reward_cards") or {}
+    cards = report.reward_cards or {}
     if not any(cards.values()):
         return []
     lines = [
@@ -356,18 +400,18 @@ def cards_markdown(report: dict[str, Any]) -> list[str]:
         "argmax = legal majority |",
         "|---|---|---|---|---|---|---|---|---|",
     ]
-    theirs = report["paper"].get("authors_rewards", {})
+    theirs = report.paper.get("authors_rewards", {})
     for algo, label in (("airl", "AIRL"), ("hairl", "H-AIRL")):
         card = cards.get(algo)
         if not card:
             continue
-        f = card["mean_f"]
+        f = card.mean_f
         lines.append(
-            f"| {label} ({card['runs']} runs) | {_f(f['call'])} | {_f(f['raise'])} | "
-            f"{_f(f['fold'])} | {_f(f['check'])} | {_f(card['decision_bonus'])} | "
-            f"{_pm(card['argmax_share']['raise'], 100, 1)}% | "
-            f"{_pm(card['agree_expert'], 100, 1)}% | "
-            f"{_pm(card['agree_legal_majority'], 100, 1)}% |"
+            f"| {label} ({card.runs} runs) | {_f(f['call'])} | {_f(f['raise'])} | "
+            f"{_f(f['fold'])} | {_f(f['check'])} | {_f(card.decision_bonus)} | "
+            f"{_pm(card.argmax_share['raise'], 100, 1)}% | "
+            f"{_pm(card.agree_expert, 100, 1)}% | "
+            f"{_pm(card.agree_legal_majority, 100, 1)}% |"
         )
         if algo in theirs:
             mine = theirs[algo]
@@ -378,37 +422,37 @@ def cards_markdown(report: dict[str, Any]) -> list[str]:
                 f"{mine['agree_expert']} | |"
             )
     any_card = next(c for c in cards.values() if c)
-    expert = any_card.get("expert_share")
+    expert = any_card.expert_share
     raises = "" if not expert else (
         f" The expert raises in {_pm(expert['raise'], 100, 1)}% of them."
     )  # fmt: skip
     lines += [
         "",
         f"The legal-majority rule itself agrees with the expert on "
-        f"{_pm(any_card['legal_majority_agree_expert'], 100, 1)}% of these states.{raises}",
+        f"{_pm(any_card.legal_majority_agree_expert, 100, 1)}% of these states.{raises}",
         "",
     ]
     for algo, card in cards.items():
         if card:
-            lines.append(f"- {algo}: {card['predictions'][0]}")
-            if card.get("figure"):
-                lines.append(f"  ![{algo} reward card]({card['figure']})")
+            lines.append(f"- {algo}: {card.predictions[0]}")
+            if card.figure:
+                lines.append(f"  ![{algo} reward card]({card.figure})")
     return [*lines, ""]
 
 
-def authors_markdown(report: dict[str, Any]) -> list[str]:
+def authors_markdown(report: StudyReport) -> list[str]:
     """The authors' protocol section, when the study ran it."""
-    table = report.get("table1_authors")
+    table = report.table1_authors
     if not table:
         return []
     first = next(iter(table.values()))
-    n = len(first["per_experiment"])
+    n = len(first.per_experiment)
     lines = [
         "## The authors' protocol (their train_rl.py and main.py, on our engine)",
         "",
         f"{n} experiments: IRL run k, then a sparse DQN, an AIRL-DQN and an H-AIRL-DQN with "
         "their DQN settings (5,000 hands against random; the > 0.8 x best checkpoint plays), "
-        f"then {first['repeats']} x {first['games']:,} non-duplicate games per pair, the small "
+        f"then {first.repeats} x {first.games:,} non-duplicate games per pair, the small "
         "blind drawn per game. Their ± is std(repeats)/√1000 over all repeats; the SE over "
         "experiments carries the variance between training runs.",
         "",
@@ -418,25 +462,25 @@ def authors_markdown(report: dict[str, Any]) -> list[str]:
     for name, label in (("hairl_dqn_vs_dqn", "H-AIRL-DQN vs DQN"),
                         ("airl_dqn_vs_dqn", "AIRL-DQN vs DQN")):  # fmt: skip
         row = table[name]
-        se = row["se_over_experiments"]
-        duplicate = row["duplicate_mbb_per_hand"]
+        se = row.se_over_experiments
+        duplicate = row.duplicate_mbb_per_hand
         lines.append(
-            f"| {label} | {row['mean']:+,.0f} | {row['paper_style_se']:,.0f} | "
+            f"| {label} | {row.mean:+,.0f} | {row.paper_style_se:,.0f} | "
             f"{'n/a' if se is None else f'{se:,.0f}'} | "
             f"{'n/a' if duplicate is None else f'{duplicate:+,.0f}'} | "
-            f"{row['paper']['mbb_per_hand']:+,} ± {row['paper']['std_error']} |"
+            f"{row.paper.mbb_per_hand:+,} ± {row.paper.std_error} |"
         )
-        per = ", ".join(f"{v:+,.0f}" for v in row["per_experiment"])
+        per = ", ".join(f"{v:+,.0f}" for v in row.per_experiment)
         lines.append(f"| (per experiment) | {per} | | | | |")
-    return [*lines, "", f"![the authors' tournament]({report['figures']['authors_tournament']})",
+    return [*lines, "", f"![the authors' tournament]({report.figures['authors_tournament']})",
             ""]  # fmt: skip
 
 
-def write_study_report(root: Path, report: dict[str, Any], panel: Panel) -> None:
+def write_study_report(root: Path, report: StudyReport, panel: Panel) -> None:
     """``panel.csv``, ``report.md``, then ``report.json`` last: it marks a finished study."""
     atomic.write_text(root / PANEL_CSV, panel_csv(panel))
     atomic.write_text(root / REPORT_MD, render_markdown(report))
-    atomic.write_text(root / REPORT_JSON, json.dumps(report, indent=2) + "\n")
+    atomic.write_text(root / REPORT_JSON, json.dumps(report.to_json(), indent=2) + "\n")
 
 
 def is_study_report(folder: Path | str) -> bool:
@@ -448,7 +492,7 @@ def is_study_report(folder: Path | str) -> bool:
     return isinstance(data, dict) and data.get("format") == REPORT_FORMAT
 
 
-def load_study_report(folder: Path | str) -> dict[str, Any]:
+def load_study_report(folder: Path | str) -> StudyReport:
     """The study report in ``folder``; one-line :class:`StudyError` when it is not one."""
     path = Path(folder) / REPORT_JSON
     try:
@@ -460,7 +504,8 @@ def load_study_report(folder: Path | str) -> dict[str, Any]:
     if not isinstance(data, dict) or data.get("format") != REPORT_FORMAT:
         raise StudyError(f"{path}: not a study report")
     try:
-        render_markdown(data)
-    except (KeyError, IndexError, TypeError, ValueError) as error:
+        report = StudyReport.from_json(data)
+        render_markdown(report)
+    except (KeyError, IndexError, TypeError, ValueError, AttributeError) as error:
         raise StudyError(f"{path}: malformed study report ({error!r})") from None
-    return data
+    return report
