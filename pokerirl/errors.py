@@ -1,11 +1,12 @@
 """One error contract: what the library raises on purpose, and how a command reports it.
 
-Every error that pokerirl raises on purpose (bad input, a file that cannot be used, a unit
-made with other settings) derives from :class:`PokerIRLError`, and its message is one line
-that names the user's file or setting, never a command-line flag: the library does not know
-the command line. Where a command could get past it (another output folder, recomputing),
-the error says so as a :class:`Remedy`, and the command line adds the advice in terms of its
-own flags (:data:`ADVICE`).
+Every error that pokerirl raises on purpose (a bad setting: :class:`ConfigError`; a file or
+data that cannot be used: :class:`InputError`; a missing optional dependency:
+:class:`MissingExtra`; a unit made with other settings) derives from :class:`PokerIRLError`,
+and its message is one line that names the user's file or setting, never a command-line
+flag: the library does not know the command line. Where a command could get past it (another
+output folder, recomputing), the error says so as a :class:`Remedy`, and the command line
+adds the advice in terms of its own flags (:data:`ADVICE`).
 
 :class:`one_line_errors` is the contract of every command, as a decorator or a ``with``
 block:
@@ -89,6 +90,20 @@ class UsageError(PokerIRLError):
     line, not the library."""
 
     exit_code: ClassVar[int] = 2
+
+
+class ConfigError(PokerIRLError, ValueError):
+    """A setting that cannot be used: one line naming the setting (and its file, when a file
+    holds it)."""
+
+
+class InputError(PokerIRLError, ValueError):
+    """A user's file or data that cannot be used (missing columns, a corrupt report, an
+    unknown agent): one line naming it."""
+
+
+class MissingExtra(PokerIRLError, ImportError):
+    """An optional dependency is missing: one line naming the pip extra that installs it."""
 
 
 def debug_enabled(environ: Mapping[str, str] | None = None) -> bool:

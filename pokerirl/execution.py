@@ -63,6 +63,7 @@ from typing import Any, TypeVar
 from tqdm import tqdm
 
 from pokerirl import atomic
+from pokerirl.errors import PokerIRLError
 
 R = TypeVar("R")
 
@@ -72,7 +73,7 @@ SCRATCH_PREFIX = "pokerirl-scratch-"  # + the owner's pid: a worker's temporary 
 PRIVATE_RAY_PREFIX = "pokerirl-ray-"  # + the driver's pid: a private Ray instance's folder
 
 
-class ExecutionError(RuntimeError):
+class ExecutionError(PokerIRLError, RuntimeError):
     """A unit could not be run (its worker kept dying, Ray is missing); one line."""
 
 

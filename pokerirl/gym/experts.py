@@ -29,6 +29,7 @@ import numpy as np
 import torch
 
 from pokerirl.atomic import write_text, write_torch
+from pokerirl.errors import MissingExtra
 from pokerirl.gym.presets import TASKS, PPOSettings, RLSettings
 
 if TYPE_CHECKING:  # gymnasium and SB3 are imported lazily: a poker-only user never pays.
@@ -201,7 +202,7 @@ def require_gym() -> None:
         import gymnasium  # noqa: F401
         import stable_baselines3  # noqa: F401
     except ImportError as error:
-        raise ImportError(
+        raise MissingExtra(
             f"pokerirl.gym needs the gym extra (pip install 'pokerirl[gym]'): {error}"
         ) from None
 

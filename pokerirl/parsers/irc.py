@@ -32,6 +32,7 @@ from typing import IO
 import numpy as np
 
 from pokerirl.encoding import CARD_INDEX
+from pokerirl.errors import PokerIRLError
 from pokerirl.parsers.replay import Replay, ReplayError, replay_actions
 
 # Big blind in chips per limit hold'em channel; bets are one big blind, doubled on turn and river.
@@ -79,7 +80,7 @@ _PROGRESS_EVERY = 8192
 _ARCHIVE_SUFFIXES = (".tgz", ".tar.gz", ".tar")
 
 
-class IngestError(Exception):
+class IngestError(PokerIRLError):
     """A source cannot be read as IRC data, or ``strict`` met a malformed line."""
 
 
@@ -338,7 +339,7 @@ def _member_key(name: str, hint: tuple[str | None, str | None]) -> tuple[str, st
     return _text(channel), _text(month), leaf
 
 
-class _HeaderTooLarge(Exception):
+class _HeaderTooLarge(IngestError):
     """A tar header of more than :data:`MAX_TAR_HEADER_BYTES` (its size)."""
 
 
