@@ -31,6 +31,7 @@ import torch
 from pokerirl.agents.dqn import GreedyQAgent, QNetwork
 from pokerirl.agents.registry import CONFIG_FILE, KEPT_FILE, MODEL_FILE
 from pokerirl.atomic import write_bytes, write_torch
+from pokerirl.errors import InputError
 
 
 class Plays(StrEnum):
@@ -104,7 +105,7 @@ def load_agent(folder: str | os.PathLike[str]) -> GreedyQAgent:
     """
     folder = Path(folder)
     if not is_finished(folder):
-        raise ValueError(f"{folder}: not an agent folder (needs {MODEL_FILE} and {CONFIG_FILE})")
+        raise InputError(f"{folder}: not an agent folder (needs {MODEL_FILE} and {CONFIG_FILE})")
     hidden, plays = _read_config(folder / CONFIG_FILE)
     checkpoint = folder / (KEPT_FILE if plays == Plays.KEPT else MODEL_FILE)
     state = _read_state_dict(checkpoint)

@@ -340,7 +340,12 @@ def _member_key(name: str, hint: tuple[str | None, str | None]) -> tuple[str, st
 
 
 class _HeaderTooLarge(IngestError):
-    """A tar header of more than :data:`MAX_TAR_HEADER_BYTES` (its size)."""
+    """A tar header of more than :data:`MAX_TAR_HEADER_BYTES`; the archive's reader names the
+    archive (internal: never reaches a user as it is)."""
+
+    def __init__(self, size: int) -> None:
+        super().__init__(f"a tar header of {size:,} bytes")
+        self.size = size
 
 
 class _BoundedTarInfo(tarfile.TarInfo):
@@ -418,7 +423,7 @@ def _iter_tar_stream(fileobj: IO[bytes], origin: str, archive_name: str) -> Iter
             yield from flush()
     except _HeaderTooLarge as error:
         raise IngestError(
-            f"{origin}: a tar header of {error.args[0]:,} bytes, more than the "
+            f"{origin}: a tar header of {error.size:,} bytes, more than the "
             f"{MAX_TAR_HEADER_BYTES:,} an IRC archive's names need (not IRC data?)"
         ) from None
     except (tarfile.TarError, EOFError, OSError) as error:

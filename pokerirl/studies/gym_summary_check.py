@@ -15,13 +15,14 @@ from __future__ import annotations
 from collections.abc import Callable, Mapping
 from typing import Any
 
+from pokerirl.errors import InputError
 from pokerirl.gym.presets import TASKS
 
 Check = Callable[[Any, str], None]
 
 
 def _fail(where: str, expected: str, value: Any) -> None:
-    raise ValueError(f"{where}: must be {expected}, got {value!r}"[:300])
+    raise InputError(f"{where}: must be {expected}, got {value!r}"[:300])
 
 
 def _number(value: Any, where: str) -> None:
@@ -75,7 +76,7 @@ def _fields(fields: Mapping[str, Check], *, optional: bool = False) -> Check:
             if name not in value:
                 if field in _MAY_BE_ABSENT:
                     continue
-                raise ValueError(f"{inner}: missing")
+                raise InputError(f"{inner}: missing")
             field(value[name], inner)
 
     return check
