@@ -39,7 +39,7 @@ import contextlib
 import os
 import sys
 import traceback
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from enum import StrEnum
 from types import TracebackType
 from typing import ClassVar, Literal, TextIO
@@ -158,6 +158,8 @@ class one_line_errors(contextlib.ContextDecorator):  # lower case: a decorator
         debug: print tracebacks too; default: :func:`debug_enabled`, read when an error
             arrives (so a ``--debug`` handled after this object was made still counts).
         stream: where the lines go (default: stderr at the time of the error).
+        display: how a line is shown (the command line shows the bytes of a path that are
+            not UTF-8 as ``\\xff``); default: as it is.
     """
 
     def __init__(
@@ -167,11 +169,13 @@ class one_line_errors(contextlib.ContextDecorator):  # lower case: a decorator
         advice: Mapping[Remedy, str] = ADVICE,
         debug: bool | None = None,
         stream: TextIO | None = None,
+        display: Callable[[str], str] | None = None,
     ) -> None:
         self.interrupted = interrupted
         self.advice = advice
         self.debug = debug
         self.stream = stream
+        self.display = display
 
     def __enter__(self) -> one_line_errors:
         return self
@@ -194,6 +198,8 @@ class one_line_errors(contextlib.ContextDecorator):  # lower case: a decorator
         stream = self.stream or sys.stderr
         if self.debug if self.debug is not None else debug_enabled():
             traceback.print_exception(error, file=stream)
+        if self.display is not None:
+            line = self.display(line)
         colour = getattr(stream, "isatty", lambda: False)()
         stream.write(f"\x1b[31merror: {line}\x1b[0m\n" if colour else f"error: {line}\n")
         stream.flush()
