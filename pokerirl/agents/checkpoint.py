@@ -122,8 +122,8 @@ def load_agent(folder: str | os.PathLike[str]) -> GreedyQAgent:
     )
 
 
-def _bad(path: Path, reason: str) -> ValueError:
-    return ValueError(f"{path}: cannot load agent: {reason}")
+def _bad(path: Path, reason: str) -> InputError:
+    return InputError(f"{path}: cannot load agent: {reason}")
 
 
 def _first_line(error: BaseException) -> str:
