@@ -332,7 +332,7 @@ def expert_settings(env_id: str, *, hyper: str = "paper") -> RLSettings:
         return settings
     if hyper == "zoo":
         if env_id not in ZOO_PPO:
-            raise ConfigError(f"no rl-zoo settings recorded for {env_id}; use --hyper paper")
+            raise ConfigError(f"no rl-zoo settings recorded for {env_id} (only the paper's)")
         return replace(settings, ppo=ZOO_PPO[env_id])
     raise ConfigError(f"unknown hyper-parameter set {hyper!r} (paper or zoo)")
 
