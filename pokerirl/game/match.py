@@ -133,14 +133,15 @@ def play_batch(
 
 
 def check_match_size(hands: int, *, duplicate: bool, batch_size: int = DEFAULT_BATCH_SIZE) -> None:
-    """Check a match's sizes before anything is allocated; ValueError (one line) if bad.
+    """Check a match's sizes before anything is allocated; ConfigError (a ValueError, one
+    line) if bad.
 
     ``hands`` must lie in [1, :data:`MAX_HANDS`] and ``batch_size`` in [2,
     :data:`MAX_BATCH_SIZE`]; with ``duplicate`` both must be even.
 
     >>> check_match_size(99_999_999_999_998, duplicate=True)
     Traceback (most recent call last):
-    ValueError: hands must be at most 100,000,000 per match, got 99,999,999,999,998
+    pokerirl.errors.ConfigError: hands must be at most 100,000,000 per match, got 99,999,999,999,998
     """
     if hands < 1:
         raise ConfigError(f"hands must be at least 1, got {hands}")

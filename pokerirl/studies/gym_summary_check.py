@@ -7,7 +7,7 @@ deep inside the renderer. Only the fields the report reads are checked; others m
 >>> check_task_summary({"env": "Acrobot-v1"})
 Traceback (most recent call last):
 ...
-ValueError: runs: missing
+pokerirl.errors.InputError: runs: missing
 """
 
 from __future__ import annotations
@@ -186,7 +186,7 @@ _REWARD_MAP = _absent_or(
 
 
 def check_task_summary(summary: Any, where: str = "") -> None:
-    """Raise a one-line ``ValueError`` naming the first field of a task's summary that the
+    """Raise a one-line ``InputError`` naming the first field of a task's summary that the
     report cannot render (missing, or of the wrong type)."""
     _fields({"env": _task, "runs": _count, "seeds": _seeds, "discrete": _flag})(summary, where)
     discrete = summary["discrete"]
