@@ -233,3 +233,36 @@ def test_ctrl_c_is_one_line_and_exit_130(
     monkeypatch.setattr(target, _interrupt)
     result = CliRunner().invoke(app, [word.format(**places) for word in line.split()])
     assert result.exit_code == 130 and result.stderr.splitlines() == [says]
+
+
+def test_help_imports_no_heavy_module() -> None:
+    script = (
+        "import sys\n"
+        "from pokerirl.cli import app\n"
+        "sys.argv = ['pokerirl', '--help']\n"
+        "try:\n    app()\nexcept SystemExit:\n    pass\n"
+        "print(sorted(m for m in ('torch', 'gymnasium', 'pyarrow') if m in sys.modules))\n"
+    )
+    done = subprocess.run(
+        [sys.executable, "-c", script], capture_output=True, text=True, cwd=ROOT,
+        env={**os.environ, "PYTHONPATH": str(ROOT)}, timeout=300,
+    )  # fmt: skip
+    assert "--debug" in done.stdout and done.stdout.splitlines()[-1] == "[]", done.stdout
+
+
+@pytest.mark.parametrize(
+    ("command", "shown"),
+    [
+        (["train"], ("--epochs", "50")),  # AIRLConfig.epochs
+        (["transfer"], ("--eval-hands", "20000")),  # TransferConfig.eval_hands
+        (["agent", "train"], ("--raise-counts", "decision")),  # TrainConfig.raise_counts
+    ],
+)
+def test_help_shows_the_config_dataclass_default(
+    command: list[str], shown: tuple[str, str]
+) -> None:
+    result = CliRunner().invoke(app, [*command, "--help"], env={"COLUMNS": "200"})
+    option, default = shown
+    text = " ".join(result.stdout.replace("│", " ").split())  # the help, unwrapped
+    entry = text.split(f" {option} ", 1)[1].split(" --", 1)[0]  # up to the next option
+    assert f"[default: {default}]" in entry, entry
