@@ -300,6 +300,13 @@ RAY_HELP = (
     "for a private single-machine Ray. Results do not change."
 )
 INTERRUPTED = "interrupted: finished units are kept; rerun the same command to resume"
+# The words of train and gym expert, rl and irl for the remedies of their run folders (their
+# lines from before the library stopped naming flags).
+RUN_ADVICE = {
+    **ADVICE,
+    Remedy.REPLACE: "pass --overwrite to replace",
+    Remedy.ELSEWHERE: "choose another --out",
+}
 
 
 @app.callback()

@@ -13,6 +13,7 @@ from pokerirl.cli.app import (
     INTERRUPTED,
     MAX_SEED,
     RAY_HELP,
+    RUN_ADVICE,
     SEED_OPTION,
     _backend,
     app,
@@ -21,7 +22,7 @@ from pokerirl.cli.app import (
     on_error,
     settings_from_options,
 )
-from pokerirl.errors import ADVICE, InputError, Remedy, UsageError
+from pokerirl.errors import InputError, UsageError
 from pokerirl.gym.presets import MAX_TRANSITIONS, TASKS
 
 gym_app = typer.Typer(
@@ -61,15 +62,6 @@ def _folder_out(out: Path) -> None:
         raise UsageError(f"--out {display(str(out))}: exists and is not a folder")
 
 
-# The words of gym expert, rl and irl for the remedies of their folders (their lines before
-# the library stopped naming flags).
-GYM_ADVICE = {
-    **ADVICE,
-    Remedy.REPLACE: "pass --overwrite to replace",
-    Remedy.ELSEWHERE: "choose another --out",
-}
-
-
 def _gym_threads(threads: int) -> None:
     # SB3's small MLPs run fastest on one thread; more only contend with other work.
     import torch
@@ -94,7 +86,7 @@ def _final_return(config: Path) -> float:
 
 
 @gym_app.command("expert")
-@on_error(interrupted=INTERRUPTED, advice=GYM_ADVICE)
+@on_error(interrupted=INTERRUPTED, advice=RUN_ADVICE)
 def gym_expert(
     env: str = typer.Argument(..., help="Acrobot-v1, MountainCar-v0, LunarLander-v3, ..."),
     out: Path = typer.Option(..., "--out", "-o", help="Expert folder to write."),
@@ -214,7 +206,7 @@ def gym_collect(
 
 
 @gym_app.command("rl")
-@on_error(interrupted=INTERRUPTED, advice=GYM_ADVICE)
+@on_error(interrupted=INTERRUPTED, advice=RUN_ADVICE)
 def gym_rl(
     env: str = typer.Argument(..., help="The environment."),
     reward_run: Path | None = typer.Option(
@@ -323,7 +315,7 @@ def gym_rl(
 
 
 @gym_app.command("irl")
-@on_error(interrupted=INTERRUPTED, advice=GYM_ADVICE)
+@on_error(interrupted=INTERRUPTED, advice=RUN_ADVICE)
 def gym_irl(
     env: str = typer.Argument(..., help="The task, e.g. MountainCar-v0."),
     data: Path | None = typer.Option(

@@ -13,6 +13,7 @@ import typer
 from pokerirl.cli.app import (
     INTERRUPTED,
     RAY_HELP,
+    RUN_ADVICE,
     SEED_OPTION,
     Default,
     _backend,
@@ -23,7 +24,7 @@ from pokerirl.cli.app import (
     seed_list,
     settings_from_options,
 )
-from pokerirl.errors import ADVICE, InputError, Remedy, UsageError
+from pokerirl.errors import InputError, UsageError
 
 if TYPE_CHECKING:
     from pokerirl.irl.records import EpochMetrics
@@ -211,17 +212,8 @@ def tournament(
         echo(f"wrote {out}/report.md, report.json, per_seed.csv, per_seed.png, timings.json")
 
 
-# pokerirl train's words for the remedies of its run folders (its lines before the library
-# stopped naming flags).
-TRAIN_ADVICE = {
-    **ADVICE,
-    Remedy.REPLACE: "pass --overwrite to replace",
-    Remedy.ELSEWHERE: "choose another --out",
-}
-
-
 @app.command()
-@on_error(interrupted=INTERRUPTED, advice=TRAIN_ADVICE)
+@on_error(interrupted=INTERRUPTED, advice=RUN_ADVICE)
 def train(
     ctx: typer.Context,
     table: str = typer.Argument(..., help="Parquet decision table written by `pokerirl ingest`."),
