@@ -1,11 +1,12 @@
 """One error contract: what the library raises on purpose, and how a command reports it.
 
-Every error that pokerirl raises on purpose (bad input, a file that cannot be used, a unit
-made with other settings) derives from :class:`PokerIRLError`, and its message is one line
-that names the user's file or setting, never a command-line flag: the library does not know
-the command line. Where a command could get past it (another output folder, recomputing),
-the error says so as a :class:`Remedy`, and the command line adds the advice in terms of its
-own flags (:data:`ADVICE`).
+Every error that pokerirl raises on purpose (a bad setting: :class:`ConfigError`; a file or
+data that cannot be used: :class:`InputError`; a missing optional dependency:
+:class:`MissingExtra`; a unit made with other settings) derives from :class:`PokerIRLError`,
+and its message is one line that names the user's file or setting, never a command-line
+flag: the library does not know the command line. Where a command could get past it (another
+output folder, recomputing), the error says so as a :class:`Remedy`, and the command line
+adds the advice in terms of its own flags (:data:`ADVICE`).
 
 :class:`one_line_errors` is the contract of every command, as a decorator or a ``with``
 block:
@@ -38,7 +39,7 @@ import contextlib
 import os
 import sys
 import traceback
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from enum import StrEnum
 from types import TracebackType
 from typing import ClassVar, Literal, TextIO
@@ -89,6 +90,20 @@ class UsageError(PokerIRLError):
     line, not the library."""
 
     exit_code: ClassVar[int] = 2
+
+
+class ConfigError(PokerIRLError, ValueError):
+    """A setting that cannot be used: one line naming the setting (and its file, when a file
+    holds it)."""
+
+
+class InputError(PokerIRLError, ValueError):
+    """A user's file or data that cannot be used (missing columns, a corrupt report, an
+    unknown agent): one line naming it."""
+
+
+class MissingExtra(PokerIRLError, ImportError):
+    """An optional dependency is missing: one line naming the pip extra that installs it."""
 
 
 def debug_enabled(environ: Mapping[str, str] | None = None) -> bool:
@@ -143,6 +158,8 @@ class one_line_errors(contextlib.ContextDecorator):  # lower case: a decorator
         debug: print tracebacks too; default: :func:`debug_enabled`, read when an error
             arrives (so a ``--debug`` handled after this object was made still counts).
         stream: where the lines go (default: stderr at the time of the error).
+        display: how a line is shown (the command line shows the bytes of a path that are
+            not UTF-8 as ``\\xff``); default: as it is.
     """
 
     def __init__(
@@ -152,11 +169,13 @@ class one_line_errors(contextlib.ContextDecorator):  # lower case: a decorator
         advice: Mapping[Remedy, str] = ADVICE,
         debug: bool | None = None,
         stream: TextIO | None = None,
+        display: Callable[[str], str] | None = None,
     ) -> None:
         self.interrupted = interrupted
         self.advice = advice
         self.debug = debug
         self.stream = stream
+        self.display = display
 
     def __enter__(self) -> one_line_errors:
         return self
@@ -179,6 +198,8 @@ class one_line_errors(contextlib.ContextDecorator):  # lower case: a decorator
         stream = self.stream or sys.stderr
         if self.debug if self.debug is not None else debug_enabled():
             traceback.print_exception(error, file=stream)
+        if self.display is not None:
+            line = self.display(line)
         colour = getattr(stream, "isatty", lambda: False)()
         stream.write(f"\x1b[31merror: {line}\x1b[0m\n" if colour else f"error: {line}\n")
         stream.flush()

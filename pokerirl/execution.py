@@ -63,6 +63,7 @@ from typing import Any, TypeVar
 from tqdm import tqdm
 
 from pokerirl import atomic
+from pokerirl.errors import ConfigError, PokerIRLError
 
 R = TypeVar("R")
 
@@ -72,7 +73,7 @@ SCRATCH_PREFIX = "pokerirl-scratch-"  # + the owner's pid: a worker's temporary 
 PRIVATE_RAY_PREFIX = "pokerirl-ray-"  # + the driver's pid: a private Ray instance's folder
 
 
-class ExecutionError(RuntimeError):
+class ExecutionError(PokerIRLError, RuntimeError):
     """A unit could not be run (its worker kept dying, Ray is missing); one line."""
 
 
@@ -93,15 +94,15 @@ class Backend:
 
     def __post_init__(self) -> None:
         if self.kind not in ("local", "ray"):
-            raise ValueError(f"unknown backend {self.kind!r} (local or ray)")
+            raise ConfigError(f"unknown backend {self.kind!r} (local or ray)")
         if self.jobs < 1:
-            raise ValueError(f"jobs must be at least 1, got {self.jobs}")
+            raise ConfigError(f"jobs must be at least 1, got {self.jobs}")
         if self.threads < 1:
-            raise ValueError(f"threads must be at least 1, got {self.threads}")
+            raise ConfigError(f"threads must be at least 1, got {self.threads}")
         if self.retries < 0:
-            raise ValueError(f"retries must be at least 0, got {self.retries}")
+            raise ConfigError(f"retries must be at least 0, got {self.retries}")
         if (self.kind == "ray") != bool(self.address):
-            raise ValueError("a Ray backend needs an address ('local' for a private one)")
+            raise ConfigError("a Ray backend needs an address ('local' for a private one)")
 
     def describe(self) -> str:
         """``local, 2 jobs`` or ``ray at ADDRESS``."""
@@ -129,7 +130,7 @@ def choose_backend(
     address = ray if ray is not None else environ.get("RAY_ADDRESS") or None
     if address is not None:
         if not address.strip():
-            raise ValueError("Ray needs an address (HOST:PORT) or 'local', got a blank one")
+            raise ConfigError("Ray needs an address (HOST:PORT) or 'local', got a blank one")
         return Backend(kind="ray", address=address.strip(), jobs=jobs, threads=threads)
     return Backend(jobs=jobs, threads=threads)
 

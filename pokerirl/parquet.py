@@ -21,6 +21,8 @@ import numpy as np
 import pyarrow as pa
 import pyarrow.parquet as pq
 
+from pokerirl.errors import InputError
+
 
 def read_parquet(
     path: str | os.PathLike[str],
@@ -41,15 +43,15 @@ def read_parquet(
             parquet = pq.ParquetFile(file)
             schema = parquet.schema_arrow
         except (pa.ArrowException, OSError) as error:
-            raise ValueError(f"cannot read {path} as Parquet: {first_line(error)}") from None
+            raise InputError(f"cannot read {path} as Parquet: {first_line(error)}") from None
         missing = [name for name in required if name not in schema.names]
         if missing:
-            raise ValueError(f"{path} lacks required column(s): {', '.join(missing)}")
+            raise InputError(f"{path} lacks required column(s): {', '.join(missing)}")
         columns = [*required, *(c for c in optional if c in schema.names)]
         try:
             return parquet.read(columns=columns)
         except (pa.ArrowException, OSError) as error:
-            raise ValueError(f"cannot read {path}: {first_line(error)}") from None
+            raise InputError(f"cannot read {path}: {first_line(error)}") from None
 
 
 def fixed_width(
@@ -63,16 +65,16 @@ def fixed_width(
     kind = column.type
     if not pa.types.is_fixed_size_list(kind) or (width is not None and kind.list_size != width):
         size = "" if width is None else f"[{width}]"
-        raise ValueError(f"{source}: column {name!r} must be fixed_size_list{size}, got {kind}")
+        raise InputError(f"{source}: column {name!r} must be fixed_size_list{size}, got {kind}")
     value_type = kind.value_type
     numeric = pa.types.is_integer(value_type) or pa.types.is_boolean(value_type)
     if not (numeric or (floating and pa.types.is_floating(value_type))):
-        raise ValueError(f"{source}: column {name!r} holds {value_type}, not numbers")
+        raise InputError(f"{source}: column {name!r} holds {value_type}, not numbers")
     array = column.combine_chunks()
     # flatten() honours slicing offsets, unlike .values; null children would be corrupt data.
     values = array.flatten()
     if values.null_count:
-        raise ValueError(f"{source}: column {name!r} has null entries inside its lists")
+        raise InputError(f"{source}: column {name!r} has null entries inside its lists")
     return values.to_numpy(zero_copy_only=False).reshape(len(array), kind.list_size)
 
 

@@ -13,6 +13,8 @@ from __future__ import annotations
 import re
 from collections.abc import Sequence
 
+from pokerirl.errors import ConfigError
+
 
 def parse_seeds(text: str) -> tuple[int, ...]:
     """Seeds from ``"0-19"``, ``"3"`` or ``"0-4,10,12-13"``: sorted, without repeats.
@@ -29,13 +31,13 @@ def seeds_as_written(text: str) -> tuple[int, ...]:
     for part in text.split(","):
         match = re.fullmatch(r"\s*(\d+)\s*(?:-\s*(\d+)\s*)?", part)
         if match is None:
-            raise ValueError(
+            raise ConfigError(
                 f"bad seed range {text!r}: use non-negative integers like 0-19 or 0-4,10"
             )
         first = int(match[1])
         last = int(match[2]) if match[2] is not None else first
         if last < first:
-            raise ValueError(f"empty seed range {part.strip()!r}")
+            raise ConfigError(f"empty seed range {part.strip()!r}")
         seeds.extend(range(first, last + 1))
     return tuple(seeds)
 

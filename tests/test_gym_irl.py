@@ -147,15 +147,15 @@ def test_discrete_action_count_comes_from_the_env_not_the_data(tmp_path: Path) -
 
 def test_bad_inputs_fail_in_one_line(tmp_path: Path) -> None:
     base = ["gym", "irl", "MountainCar-v0", "--out", str(tmp_path / "irl")]
-    cases = {
-        "no such file": ["--data", str(tmp_path / "missing.parquet")],
-        "--algo must be": ["--algo", "gail"],
-        "--preset must be": ["--preset", "huge"],
-        "continuous actions": ["--data", str(_pendulum(tmp_path))],
+    cases = {  # the message: the exit code (2: a usage error), the options
+        "no such file": (1, ["--data", str(tmp_path / "missing.parquet")]),
+        "--algo must be": (2, ["--algo", "gail"]),
+        "--preset must be": (2, ["--preset", "huge"]),
+        "continuous actions": (1, ["--data", str(_pendulum(tmp_path))]),
     }
-    for message, extra in cases.items():
+    for message, (code, extra) in cases.items():
         result = CliRunner().invoke(app, [*base, *extra])
-        assert result.exit_code == 1 and message in result.output, (extra, result.output)
+        assert result.exit_code == code and message in result.output, (extra, result.output)
         assert len(result.output.strip().splitlines()) == 1
     assert not list((tmp_path / "irl").glob("run-*"))
 

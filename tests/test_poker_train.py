@@ -94,4 +94,4 @@ def test_library_messages_name_no_flag(tmp_path: Path) -> None:
     with pytest.raises(ValueError, match=r"^runs must be at least 1, got 0$"):
         train_runs(tmp_path / "t.parquet", tmp_path / "out", runs=0)
     code, stderr = _train(tmp_path / "t.parquet", tmp_path / "out", "--runs", "2", "--ray", " ")
-    assert (code, stderr) == (1, "error: --ray needs an address (HOST:PORT) or 'local'\n")
+    assert (code, stderr) == (2, "error: --ray needs an address (HOST:PORT) or 'local'\n")  # usage

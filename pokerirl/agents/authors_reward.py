@@ -38,6 +38,7 @@ import numpy as np
 
 from pokerirl.agents.rewards import AUTHORS_PREFIX, Decisions, PokerReward
 from pokerirl.encoding import NUM_ACTIONS
+from pokerirl.errors import InputError
 
 STATE_SIZE = 61  # 7 cards x 7 bits, then 4 rounds x 3 bits
 HIDDEN = 64
@@ -61,7 +62,7 @@ LEAKY_SLOPE = 0.01  # torch.nn.functional.leaky_relu's default, which their forw
 _RANK_BITS, _SUIT_BITS, _RAISE_BITS = 4, 3, 3
 
 
-class AuthorsFileError(ValueError):
+class AuthorsFileError(InputError):
     """A file that is not one of the authors' poker rewards, in one line naming it."""
 
 

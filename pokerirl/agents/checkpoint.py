@@ -31,6 +31,7 @@ import torch
 from pokerirl.agents.dqn import GreedyQAgent, QNetwork
 from pokerirl.agents.registry import CONFIG_FILE, KEPT_FILE, MODEL_FILE
 from pokerirl.atomic import write_bytes, write_torch
+from pokerirl.errors import InputError
 
 
 class Plays(StrEnum):
@@ -104,7 +105,7 @@ def load_agent(folder: str | os.PathLike[str]) -> GreedyQAgent:
     """
     folder = Path(folder)
     if not is_finished(folder):
-        raise ValueError(f"{folder}: not an agent folder (needs {MODEL_FILE} and {CONFIG_FILE})")
+        raise InputError(f"{folder}: not an agent folder (needs {MODEL_FILE} and {CONFIG_FILE})")
     hidden, plays = _read_config(folder / CONFIG_FILE)
     checkpoint = folder / (KEPT_FILE if plays == Plays.KEPT else MODEL_FILE)
     state = _read_state_dict(checkpoint)
@@ -121,8 +122,8 @@ def load_agent(folder: str | os.PathLike[str]) -> GreedyQAgent:
     )
 
 
-def _bad(path: Path, reason: str) -> ValueError:
-    return ValueError(f"{path}: cannot load agent: {reason}")
+def _bad(path: Path, reason: str) -> InputError:
+    return InputError(f"{path}: cannot load agent: {reason}")
 
 
 def _first_line(error: BaseException) -> str:

@@ -38,6 +38,7 @@ from tqdm import tqdm
 
 from pokerirl.agents.rewards import RAISE_COUNTS, Decisions, PokerReward, as_poker_reward
 from pokerirl.encoding import NUM_ACTIONS, OBS_SIZE, encode_obs
+from pokerirl.errors import ConfigError
 from pokerirl.game.agents import Agent, RandomAgent, agent_actions
 from pokerirl.game.deals import DEAL_BLOCK, deal_cards
 from pokerirl.game.engine import LimitHoldemBatch
@@ -95,20 +96,20 @@ class DQNConfig:
         )  # fmt: skip
         for name in positive:
             if getattr(self, name) < 1:
-                raise ValueError(f"{name} must be at least 1, got {getattr(self, name)}")
+                raise ConfigError(f"{name} must be at least 1, got {getattr(self, name)}")
         if max(self.batch_size, self.replay_init, self.concurrent_hands) > self.replay_size:
-            raise ValueError(
+            raise ConfigError(
                 "batch_size, replay_init and concurrent_hands must not exceed replay_size"
             )
         if not self.learning_rate > 0 or not 0 <= self.gamma <= 1:
-            raise ValueError("learning_rate must be positive and gamma in [0, 1]")
+            raise ConfigError("learning_rate must be positive and gamma in [0, 1]")
         if not (0 <= self.epsilon_start <= 1 and 0 <= self.epsilon_end <= 1):
-            raise ValueError(
+            raise ConfigError(
                 f"epsilon_start and epsilon_end must lie in [0, 1], got {self.epsilon_start} "
                 f"and {self.epsilon_end}"
             )
         if not self.hidden or min(self.hidden) < 1:
-            raise ValueError(f"hidden must be positive layer sizes, got {self.hidden}")
+            raise ConfigError(f"hidden must be positive layer sizes, got {self.hidden}")
 
 
 class QNetwork(nn.Module):
@@ -436,13 +437,13 @@ def _check_training(
 ) -> None:
     """``train_dqn``'s arguments that no type checks, in one line each."""
     if hands < 1:
-        raise ValueError(f"hands must be at least 1, got {hands}")
+        raise ConfigError(f"hands must be at least 1, got {hands}")
     if not 0.0 <= payoff_weight <= 1.0:
-        raise ValueError(f"payoff weight must be in [0, 1], got {payoff_weight}")
+        raise ConfigError(f"payoff weight must be in [0, 1], got {payoff_weight}")
     if isinstance(opponent, str) and opponent != SELF_PLAY:
-        raise ValueError(f"opponent must be an agent or {SELF_PLAY!r}, got {opponent!r}")
+        raise ConfigError(f"opponent must be an agent or {SELF_PLAY!r}, got {opponent!r}")
     if raise_counts not in RAISE_COUNTS:
-        raise ValueError(f"raise_counts must be one of {', '.join(RAISE_COUNTS)}")
+        raise ConfigError(f"raise_counts must be one of {', '.join(RAISE_COUNTS)}")
 
 
 @dataclass(kw_only=True)

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from pokerirl.errors import InputError
 from pokerirl.game.agents import BUILT_IN_AGENTS, Agent, make_agent
 
 RLCARD_PREFIX = "rlcard:"
@@ -34,10 +35,10 @@ def resolve_agent(spec: str) -> Agent:
 
         return load_agent(path)
     if path.exists():
-        raise ValueError(f"{spec}: not an agent folder")
+        raise InputError(f"{spec}: not an agent folder")
     if len(path.parts) > 1:  # a path, not a name (named as it is: repr would hide its bytes)
         known = ", ".join(sorted(BUILT_IN_AGENTS))
-        raise ValueError(f"{spec}: no such agent folder, and not a built-in agent ({known})")
+        raise InputError(f"{spec}: no such agent folder, and not a built-in agent ({known})")
     return make_agent(spec)  # raises: unknown name, listing the built-ins
 
 

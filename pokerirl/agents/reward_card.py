@@ -41,6 +41,7 @@ import numpy as np
 
 from pokerirl.agents.rewards import Decisions, PokerReward
 from pokerirl.encoding import ACTIONS, CALL, CHECK, FOLD, NUM_ACTIONS, parse_card
+from pokerirl.errors import InputError
 from pokerirl.game.agents import street_of
 from pokerirl.game.evaluator import hand_strength
 
@@ -156,7 +157,7 @@ class CardStates:
         hand_ids = table.column("hand_id").to_pylist()
         keep = np.ones(len(hand_ids), bool) if groups is None else np.isin(hand_ids, list(groups))
         if not keep.any():
-            raise ValueError(f"{path}: none of its rows are in the states asked for")
+            raise InputError(f"{path}: none of its rows are in the states asked for")
         index = np.flatnonzero(keep)
         hole_texts, board_texts = (table.column(c).to_pylist() for c in ("hole_cards", "board"))
         hole = [hole_texts[i] for i in index]
@@ -213,7 +214,7 @@ class RewardCard:
     def from_json(cls, text: str) -> RewardCard:
         data = json.loads(text)
         if not isinstance(data, dict) or data.get("format") != CARD_FORMAT:
-            raise ValueError("not a pokerirl reward card")
+            raise InputError("not a pokerirl reward card")
         return cls(**data)
 
     def render(self) -> str:

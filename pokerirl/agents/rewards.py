@@ -35,6 +35,7 @@ from pathlib import Path
 import numpy as np
 
 from pokerirl.encoding import MAX_RAISES, NUM_ACTIONS, NUM_ROUNDS, OBS_SIZE, RAISE_OFFSET
+from pokerirl.errors import ConfigError, InputError
 
 
 class Transform(StrEnum):
@@ -143,7 +144,7 @@ def transform_values(values: np.ndarray, legal_mask: np.ndarray, transform: str)
     1.0
     """
     if transform not in TRANSFORMS:
-        raise ValueError(f"unknown reward transform {transform!r} ({', '.join(TRANSFORMS)})")
+        raise ConfigError(f"unknown reward transform {transform!r} ({', '.join(TRANSFORMS)})")
     legal_mask = np.asarray(legal_mask, dtype=bool)
     values = np.where(legal_mask, np.asarray(values, dtype=np.float64), np.nan)
     if transform == Transform.CENTERED:
@@ -159,7 +160,7 @@ class TransformedReward(PokerReward):
 
     def __init__(self, base: PokerReward, transform: str) -> None:
         if transform not in TRANSFORMS:
-            raise ValueError(f"unknown reward transform {transform!r} ({', '.join(TRANSFORMS)})")
+            raise ConfigError(f"unknown reward transform {transform!r} ({', '.join(TRANSFORMS)})")
         self.base, self.transform = base, transform
         self.name = base.name if transform == Transform.RAW else f"{base.name} ({transform})"
         self.fingerprint, self.needs_cards = base.fingerprint, base.needs_cards
@@ -215,11 +216,11 @@ def reward_source_fingerprint(spec: str | os.PathLike[str]) -> str:
     if is_authors_spec(spec):
         path = _authors_path(spec)
         if not path.is_file():
-            raise ValueError(f"{spec}: no such file (authors:FILE names an authors' reward)")
+            raise InputError(f"{spec}: no such file (authors:FILE names an authors' reward)")
         return files_fingerprint(path.parent, (path.name,))
     for name in REWARD_RUN_FILES:
         if not (Path(spec) / name).is_file():
-            raise ValueError(f"{spec}: not a reward run (no {name}) nor authors:FILE")
+            raise InputError(f"{spec}: not a reward run (no {name}) nor authors:FILE")
     _check_poker_run(Path(spec))
     return files_fingerprint(spec, REWARD_RUN_FILES)
 
@@ -238,12 +239,12 @@ def _check_poker_run(run: Path) -> None:
     except (OSError, ValueError, AttributeError, KeyError, TypeError):
         return
     if task is not None:
-        raise ValueError(
+        raise InputError(
             f"{run}: a Gymnasium IRL run (reward of {task}), not a poker reward; "
             "give a run of pokerirl train"
         )
     if sizes != (OBS_SIZE, NUM_ACTIONS):
-        raise ValueError(
+        raise InputError(
             f"{run}: a reward on {sizes[0]}-d observations and {sizes[1]} actions, not "
             f"poker's {OBS_SIZE}-d observation and {NUM_ACTIONS} actions"
         )

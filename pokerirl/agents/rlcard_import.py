@@ -27,6 +27,7 @@ from pokerirl.agents.checkpoint import save_agent
 from pokerirl.agents.dqn import GreedyQAgent, QNetwork
 from pokerirl.agents.registry import RLCARD_PREFIX
 from pokerirl.encoding import NUM_ACTIONS, OBS_SIZE
+from pokerirl.errors import InputError
 
 _LAYER_KEY = re.compile(r"^fc_layers\.(\d+)\.(.+)$")
 
@@ -37,7 +38,7 @@ class UntrustedCheckpointWarning(UserWarning):
 
 def _read_checkpoint(path: Path) -> Mapping[str, Any]:
     if not path.is_file():
-        raise ValueError(f"{path}: no such RLCard checkpoint file")
+        raise InputError(f"{path}: no such RLCard checkpoint file")
     warnings.warn(
         f"{RLCARD_PREFIX}{path}: unpickling an RLCard checkpoint runs any code it holds; "
         "load only files you trust",
@@ -50,29 +51,29 @@ def _read_checkpoint(path: Path) -> Mapping[str, Any]:
         checkpoint = torch.load(path, map_location="cpu", weights_only=False)
     except Exception as error:
         reason = (str(error).strip() or repr(error)).splitlines()[0]
-        raise ValueError(f"{path}: cannot read RLCard checkpoint: {reason}") from None
+        raise InputError(f"{path}: cannot read RLCard checkpoint: {reason}") from None
     if not isinstance(checkpoint, dict) or checkpoint.get("agent_type") != "DQNAgent":
-        raise ValueError(f"{path}: not an RLCard DQNAgent checkpoint")
+        raise InputError(f"{path}: not an RLCard DQNAgent checkpoint")
     for key in ("q_estimator", "num_actions"):
         if key not in checkpoint:
-            raise ValueError(f"{path}: not an RLCard DQNAgent checkpoint (no {key})")
+            raise InputError(f"{path}: not an RLCard DQNAgent checkpoint (no {key})")
     estimator = checkpoint["q_estimator"]
     if not isinstance(estimator, dict) or not {"state_shape", "mlp_layers", "qnet"} <= set(
         estimator
     ):
-        raise ValueError(f"{path}: not an RLCard DQNAgent checkpoint (bad q_estimator)")
+        raise InputError(f"{path}: not an RLCard DQNAgent checkpoint (bad q_estimator)")
     try:
         shape = list(estimator["state_shape"] or [])
         hidden = [int(width) for width in estimator["mlp_layers"]]
     except (TypeError, ValueError):
-        raise ValueError(f"{path}: not an RLCard DQNAgent checkpoint (bad q_estimator)") from None
+        raise InputError(f"{path}: not an RLCard DQNAgent checkpoint (bad q_estimator)") from None
     if shape != [OBS_SIZE] or checkpoint["num_actions"] != NUM_ACTIONS:
-        raise ValueError(
+        raise InputError(
             f"{path}: state_shape {shape} and num_actions {checkpoint['num_actions']} are not "
             f"limit hold'em's [{OBS_SIZE}] and {NUM_ACTIONS}"
         )
     if not hidden or min(hidden) < 1 or not isinstance(estimator["qnet"], dict):
-        raise ValueError(f"{path}: not an RLCard DQNAgent checkpoint (bad q_estimator)")
+        raise InputError(f"{path}: not an RLCard DQNAgent checkpoint (bad q_estimator)")
     return checkpoint
 
 
@@ -82,7 +83,7 @@ def _convert_state_dict(qnet_state: dict[str, torch.Tensor]) -> dict[str, torch.
     for key, value in qnet_state.items():
         match = _LAYER_KEY.match(key)
         if match is None:
-            raise ValueError(f"unexpected RLCard q-network key {key!r}")
+            raise InputError(f"unexpected RLCard q-network key {key!r}")
         index, rest = int(match.group(1)), match.group(2)
         converted[f"norm.{rest}" if index == 1 else f"mlp.{index - 2}.{rest}"] = value
     return converted
@@ -126,7 +127,7 @@ def _agent_and_checkpoint(path: Path) -> tuple[GreedyQAgent, Mapping[str, Any]]:
     try:
         network.load_state_dict(_convert_state_dict(estimator["qnet"]))
     except (RuntimeError, ValueError, TypeError, AttributeError) as error:
-        raise ValueError(f"{path}: q-network does not fit: {str(error).splitlines()[0]}") from None
+        raise InputError(f"{path}: q-network does not fit: {str(error).splitlines()[0]}") from None
     digest = hashlib.sha256(path.read_bytes()).hexdigest()
     agent = GreedyQAgent(
         name=f"{RLCARD_PREFIX}{path}", network=network.eval(), fingerprint=f"sha256:{digest}"
@@ -144,7 +145,7 @@ def import_rlcard_dqn(path: str | os.PathLike[str], out: str | os.PathLike[str])
     try:
         dqn = rlcard_checkpoint_config(checkpoint)
     except (KeyError, TypeError, ValueError) as error:
-        raise ValueError(f"{path}: RLCard checkpoint without its settings ({error!r})") from None
+        raise InputError(f"{path}: RLCard checkpoint without its settings ({error!r})") from None
     config = {
         "hidden": [int(width) for width in checkpoint["q_estimator"]["mlp_layers"]],
         "source": {"kind": "rlcard-1.2.0-dqn", "path": str(path), "fingerprint": agent.fingerprint},

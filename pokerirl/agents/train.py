@@ -85,6 +85,7 @@ from pokerirl.agents.rewards import (
     reward_source_fingerprint,
 )
 from pokerirl.atomic import atomic_path
+from pokerirl.errors import ConfigError, InputError
 from pokerirl.errors import report as error_report
 from pokerirl.execution import Backend, read_files, write_files
 from pokerirl.game import make_agent, play_match
@@ -145,36 +146,36 @@ class TrainConfig:
 
     def __post_init__(self) -> None:
         if self.reward not in REWARD_MODES:
-            raise ValueError(f"unknown reward mode {self.reward!r} (sparse or learned)")
+            raise ConfigError(f"unknown reward mode {self.reward!r} (sparse or learned)")
         if self.reward == RewardMode.SPARSE and self.reward_run is not None:
-            raise ValueError("--reward-run needs --reward learned")
+            raise ConfigError("--reward-run needs --reward learned")
         if self.reward == RewardMode.SPARSE and self.payoff_weight != 0.0:
-            raise ValueError("--payoff-weight needs --reward learned")
+            raise ConfigError("--payoff-weight needs --reward learned")
         if not 0.0 <= self.payoff_weight <= 1.0:
-            raise ValueError(f"payoff weight must be in [0, 1], got {self.payoff_weight}")
+            raise ConfigError(f"payoff weight must be in [0, 1], got {self.payoff_weight}")
         if self.hands < 1 or self.eval_every < 1:
-            raise ValueError("hands and eval_every must be at least 1")
+            raise ConfigError("hands and eval_every must be at least 1")
         if self.seed < 0 or self.eval_seed < 0:
-            raise ValueError("seeds must be non-negative")
+            raise ConfigError("seeds must be non-negative")
         if self.protocol not in PROTOCOLS:
-            raise ValueError(f"unknown protocol {self.protocol!r} ({', '.join(PROTOCOLS)})")
+            raise ConfigError(f"unknown protocol {self.protocol!r} ({', '.join(PROTOCOLS)})")
         duplicate = self.protocol == TrainingProtocol.POKERIRL
         if self.eval_hands < 2 or (duplicate and self.eval_hands % 2):
-            raise ValueError(f"eval_hands must be even and at least 2, got {self.eval_hands}")
+            raise ConfigError(f"eval_hands must be even and at least 2, got {self.eval_hands}")
         if self.reward_transform not in TRANSFORMS:
-            raise ValueError(
+            raise ConfigError(
                 f"unknown reward transform {self.reward_transform!r} ({', '.join(TRANSFORMS)})"
             )
         if self.raise_counts not in RAISE_COUNTS:
-            raise ValueError(f"--raise-counts must be one of {', '.join(RAISE_COUNTS)}")
+            raise ConfigError(f"--raise-counts must be one of {', '.join(RAISE_COUNTS)}")
         if self.reward == RewardMode.SPARSE and (
             self.reward_transform != Transform.RAW or self.raise_counts != RaiseCounts.DECISION
         ):
-            raise ValueError("--reward-transform and --raise-counts need --reward learned")
+            raise ConfigError("--reward-transform and --raise-counts need --reward learned")
         if self.play not in PLAYS:
-            raise ValueError(f"--play must be one of {', '.join(PLAYS)}")
+            raise ConfigError(f"--play must be one of {', '.join(PLAYS)}")
         if self.play == Plays.KEPT and self.protocol != TrainingProtocol.AUTHORS:
-            raise ValueError("--play kept needs --protocol authors (its kept checkpoint)")
+            raise ConfigError("--play kept needs --protocol authors (its kept checkpoint)")
 
 
 _OURS = TrainConfig(hands=1, seed=0)
@@ -288,7 +289,7 @@ def agent_preset(name: str, **overrides: Any) -> TrainConfig:
     """The preset ``name`` (:data:`AGENT_PRESETS`), then ``overrides`` (None values ignored);
     ``hands`` and ``seed`` may come from either. ``dqn`` overrides may be a dict of fields."""
     if name not in AGENT_PRESETS:
-        raise ValueError(f"unknown agent preset {name!r}; choose {', '.join(AGENT_PRESETS)}")
+        raise ConfigError(f"unknown agent preset {name!r}; choose {', '.join(AGENT_PRESETS)}")
     settings = {"seed": 0, **AGENT_PRESETS[name]}
     changes = {k: v for k, v in overrides.items() if v is not None}
     dqn = changes.pop("dqn", {})
@@ -315,7 +316,7 @@ def _typed(key: str, hint: str, value: Any) -> Any:
         if all(isinstance(w, int) and not isinstance(w, bool) for w in value):
             return tuple(value)
     kind = {"int": "an integer", "float": "a number", "tuple[int, ...]": "a list of integers"}
-    raise ValueError(f"{key} must be {kind.get(hint, 'a string')}")
+    raise ConfigError(f"{key} must be {kind.get(hint, 'a string')}")
 
 
 def load_agent_config(path: str | os.PathLike[str]) -> dict[str, Any]:
@@ -331,19 +332,19 @@ def load_agent_config(path: str | os.PathLike[str]) -> dict[str, Any]:
     try:
         settings = tomllib.loads(path.read_text(encoding="utf-8"))
     except FileNotFoundError:
-        raise ValueError(f"config file not found: {path}") from None
+        raise ConfigError(f"config file not found: {path}") from None
     except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as error:
-        raise ValueError(f"cannot read {path} as TOML: {error}") from None
+        raise ConfigError(f"cannot read {path} as TOML: {error}") from None
     found: dict[str, Any] = {"dqn": {}}
     for key, value in settings.items():
         hint = _TRAIN_KEYS.get(key) or _DQN_KEYS.get(key)
         if hint is None or key == "seed":
             known = sorted({*_TRAIN_KEYS, *_DQN_KEYS} - {"seed"})
-            raise ValueError(f"{path}: unknown setting {key!r} (known: {', '.join(known)})")
+            raise ConfigError(f"{path}: unknown setting {key!r} (known: {', '.join(known)})")
         try:
             checked = _typed(key, str(hint), value)
         except ValueError as error:
-            raise ValueError(f"{path}: {error}, got {value!r}") from None
+            raise ConfigError(f"{path}: {error}, got {value!r}") from None
         (found["dqn"] if key in _DQN_KEYS else found)[key] = checked
     return found
 
@@ -465,10 +466,10 @@ def train_seeds(
     others map to their last evaluation. One progress bar counts seeds.
     """
     if jobs < 1:
-        raise ValueError(f"jobs must be at least 1, got {jobs}")
+        raise ConfigError(f"jobs must be at least 1, got {jobs}")
     out = Path(out)
     if out.exists() and not out.is_dir():
-        raise ValueError(f"{out} exists and is not a folder")
+        raise InputError(f"{out} exists and is not a folder")
     units = {s: (out / f"seed-{s}", dataclasses.replace(config, seed=s)) for s in seeds}
     return _train_many(
         units,
@@ -535,7 +536,7 @@ def _train_many(
     reward_print = None
     if first.reward == RewardMode.LEARNED:
         if first.reward_run is None:
-            raise ValueError("--reward learned needs --reward-run RUN_DIR (or authors:FILE)")
+            raise ConfigError("--reward learned needs --reward-run RUN_DIR (or authors:FILE)")
         reward_print = reward_run_fingerprint(first.reward_run)
         if reward_fn is None:
             load_reward_fn(first.reward_run)  # errors name the user's files, not a worker's copy

@@ -11,8 +11,8 @@ from pokerirl.cli import (
     poker,  # noqa: F401
     studies,  # noqa: F401
 )
-from pokerirl.cli.app import app, fail
+from pokerirl.cli.app import app
 
 # isort: on
 
-__all__ = ["app", "fail"]
+__all__ = ["app"]

@@ -1,15 +1,24 @@
-"""The ``pokerirl`` command group, its one-line error handling and the helpers every command
-shares; the commands live beside it, by group (poker, studies, gym)."""
+"""The ``pokerirl`` command group, its error contract and the helpers every command shares;
+the commands live beside it, by group (poker, studies, gym).
+
+The error contract (:mod:`pokerirl.errors`) is applied once, by the group, around every
+command: a command raises (:class:`~pokerirl.errors.UsageError` for a command line that
+cannot be run, the library's :class:`~pokerirl.errors.PokerIRLError` for the rest) and never
+catches to print. :func:`on_error` gives a command its own Ctrl-C line or advice.
+"""
 
 from __future__ import annotations
 
+import dataclasses
+import functools
+import importlib
 import os
 import re
 import sys
 import warnings
-from collections.abc import Iterator, Mapping, Sequence
-from contextlib import contextmanager
-from typing import Any, NoReturn
+from collections.abc import Callable, Mapping, Sequence
+from types import TracebackType
+from typing import Any, Literal, ParamSpec, TypeVar
 
 import typer
 from typer.core import TyperGroup
@@ -17,12 +26,15 @@ from typer.core import TyperGroup
 from pokerirl import execution  # light: tqdm only; ray loads when chosen
 from pokerirl.errors import (
     ADVICE,
-    PokerIRLError,
+    DEBUG_VARIABLE,
+    ConfigError,
     Remedy,
     UsageError,
-    describe_os_error,
-    report,
+    one_line_errors,
 )
+
+P = ParamSpec("P")
+T = TypeVar("T")
 
 
 def _command_line_errors() -> tuple[type[Exception], ...]:
@@ -44,10 +56,11 @@ _COMMAND_LINE_ERRORS = _command_line_errors()
 
 
 class OneLineErrors(TyperGroup):
-    """The command group, with usage errors as one ``error: ...`` line (exit code 2) instead of
-    click's usage text or typer's boxed panel, and warnings (such as the library's warning
-    before it unpickles an ``rlcard:`` checkpoint) as one ``warning: ...`` line on stderr.
-    Help (``--help``, or no arguments) is unchanged.
+    """The command group: every command runs under the error contract (:func:`command_errors`,
+    applied once here, around every command's invoke); the parser's usage errors are one
+    ``error: ...`` line (exit code 2) instead of click's usage text or typer's boxed panel;
+    warnings (such as the library's warning before it unpickles an ``rlcard:`` checkpoint)
+    are one ``warning: ...`` line on stderr. Help (``--help``, or no arguments) is unchanged.
 
     Works wherever the group's ``main`` runs: the ``pokerirl`` script (``pokerirl.cli:app``),
     ``python -m pokerirl`` and typer's ``CliRunner``.
@@ -84,6 +97,113 @@ class OneLineErrors(TyperGroup):
             typer.secho("error: aborted", err=True, fg=typer.colors.RED)
             sys.exit(1)
         sys.exit(result if isinstance(result, int) else 0)
+
+    def invoke(self, ctx: Any) -> Any:
+        # Around the callback (--debug) and the command, nested groups included; the parser's
+        # own errors pass through to main.
+        with command_errors():
+            return super().invoke(ctx)
+
+
+class command_errors(one_line_errors):  # lower case: a decorator
+    """:class:`~pokerirl.errors.one_line_errors` as the command line shows it: paths'
+    undecodable bytes as ``\\xff``; a closed stdout (``pokerirl report DIR | head``) is left
+    to click, which exits quietly."""
+
+    def __init__(
+        self, *, interrupted: str = "interrupted", advice: Mapping[Remedy, str] = ADVICE
+    ) -> None:
+        super().__init__(interrupted=interrupted, advice=advice, display=display_error)
+
+    def __exit__(
+        self,
+        kind: type[BaseException] | None,
+        error: BaseException | None,
+        trace: TracebackType | None,
+    ) -> Literal[False]:
+        if isinstance(error, BrokenPipeError):
+            return False
+        return super().__exit__(kind, error, trace)
+
+
+def on_error(
+    *, interrupted: str = "interrupted", advice: Mapping[Remedy, str] = ADVICE
+) -> Callable[[Callable[P, T]], Callable[P, T]]:
+    """A command's own error contract: its Ctrl-C line (a resumable command says how to
+    resume: :data:`INTERRUPTED`) or its words for the remedies. Put it below
+    ``@app.command()``; the group's contract covers every other command."""
+
+    def decorate(command: Callable[P, T]) -> Callable[P, T]:
+        @functools.wraps(command)
+        def run(*args: P.args, **kwargs: P.kwargs) -> T:
+            with command_errors(interrupted=interrupted, advice=advice):
+                return command(*args, **kwargs)
+
+        return run
+
+    return decorate
+
+
+def settings_from_options(make: Callable[..., T], /, *args: Any, **options: Any) -> T:
+    """``make(*args, **options)``: a frozen config dataclass (or the function that builds
+    one) from a command's options, checked before any work. Its :class:`ConfigError` is a
+    usage error (exit code 2, like the parser's own).
+
+    >>> from pokerirl.studies.poker.transfer import TransferConfig
+    >>> settings_from_options(TransferConfig, hands=10).hands
+    10
+    >>> settings_from_options(TransferConfig, hands=0)
+    Traceback (most recent call last):
+    ...
+    pokerirl.errors.UsageError: need seeds, hands >= 1 and an even eval_hands >= 2
+    """
+    try:
+        return make(*args, **options)
+    except ConfigError as error:
+        raise UsageError(str(error)) from error
+
+
+class Default:
+    """A typer option's default, read from a config dataclass's field: declared once, in the
+    dataclass, and shown by ``--help``. Lazy: the module is imported when the default is used
+    or shown, never when the command line starts. A tuple is given as the command line
+    writes it (``raw,centered``).
+
+    >>> Default("pokerirl.studies.poker.transfer:TransferConfig", "hands")()
+    50000
+    >>> str(Default("pokerirl.studies.poker.transfer:TransferConfig", "transforms"))
+    'raw,centered,log_softmax'
+    """
+
+    def __init__(self, config: str, field: str) -> None:
+        self.config, self.field = config, field
+
+    def __call__(self) -> Any:
+        module, _, name = self.config.partition(":")
+        config = getattr(importlib.import_module(module), name)
+        field = {f.name: f for f in dataclasses.fields(config)}[self.field]
+        if field.default is dataclasses.MISSING:
+            value = field.default_factory()  # type: ignore[operator]  # has one: no default
+        else:
+            value = field.default
+        return ",".join(map(str, value)) if isinstance(value, tuple) else value
+
+    def __str__(self) -> str:
+        return str(self())
+
+    def __repr__(self) -> str:
+        return f"Default({self.config!r}, {self.field!r})"
+
+
+def given(ctx: typer.Context, **options: T) -> dict[str, T]:
+    """The ``options`` the command line set (not left at their default), for settings that
+    a preset or a ``--config`` file gives otherwise."""
+    left = ("DEFAULT", "DEFAULT_MAP")  # by name: typer's click or click's ParameterSource
+    return {
+        name: value
+        for name, value in options.items()
+        if getattr(ctx.get_parameter_source(name), "name", "DEFAULT") not in left
+    }
 
 
 def _one_line_warning(message: Warning | str, *_: Any, **__: Any) -> None:
@@ -135,44 +255,10 @@ def display_error(text: str) -> str:
 _REPR_SURROGATE = re.compile(r"\\udc([89a-f][0-9a-f])")  # an undecodable byte, as repr shows it
 
 
-def fail(message: str, code: int = 1) -> NoReturn:
-    """Print a one-line error to stderr and exit non-zero, without a traceback."""
-    typer.secho(f"error: {display_error(message)}", err=True, fg=typer.colors.RED)
-    raise typer.Exit(code)
-
-
 def echo(message: str = "", *, nl: bool = True) -> None:
     """``typer.echo`` of a line that may hold paths (see :func:`display`): a name that is
     not UTF-8 cannot stop a command after its work is done."""
     typer.echo(display(message), nl=nl)
-
-
-def error_line(error: Exception, path: str | os.PathLike[str] | None = None) -> str:
-    """An error's one line; an ``OSError`` as ``FILE: reason``, naming ``path`` (the user's)
-    when the error names no file."""
-    if not isinstance(error, OSError):
-        return str(error)
-    if error.filename is None and path is not None:
-        return f"{os.fsdecode(path)}: {error.strerror or error}"
-    return describe_os_error(error)
-
-
-def advised(error: Exception, advice: Mapping[Remedy, str] = ADVICE) -> str:
-    """An error's one line with the command line's advice for its remedy appended: the
-    library names no flag (``out/run already holds files``), the command adds its own
-    (``; pass --overwrite to replace``). An error without a remedy is its message."""
-    found = report(error, advice) if isinstance(error, PokerIRLError) else None
-    return str(error) if found is None else found[1]
-
-
-@contextmanager
-def usage_errors() -> Iterator[None]:
-    """Settings checked before any work: a ``ValueError`` there is a usage error (exit 2,
-    like the parser's own)."""
-    try:
-        yield
-    except ValueError as error:
-        fail(str(error), UsageError.exit_code)
 
 
 MAX_SEED = 2**32 - 1  # the largest seed numpy's and Gymnasium's generators take
@@ -205,11 +291,8 @@ def seed_list(text: str | None) -> str | None:
 def _backend(jobs: int, ray: str | None, threads: int = 1) -> execution.Backend:
     """The execution backend of a fan-out command: --ray, else $RAY_ADDRESS, else --jobs."""
     if ray is not None and not ray.strip():
-        fail("--ray needs an address (HOST:PORT) or 'local'")
-    try:
-        return execution.choose_backend(jobs=jobs, ray=ray, threads=threads)
-    except ValueError as error:
-        fail(str(error))
+        raise UsageError("--ray needs an address (HOST:PORT) or 'local'")
+    return execution.choose_backend(jobs=jobs, ray=ray, threads=threads)
 
 
 RAY_HELP = (
@@ -217,6 +300,23 @@ RAY_HELP = (
     "for a private single-machine Ray. Results do not change."
 )
 INTERRUPTED = "interrupted: finished units are kept; rerun the same command to resume"
+# The words of train and gym expert, rl and irl for the remedies of their run folders (their
+# lines from before the library stopped naming flags).
+RUN_ADVICE = {
+    **ADVICE,
+    Remedy.REPLACE: "pass --overwrite to replace",
+    Remedy.ELSEWHERE: "choose another --out",
+}
+
+
+@app.callback()
+def main(
+    debug: bool = typer.Option(
+        False, "--debug", help=f"Print the traceback of any error (as {DEBUG_VARIABLE}=1 does)."
+    ),
+) -> None:
+    if debug:  # the environment: worker processes and every command's contract read it
+        os.environ[DEBUG_VARIABLE] = "1"
 
 
 @app.command()

@@ -4,27 +4,25 @@ from __future__ import annotations
 
 import functools
 import json
-from collections.abc import Iterator
-from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
 import typer
 
-from pokerirl import execution
 from pokerirl.cli.app import (
     INTERRUPTED,
     MAX_SEED,
     RAY_HELP,
+    RUN_ADVICE,
     SEED_OPTION,
     _backend,
-    advised,
     app,
     display,
     echo,
-    error_line,
-    fail,
+    on_error,
+    settings_from_options,
 )
+from pokerirl.errors import InputError, UsageError
 from pokerirl.gym.presets import MAX_TRANSITIONS, TASKS
 
 gym_app = typer.Typer(
@@ -48,20 +46,20 @@ def _rl_backend(name: str) -> str:
     from pokerirl.gym.rl import RL_BACKENDS
 
     if name not in RL_BACKENDS:
-        fail(f"--rl-backend must be one of {', '.join(RL_BACKENDS)}, got {name!r}", 2)
+        raise UsageError(f"--rl-backend must be one of {', '.join(RL_BACKENDS)}, got {name!r}")
     return name
 
 
 def _known_task(env: str) -> None:
     """Refuse an env id the toolkit has no settings for, naming the ones it has (exit 2)."""
     if env not in TASKS:
-        fail(f"unknown task {env!r}; choose one of {', '.join(TASKS)}", 2)
+        raise UsageError(f"unknown task {env!r}; choose one of {', '.join(TASKS)}")
 
 
 def _folder_out(out: Path) -> None:
     """Refuse an --out that exists and is not a folder, before any work (exit 2)."""
     if out.exists() and not out.is_dir():
-        fail(f"--out {display(str(out))}: exists and is not a folder", 2)
+        raise UsageError(f"--out {display(str(out))}: exists and is not a folder")
 
 
 def _gym_threads(threads: int) -> None:
@@ -71,7 +69,24 @@ def _gym_threads(threads: int) -> None:
     torch.set_num_threads(threads)
 
 
+def _json_file(path: Path) -> Any:
+    """A JSON file this toolkit wrote (corrupt: one line naming it)."""
+    try:
+        return json.loads(path.read_text())
+    except ValueError as error:  # JSONDecodeError, UnicodeDecodeError
+        raise InputError(f"{path}: corrupt: not JSON ({error})") from None
+
+
+def _final_return(config: Path) -> float:
+    """A finished RL run's final return, from its config file (corrupt: one line naming it)."""
+    try:
+        return float(json.loads(config.read_text())["final_return"])
+    except (ValueError, KeyError, TypeError) as error:  # not JSON, or not a run's record
+        raise InputError(f"{config}: corrupt: no final return ({error!r})") from None
+
+
 @gym_app.command("expert")
+@on_error(interrupted=INTERRUPTED, advice=RUN_ADVICE)
 def gym_expert(
     env: str = typer.Argument(..., help="Acrobot-v1, MountainCar-v0, LunarLander-v3, ..."),
     out: Path = typer.Option(..., "--out", "-o", help="Expert folder to write."),
@@ -102,36 +117,29 @@ def gym_expert(
     _folder_out(out)
     _gym_threads(threads)
     files = (CONFIG_FILE, METRICS_FILE, MODEL_FILE)
-    try:
-        identity = {
-            "env": env, "seed": seed, "hyper": hyper,
-            "timesteps": timesteps or expert_settings(env, hyper=hyper).timesteps,
-            "eval_every": eval_every, "eval_episodes": eval_episodes,
-            "final_episodes": final_episodes,
-        }  # fmt: skip
-        claim(out, "expert.job.json", identity, outputs=list(files), overwrite=overwrite)
-        tidy(out, key="expert")  # what a killed rerun left
-        if all((out / name).is_file() for name in files):
-            record = json.loads((out / CONFIG_FILE).read_text())
-            echo(f"reusing the expert in {out} (same settings)")
-        else:
-            with staged_files(out, key="expert") as new:  # the three files, or none
-                record = train_expert(
-                    new,
-                    env,
-                    seed=seed,
-                    timesteps=timesteps,
-                    hyper=hyper,
-                    eval_every=eval_every,
-                    eval_episodes=eval_episodes,
-                    final_episodes=final_episodes,
-                )
-    except (ValueError, ImportError) as error:
-        fail(str(error))
-    except KeyboardInterrupt:
-        fail(INTERRUPTED, code=130)
-    except OSError as error:
-        fail(error_line(error, out))
+    identity = {
+        "env": env, "seed": seed, "hyper": hyper,
+        "timesteps": timesteps or expert_settings(env, hyper=hyper).timesteps,
+        "eval_every": eval_every, "eval_episodes": eval_episodes,
+        "final_episodes": final_episodes,
+    }  # fmt: skip
+    claim(out, "expert.job.json", identity, outputs=list(files), overwrite=overwrite)
+    tidy(out, key="expert")  # what a killed rerun left
+    if all((out / name).is_file() for name in files):
+        record = _json_file(out / CONFIG_FILE)
+        echo(f"reusing the expert in {out} (same settings)")
+    else:
+        with staged_files(out, key="expert") as new:  # the three files, or none
+            record = train_expert(
+                new,
+                env,
+                seed=seed,
+                timesteps=timesteps,
+                hyper=hyper,
+                eval_every=eval_every,
+                eval_episodes=eval_episodes,
+                final_episodes=final_episodes,
+            )
     echo(
         f"{env}: {record['algo']} expert, return {record['return_mean']:.1f} "
         f"+- {record['return_std']:.1f} over {record['episodes']} episodes "
@@ -147,11 +155,8 @@ def gym_experts(
     from pokerirl.gym.experts import MANIFEST_KEYS, shipped_manifest
 
     if format not in ("json", "text"):
-        fail(f"--format must be json or text, got {format!r}")
-    try:
-        manifest = [{key: entry[key] for key in MANIFEST_KEYS} for entry in shipped_manifest()]
-    except ValueError as error:
-        fail(str(error))
+        raise UsageError(f"--format must be json or text, got {format!r}")
+    manifest = [{key: entry[key] for key in MANIFEST_KEYS} for entry in shipped_manifest()]
     if format == "json":
         echo(json.dumps(manifest, indent=2))
         return
@@ -183,21 +188,16 @@ def gym_collect(
     from pokerirl.gym.experts import load_expert, resolve_expert_dir
 
     _known_task(env)
-    try:
-        loaded = load_expert(resolve_expert_dir(expert, env))
-        if loaded.env_id != env:
-            fail(f"{expert}: an expert for {loaded.env_id}, not {env}")
-        summary = collect(
-            loaded,
-            out,
-            transitions=transitions,
-            seed=seed,
-            deterministic=None if stochastic is None else not stochastic,
-        )
-    except (ValueError, ImportError) as error:
-        fail(str(error))
-    except OSError as error:
-        fail(error_line(error, out))
+    loaded = load_expert(resolve_expert_dir(expert, env))
+    if loaded.env_id != env:
+        raise InputError(f"{expert}: an expert for {loaded.env_id}, not {env}")
+    summary = collect(
+        loaded,
+        out,
+        transitions=transitions,
+        seed=seed,
+        deterministic=None if stochastic is None else not stochastic,
+    )
     echo(
         f"wrote {summary.transitions:,} transitions ({summary.episodes} episodes) to {out}; "
         f"expert return {summary.return_mean:.1f} +- {summary.return_std:.1f} "
@@ -206,6 +206,7 @@ def gym_collect(
 
 
 @gym_app.command("rl")
+@on_error(interrupted=INTERRUPTED, advice=RUN_ADVICE)
 def gym_rl(
     env: str = typer.Argument(..., help="The environment."),
     reward_run: Path | None = typer.Option(
@@ -229,89 +230,83 @@ def gym_rl(
     (OUT/rl.job.json records them)."""
     from contextlib import ExitStack
 
-    from pokerirl.gym.experts import CONFIG_FILE, METRICS_FILE, MODEL_FILE
+    from pokerirl.gym.experts import CONFIG_FILE, METRICS_FILE, MODEL_FILE, require_gym
     from pokerirl.gym.rl import mean_std, train_rl
     from pokerirl.store import digest, staged_folder, tidy
     from pokerirl.studies.gym_job import claim
 
     if (reward_run is None) == (not env_reward):
-        fail("give exactly one of --reward-run DIR and --env-reward")
+        raise UsageError("give exactly one of --reward-run DIR and --env-reward")
     _rl_backend(rl_backend)
     _known_task(env)
     _folder_out(out)
     _gym_threads(threads)
     files = (CONFIG_FILE, METRICS_FILE, MODEL_FILE)
-    try:
-        reward = None
-        reward_identity: Any = "env"
-        if reward_run is not None:
-            from pokerirl.irl import load_reward
-            from pokerirl.irl.run import REWARD_FILE
+    reward = None
+    reward_identity: Any = "env"
+    if reward_run is not None:
+        from pokerirl.irl import load_reward
+        from pokerirl.irl.run import REWARD_FILE
 
-            reward = load_reward(reward_run)
-            weights = reward_run / REWARD_FILE
-            reward_identity = {
-                "run": str(reward_run),
-                "sha256": digest(weights.read_bytes()) if weights.is_file() else None,
-            }
-        identity = {
-            "env": env,
-            "reward": reward_identity,
-            "timesteps": timesteps or TASKS[env].rl.timesteps,
-            "evaluations": evaluations,
-            "eval_episodes": eval_episodes,
-            # Only for lockstep: folders written before the switch keep their identity.
-            **({} if rl_backend == "sb3" else {"backend": rl_backend}),
+        reward = load_reward(reward_run)
+        weights = reward_run / REWARD_FILE
+        reward_identity = {
+            "run": str(reward_run),
+            "sha256": digest(weights.read_bytes()) if weights.is_file() else None,
         }
-        if rl_backend == "lockstep":
-            from pokerirl.gym.lockstep.group import train_rl_group
+    identity = {
+        "env": env,
+        "reward": reward_identity,
+        "timesteps": timesteps or TASKS[env].rl.timesteps,
+        "evaluations": evaluations,
+        "eval_episodes": eval_episodes,
+        # Only for lockstep: folders written before the switch keep their identity.
+        **({} if rl_backend == "sb3" else {"backend": rl_backend}),
+    }
+    if rl_backend == "lockstep":
+        require_gym()  # the lock-step trainers import gymnasium
+        from pokerirl.gym.lockstep.group import train_rl_group
 
-        claim(out, "rl.job.json", identity, outputs=["run-*"], overwrite=overwrite)
-        reward_name = "env" if reward is None else str(reward_run)
-        found: dict[int, float] = {}
-        todo = []
-        for k in range(runs):
-            run = out / f"run-{k}"
-            tidy(out, key=run.name)  # what a killed rerun left
-            if all((run / name).is_file() for name in files):
-                found[k] = float(json.loads((run / CONFIG_FILE).read_text())["final_return"])
-            else:
-                todo.append(k)
-        if rl_backend == "sb3":
-            for k in todo:
-                with staged_folder(out / f"run-{k}") as stage:  # a run is whole, or not at all
-                    result = train_rl(
-                        env,
-                        reward=reward,
-                        reward_name=reward_name,
-                        seed=k,
-                        timesteps=timesteps,
-                        evaluations=evaluations,
-                        eval_episodes=eval_episodes,
-                        out=stage,
-                    )
-                found[k] = result.final_return
-        elif todo:
-            with ExitStack() as stack:  # every run of the group lands whole, or none does
-                stages = [stack.enter_context(staged_folder(out / f"run-{k}")) for k in todo]
-                results = train_rl_group(
+    claim(out, "rl.job.json", identity, outputs=["run-*"], overwrite=overwrite)
+    reward_name = "env" if reward is None else str(reward_run)
+    found: dict[int, float] = {}
+    todo = []
+    for k in range(runs):
+        run = out / f"run-{k}"
+        tidy(out, key=run.name)  # what a killed rerun left
+        if all((run / name).is_file() for name in files):
+            found[k] = _final_return(run / CONFIG_FILE)
+        else:
+            todo.append(k)
+    if rl_backend == "sb3":
+        for k in todo:
+            with staged_folder(out / f"run-{k}") as stage:  # a run is whole, or not at all
+                result = train_rl(
                     env,
-                    rewards=[reward] * len(todo),
-                    reward_names=[reward_name] * len(todo),
-                    seeds=todo,
+                    reward=reward,
+                    reward_name=reward_name,
+                    seed=k,
                     timesteps=timesteps,
                     evaluations=evaluations,
                     eval_episodes=eval_episodes,
-                    outs=stages,
+                    out=stage,
                 )
-            found.update({k: result.final_return for k, result in zip(todo, results, strict=True)})
-        finals = [found[k] for k in range(runs)]
-    except (ValueError, ImportError, KeyError) as error:
-        fail(str(error))
-    except KeyboardInterrupt:
-        fail(INTERRUPTED, code=130)
-    except OSError as error:
-        fail(error_line(error, out))
+            found[k] = result.final_return
+    elif todo:
+        with ExitStack() as stack:  # every run of the group lands whole, or none does
+            stages = [stack.enter_context(staged_folder(out / f"run-{k}")) for k in todo]
+            results = train_rl_group(
+                env,
+                rewards=[reward] * len(todo),
+                reward_names=[reward_name] * len(todo),
+                seeds=todo,
+                timesteps=timesteps,
+                evaluations=evaluations,
+                eval_episodes=eval_episodes,
+                outs=stages,
+            )
+        found.update({k: result.final_return for k, result in zip(todo, results, strict=True)})
+    finals = [found[k] for k in range(runs)]
     final = mean_std(finals)
     echo(
         f"{env}: final true return {final['mean']:.1f} +- {final['std']:.1f} over {runs} runs; "
@@ -320,6 +315,7 @@ def gym_rl(
 
 
 @gym_app.command("irl")
+@on_error(interrupted=INTERRUPTED, advice=RUN_ADVICE)
 def gym_irl(
     env: str = typer.Argument(..., help="The task, e.g. MountainCar-v0."),
     data: Path | None = typer.Option(
@@ -344,55 +340,47 @@ def gym_irl(
     """AIRL or H-AIRL on a task's expert data; each epoch's policy is evaluated in the env."""
     from dataclasses import replace
 
+    from pokerirl.gym.irl import train_gym_irl
     from pokerirl.gym.presets import PRESETS
 
     if preset not in PRESETS:
-        fail(f"--preset must be one of {', '.join(PRESETS)}, got {preset!r}")
+        raise UsageError(f"--preset must be one of {', '.join(PRESETS)}, got {preset!r}")
     if algo not in ("airl", "hairl"):
-        fail(f"--algo must be airl or hairl, got {algo!r}")
+        raise UsageError(f"--algo must be airl or hairl, got {algo!r}")
     _known_task(env)
     if data is not None and not data.is_file():
-        fail(f"--data {display(str(data))}: no such file")
+        raise InputError(f"--data {display(str(data))}: no such file")
     settings = PRESETS[preset].irl(env)
     if epochs is not None:
         settings = replace(settings, epochs=epochs)
     settings = replace(settings, standardize_obs=not raw_obs)
     _gym_threads(threads)
-    try:
-        from pokerirl.gym.irl import train_gym_irl
+    if data is None:
+        from pokerirl.gym.collect import collect
+        from pokerirl.gym.experts import load_expert, resolve_expert_dir
 
-        if data is None:
-            from pokerirl.gym.collect import collect
-            from pokerirl.gym.experts import load_expert, resolve_expert_dir
-
-            data = out / "expert.parquet"
-            if not data.is_file():
-                out.mkdir(parents=True, exist_ok=True)
-                collect(
-                    load_expert(resolve_expert_dir("shipped", env)),
-                    data,
-                    transitions=settings.transitions,
-                    seed=seed,
-                )
-                echo(f"collected {settings.transitions:,} expert transitions into {data}")
-            else:
-                echo(f"reusing the expert data in {data}")
-        result = train_gym_irl(
-            env,
-            data,
-            algo=algo,
-            runs=runs or PRESETS[preset].runs,
-            settings=settings,
-            seed=seed,
-            out=out,
-            overwrite=overwrite,
-        )
-    except (ValueError, ImportError) as error:
-        fail(str(error))
-    except KeyboardInterrupt:
-        fail(INTERRUPTED, code=130)
-    except OSError as error:
-        fail(error_line(error, out))
+        data = out / "expert.parquet"
+        if not data.is_file():
+            out.mkdir(parents=True, exist_ok=True)
+            collect(
+                load_expert(resolve_expert_dir("shipped", env)),
+                data,
+                transitions=settings.transitions,
+                seed=seed,
+            )
+            echo(f"collected {settings.transitions:,} expert transitions into {data}")
+        else:
+            echo(f"reusing the expert data in {data}")
+    result = train_gym_irl(
+        env,
+        data,
+        algo=algo,
+        runs=runs or PRESETS[preset].runs,
+        settings=settings,
+        seed=seed,
+        out=out,
+        overwrite=overwrite,
+    )
     final = result.final_return
     line = (
         f"{env} {algo}: final return {final['mean']:.1f} +- {final['std']:.1f} over "
@@ -428,15 +416,10 @@ def gym_reward_map(
     # click gives an option one value: `--runs A B` leaves B among the positionals.
     folders = [*runs, *map(Path, extra)]
     if not folders:
-        fail("give the IRL folders to draw: --runs AIRL_DIR HAIRL_DIR")
-    try:
-        result = reward_map(env, folders, grid=grid, expert=None if expert == "none" else expert)
-        out.parent.mkdir(parents=True, exist_ok=True)
-        plot_reward_map(result, out)
-    except (ValueError, ImportError) as error:
-        fail(str(error))
-    except OSError as error:
-        fail(error_line(error, out))
+        raise UsageError("give the IRL folders to draw: --runs AIRL_DIR HAIRL_DIR")
+    result = reward_map(env, folders, grid=grid, expert=None if expert == "none" else expert)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    plot_reward_map(result, out)
     for panel in result.panels:
         line = panel.label
         if panel.agreement is not None:
@@ -466,34 +449,21 @@ GYM_OVERWRITE = typer.Option(False, "--overwrite", help="Recompute units whose s
 GYM_QUIET = typer.Option(False, "--quiet", "-q", help="No progress bars.")
 
 
-@contextmanager
-def _study_errors(out: Path) -> Iterator[None]:
-    """What the gym study and the sweep stop on, in one line (finished units are kept)."""
-    try:
-        yield
-    except OSError as error:
-        fail(error_line(error, out))
-    except (ValueError, ImportError, execution.ExecutionError) as error:
-        fail(advised(error))  # a unit's conflict: with the advice for its remedy
-    except KeyboardInterrupt:
-        fail(INTERRUPTED, 130)
-
-
 def _gym_preset(name: str, task: str, **overrides: int | None) -> Any:
     """The study preset ``name`` for ``task`` (or all) with the command line's overrides."""
     from pokerirl.studies.gym import parse_tasks, study_preset
 
-    preset = study_preset(name, tasks=parse_tasks(task), **overrides)
+    preset = settings_from_options(study_preset, name, tasks=parse_tasks(task), **overrides)
     if preset.seed + preset.runs - 1 > MAX_SEED:  # run k uses seed + k
-        fail(
+        raise UsageError(
             f"--seed {preset.seed:,} with {preset.runs} runs: run seeds must be at most "
-            f"{MAX_SEED:,}",
-            2,
+            f"{MAX_SEED:,}"
         )
     return preset
 
 
 @gym_app.command("study")
+@on_error(interrupted=INTERRUPTED)
 def gym_study(
     task: str = typer.Argument(..., metavar="ENV|all", help="A task, e.g. MountainCar-v0, or all."),
     out: Path = typer.Option(..., "--out", "-o", help="The study folder."),
@@ -516,26 +486,26 @@ def gym_study(
     from pokerirl.studies.gym import run_gym_study
 
     _rl_backend(rl_backend)
-    with _study_errors(out):
-        preset = _gym_preset(
-            preset_name, task, runs=runs, seed=seed, transitions=transitions, epochs=epochs,
-            eval_episodes=eval_episodes, rl_timesteps=timesteps,
-        )  # fmt: skip
-        result = run_gym_study(
-            out,
-            preset,
-            backend=_backend(jobs, ray),
-            overwrite=overwrite,
-            progress=not quiet,
-            say=echo,
-            rl_backend=rl_backend,
-        )
+    preset = _gym_preset(
+        preset_name, task, runs=runs, seed=seed, transitions=transitions, epochs=epochs,
+        eval_episodes=eval_episodes, rl_timesteps=timesteps,
+    )  # fmt: skip
+    result = run_gym_study(
+        out,
+        preset,
+        backend=_backend(jobs, ray),
+        overwrite=overwrite,
+        progress=not quiet,
+        say=echo,
+        rl_backend=rl_backend,
+    )
     echo("")
     echo(result.markdown)
     echo(f"report: {out / 'report.md'}")
 
 
 @gym_app.command("sweep")
+@on_error(interrupted=INTERRUPTED)
 def gym_sweep(
     env: str = typer.Argument(..., help="The task, e.g. MountainCar-v0."),
     param: list[str] = typer.Option(
@@ -557,32 +527,30 @@ def gym_sweep(
 ) -> None:
     """One-factor-at-a-time ablation of H-AIRL (the paper's Figure 5): each point runs the IRL
     phase, then RL on its learned rewards; writes sweep.csv, sweep.json and PARAM.png."""
-    from pokerirl.studies.common import StudyError
     from pokerirl.studies.sweep import parse_param, run_sweep
 
     _rl_backend(rl_backend)
-    with _study_errors(out):
-        params: dict[str, tuple[float, ...]] = {}
-        for text in param:
-            name, values = parse_param(text)
-            if name in params:
-                raise StudyError(f"--param {name} is given twice; list its values once")
-            params[name] = values
-        preset = _gym_preset(
-            preset_name, env, runs=runs, seed=seed, transitions=transitions, epochs=epochs,
-            eval_episodes=eval_episodes, rl_timesteps=timesteps,
-        )  # fmt: skip
-        result = run_sweep(
-            env,
-            params,
-            preset,
-            out,
-            backend=_backend(jobs, ray),
-            overwrite=overwrite,
-            progress=not quiet,
-            say=echo,
-            rl_backend=rl_backend,
-        )
+    params: dict[str, tuple[float, ...]] = {}
+    for text in param:
+        name, values = parse_param(text)
+        if name in params:
+            raise InputError(f"--param {name} is given twice; list its values once")
+        params[name] = values
+    preset = _gym_preset(
+        preset_name, env, runs=runs, seed=seed, transitions=transitions, epochs=epochs,
+        eval_episodes=eval_episodes, rl_timesteps=timesteps,
+    )  # fmt: skip
+    result = run_sweep(
+        env,
+        params,
+        preset,
+        out,
+        backend=_backend(jobs, ray),
+        overwrite=overwrite,
+        progress=not quiet,
+        say=echo,
+        rl_backend=rl_backend,
+    )
     for row in result.rows:
         line = (
             f"{row.param}={row.value:g}: IRL return {row.irl_final_return_mean:.1f} "

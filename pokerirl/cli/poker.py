@@ -3,27 +3,28 @@
 from __future__ import annotations
 
 import json
+import re
 from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import typer
 
-from pokerirl import execution
 from pokerirl.cli.app import (
     INTERRUPTED,
     RAY_HELP,
+    RUN_ADVICE,
     SEED_OPTION,
+    Default,
     _backend,
-    advised,
     app,
     echo,
-    error_line,
-    fail,
+    given,
+    on_error,
     seed_list,
-    usage_errors,
+    settings_from_options,
 )
-from pokerirl.errors import ADVICE, Remedy
+from pokerirl.errors import InputError, UsageError
 
 if TYPE_CHECKING:
     from pokerirl.irl.records import EpochMetrics
@@ -43,14 +44,8 @@ def ingest(
     Writes TABLE and TABLE.summary.json (where every hand went) and prints the summary.
     """
     from pokerirl.datasets.ingest import ingest as run_ingest
-    from pokerirl.parsers.irc import IngestError
 
-    try:
-        summary = run_ingest(sources, out, strict=strict, progress=not quiet)
-    except IngestError as error:
-        fail(str(error))
-    except OSError as error:
-        fail(error_line(error, out))
+    summary = run_ingest(sources, out, strict=strict, progress=not quiet)
     if not quiet:
         echo(json.dumps(summary, indent=2))
 
@@ -67,13 +62,8 @@ def synth(
     from pokerirl.game.synth import MAX_HANDS, write_synthetic_month
 
     if hands > MAX_HANDS:
-        fail(f"--hands must be at most {MAX_HANDS:,} (one month), got {hands:,}", 2)
-    try:
-        folder = write_synthetic_month(out, hands=hands, seed=seed)
-    except ValueError as error:
-        fail(str(error))
-    except OSError as error:
-        fail(error_line(error, out))
+        raise UsageError(f"--hands must be at most {MAX_HANDS:,} (one month), got {hands:,}")
+    folder = write_synthetic_month(out, hands=hands, seed=seed)
     echo(f"wrote {hands} hands to {folder}")
 
 
@@ -100,20 +90,16 @@ def match(
     from pokerirl.game import check_match_size, play_match
 
     if output_format not in ("text", "json"):
-        fail(f"unknown --format {output_format!r} (text or json)", 2)
-    with usage_errors():
-        check_match_size(hands, duplicate=duplicate)
-    try:
-        result = play_match(
-            resolve_agent(agent_a),
-            resolve_agent(agent_b),
-            hands=hands,
-            seed=seed,
-            duplicate=duplicate,
-            progress=True,
-        )
-    except ValueError as error:
-        fail(str(error))
+        raise UsageError(f"unknown --format {output_format!r} (text or json)")
+    settings_from_options(check_match_size, hands, duplicate=duplicate)
+    result = play_match(
+        resolve_agent(agent_a),
+        resolve_agent(agent_b),
+        hands=hands,
+        seed=seed,
+        duplicate=duplicate,
+        progress=True,
+    )
     if output_format == "json":
         summary = {
             "mbb_per_hand": result.mbb_per_hand,
@@ -131,6 +117,7 @@ def match(
 
 
 @app.command()
+@on_error(interrupted=INTERRUPTED)
 def tournament(
     agents: list[str] = typer.Argument(
         None,
@@ -185,7 +172,6 @@ def tournament(
     others (--overwrite recomputes them); a corrupt saved seed is recomputed.
     pokerirl report DIR prints it again.
     """
-    from pokerirl.execution import ExecutionError
     from pokerirl.game import check_match_size
     from pokerirl.seeds import parse_seeds
     from pokerirl.tournaments import render_report, run_tournament
@@ -193,46 +179,43 @@ def tournament(
     agents = agents or []
     if vs is not None:
         if not agents:
-            fail("--vs BASE needs at least one agent to play against it", 2)
+            raise UsageError("--vs BASE needs at least one agent to play against it")
         matchups = [(agent, vs) for agent in agents]
     elif len(agents) == 2:
         matchups = [(agents[0], agents[1])]
     else:
-        fail(f"give two agents (A B) or --vs BASE and agents; got {len(agents)} agent(s)", 2)
-    if not 0 < alpha < 1:
-        fail(f"--alpha must be between 0 and 1, got {alpha}", 2)
-    if duplicate and hands < 4:
-        fail(f"--hands must be at least 4 with duplicate deals (two pairs), got {hands}", 2)
-    with usage_errors():
-        check_match_size(hands, duplicate=duplicate, batch_size=batch_size)
-    backend = _backend(jobs, ray)
-    try:
-        report = run_tournament(
-            matchups,
-            hands=hands,
-            seeds=parse_seeds(seeds),
-            out=out,
-            duplicate=duplicate,
-            alpha=alpha,
-            jobs=jobs,
-            batch_size=batch_size,
-            overwrite=overwrite,
-            progress=not quiet,
-            backend=backend,
+        raise UsageError(
+            f"give two agents (A B) or --vs BASE and agents; got {len(agents)} agent(s)"
         )
-    except (ValueError, ExecutionError) as error:  # TournamentError, an agent's illegal move
-        fail(str(error))
-    except KeyboardInterrupt:
-        fail(INTERRUPTED, code=130)
-    except OSError as error:
-        fail(error_line(error, out))
+    if not 0 < alpha < 1:
+        raise UsageError(f"--alpha must be between 0 and 1, got {alpha}")
+    if duplicate and hands < 4:
+        raise UsageError(
+            f"--hands must be at least 4 with duplicate deals (two pairs), got {hands}"
+        )
+    settings_from_options(check_match_size, hands, duplicate=duplicate, batch_size=batch_size)
+    report = run_tournament(
+        matchups,
+        hands=hands,
+        seeds=parse_seeds(seeds),
+        out=out,
+        duplicate=duplicate,
+        alpha=alpha,
+        jobs=jobs,
+        batch_size=batch_size,
+        overwrite=overwrite,
+        progress=not quiet,
+        backend=_backend(jobs, ray),
+    )
     if not quiet:
         echo(render_report(report))
         echo(f"wrote {out}/report.md, report.json, per_seed.csv, per_seed.png, timings.json")
 
 
 @app.command()
+@on_error(interrupted=INTERRUPTED, advice=RUN_ADVICE)
 def train(
+    ctx: typer.Context,
     table: str = typer.Argument(..., help="Parquet decision table written by `pokerirl ingest`."),
     out: str = typer.Option(..., "--out", help="Run folder (with --runs > 1: a folder of runs)."),
     algo: str = typer.Option("hairl", "--algo", help="hairl or airl (picks the defaults)."),
@@ -244,8 +227,9 @@ def train(
     ),
     jobs: int = typer.Option(1, "--jobs", "-j", min=1, help="Processes running --runs at once."),
     ray: str | None = typer.Option(None, "--ray", metavar="ADDRESS", help=RAY_HELP),
-    epochs: int | None = typer.Option(
-        None, "--epochs", min=1, help="Training epochs [default: 50]."
+    epochs: int = typer.Option(
+        Default("pokerirl.irl.config:AIRLConfig", "epochs"), "--epochs", min=1,
+        help="Training epochs.",
     ),
     seed: int | None = typer.Option(
         None, "--seed", **SEED_OPTION, help="Seed for init, split, shuffle, noise."
@@ -282,7 +266,7 @@ def train(
     torch.set_num_threads(threads)
     widths = None if hidden is None else _widths(hidden)
     overrides = {
-        "epochs": epochs,
+        **given(ctx, epochs=epochs),  # else the --config file's, or the algorithm's
         "seed": seed,
         "batch_size": batch_size,
         "reward_hidden": widths,
@@ -296,27 +280,19 @@ def train(
         "sigma_end": sigma_end,
         "val_fraction": val_fraction,
     }
-    with usage_errors():
-        settings = load_config(algo, config_file=config, overrides=overrides)
-        resolve_device(device)
-    try:
-        summary = train_runs(
-            table,
-            out,
-            runs=runs,
-            algo=algo,
-            config=settings,
-            device=device,
-            progress=not quiet,
-            overwrite=overwrite,
-            backend=_backend(jobs, ray),
-        )
-    except (ValueError, execution.ExecutionError) as error:
-        fail(advised(error, TRAIN_ADVICE))
-    except OSError as error:
-        fail(error_line(error, out))
-    except KeyboardInterrupt:
-        fail(INTERRUPTED, 130)
+    settings = settings_from_options(load_config, algo, config_file=config, overrides=overrides)
+    settings_from_options(resolve_device, device)
+    summary = train_runs(
+        table,
+        out,
+        runs=runs,
+        algo=algo,
+        config=settings,
+        device=device,
+        progress=not quiet,
+        overwrite=overwrite,
+        backend=_backend(jobs, ray),
+    )
     if summary.results:  # several runs: each one, named by its folder
         for run in summary.results:
             _echo_run(f"{algo} {Path(run.out).name}", Path(run.out), run.metrics,
@@ -356,21 +332,12 @@ def _echo_run(
         )
 
 
-# pokerirl train's words for the remedies of its run folders (its lines before the library
-# stopped naming flags).
-TRAIN_ADVICE = {
-    **ADVICE,
-    Remedy.REPLACE: "pass --overwrite to replace",
-    Remedy.ELSEWHERE: "choose another --out",
-}
-
-
 def _widths(hidden: str) -> list[int]:
     """``--hidden 64,64`` as layer widths (a usage error when not integers)."""
-    try:
-        return [int(w) for w in hidden.split(",") if w.strip()]
-    except ValueError:
-        fail(f"--hidden must be comma-separated integers, got {hidden!r}", 2)
+    widths = [w.strip() for w in hidden.split(",") if w.strip()]
+    if not all(re.fullmatch(r"[+-]?\d+", w) for w in widths):
+        raise UsageError(f"--hidden must be comma-separated integers, got {hidden!r}")
+    return [int(w) for w in widths]
 
 
 @app.command("reward-card")
@@ -393,32 +360,40 @@ def reward_card_command(
     from pokerirl.agents.rewards import TRANSFORMS, TransformedReward, load_reward_source
 
     if transform not in TRANSFORMS:
-        fail(f"unknown --transform {transform!r} ({', '.join(TRANSFORMS)})", 2)
-    try:
-        source = load_reward_source(reward)
-        groups = None
-        if validation:
-            split = Path(reward) / "split.json"
-            if not split.is_file():
-                fail(f"--validation needs a run folder with split.json; {reward} has none")
-            groups = {str(g) for g in json.loads(split.read_text())["validation_groups"]}
-        states = CardStates.from_table(table, groups=groups)
-        card = reward_card(TransformedReward(source, transform), states)
-        write_card(card, out)
-    except ValueError as error:
-        fail(str(error))
-    except OSError as error:
-        fail(error_line(error, out))
+        raise UsageError(f"unknown --transform {transform!r} ({', '.join(TRANSFORMS)})")
+    source = load_reward_source(reward)
+    groups = None
+    if validation:
+        split = Path(reward) / "split.json"
+        if not split.is_file():
+            raise InputError(f"--validation needs a run folder with split.json; {reward} has none")
+        groups = _validation_groups(split)
+    states = CardStates.from_table(table, groups=groups)
+    card = reward_card(TransformedReward(source, transform), states)
+    write_card(card, out)
     echo(card.render())
     echo(f"wrote {out / 'reward_card.json'} and reward_card.png")
+
+
+def _validation_groups(split: Path) -> set[str]:
+    """The validation hands a run's ``split.json`` names."""
+    try:
+        return {str(g) for g in json.loads(split.read_text())["validation_groups"]}
+    except (ValueError, KeyError, TypeError) as error:  # corrupt: JSON, or not a split's
+        raise InputError(f"{split}: not a run's split ({error!r})") from None
 
 
 agent_app = typer.Typer(help="Train DQN agents.", no_args_is_help=True)
 app.add_typer(agent_app, name="agent")
 
 
+TRAIN_CONFIG = "pokerirl.agents.train:TrainConfig"
+
+
 @agent_app.command("train")
+@on_error(interrupted=INTERRUPTED)
 def agent_train(
+    ctx: typer.Context,
     out: Path = typer.Option(..., "--out", "-o", help="Agent folder (with --seeds: its parent)."),
     preset: str = typer.Option(
         "default",
@@ -431,8 +406,8 @@ def agent_train(
     config_file: Path | None = typer.Option(
         None, "--config", help="TOML file of settings (any TrainConfig or DQNConfig field)."
     ),
-    reward: str | None = typer.Option(
-        None, help="sparse (the payoff) or learned (--reward-run's f) [default: sparse]."
+    reward: str = typer.Option(
+        Default(TRAIN_CONFIG, "reward"), help="sparse (the payoff) or learned (--reward-run's f)."
     ),
     reward_run: str | None = typer.Option(
         None, help="AIRL / H-AIRL run folder, or authors:FILE (one of the authors' rewards)."
@@ -440,15 +415,15 @@ def agent_train(
     payoff_weight: float | None = typer.Option(
         None, help="w in r = w * payoff + (1 - w) * f(s, a); 0: the learned reward alone."
     ),
-    reward_transform: str | None = typer.Option(
-        None,
+    reward_transform: str = typer.Option(
+        Default(TRAIN_CONFIG, "reward_transform"),
         help="raw (f), centered (f minus its mean over legal actions) or log_softmax (f minus "
-        "its logsumexp over legal actions) [default: raw].",
+        "its logsumexp over legal actions).",
     ),
-    raise_counts: str | None = typer.Option(
-        None,
+    raise_counts: str = typer.Option(
+        Default(TRAIN_CONFIG, "raise_counts"),
         help="decision (f reads the raise counts of the decision) or end-of-hand (those the "
-        "hand ended with, as the authors' agent read RLCard's live list) [default: decision].",
+        "hand ended with, as the authors' agent read RLCard's live list).",
     ),
     hands: int | None = typer.Option(None, "--hands", "-n", help="Training hands."),
     seed: int = typer.Option(0, **SEED_OPTION, help="Seed of one agent."),
@@ -516,18 +491,16 @@ def agent_train(
         train_agent,
         train_seeds,
     )
-    from pokerirl.execution import ExecutionError
     from pokerirl.seeds import parse_seeds
 
     backend = _backend(jobs, ray, threads)
     widths = None if hidden is None else tuple(_widths(hidden))
     flags = {
         "hands": hands,
-        "reward": reward,
+        # else the preset's, or the --config file's
+        **given(ctx, reward=reward, reward_transform=reward_transform, raise_counts=raise_counts),
         "reward_run": reward_run,
         "payoff_weight": payoff_weight,
-        "reward_transform": reward_transform,
-        "raise_counts": raise_counts,
         "opponent": opponent,
         "protocol": protocol,
         "play": play,
@@ -550,33 +523,25 @@ def agent_train(
         "concurrent_hands": concurrent_hands,
         "self_play_every": self_play_every,
     }
-    with usage_errors():
-        from_file = {"dqn": {}} if config_file is None else load_agent_config(config_file)
-        dqn = {**from_file.pop("dqn"), **{k: v for k, v in dqn_flags.items() if v is not None}}
-        settings = {**from_file, **{k: v for k, v in flags.items() if v is not None}}
-        config = agent_preset(preset, seed=seed, dqn=dqn, **settings)
-    try:
-        if seeds is None:
-            summary = train_agent(
-                out, config, progress=not quiet, overwrite=overwrite, backend=backend
-            )
-            lines = {seed: summary}
-        else:
-            lines = train_seeds(
-                out,
-                config,
-                list(parse_seeds(seeds)),
-                jobs=jobs,
-                progress=not quiet,
-                overwrite=overwrite,
-                backend=backend,
-            )
-    except (ValueError, ExecutionError) as error:
-        fail(str(error))
-    except KeyboardInterrupt:
-        fail(INTERRUPTED, code=130)
-    except OSError as error:
-        fail(error_line(error, out))
+    from_file: dict[str, Any] = {"dqn": {}}
+    if config_file is not None:
+        from_file = settings_from_options(load_agent_config, config_file)
+    dqn = {**from_file.pop("dqn"), **{k: v for k, v in dqn_flags.items() if v is not None}}
+    settings = {**from_file, **{k: v for k, v in flags.items() if v is not None}}
+    config = settings_from_options(agent_preset, preset, seed=seed, dqn=dqn, **settings)
+    if seeds is None:
+        summary = train_agent(out, config, progress=not quiet, overwrite=overwrite, backend=backend)
+        lines = {seed: summary}
+    else:
+        lines = train_seeds(
+            out,
+            config,
+            list(parse_seeds(seeds)),
+            jobs=jobs,
+            progress=not quiet,
+            overwrite=overwrite,
+            backend=backend,
+        )
     for agent_seed, line in lines.items():
         folder = out if seeds is None else out / f"seed-{agent_seed}"
         if line is None:

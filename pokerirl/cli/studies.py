@@ -4,49 +4,38 @@ from __future__ import annotations
 
 import json
 import warnings
-from collections.abc import Iterator
-from contextlib import contextmanager
 from pathlib import Path
 
 import typer
 
-from pokerirl import execution
 from pokerirl.cli.app import (
     INTERRUPTED,
     RAY_HELP,
     SEED_OPTION,
+    Default,
     _backend,
-    advised,
     app,
     echo,
-    error_line,
-    fail,
+    on_error,
     seed_list,
-    usage_errors,
+    settings_from_options,
 )
+from pokerirl.errors import InputError, MissingExtra, UsageError
 
-
-@contextmanager
-def _one_line_errors(out: Path) -> Iterator[None]:
-    """What a study stops on, in one line: bad input and settings, files (naming ``out`` when
-    the error names none), units; Ctrl-C (finished units are kept)."""
-    from pokerirl.parsers.irc import IngestError
-
-    try:
-        yield
-    except OSError as error:
-        fail(error_line(error, out))
-    except (ValueError, execution.ExecutionError, IngestError) as error:
-        fail(advised(error))  # a unit's conflict: with the advice for its remedy
-    except KeyboardInterrupt:
-        fail(INTERRUPTED, 130)
+DEMO_CONFIG = "pokerirl.studies.demo:DemoConfig"
+TRANSFER_CONFIG = "pokerirl.studies.poker.transfer:TransferConfig"
 
 
 @app.command()
+@on_error(interrupted=INTERRUPTED)
 def demo(
     out: Path = typer.Option(Path("demo-output"), "--out", "-o", help="Where the demo writes."),
-    seed: int = typer.Option(0, "--seed", **SEED_OPTION, help="Seed of the synthetic data."),
-    jobs: int = typer.Option(2, "--jobs", min=1, help="Processes for agent training and play."),
+    seed: int = typer.Option(
+        Default(DEMO_CONFIG, "seed"), "--seed", **SEED_OPTION, help="Seed of the synthetic data."
+    ),
+    jobs: int = typer.Option(
+        Default(DEMO_CONFIG, "jobs"), "--jobs", min=1, help="Processes for agent training and play."
+    ),
     overwrite: bool = typer.Option(False, "--overwrite", help="Recompute changed units."),
     gym: bool = typer.Option(
         True, "--gym/--no-gym", help="Also run the Gymnasium study's quick preset (~8 min)."
@@ -62,36 +51,35 @@ def demo(
     """
     from pokerirl.studies.demo import DemoConfig, run_demo, run_gym_demo
 
-    with _one_line_errors(out):
-        result = run_demo(
-            out,
-            DemoConfig(seed=seed, jobs=jobs),
-            say=echo,
-            progress=not quiet,
-            overwrite=overwrite,
-        )
+    result = run_demo(
+        out,
+        settings_from_options(DemoConfig, seed=seed, jobs=jobs),
+        say=echo,
+        progress=not quiet,
+        overwrite=overwrite,
+    )
     echo("")
     echo(result.markdown)
     echo(f"report: {out / 'report.md'} (pokerirl report {out})")
     if not gym:
         return
-    try:
-        from pokerirl.gym.experts import require_gym
+    from pokerirl.gym.experts import require_gym
 
+    try:
         require_gym()
-    except ImportError as error:
+    except MissingExtra as error:  # not an error here: the poker demo is done
         warnings.warn(f"the Gymnasium demo is skipped: {error}", stacklevel=1)
         return
     echo("")
     echo(f"gym: the quick study on MountainCar-v0 -> {out / 'gym'}")
-    with _one_line_errors(out):
-        gym_result = run_gym_demo(out, jobs=jobs, say=echo, progress=not quiet, overwrite=overwrite)
+    gym_result = run_gym_demo(out, jobs=jobs, say=echo, progress=not quiet, overwrite=overwrite)
     echo("")
     echo(gym_result.markdown)
     echo(f"report: {out / 'gym' / 'report.md'}")
 
 
 @app.command()
+@on_error(interrupted=INTERRUPTED)
 def study(
     sources: list[Path] = typer.Argument(..., help="IRC month folders or archives."),
     out: Path = typer.Option(..., "--out", "-o", help="The study folder."),
@@ -134,48 +122,58 @@ def study(
     for item in reward_run:
         algo, _, spec = item.partition("=") if "=" in item.split(":", 1)[0] else ("", "", item)
         sources_given.append((algo or "hairl", spec))
-    with usage_errors():
-        config = preset(
-            preset_name,
-            runs=runs,
-            # As written: the first seeds the agents, and a repeat is refused, not dropped.
-            seeds=None if seeds is None else seeds_as_written(seeds),
-            hands=hands,
-            jobs=jobs,
-            reward_sources=tuple(sources_given) or None,
-            reward_transform=reward_transform,
-        )
-    with _one_line_errors(out):
-        result = run_study(
-            sources,
-            out,
-            config,
-            overwrite=overwrite,
-            progress=not quiet,
-            say=echo,
-            backend=_backend(jobs, ray),
-        )
+    config = settings_from_options(
+        preset,
+        preset_name,
+        runs=runs,
+        # As written: the first seeds the agents, and a repeat is refused, not dropped.
+        seeds=None if seeds is None else seeds_as_written(seeds),
+        hands=hands,
+        jobs=jobs,
+        reward_sources=tuple(sources_given) or None,
+        reward_transform=reward_transform,
+    )
+    result = run_study(
+        sources,
+        out,
+        config,
+        overwrite=overwrite,
+        progress=not quiet,
+        say=echo,
+        backend=_backend(jobs, ray),
+    )
     echo("")
     echo(result.markdown)
     echo(f"report: {out / 'report.md'} (pokerirl report {out})")
 
 
 @app.command()
+@on_error(interrupted=INTERRUPTED)
 def transfer(
     reward_run: str = typer.Argument(..., help="An IRL run folder, or authors:FILE."),
     out: Path = typer.Option(..., "--out", "-o", help="Folder for the agents and the table."),
     transforms: str = typer.Option(
-        "raw,centered,log_softmax", "--transforms", help="Reward transforms to train on."
+        Default(TRANSFER_CONFIG, "transforms"), "--transforms",
+        help="Reward transforms to train on.",
     ),
-    payoff_weights: str = typer.Option("0", "--payoff-weights", help="e.g. 0,0.5."),
-    seeds: str = typer.Option("0-2", "--seeds", callback=seed_list, help="DQN seeds."),
-    hands: int = typer.Option(50_000, "--hands", "-n", min=1, help="DQN training hands."),
-    agent_preset: str = typer.Option("default", "--preset", help="DQN preset: default, authors."),
+    payoff_weights: str = typer.Option(
+        Default(TRANSFER_CONFIG, "payoff_weights"), "--payoff-weights", help="e.g. 0,0.5."
+    ),
+    seeds: str = typer.Option(
+        Default(TRANSFER_CONFIG, "seeds"), "--seeds", callback=seed_list, help="DQN seeds."
+    ),
+    hands: int = typer.Option(
+        Default(TRANSFER_CONFIG, "hands"), "--hands", "-n", min=1, help="DQN training hands."
+    ),
+    agent_preset: str = typer.Option(
+        Default(TRANSFER_CONFIG, "agent_preset"), "--preset", help="DQN preset: default, authors."
+    ),
     eval_hands: int = typer.Option(
-        20_000, "--eval-hands", min=2, help="Duplicate hands vs random."
+        Default(TRANSFER_CONFIG, "eval_hands"), "--eval-hands", min=2,
+        help="Duplicate hands vs random.",
     ),
     experts: str = typer.Option(
-        "tightbot,loosebot,legal_majority",
+        Default(TRANSFER_CONFIG, "experts"),
         "--experts",
         help="Rules to compare the agents' actions with (tightbot, loosebot, legal_majority), "
         "or none.",
@@ -191,21 +189,19 @@ def transfer(
     from pokerirl.seeds import parse_seeds
     from pokerirl.studies.poker.transfer import TransferConfig, parse_list, run_transfer
 
-    with usage_errors():
-        config = TransferConfig(
-            transforms=parse_list(transforms),
-            payoff_weights=parse_list(payoff_weights, float),
-            seeds=tuple(parse_seeds(seeds)),
-            hands=hands,
-            agent_preset=agent_preset,
-            eval_hands=eval_hands,
-            experts=parse_list(experts),
-        )
-    with _one_line_errors(out):
-        result = run_transfer(
-            reward_run, out, config, backend=_backend(jobs, ray), progress=not quiet,
-            say=echo,
-        )  # fmt: skip
+    config = settings_from_options(
+        TransferConfig,
+        transforms=settings_from_options(parse_list, transforms),
+        payoff_weights=settings_from_options(parse_list, payoff_weights, float),
+        seeds=tuple(parse_seeds(seeds)),
+        hands=hands,
+        agent_preset=agent_preset,
+        eval_hands=eval_hands,
+        experts=settings_from_options(parse_list, experts),
+    )
+    result = run_transfer(
+        reward_run, out, config, backend=_backend(jobs, ray), progress=not quiet, say=echo
+    )
     echo(result.markdown())
     echo(f"wrote {out / 'transfer.json'} and transfer.md")
 
@@ -223,22 +219,19 @@ def report(
     from pokerirl.tournaments import load_report, render_report
 
     if output_format not in ("markdown", "text", "json"):
-        fail(f"unknown --format {output_format!r}; choose markdown or json", 2)
+        raise UsageError(f"unknown --format {output_format!r}; choose markdown or json")
     from pokerirl.studies.common import REPORT_JSON, SUMMARY_JSON
 
     for name in (SUMMARY_JSON, REPORT_JSON):
         _refuse_corrupt(folder / name)
-    try:
-        if is_gym_study(folder):
-            found, markdown = load_gym_study(folder)
-        elif is_study_report(folder):
-            loaded = load_study_report(folder)
-            found, markdown = loaded.to_json(), render_markdown(loaded)
-        else:
-            echo(render_report(load_report(folder), output_format), nl=False)
-            return
-    except ValueError as error:
-        fail(str(error))
+    if is_gym_study(folder):
+        found, markdown = load_gym_study(folder)
+    elif is_study_report(folder):
+        loaded = load_study_report(folder)
+        found, markdown = loaded.to_json(), render_markdown(loaded)
+    else:
+        echo(render_report(load_report(folder), output_format), nl=False)
+        return
     if output_format == "json":
         echo(json.dumps(found, indent=2))
     else:
@@ -252,8 +245,6 @@ def _refuse_corrupt(path: Path) -> None:
         json.loads(path.read_bytes())
     except FileNotFoundError:
         return
-    except OSError as error:
-        fail(error_line(error, path))
     except ValueError as error:  # JSONDecodeError, UnicodeDecodeError
         reason = error.msg if isinstance(error, json.JSONDecodeError) else "not UTF-8 text"
-        fail(f"{path}: corrupt: not JSON ({reason})")
+        raise InputError(f"{path}: corrupt: not JSON ({reason})") from None

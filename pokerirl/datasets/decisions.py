@@ -29,6 +29,7 @@ import pyarrow as pa
 import pyarrow.compute as pc
 
 from pokerirl.encoding import NUM_ACTIONS, OBS_SIZE
+from pokerirl.errors import InputError
 from pokerirl.parquet import fixed_width, read_parquet
 
 REQUIRED_COLUMNS = ("hand_id", "obs", "action_id", "legal_mask")
@@ -74,23 +75,23 @@ def read_decisions(path: str | os.PathLike[str]) -> DecisionArrays:
 def decisions_from_arrow(table: pa.Table, *, source: str = "table") -> DecisionArrays:
     """Validate an Arrow table with the decision-table schema and convert it."""
     if table.num_rows == 0:
-        raise ValueError(f"{source} is empty: no expert decisions to learn from")
+        raise InputError(f"{source} is empty: no expert decisions to learn from")
     for name in (*REQUIRED_COLUMNS, *OPTIONAL_COLUMNS):
         if name in table.column_names and table.column(name).null_count:
-            raise ValueError(f"{source}: column {name!r} has null values")
+            raise InputError(f"{source}: column {name!r} has null values")
     hand = _strings(table, "hand_id", source)
     obs = fixed_width(table, "obs", OBS_SIZE, source).astype(np.uint8, copy=False)
     mask = fixed_width(table, "legal_mask", NUM_ACTIONS, source).astype(bool, copy=False)
 
     action = table.column("action_id")
     if not pa.types.is_integer(action.type):
-        raise ValueError(f"{source}: column 'action_id' must be integer, got {action.type}")
+        raise InputError(f"{source}: column 'action_id' must be integer, got {action.type}")
     action_ids = action.to_numpy().astype(np.int64)
     if action_ids.min() < 0 or action_ids.max() >= NUM_ACTIONS:
-        raise ValueError(f"{source}: 'action_id' must lie in 0..{NUM_ACTIONS - 1}")
+        raise InputError(f"{source}: 'action_id' must lie in 0..{NUM_ACTIONS - 1}")
     illegal = ~mask[np.arange(len(action_ids)), action_ids]
     if illegal.any():
-        raise ValueError(
+        raise InputError(
             f"{source}: {int(illegal.sum())} row(s) take an action their 'legal_mask' forbids"
         )
 
@@ -98,7 +99,7 @@ def decisions_from_arrow(table: pa.Table, *, source: str = "table") -> DecisionA
     if "reward" in table.column_names:
         reward = table.column("reward")
         if not pa.types.is_floating(reward.type) and not pa.types.is_integer(reward.type):
-            raise ValueError(f"{source}: column 'reward' must be numeric, got {reward.type}")
+            raise InputError(f"{source}: column 'reward' must be numeric, got {reward.type}")
         rewards = reward.to_numpy().astype(np.float32)
 
     next_obs = dones = None
@@ -127,7 +128,7 @@ class _Encoded:
 def _strings(table: pa.Table, name: str, source: str) -> _Encoded:
     column = table.column(name)
     if not (pa.types.is_string(column.type) or pa.types.is_large_string(column.type)):
-        raise ValueError(f"{source}: column {name!r} must be string, got {column.type}")
+        raise InputError(f"{source}: column {name!r} must be string, got {column.type}")
     encoded = pc.dictionary_encode(column.combine_chunks())
     indices = encoded.indices.to_numpy(zero_copy_only=False).astype(np.int64)
     return _Encoded(indices, encoded.dictionary)

@@ -20,6 +20,7 @@ from typing import Protocol, runtime_checkable
 import numpy as np
 
 from pokerirl.encoding import BOARD_SIZE_BY_ROUND, CALL, CHECK, FOLD, RAISE, RAISE_OFFSET
+from pokerirl.errors import ConfigError
 from pokerirl.game.synth import DEFAULT_PLAYERS, ScriptedPlayer, visible_strength
 
 # For each of the 16 legal-mask patterns (bit i: action i legal): how many, and the k-th one.
@@ -212,5 +213,5 @@ def make_agent(name: str) -> Agent:
     factory = BUILT_IN_AGENTS.get(name)
     if factory is None:
         known = ", ".join(sorted(BUILT_IN_AGENTS))
-        raise ValueError(f"unknown agent {name!r} (built-in agents: {known})")
+        raise ConfigError(f"unknown agent {name!r} (built-in agents: {known})")
     return factory()

@@ -46,6 +46,7 @@ from pokerirl.encoding import (
     RAISE,
     encode_obs,
 )
+from pokerirl.errors import PokerIRLError
 from pokerirl.game.deals import DEAL_SIZE, deal_cards
 from pokerirl.game.evaluator import hand_strength
 
@@ -58,7 +59,7 @@ _HOLE_COLUMNS = np.array([[0, 1], [2, 3]])  # deal columns of each seat's hole c
 _VISIBLE = np.arange(7) < 2 + np.array((*BOARD_SIZE_BY_ROUND, 5))[:, None]
 
 
-class IllegalActionError(ValueError):
+class IllegalActionError(PokerIRLError, ValueError):
     """An action that is not legal for the hand it was given to."""
 
 

@@ -20,6 +20,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from tqdm import tqdm
 
+from pokerirl.errors import ConfigError
 from pokerirl.game.agents import Agent, agent_actions, seat_cards
 from pokerirl.game.deals import deal_cards
 from pokerirl.game.engine import IllegalActionError, LimitHoldemBatch
@@ -132,27 +133,30 @@ def play_batch(
 
 
 def check_match_size(hands: int, *, duplicate: bool, batch_size: int = DEFAULT_BATCH_SIZE) -> None:
-    """Check a match's sizes before anything is allocated; ValueError (one line) if bad.
+    """Check a match's sizes before anything is allocated; ConfigError (a ValueError, one
+    line) if bad.
 
     ``hands`` must lie in [1, :data:`MAX_HANDS`] and ``batch_size`` in [2,
     :data:`MAX_BATCH_SIZE`]; with ``duplicate`` both must be even.
 
     >>> check_match_size(99_999_999_999_998, duplicate=True)
     Traceback (most recent call last):
-    ValueError: hands must be at most 100,000,000 per match, got 99,999,999,999,998
+    pokerirl.errors.ConfigError: hands must be at most 100,000,000 per match, got 99,999,999,999,998
     """
     if hands < 1:
-        raise ValueError(f"hands must be at least 1, got {hands}")
+        raise ConfigError(f"hands must be at least 1, got {hands}")
     if hands > MAX_HANDS:
-        raise ValueError(f"hands must be at most {MAX_HANDS:,} per match, got {hands:,}")
+        raise ConfigError(f"hands must be at most {MAX_HANDS:,} per match, got {hands:,}")
     if not 2 <= batch_size <= MAX_BATCH_SIZE:
-        raise ValueError(f"batch_size must be between 2 and {MAX_BATCH_SIZE:,}, got {batch_size:,}")
+        raise ConfigError(
+            f"batch_size must be between 2 and {MAX_BATCH_SIZE:,}, got {batch_size:,}"
+        )
     if duplicate and hands % 2:
-        raise ValueError(
+        raise ConfigError(
             f"duplicate matches play every deal twice: hands must be even, got {hands}"
         )
     if duplicate and batch_size % 2:
-        raise ValueError(f"duplicate matches need an even batch_size, got {batch_size}")
+        raise ConfigError(f"duplicate matches need an even batch_size, got {batch_size}")
 
 
 def play_match(
@@ -180,9 +184,9 @@ def play_match(
     """
     check_match_size(hands, duplicate=duplicate, batch_size=batch_size)
     if seed < 0:
-        raise ValueError(f"seed must be non-negative, got {seed}")
+        raise ConfigError(f"seed must be non-negative, got {seed}")
     if seating not in SEATINGS or (seating == "random" and duplicate):
-        raise ValueError(f"seating must be alternate, or random without duplicate: {seating!r}")
+        raise ConfigError(f"seating must be alternate, or random without duplicate: {seating!r}")
 
     rngs = (_agent_rng(seed, 0), _agent_rng(seed, 1))
     seat_rng = _agent_rng(seed, 2)

@@ -26,6 +26,7 @@ from pathlib import Path
 import numpy as np
 
 from pokerirl.encoding import card_str
+from pokerirl.errors import ConfigError
 from pokerirl.game.evaluator import hand_strength
 
 SMALL_BLIND, BIG_BLIND = 5, 10
@@ -106,9 +107,9 @@ def write_synthetic_month(
         ValueError: one line, for ``hands`` outside [1, :data:`MAX_HANDS`] or a negative seed.
     """
     if not 1 <= hands <= MAX_HANDS:
-        raise ValueError(f"hands must be between 1 and {MAX_HANDS:,} (one month), got {hands}")
+        raise ConfigError(f"hands must be between 1 and {MAX_HANDS:,} (one month), got {hands}")
     if seed < 0:
-        raise ValueError(f"seed must be non-negative, got {seed}")
+        raise ConfigError(f"seed must be non-negative, got {seed}")
     rng = np.random.default_rng(seed)
     deals = rng.random((hands, 52)).argsort(axis=1)[:, :9].astype(np.int64)
     # Player 0 of the pair sits in position 1 on even hands; the button alternates.

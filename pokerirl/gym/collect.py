@@ -31,6 +31,7 @@ import numpy as np
 import torch
 
 from pokerirl.atomic import atomic_path
+from pokerirl.errors import ConfigError
 from pokerirl.gym.experts import Expert, make_env
 from pokerirl.gym.presets import MAX_TRANSITIONS, TASKS
 
@@ -88,7 +89,7 @@ def rollout(
     if deterministic is None:
         deterministic = default_deterministic(expert.env_id)
     if not 1 <= transitions <= MAX_TRANSITIONS:
-        raise ValueError(
+        raise ConfigError(
             f"transitions must be within 1..{MAX_TRANSITIONS:,} (held in memory until "
             f"written), got {transitions:,}"
         )

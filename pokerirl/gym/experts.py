@@ -29,6 +29,7 @@ import numpy as np
 import torch
 
 from pokerirl.atomic import write_text, write_torch
+from pokerirl.errors import ConfigError, InputError, MissingExtra
 from pokerirl.gym.presets import TASKS, PPOSettings, RLSettings
 
 if TYPE_CHECKING:  # gymnasium and SB3 are imported lazily: a poker-only user never pays.
@@ -201,7 +202,7 @@ def require_gym() -> None:
         import gymnasium  # noqa: F401
         import stable_baselines3  # noqa: F401
     except ImportError as error:
-        raise ImportError(
+        raise MissingExtra(
             f"pokerirl.gym needs the gym extra (pip install 'pokerirl[gym]'): {error}"
         ) from None
 
@@ -219,7 +220,7 @@ def make_env(env_id: str) -> gymnasium.Env:
             )
             return gymnasium.make(env_id)
     except gymnasium.error.Error as error:
-        raise ValueError(f"unknown environment {env_id!r}: {error}") from None
+        raise ConfigError(f"unknown environment {env_id!r}: {error}") from None
 
 
 # --------------------------------------------------------------------------- architecture
@@ -261,7 +262,7 @@ def build_policy(env_id: str, algo: str, kwargs: Mapping[str, Any]) -> BasePolic
 
     classes: dict[str, type[BasePolicy]] = {"dqn": DQNPolicy, "ppo": ActorCriticPolicy}
     if algo not in classes:
-        raise ValueError(f"unknown expert algorithm {algo!r} (ppo or dqn)")
+        raise InputError(f"unknown expert algorithm {algo!r} (ppo or dqn)")
     policy: BasePolicy = classes[algo](*spaces, lr_schedule=lambda _: 0.0, **_sb3_kwargs(kwargs))
     return policy
 
@@ -325,15 +326,15 @@ def expert_settings(env_id: str, *, hyper: str = "paper") -> RLSettings:
     authors' miss the target; MountainCar's DQN is rl-zoo's either way.
     """
     if env_id not in TASKS:
-        raise ValueError(f"no expert settings for {env_id!r}; tasks: {', '.join(TASKS)}")
+        raise ConfigError(f"no expert settings for {env_id!r}; tasks: {', '.join(TASKS)}")
     settings = TASKS[env_id].rl
     if hyper == "paper":
         return settings
     if hyper == "zoo":
         if env_id not in ZOO_PPO:
-            raise ValueError(f"no rl-zoo settings recorded for {env_id}; use --hyper paper")
+            raise ConfigError(f"no rl-zoo settings recorded for {env_id} (only the paper's)")
         return replace(settings, ppo=ZOO_PPO[env_id])
-    raise ValueError(f"unknown hyper-parameter set {hyper!r} (paper or zoo)")
+    raise ConfigError(f"unknown hyper-parameter set {hyper!r} (paper or zoo)")
 
 
 # rl-zoo (rl-baselines3-zoo, hyperparams/ppo.yml) settings for a retry where the authors'
@@ -401,7 +402,7 @@ def train_expert_record(
     settings = expert_settings(env_id, hyper=hyper)
     timesteps = timesteps or settings.timesteps
     if timesteps < 1 or eval_episodes < 1 or final_episodes < 1:
-        raise ValueError("timesteps, eval_episodes and final_episodes must be positive")
+        raise ConfigError("timesteps, eval_episodes and final_episodes must be positive")
     every: int = eval_every or max(timesteps // 20, 1)
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
@@ -489,7 +490,7 @@ def shipped_manifest() -> list[Mapping[str, Any]]:
     """
     path = shipped_dir() / MANIFEST_FILE
     if not path.is_file():
-        raise ValueError(f"{path}: no shipped experts in this installation")
+        raise InputError(f"{path}: no shipped experts in this installation")
     manifest: list[Mapping[str, Any]] = json.loads(path.read_text())
     return manifest
 
@@ -504,7 +505,7 @@ def resolve_expert_dir(expert: str | os.PathLike[str], env_id: str) -> Path:
     if str(expert) == "shipped":
         folder = shipped_dir() / env_id
         if not (folder / CONFIG_FILE).is_file():
-            raise ValueError(f"no shipped expert for {env_id!r}")
+            raise ConfigError(f"no shipped expert for {env_id!r}")
         return folder
     return Path(expert)
 
@@ -524,17 +525,17 @@ def load_expert(folder: str | os.PathLike[str]) -> Expert:
             state = torch.load(folder / MODEL_FILE, weights_only=True, map_location="cpu")
         policy.load_state_dict(state)
     except FileNotFoundError as error:
-        raise ValueError(
+        raise InputError(
             f"{folder}: not an expert folder ({Path(error.filename).name} missing)"
         ) from None
     except pickle.UnpicklingError as error:
         pickled = (folder / MODEL_FILE).read_bytes()[:1] == b"\x80"  # a pickle's opcode
         refused = "GLOBAL" in str(error) or "Unsupported global" in str(error)
         if not pickled and not refused:
-            raise ValueError(f"{folder}: bad expert files: {str(error).splitlines()[0]}") from None
+            raise InputError(f"{folder}: bad expert files: {str(error).splitlines()[0]}") from None
         # weights_only refused a pickled object: nothing was executed; torch's advice is
         # several lines about unpickling, which we refuse to do.
-        raise ValueError(
+        raise InputError(
             f"{folder / MODEL_FILE}: not a state_dict (refusing to unpickle)"
         ) from None
     except (
@@ -543,7 +544,7 @@ def load_expert(folder: str | os.PathLike[str]) -> Expert:
         RuntimeError,
         TypeError,
     ) as error:
-        raise ValueError(f"{folder}: bad expert files: {str(error).splitlines()[0]}") from None
+        raise InputError(f"{folder}: bad expert files: {str(error).splitlines()[0]}") from None
     policy.set_training_mode(False)
     return Expert(env_id=record["env"], algo=record["algo"], policy=policy, record=record)
 

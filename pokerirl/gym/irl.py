@@ -36,6 +36,7 @@ import torch
 from torch import Tensor, nn
 
 from pokerirl.atomic import atomic_path, make_shareable, write_text
+from pokerirl.errors import ConfigError, InputError, Remedy
 from pokerirl.gym.experts import make_env, shipped_experts
 from pokerirl.gym.presets import TASKS, IRLSettings
 from pokerirl.gym.quality import write_reward_quality
@@ -122,17 +123,17 @@ def load_env_transitions(env_id: str, data_path: str | os.PathLike[str]) -> Tran
     if hasattr(space, "n"):
         data = Transitions.from_parquet(data_path)
         if not data.discrete:
-            raise ValueError(f"{data_path}: continuous actions, but {env_id} has discrete ones")
+            raise InputError(f"{data_path}: continuous actions, but {env_id} has discrete ones")
         if int(data.actions.max()) >= int(space.n) or int(data.actions.min()) < 0:
-            raise ValueError(f"{data_path}: action ids outside {env_id}'s 0..{int(space.n) - 1}")
+            raise InputError(f"{data_path}: action ids outside {env_id}'s 0..{int(space.n) - 1}")
         data = replace(data, num_actions=int(space.n))
     else:
         low, high = space.low.astype(float).tolist(), space.high.astype(float).tolist()
         data = Transitions.from_parquet(data_path, low=low, high=high)
         if data.discrete or data.action_dim != len(low):
-            raise ValueError(f"{data_path}: actions do not fit {env_id}'s box of {len(low)} dims")
+            raise InputError(f"{data_path}: actions do not fit {env_id}'s box of {len(low)} dims")
     if data.obs_dim != int(np.prod(obs_space.shape)):
-        raise ValueError(
+        raise InputError(
             f"{data_path}: observations have {data.obs_dim} dims, {env_id} has {obs_space.shape}"
         )
     return data
@@ -285,19 +286,19 @@ def train_gym_irl(
     as bytes names the driver's file, so the bytes do not depend on its scratch folder).
     """
     if env_id not in TASKS:
-        raise ValueError(f"unknown task {env_id!r}; choose one of {', '.join(TASKS)}")
+        raise ConfigError(f"unknown task {env_id!r}; choose one of {', '.join(TASKS)}")
     if runs < 1:
-        raise ValueError("runs must be at least 1")
+        raise ConfigError("runs must be at least 1")
     settings = settings or TASKS[env_id].irl
     out = Path(out)
     products = [f"run-{k}" for k in range(runs)] + [SUMMARY_FILE, RETURNS_FILE]
     if out.exists() and not out.is_dir():
-        raise RunError(f"{out} exists and is not a folder; choose another --out")
+        raise RunError(f"{out} exists and is not a folder", remedy=Remedy.ELSEWHERE)
     if out.is_dir():
         tidy(out, key=STAGE_KEY)  # finish or remove what a killed run left
     taken = [p for p in products if (out / p).exists()] if out.is_dir() else []
     if taken and not overwrite:
-        raise RunError(f"{out} already holds {taken[0]}; pass --overwrite to replace")
+        raise RunError(f"{out} already holds {taken[0]}", remedy=Remedy.REPLACE)
     config = irl_config(algo, settings, seed=seed)
     data = load_env_transitions(env_id, data_path)
     discrete = data.discrete

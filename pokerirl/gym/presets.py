@@ -17,6 +17,8 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 from typing import Any, Literal
 
+from pokerirl.errors import ConfigError
+
 Algo = Literal["ppo", "dqn"]
 
 
@@ -451,7 +453,7 @@ class StudyPreset:
     def __post_init__(self) -> None:
         unknown = [t for t in self.tasks if t not in TASKS]
         if unknown:
-            raise ValueError(f"unknown task {unknown[0]!r}; choose one of {', '.join(TASKS)}")
+            raise ConfigError(f"unknown task {unknown[0]!r}; choose one of {', '.join(TASKS)}")
         checks = {
             "runs >= 1": self.runs >= 1,
             "at least one task": len(self.tasks) >= 1,
@@ -464,7 +466,7 @@ class StudyPreset:
         }
         broken = [name for name, ok in checks.items() if not ok]
         if broken:
-            raise ValueError(f"bad study settings: {', '.join(broken)}")
+            raise ConfigError(f"bad study settings: {', '.join(broken)}")
 
     def irl(self, env_id: str) -> IRLSettings:
         """The task's IRL settings with this preset's budget overrides applied."""

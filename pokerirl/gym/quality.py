@@ -50,6 +50,7 @@ import numpy as np
 import torch
 
 from pokerirl.atomic import write_text
+from pokerirl.errors import PokerIRLError
 from pokerirl.gym.collect import read_transitions
 from pokerirl.gym.experts import make_env
 from pokerirl.gym.presets import TASKS
@@ -84,7 +85,7 @@ SCORES = (
 TransitionReward = Callable[[np.ndarray, np.ndarray, np.ndarray], np.ndarray]
 
 
-class QualityError(ValueError):
+class QualityError(PokerIRLError, ValueError):
     """A run folder or task that cannot be scored; the message is one line."""
 
 

@@ -29,6 +29,7 @@ from typing import Any
 import numpy as np
 
 from pokerirl.atomic import write_bytes
+from pokerirl.errors import ConfigError, InputError
 from pokerirl.irl.config import Algo
 from pokerirl.irl.run import CONFIG_FILE, RunError, load_reward, load_run_config
 
@@ -95,13 +96,13 @@ def task_space(env_id: str) -> tuple[np.ndarray, np.ndarray, int]:
         env.close()
     shape = getattr(obs_space, "shape", None)
     if shape != (2,) or not hasattr(action_space, "n"):
-        raise ValueError(
+        raise ConfigError(
             f"{env_id}: the reward map needs a 2-d observation and discrete actions; "
             f"it has observations of shape {shape} and {type(action_space).__name__} actions"
         )
     low, high = obs_space.low.astype(np.float64), obs_space.high.astype(np.float64)
     if not (np.isfinite(low).all() and np.isfinite(high).all()):
-        raise ValueError(f"{env_id}: the observation space is unbounded; no lattice to draw")
+        raise ConfigError(f"{env_id}: the observation space is unbounded; no lattice to draw")
     return low, high, int(action_space.n)
 
 
@@ -131,7 +132,7 @@ def lattice(low: np.ndarray, high: np.ndarray, grid: int) -> tuple[np.ndarray, n
     ([0.0, 0.5, 1.0], [-1.0, 0.0, 1.0])
     """
     if grid < 2:
-        raise ValueError(f"grid must be at least 2, got {grid}")
+        raise ConfigError(f"grid must be at least 2, got {grid}")
     return np.linspace(low[0], high[0], grid), np.linspace(low[1], high[1], grid)
 
 
@@ -178,7 +179,7 @@ def expert_actions(expert: str | os.PathLike[str], env_id: str, states: np.ndarr
 
     loaded = load_expert(resolve_expert_dir(expert, env_id))
     if loaded.env_id != env_id:
-        raise ValueError(f"{expert}: an expert for {loaded.env_id}, not {env_id}")
+        raise InputError(f"{expert}: an expert for {loaded.env_id}, not {env_id}")
     return np.asarray(loaded.act(states, deterministic=True), dtype=np.int64).reshape(-1)
 
 
@@ -196,7 +197,7 @@ def reward_map(
     missing folder, a run on another task, a task without 2-d states and discrete actions).
     """
     if not folders:
-        raise ValueError("give at least one IRL run folder")
+        raise ConfigError("give at least one IRL run folder")
     low, high, num_actions = task_space(env_id)
     xs, ys = lattice(low, high, grid)
     states = grid_states(xs, ys)

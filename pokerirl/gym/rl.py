@@ -19,6 +19,7 @@ from typing import Any
 import numpy as np
 
 from pokerirl.atomic import write_text, write_torch
+from pokerirl.errors import ConfigError, InputError
 from pokerirl.gym.experts import (
     CONFIG_FILE,
     METRICS_FILE,
@@ -100,7 +101,7 @@ def train_rl(
     settings = settings or TASKS[env_id].rl
     budget: int = timesteps or settings.timesteps
     if budget < 1 or evaluations < 1 or eval_episodes < 1:
-        raise ValueError("timesteps, evaluations and eval_episodes must be positive")
+        raise ConfigError("timesteps, evaluations and eval_episodes must be positive")
     check_reward(env_id, reward)
     venv: Any = DummyVecEnv([lambda: Monitor(make_env(env_id))])
     if reward is not None:
@@ -153,9 +154,9 @@ def check_reward(env_id: str, reward: RewardCallable | None) -> None:
         try:
             values = np.asarray(reward(obs, action))
         except (ValueError, RuntimeError, IndexError) as error:
-            raise ValueError(f"the reward does not fit {env_id}: {error}") from None
+            raise InputError(f"the reward does not fit {env_id}: {error}") from None
         if values.shape != (1,):
-            raise ValueError(f"the reward gives shape {values.shape} on {env_id}, not (1,)")
+            raise InputError(f"the reward gives shape {values.shape} on {env_id}, not (1,)")
     finally:
         env.close()
 
@@ -177,7 +178,7 @@ def save_run(
     state_dict) and ``config.json``; a lock-step run's config also says ``"backend"`` (an
     SB3 run's is left as it always was)."""
     if backend not in RL_BACKENDS:
-        raise ValueError(f"unknown RL backend {backend!r}; choose one of {', '.join(RL_BACKENDS)}")
+        raise ConfigError(f"unknown RL backend {backend!r}; choose one of {', '.join(RL_BACKENDS)}")
     out.mkdir(parents=True, exist_ok=True)
     record = {
         "env": result.env,

@@ -48,6 +48,7 @@ import torch
 from torch import Tensor, nn
 from tqdm.auto import tqdm
 
+from pokerirl.errors import ConfigError, InputError
 from pokerirl.irl import fast
 from pokerirl.irl.baselines import baselines
 from pokerirl.irl.config import AIRLConfig, NoiseForm, NoiseSchedule
@@ -231,7 +232,7 @@ def train_many(
     """
     device = resolve_device(device)
     if len(train_data) == 0 or len(val_data) == 0:
-        raise ValueError("training and validation data must both be non-empty")
+        raise InputError("training and validation data must both be non-empty")
     seeds = [int(s) for s in seeds]
     if not seeds:
         raise ValueError("train_many needs at least one seed")
@@ -242,7 +243,7 @@ def train_many(
     if not len(rewards) == len(policies) == len(seeds):
         raise ValueError("give one reward net and one policy per seed")
     if config.reward_family == RewardFamily.SHAPED and train_data.next_obs is None:
-        raise ValueError("the shaped reward family needs transitions with next_obs and done")
+        raise ConfigError("the shaped reward family needs transitions with next_obs and done")
     for module in (*rewards, *policies):
         module.to(device).train()
     return _Loop(
@@ -629,9 +630,9 @@ def resolve_device(device: str | torch.device) -> torch.device:
     try:
         resolved = torch.device(device)
     except RuntimeError as error:
-        raise ValueError(f"unknown device {device!r}: {error}") from None
+        raise ConfigError(f"unknown device {device!r}: {error}") from None
     if resolved.type == "cuda" and not torch.cuda.is_available():
-        raise ValueError("device 'cuda' requested but CUDA is not available on this machine")
+        raise ConfigError("device 'cuda' requested but CUDA is not available on this machine")
     if resolved.type not in ("cpu", "cuda"):
-        raise ValueError(f"unsupported device {device!r}; use cpu or cuda")
+        raise ConfigError(f"unsupported device {device!r}; use cpu or cuda")
     return resolved

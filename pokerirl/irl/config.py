@@ -15,7 +15,7 @@ The TOML file is flat, with the field names as keys::
 >>> AIRLConfig(epochs=True)
 Traceback (most recent call last):
 ...
-pokerirl.irl.config.ConfigError: epochs must be an integer, got True
+pokerirl.errors.ConfigError: epochs must be an integer, got True
 """
 
 from __future__ import annotations
@@ -30,7 +30,7 @@ from enum import StrEnum
 from pathlib import Path
 from typing import Any
 
-from pokerirl.errors import PokerIRLError
+from pokerirl.errors import ConfigError as ConfigError  # its old home: imports keep working
 from pokerirl.irl.nets import ACTIVATIONS, REWARD_FAMILIES, NetSpec, RewardFamily
 
 
@@ -81,10 +81,6 @@ NOISE_SCHEDULES: tuple[str, ...] = tuple(NoiseSchedule)
 DISC_ACTIONS: tuple[str, ...] = tuple(DiscAction)
 NOISE_FORMS: tuple[str, ...] = tuple(NoiseForm)
 SUPERVISED_FORMS: tuple[str, ...] = tuple(SupervisedForm)
-
-
-class ConfigError(PokerIRLError, ValueError):
-    """A bad setting: one line naming the key (and the file, when there is one)."""
 
 
 @dataclass(frozen=True, kw_only=True)

@@ -16,6 +16,7 @@ from typing import NamedTuple
 import torch
 from torch import Tensor, nn
 
+from pokerirl.errors import ConfigError
 from pokerirl.irl.nets import DiscretePolicy, StateActionReward
 
 
@@ -39,7 +40,7 @@ def supports(reward: nn.Module, policy: nn.Module) -> bool:
 def check(reward: nn.Module, policy: nn.Module) -> None:
     """Raise a clear ``ValueError`` unless :func:`supports` the pair."""
     if not supports(reward, policy):
-        raise ValueError(
+        raise ConfigError(
             "the hand-derived gradient path covers only StateActionReward and DiscretePolicy "
             "with ReLU and no layer norm; use autograd (fast_path=False) for "
             f"{type(reward).__name__} / {type(policy).__name__} as configured"

@@ -35,6 +35,8 @@ import numpy as np
 import torch
 from torch import Tensor, nn
 
+from pokerirl.errors import ConfigError
+
 # Finite stand-in for log(0) on illegal actions: 0 * MASKED_LOGIT is 0, 0 * -inf would be NaN.
 MASKED_LOGIT = -1e9
 ACTIVATIONS: dict[str, type[nn.Module]] = {
@@ -67,12 +69,12 @@ class NetSpec:
 
     def __post_init__(self) -> None:
         if self.activation not in ACTIVATIONS:
-            raise ValueError(f"activation must be one of {', '.join(ACTIVATIONS)}")
+            raise ConfigError(f"activation must be one of {', '.join(ACTIVATIONS)}")
         if self.reward_family not in REWARD_FAMILIES:
-            raise ValueError(f"reward_family must be one of {', '.join(REWARD_FAMILIES)}")
+            raise ConfigError(f"reward_family must be one of {', '.join(REWARD_FAMILIES)}")
         object.__setattr__(self, "reward_family", RewardFamily(self.reward_family))
         if not self.reward_hidden or min(self.reward_hidden + self.policy_hidden, default=1) < 1:
-            raise ValueError("hidden widths must be >= 1, with at least one reward layer")
+            raise ConfigError("hidden widths must be >= 1, with at least one reward layer")
 
 
 def build_mlp(

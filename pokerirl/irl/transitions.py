@@ -31,6 +31,8 @@ import numpy as np
 import torch
 from torch import Tensor
 
+from pokerirl.errors import InputError
+
 ENV_COLUMNS = ("obs", "action", "reward", "next_obs", "done", "episode")
 
 
@@ -127,10 +129,10 @@ class Transitions:
         path = Path(path)
         table = read_parquet(path, ENV_COLUMNS, what="rollouts")
         if table.num_rows == 0:
-            raise ValueError(f"{path} is empty: no transitions")
+            raise InputError(f"{path} is empty: no transitions")
         for name in ENV_COLUMNS:
             if table.column(name).null_count:
-                raise ValueError(f"{path}: column {name!r} has null values")
+                raise InputError(f"{path}: column {name!r} has null values")
         obs = fixed_width(table, "obs", None, str(path), floating=True)
         next_obs = fixed_width(table, "next_obs", obs.shape[1], str(path), floating=True)
         action_type = table.column("action").type
@@ -140,13 +142,13 @@ class Transitions:
             actions = fixed_width(table, "action", None, str(path), floating=True)
             actions = actions.astype(np.float32)
         else:
-            raise ValueError(f"{path}: column 'action' must be int64 or fixed_size_list<float>")
+            raise InputError(f"{path}: column 'action' must be int64 or fixed_size_list<float>")
         if not pa.types.is_boolean(table.column("done").type):
-            raise ValueError(f"{path}: column 'done' must be bool")
+            raise InputError(f"{path}: column 'done' must be bool")
         for name in ("reward", "episode"):
             kind = table.column(name).type
             if not (pa.types.is_floating(kind) or pa.types.is_integer(kind)):
-                raise ValueError(f"{path}: column {name!r} must be numeric, got {kind}")
+                raise InputError(f"{path}: column {name!r} must be numeric, got {kind}")
         return cls.from_arrays(
             obs,
             actions,
@@ -211,7 +213,7 @@ class Transitions:
         group_index = rank[inverse.reshape(-1)]
         num_groups = len(first)
         if num_groups < 2:
-            raise ValueError("need at least two groups (hands, episodes) to split")
+            raise InputError("need at least two groups (hands, episodes) to split")
         num_val = min(max(round(val_fraction * num_groups), 1), num_groups - 1)
         is_val_group = np.zeros(num_groups, dtype=bool)
         is_val_group[np.random.default_rng(seed).permutation(num_groups)[:num_val]] = True

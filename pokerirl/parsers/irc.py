@@ -32,6 +32,7 @@ from typing import IO
 import numpy as np
 
 from pokerirl.encoding import CARD_INDEX
+from pokerirl.errors import PokerIRLError
 from pokerirl.parsers.replay import Replay, ReplayError, replay_actions
 
 # Big blind in chips per limit hold'em channel; bets are one big blind, doubled on turn and river.
@@ -79,7 +80,7 @@ _PROGRESS_EVERY = 8192
 _ARCHIVE_SUFFIXES = (".tgz", ".tar.gz", ".tar")
 
 
-class IngestError(Exception):
+class IngestError(PokerIRLError):
     """A source cannot be read as IRC data, or ``strict`` met a malformed line."""
 
 
@@ -338,8 +339,13 @@ def _member_key(name: str, hint: tuple[str | None, str | None]) -> tuple[str, st
     return _text(channel), _text(month), leaf
 
 
-class _HeaderTooLarge(Exception):
-    """A tar header of more than :data:`MAX_TAR_HEADER_BYTES` (its size)."""
+class _HeaderTooLarge(IngestError):
+    """A tar header of more than :data:`MAX_TAR_HEADER_BYTES`; the archive's reader names the
+    archive (internal: never reaches a user as it is)."""
+
+    def __init__(self, size: int) -> None:
+        super().__init__(f"a tar header of {size:,} bytes")
+        self.size = size
 
 
 class _BoundedTarInfo(tarfile.TarInfo):
@@ -417,7 +423,7 @@ def _iter_tar_stream(fileobj: IO[bytes], origin: str, archive_name: str) -> Iter
             yield from flush()
     except _HeaderTooLarge as error:
         raise IngestError(
-            f"{origin}: a tar header of {error.args[0]:,} bytes, more than the "
+            f"{origin}: a tar header of {error.size:,} bytes, more than the "
             f"{MAX_TAR_HEADER_BYTES:,} an IRC archive's names need (not IRC data?)"
         ) from None
     except (tarfile.TarError, EOFError, OSError) as error:

@@ -21,6 +21,7 @@ from dataclasses import dataclass
 from functools import lru_cache
 
 from pokerirl.encoding import CALL, CHECK, FOLD, MAX_RAISES, NUM_ROUNDS, RAISE
+from pokerirl.errors import InputError
 
 # Chips are counted in small blinds: blinds 1 and 2, bets 2 preflop and on the flop, 4 later.
 BET_IN_SMALL_BLINDS = (2, 2, 4, 4)
@@ -28,7 +29,7 @@ _FOLDS = frozenset("fQK")
 _ACTIONS = frozenset("kcbrAfQK")
 
 
-class ReplayError(ValueError):
+class ReplayError(InputError):
     """The action strings do not describe a playable hand."""
 
 

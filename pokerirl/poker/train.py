@@ -45,7 +45,7 @@ import torch
 
 from pokerirl.agents.reward_card import CARD_FILE
 from pokerirl.atomic import make_shareable, write_text
-from pokerirl.errors import Remedy
+from pokerirl.errors import ConfigError, Remedy
 from pokerirl.execution import Backend
 from pokerirl.irl.airl import resolve_device
 from pokerirl.irl.config import AIRLConfig, Algo
@@ -215,7 +215,7 @@ def train_runs(
     settings unless ``overwrite``. Results do not depend on the backend.
     """
     if runs < 1:
-        raise ValueError(f"runs must be at least 1, got {runs}")
+        raise ConfigError(f"runs must be at least 1, got {runs}")
     config = config or AIRLConfig.for_algo(algo)
     if runs == 1:
         return train_table(

@@ -61,7 +61,7 @@ class UnitConflict(StoreError, ValueError):
     what would get past it."""
 
 
-class NotARecord(ValueError):
+class NotARecord(StoreError, ValueError):
     """Text that is not a unit record of a readable format (corrupt, truncated, another
     tool's): the unit is recomputed. Internal: never reaches a user."""
 

@@ -19,7 +19,7 @@ from typing import Any, TypeVar
 
 import numpy as np
 
-from pokerirl.errors import PokerIRLError
+from pokerirl.errors import ConfigError
 
 # The files the studies read in their units' folders and write in their own.
 METRICS_JSONL = "metrics.jsonl"  # an IRL run's epochs, an RL run's or agent's evaluations
@@ -30,7 +30,7 @@ REPORT_MD, REPORT_JSON = "report.md", "report.json"
 Preset = TypeVar("Preset")
 
 
-class StudyError(PokerIRLError, ValueError):
+class StudyError(ConfigError):
     """Bad study settings, or a study folder that does not fit them; the message is one line."""
 
 

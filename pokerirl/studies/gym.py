@@ -36,7 +36,7 @@ from typing import Any
 import numpy as np
 
 from pokerirl.atomic import write_text
-from pokerirl.errors import PokerIRLError
+from pokerirl.errors import PokerIRLError, Remedy
 from pokerirl.execution import Backend
 from pokerirl.gym.presets import PRESETS, TASK_ORDER, TASKS, StudyPreset
 from pokerirl.gym.presets import MeanStd as PaperValue
@@ -206,7 +206,7 @@ def run_gym_study(
     backend = backend or Backend()
     out = Path(out)
     if out.exists() and not out.is_dir():
-        raise StudyError(f"{out} exists and is not a folder; choose another --out")
+        raise StudyError(f"{out} exists and is not a folder", remedy=Remedy.ELSEWHERE)
     tasks = preset.tasks
     roots = {env: task_root(out, env, tasks) for env in tasks}
     names = ", ".join(tasks)

@@ -25,6 +25,7 @@ from pathlib import Path
 from typing import Any
 
 from pokerirl.atomic import write_text
+from pokerirl.errors import Remedy
 from pokerirl.store import UnitConflict, describe_changes
 
 JOB_FORMAT = "pokerirl-gym-job/1"
@@ -57,11 +58,13 @@ def claim(
         if old is None:
             raise UnitConflict(
                 f"{folder} holds outputs without a readable {name} (another version's, or "
-                "its record is corrupt); pass --overwrite to replace them"
+                "its record is corrupt)",
+                remedy=Remedy.REPLACE,
             )
         raise UnitConflict(
             f"{folder}: its outputs were trained with other settings "
-            f"({describe_changes(old, identity)}); pass --overwrite to replace them"
+            f"({describe_changes(old, identity)})",
+            remedy=Remedy.REPLACE,
         )
     for output in found:  # the record goes first: a kill from here leaves no stale record
         if output.is_dir() and not output.is_symlink():

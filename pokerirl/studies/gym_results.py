@@ -14,6 +14,8 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
+from pokerirl.errors import InputError
+
 Json = dict[str, Any]
 QUALITY_KEYS = ("disc_acc_expert", "disc_acc_policy")  # written as final_<key>
 
@@ -31,7 +33,7 @@ class MeanStd:
     @classmethod
     def from_json(cls, data: Mapping[str, Any]) -> MeanStd:
         if not isinstance(data, Mapping):
-            raise ValueError(f"must be an object with a mean and a std, got {data!r}"[:200])
+            raise InputError(f"must be an object with a mean and a std, got {data!r}"[:200])
         return cls(mean=data.get("mean"), std=data.get("std"))
 
 

@@ -7,7 +7,7 @@ deep inside the renderer. Only the fields the report reads are checked; others m
 >>> check_task_summary({"env": "Acrobot-v1"})
 Traceback (most recent call last):
 ...
-ValueError: runs: missing
+pokerirl.errors.InputError: runs: missing
 """
 
 from __future__ import annotations
@@ -15,13 +15,14 @@ from __future__ import annotations
 from collections.abc import Callable, Mapping
 from typing import Any
 
+from pokerirl.errors import InputError
 from pokerirl.gym.presets import TASKS
 
 Check = Callable[[Any, str], None]
 
 
 def _fail(where: str, expected: str, value: Any) -> None:
-    raise ValueError(f"{where}: must be {expected}, got {value!r}"[:300])
+    raise InputError(f"{where}: must be {expected}, got {value!r}"[:300])
 
 
 def _number(value: Any, where: str) -> None:
@@ -75,7 +76,7 @@ def _fields(fields: Mapping[str, Check], *, optional: bool = False) -> Check:
             if name not in value:
                 if field in _MAY_BE_ABSENT:
                     continue
-                raise ValueError(f"{inner}: missing")
+                raise InputError(f"{inner}: missing")
             field(value[name], inner)
 
     return check
@@ -185,7 +186,7 @@ _REWARD_MAP = _absent_or(
 
 
 def check_task_summary(summary: Any, where: str = "") -> None:
-    """Raise a one-line ``ValueError`` naming the first field of a task's summary that the
+    """Raise a one-line ``InputError`` naming the first field of a task's summary that the
     report cannot render (missing, or of the wrong type)."""
     _fields({"env": _task, "runs": _count, "seeds": _seeds, "discrete": _flag})(summary, where)
     discrete = summary["discrete"]

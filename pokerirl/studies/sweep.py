@@ -31,7 +31,7 @@ from typing import Any
 import numpy as np
 
 from pokerirl.atomic import atomic_path, write_text
-from pokerirl.errors import PokerIRLError
+from pokerirl.errors import PokerIRLError, Remedy
 from pokerirl.execution import Backend
 from pokerirl.gym.irl import irl_config
 from pokerirl.gym.presets import TASKS, StudyPreset
@@ -183,7 +183,7 @@ def run_sweep(
     backend = backend or Backend()
     out = Path(out)
     if out.exists() and not out.is_dir():
-        raise StudyError(f"{out} exists and is not a folder; choose another --out")
+        raise StudyError(f"{out} exists and is not a folder", remedy=Remedy.ELSEWHERE)
     points = sweep_points(env, params, preset)
     unique = list({point.name: point for point in points}.values())
     data = out / DATA_FILE

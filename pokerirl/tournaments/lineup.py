@@ -16,13 +16,14 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from pokerirl.agents.registry import RLCARD_PREFIX
+from pokerirl.errors import PokerIRLError
 from pokerirl.game.agents import BUILT_IN_AGENTS
 from pokerirl.seeds import format_seeds
 
 _SEED_FOLDER = re.compile(r"seed-(\d+)")
 
 
-class TournamentError(ValueError):
+class TournamentError(PokerIRLError, ValueError):
     """Bad tournament input or a result folder that does not fit; the message is one line."""
 
 

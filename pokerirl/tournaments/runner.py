@@ -240,7 +240,7 @@ def _validate(
     batch_size: int,
 ) -> None:
     if not matchups:
-        raise TournamentError("no matchups: give two agents, or --vs BASE and one or more")
+        raise TournamentError("no matchups: give at least one (agent, base) pair")
     if len(set(matchups)) < len(matchups):
         raise TournamentError("the same matchup is listed twice")
     if not seeds:

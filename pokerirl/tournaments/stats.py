@@ -21,6 +21,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import stats
 
+from pokerirl.errors import ConfigError
+
 CONFIDENCE = 0.95
 
 
@@ -50,7 +52,7 @@ def estimate(units_mbb: np.ndarray) -> Estimate:
     """
     units = np.asarray(units_mbb, dtype=np.float64)
     if units.ndim != 1 or units.size < 2:
-        raise ValueError(f"need at least two independent units, got {units.size}")
+        raise ConfigError(f"need at least two independent units, got {units.size}")
     mean = float(units.mean())
     if np.all(units == units[0]):
         p_value = 1.0 if mean == 0.0 else 0.0

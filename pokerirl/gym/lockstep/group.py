@@ -21,6 +21,7 @@ from typing import Any, Protocol
 
 import numpy as np
 
+from pokerirl.errors import ConfigError
 from pokerirl.gym.presets import TASKS, RLSettings
 from pokerirl.gym.rewards import RewardCallable
 from pokerirl.gym.rl import EVAL_SEED, CurvePoint, RLBackend, RLResult, check_reward, save_run
@@ -116,7 +117,7 @@ def train_rl_group(
     settings = settings or TASKS[env_id].rl
     timesteps = timesteps or settings.timesteps
     if timesteps < 1 or evaluations < 1 or eval_episodes < 1:
-        raise ValueError("timesteps, evaluations and eval_episodes must be positive")
+        raise ConfigError("timesteps, evaluations and eval_episodes must be positive")
     R = len(seeds)
     if R < 1 or len(rewards) != R or len(reward_names) != R or (outs is not None
                                                                and len(outs) != R):

@@ -14,6 +14,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
+from pokerirl.errors import Remedy
 from pokerirl.execution import Backend
 from pokerirl.studies.poker import figures
 from pokerirl.studies.poker.config import PRESETS, StudyConfig, StudyError, preset
@@ -94,7 +95,7 @@ def run_study(
     reward_source_prints(config)  # a reward that replaces IRL runs, checked as early
     root = Path(out)
     if root.exists() and not root.is_dir():
-        raise StudyError(f"{root} exists and is not a folder; choose another --out")
+        raise StudyError(f"{root} exists and is not a folder", remedy=Remedy.ELSEWHERE)
     root.mkdir(parents=True, exist_ok=True)
     study = Study(
         root,

@@ -35,6 +35,7 @@ import numpy as np
 
 from pokerirl.atomic import write_text
 from pokerirl.encoding import ACTIONS
+from pokerirl.errors import ConfigError
 from pokerirl.execution import Backend
 from pokerirl.studies.common import markdown_table
 from pokerirl.studies.poker.config import AGENT_PRESETS
@@ -61,16 +62,16 @@ class TransferConfig:
         from pokerirl.agents.rewards import TRANSFORMS
 
         if not self.transforms or any(t not in TRANSFORMS for t in self.transforms):
-            raise ValueError(f"transforms must be some of {', '.join(TRANSFORMS)}")
+            raise ConfigError(f"transforms must be some of {', '.join(TRANSFORMS)}")
         if not self.payoff_weights or any(not 0 <= w <= 1 for w in self.payoff_weights):
-            raise ValueError("payoff weights must lie in [0, 1]")
+            raise ConfigError("payoff weights must lie in [0, 1]")
         if not self.seeds or self.hands < 1 or self.eval_hands < 2 or self.eval_hands % 2:
-            raise ValueError("need seeds, hands >= 1 and an even eval_hands >= 2")
+            raise ConfigError("need seeds, hands >= 1 and an even eval_hands >= 2")
         unknown = [e for e in self.experts if e not in RULES]
         if unknown:
-            raise ValueError(f"unknown rule {unknown[0]!r} ({', '.join(RULES)})")
+            raise ConfigError(f"unknown rule {unknown[0]!r} ({', '.join(RULES)})")
         if self.agent_preset not in AGENT_PRESETS:
-            raise ValueError(
+            raise ConfigError(
                 f"unknown agent preset {self.agent_preset!r}; choose {', '.join(AGENT_PRESETS)}"
             )
 
@@ -272,7 +273,7 @@ def parse_list(text: str, kind: type = str) -> tuple[Any, ...]:
     try:
         return tuple(kind(part) for part in parts)
     except ValueError:
-        raise ValueError(f"{text!r}: not a list of {kind.__name__} values") from None
+        raise ConfigError(f"{text!r}: not a list of {kind.__name__} values") from None
 
 
 __all__ = ["TransferConfig", "TransferResult", "TransferRow", "parse_list", "run_transfer"]

@@ -1,0 +1,268 @@
+"""The error contract of every command (pokerirl/errors.py, pokerirl/cli/app.py).
+
+Every command of ``pokerirl`` (the click tree, hidden commands included) runs with a bad
+input of each kind: a usage error (exit 2), a missing input file (exit 1, the line names it)
+and a setting or file the library refuses (``ConfigError``, ``InputError``: exit 1); each is
+one ``error: ...`` line on stderr, without a traceback. A bug keeps its traceback; ``--debug``
+and ``POKERIRL_DEBUG=1`` print the traceback of a user's error too. A command added without
+its cases fails :func:`test_every_command_has_its_cases`.
+"""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+from typing import Any
+
+import pytest
+import typer
+from typer.testing import CliRunner
+
+from pokerirl.cli import app
+from pokerirl.errors import DEBUG_VARIABLE
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _tree(command: Any, path: tuple[str, ...] = ()) -> list[str]:
+    """The command paths under ``command`` (``gym rl``), hidden ones included."""
+    children = getattr(command, "commands", None)
+    if children is None:
+        return [" ".join(path)]
+    return [p for name, child in children.items() for p in _tree(child, (*path, name))]
+
+
+COMMANDS = sorted(_tree(typer.main.get_command(app)))
+
+# Placeholders: {F} a path that does not exist, {G} a file of garbage, {E} an empty folder,
+# {A} a plain file, {O} an output folder (it exists, empty), {T} a file that is not TOML,
+# {R} a folder whose report.json is corrupt.
+USAGE: dict[str, str] = {  # a command line that cannot be run: exit 2
+    "version": "version --bogus",
+    "ingest": "ingest {G}",  # no --out
+    "synth": "synth --out {O} --hands lots",
+    "match": "match random call --hands lots",
+    "tournament": "tournament random call --out {O} --alpha 2",
+    "train": "train {G} --out {O} --epochs 0",
+    "reward-card": "reward-card {E} --table {G} --out {O} --transform nope",
+    "demo": "demo --out {O} --jobs 0",
+    "study": "study {G} --out {O} --preset nope",
+    "transfer": "transfer {E} --out {O} --transforms nope",
+    "report": "report {E} --format xml",
+    "sweep": "sweep MountainCar-v0 --param alpha=0 --out {O} --runs 0",
+    "agent train": "agent train --out {O} --config {T}",
+    "gym expert": "gym expert Nope-v0 --out {O}",
+    "gym experts": "gym experts --format xml",
+    "gym collect": "gym collect MountainCar-v0 -n 0 --out {O}/x.parquet",
+    "gym rl": "gym rl MountainCar-v0 --out {O}",  # neither --reward-run nor --env-reward
+    "gym irl": "gym irl MountainCar-v0 --out {O} --algo nope",
+    "gym reward-map": "gym reward-map MountainCar-v0 --out {O}/x.png",  # no folders
+    "gym study": "gym study MountainCar-v0 --out {O} --rl-backend nope",
+    "gym sweep": "gym sweep MountainCar-v0 --param alpha=0 --out {O} --seed 4294967295 --runs 2",
+}
+MISSING: dict[str, str | None] = {  # an input that is not there: exit 1, naming it
+    "version": None,  # reads nothing
+    "ingest": "ingest {F} --out {O}/t.parquet",
+    "synth": None,
+    "match": "match {F} random --hands 10",
+    "tournament": "tournament {F} random --out {O} --hands 4 --seeds 0-1",
+    "train": "train {F} --out {O}",
+    "reward-card": "reward-card {F} --table {G} --out {O}",
+    "demo": None,
+    "study": "study {F} --out {O}",
+    "transfer": "transfer {F} --out {O}",
+    "report": "report {F}",
+    "sweep": None,
+    "agent train": "agent train --out {O} --reward learned --reward-run {F}",
+    "gym expert": None,
+    "gym experts": None,
+    "gym collect": "gym collect MountainCar-v0 --expert {F} -n 5 --out {O}/x.parquet",
+    "gym rl": "gym rl MountainCar-v0 --reward-run {F} --out {O}",
+    "gym irl": "gym irl MountainCar-v0 --data {F} --out {O}",
+    "gym reward-map": "gym reward-map MountainCar-v0 --runs {F} --out {O}/x.png",
+    "gym study": None,
+    "gym sweep": None,
+}
+REFUSED: dict[str, str | None] = {  # a setting or a file the library refuses: exit 1
+    "version": None,
+    "ingest": "ingest {G} --out {O}/t.parquet",
+    "synth": "synth --out {A}/x",  # an OSError: the path, and why
+    "match": "match random nope --hands 10",
+    "tournament": "tournament random nope --out {O} --hands 4 --seeds 0-1",
+    "train": "train {G} --out {O}",
+    "reward-card": "reward-card {E} --table {G} --out {O}",
+    "demo": "demo --out {A}",
+    "study": "study {G} --out {O}",
+    "transfer": "transfer {E} --out {O}",
+    "report": "report {R}",
+    "sweep": "sweep MountainCar-v0 --param bogus=1 --out {O}",
+    "agent train": "agent train --out {O} --opponent nope",
+    "gym expert": "gym expert MountainCar-v0 --out {O} --hyper nope",
+    "gym experts": None,  # reads only the shipped manifest
+    "gym collect": "gym collect MountainCar-v0 --expert {E} -n 5 --out {O}/x.parquet",
+    "gym rl": "gym rl MountainCar-v0 --reward-run {E} --out {O}",
+    "gym irl": "gym irl MountainCar-v0 --data {G} --out {O}",
+    "gym reward-map": "gym reward-map MountainCar-v0 --runs {E} --out {O}/x.png",
+    "gym study": "gym study Nope-v0 --out {O}",
+    "gym sweep": "gym sweep MountainCar-v0 --param bogus=1 --out {O}",
+}
+
+
+@pytest.fixture
+def places(tmp_path: Path) -> dict[str, str]:
+    (tmp_path / "garbage.txt").write_text("not a table, not IRC data\n")
+    (tmp_path / "empty").mkdir()
+    (tmp_path / "afile").write_text("x")
+    (tmp_path / "bad.toml").write_text("= not toml")
+    (tmp_path / "out").mkdir()
+    (tmp_path / "report").mkdir()
+    (tmp_path / "report" / "report.json").write_text('{"truncated')
+    names = {"F": "missing", "G": "garbage.txt", "E": "empty", "A": "afile", "O": "out"}
+    return {
+        **{key: str(tmp_path / name) for key, name in names.items()},
+        "T": str(tmp_path / "bad.toml"),
+        "R": str(tmp_path / "report"),
+    }
+
+
+def run(line: str, places: dict[str, str]) -> tuple[int, str]:
+    """Exit code and the one error line of ``pokerirl LINE`` (a bug fails here)."""
+    result = CliRunner().invoke(app, [word.format(**places) for word in line.split()])
+    assert isinstance(result.exception, SystemExit), result.exception  # not a bug
+    assert "Traceback" not in result.stderr + result.stdout
+    errors = [text for text in result.stderr.splitlines() if not text.startswith("warning: ")]
+    assert len(errors) == 1 and errors[0].startswith("error: "), result.stderr
+    return result.exit_code, errors[0]
+
+
+@pytest.fixture(autouse=True)
+def no_debug(monkeypatch: pytest.MonkeyPatch) -> None:
+    # --debug sets the variable in this process: monkeypatch puts it back after each test.
+    monkeypatch.setenv(DEBUG_VARIABLE, "0")
+
+
+def test_every_command_has_its_cases() -> None:
+    assert len(COMMANDS) > 15 and "sweep" in COMMANDS  # hidden commands too
+    for cases in (USAGE, MISSING, REFUSED):
+        assert sorted(cases) == COMMANDS
+
+
+@pytest.mark.parametrize("command", COMMANDS)
+def test_a_usage_error_is_one_line_and_exit_2(command: str, places: dict[str, str]) -> None:
+    code, _ = run(USAGE[command], places)
+    assert code == 2
+
+
+@pytest.mark.parametrize("command", [c for c in COMMANDS if MISSING[c] is not None])
+def test_a_missing_input_is_one_line_naming_it_and_exit_1(
+    command: str, places: dict[str, str]
+) -> None:
+    code, line = run(str(MISSING[command]), places)
+    assert code == 1 and places["F"] in line
+
+
+@pytest.mark.parametrize("command", [c for c in COMMANDS if REFUSED[c] is not None])
+def test_a_refused_setting_or_file_is_one_line_and_exit_1(
+    command: str, places: dict[str, str]
+) -> None:
+    code, _ = run(str(REFUSED[command]), places)
+    assert code == 1
+
+
+def _boom(*_: object, **__: object) -> None:
+    raise KeyError("a bug")
+
+
+def test_a_bug_keeps_its_traceback(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr("pokerirl.game.play_match", _boom)
+    result = CliRunner().invoke(app, ["match", "random", "call", "--hands", "10"])
+    assert isinstance(result.exception, KeyError)  # not turned into SystemExit
+    assert "error:" not in result.stderr
+    # The script: Python prints the traceback.
+    script = (
+        "import sys, pokerirl.game as game\n"
+        "def boom(*a, **k):\n    raise KeyError('a bug')\n"
+        "game.play_match = boom\n"
+        "from pokerirl.cli import app\n"
+        "sys.argv = ['pokerirl', 'match', 'random', 'call', '--hands', '10']\n"
+        "app()\n"
+    )
+    done = subprocess.run(
+        [sys.executable, "-c", script], capture_output=True, text=True, cwd=ROOT,
+        env={**os.environ, "PYTHONPATH": str(ROOT), DEBUG_VARIABLE: "0"}, timeout=300,
+    )  # fmt: skip
+    assert "Traceback" in done.stderr and "KeyError: 'a bug'" in done.stderr
+    assert "error:" not in done.stderr
+
+
+@pytest.mark.parametrize("how", ["--debug", DEBUG_VARIABLE])
+def test_debug_prints_the_traceback_of_a_user_error(
+    how: str, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    args = ["match", "random", "nope", "--hands", "10"]
+    if how == "--debug":
+        args.insert(0, "--debug")
+    else:
+        monkeypatch.setenv(DEBUG_VARIABLE, "1")
+    result = CliRunner().invoke(app, args)
+    assert result.exit_code == 1
+    assert "Traceback" in result.stderr and "ConfigError: unknown agent 'nope'" in result.stderr
+    assert result.stderr.splitlines()[-1].startswith("error: unknown agent 'nope'")
+
+
+def _interrupt(*_: object, **__: object) -> None:
+    raise KeyboardInterrupt
+
+
+@pytest.mark.parametrize(
+    ("line", "target", "says"),
+    [
+        ("match random call --hands 10", "pokerirl.game.play_match", "error: interrupted"),
+        (
+            "tournament random call --hands 4 --seeds 0-1 --out {O}",
+            "pokerirl.tournaments.run_tournament",
+            "error: interrupted: finished units are kept; rerun the same command to resume",
+        ),
+    ],
+)
+def test_ctrl_c_is_one_line_and_exit_130(
+    line: str, target: str, says: str, places: dict[str, str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setattr(target, _interrupt)
+    result = CliRunner().invoke(app, [word.format(**places) for word in line.split()])
+    assert result.exit_code == 130 and result.stderr.splitlines() == [says]
+
+
+def test_help_imports_no_heavy_module() -> None:
+    script = (
+        "import sys\n"
+        "from pokerirl.cli import app\n"
+        "sys.argv = ['pokerirl', '--help']\n"
+        "try:\n    app()\nexcept SystemExit:\n    pass\n"
+        "print(sorted(m for m in ('torch', 'gymnasium', 'pyarrow') if m in sys.modules))\n"
+    )
+    done = subprocess.run(
+        [sys.executable, "-c", script], capture_output=True, text=True, cwd=ROOT,
+        env={**os.environ, "PYTHONPATH": str(ROOT)}, timeout=300,
+    )  # fmt: skip
+    assert "--debug" in done.stdout and done.stdout.splitlines()[-1] == "[]", done.stdout
+
+
+@pytest.mark.parametrize(
+    ("command", "shown"),
+    [
+        (["train"], ("--epochs", "50")),  # AIRLConfig.epochs
+        (["transfer"], ("--eval-hands", "20000")),  # TransferConfig.eval_hands
+        (["agent", "train"], ("--raise-counts", "decision")),  # TrainConfig.raise_counts
+    ],
+)
+def test_help_shows_the_config_dataclass_default(
+    command: list[str], shown: tuple[str, str]
+) -> None:
+    result = CliRunner().invoke(app, [*command, "--help"], env={"COLUMNS": "200"})
+    option, default = shown
+    text = " ".join(result.stdout.replace("│", " ").split())  # the help, unwrapped
+    entry = text.split(f" {option} ", 1)[1].split(" --", 1)[0]  # up to the next option
+    assert f"[default: {default}]" in entry, entry
