@@ -230,7 +230,8 @@ def gym_rl(
     from contextlib import ExitStack
 
     from pokerirl.gym.experts import CONFIG_FILE, METRICS_FILE, MODEL_FILE
-    from pokerirl.gym.rl import mean_std, train_rl
+    from pokerirl.gym.rl import train_rl
+    from pokerirl.meanstd import mean_std
     from pokerirl.store import digest, staged_folder, tidy
     from pokerirl.studies.gym_job import claim
 
@@ -314,7 +315,7 @@ def gym_rl(
         fail(error_line(error, out))
     final = mean_std(finals)
     echo(
-        f"{env}: final true return {final['mean']:.1f} +- {final['std']:.1f} over {runs} runs; "
+        f"{env}: final true return {final.mean:.1f} +- {final.std:.1f} over {runs} runs; "
         f"wrote {out}"
     )
 

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import json
 import os
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from dataclasses import asdict, dataclass
 from enum import StrEnum
 from pathlib import Path
@@ -31,6 +31,7 @@ from pokerirl.gym.experts import (
 )
 from pokerirl.gym.presets import TASKS, RLSettings
 from pokerirl.gym.rewards import RewardCallable, learned_reward_env
+from pokerirl.meanstd import mean_and_std
 
 EVAL_SEED = 2_000_000  # evaluation episodes' seeds, apart from the experts' and the data's
 # How the RL phase trains: SB3, one run per call (train_rl), or R runs of one task in one
@@ -197,17 +198,7 @@ def save_run(
     write_text(out / CONFIG_FILE, json.dumps(record, indent=2) + "\n")
 
 
-def mean_std(values: Sequence[float]) -> dict[str, float]:
-    """Mean and sample std (ddof 1; 0 for one value), as the IRL summaries give them.
-
-    >>> mean_std([1.0, 3.0])
-    {'mean': 2.0, 'std': 1.4142135623730951}
-    """
-    array = np.asarray(values, dtype=float)
-    std = float(array.std(ddof=1)) if len(array) > 1 else 0.0
-    return {"mean": float(array.mean()), "std": std}
-
-
 def summarize(results: list[RLResult]) -> dict[str, float]:
     """Mean and sample std over runs of the final true return."""
-    return {**mean_std([r.final_return for r in results]), "runs": len(results)}
+    mean, std = mean_and_std([r.final_return for r in results])
+    return {"mean": mean, "std": std, "runs": len(results)}

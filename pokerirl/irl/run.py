@@ -46,6 +46,7 @@ from pokerirl.irl.nets import ACTIVATIONS, REWARD_FAMILIES, NetSpec, RewardFamil
 from pokerirl.irl.plots import plot_curves
 from pokerirl.irl.records import EpochMetrics
 from pokerirl.irl.transitions import Transitions
+from pokerirl.meanstd import MeanStd
 from pokerirl.parquet import first_line
 from pokerirl.versions import package_versions
 
@@ -109,21 +110,6 @@ class RunSummary:
     train_rows: int
     val_rows: int
     results: tuple[RunResult, ...] = ()  # several runs: each run's result
-
-
-@dataclass(frozen=True, kw_only=True)
-class MeanStd:
-    """Mean and sample standard deviation over runs."""
-
-    mean: float
-    std: float
-
-    def to_json(self) -> dict[str, float]:
-        return {"mean": self.mean, "std": self.std}
-
-    @classmethod
-    def from_json(cls, data: Mapping[str, Any]) -> MeanStd:
-        return cls(mean=data["mean"], std=data["std"])
 
 
 @dataclass(frozen=True, kw_only=True)

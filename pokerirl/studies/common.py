@@ -1,8 +1,6 @@
-"""What every study shares: its error, presets with overrides, ``mean_std``, reading the units'
-JSONL metrics, mean ± std bands and Markdown tables.
+"""What every study shares: its error, presets with overrides, reading the units' JSONL
+metrics, mean ± std bands and Markdown tables (``mean_std`` is :mod:`pokerirl.meanstd`'s).
 
->>> mean_std([1.0, 3.0])
-{'mean': 2.0, 'std': 1.4142135623730951}
 >>> print("\\n".join(markdown_table(["", "ours"], [["AIRL", "0.5"]])))
 | | ours |
 |---|---|
@@ -46,19 +44,6 @@ def with_overrides(presets: Mapping[str, Preset], name: str, **overrides: Any) -
         raise StudyError(f"bad study setting: {error}") from None
     except ValueError as error:  # the preset's own checks
         raise StudyError(str(error)) from None
-
-
-def mean_std(
-    values: Sequence[float] | Sequence[Sequence[float]] | np.ndarray, axis: int | None = None
-) -> dict[str, Any]:
-    """Mean and sample std (ddof 1; 0 for one value), as floats, or as lists along ``axis``."""
-    array = np.asarray(values, dtype=float)
-    count = array.shape[0] if axis == 0 else array.size
-    mean = array.mean(axis=axis)
-    std = array.std(axis=axis, ddof=1) if count > 1 else np.zeros_like(mean)
-    if axis is None:
-        return {"mean": float(mean), "std": float(std)}
-    return {"mean": mean.tolist(), "std": std.tolist()}
 
 
 def read_jsonl(path: Path) -> list[dict[str, Any]]:

@@ -39,8 +39,8 @@ from pokerirl.atomic import write_text
 from pokerirl.errors import PokerIRLError
 from pokerirl.execution import Backend
 from pokerirl.gym.presets import PRESETS, TASK_ORDER, TASKS, StudyPreset
-from pokerirl.gym.presets import MeanStd as PaperValue
 from pokerirl.gym.rl import DEFAULT_RL_BACKEND, RLBackend
+from pokerirl.meanstd import MeanStd, mean_std
 from pokerirl.studies.common import (
     METRICS_JSONL,
     REPORT_MD,
@@ -48,7 +48,6 @@ from pokerirl.studies.common import (
     StudyError,
     band,
     markdown_table,
-    mean_std,
     read_jsonl,
     with_overrides,
 )
@@ -57,7 +56,6 @@ from pokerirl.studies.gym_results import (
     AlgoSummary,
     Band,
     EnvRewardSummary,
-    MeanStd,
     PaperFinals,
     RewardMapSummary,
     StudySettings,
@@ -338,10 +336,6 @@ def rl_curves(root: Path, reward: str, runs: int) -> RLCurves:
     )
 
 
-def _paper(value: PaperValue) -> MeanStd:
-    return MeanStd(value.mean, value.std)
-
-
 def task_summary(
     root: Path, env: str, preset: StudyPreset, *, rl_backend: str = DEFAULT_RL_BACKEND
 ) -> TaskSummary:
@@ -358,7 +352,7 @@ def task_summary(
         rl = rl_curves(root, algo, preset.runs)
         algos[algo] = AlgoSummary(
             irl_final_return=MeanStd.from_json(irl["irl_final_return"]),
-            rl_final_return=MeanStd.from_json(mean_std(rl.per_run_final)),
+            rl_final_return=mean_std(rl.per_run_final),
             baselines={name: MeanStd.from_json(v) for name, v in irl["baselines"].items()},
             irl_per_run_final=_per_run_final(root / "irl" / algo, preset.runs, "eval_return"),
             rl_per_run_final=rl.per_run_final,
@@ -387,7 +381,7 @@ def task_summary(
         random_return=baselines["random"]["mean"],
         algos=algos,
         env_reward=EnvRewardSummary(
-            rl_final_return=MeanStd.from_json(mean_std(env_rl.per_run_final)),
+            rl_final_return=mean_std(env_rl.per_run_final),
             rl_per_run_final=env_rl.per_run_final,
             rl_curve=env_rl.band(),
         ),
@@ -401,12 +395,12 @@ def task_summary(
             rl_backend=rl_backend,
         ),
         paper=PaperFinals(
-            irl_final_return={"airl": _paper(paper.irl_airl), "hairl": _paper(paper.irl_hairl)},
+            irl_final_return={"airl": paper.irl_airl, "hairl": paper.irl_hairl},
             expert_return=paper.irl_expert.mean,
             rl_final_return={
-                "airl": _paper(paper.rl_airl),
-                "hairl": _paper(paper.rl_hairl),
-                "env_reward": _paper(paper.rl_env_reward),
+                "airl": paper.rl_airl,
+                "hairl": paper.rl_hairl,
+                "env_reward": paper.rl_env_reward,
             },
             final_alignment={"airl": paper.alignment_airl, "hairl": paper.alignment_hairl}
             if task.discrete
@@ -419,7 +413,7 @@ def task_summary(
 
 def _last(curve: dict[str, list[float]]) -> MeanStd:
     """A per-epoch curve's last point."""
-    return MeanStd(curve["mean"][-1], curve["std"][-1])
+    return MeanStd(mean=curve["mean"][-1], std=curve["std"][-1])
 
 
 def reward_quality(root: Path, env: str, algo: str, runs: int) -> dict[str, Any]:
@@ -437,7 +431,7 @@ def reward_quality(root: Path, env: str, algo: str, runs: int) -> dict[str, Any]
     quality = {}
     for key in SCORES:
         values = [q[key] for q in found if q.get(key) is not None]
-        quality[key] = MeanStd.from_json(mean_std(values)) if values else MeanStd(None)
+        quality[key] = mean_std(values) if values else MeanStd(mean=None)
     return {
         "quality": quality,
         "reward_quality": {
@@ -516,8 +510,8 @@ def task_table(summary: TaskSummary) -> list[str]:
          _value(paper.irl_final_return["airl"])),
         ("IRL-phase return, H-AIRL", _value(hairl.irl_final_return),
          _value(paper.irl_final_return["hairl"])),
-        ("expert (its data's episodes)", _value(MeanStd(summary.expert_return)),
-         _value(MeanStd(paper.expert_return))),
+        ("expert (its data's episodes)", _value(MeanStd(mean=summary.expert_return)),
+         _value(MeanStd(mean=paper.expert_return))),
         ("RL-phase return, AIRL reward", _value(airl.rl_final_return),
          _value(paper.rl_final_return["airl"])),
         ("RL-phase return, H-AIRL reward", _value(hairl.rl_final_return),
@@ -572,8 +566,8 @@ def task_table(summary: TaskSummary) -> list[str]:
              "Figure 4: maps only"),
         )  # fmt: skip
     rows.append(
-        ("random policy", _value(MeanStd(summary.random_return)),
-         _value(MeanStd(paper.random_return)))
+        ("random policy", _value(MeanStd(mean=summary.random_return)),
+         _value(MeanStd(mean=paper.random_return)))
     )  # fmt: skip
     return markdown_table(["", "ours", "the authors"], rows)
 

@@ -36,7 +36,8 @@ from pokerirl.execution import Backend
 from pokerirl.gym.irl import irl_config
 from pokerirl.gym.presets import TASKS, StudyPreset
 from pokerirl.gym.rl import DEFAULT_RL_BACKEND
-from pokerirl.studies.common import SUMMARY_JSON, StudyError, mean_std
+from pokerirl.meanstd import mean_and_std
+from pokerirl.studies.common import SUMMARY_JSON, StudyError
 from pokerirl.studies.gym import (
     check_rl_backend,
     data_job,
@@ -242,7 +243,7 @@ def point_row(
     """The point's finals: IRL-phase return, RL-phase return, alignment (discrete tasks)."""
     root = out / "points" / point.name
     irl = json.loads((root / "irl" / "hairl" / SUMMARY_JSON).read_text())
-    rl = mean_std(rl_curves(root, "hairl", preset.runs).per_run_final)
+    rl_mean, rl_std = mean_and_std(rl_curves(root, "hairl", preset.runs).per_run_final)
     alignment: dict[str, float | None] = {}
     for name, key in (
         ("final_alignment", "val_alignment"),
@@ -258,8 +259,8 @@ def point_row(
         runs=preset.runs,
         irl_final_return_mean=irl["irl_final_return"]["mean"],
         irl_final_return_std=irl["irl_final_return"]["std"],
-        rl_final_return_mean=rl["mean"],
-        rl_final_return_std=rl["std"],
+        rl_final_return_mean=rl_mean,
+        rl_final_return_std=rl_std,
         **alignment,
     )
 

@@ -30,11 +30,11 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from pokerirl.execution import Backend
+from pokerirl.meanstd import mean_std_curve
 from pokerirl.store import Fate, Layout, LegacyRecord, Unit, check, digest, fingerprint, writing
 from pokerirl.studies.common import (
     BASELINES_JSON,
     METRICS_JSONL,
-    mean_std,
     read_jsonl,
 )
 from pokerirl.studies.poker.config import (
@@ -365,8 +365,8 @@ def _curve(agent_set: Path, seeds: Sequence[int]) -> HandsCurve:
     lines = [read_jsonl(agent_set / f"seed-{s}" / METRICS_JSONL) for s in seeds]
     points = min(len(line) for line in lines)
     values = [[line[i]["eval"]["random"]["mbb_per_hand"] for i in range(points)] for line in lines]
-    return HandsCurve(hands=[lines[0][i]["hands"] for i in range(points)],
-                      **mean_std(values, axis=0))  # fmt: skip
+    mean, std = mean_std_curve(values)
+    return HandsCurve(hands=[lines[0][i]["hands"] for i in range(points)], mean=mean, std=std)
 
 
 def _playing_vs_random(agent_set: Path, seeds: Sequence[int]) -> list[float]:
