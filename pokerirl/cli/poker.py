@@ -510,8 +510,8 @@ def agent_train(
     """
     from pokerirl.agents.registry import CONFIG_FILE, KEPT_FILE, MODEL_FILE
     from pokerirl.agents.train import (
+        AgentOverrides,
         MetricsLine,
-        agent_preset,
         load_agent_config,
         train_agent,
         train_seeds,
@@ -551,10 +551,8 @@ def agent_train(
         "self_play_every": self_play_every,
     }
     with usage_errors():
-        from_file = {"dqn": {}} if config_file is None else load_agent_config(config_file)
-        dqn = {**from_file.pop("dqn"), **{k: v for k, v in dqn_flags.items() if v is not None}}
-        settings = {**from_file, **{k: v for k, v in flags.items() if v is not None}}
-        config = agent_preset(preset, seed=seed, dqn=dqn, **settings)
+        from_file = AgentOverrides() if config_file is None else load_agent_config(config_file)
+        config = from_file.with_flags(train=flags, dqn=dqn_flags).config(preset, seed=seed)
     try:
         if seeds is None:
             summary = train_agent(
