@@ -42,17 +42,17 @@ def ingest(
 
     Writes TABLE and TABLE.summary.json (where every hand went) and prints the summary.
     """
-    from pokerirl.datasets.ingest import ingest as run_ingest
+    from pokerirl.datasets.ingest import ingest_table
     from pokerirl.parsers.irc import IngestError
 
     try:
-        summary = run_ingest(sources, out, strict=strict, progress=not quiet)
+        summary = ingest_table(sources, out, strict=strict, progress=not quiet)
     except IngestError as error:
         fail(str(error))
     except OSError as error:
         fail(error_line(error, out))
     if not quiet:
-        echo(json.dumps(summary, indent=2))
+        echo(json.dumps(summary.to_json(), indent=2))
 
 
 @app.command()

@@ -217,7 +217,7 @@ class Study:
 
 def ingest_stage(study: Study, sources: Sequence[str | os.PathLike[str]]) -> Ingested:
     """The table and its summary: a ``file`` unit, ingested in this process."""
-    from pokerirl.datasets.ingest import ingest, summary_path
+    from pokerirl.datasets.ingest import ingest_table, summary_path
 
     study.step("ingest")
     sources_print = _sources_fingerprint(sources)
@@ -233,7 +233,7 @@ def ingest_stage(study: Study, sources: Sequence[str | os.PathLike[str]]) -> Ing
         study.say("      the table is finished already, reused")
     else:
         with writing(unit) as folder:
-            ingest(sources, folder / TABLE, progress=study.execution.progress)
+            ingest_table(sources, folder / TABLE, progress=study.execution.progress)
     summary = json.loads(summary_path(study.root / TABLE).read_text())
     return Ingested(summary=summary, fingerprint=fingerprint(legacy.identity))
 
