@@ -396,12 +396,12 @@ def gym_irl(
         fail(error_line(error, out))
     final = result.final_return
     line = (
-        f"{env} {algo}: final return {final['mean']:.1f} +- {final['std']:.1f} over "
-        f"{result.runs} runs (expert {result.expert_return:.1f}, "
+        f"{env} {algo}: final return {final.mean:.1f} +- {final.std:.1f} over "
+        f"{result.runs} runs (expert {result.summary.expert_return:.1f}, "
         f"random {result.baselines['random']:.1f})"
     )
     if result.final_alignment is not None:
-        line += f", alignment {100 * result.final_alignment['mean']:.1f}%"
+        line += f", alignment {100 * result.final_alignment.measured[0]:.1f}%"
     echo(f"{line}; wrote {out}")
 
 

@@ -52,12 +52,14 @@ from pokerirl.irl.run import (
     SUMMARY_FILE,
     RunError,
     RunResult,
+    RunsSummary,
     data_record,
     run_baselines,
     save_run,
     summarize,
 )
 from pokerirl.irl.transitions import Transitions
+from pokerirl.meanstd import MeanStd
 from pokerirl.store import staged_files, tidy
 
 RETURNS_FILE = "returns_bands.png"
@@ -66,18 +68,59 @@ ALIGNMENT_BASELINES = ("majority", "legal_majority", "bc")  # shares of states, 
 
 
 @dataclass(frozen=True, kw_only=True)
+class GymIRLSummary:
+    """A ``gym irl`` folder's ``summary.json``: the runs summarized (:class:`RunsSummary`),
+    the expert's return, and the last epoch's mean and std over runs of the evaluation return
+    and (discrete tasks) the validation alignment."""
+
+    env: str
+    algo: str
+    expert_return: float
+    irl_final_return: MeanStd
+    final_alignment: MeanStd | None  # discrete tasks only
+    over_runs: RunsSummary
+
+    def to_json(self) -> dict[str, object]:
+        finals = {"irl_final_return": self.irl_final_return.to_json()}
+        if self.final_alignment is not None:
+            finals["final_alignment"] = self.final_alignment.to_json()
+        head = {"env": self.env, "algo": self.algo, "expert_return": self.expert_return}
+        return {**head, **finals, **self.over_runs.to_json()}
+
+    @classmethod
+    def from_json(cls, data: Mapping[str, Any]) -> GymIRLSummary:
+        alignment = data.get("final_alignment")
+        return cls(
+            env=data["env"],
+            algo=data["algo"],
+            expert_return=data["expert_return"],
+            irl_final_return=MeanStd.from_json(data["irl_final_return"]),
+            final_alignment=None if alignment is None else MeanStd.from_json(alignment),
+            over_runs=RunsSummary.from_json(data),
+        )
+
+    @classmethod
+    def read(cls, folder: Path) -> GymIRLSummary:
+        """The ``summary.json`` of the ``gym irl`` folder ``folder``."""
+        return cls.from_json(json.loads((folder / SUMMARY_FILE).read_text()))
+
+
+@dataclass(frozen=True, kw_only=True)
 class GymIRLResult:
     """What :func:`train_gym_irl` wrote: the summary and the headline finals."""
 
     out: Path
-    env: str
-    algo: str
     runs: int
-    summary: dict[str, Any]
+    summary: GymIRLSummary
     baselines: dict[str, float]
-    expert_return: float
-    final_return: dict[str, float]  # mean, std over runs of the last epoch's eval_return
-    final_alignment: dict[str, float] | None  # discrete tasks only
+
+    @property
+    def final_return(self) -> MeanStd:
+        return self.summary.irl_final_return
+
+    @property
+    def final_alignment(self) -> MeanStd | None:
+        return self.summary.final_alignment
 
 
 def irl_config(algo: str, settings: IRLSettings, *, seed: int) -> AIRLConfig:
@@ -391,42 +434,27 @@ def train_gym_irl(
                 )
             )
         over_runs = summarize(results)
-        finals = {
-            name: {
-                "mean": over_runs.metrics[key].mean[-1],
-                "std": over_runs.metrics[key].std[-1],
-            }
-            for name, key in (
-                ("irl_final_return", "eval_return"),
-                ("final_alignment", "val_alignment"),
-            )
-            if key in over_runs.metrics
-        }
-        summary = {
-            "env": env_id,
-            "algo": algo,
-            "expert_return": found["expert"],
-            **finals,
-            **over_runs.to_json(),
-        }
-        write_text(stage / SUMMARY_FILE, json.dumps(summary, indent=2) + "\n")
-        plot_returns(summary, stage / RETURNS_FILE)
+
+        def last(key: str) -> MeanStd:
+            return MeanStd(mean=over_runs.metrics[key].mean[-1], std=over_runs.metrics[key].std[-1])
+
+        summary = GymIRLSummary(
+            env=env_id,
+            algo=algo,
+            expert_return=found["expert"],
+            irl_final_return=last("eval_return"),
+            final_alignment=last("val_alignment") if "val_alignment" in over_runs.metrics else None,
+            over_runs=over_runs,
+        )
+        as_json = summary.to_json()
+        write_text(stage / SUMMARY_FILE, json.dumps(as_json, indent=2) + "\n")
+        plot_returns(as_json, stage / RETURNS_FILE)
         if discrete:
             plot_bands(
-                {**summary, "baselines": {k: over_runs.baselines[k].to_json() for k in shares}},
+                {**as_json, "baselines": {k: over_runs.baselines[k].to_json() for k in shares}},
                 stage,
             )
-    return GymIRLResult(
-        out=out,
-        env=env_id,
-        algo=algo,
-        runs=runs,
-        summary=summary,
-        baselines=found,
-        expert_return=found["expert"],
-        final_return=finals["irl_final_return"],
-        final_alignment=finals.get("final_alignment"),
-    )
+    return GymIRLResult(out=out, runs=runs, summary=summary, baselines=found)
 
 
 def plot_returns(summary: Mapping[str, Any], path: Path) -> Path:

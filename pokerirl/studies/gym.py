@@ -38,8 +38,10 @@ import numpy as np
 from pokerirl.atomic import write_text
 from pokerirl.errors import PokerIRLError
 from pokerirl.execution import Backend
+from pokerirl.gym.irl import GymIRLSummary
 from pokerirl.gym.presets import PRESETS, TASK_ORDER, TASKS, StudyPreset
 from pokerirl.gym.rl import DEFAULT_RL_BACKEND, RLBackend
+from pokerirl.irl.run import CurveStats
 from pokerirl.meanstd import MeanStd, mean_std
 from pokerirl.studies.common import (
     METRICS_JSONL,
@@ -346,21 +348,21 @@ def task_summary(
     algos: dict[str, AlgoSummary] = {}
     irl_summaries = {}
     for algo in ALGOS:
-        irl = json.loads((root / "irl" / algo / SUMMARY_JSON).read_text())
+        irl = GymIRLSummary.read(root / "irl" / algo)
         irl_summaries[algo] = irl
-        metrics = irl["metrics"]
+        metrics = irl.over_runs.metrics
         rl = rl_curves(root, algo, preset.runs)
         algos[algo] = AlgoSummary(
-            irl_final_return=MeanStd.from_json(irl["irl_final_return"]),
+            irl_final_return=irl.irl_final_return,
             rl_final_return=mean_std(rl.per_run_final),
-            baselines={name: MeanStd.from_json(v) for name, v in irl["baselines"].items()},
+            baselines=dict(irl.over_runs.baselines),
             irl_per_run_final=_per_run_final(root / "irl" / algo, preset.runs, "eval_return"),
             rl_per_run_final=rl.per_run_final,
-            irl_epochs=irl["epochs"],
-            irl_return=Band.from_json(metrics["eval_return"]),
+            irl_epochs=list(irl.over_runs.epochs),
+            irl_return=Band.from_json(metrics["eval_return"].to_json()),
             rl_curve=rl.band(),
-            alignment=Band.from_json(metrics["val_alignment"]) if task.discrete else None,
-            final_alignment=MeanStd.from_json(irl["final_alignment"]) if task.discrete else None,
+            alignment=Band.from_json(metrics["val_alignment"].to_json()) if task.discrete else None,
+            final_alignment=irl.final_alignment if task.discrete else None,
             final_reward_alignment=_last(metrics["val_reward_alignment"])
             if task.discrete
             else None,
@@ -368,7 +370,7 @@ def task_summary(
             **reward_quality(root, env, algo, preset.runs),
         )
     env_rl = rl_curves(root, "env", preset.runs)
-    baselines = irl_summaries["hairl"]["baselines"]
+    baselines = irl_summaries["hairl"].over_runs.baselines
     paper = task.paper
     return TaskSummary(
         format=SUMMARY_FORMAT,
@@ -377,8 +379,8 @@ def task_summary(
         runs=preset.runs,
         seeds=[preset.seed + k for k in range(preset.runs)],
         discrete=task.discrete,
-        expert_return=irl_summaries["hairl"]["expert_return"],
-        random_return=baselines["random"]["mean"],
+        expert_return=irl_summaries["hairl"].expert_return,
+        random_return=baselines["random"].measured[0],
         algos=algos,
         env_reward=EnvRewardSummary(
             rl_final_return=mean_std(env_rl.per_run_final),
@@ -411,9 +413,9 @@ def task_summary(
     )
 
 
-def _last(curve: dict[str, list[float]]) -> MeanStd:
+def _last(curve: CurveStats) -> MeanStd:
     """A per-epoch curve's last point."""
-    return MeanStd(mean=curve["mean"][-1], std=curve["std"][-1])
+    return MeanStd(mean=curve.mean[-1], std=curve.std[-1])
 
 
 def reward_quality(root: Path, env: str, algo: str, runs: int) -> dict[str, Any]:
