@@ -230,7 +230,8 @@ def report(
         _refuse_corrupt(folder / name)
     try:
         if is_gym_study(folder):
-            found, markdown = load_gym_study(folder)
+            summary, markdown = load_gym_study(folder)
+            found = summary.to_json()
         elif is_study_report(folder):
             loaded = load_study_report(folder)
             found, markdown = loaded.to_json(), render_markdown(loaded)

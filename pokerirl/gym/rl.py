@@ -53,9 +53,22 @@ DEFAULT_RL_BACKEND = RLBackend.LOCKSTEP
 
 @dataclass(frozen=True, kw_only=True)
 class CurvePoint:
+    """One evaluation of an RL run: a line of its ``metrics.jsonl``."""
+
     timesteps: int
     return_mean: float
     return_std: float
+
+    @classmethod
+    def from_json(cls, data: Mapping[str, Any]) -> CurvePoint:
+        mean, std = data["return_mean"], data["return_std"]
+        return cls(timesteps=data["timesteps"], return_mean=mean, return_std=std)
+
+
+def read_curve(run: Path) -> list[CurvePoint]:
+    """The true-return curve of the RL run folder ``run`` (its ``metrics.jsonl``)."""
+    lines = (run / METRICS_FILE).read_text().splitlines()
+    return [CurvePoint.from_json(json.loads(line)) for line in lines if line.strip()]
 
 
 @dataclass(frozen=True, kw_only=True)

@@ -40,9 +40,9 @@ from pokerirl.errors import PokerIRLError
 from pokerirl.execution import Backend
 from pokerirl.gym.irl import GymIRLSummary
 from pokerirl.gym.presets import PRESETS, TASK_ORDER, TASKS, StudyPreset
-from pokerirl.gym.rl import DEFAULT_RL_BACKEND, RLBackend
+from pokerirl.gym.rl import DEFAULT_RL_BACKEND, RLBackend, read_curve
 from pokerirl.irl.run import CurveStats
-from pokerirl.meanstd import MeanStd, mean_std
+from pokerirl.meanstd import MeanStd, mean_std, mean_std_curve
 from pokerirl.studies.common import (
     METRICS_JSONL,
     REPORT_MD,
@@ -96,6 +96,40 @@ class GymStudyResult:
     out: Path
     summaries: dict[str, TaskSummary]  # env -> the task's summary.json
     markdown: str
+
+
+@dataclass(frozen=True, kw_only=True)
+class GymStudySummary:
+    """A gym study's ``summary.json``: a single task's :class:`TaskSummary`, or (``all``)
+    the tasks' under ``tasks`` with the preset and the runs."""
+
+    preset: str
+    runs: int
+    tasks: dict[str, TaskSummary]
+    several: bool  # the ``tasks`` form, even for one task
+
+    def to_json(self) -> dict[str, object]:
+        if not self.several:
+            (only,) = self.tasks.values()
+            return only.to_json()
+        return {
+            "format": SUMMARY_FORMAT,
+            "preset": self.preset,
+            "runs": self.runs,
+            "tasks": {env: summary.to_json() for env, summary in self.tasks.items()},
+        }
+
+    @classmethod
+    def from_json(cls, data: Mapping[str, Any]) -> GymStudySummary:
+        if "tasks" in data:
+            tasks = {env: TaskSummary.from_json(task) for env, task in data["tasks"].items()}
+            return cls(preset=data["preset"], runs=data["runs"], tasks=tasks, several=True)
+        task = TaskSummary.from_json(data)
+        return cls(preset=task.preset, runs=task.runs, tasks={task.env: task}, several=False)
+
+    def render(self) -> str:
+        """The study's ``report.md``."""
+        return render_report(self.tasks, self.preset, prefix=None if self.several else "")
 
 
 def study_preset(name: str, **overrides: Any) -> StudyPreset:
@@ -252,15 +286,12 @@ def run_gym_study(
         if len(tasks) > 1:
             write_text(roots[env] / REPORT_MD, render_report({env: summary}, preset.name))
         summaries[env] = summary
-    if len(tasks) > 1:
-        overall = {
-            "format": SUMMARY_FORMAT,
-            "preset": preset.name,
-            "runs": preset.runs,
-            "tasks": {env: summary.to_json() for env, summary in summaries.items()},
-        }
-        write_text(out / SUMMARY_JSON, json.dumps(overall, indent=2) + "\n")
-    markdown = render_report(summaries, preset.name, prefix="" if len(tasks) == 1 else None)
+    overall = GymStudySummary(
+        preset=preset.name, runs=preset.runs, tasks=summaries, several=len(tasks) > 1
+    )
+    if overall.several:
+        write_text(out / SUMMARY_JSON, json.dumps(overall.to_json(), indent=2) + "\n")
+    markdown = overall.render()
     write_text(report, markdown)
     return GymStudyResult(out=out, summaries=summaries, markdown=markdown)
 
@@ -274,7 +305,7 @@ def is_gym_study(folder: str | os.PathLike[str]) -> bool:
     return isinstance(found, dict) and found.get("format") == SUMMARY_FORMAT
 
 
-def load_gym_study(folder: str | os.PathLike[str]) -> tuple[dict[str, Any], str]:
+def load_gym_study(folder: str | os.PathLike[str]) -> tuple[GymStudySummary, str]:
     """A finished study's ``summary.json`` and its report rendered again (``pokerirl report``)."""
     from pokerirl.studies.gym_summary_check import check_summary
 
@@ -282,10 +313,8 @@ def load_gym_study(folder: str | os.PathLike[str]) -> tuple[dict[str, Any], str]
     try:
         found = json.loads(path.read_text())
         check_summary(found)  # once, on reading: the renderer trusts what passes
-        if "tasks" in found:
-            tasks = {env: TaskSummary.from_json(task) for env, task in found["tasks"].items()}
-            return found, render_report(tasks, found["preset"], prefix=None)
-        return found, render_report({found["env"]: TaskSummary.from_json(found)}, found["preset"])
+        summary = GymStudySummary.from_json(found)
+        return summary, summary.render()
     except (OSError, ValueError, KeyError, TypeError, AttributeError) as error:
         # check_summary names the fields the report reads; the others fail here, one line too.
         raise StudyError(f"{path}: not a readable gym study summary ({error})") from None
@@ -326,14 +355,14 @@ class RLCurves:
 
 def rl_curves(root: Path, reward: str, runs: int) -> RLCurves:
     """The RL runs' true-return curves: timesteps, per-run values, mean and std per point."""
-    lines = [read_jsonl(root / "rl" / reward / f"run-{k}" / METRICS_JSONL) for k in range(runs)]
-    points = min(len(line) for line in lines)
-    values = np.array([[p["return_mean"] for p in line[:points]] for line in lines])
-    std = values.std(0, ddof=1) if runs > 1 else np.zeros(points)
+    curves = [read_curve(root / "rl" / reward / f"run-{k}") for k in range(runs)]
+    points = min(len(curve) for curve in curves)
+    values = np.array([[p.return_mean for p in curve[:points]] for curve in curves])
+    mean, std = mean_std_curve(values)
     return RLCurves(
-        timesteps=[p["timesteps"] for p in lines[0][:points]],
-        mean=values.mean(0).tolist(),
-        std=std.tolist(),
+        timesteps=[p.timesteps for p in curves[0][:points]],
+        mean=mean,
+        std=std,
         per_run_final=values[:, -1].tolist(),
     )
 
