@@ -36,5 +36,12 @@ def transitions_from_arrow(table: pa.Table, *, source: str = "table") -> Transit
 
 def as_transitions(decisions: DecisionArrays) -> Transitions:
     return Transitions.from_arrays(
-        decisions.obs, decisions.action_ids, **decisions.transitions_arguments()
+        decisions.obs,
+        decisions.action_ids,
+        groups=decisions.groups,
+        next_obs=decisions.next_obs,
+        dones=decisions.dones,
+        rewards=decisions.rewards,
+        legal_mask=decisions.legal_mask,
+        num_actions=decisions.num_actions,
     )
