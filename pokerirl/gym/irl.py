@@ -46,13 +46,11 @@ from pokerirl.irl.nets import fold_obs_standardization
 from pokerirl.irl.plots import plot_bands, plot_curves
 from pokerirl.irl.records import EpochMetrics, EpochRecord
 from pokerirl.irl.run import (
-    BASELINES_FILE,
-    METRICS_FILE,
-    SPLIT_FILE,
     SUMMARY_FILE,
     RunError,
     RunResult,
     RunsSummary,
+    begin_run,
     data_record,
     run_baselines,
     save_run,
@@ -365,11 +363,7 @@ def train_gym_irl(
     with staged_files(out, key=STAGE_KEY) as stage:
         make_shareable(stage)
         folders = [stage / f"run-{k}" for k in range(runs)]
-        lines: list[list[str]] = [[] for _ in range(runs)]
-        for folder in folders:
-            folder.mkdir()
-            write_text(folder / SPLIT_FILE, json.dumps({"validation_groups": val_groups}) + "\n")
-            write_text(folder / BASELINES_FILE, json.dumps(found, indent=2) + "\n")
+        logs = [begin_run(folder, val_groups=val_groups, baselines=found) for folder in folders]
 
         def env_returns(record: EpochRecord) -> list[Mapping[str, float]]:
             # The nets' parameters were written back: evaluate each policy in the env.
@@ -389,9 +383,8 @@ def train_gym_irl(
             return extras
 
         def on_epoch(all_metrics: list[EpochMetrics]) -> None:
-            for k, metrics in enumerate(all_metrics):
-                lines[k].append(json.dumps(metrics.to_json()))
-                write_text(folders[k] / METRICS_FILE, "\n".join(lines[k]) + "\n")
+            for log, metrics in zip(logs, all_metrics, strict=False):
+                log.write(metrics)
 
         many = train_many(
             train_data,

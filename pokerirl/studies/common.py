@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import os
 from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
 from typing import Any, TypeVar
@@ -44,6 +45,14 @@ def with_overrides(presets: Mapping[str, Preset], name: str, **overrides: Any) -
         raise StudyError(f"bad study setting: {error}") from None
     except ValueError as error:  # the preset's own checks
         raise StudyError(str(error)) from None
+
+
+def study_folder(out: str | os.PathLike[str]) -> Path:
+    """``out`` as a study's folder (made later, by the study); refused where it is a file."""
+    folder = Path(out)
+    if folder.exists() and not folder.is_dir():
+        raise StudyError(f"{folder} exists and is not a folder; choose another --out")
+    return folder
 
 
 def read_jsonl(path: Path) -> list[dict[str, Any]]:

@@ -51,6 +51,7 @@ from pokerirl.studies.common import (
     band,
     markdown_table,
     read_jsonl,
+    study_folder,
     with_overrides,
 )
 from pokerirl.studies.gym_results import (
@@ -238,9 +239,7 @@ def run_gym_study(
     require_gym()
     check_rl_backend(rl_backend)
     backend = backend or Backend()
-    out = Path(out)
-    if out.exists() and not out.is_dir():
-        raise StudyError(f"{out} exists and is not a folder; choose another --out")
+    out = study_folder(out)
     tasks = preset.tasks
     roots = {env: task_root(out, env, tasks) for env in tasks}
     names = ", ".join(tasks)

@@ -37,7 +37,7 @@ from pokerirl.gym.irl import GymIRLSummary, irl_config
 from pokerirl.gym.presets import TASKS, StudyPreset
 from pokerirl.gym.rl import DEFAULT_RL_BACKEND
 from pokerirl.meanstd import mean_and_std
-from pokerirl.studies.common import StudyError
+from pokerirl.studies.common import StudyError, study_folder
 from pokerirl.studies.gym import (
     check_rl_backend,
     data_job,
@@ -182,9 +182,7 @@ def run_sweep(
     if not params:
         raise StudyError("give at least one --param, e.g. --param alpha=0,0.5,1")
     backend = backend or Backend()
-    out = Path(out)
-    if out.exists() and not out.is_dir():
-        raise StudyError(f"{out} exists and is not a folder; choose another --out")
+    out = study_folder(out)
     points = sweep_points(env, params, preset)
     unique = list({point.name: point for point in points}.values())
     data = out / DATA_FILE
