@@ -35,7 +35,7 @@ import numpy as np
 import torch
 from torch import Tensor, nn
 
-from pokerirl.atomic import atomic_path, make_shareable, write_text
+from pokerirl.atomic import make_shareable, write_text
 from pokerirl.gym.experts import make_env, shipped_experts
 from pokerirl.gym.presets import TASKS, IRLSettings
 from pokerirl.gym.quality import write_reward_quality
@@ -43,7 +43,7 @@ from pokerirl.gym.rl import EVAL_SEED
 from pokerirl.irl.airl import default_nets, train_many
 from pokerirl.irl.config import AIRLConfig, Algo, NoiseSchedule
 from pokerirl.irl.nets import fold_obs_standardization
-from pokerirl.irl.plots import plot_bands, plot_curves
+from pokerirl.irl.plots import new_figure, plot_bands, plot_curves, save_figure
 from pokerirl.irl.records import EpochMetrics, EpochRecord
 from pokerirl.irl.run import (
     SUMMARY_FILE,
@@ -441,7 +441,7 @@ def train_gym_irl(
         )
         as_json = summary.to_json()
         write_text(stage / SUMMARY_FILE, json.dumps(as_json, indent=2) + "\n")
-        plot_returns(as_json, stage / RETURNS_FILE)
+        plot_returns(summary, stage / RETURNS_FILE)
         if discrete:
             plot_bands(
                 {**as_json, "baselines": {k: over_runs.baselines[k].to_json() for k in shares}},
@@ -450,28 +450,18 @@ def train_gym_irl(
     return GymIRLResult(out=out, runs=runs, summary=summary, baselines=found)
 
 
-def plot_returns(summary: Mapping[str, Any], path: Path) -> Path:
+def plot_returns(summary: GymIRLSummary, path: Path) -> Path:
     """Mean ± std over runs of the evaluation return per epoch, the expert and random lines."""
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
-
-    figure = Figure(figsize=(6, 4), dpi=100)
-    FigureCanvasAgg(figure)
-    axes = figure.add_subplot()
-    epochs = summary["epochs"]
-    mean = np.array(summary["metrics"]["eval_return"]["mean"])
-    std = np.array(summary["metrics"]["eval_return"]["std"])
-    label = f"{summary['algo']} policy (mean of {summary['runs']} runs)"
+    figure, axes = new_figure()
+    runs = summary.over_runs
+    epochs = list(runs.epochs)
+    mean = np.array(runs.metrics["eval_return"].mean)
+    std = np.array(runs.metrics["eval_return"].std)
+    label = f"{summary.algo} policy (mean of {len(runs.seeds)} runs)"
     axes.plot(epochs, mean, color="C0", label=label)
     axes.fill_between(epochs, mean - std, mean + std, color="C0", alpha=0.25, label="± 1 std")
     for i, name in enumerate(("expert", "random")):
-        value = summary["baselines"][name]["mean"]
-        if math.isfinite(value):
+        value = runs.baselines[name].mean
+        if value is not None and math.isfinite(value):
             axes.axhline(value, linestyle="--", linewidth=1, color=f"C{i + 1}", label=name)
-    axes.set(title=f"{summary['env']}: IRL-phase return", xlabel="epoch", ylabel="return")
-    axes.grid(alpha=0.3)
-    axes.legend(fontsize="small")
-    figure.tight_layout()
-    with atomic_path(path) as temporary:
-        figure.savefig(temporary, format="png")
-    return path
+    return save_figure(figure, axes, path, f"{summary.env}: IRL-phase return", "return")
