@@ -56,7 +56,8 @@ def study_folder(out: str | os.PathLike[str]) -> Path:
 
 
 def read_jsonl(path: Path) -> list[dict[str, Any]]:
-    """The JSON objects of a ``metrics.jsonl`` (blank lines skipped)."""
+    """The JSON objects of a ``metrics.jsonl`` (blank lines skipped): a study reading the
+    lines of its own units (RL curves are :func:`pokerirl.gym.rl.read_curve`'s)."""
     return [json.loads(line) for line in path.read_text().splitlines() if line.strip()]
 
 

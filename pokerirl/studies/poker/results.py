@@ -26,6 +26,7 @@ class Ingested:
     """The table's summary (``datasets.ingest``'s), and the print of the ingest stage that an
     older pokerirl's later stage records were made with."""
 
+    # The file as written, whatever pokerirl wrote it: only this package's report reads it.
     summary: dict[str, Any]
     fingerprint: str
 
