@@ -18,7 +18,7 @@ from pathlib import Path
 import pyarrow as pa
 import pyarrow.parquet as pq
 
-from pokerirl.datasets.ingest import PARQUET_OPTIONS, ingest
+from pokerirl.datasets.ingest import PARQUET_OPTIONS, ingest_table
 from pokerirl.datasets.table import month_table
 from pokerirl.game.synth import write_synthetic_month
 from pokerirl.parsers.irc import IngestStats, iter_months, parse_month
@@ -48,7 +48,7 @@ def main() -> None:
         best = best_cpu = float("inf")
         for _ in range(args.repeats):
             started, started_cpu = time.perf_counter(), time.process_time()
-            summary = ingest([folder], root / "table.parquet")
+            summary = ingest_table([folder], root / "table.parquet").to_json()
             best = min(best, time.perf_counter() - started)
             best_cpu = min(best_cpu, time.process_time() - started_cpu)
         hands = summary["hands_read_total"]

@@ -22,11 +22,11 @@ def _cards(hole: str, board: str) -> list[int]:
 def test_the_rule_is_the_generators_own_on_every_decision_it_wrote(tmp_path: Path) -> None:
     """With no noise, the engine agent's rule reproduces every decision of the synthetic
     month's players (the month is written with synth's own code, then ingested)."""
-    from pokerirl.datasets.ingest import ingest
+    from pokerirl.datasets.ingest import ingest_table
 
     players = tuple(ScriptedPlayer(**{**vars(p), "noise": 0.0}) for p in DEFAULT_PLAYERS)
     month = write_synthetic_month(tmp_path, hands=400, seed=3, players=players)
-    ingest([month], tmp_path / "table.parquet")
+    ingest_table([month], tmp_path / "table.parquet")
     table = pq.read_table(tmp_path / "table.parquet").to_pydict()
     obs = np.array(table["obs"], np.uint8)
     legal = np.array(table["legal_mask"], bool)

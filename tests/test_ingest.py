@@ -22,7 +22,7 @@ from irc_fixtures import (
     write_month,
 )
 from pokerirl.cli import app
-from pokerirl.datasets.ingest import IngestSummary, ingest, ingest_table, summary_path
+from pokerirl.datasets.ingest import IngestSummary, ingest_table, summary_path
 from pokerirl.datasets.table import REQUIRED_COLUMNS
 from pokerirl.encoding import CALL, CHECK, RAISE
 from pokerirl.parsers.irc import IngestError
@@ -42,7 +42,7 @@ def month(tmp_path: Path) -> Path:
 @pytest.fixture
 def ingested(month: Path, tmp_path: Path) -> tuple[Path, dict]:
     out = tmp_path / "table.parquet"
-    return out, ingest([month], out)
+    return out, ingest_table([month], out).to_json()
 
 
 def test_every_hand_lands_in_exactly_one_bucket(ingested: tuple[Path, dict]) -> None:
@@ -177,19 +177,19 @@ def test_no_fold_rows_and_obs_invariants(ingested: tuple[Path, dict]) -> None:
 def test_crlf_and_lf_give_identical_tables(tmp_path: Path) -> None:
     crlf = write_month(tmp_path / "a", newline="\r\n")
     lf = write_month(tmp_path / "b", newline="\n")
-    ingest([crlf], tmp_path / "crlf.parquet")
-    ingest([lf], tmp_path / "lf.parquet")
+    ingest_table([crlf], tmp_path / "crlf.parquet")
+    ingest_table([lf], tmp_path / "lf.parquet")
     assert (tmp_path / "crlf.parquet").read_bytes() == (tmp_path / "lf.parquet").read_bytes()
 
 
 def test_same_input_gives_byte_identical_table(month: Path, tmp_path: Path) -> None:
-    ingest([month], tmp_path / "one.parquet")
-    ingest([month], tmp_path / "two.parquet")
+    ingest_table([month], tmp_path / "one.parquet")
+    ingest_table([month], tmp_path / "two.parquet")
     assert (tmp_path / "one.parquet").read_bytes() == (tmp_path / "two.parquet").read_bytes()
 
 
 def test_same_month_twice_is_all_duplicates(month: Path, tmp_path: Path) -> None:
-    summary = ingest([month, month], tmp_path / "t.parquet")
+    summary = ingest_table([month, month], tmp_path / "t.parquet").to_json()
     assert summary["kept_hands"] == 5
     assert summary["dropped"]["duplicate_hand"] == 1 + 11  # 11 valid hdb lines seen again
     assert summary["buckets_add_up"]
@@ -199,7 +199,7 @@ def test_skipped_channel_is_counted(month: Path, tmp_path: Path) -> None:
     nolimit = write_month(
         tmp_path / "irc", channel="nolimit", hdb=["797000000 1 1 2 0/0 0/0 0/0 1/15"]
     )
-    summary = ingest([tmp_path / "irc"], tmp_path / "t.parquet")
+    summary = ingest_table([tmp_path / "irc"], tmp_path / "t.parquet").to_json()
     assert nolimit.exists()
     assert summary["dropped"]["skipped_channel"] == 1
     assert summary["skipped_channels"] == {"nolimit": 1}
@@ -226,16 +226,16 @@ def _month_members(folder: Path, prefix: str) -> dict[str, bytes]:
 
 
 def test_month_archive_and_nested_archive_match_the_folder(month: Path, tmp_path: Path) -> None:
-    ingest([month], tmp_path / "folder.parquet")
+    ingest_table([month], tmp_path / "folder.parquet")
     month_tgz = _tgz(_month_members(month, "holdem/199504/"))
     (tmp_path / "holdem.199504.tgz").write_bytes(month_tgz)
-    ingest([tmp_path / "holdem.199504.tgz"], tmp_path / "archive.parquet")
+    ingest_table([tmp_path / "holdem.199504.tgz"], tmp_path / "archive.parquet")
     # IRCdata.tgz: month archives inside an archive, with a channel we skip.
     nolimit_tgz = _tgz({"nolimit/199504/hdb": b"797000000 1 1 2 0/0 0/0 0/0 1/15\r\n"})
     (tmp_path / "IRCdata.tgz").write_bytes(
         _tgz({"holdem.199504.tgz": month_tgz, "nolimit.199504.tgz": nolimit_tgz})
     )
-    summary = ingest([tmp_path / "IRCdata.tgz"], tmp_path / "nested.parquet")
+    summary = ingest_table([tmp_path / "IRCdata.tgz"], tmp_path / "nested.parquet").to_json()
     folder_bytes = (tmp_path / "folder.parquet").read_bytes()
     assert (tmp_path / "archive.parquet").read_bytes() == folder_bytes
     assert (tmp_path / "nested.parquet").read_bytes() == folder_bytes
@@ -244,23 +244,23 @@ def test_month_archive_and_nested_archive_match_the_folder(month: Path, tmp_path
 
 def test_archive_without_folders_takes_channel_from_its_name(month: Path, tmp_path: Path) -> None:
     (tmp_path / "holdem.199504.tgz").write_bytes(_tgz(_month_members(month, "./")))
-    summary = ingest([tmp_path / "holdem.199504.tgz"], tmp_path / "t.parquet")
+    summary = ingest_table([tmp_path / "holdem.199504.tgz"], tmp_path / "t.parquet").to_json()
     assert summary["months"] == ["holdem/199504"] and summary["kept_hands"] == 5
 
 
 def test_strict_turns_malformed_lines_into_an_error(month: Path, tmp_path: Path) -> None:
     with pytest.raises(IngestError, match=r"hdb:10"):
-        ingest([month], tmp_path / "t.parquet", strict=True)
+        ingest_table([month], tmp_path / "t.parquet", strict=True)
     assert not (tmp_path / "t.parquet").exists()
 
 
 def test_failed_ingest_leaves_existing_output_untouched(month: Path, tmp_path: Path) -> None:
     out = tmp_path / "t.parquet"
-    ingest([month], out)
+    ingest_table([month], out)
     before = out.read_bytes()
     (tmp_path / "broken.tgz").write_bytes(b"not a tar archive at all")
     with pytest.raises(IngestError, match="not a readable tar archive"):
-        ingest([month, tmp_path / "broken.tgz"], out)
+        ingest_table([month, tmp_path / "broken.tgz"], out)
     assert out.read_bytes() == before
     assert sorted(p.name for p in tmp_path.iterdir() if p.name.startswith(".")) == []
 
@@ -312,7 +312,7 @@ def test_inconsistent_hands_are_counted_with_a_reason(
     pdb = dict(PDB)
     pdb["pdb.Amy"] = [f"Amy       {ZED_FIRST}  2  2 {amy_line}", *PDB["pdb.Amy"][1:]]
     folder = write_month(tmp_path / "irc", pdb=pdb)
-    summary = ingest([folder], tmp_path / "t.parquet")
+    summary = ingest_table([folder], tmp_path / "t.parquet").to_json()
     assert summary["dropped"]["inconsistent_hand"] == 1
     assert summary["inconsistent_reasons"] == {reason: 1}
     assert summary["kept_hands"] == 4 and summary["buckets_add_up"]
@@ -321,7 +321,7 @@ def test_inconsistent_hands_are_counted_with_a_reason(
 def test_stakes_come_from_the_channel(tmp_path: Path) -> None:
     folder = write_month(tmp_path / "irc", channel="holdem2")  # 20-40: big blind of 20 chips
     out = tmp_path / "t.parquet"
-    ingest([folder], out)
+    ingest_table([folder], out)
     rows = rows_of(out, ZED_FIRST)
     assert rows["hand_id"][0] == f"holdem2/199504/{ZED_FIRST}"
     assert rows["big_blind"][0] == 20

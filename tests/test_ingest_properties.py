@@ -9,7 +9,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from irc_fixtures import HDB, HROSTER, PDB, write_month
-from pokerirl.datasets.ingest import ingest
+from pokerirl.datasets.ingest import ingest_table
 
 _GARBAGE = st.text(
     alphabet=st.sampled_from(list("0123456789 /-BkcbrAfQKshdcAKQJT2\t\r.[]`\\x")), max_size=40
@@ -56,7 +56,7 @@ def test_corrupted_lines_never_crash_and_every_hand_is_counted(
     with tempfile.TemporaryDirectory() as tmp:
         root = Path(tmp)
         folder = write_month(root / "irc", hdb=hdb, hroster=hroster, pdb=pdb)
-        summary = ingest([folder], root / "t.parquet")
+        summary = ingest_table([folder], root / "t.parquet").to_json()
     assert summary["hands_read_total"] == len(hdb)
     assert summary["kept_hands"] + sum(summary["dropped"].values()) == len(hdb)
     assert summary["buckets_add_up"]

@@ -12,7 +12,7 @@ from rlcard.envs.limitholdem import LimitholdemEnv
 from rlcard.games.base import Card
 from rlcard.games.limitholdem.game import LimitHoldemGame
 
-from pokerirl.datasets.ingest import ingest
+from pokerirl.datasets.ingest import ingest_table
 from pokerirl.encoding import ACTIONS, MAX_RAISES, parse_card, rlcard_card_str
 
 SAMPLE = Path(__file__).resolve().parents[2] / "shared" / "irc-sample" / "holdem" / "199504"
@@ -22,7 +22,7 @@ pytestmark = pytest.mark.skipif(not SAMPLE.is_dir(), reason="real IRC sample not
 @pytest.fixture(scope="module")
 def real(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, dict, dict[str, np.ndarray]]:
     out = tmp_path_factory.mktemp("real") / "real.parquet"
-    summary = ingest([SAMPLE], out)
+    summary = ingest_table([SAMPLE], out).to_json()
     table = pq.read_table(out)
     columns = {
         name: np.asarray(table.column(name))
@@ -106,7 +106,7 @@ def test_tgz_of_the_folder_gives_the_same_table(
     archive = tmp_path / "holdem.199504.tgz"
     with tarfile.open(archive, "w:gz") as tar:
         tar.add(SAMPLE, arcname="holdem/199504")
-    from_archive = ingest([archive], tmp_path / "t.parquet")
+    from_archive = ingest_table([archive], tmp_path / "t.parquet").to_json()
     assert (tmp_path / "t.parquet").read_bytes() == out.read_bytes()
     assert from_archive["dropped"] == summary["dropped"]
 

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 import torch
 
-from pokerirl.datasets.ingest import ingest
+from pokerirl.datasets.ingest import ingest_table
 from pokerirl.game.synth import write_synthetic_month
 from pokerirl.irl import load_config
 from pokerirl.poker import train_table
@@ -20,7 +20,7 @@ def synthetic_tables(tmp_path_factory: pytest.TempPathFactory) -> list[Path]:
     for seed in (0, 1, 2):
         root = tmp_path_factory.mktemp(f"synth{seed}")
         folder = write_synthetic_month(root / "irc", hands=6000, seed=seed)
-        ingest([folder], root / "expert.parquet")
+        ingest_table([folder], root / "expert.parquet")
         tables.append(root / "expert.parquet")
     return tables
 

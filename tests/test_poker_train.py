@@ -34,7 +34,13 @@ def test_datasets_reads_numpy_and_poker_makes_the_same_transitions(table_path: P
     data = read_table(table_path)
     assert isinstance(data, Transitions) and data.num_actions == 4 and data.obs_dim == 72
     rebuilt = Transitions.from_arrays(
-        decisions.obs, decisions.action_ids, **decisions.transitions_arguments()
+        decisions.obs,
+        decisions.action_ids,
+        groups=decisions.groups,
+        next_obs=decisions.next_obs,
+        dones=decisions.dones,
+        rewards=decisions.rewards,
+        legal_mask=decisions.legal_mask,
     )
     assert data.fingerprint() == rebuilt.fingerprint()
     assert not hasattr(Transitions, "from_table")  # the poker constructor left the generic type

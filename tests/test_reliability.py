@@ -31,7 +31,7 @@ from pokerirl.agents.checkpoint import save_agent
 from pokerirl.agents.dqn import QNetwork
 from pokerirl.agents.rlcard_import import UntrustedCheckpointWarning, load_rlcard_dqn
 from pokerirl.cli import app
-from pokerirl.datasets.ingest import ingest, summary_path
+from pokerirl.datasets.ingest import ingest_table, summary_path
 from pokerirl.game.agents import make_agent
 from pokerirl.game.match import MAX_HANDS, check_match_size, play_match
 from pokerirl.game.synth import write_synthetic_month
@@ -79,7 +79,7 @@ def one_error_line(lines: list[str]) -> str:
 
 
 def test_minimal_month_ingests_cleanly(tmp_path: Path) -> None:
-    summary = ingest([write_minimal(tmp_path / "irc")], tmp_path / "t.parquet")
+    summary = ingest_table([write_minimal(tmp_path / "irc")], tmp_path / "t.parquet").to_json()
     assert summary["kept_hands"] == 1 and summary["malformed_lines"] == 0
     table = pq.read_table(tmp_path / "t.parquet").to_pydict()
     assert set(table["chips_in"]) == {80}
@@ -111,14 +111,14 @@ def test_corrupt_number_is_a_malformed_line(
 ) -> None:
     folder = write_minimal(tmp_path / "irc", file, old, new)
     out = tmp_path / "t.parquet"
-    summary = ingest([folder], out)
+    summary = ingest_table([folder], out).to_json()
     assert summary["malformed_lines"] == 1
     assert summary["kept_hands"] == 0
     assert summary["dropped"][bucket] == 1 and summary["buckets_add_up"]
     where = f"{file}:1"
     assert summary["malformed_examples"][0].startswith(f"{folder}/{where}: ")
     with pytest.raises(IngestError, match=re.escape(f"malformed line at {folder}/{where}")):
-        ingest([folder], tmp_path / "strict.parquet", strict=True)
+        ingest_table([folder], tmp_path / "strict.parquet", strict=True)
 
 
 def test_cli_strict_corrupt_chips_is_one_line(tmp_path: Path) -> None:
@@ -136,14 +136,14 @@ def test_raises_beyond_int16_are_a_malformed_line(tmp_path: Path) -> None:
         "pdb.Zed": [f"Zed 800000001 2 2 B{'r' * n} k k k 1000 40 0 As Ad"],
     }
     folder = write_month(tmp_path / "irc", hdb=hdb, hroster=["800000001 2 Amy Zed"], pdb=pdb)
-    summary = ingest([folder], tmp_path / "t.parquet")
+    summary = ingest_table([folder], tmp_path / "t.parquet").to_json()
     assert summary["dropped"]["malformed_line"] == 1 and summary["kept_hands"] == 0
     assert "32768 raises in a round" in summary["malformed_examples"][0]
 
 
 def test_archive_without_irc_data_is_an_error_and_keeps_the_table(tmp_path: Path) -> None:
     out = tmp_path / "t.parquet"
-    ingest([write_minimal(tmp_path / "irc")], out)
+    ingest_table([write_minimal(tmp_path / "irc")], out)
     table, summary = out.read_bytes(), summary_path(out).read_bytes()
     archive = tmp_path / "notes.tgz"
     with tarfile.open(archive, "w:gz") as tar:
@@ -171,15 +171,15 @@ def test_oversized_member_is_refused_before_it_is_read(
         info.size = 20 * len(line)
         tar.addfile(info, io.BytesIO(line * 20))
     with pytest.raises(IngestError, match=r"holdem/199504/hdb: 1,120 bytes, more than the 1,000"):
-        ingest([archive], tmp_path / "t.parquet")
+        ingest_table([archive], tmp_path / "t.parquet")
     folder = write_minimal(tmp_path / "irc")
     (folder / "hdb").write_bytes(line * 20)
     with pytest.raises(IngestError, match=rf"{re.escape(str(folder))}/hdb: 1,120 bytes"):
-        ingest([folder], tmp_path / "t.parquet")
+        ingest_table([folder], tmp_path / "t.parquet")
     monkeypatch.setattr(irc, "MAX_FILE_BYTES", 10_000)
     monkeypatch.setattr(irc, "MAX_MONTH_BYTES", 1_150)
     with pytest.raises(IngestError, match=r"its month holds .* more than the 1,150"):
-        ingest([folder], tmp_path / "t.parquet")
+        ingest_table([folder], tmp_path / "t.parquet")
 
 
 def test_unwritable_output_names_the_output_not_the_temporary(
@@ -218,7 +218,7 @@ def test_table_and_summary_never_mismatch(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch, killed_at: int
 ) -> None:
     out = tmp_path / "t.parquet"
-    ingest([write_minimal(tmp_path / "minimal")], out)  # 1 kept hand
+    ingest_table([write_minimal(tmp_path / "minimal")], out)  # 1 kept hand
     real_replace, calls = os.replace, []
 
     def replace(source: str | os.PathLike[str], target: str | os.PathLike[str]) -> None:
@@ -229,7 +229,7 @@ def test_table_and_summary_never_mismatch(
 
     monkeypatch.setattr(os, "replace", replace)
     with pytest.raises(_Killed):
-        ingest([write_month(tmp_path / "fixture")], out)  # 5 kept hands
+        ingest_table([write_month(tmp_path / "fixture")], out)  # 5 kept hands
     monkeypatch.undo()
     hands = len(set(pq.read_table(out).column("hand_id").to_pylist()))
     assert hands == (1 if killed_at == 1 else 5)
@@ -247,7 +247,7 @@ def test_stale_work_folder_is_removed_and_a_live_one_kept(tmp_path: Path) -> Non
     descriptor = os.open(live, os.O_RDONLY)
     try:
         fcntl.flock(descriptor, fcntl.LOCK_EX | fcntl.LOCK_NB)  # as a running ingest holds it
-        ingest([write_minimal(tmp_path / "irc")], out)
+        ingest_table([write_minimal(tmp_path / "irc")], out)
         assert not stale.exists() and live.is_dir()
     finally:
         os.close(descriptor)
@@ -259,7 +259,7 @@ def test_killed_ingest_keeps_the_old_pair_and_its_folder_is_cleaned_next_time(
 ) -> None:
     out = tmp_path / "out" / "t.parquet"
     out.parent.mkdir()
-    ingest([write_minimal(tmp_path / "minimal")], out)
+    ingest_table([write_minimal(tmp_path / "minimal")], out)
     table, summary = out.read_bytes(), summary_path(out).read_bytes()
     big = write_synthetic_month(tmp_path / "synth", hands=60_000, seed=0)
     env = {
@@ -282,7 +282,7 @@ def test_killed_ingest_keeps_the_old_pair_and_its_folder_is_cleaned_next_time(
     leftovers = [p for p in out.parent.iterdir() if p.name.startswith(".")]
     assert leftovers  # a kill cannot clean up...
     assert out.read_bytes() == table and summary_path(out).read_bytes() == summary
-    ingest([write_minimal(tmp_path / "minimal")], out)
+    ingest_table([write_minimal(tmp_path / "minimal")], out)
     assert not [p for p in out.parent.iterdir() if p.name.startswith(".")]  # ...the next run does
 
 
@@ -358,9 +358,9 @@ def test_byte_flips_of_the_real_sample_never_crash_and_every_line_is_counted(
         (folder / "pdb").mkdir(parents=True)
         for name, content in files.items():
             (folder / name).write_bytes(content)
-        summary = ingest([folder], Path(tmp) / "t.parquet")
+        summary = ingest_table([folder], Path(tmp) / "t.parquet").to_json()
         try:
-            ingest([folder], Path(tmp) / "strict.parquet", strict=True)
+            ingest_table([folder], Path(tmp) / "strict.parquet", strict=True)
         except IngestError as error:
             assert "\n" not in str(error)
     assert summary["hands_read_total"] == hdb_lines

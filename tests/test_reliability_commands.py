@@ -24,7 +24,7 @@ from test_reliability_io import _gym_run, read_only
 from pokerirl.agents.checkpoint import save_agent
 from pokerirl.agents.dqn import QNetwork
 from pokerirl.cli.app import display, display_error
-from pokerirl.datasets.ingest import ingest
+from pokerirl.datasets.ingest import ingest_table
 from pokerirl.game.synth import write_synthetic_month
 
 REPO = Path(__file__).resolve().parents[1]
@@ -63,7 +63,7 @@ def _poker_run(folder: Path) -> Path:
 def inputs(tmp_path_factory: pytest.TempPathFactory) -> Inputs:
     root = tmp_path_factory.mktemp("inputs")
     month = write_synthetic_month(root / "irc", hands=200, seed=0)
-    ingest([month], root / "table.parquet")
+    ingest_table([month], root / "table.parquet")
     agent = root / "agent"
     save_agent(agent, QNetwork(hidden=(8,)), {"hidden": [8]})
     return Inputs(

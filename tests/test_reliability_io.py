@@ -26,7 +26,7 @@ import pyarrow.parquet as pq
 import pytest
 from test_reliability import MINIMAL, one_error_line, run_cli, write_minimal
 
-from pokerirl.datasets.ingest import ingest, summary_path
+from pokerirl.datasets.ingest import ingest_table, summary_path
 from pokerirl.parsers import irc
 
 REPO = Path(__file__).resolve().parents[1]
@@ -282,7 +282,7 @@ def test_ingest_reads_at_most_the_cap_of_a_file_that_grows(
 
     monkeypatch.setattr(irc, "_open_regular", grows)
     with pytest.raises(irc.IngestError, match=r"hdb: 1,001 bytes, more than the 1,000"):
-        ingest([month], tmp_path / "t.parquet")
+        ingest_table([month], tmp_path / "t.parquet")
 
 
 # --- ingest: a corrupt timestamp anywhere is a malformed line --------------------------------
@@ -303,7 +303,7 @@ def test_a_corrupt_line_in_any_file_is_a_malformed_line(
     tmp_path: Path, file: str, old: bytes, new: bytes
 ) -> None:
     month = write_minimal(tmp_path, file, old, new)
-    summary = ingest([month], tmp_path / "t.parquet")
+    summary = ingest_table([month], tmp_path / "t.parquet").to_json()
     assert summary["malformed_lines"] == 1 and summary["buckets_add_up"]
     assert summary["dropped"]["malformed_line"] == 1, summary["dropped"]
     assert summary["dropped"]["missing_pdb_line"] == summary["dropped"]["roster_mismatch"] == 0
@@ -316,7 +316,7 @@ def test_only_the_hand_of_a_corrupt_line_is_malformed_in_a_real_month(tmp_path: 
     # line outright. A is malformed, B is missing a line, every other hand is as it was.
     month = tmp_path / "holdem" / "199504"
     shutil.copytree(SAMPLE, month)
-    before = ingest([month], tmp_path / "before.parquet")
+    before = ingest_table([month], tmp_path / "before.parquet").to_json()
     kept = pq.read_table(tmp_path / "before.parquet", columns=["hand_id", "player"])
     players: dict[str, set[str]] = {}
     for hand, player in zip(
@@ -335,7 +335,7 @@ def test_only_the_hand_of_a_corrupt_line_is_malformed_in_a_real_month(tmp_path: 
 
     edit(x, hand_a, f"{x} 79x{hand_a[3:]} 2 1 Bc k k k 1000 10 20\r".encode())
     edit(y, hand_b, None)
-    after = ingest([month], tmp_path / "after.parquet")
+    after = ingest_table([month], tmp_path / "after.parquet").to_json()
     assert after["kept_hands"] == before["kept_hands"] - 2
     assert after["malformed_lines"] == 1
     expected = {**before["dropped"], "malformed_line": 1, "missing_pdb_line": 1}

@@ -82,11 +82,11 @@ def test_card_round_trips_and_a_train_run_writes_one(tmp_path: Path) -> None:
     from typer.testing import CliRunner
 
     from pokerirl.cli import app
-    from pokerirl.datasets.ingest import ingest
+    from pokerirl.datasets.ingest import ingest_table
     from pokerirl.game.synth import write_synthetic_month
 
     month = write_synthetic_month(tmp_path, hands=300, seed=0)
-    ingest([month], tmp_path / "table.parquet")
+    ingest_table([month], tmp_path / "table.parquet")
     result = CliRunner().invoke(
         app, ["train", str(tmp_path / "table.parquet"), "--out", str(tmp_path / "run"),
               "--epochs", "2", "--quiet"],
@@ -123,14 +123,14 @@ def test_card_round_trips_and_a_train_run_writes_one(tmp_path: Path) -> None:
 def test_fan_out_runs_write_the_same_card_bytes_naming_the_real_table(tmp_path: Path) -> None:
     # A fan-out run trains on a worker's scratch copy of the table; its card must name the
     # table given, not the copy, so the same inputs give the same bytes.
-    from pokerirl.datasets.ingest import ingest
+    from pokerirl.datasets.ingest import ingest_table
     from pokerirl.game.synth import write_synthetic_month
     from pokerirl.irl import AIRLConfig
     from pokerirl.poker import train_runs
 
     month = write_synthetic_month(tmp_path, hands=200, seed=1)
     table = tmp_path / "table.parquet"
-    ingest([month], table)
+    ingest_table([month], table)
     config = AIRLConfig.for_algo("hairl", epochs=1)
     for name in ("a", "b"):
         train_runs(table, tmp_path / name, runs=2, config=config, progress=False)

@@ -13,14 +13,14 @@ from pokerirl.cli import app
 
 @pytest.fixture(scope="module")
 def run_dir(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    from pokerirl.datasets.ingest import ingest
+    from pokerirl.datasets.ingest import ingest_table
     from pokerirl.game.synth import write_synthetic_month
     from pokerirl.irl import load_config
     from pokerirl.poker import train_table
 
     root = tmp_path_factory.mktemp("transfer")
     month = write_synthetic_month(root, hands=300, seed=2)
-    ingest([month], root / "table.parquet")
+    ingest_table([month], root / "table.parquet")
     config = load_config("hairl", overrides={"epochs": 2, "batch_size": 64})
     train_table(root / "table.parquet", root / "run", config=config, progress=False)
     return root / "run"

@@ -319,12 +319,38 @@ def _typed(key: str, hint: str, value: Any) -> Any:
     raise ConfigError(f"{key} must be {kind.get(hint, 'a string')}")
 
 
-def load_agent_config(path: str | os.PathLike[str]) -> dict[str, Any]:
+@dataclass(frozen=True, kw_only=True)
+class AgentOverrides:
+    """Training settings over an agent preset: fields of :class:`TrainConfig` (``train``) and of
+    :class:`~pokerirl.agents.dqn.DQNConfig` (``dqn``).
+
+    >>> file = AgentOverrides(train={"hands": 500}, dqn={"train_every": 2})
+    >>> config = file.with_flags(train={"hands": None}, dqn={"train_every": 4}).config("default")
+    >>> config.hands, config.dqn.train_every
+    (500, 4)
+    """
+
+    train: Mapping[str, Any] = field(default_factory=dict)
+    dqn: Mapping[str, Any] = field(default_factory=dict)
+
+    def with_flags(self, *, train: Mapping[str, Any], dqn: Mapping[str, Any]) -> AgentOverrides:
+        """These settings under ``train`` and ``dqn`` (command-line flags: None values unset)."""
+        return AgentOverrides(
+            train={**self.train, **{k: v for k, v in train.items() if v is not None}},
+            dqn={**self.dqn, **{k: v for k, v in dqn.items() if v is not None}},
+        )
+
+    def config(self, preset: str, *, seed: int | None = None) -> TrainConfig:
+        """:func:`agent_preset` ``preset`` with these settings."""
+        return agent_preset(preset, seed=seed, dqn=dict(self.dqn), **self.train)
+
+
+def load_agent_config(path: str | os.PathLike[str]) -> AgentOverrides:
     """A TOML file of training settings as :func:`agent_preset` overrides: flat keys, any
     field of :class:`TrainConfig` (``hands``, ``eval_every``, ...) or of
     :class:`~pokerirl.agents.dqn.DQNConfig` (``learning_rate``, ``train_every``, ...).
 
-    Raises ``ValueError`` of one line naming the file and the key.
+    Raises :class:`~pokerirl.errors.ConfigError` of one line naming the file and the key.
     """
     import tomllib
 
@@ -335,7 +361,8 @@ def load_agent_config(path: str | os.PathLike[str]) -> dict[str, Any]:
         raise ConfigError(f"config file not found: {path}") from None
     except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as error:
         raise ConfigError(f"cannot read {path} as TOML: {error}") from None
-    found: dict[str, Any] = {"dqn": {}}
+    train: dict[str, object] = {}
+    dqn: dict[str, object] = {}
     for key, value in settings.items():
         hint = _TRAIN_KEYS.get(key) or _DQN_KEYS.get(key)
         if hint is None or key == "seed":
@@ -345,8 +372,8 @@ def load_agent_config(path: str | os.PathLike[str]) -> dict[str, Any]:
             checked = _typed(key, str(hint), value)
         except ValueError as error:
             raise ConfigError(f"{path}: {error}, got {value!r}") from None
-        (found["dqn"] if key in _DQN_KEYS else found)[key] = checked
-    return found
+        (dqn if key in _DQN_KEYS else train)[key] = checked
+    return AgentOverrides(train=train, dqn=dqn)
 
 
 def reward_run_fingerprint(run_dir: str | os.PathLike[str]) -> str:

@@ -231,7 +231,8 @@ def gym_rl(
     from contextlib import ExitStack
 
     from pokerirl.gym.experts import CONFIG_FILE, METRICS_FILE, MODEL_FILE, require_gym
-    from pokerirl.gym.rl import mean_std, train_rl
+    from pokerirl.gym.rl import train_rl
+    from pokerirl.meanstd import mean_std
     from pokerirl.store import digest, staged_folder, tidy
     from pokerirl.studies.gym_job import claim
 
@@ -309,7 +310,7 @@ def gym_rl(
     finals = [found[k] for k in range(runs)]
     final = mean_std(finals)
     echo(
-        f"{env}: final true return {final['mean']:.1f} +- {final['std']:.1f} over {runs} runs; "
+        f"{env}: final true return {final.mean:.1f} +- {final.std:.1f} over {runs} runs; "
         f"wrote {out}"
     )
 
@@ -383,12 +384,12 @@ def gym_irl(
     )
     final = result.final_return
     line = (
-        f"{env} {algo}: final return {final['mean']:.1f} +- {final['std']:.1f} over "
-        f"{result.runs} runs (expert {result.expert_return:.1f}, "
+        f"{env} {algo}: final return {final.mean:.1f} +- {final.std:.1f} over "
+        f"{result.runs} runs (expert {result.summary.expert_return:.1f}, "
         f"random {result.baselines['random']:.1f})"
     )
     if result.final_alignment is not None:
-        line += f", alignment {100 * result.final_alignment['mean']:.1f}%"
+        line += f", alignment {100 * result.final_alignment.measured[0]:.1f}%"
     echo(f"{line}; wrote {out}")
 
 

@@ -6,7 +6,7 @@ import json
 import re
 from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import typer
 
@@ -43,11 +43,11 @@ def ingest(
 
     Writes TABLE and TABLE.summary.json (where every hand went) and prints the summary.
     """
-    from pokerirl.datasets.ingest import ingest as run_ingest
+    from pokerirl.datasets.ingest import ingest_table
 
-    summary = run_ingest(sources, out, strict=strict, progress=not quiet)
+    summary = ingest_table(sources, out, strict=strict, progress=not quiet)
     if not quiet:
-        echo(json.dumps(summary, indent=2))
+        echo(json.dumps(summary.to_json(), indent=2))
 
 
 @app.command()
@@ -485,8 +485,8 @@ def agent_train(
     """
     from pokerirl.agents.registry import CONFIG_FILE, KEPT_FILE, MODEL_FILE
     from pokerirl.agents.train import (
+        AgentOverrides,
         MetricsLine,
-        agent_preset,
         load_agent_config,
         train_agent,
         train_seeds,
@@ -523,12 +523,12 @@ def agent_train(
         "concurrent_hands": concurrent_hands,
         "self_play_every": self_play_every,
     }
-    from_file: dict[str, Any] = {"dqn": {}}
+    from_file = AgentOverrides()
     if config_file is not None:
         from_file = settings_from_options(load_agent_config, config_file)
-    dqn = {**from_file.pop("dqn"), **{k: v for k, v in dqn_flags.items() if v is not None}}
-    settings = {**from_file, **{k: v for k, v in flags.items() if v is not None}}
-    config = settings_from_options(agent_preset, preset, seed=seed, dqn=dqn, **settings)
+    config = settings_from_options(
+        from_file.with_flags(train=flags, dqn=dqn_flags).config, preset, seed=seed
+    )
     if seeds is None:
         summary = train_agent(out, config, progress=not quiet, overwrite=overwrite, backend=backend)
         lines = {seed: summary}

@@ -225,7 +225,8 @@ def report(
     for name in (SUMMARY_JSON, REPORT_JSON):
         _refuse_corrupt(folder / name)
     if is_gym_study(folder):
-        found, markdown = load_gym_study(folder)
+        summary, markdown = load_gym_study(folder)
+        found = summary.to_json()
     elif is_study_report(folder):
         loaded = load_study_report(folder)
         found, markdown = loaded.to_json(), render_markdown(loaded)

@@ -22,7 +22,6 @@ from __future__ import annotations
 import os
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 import pyarrow as pa
@@ -48,19 +47,6 @@ class DecisionArrays:
     dones: np.ndarray | None = None  # (N,) bool: the player's last decision of the hand
     rewards: np.ndarray | None = None  # (N,) float32
     num_actions: int = NUM_ACTIONS
-
-    def transitions_arguments(self) -> dict[str, Any]:
-        """Keyword arguments of ``Transitions.from_arrays(obs, actions, **...)`` but the two
-        positional ones (see :func:`pokerirl.poker.read_table`)."""
-        return {
-            "groups": self.groups,
-            "next_obs": self.next_obs,
-            "dones": self.dones,
-            "rewards": self.rewards,
-            "legal_mask": self.legal_mask,
-            "num_actions": self.num_actions,
-        }
-
 
 def read_decisions(path: str | os.PathLike[str]) -> DecisionArrays:
     """Read and validate the decision table at ``path``.

@@ -108,17 +108,6 @@ def summary_path(table_path: str | os.PathLike[str]) -> Path:
     return path.with_name(path.name.removesuffix(".parquet") + ".summary.json")
 
 
-def ingest(
-    sources: Sequence[str | os.PathLike[str]],
-    out: str | os.PathLike[str],
-    *,
-    strict: bool = False,
-    progress: bool = False,
-) -> dict[str, object]:
-    """:func:`ingest_table`, its summary as JSON (as the file holds it)."""
-    return ingest_table(sources, out, strict=strict, progress=progress).to_json()
-
-
 def ingest_table(
     sources: Sequence[str | os.PathLike[str]],
     out: str | os.PathLike[str],

@@ -35,7 +35,7 @@ import numpy as np
 import torch
 from torch import Tensor, nn
 
-from pokerirl.atomic import atomic_path, make_shareable, write_text
+from pokerirl.atomic import make_shareable, write_text
 from pokerirl.errors import ConfigError, InputError, Remedy
 from pokerirl.gym.experts import make_env, shipped_experts
 from pokerirl.gym.presets import TASKS, IRLSettings
@@ -44,21 +44,21 @@ from pokerirl.gym.rl import EVAL_SEED
 from pokerirl.irl.airl import default_nets, train_many
 from pokerirl.irl.config import AIRLConfig, Algo, NoiseSchedule
 from pokerirl.irl.nets import fold_obs_standardization
-from pokerirl.irl.plots import plot_bands, plot_curves
+from pokerirl.irl.plots import new_figure, plot_bands, plot_curves, save_figure
 from pokerirl.irl.records import EpochMetrics, EpochRecord
 from pokerirl.irl.run import (
-    BASELINES_FILE,
-    METRICS_FILE,
-    SPLIT_FILE,
     SUMMARY_FILE,
     RunError,
     RunResult,
+    RunsSummary,
+    begin_run,
     data_record,
     run_baselines,
     save_run,
     summarize,
 )
 from pokerirl.irl.transitions import Transitions
+from pokerirl.meanstd import MeanStd
 from pokerirl.store import staged_files, tidy
 
 RETURNS_FILE = "returns_bands.png"
@@ -67,18 +67,59 @@ ALIGNMENT_BASELINES = ("majority", "legal_majority", "bc")  # shares of states, 
 
 
 @dataclass(frozen=True, kw_only=True)
+class GymIRLSummary:
+    """A ``gym irl`` folder's ``summary.json``: the runs summarized (:class:`RunsSummary`),
+    the expert's return, and the last epoch's mean and std over runs of the evaluation return
+    and (discrete tasks) the validation alignment."""
+
+    env: str
+    algo: str
+    expert_return: float
+    irl_final_return: MeanStd
+    final_alignment: MeanStd | None  # discrete tasks only
+    over_runs: RunsSummary
+
+    def to_json(self) -> dict[str, object]:
+        finals = {"irl_final_return": self.irl_final_return.to_json()}
+        if self.final_alignment is not None:
+            finals["final_alignment"] = self.final_alignment.to_json()
+        head = {"env": self.env, "algo": self.algo, "expert_return": self.expert_return}
+        return {**head, **finals, **self.over_runs.to_json()}
+
+    @classmethod
+    def from_json(cls, data: Mapping[str, Any]) -> GymIRLSummary:
+        alignment = data.get("final_alignment")
+        return cls(
+            env=data["env"],
+            algo=data["algo"],
+            expert_return=data["expert_return"],
+            irl_final_return=MeanStd.from_json(data["irl_final_return"]),
+            final_alignment=None if alignment is None else MeanStd.from_json(alignment),
+            over_runs=RunsSummary.from_json(data),
+        )
+
+    @classmethod
+    def read(cls, folder: Path) -> GymIRLSummary:
+        """The ``summary.json`` of the ``gym irl`` folder ``folder``."""
+        return cls.from_json(json.loads((folder / SUMMARY_FILE).read_text()))
+
+
+@dataclass(frozen=True, kw_only=True)
 class GymIRLResult:
     """What :func:`train_gym_irl` wrote: the summary and the headline finals."""
 
     out: Path
-    env: str
-    algo: str
     runs: int
-    summary: dict[str, Any]
+    summary: GymIRLSummary
     baselines: dict[str, float]
-    expert_return: float
-    final_return: dict[str, float]  # mean, std over runs of the last epoch's eval_return
-    final_alignment: dict[str, float] | None  # discrete tasks only
+
+    @property
+    def final_return(self) -> MeanStd:
+        return self.summary.irl_final_return
+
+    @property
+    def final_alignment(self) -> MeanStd | None:
+        return self.summary.final_alignment
 
 
 def irl_config(algo: str, settings: IRLSettings, *, seed: int) -> AIRLConfig:
@@ -323,11 +364,7 @@ def train_gym_irl(
     with staged_files(out, key=STAGE_KEY) as stage:
         make_shareable(stage)
         folders = [stage / f"run-{k}" for k in range(runs)]
-        lines: list[list[str]] = [[] for _ in range(runs)]
-        for folder in folders:
-            folder.mkdir()
-            write_text(folder / SPLIT_FILE, json.dumps({"validation_groups": val_groups}) + "\n")
-            write_text(folder / BASELINES_FILE, json.dumps(found, indent=2) + "\n")
+        logs = [begin_run(folder, val_groups=val_groups, baselines=found) for folder in folders]
 
         def env_returns(record: EpochRecord) -> list[Mapping[str, float]]:
             # The nets' parameters were written back: evaluate each policy in the env.
@@ -347,9 +384,8 @@ def train_gym_irl(
             return extras
 
         def on_epoch(all_metrics: list[EpochMetrics]) -> None:
-            for k, metrics in enumerate(all_metrics):
-                lines[k].append(json.dumps(metrics.to_json()))
-                write_text(folders[k] / METRICS_FILE, "\n".join(lines[k]) + "\n")
+            for log, metrics in zip(logs, all_metrics, strict=False):
+                log.write(metrics)
 
         many = train_many(
             train_data,
@@ -392,66 +428,41 @@ def train_gym_irl(
                 )
             )
         over_runs = summarize(results)
-        finals = {
-            name: {
-                "mean": over_runs.metrics[key].mean[-1],
-                "std": over_runs.metrics[key].std[-1],
-            }
-            for name, key in (
-                ("irl_final_return", "eval_return"),
-                ("final_alignment", "val_alignment"),
-            )
-            if key in over_runs.metrics
-        }
-        summary = {
-            "env": env_id,
-            "algo": algo,
-            "expert_return": found["expert"],
-            **finals,
-            **over_runs.to_json(),
-        }
-        write_text(stage / SUMMARY_FILE, json.dumps(summary, indent=2) + "\n")
+
+        def last(key: str) -> MeanStd:
+            return MeanStd(mean=over_runs.metrics[key].mean[-1], std=over_runs.metrics[key].std[-1])
+
+        summary = GymIRLSummary(
+            env=env_id,
+            algo=algo,
+            expert_return=found["expert"],
+            irl_final_return=last("eval_return"),
+            final_alignment=last("val_alignment") if "val_alignment" in over_runs.metrics else None,
+            over_runs=over_runs,
+        )
+        as_json = summary.to_json()
+        write_text(stage / SUMMARY_FILE, json.dumps(as_json, indent=2) + "\n")
         plot_returns(summary, stage / RETURNS_FILE)
         if discrete:
             plot_bands(
-                {**summary, "baselines": {k: over_runs.baselines[k].to_json() for k in shares}},
+                {**as_json, "baselines": {k: over_runs.baselines[k].to_json() for k in shares}},
                 stage,
             )
-    return GymIRLResult(
-        out=out,
-        env=env_id,
-        algo=algo,
-        runs=runs,
-        summary=summary,
-        baselines=found,
-        expert_return=found["expert"],
-        final_return=finals["irl_final_return"],
-        final_alignment=finals.get("final_alignment"),
-    )
+    return GymIRLResult(out=out, runs=runs, summary=summary, baselines=found)
 
 
-def plot_returns(summary: Mapping[str, Any], path: Path) -> Path:
+def plot_returns(summary: GymIRLSummary, path: Path) -> Path:
     """Mean ± std over runs of the evaluation return per epoch, the expert and random lines."""
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
-
-    figure = Figure(figsize=(6, 4), dpi=100)
-    FigureCanvasAgg(figure)
-    axes = figure.add_subplot()
-    epochs = summary["epochs"]
-    mean = np.array(summary["metrics"]["eval_return"]["mean"])
-    std = np.array(summary["metrics"]["eval_return"]["std"])
-    label = f"{summary['algo']} policy (mean of {summary['runs']} runs)"
+    figure, axes = new_figure()
+    runs = summary.over_runs
+    epochs = list(runs.epochs)
+    mean = np.array(runs.metrics["eval_return"].mean)
+    std = np.array(runs.metrics["eval_return"].std)
+    label = f"{summary.algo} policy (mean of {len(runs.seeds)} runs)"
     axes.plot(epochs, mean, color="C0", label=label)
     axes.fill_between(epochs, mean - std, mean + std, color="C0", alpha=0.25, label="± 1 std")
     for i, name in enumerate(("expert", "random")):
-        value = summary["baselines"][name]["mean"]
-        if math.isfinite(value):
+        value = runs.baselines[name].mean
+        if value is not None and math.isfinite(value):
             axes.axhline(value, linestyle="--", linewidth=1, color=f"C{i + 1}", label=name)
-    axes.set(title=f"{summary['env']}: IRL-phase return", xlabel="epoch", ylabel="return")
-    axes.grid(alpha=0.3)
-    axes.legend(fontsize="small")
-    figure.tight_layout()
-    with atomic_path(path) as temporary:
-        figure.savefig(temporary, format="png")
-    return path
+    return save_figure(figure, axes, path, f"{summary.env}: IRL-phase return", "return")

@@ -18,6 +18,7 @@ from dataclasses import dataclass, replace
 from typing import Any, Literal
 
 from pokerirl.errors import ConfigError
+from pokerirl.meanstd import MeanStd
 
 Algo = Literal["ppo", "dqn"]
 
@@ -112,14 +113,6 @@ class RLSettings:
         own = self.ppo if self.algo == "ppo" else self.dqn
         assert own is not None  # __post_init__ holds it
         return own
-
-
-@dataclass(frozen=True, kw_only=True)
-class MeanStd:
-    """A final value as the authors report it: the last point of a mean ± std curve."""
-
-    mean: float
-    std: float | None = None  # None where the authors give a single line (the expert).
 
 
 @dataclass(frozen=True, kw_only=True)

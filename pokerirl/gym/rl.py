@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import json
 import os
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from dataclasses import asdict, dataclass
 from enum import StrEnum
 from pathlib import Path
@@ -32,6 +32,7 @@ from pokerirl.gym.experts import (
 )
 from pokerirl.gym.presets import TASKS, RLSettings
 from pokerirl.gym.rewards import RewardCallable, learned_reward_env
+from pokerirl.meanstd import mean_and_std
 
 EVAL_SEED = 2_000_000  # evaluation episodes' seeds, apart from the experts' and the data's
 # How the RL phase trains: SB3, one run per call (train_rl), or R runs of one task in one
@@ -53,9 +54,22 @@ DEFAULT_RL_BACKEND = RLBackend.LOCKSTEP
 
 @dataclass(frozen=True, kw_only=True)
 class CurvePoint:
+    """One evaluation of an RL run: a line of its ``metrics.jsonl``."""
+
     timesteps: int
     return_mean: float
     return_std: float
+
+    @classmethod
+    def from_json(cls, data: Mapping[str, Any]) -> CurvePoint:
+        mean, std = data["return_mean"], data["return_std"]
+        return cls(timesteps=data["timesteps"], return_mean=mean, return_std=std)
+
+
+def read_curve(run: Path) -> list[CurvePoint]:
+    """The true-return curve of the RL run folder ``run`` (its ``metrics.jsonl``)."""
+    lines = (run / METRICS_FILE).read_text().splitlines()
+    return [CurvePoint.from_json(json.loads(line)) for line in lines if line.strip()]
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -198,17 +212,7 @@ def save_run(
     write_text(out / CONFIG_FILE, json.dumps(record, indent=2) + "\n")
 
 
-def mean_std(values: Sequence[float]) -> dict[str, float]:
-    """Mean and sample std (ddof 1; 0 for one value), as the IRL summaries give them.
-
-    >>> mean_std([1.0, 3.0])
-    {'mean': 2.0, 'std': 1.4142135623730951}
-    """
-    array = np.asarray(values, dtype=float)
-    std = float(array.std(ddof=1)) if len(array) > 1 else 0.0
-    return {"mean": float(array.mean()), "std": std}
-
-
 def summarize(results: list[RLResult]) -> dict[str, float]:
     """Mean and sample std over runs of the final true return."""
-    return {**mean_std([r.final_return for r in results]), "runs": len(results)}
+    mean, std = mean_and_std([r.final_return for r in results])
+    return {"mean": mean, "std": std, "runs": len(results)}

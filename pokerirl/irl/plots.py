@@ -41,13 +41,15 @@ CURVES: dict[str, tuple[str, str, list[tuple[str, str]]]] = {
 BANDS_FILE = "alignment_bands.png"
 
 
-def _figure() -> tuple[Figure, Any]:
+def new_figure() -> tuple[Figure, Any]:
+    """A 6x4 inch Agg figure and its axes, as every run-folder figure is drawn."""
     figure = Figure(figsize=(6, 4), dpi=100)
     FigureCanvasAgg(figure)
     return figure, figure.add_subplot()
 
 
-def _save(figure: Figure, axes: Any, path: Path, title: str, ylabel: str) -> Path:
+def save_figure(figure: Figure, axes: Any, path: Path, title: str, ylabel: str) -> Path:
+    """Title, labels (epochs on x), grid and legend; written atomically to ``path``."""
     axes.set(title=title, xlabel="epoch", ylabel=ylabel)
     axes.grid(alpha=0.3)
     axes.legend(fontsize="small")
@@ -77,12 +79,12 @@ def plot_curves(
         present = [(key, label) for key, label in series if metrics and key in metrics[0]]
         if not present:
             continue
-        figure, axes = _figure()
+        figure, axes = new_figure()
         for key, label in present:
             axes.plot(epochs, [m[key] for m in metrics], marker=".", label=label)
         if name == ALIGNMENT_FIGURE and baselines:
             _baseline_lines(axes, baselines)
-        written.append(_save(figure, axes, out_dir / name, title, ylabel))
+        written.append(save_figure(figure, axes, out_dir / name, title, ylabel))
     return written
 
 
@@ -94,7 +96,7 @@ def plot_bands(summary: Mapping[str, Any], out_dir: str | os.PathLike[str]) -> P
     ]
     if not series:
         return None
-    figure, axes = _figure()
+    figure, axes = new_figure()
     for i, (key, label) in enumerate(series):
         mean, std = summary["metrics"][key]["mean"], summary["metrics"][key]["std"]
         axes.plot(epochs, mean, color=f"C{i}", label=f"{label} (mean)")
@@ -103,4 +105,4 @@ def plot_bands(summary: Mapping[str, Any], out_dir: str | os.PathLike[str]) -> P
         axes.fill_between(epochs, low, high, color=f"C{i}", alpha=0.25, label="± 1 std")
     _baseline_lines(axes, {k: v["mean"] for k, v in summary["baselines"].items()})
     title = f"Validation alignment over {summary['runs']} runs"
-    return _save(figure, axes, Path(out_dir) / BANDS_FILE, title, "share of states")
+    return save_figure(figure, axes, Path(out_dir) / BANDS_FILE, title, "share of states")

@@ -30,7 +30,7 @@ from __future__ import annotations
 import json
 import os
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -46,6 +46,7 @@ from pokerirl.irl.nets import ACTIVATIONS, REWARD_FAMILIES, NetSpec, RewardFamil
 from pokerirl.irl.plots import plot_curves
 from pokerirl.irl.records import EpochMetrics
 from pokerirl.irl.transitions import Transitions
+from pokerirl.meanstd import MeanStd
 from pokerirl.parquet import first_line
 from pokerirl.versions import package_versions
 
@@ -112,21 +113,6 @@ class RunSummary:
 
 
 @dataclass(frozen=True, kw_only=True)
-class MeanStd:
-    """Mean and sample standard deviation over runs."""
-
-    mean: float
-    std: float
-
-    def to_json(self) -> dict[str, float]:
-        return {"mean": self.mean, "std": self.std}
-
-    @classmethod
-    def from_json(cls, data: Mapping[str, Any]) -> MeanStd:
-        return cls(mean=data["mean"], std=data["std"])
-
-
-@dataclass(frozen=True, kw_only=True)
 class CurveStats:
     """Mean and sample standard deviation over runs of one metric, epoch by epoch."""
 
@@ -173,6 +159,29 @@ class RunsSummary:
 # --------------------------------------------------------------------------- one run
 
 
+@dataclass(frozen=True)
+class MetricsLog:
+    """A run folder's ``metrics.jsonl``, one line per epoch."""
+
+    path: Path
+    lines: list[str] = field(default_factory=list)
+
+    def write(self, metrics: EpochMetrics) -> None:
+        # Rewrite the whole (small) file each epoch: readable live, never half-written.
+        self.lines.append(json.dumps(metrics.to_json()))
+        write_text(self.path, "\n".join(self.lines) + "\n")
+
+
+def begin_run(
+    folder: Path, *, val_groups: Sequence[Any], baselines: Mapping[str, float]
+) -> MetricsLog:
+    """Make the run folder ``folder`` with its split and baselines; its epochs' log."""
+    folder.mkdir(parents=True, exist_ok=True)
+    write_text(folder / SPLIT_FILE, json.dumps({"validation_groups": val_groups}) + "\n")
+    write_text(folder / BASELINES_FILE, json.dumps(baselines, indent=2) + "\n")
+    return MetricsLog(folder / METRICS_FILE)
+
+
 def train_into(
     data: Transitions,
     folder: Path,
@@ -191,25 +200,15 @@ def train_into(
     train_data, val_data, val_groups = data.split(
         val_fraction=config.val_fraction, seed=config.seed
     )
-    folder.mkdir(parents=True, exist_ok=True)
-    write_text(folder / SPLIT_FILE, json.dumps({"validation_groups": val_groups}) + "\n")
     found = run_baselines(train_data, val_data, config=config, device=device, progress=progress)
-    write_text(folder / BASELINES_FILE, json.dumps(found, indent=2) + "\n")
-
-    lines: list[str] = []
-
-    def log_epoch(metrics: EpochMetrics) -> None:
-        # Rewrite the whole (small) file each epoch: readable live, never half-written.
-        lines.append(json.dumps(metrics.to_json()))
-        write_text(folder / METRICS_FILE, "\n".join(lines) + "\n")
-
+    log = begin_run(folder, val_groups=val_groups, baselines=found)
     result = train(
         train_data,
         val_data,
         config=config,
         device=device,
         progress=progress,
-        on_epoch=log_epoch,
+        on_epoch=log.write,
     )
     data_info = data_record(data, train_data, val_data, path=data_path)
     save_run(result, folder, algo=algo, data=data_info, baselines=found, device=device)

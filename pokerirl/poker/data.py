@@ -35,6 +35,7 @@ def transitions_from_arrow(table: pa.Table, *, source: str = "table") -> Transit
 
 
 def as_transitions(decisions: DecisionArrays) -> Transitions:
-    return Transitions.from_arrays(
-        decisions.obs, decisions.action_ids, **decisions.transitions_arguments()
-    )
+    d = decisions
+    return Transitions.from_arrays(d.obs, d.action_ids, groups=d.groups, next_obs=d.next_obs,
+                                   dones=d.dones, rewards=d.rewards, legal_mask=d.legal_mask,
+                                   num_actions=d.num_actions)  # fmt: skip

@@ -1,8 +1,6 @@
-"""What every study shares: its error, presets with overrides, ``mean_std``, reading the units'
-JSONL metrics, mean ± std bands and Markdown tables.
+"""What every study shares: its error, presets with overrides, reading the units' JSONL
+metrics, mean ± std bands and Markdown tables (``mean_std`` is :mod:`pokerirl.meanstd`'s).
 
->>> mean_std([1.0, 3.0])
-{'mean': 2.0, 'std': 1.4142135623730951}
 >>> print("\\n".join(markdown_table(["", "ours"], [["AIRL", "0.5"]])))
 | | ours |
 |---|---|
@@ -13,13 +11,14 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import os
 from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
 from typing import Any, TypeVar
 
 import numpy as np
 
-from pokerirl.errors import ConfigError
+from pokerirl.errors import ConfigError, Remedy
 
 # The files the studies read in their units' folders and write in their own.
 METRICS_JSONL = "metrics.jsonl"  # an IRL run's epochs, an RL run's or agent's evaluations
@@ -48,21 +47,17 @@ def with_overrides(presets: Mapping[str, Preset], name: str, **overrides: Any) -
         raise StudyError(str(error)) from None
 
 
-def mean_std(
-    values: Sequence[float] | Sequence[Sequence[float]] | np.ndarray, axis: int | None = None
-) -> dict[str, Any]:
-    """Mean and sample std (ddof 1; 0 for one value), as floats, or as lists along ``axis``."""
-    array = np.asarray(values, dtype=float)
-    count = array.shape[0] if axis == 0 else array.size
-    mean = array.mean(axis=axis)
-    std = array.std(axis=axis, ddof=1) if count > 1 else np.zeros_like(mean)
-    if axis is None:
-        return {"mean": float(mean), "std": float(std)}
-    return {"mean": mean.tolist(), "std": std.tolist()}
+def study_folder(out: str | os.PathLike[str]) -> Path:
+    """``out`` as a study's folder (made later, by the study); refused where it is a file."""
+    folder = Path(out)
+    if folder.exists() and not folder.is_dir():
+        raise StudyError(f"{folder} exists and is not a folder", remedy=Remedy.ELSEWHERE)
+    return folder
 
 
 def read_jsonl(path: Path) -> list[dict[str, Any]]:
-    """The JSON objects of a ``metrics.jsonl`` (blank lines skipped)."""
+    """The JSON objects of a ``metrics.jsonl`` (blank lines skipped): a study reading the
+    lines of its own units (RL curves are :func:`pokerirl.gym.rl.read_curve`'s)."""
     return [json.loads(line) for line in path.read_text().splitlines() if line.strip()]
 
 

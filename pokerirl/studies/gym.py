@@ -36,11 +36,13 @@ from typing import Any
 import numpy as np
 
 from pokerirl.atomic import write_text
-from pokerirl.errors import PokerIRLError, Remedy
+from pokerirl.errors import PokerIRLError
 from pokerirl.execution import Backend
+from pokerirl.gym.irl import GymIRLSummary
 from pokerirl.gym.presets import PRESETS, TASK_ORDER, TASKS, StudyPreset
-from pokerirl.gym.presets import MeanStd as PaperValue
-from pokerirl.gym.rl import DEFAULT_RL_BACKEND, RLBackend
+from pokerirl.gym.rl import DEFAULT_RL_BACKEND, RLBackend, read_curve
+from pokerirl.irl.run import CurveStats
+from pokerirl.meanstd import MeanStd, mean_std, mean_std_curve
 from pokerirl.studies.common import (
     METRICS_JSONL,
     REPORT_MD,
@@ -48,8 +50,8 @@ from pokerirl.studies.common import (
     StudyError,
     band,
     markdown_table,
-    mean_std,
     read_jsonl,
+    study_folder,
     with_overrides,
 )
 from pokerirl.studies.gym_results import (
@@ -57,7 +59,6 @@ from pokerirl.studies.gym_results import (
     AlgoSummary,
     Band,
     EnvRewardSummary,
-    MeanStd,
     PaperFinals,
     RewardMapSummary,
     StudySettings,
@@ -96,6 +97,40 @@ class GymStudyResult:
     out: Path
     summaries: dict[str, TaskSummary]  # env -> the task's summary.json
     markdown: str
+
+
+@dataclass(frozen=True, kw_only=True)
+class GymStudySummary:
+    """A gym study's ``summary.json``: a single task's :class:`TaskSummary`, or (``all``)
+    the tasks' under ``tasks`` with the preset and the runs."""
+
+    preset: str
+    runs: int
+    tasks: dict[str, TaskSummary]
+    several: bool  # the ``tasks`` form, even for one task
+
+    def to_json(self) -> dict[str, object]:
+        if not self.several:
+            (only,) = self.tasks.values()
+            return only.to_json()
+        return {
+            "format": SUMMARY_FORMAT,
+            "preset": self.preset,
+            "runs": self.runs,
+            "tasks": {env: summary.to_json() for env, summary in self.tasks.items()},
+        }
+
+    @classmethod
+    def from_json(cls, data: Mapping[str, Any]) -> GymStudySummary:
+        if "tasks" in data:
+            tasks = {env: TaskSummary.from_json(task) for env, task in data["tasks"].items()}
+            return cls(preset=data["preset"], runs=data["runs"], tasks=tasks, several=True)
+        task = TaskSummary.from_json(data)
+        return cls(preset=task.preset, runs=task.runs, tasks={task.env: task}, several=False)
+
+    def render(self) -> str:
+        """The study's ``report.md``."""
+        return render_report(self.tasks, self.preset, prefix=None if self.several else "")
 
 
 def study_preset(name: str, **overrides: Any) -> StudyPreset:
@@ -204,9 +239,7 @@ def run_gym_study(
     require_gym()
     check_rl_backend(rl_backend)
     backend = backend or Backend()
-    out = Path(out)
-    if out.exists() and not out.is_dir():
-        raise StudyError(f"{out} exists and is not a folder", remedy=Remedy.ELSEWHERE)
+    out = study_folder(out)
     tasks = preset.tasks
     roots = {env: task_root(out, env, tasks) for env in tasks}
     names = ", ".join(tasks)
@@ -252,15 +285,12 @@ def run_gym_study(
         if len(tasks) > 1:
             write_text(roots[env] / REPORT_MD, render_report({env: summary}, preset.name))
         summaries[env] = summary
-    if len(tasks) > 1:
-        overall = {
-            "format": SUMMARY_FORMAT,
-            "preset": preset.name,
-            "runs": preset.runs,
-            "tasks": {env: summary.to_json() for env, summary in summaries.items()},
-        }
-        write_text(out / SUMMARY_JSON, json.dumps(overall, indent=2) + "\n")
-    markdown = render_report(summaries, preset.name, prefix="" if len(tasks) == 1 else None)
+    overall = GymStudySummary(
+        preset=preset.name, runs=preset.runs, tasks=summaries, several=len(tasks) > 1
+    )
+    if overall.several:
+        write_text(out / SUMMARY_JSON, json.dumps(overall.to_json(), indent=2) + "\n")
+    markdown = overall.render()
     write_text(report, markdown)
     return GymStudyResult(out=out, summaries=summaries, markdown=markdown)
 
@@ -274,7 +304,7 @@ def is_gym_study(folder: str | os.PathLike[str]) -> bool:
     return isinstance(found, dict) and found.get("format") == SUMMARY_FORMAT
 
 
-def load_gym_study(folder: str | os.PathLike[str]) -> tuple[dict[str, Any], str]:
+def load_gym_study(folder: str | os.PathLike[str]) -> tuple[GymStudySummary, str]:
     """A finished study's ``summary.json`` and its report rendered again (``pokerirl report``)."""
     from pokerirl.studies.gym_summary_check import check_summary
 
@@ -282,10 +312,8 @@ def load_gym_study(folder: str | os.PathLike[str]) -> tuple[dict[str, Any], str]
     try:
         found = json.loads(path.read_text())
         check_summary(found)  # once, on reading: the renderer trusts what passes
-        if "tasks" in found:
-            tasks = {env: TaskSummary.from_json(task) for env, task in found["tasks"].items()}
-            return found, render_report(tasks, found["preset"], prefix=None)
-        return found, render_report({found["env"]: TaskSummary.from_json(found)}, found["preset"])
+        summary = GymStudySummary.from_json(found)
+        return summary, summary.render()
     except (OSError, ValueError, KeyError, TypeError, AttributeError) as error:
         # check_summary names the fields the report reads; the others fail here, one line too.
         raise StudyError(f"{path}: not a readable gym study summary ({error})") from None
@@ -326,20 +354,16 @@ class RLCurves:
 
 def rl_curves(root: Path, reward: str, runs: int) -> RLCurves:
     """The RL runs' true-return curves: timesteps, per-run values, mean and std per point."""
-    lines = [read_jsonl(root / "rl" / reward / f"run-{k}" / METRICS_JSONL) for k in range(runs)]
-    points = min(len(line) for line in lines)
-    values = np.array([[p["return_mean"] for p in line[:points]] for line in lines])
-    std = values.std(0, ddof=1) if runs > 1 else np.zeros(points)
+    curves = [read_curve(root / "rl" / reward / f"run-{k}") for k in range(runs)]
+    points = min(len(curve) for curve in curves)
+    values = np.array([[p.return_mean for p in curve[:points]] for curve in curves])
+    mean, std = mean_std_curve(values)
     return RLCurves(
-        timesteps=[p["timesteps"] for p in lines[0][:points]],
-        mean=values.mean(0).tolist(),
-        std=std.tolist(),
+        timesteps=[p.timesteps for p in curves[0][:points]],
+        mean=mean,
+        std=std,
         per_run_final=values[:, -1].tolist(),
     )
-
-
-def _paper(value: PaperValue) -> MeanStd:
-    return MeanStd(value.mean, value.std)
 
 
 def task_summary(
@@ -352,21 +376,21 @@ def task_summary(
     algos: dict[str, AlgoSummary] = {}
     irl_summaries = {}
     for algo in ALGOS:
-        irl = json.loads((root / "irl" / algo / SUMMARY_JSON).read_text())
+        irl = GymIRLSummary.read(root / "irl" / algo)
         irl_summaries[algo] = irl
-        metrics = irl["metrics"]
+        metrics = irl.over_runs.metrics
         rl = rl_curves(root, algo, preset.runs)
         algos[algo] = AlgoSummary(
-            irl_final_return=MeanStd.from_json(irl["irl_final_return"]),
-            rl_final_return=MeanStd.from_json(mean_std(rl.per_run_final)),
-            baselines={name: MeanStd.from_json(v) for name, v in irl["baselines"].items()},
+            irl_final_return=irl.irl_final_return,
+            rl_final_return=mean_std(rl.per_run_final),
+            baselines=dict(irl.over_runs.baselines),
             irl_per_run_final=_per_run_final(root / "irl" / algo, preset.runs, "eval_return"),
             rl_per_run_final=rl.per_run_final,
-            irl_epochs=irl["epochs"],
-            irl_return=Band.from_json(metrics["eval_return"]),
+            irl_epochs=list(irl.over_runs.epochs),
+            irl_return=Band.from_json(metrics["eval_return"].to_json()),
             rl_curve=rl.band(),
-            alignment=Band.from_json(metrics["val_alignment"]) if task.discrete else None,
-            final_alignment=MeanStd.from_json(irl["final_alignment"]) if task.discrete else None,
+            alignment=Band.from_json(metrics["val_alignment"].to_json()) if task.discrete else None,
+            final_alignment=irl.final_alignment if task.discrete else None,
             final_reward_alignment=_last(metrics["val_reward_alignment"])
             if task.discrete
             else None,
@@ -374,7 +398,7 @@ def task_summary(
             **reward_quality(root, env, algo, preset.runs),
         )
     env_rl = rl_curves(root, "env", preset.runs)
-    baselines = irl_summaries["hairl"]["baselines"]
+    baselines = irl_summaries["hairl"].over_runs.baselines
     paper = task.paper
     return TaskSummary(
         format=SUMMARY_FORMAT,
@@ -383,11 +407,11 @@ def task_summary(
         runs=preset.runs,
         seeds=[preset.seed + k for k in range(preset.runs)],
         discrete=task.discrete,
-        expert_return=irl_summaries["hairl"]["expert_return"],
-        random_return=baselines["random"]["mean"],
+        expert_return=irl_summaries["hairl"].expert_return,
+        random_return=baselines["random"].measured[0],
         algos=algos,
         env_reward=EnvRewardSummary(
-            rl_final_return=MeanStd.from_json(mean_std(env_rl.per_run_final)),
+            rl_final_return=mean_std(env_rl.per_run_final),
             rl_per_run_final=env_rl.per_run_final,
             rl_curve=env_rl.band(),
         ),
@@ -401,12 +425,12 @@ def task_summary(
             rl_backend=rl_backend,
         ),
         paper=PaperFinals(
-            irl_final_return={"airl": _paper(paper.irl_airl), "hairl": _paper(paper.irl_hairl)},
+            irl_final_return={"airl": paper.irl_airl, "hairl": paper.irl_hairl},
             expert_return=paper.irl_expert.mean,
             rl_final_return={
-                "airl": _paper(paper.rl_airl),
-                "hairl": _paper(paper.rl_hairl),
-                "env_reward": _paper(paper.rl_env_reward),
+                "airl": paper.rl_airl,
+                "hairl": paper.rl_hairl,
+                "env_reward": paper.rl_env_reward,
             },
             final_alignment={"airl": paper.alignment_airl, "hairl": paper.alignment_hairl}
             if task.discrete
@@ -417,9 +441,9 @@ def task_summary(
     )
 
 
-def _last(curve: dict[str, list[float]]) -> MeanStd:
+def _last(curve: CurveStats) -> MeanStd:
     """A per-epoch curve's last point."""
-    return MeanStd(curve["mean"][-1], curve["std"][-1])
+    return MeanStd(mean=curve.mean[-1], std=curve.std[-1])
 
 
 def reward_quality(root: Path, env: str, algo: str, runs: int) -> dict[str, Any]:
@@ -437,7 +461,7 @@ def reward_quality(root: Path, env: str, algo: str, runs: int) -> dict[str, Any]
     quality = {}
     for key in SCORES:
         values = [q[key] for q in found if q.get(key) is not None]
-        quality[key] = MeanStd.from_json(mean_std(values)) if values else MeanStd(None)
+        quality[key] = mean_std(values) if values else MeanStd(mean=None)
     return {
         "quality": quality,
         "reward_quality": {
@@ -516,8 +540,8 @@ def task_table(summary: TaskSummary) -> list[str]:
          _value(paper.irl_final_return["airl"])),
         ("IRL-phase return, H-AIRL", _value(hairl.irl_final_return),
          _value(paper.irl_final_return["hairl"])),
-        ("expert (its data's episodes)", _value(MeanStd(summary.expert_return)),
-         _value(MeanStd(paper.expert_return))),
+        ("expert (its data's episodes)", _value(MeanStd(mean=summary.expert_return)),
+         _value(MeanStd(mean=paper.expert_return))),
         ("RL-phase return, AIRL reward", _value(airl.rl_final_return),
          _value(paper.rl_final_return["airl"])),
         ("RL-phase return, H-AIRL reward", _value(hairl.rl_final_return),
@@ -572,8 +596,8 @@ def task_table(summary: TaskSummary) -> list[str]:
              "Figure 4: maps only"),
         )  # fmt: skip
     rows.append(
-        ("random policy", _value(MeanStd(summary.random_return)),
-         _value(MeanStd(paper.random_return)))
+        ("random policy", _value(MeanStd(mean=summary.random_return)),
+         _value(MeanStd(mean=paper.random_return)))
     )  # fmt: skip
     return markdown_table(["", "ours", "the authors"], rows)
 

@@ -4,8 +4,6 @@
 reads a summary checked by :mod:`pokerirl.studies.gym_summary_check` (an older one may lack
 the fields added since: the reward map, the reward quality, the RL backend).
 
->>> MeanStd.from_json({"mean": 1.5, "std": None}).to_json()
-{'mean': 1.5, 'std': None}
 """
 
 from __future__ import annotations
@@ -14,27 +12,10 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
-from pokerirl.errors import InputError
+from pokerirl.meanstd import MeanStd
 
 Json = dict[str, Any]
 QUALITY_KEYS = ("disc_acc_expert", "disc_acc_policy")  # written as final_<key>
-
-
-@dataclass(frozen=True)
-class MeanStd:
-    """A final value over runs (None: not measured, or the authors' figure gives none)."""
-
-    mean: float | None
-    std: float | None = None
-
-    def to_json(self) -> Json:
-        return {"mean": self.mean, "std": self.std}
-
-    @classmethod
-    def from_json(cls, data: Mapping[str, Any]) -> MeanStd:
-        if not isinstance(data, Mapping):
-            raise InputError(f"must be an object with a mean and a std, got {data!r}"[:200])
-        return cls(mean=data.get("mean"), std=data.get("std"))
 
 
 @dataclass(frozen=True, kw_only=True)

@@ -31,7 +31,17 @@ from pokerirl.execution import Backend, map_units, read_files, write_files
 from pokerirl.gym.presets import IRLSettings, RLSettings
 from pokerirl.gym.rl import RLBackend
 from pokerirl.irl.run import CONFIG_FILE, REWARD_FILE, TIMINGS_FILE
-from pokerirl.store import Fate, Layout, Unit, UnitOutput, check, digest, run_units, save
+from pokerirl.store import (
+    Fate,
+    Json,
+    Layout,
+    Unit,
+    UnitOutput,
+    check,
+    digest,
+    run_units,
+    save,
+)
 from pokerirl.studies.common import StudyError
 
 DATA_FILE = "expert.parquet"
@@ -59,14 +69,14 @@ def _output(files: dict[str, bytes]) -> UnitOutput[None]:
     return UnitOutput(files=kept, unhashed=timed)
 
 
-def expert_fingerprint(env_id: str) -> dict[str, Any]:
+def expert_fingerprint(env_id: str) -> dict[str, Json]:
     """The shipped expert of ``env_id``: its manifest entry and the sha256 of its weights."""
     from pokerirl.gym.experts import MODEL_FILE, resolve_expert_dir, shipped_manifest
 
     folder = resolve_expert_dir("shipped", env_id)
     entry = next((e for e in shipped_manifest() if e["env"] == env_id), None)
     digest = hashlib.sha256((folder / MODEL_FILE).read_bytes()).hexdigest()
-    return {"manifest": entry, "model_sha256": digest}
+    return {"manifest": None if entry is None else dict(entry), "model_sha256": digest}
 
 
 # --------------------------------------------------------------------------- the units
@@ -195,7 +205,7 @@ class DataJob:
     seed: int
     path: Path
 
-    def config(self) -> dict[str, Any]:
+    def config(self) -> dict[str, Json]:
         from pokerirl.gym.collect import default_deterministic
 
         return {
@@ -233,7 +243,7 @@ class IRLJob:
     data: Path
     folder: Path
 
-    def config(self) -> dict[str, Any]:
+    def config(self) -> dict[str, Json]:
         """The unit's configuration; its input is the data (:meth:`unit`)."""
         return {
             "unit": "gym-irl",
@@ -283,7 +293,7 @@ class RLJob:
         except OSError as error:
             raise JobError(f"{self.reward_run}: cannot read the IRL run ({error})") from None
 
-    def config(self) -> dict[str, Any]:
+    def config(self) -> dict[str, Json]:
         """The unit's configuration; its input is the reward run's files (:meth:`unit`)."""
         return {
             "unit": "gym-rl",

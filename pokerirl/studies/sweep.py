@@ -31,12 +31,13 @@ from typing import Any
 import numpy as np
 
 from pokerirl.atomic import atomic_path, write_text
-from pokerirl.errors import PokerIRLError, Remedy
+from pokerirl.errors import PokerIRLError
 from pokerirl.execution import Backend
-from pokerirl.gym.irl import irl_config
+from pokerirl.gym.irl import GymIRLSummary, irl_config
 from pokerirl.gym.presets import TASKS, StudyPreset
 from pokerirl.gym.rl import DEFAULT_RL_BACKEND
-from pokerirl.studies.common import SUMMARY_JSON, StudyError, mean_std
+from pokerirl.meanstd import mean_and_std
+from pokerirl.studies.common import StudyError, study_folder
 from pokerirl.studies.gym import (
     check_rl_backend,
     data_job,
@@ -181,9 +182,7 @@ def run_sweep(
     if not params:
         raise StudyError("give at least one --param, e.g. --param alpha=0,0.5,1")
     backend = backend or Backend()
-    out = Path(out)
-    if out.exists() and not out.is_dir():
-        raise StudyError(f"{out} exists and is not a folder", remedy=Remedy.ELSEWHERE)
+    out = study_folder(out)
     points = sweep_points(env, params, preset)
     unique = list({point.name: point for point in points}.values())
     data = out / DATA_FILE
@@ -218,7 +217,7 @@ def run_sweep(
     say(f"[4/4] {CSV_FILE}, {JSON_FILE} and one figure per parameter -> {out}")
     rows = [point_row(out, point, preset, discrete=TASKS[env].discrete) for point in points]
     write_text(out / CSV_FILE, _csv(rows))
-    expert = json.loads((irl[unique[0].name].folder / SUMMARY_JSON).read_text())
+    expert = GymIRLSummary.read(irl[unique[0].name].folder)
     record = {
         "format": SWEEP_FORMAT,
         "env": env,
@@ -227,8 +226,8 @@ def run_sweep(
         "seeds": [preset.seed + k for k in range(preset.runs)],
         "base": {key: float(getattr(preset.irl(env), key)) for key in PARAMS},
         "rl_backend": rl_backend,
-        "expert_return": expert["expert_return"],
-        "random_return": expert["baselines"]["random"]["mean"],
+        "expert_return": expert.expert_return,
+        "random_return": expert.over_runs.baselines["random"].mean,
         "rows": [row.to_json() for row in rows],
     }
     write_text(out / JSON_FILE, json.dumps(record, indent=2) + "\n")
@@ -241,25 +240,25 @@ def point_row(
 ) -> SweepRow:
     """The point's finals: IRL-phase return, RL-phase return, alignment (discrete tasks)."""
     root = out / "points" / point.name
-    irl = json.loads((root / "irl" / "hairl" / SUMMARY_JSON).read_text())
-    rl = mean_std(rl_curves(root, "hairl", preset.runs).per_run_final)
+    irl = GymIRLSummary.read(root / "irl" / "hairl")
+    rl_mean, rl_std = mean_and_std(rl_curves(root, "hairl", preset.runs).per_run_final)
     alignment: dict[str, float | None] = {}
     for name, key in (
         ("final_alignment", "val_alignment"),
         ("final_reward_alignment", "val_reward_alignment"),
     ):
-        curve = irl["metrics"].get(key) if discrete else None
-        alignment[f"{name}_mean"] = None if curve is None else curve["mean"][-1]
-        alignment[f"{name}_std"] = None if curve is None else curve["std"][-1]
+        curve = irl.over_runs.metrics.get(key) if discrete else None
+        alignment[f"{name}_mean"] = None if curve is None else curve.mean[-1]
+        alignment[f"{name}_std"] = None if curve is None else curve.std[-1]
     return SweepRow(
         param=point.param,
         value=point.value,
         point=point.name,
         runs=preset.runs,
-        irl_final_return_mean=irl["irl_final_return"]["mean"],
-        irl_final_return_std=irl["irl_final_return"]["std"],
-        rl_final_return_mean=rl["mean"],
-        rl_final_return_std=rl["std"],
+        irl_final_return_mean=irl.irl_final_return.measured[0],
+        irl_final_return_std=irl.irl_final_return.measured[1],
+        rl_final_return_mean=rl_mean,
+        rl_final_return_std=rl_std,
         **alignment,
     )
 

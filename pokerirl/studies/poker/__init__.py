@@ -14,8 +14,8 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
-from pokerirl.errors import Remedy
 from pokerirl.execution import Backend
+from pokerirl.studies.common import study_folder
 from pokerirl.studies.poker import figures
 from pokerirl.studies.poker.config import PRESETS, StudyConfig, StudyError, preset
 from pokerirl.studies.poker.pipeline import (
@@ -93,9 +93,7 @@ def run_study(
         raise StudyError("give at least one SOURCE (an IRC month folder or archive)")
     check_sources(sources)  # before anything is written: a missing path, a plain file
     reward_source_prints(config)  # a reward that replaces IRL runs, checked as early
-    root = Path(out)
-    if root.exists() and not root.is_dir():
-        raise StudyError(f"{root} exists and is not a folder", remedy=Remedy.ELSEWHERE)
+    root = study_folder(out)
     root.mkdir(parents=True, exist_ok=True)
     study = Study(
         root,

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import io
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -13,7 +13,14 @@ from pokerirl.atomic import write_bytes
 from pokerirl.encoding import ACTIONS
 from pokerirl.studies.common import band
 from pokerirl.studies.poker.report_types import StudyReport
-from pokerirl.studies.poker.results import AgentsResult, Curve, IRLResult, IRLRuns, Panel
+from pokerirl.studies.poker.results import (
+    AgentsResult,
+    Curve,
+    HandsCurve,
+    IRLResult,
+    IRLRuns,
+    Panel,
+)
 
 if TYPE_CHECKING:
     from pokerirl.tournaments import AuthorsMatchup
@@ -48,34 +55,52 @@ def _trained(irl: IRLResult) -> dict[str, tuple[str, IRLRuns]]:
     }
 
 
-def irl_alignment(irl: IRLResult, path: Path) -> None:
-    """Validation alignment over epochs, mean ± std over runs, with the baselines as lines."""
+def _band_figure(
+    path: Path,
+    bands: Iterable[tuple[Any, Curve | HandsCurve, str]],
+    lines: Iterable[tuple[float, str, str]] = (),
+    **axes: Any,
+) -> None:
+    """Mean ± std bands (x, curve, label), grey reference lines (value, style, label), then
+    ``axes`` (labels, title, limits) and a legend."""
     plt = _pyplot()
     figure, axis = plt.subplots(figsize=(6.4, 4))
+    for x, curve, label in bands:
+        band(axis, x, curve.to_json(), label)
+    for value, style, label in lines:
+        axis.axhline(value, color="grey", linestyle=style, label=label)
+    axis.set(**axes)
+    axis.legend(fontsize=8)
+    _save(figure, path)
+
+
+def _epochs(curve: Curve) -> np.ndarray:
+    return np.arange(1, len(curve.mean) + 1)
+
+
+def irl_alignment(irl: IRLResult, path: Path) -> None:
+    """Validation alignment over epochs, mean ± std over runs, with the baselines as lines."""
     trained = _trained(irl)
-    for label, runs in trained.values():
-        curve = runs.curves["val_alignment"]
-        band(axis, np.arange(1, len(curve.mean) + 1), curve.to_json(), label)
+    curves = {label: runs.curves["val_alignment"] for label, runs in trained.values()}
+    bands = [(_epochs(curve), curve, label) for label, curve in curves.items()]
+    lines = []
     styles = {"majority": ":", "legal_majority": "--", "bc": "-."}
     for name, style in styles.items() if trained else ():
         value = list(trained.values())[-1][1].baselines[name].mean
-        axis.axhline(value, color="grey", linestyle=style, label=f"{name} {value:.3f}")
-    axis.set(xlabel="epoch", ylabel="validation alignment", title="IRL: validation alignment")
-    axis.legend(fontsize=8)
-    _save(figure, path)
+        lines.append((value, style, f"{name} {value:.3f}"))
+    _band_figure(path, bands, lines, xlabel="epoch", ylabel="validation alignment",
+                 title="IRL: validation alignment")  # fmt: skip
 
 
 def irl_discriminator(irl: IRLResult, path: Path) -> None:
     """Discriminator accuracy on expert and on policy actions over epochs, mean ± std."""
-    plt = _pyplot()
-    figure, axis = plt.subplots(figsize=(6.4, 4))
-    for label, runs in _trained(irl).values():
-        for key, side in (("disc_acc_expert", "expert"), ("disc_acc_policy", "policy")):
-            curve = runs.curves[key]
-            band(axis, np.arange(1, len(curve.mean) + 1), curve.to_json(), f"{label}, {side}")
-    axis.set(xlabel="epoch", ylabel="accuracy", title="IRL: discriminator accuracy", ylim=(0, 1))
-    axis.legend(fontsize=8)
-    _save(figure, path)
+    bands = [
+        (_epochs(runs.curves[key]), runs.curves[key], f"{label}, {side}")
+        for label, runs in _trained(irl).values()
+        for key, side in (("disc_acc_expert", "expert"), ("disc_acc_policy", "policy"))
+    ]
+    _band_figure(path, bands, xlabel="epoch", ylabel="accuracy",
+                 title="IRL: discriminator accuracy", ylim=(0, 1))  # fmt: skip
 
 
 def irl_actions(irl: IRLResult, path: Path) -> None:
@@ -108,17 +133,14 @@ def irl_actions(irl: IRLResult, path: Path) -> None:
 def rl_curves(agents: AgentsResult, path: Path) -> None:
     """Learning curves against random, mean ± std over seeds, with always-call and
     always-raise as reference lines (the paper's RL figure)."""
-    plt = _pyplot()
-    figure, axis = plt.subplots(figsize=(6.4, 4))
-    for kind, label in KIND_LABELS.items():
-        curve = agents.curves[kind]
-        band(axis, curve.hands, curve.to_json(), label)
+    bands = [(agents.curves[kind].hands, agents.curves[kind], label)
+             for kind, label in KIND_LABELS.items()]  # fmt: skip
+    lines = []
     for name, style in (("call", ":"), ("raise", "--")):
         value = agents.references[name].mbb_per_hand
-        axis.axhline(value, color="grey", linestyle=style, label=f"always-{name} {value:,.0f}")
-    axis.set(xlabel="training hands", ylabel="mbb/hand vs random", title="RL against random")
-    axis.legend(fontsize=8)
-    _save(figure, path)
+        lines.append((value, style, f"always-{name} {value:,.0f}"))
+    _band_figure(path, bands, lines, xlabel="training hands", ylabel="mbb/hand vs random",
+                 title="RL against random")  # fmt: skip
 
 
 def panel_heatmap(panel: Panel, path: Path) -> None:

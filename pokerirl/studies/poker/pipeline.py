@@ -30,11 +30,11 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from pokerirl.execution import Backend
+from pokerirl.meanstd import mean_std_curve
 from pokerirl.store import Fate, Layout, LegacyRecord, Unit, check, digest, fingerprint, writing
 from pokerirl.studies.common import (
     BASELINES_JSON,
     METRICS_JSONL,
-    mean_std,
     read_jsonl,
 )
 from pokerirl.studies.poker.config import (
@@ -217,7 +217,7 @@ class Study:
 
 def ingest_stage(study: Study, sources: Sequence[str | os.PathLike[str]]) -> Ingested:
     """The table and its summary: a ``file`` unit, ingested in this process."""
-    from pokerirl.datasets.ingest import ingest, summary_path
+    from pokerirl.datasets.ingest import ingest_table, summary_path
 
     study.step("ingest")
     sources_print = _sources_fingerprint(sources)
@@ -233,7 +233,7 @@ def ingest_stage(study: Study, sources: Sequence[str | os.PathLike[str]]) -> Ing
         study.say("      the table is finished already, reused")
     else:
         with writing(unit) as folder:
-            ingest(sources, folder / TABLE, progress=study.execution.progress)
+            ingest_table(sources, folder / TABLE, progress=study.execution.progress)
     summary = json.loads(summary_path(study.root / TABLE).read_text())
     return Ingested(summary=summary, fingerprint=fingerprint(legacy.identity))
 
@@ -365,8 +365,8 @@ def _curve(agent_set: Path, seeds: Sequence[int]) -> HandsCurve:
     lines = [read_jsonl(agent_set / f"seed-{s}" / METRICS_JSONL) for s in seeds]
     points = min(len(line) for line in lines)
     values = [[line[i]["eval"]["random"]["mbb_per_hand"] for i in range(points)] for line in lines]
-    return HandsCurve(hands=[lines[0][i]["hands"] for i in range(points)],
-                      **mean_std(values, axis=0))  # fmt: skip
+    mean, std = mean_std_curve(values)
+    return HandsCurve(hands=[lines[0][i]["hands"] for i in range(points)], mean=mean, std=std)
 
 
 def _playing_vs_random(agent_set: Path, seeds: Sequence[int]) -> list[float]:

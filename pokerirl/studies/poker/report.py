@@ -5,13 +5,14 @@ from __future__ import annotations
 
 import json
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 from pokerirl import atomic
 from pokerirl.encoding import ACTIONS
-from pokerirl.studies.common import REPORT_JSON, REPORT_MD, markdown_table, mean_std
+from pokerirl.meanstd import MeanStd, mean_and_std
+from pokerirl.studies.common import REPORT_JSON, REPORT_MD, markdown_table
 from pokerirl.studies.poker import paper
 from pokerirl.studies.poker.config import AGENT_KINDS, IRL_ALGOS, StudyConfig, StudyError
 from pokerirl.studies.poker.report_types import (
@@ -23,7 +24,6 @@ from pokerirl.studies.poker.report_types import (
     IRLAlgoPart,
     IRLPart,
     IRLReplacedPart,
-    MeanStd,
     PanelPart,
     PaperLine,
     RLKindPart,
@@ -39,7 +39,6 @@ from pokerirl.studies.poker.results import (
     IRLRuns,
     Panel,
     Replaced,
-    Spread,
     Table1Line,
 )
 
@@ -91,9 +90,9 @@ def build_report(
             continue
         final = found.final
         algos[algo] = IRLAlgoPart(
-            final_val_alignment=_mean_std(final["val_alignment"]),
-            final_disc_acc_expert=_mean_std(final["disc_acc_expert"]),
-            final_disc_acc_policy=_mean_std(final["disc_acc_policy"]),
+            final_val_alignment=final["val_alignment"].stats,
+            final_disc_acc_expert=final["disc_acc_expert"].stats,
+            final_disc_acc_policy=final["disc_acc_policy"].stats,
             per_run_val_alignment=final["val_alignment"].values,
             paper_val_alignment=MeanStd(**paper.IRL_ALIGNMENT[algo]),
             paper_disc_acc=paper.DISC_ACC_FINAL[algo],
@@ -105,10 +104,10 @@ def build_report(
         irl_part = IRLPart(
             algos=algos,
             runs=config.runs,
-            bc=BCPart(final_val_alignment=_mean_std(baselines["bc"]),
+            bc=BCPart(final_val_alignment=baselines["bc"].stats,
                       per_run_val_alignment=baselines["bc"].values),
             baselines={
-                name: _mean_std(baselines[name]) for name in ("majority", "legal_majority")
+                name: baselines[name].stats for name in ("majority", "legal_majority")
             },
             epochs=runs[trained[-1]].epochs,
         )  # fmt: skip
@@ -116,7 +115,7 @@ def build_report(
     vs_random = agents.vs_random
     rl = RLPart(
         kinds={
-            kind: RLKindPart(**mean_std(vs_random[kind]), paper=paper.RL_VS_RANDOM[kind])
+            kind: _rl_kind(vs_random[kind], paper.RL_VS_RANDOM[kind])
             for kind in AGENT_KINDS
         },
         references=dict(agents.references),
@@ -153,8 +152,8 @@ def build_report(
         irl=irl_part,
         rl_vs_random=rl,
         training_length=TrainingLengthPart(
-            short=HandsResult(hands=length.short_agent_hands, **mean_std(length.short)),
-            long=HandsResult(hands=length.agent_hands, **mean_std(length.long)),
+            short=_hands_result(length.short_agent_hands, length.short),
+            long=_hands_result(length.agent_hands, length.long),
             paper=paper.DQN_TRAINING,
         ),
         panel=PanelPart(panel=panel, hands=config.panel_hands),
@@ -182,8 +181,14 @@ def _authors_row(matchup: AuthorsMatchup, theirs: PaperLine) -> AuthorsRow:
     )
 
 
-def _mean_std(spread: Spread) -> MeanStd:
-    return MeanStd(mean=spread.mean, std=spread.std)
+def _rl_kind(values: Sequence[float], published: float) -> RLKindPart:
+    mean, std = mean_and_std(values)
+    return RLKindPart(mean=mean, std=std, paper=published)
+
+
+def _hands_result(hands: int, values: Sequence[float]) -> HandsResult:
+    mean, std = mean_and_std(values)
+    return HandsResult(hands=hands, mean=mean, std=std)
 
 
 def panel_csv(panel: Panel) -> str:
@@ -199,7 +204,8 @@ def panel_csv(panel: Panel) -> str:
 
 
 def _pm(value: MeanStd, scale: float = 1.0, digits: int = 0) -> str:
-    return f"{value.mean * scale:,.{digits}f} ± {value.std * scale:,.{digits}f}"
+    mean, std = value.measured
+    return f"{mean * scale:,.{digits}f} ± {std * scale:,.{digits}f}"
 
 
 def _p(p: float) -> str:
@@ -282,7 +288,7 @@ def render_markdown(report: StudyReport) -> str:
         ours, published = part.final_val_alignment, part.paper_val_alignment
         lines.append(
             f"| {label} | {_pm(ours, 100, 1)}% | "
-            f"{published.mean * 100:.1f} ± {published.std * 100:.1f}% |"
+            f"{published.measured[0] * 100:.1f} ± {published.measured[1] * 100:.1f}% |"
         )
     if irl.bc is not None:
         lines.append(f"| BC (supervised only) | {_pm(irl.bc.final_val_alignment, 100, 1)}%"
@@ -380,7 +386,8 @@ def rl_measured(report: StudyReport) -> str:
 
 def _f(value: MeanStd | None) -> str:
     if value is not None:
-        return f"{value.mean:+.2f} ± {value.std:.2f}"
+        mean, std = value.measured
+        return f"{mean:+.2f} ± {std:.2f}"
     return "n/a" if value is None else str(value)
 
 

@@ -4,9 +4,6 @@ render_markdown`, the figures and ``pokerirl report`` read.
 ``to_json`` writes exactly the names (and their order) ``report.json`` has always had;
 ``from_json`` reads one back (``from_json(data).to_json() == data``). The parts that are the
 paper's constants or the study's settings stay open mappings.
-
->>> MeanStd.from_json({"mean": 0.5, "std": 0.1}).to_json()
-{'mean': 0.5, 'std': 0.1}
 """
 
 from __future__ import annotations
@@ -15,22 +12,8 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
+from pokerirl.meanstd import MeanStd
 from pokerirl.studies.poker.results import Json, Panel, Reference, Table1Line
-
-
-@dataclass(frozen=True, kw_only=True)
-class MeanStd:
-    """A value's mean and std over runs or seeds."""
-
-    mean: float
-    std: float
-
-    def to_json(self) -> Json:
-        return {"mean": self.mean, "std": self.std}
-
-    @classmethod
-    def from_json(cls, data: Mapping[str, Any]) -> MeanStd:
-        return cls(mean=data["mean"], std=data["std"])
 
 
 def _stats(data: Mapping[str, Any]) -> dict[str, MeanStd]:

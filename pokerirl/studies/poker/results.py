@@ -16,7 +16,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import asdict, dataclass, field
 from typing import Any
 
-from pokerirl.studies.common import mean_std
+from pokerirl.meanstd import MeanStd, mean_and_std, mean_std_curve
 
 Json = dict[str, Any]
 
@@ -26,6 +26,7 @@ class Ingested:
     """The table's summary (``datasets.ingest``'s), and the print of the ingest stage that an
     older pokerirl's later stage records were made with."""
 
+    # The file as written, whatever pokerirl wrote it: only this package's report reads it.
     summary: dict[str, Any]
     fingerprint: str
 
@@ -40,7 +41,8 @@ class Curve:
     @classmethod
     def of(cls, values: Sequence[Sequence[float]]) -> Curve:
         """Over the first axis of ``values`` (one row per run)."""
-        return cls(**mean_std(values, axis=0))
+        mean, std = mean_std_curve(values)
+        return cls(mean=mean, std=std)
 
     def to_json(self) -> Json:
         return {"mean": self.mean, "std": self.std}
@@ -60,7 +62,12 @@ class Spread:
 
     @classmethod
     def of(cls, values: Sequence[float]) -> Spread:
-        return cls(values=list(values), **mean_std(values))
+        mean, std = mean_and_std(values)
+        return cls(values=list(values), mean=mean, std=std)
+
+    @property
+    def stats(self) -> MeanStd:
+        return MeanStd(mean=self.mean, std=self.std)
 
     def to_json(self) -> Json:
         return {"values": self.values, "mean": self.mean, "std": self.std}
