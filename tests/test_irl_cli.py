@@ -381,7 +381,7 @@ def test_a_killed_overwrite_leaves_the_finished_run_byte_for_byte(
     try:
         deadline = time.monotonic() + 120
         while time.monotonic() < deadline:  # wait until the new run is writing epochs
-            staged = list(tmp_path.glob(".run.*.tmp/metrics.jsonl"))
+            staged = list(tmp_path.glob(".run.new-*/new/run/metrics.jsonl"))  # the store's
             if staged and staged[0].read_text().count("\n") >= 2:
                 break
             assert process.poll() is None, "the run ended before it could be killed"
@@ -396,3 +396,7 @@ def test_a_killed_overwrite_leaves_the_finished_run_byte_for_byte(
             process.wait()
     assert _snapshot(target) == before
     load_reward(target)  # still a consistent, loadable run
+    from pokerirl.store import tidy
+
+    tidy(tmp_path, key="run")  # what the next writer does first: the dead write is gone
+    assert not list(tmp_path.glob(".run.*"))

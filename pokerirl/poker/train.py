@@ -31,11 +31,8 @@ from __future__ import annotations
 
 import json
 import os
-import shutil
 import tempfile
-import uuid
-from collections.abc import Iterator, Mapping
-from contextlib import contextmanager
+from collections.abc import Mapping
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
@@ -44,7 +41,7 @@ import numpy as np
 import torch
 
 from pokerirl.agents.reward_card import CARD_FILE
-from pokerirl.atomic import make_shareable, write_text
+from pokerirl.atomic import write_text
 from pokerirl.errors import ConfigError, Remedy
 from pokerirl.execution import Backend
 from pokerirl.irl.airl import resolve_device
@@ -65,7 +62,7 @@ from pokerirl.irl.run import (
 )
 from pokerirl.irl.transitions import Transitions
 from pokerirl.poker.data import read_table
-from pokerirl.store import Unit, UnitConflict, UnitOutput, digest, run_units
+from pokerirl.store import Unit, UnitConflict, UnitOutput, digest, run_units, staged_folder
 
 CARD_COLUMNS = ("hole_cards", "board")  # what the card reads beyond the trainer's columns
 
@@ -92,7 +89,7 @@ def train_table(
     out = Path(out_dir)
     check_destination(out, overwrite=overwrite)
     data = read_table(table)
-    with staged_folder(out, overwrite=overwrite) as folder:
+    with staged_folder(out) as folder:  # the store's: a kill leaves out as it was
         summary = train_table_into(
             data, folder, algo=algo, config=config, device=device, progress=progress, table=table
         )
@@ -283,31 +280,3 @@ def check_destination(out: Path, *, overwrite: bool) -> None:
         raise RunError(f"{out} exists and is not a folder", remedy=Remedy.ELSEWHERE)
     if out.is_dir() and any(out.iterdir()) and not overwrite:
         raise RunError(f"{out} already holds files (a finished run?)", remedy=Remedy.REPLACE)
-
-
-@contextmanager
-def staged_folder(out: Path, *, overwrite: bool) -> Iterator[Path]:
-    """Yield a new hidden folder beside ``out``; on success it replaces ``out``.
-
-    A failure or an interruption deletes it and leaves ``out`` as it was (a kill -9 leaves
-    the hidden ``.<name>.*.tmp`` folder behind, never a change to ``out``).
-    """
-    check_destination(out, overwrite=overwrite)
-    try:
-        out.parent.mkdir(parents=True, exist_ok=True)
-        folder = Path(tempfile.mkdtemp(prefix=f".{out.name}.", suffix=".tmp", dir=out.parent))
-    except OSError as error:
-        raise RunError(f"{out}: cannot write there ({error.strerror or error})") from None
-    make_shareable(folder)
-    try:
-        yield folder
-        if out.is_dir() and any(out.iterdir()):
-            old = out.parent / f".{out.name}.{uuid.uuid4().hex}.old"
-            os.replace(out, old)
-            os.replace(folder, out)
-            shutil.rmtree(old, ignore_errors=True)
-        else:
-            os.replace(folder, out)  # onto nothing, or onto an empty folder
-    except BaseException:
-        shutil.rmtree(folder, ignore_errors=True)
-        raise

@@ -134,8 +134,8 @@ def tidy(parent: str | os.PathLike[str], *, key: str) -> None:
         NEW: _pattern(key, f"{NEW}-{_RANDOM}"),
         SWAP: _pattern(key, f"{SWAP}-{_RANDOM}"),
         "old": _pattern(key, f"old-{_RANDOM}"),  # execution.save_unit_folder's, aside
-        "legacy new": _pattern(key, rf"{_RANDOM}\.tmp"),  # pokerirl train's staged_folder
-        "legacy old": _pattern(key, r"[0-9a-f]{32}\.old"),  # pokerirl train's staged_folder, aside
+        "legacy new": _pattern(key, rf"{_RANDOM}\.tmp"),  # pokerirl train's, pre-store
+        "legacy old": _pattern(key, r"[0-9a-f]{32}\.old"),  # the same, aside
         "ingest": _pattern(key, f"ingest-{_RANDOM}"),  # datasets.ingest's work folder
     }
     target = parent / key
