@@ -333,3 +333,19 @@ def test_cli_output_that_is_a_folder_is_one_line_error(month: Path, tmp_path: Pa
     assert result.exit_code == 1
     assert "is a folder" in result.output and "Traceback" not in result.output
     assert not list(tmp_path.glob(".*"))  # no temporary files left behind
+
+
+def test_months_spilled_to_parts_give_the_same_table(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from pokerirl.datasets import ingest as ingest_module
+    from pokerirl.game.synth import write_synthetic_month
+
+    months = [write_synthetic_month(tmp_path / f"m{k}", hands=40, seed=k) for k in range(3)]
+    held = tmp_path / "held.parquet"
+    ingest_table(months, held)
+    monkeypatch.setattr(ingest_module, "SPILL_BYTES", 0)  # every month goes to a part file
+    spilled = tmp_path / "spilled.parquet"
+    ingest_table(months, spilled)
+    assert spilled.read_bytes() == held.read_bytes()
+    assert not [p for p in tmp_path.iterdir() if p.name.startswith(".")]  # parts gone too

@@ -37,6 +37,7 @@ from pokerirl.game.match import MAX_HANDS, check_match_size, play_match
 from pokerirl.game.synth import write_synthetic_month
 from pokerirl.parsers import irc
 from pokerirl.parsers.irc import IngestError
+from pokerirl.store import tidy
 
 REPO = Path(__file__).resolve().parents[1]
 SAMPLE = REPO.parent / "shared" / "irc-sample" / "holdem" / "199504"
@@ -228,27 +229,34 @@ def test_table_and_summary_never_mismatch(
         real_replace(source, target)
 
     monkeypatch.setattr(os, "replace", replace)
-    with pytest.raises(_Killed):
+    with pytest.raises(_Killed):  # the swap is committed: its renames are the only os.replace
         ingest_table([write_month(tmp_path / "fixture")], out)  # 5 kept hands
     monkeypatch.undo()
-    hands = len(set(pq.read_table(out).column("hand_id").to_pylist()))
-    assert hands == (1 if killed_at == 1 else 5)
-    if summary_path(out).exists():
-        assert json.loads(summary_path(out).read_text())["kept_hands"] == hands
+
+    def kept() -> int:
+        hands = len(set(pq.read_table(out).column("hand_id").to_pylist()))
+        if summary_path(out).exists():  # never another ingest's summary beside the table
+            assert json.loads(summary_path(out).read_text())["kept_hands"] == hands
+        return hands
+
+    assert kept() == (1 if killed_at == 1 else 5)
+    tidy(tmp_path, key=out.name)  # what the next writer does first: the swap is finished
+    assert kept() == 5 and summary_path(out).exists()
     assert not [p for p in tmp_path.iterdir() if p.name.startswith(".")]
 
 
 def test_stale_work_folder_is_removed_and_a_live_one_kept(tmp_path: Path) -> None:
     out = tmp_path / "t.parquet"
-    stale = tmp_path / ".t.parquet.ingest-dead"
-    live = tmp_path / ".t.parquet.ingest-live"
-    stale.mkdir()
-    live.mkdir()
+    stale = tmp_path / ".t.parquet.new-deadbeef"
+    stale_before_the_store = tmp_path / ".t.parquet.ingest-deadbeef"  # ingest's own, earlier
+    live = tmp_path / ".t.parquet.new-livelive"
+    for folder in (stale, stale_before_the_store, live):
+        folder.mkdir()
     descriptor = os.open(live, os.O_RDONLY)
     try:
         fcntl.flock(descriptor, fcntl.LOCK_EX | fcntl.LOCK_NB)  # as a running ingest holds it
         ingest_table([write_minimal(tmp_path / "irc")], out)
-        assert not stale.exists() and live.is_dir()
+        assert not stale.exists() and not stale_before_the_store.exists() and live.is_dir()
     finally:
         os.close(descriptor)
 

@@ -8,9 +8,7 @@ from __future__ import annotations
 import json
 import os
 import shutil
-import tempfile
-from collections.abc import Iterator, Mapping, Sequence
-from contextlib import contextmanager
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -20,7 +18,6 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 from tqdm import tqdm
 
-from pokerirl.atomic import lock_folder
 from pokerirl.datasets.table import SCHEMA, month_table
 from pokerirl.encoding import ACTIONS, FOLD
 from pokerirl.parsers.irc import (
@@ -32,6 +29,7 @@ from pokerirl.parsers.irc import (
     iter_months,
     parse_month,
 )
+from pokerirl.store import staged_files
 
 # Dictionary encoding and statistics only where they pay: the obs and mask lists are most of
 # the bytes, and encoding them is most of the write time.
@@ -42,7 +40,6 @@ PARQUET_OPTIONS: Mapping[str, Any] = {
     "use_dictionary": _STRING_COLUMNS,
     "write_statistics": ["hand_id", "timestamp", "player", "street", "action_id", "channel"],
 }
-_WORK_TABLE, _WORK_SUMMARY = "table.parquet", "summary.json"  # inside the private work folder
 SPILL_BYTES = 512 * 1024 * 1024  # months held in memory before they go to temporary parts
 
 
@@ -120,10 +117,11 @@ def ingest_table(
     Months are parsed one at a time; their tables are held until they pass ``SPILL_BYTES``,
     then spilled to temporary Parquet parts, so memory stays bounded. Months are joined in
     (channel, month) order at the end.
-    Nothing appears at ``out`` unless the whole ingest succeeds. A summary beside the table
-    always describes that table: the old summary is removed before the new table is renamed
-    into place, and the new summary follows it, so a kill in between leaves a table without a
-    summary, never a table with another run's summary.
+
+    The table and its summary are written through the store (:func:`staged_files`, key: the
+    table's name): nothing changes at ``out`` unless the whole ingest succeeds, and a kill
+    leaves the old pair or, once the next writer has tidied, the new one. The old summary is
+    removed just before the swap, so a table is never seen beside another ingest's summary.
     """
     out_path = Path(out)
     if out_path.is_dir():
@@ -131,50 +129,26 @@ def ingest_table(
     if not out_path.parent.is_dir():
         raise IngestError(f"{out_path.parent}: output folder does not exist")
     check_sources(sources)
-    with _work_dir(out_path) as work_dir:
-        try:
-            return _ingest(sources, out_path, work_dir, strict=strict, progress=progress)
-        except OSError as error:  # sources' read errors are IngestErrors: this is a write
-            raise IngestError(f"{out_path}: cannot write ({error.strerror or error})") from None
-
-
-_WORK_DIR_INFIX = ".ingest-"
-
-
-@contextmanager
-def _work_dir(out_path: Path) -> Iterator[Path]:
-    """A hidden folder beside ``out_path`` for the temporary files, locked while in use.
-
-    A killed ingest cannot remove its folder; the next ingest into the same folder removes
-    every such folder whose lock is free (its owner is gone). Errors name ``out_path``, not
-    the temporary path.
-    """
-    prefix = f".{out_path.name}{_WORK_DIR_INFIX}"
     try:
-        candidates = sorted(p for p in out_path.parent.iterdir() if p.name.startswith(prefix))
-    except OSError:  # an unlistable folder: nothing to clean, and mkdtemp below tells the rest
-        candidates = []
-    for stale in candidates:
-        if stale.is_dir() and (lock := lock_folder(stale)) is not None:
-            shutil.rmtree(stale, ignore_errors=True)
-            os.close(lock)
-    try:
-        work_dir = Path(tempfile.mkdtemp(prefix=prefix, dir=out_path.parent))
-    except OSError as error:
+        with staged_files(out_path.parent, key=out_path.name, make_parent=False) as new:
+            scratch = new / _SPILL_FOLDER  # inside the staging folder; gone before the swap
+            scratch.mkdir()
+            summary = _ingest(sources, out_path, new, scratch, strict=strict, progress=progress)
+            shutil.rmtree(scratch)
+            summary_path(out_path).unlink(missing_ok=True)
+    except OSError as error:  # sources' read errors are IngestErrors: this is a write
         raise IngestError(f"{out_path}: cannot write ({error.strerror or error})") from None
-    lock = lock_folder(work_dir)
-    try:
-        yield work_dir
-    finally:
-        shutil.rmtree(work_dir, ignore_errors=True)
-        if lock is not None:
-            os.close(lock)
+    return summary
+
+
+_SPILL_FOLDER = ".spill"  # month parts, within the staged entries until just before the swap
 
 
 def _ingest(
     sources: Sequence[str | os.PathLike[str]],
     out_path: Path,
-    work_dir: Path,
+    new: Path,
+    scratch: Path,
     *,
     strict: bool,
     progress: bool,
@@ -197,10 +171,10 @@ def _ingest(
             months.append((month.key, order, table))
             in_memory += table.nbytes
             if in_memory > SPILL_BYTES:
-                months = [_spill(item, work_dir) for item in months]
+                months = [_spill(item, scratch) for item in months]
                 in_memory = 0
     summary = _summary(stats, sources, out_path, counts)
-    table_file, summary_file = work_dir / _WORK_TABLE, work_dir / _WORK_SUMMARY
+    table_file, summary_file = new / out_path.name, new / summary_path(out_path).name
     with (
         _file(table_file, "wb") as sink,
         pq.ParquetWriter(sink, SCHEMA, **PARQUET_OPTIONS) as writer,
@@ -211,21 +185,16 @@ def _ingest(
                     data = pq.read_table(part)
             writer.write_table(data)
     summary_file.write_text(json.dumps(summary.to_json(), indent=2) + "\n", encoding="utf-8")
-    # Files in the work folder are 0666 less the umask already (mkdtemp only restricts the
-    # folder). Old summary out, new table in, new summary in: see ingest().
-    summary_path(out_path).unlink(missing_ok=True)
-    os.replace(table_file, out_path)
-    os.replace(summary_file, summary_path(out_path))
     return summary
 
 
 def _spill(
-    item: tuple[str, int, pa.Table | Path], work_dir: Path
+    item: tuple[str, int, pa.Table | Path], scratch: Path
 ) -> tuple[str, int, pa.Table | Path]:
     key, order, data = item
     if isinstance(data, Path):
         return item
-    part = work_dir / f"part-{order:06d}.parquet"
+    part = scratch / f"part-{order:06d}.parquet"
     with _file(part, "wb") as sink:
         pq.write_table(data, sink, compression="lz4")
     return key, order, part

@@ -136,7 +136,7 @@ def tidy(parent: str | os.PathLike[str], *, key: str) -> None:
         "old": _pattern(key, f"old-{_RANDOM}"),  # execution.save_unit_folder's, aside
         "legacy new": _pattern(key, rf"{_RANDOM}\.tmp"),  # pokerirl train's, pre-store
         "legacy old": _pattern(key, r"[0-9a-f]{32}\.old"),  # the same, aside
-        "ingest": _pattern(key, f"ingest-{_RANDOM}"),  # datasets.ingest's work folder
+        "ingest": _pattern(key, f"ingest-{_RANDOM}"),  # ingest's work folder, pre-store
     }
     target = parent / key
     for name in names:
