@@ -69,22 +69,6 @@ def _gym_threads(threads: int) -> None:
     torch.set_num_threads(threads)
 
 
-def _json_file(path: Path) -> Any:
-    """A JSON file this toolkit wrote (corrupt: one line naming it)."""
-    try:
-        return json.loads(path.read_text())
-    except ValueError as error:  # JSONDecodeError, UnicodeDecodeError
-        raise InputError(f"{path}: corrupt: not JSON ({error})") from None
-
-
-def _final_return(config: Path) -> float:
-    """A finished RL run's final return, from its config file (corrupt: one line naming it)."""
-    try:
-        return float(json.loads(config.read_text())["final_return"])
-    except (ValueError, KeyError, TypeError) as error:  # not JSON, or not a run's record
-        raise InputError(f"{config}: corrupt: no final return ({error!r})") from None
-
-
 @gym_app.command("expert")
 @on_error(interrupted=INTERRUPTED, advice=RUN_ADVICE)
 def gym_expert(
@@ -103,47 +87,29 @@ def gym_expert(
 
     A rerun with the same settings keeps the expert; other settings are refused unless
     --overwrite (OUT/expert.job.json records them)."""
-    from pokerirl.gym.experts import (
-        CONFIG_FILE,
-        METRICS_FILE,
-        MODEL_FILE,
-        expert_settings,
-        train_expert,
-    )
-    from pokerirl.store import staged_files, tidy
-    from pokerirl.studies.gym_job import claim
+    from pokerirl.studies.gym_job import expert_folder
 
     _known_task(env)
     _folder_out(out)
     _gym_threads(threads)
-    files = (CONFIG_FILE, METRICS_FILE, MODEL_FILE)
-    identity = {
-        "env": env, "seed": seed, "hyper": hyper,
-        "timesteps": timesteps or expert_settings(env, hyper=hyper).timesteps,
-        "eval_every": eval_every, "eval_episodes": eval_episodes,
-        "final_episodes": final_episodes,
-    }  # fmt: skip
-    claim(out, "expert.job.json", identity, outputs=list(files), overwrite=overwrite)
-    tidy(out, key="expert")  # what a killed rerun left
-    if all((out / name).is_file() for name in files):
-        record = _json_file(out / CONFIG_FILE)
+    done = expert_folder(
+        out,
+        env,
+        seed=seed,
+        hyper=hyper,
+        timesteps=timesteps,
+        eval_every=eval_every,
+        eval_episodes=eval_episodes,
+        final_episodes=final_episodes,
+        overwrite=overwrite,
+    )
+    record = done.record
+    if done.reused:
         echo(f"reusing the expert in {out} (same settings)")
-    else:
-        with staged_files(out, key="expert") as new:  # the three files, or none
-            record = train_expert(
-                new,
-                env,
-                seed=seed,
-                timesteps=timesteps,
-                hyper=hyper,
-                eval_every=eval_every,
-                eval_episodes=eval_episodes,
-                final_episodes=final_episodes,
-            )
     echo(
-        f"{env}: {record['algo']} expert, return {record['return_mean']:.1f} "
-        f"+- {record['return_std']:.1f} over {record['episodes']} episodes "
-        f"(target {record['target']:g}); wrote {out}"
+        f"{env}: {record.algo} expert, return {record.return_mean:.1f} "
+        f"+- {record.return_std:.1f} over {record.episodes} episodes "
+        f"(target {record.target:g}); wrote {out}"
     )
 
 
@@ -228,13 +194,7 @@ def gym_rl(
     the same run either way it is grouped). Resumable: a rerun with the same settings keeps
     the finished runs; other settings (the backend too) are refused unless --overwrite
     (OUT/rl.job.json records them)."""
-    from contextlib import ExitStack
-
-    from pokerirl.gym.experts import CONFIG_FILE, METRICS_FILE, MODEL_FILE, require_gym
-    from pokerirl.gym.rl import train_rl
-    from pokerirl.meanstd import mean_std
-    from pokerirl.store import digest, staged_folder, tidy
-    from pokerirl.studies.gym_job import claim
+    from pokerirl.studies.gym_job import rl_runs
 
     if (reward_run is None) == (not env_reward):
         raise UsageError("give exactly one of --reward-run DIR and --env-reward")
@@ -242,76 +202,20 @@ def gym_rl(
     _known_task(env)
     _folder_out(out)
     _gym_threads(threads)
-    files = (CONFIG_FILE, METRICS_FILE, MODEL_FILE)
-    reward = None
-    reward_identity: Any = "env"
-    if reward_run is not None:
-        from pokerirl.irl import load_reward
-        from pokerirl.irl.run import REWARD_FILE
-
-        reward = load_reward(reward_run)
-        weights = reward_run / REWARD_FILE
-        reward_identity = {
-            "run": str(reward_run),
-            "sha256": digest(weights.read_bytes()) if weights.is_file() else None,
-        }
-    identity = {
-        "env": env,
-        "reward": reward_identity,
-        "timesteps": timesteps or TASKS[env].rl.timesteps,
-        "evaluations": evaluations,
-        "eval_episodes": eval_episodes,
-        # Only for lockstep: folders written before the switch keep their identity.
-        **({} if rl_backend == "sb3" else {"backend": rl_backend}),
-    }
-    if rl_backend == "lockstep":
-        require_gym()  # the lock-step trainers import gymnasium
-        from pokerirl.gym.lockstep.group import train_rl_group
-
-    claim(out, "rl.job.json", identity, outputs=["run-*"], overwrite=overwrite)
-    reward_name = "env" if reward is None else str(reward_run)
-    found: dict[int, float] = {}
-    todo = []
-    for k in range(runs):
-        run = out / f"run-{k}"
-        tidy(out, key=run.name)  # what a killed rerun left
-        if all((run / name).is_file() for name in files):
-            found[k] = _final_return(run / CONFIG_FILE)
-        else:
-            todo.append(k)
-    if rl_backend == "sb3":
-        for k in todo:
-            with staged_folder(out / f"run-{k}") as stage:  # a run is whole, or not at all
-                result = train_rl(
-                    env,
-                    reward=reward,
-                    reward_name=reward_name,
-                    seed=k,
-                    timesteps=timesteps,
-                    evaluations=evaluations,
-                    eval_episodes=eval_episodes,
-                    out=stage,
-                )
-            found[k] = result.final_return
-    elif todo:
-        with ExitStack() as stack:  # every run of the group lands whole, or none does
-            stages = [stack.enter_context(staged_folder(out / f"run-{k}")) for k in todo]
-            results = train_rl_group(
-                env,
-                rewards=[reward] * len(todo),
-                reward_names=[reward_name] * len(todo),
-                seeds=todo,
-                timesteps=timesteps,
-                evaluations=evaluations,
-                eval_episodes=eval_episodes,
-                outs=stages,
-            )
-        found.update({k: result.final_return for k, result in zip(todo, results, strict=True)})
-    finals = [found[k] for k in range(runs)]
-    final = mean_std(finals)
+    done = rl_runs(
+        out,
+        env,
+        reward_run=reward_run,
+        runs=runs,
+        timesteps=timesteps,
+        evaluations=evaluations,
+        eval_episodes=eval_episodes,
+        rl_backend=rl_backend,
+        overwrite=overwrite,
+    )
     echo(
-        f"{env}: final true return {final.mean:.1f} +- {final.std:.1f} over {runs} runs; "
-        f"wrote {out}"
+        f"{env}: final true return {done.final.mean:.1f} +- {done.final.std:.1f} over {runs} "
+        f"runs; wrote {out}"
     )
 
 
