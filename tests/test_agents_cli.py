@@ -121,9 +121,9 @@ def test_same_seed_same_bytes_and_threads_are_explicit(tmp_path: Path) -> None:
 @pytest.mark.parametrize(
     ("args", "code", "message"),
     [
-        (["--reward", "learned"], 1, "--reward learned needs --reward-run"),
+        (["--reward", "learned"], 1, "reward 'learned' needs a reward_run"),
         (["--reward", "shaped"], 2, "unknown reward mode"),
-        (["--reward-run", "."], 2, "--reward-run needs --reward learned"),
+        (["--reward-run", "."], 2, "reward_run needs reward 'learned'"),
         (["--reward", "learned", "--reward-run", "."], 1, "not a reward run"),
         (["--seeds", "5-2"], 2, "empty seed range"),
         (["--opponent", "nobody"], 1, "unknown agent 'nobody'"),
@@ -277,4 +277,4 @@ def test_the_authors_preset_keeps_and_plays_the_best_checkpoint(tmp_path: Path) 
         expected = network.eval()(torch.from_numpy(obs).float()).numpy()
     np.testing.assert_allclose(agent.q_values(obs), expected, rtol=1e-6)
     code, output = invoke("agent", "train", "--play", "kept", "--out", str(tmp_path / "x"), "-q")
-    assert code == 2 and "--play kept needs --protocol authors" in output
+    assert code == 2 and "play 'kept' needs protocol 'authors'" in output

@@ -222,7 +222,7 @@ def test_bad_inputs_are_one_line(tmp_path: Path) -> None:
         (["gym", "study", "MountainCar-v0", "--preset", "huge", "--out", str(tmp_path / "b")],
          "unknown preset 'huge'"),
         (["gym", "sweep", "MountainCar-v0", "--param", "gamma=0.9", "--out", str(tmp_path / "c")],
-         "bad --param 'gamma=0.9'"),
+         "bad sweep parameter 'gamma=0.9'"),
         (["gym", "sweep", "MountainCar-v0", "--param", "alpha=0,2", "--out", str(tmp_path / "d")],
          "alpha must be in [0, 1], got 2"),
         (["gym", "sweep", "MountainCar-v0", "--param", "beta=0", "--param", "beta=1", "--out",
@@ -282,7 +282,7 @@ def test_sweep_is_a_gym_command_and_the_old_name_a_hidden_alias_that_warns_once(
                               str(tmp_path)])  # fmt: skip
     assert bad.exit_code == 1
     assert bad.stderr.splitlines()[0] == SWEEP_WARNING
-    assert bad.stderr.splitlines()[1].startswith("error: bad --param 'gamma=1'")
+    assert bad.stderr.splitlines()[1].startswith("error: bad sweep parameter 'gamma=1'")
     # Listed under gym only.
     assert " sweep " not in runner.invoke(app, ["--help"]).output
     assert " sweep " in runner.invoke(app, ["gym", "--help"]).output

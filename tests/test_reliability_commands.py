@@ -137,7 +137,7 @@ def _bad_values(i: Inputs, out: Path) -> list[tuple[list[str], str]]:
         ([*agent, "--epsilon-start", "2"], "epsilon_start and epsilon_end must lie in [0, 1]"),
         ([*agent, "--eval-hands", "3"], "eval_hands must be even"),
         ([*agent, "--train-every", "0"], "train_every must be at least 1"),
-        ([*agent, "--payoff-weight", "0.5"], "--payoff-weight needs --reward learned"),
+        ([*agent, "--payoff-weight", "0.5"], "payoff_weight needs reward 'learned'"),
         ([*agent, "--preset", "fast"], "unknown agent preset 'fast'"),
         ([*tournament, "--seeds", BIG_SEED], "seeds must be at most 4,294,967,295"),
         ([*tournament, "--seeds", "-1"], "bad seed range '-1'"),

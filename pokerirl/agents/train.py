@@ -148,9 +148,9 @@ class TrainConfig:
         if self.reward not in REWARD_MODES:
             raise ConfigError(f"unknown reward mode {self.reward!r} (sparse or learned)")
         if self.reward == RewardMode.SPARSE and self.reward_run is not None:
-            raise ConfigError("--reward-run needs --reward learned")
+            raise ConfigError("reward_run needs reward 'learned'")
         if self.reward == RewardMode.SPARSE and self.payoff_weight != 0.0:
-            raise ConfigError("--payoff-weight needs --reward learned")
+            raise ConfigError("payoff_weight needs reward 'learned'")
         if not 0.0 <= self.payoff_weight <= 1.0:
             raise ConfigError(f"payoff weight must be in [0, 1], got {self.payoff_weight}")
         if self.hands < 1 or self.eval_every < 1:
@@ -167,15 +167,17 @@ class TrainConfig:
                 f"unknown reward transform {self.reward_transform!r} ({', '.join(TRANSFORMS)})"
             )
         if self.raise_counts not in RAISE_COUNTS:
-            raise ConfigError(f"--raise-counts must be one of {', '.join(RAISE_COUNTS)}")
+            raise ConfigError(
+                f"unknown raise_counts {self.raise_counts!r} ({', '.join(RAISE_COUNTS)})"
+            )
         if self.reward == RewardMode.SPARSE and (
             self.reward_transform != Transform.RAW or self.raise_counts != RaiseCounts.DECISION
         ):
-            raise ConfigError("--reward-transform and --raise-counts need --reward learned")
+            raise ConfigError("reward_transform and raise_counts need reward 'learned'")
         if self.play not in PLAYS:
-            raise ConfigError(f"--play must be one of {', '.join(PLAYS)}")
+            raise ConfigError(f"unknown play {self.play!r} ({', '.join(PLAYS)})")
         if self.play == Plays.KEPT and self.protocol != TrainingProtocol.AUTHORS:
-            raise ConfigError("--play kept needs --protocol authors (its kept checkpoint)")
+            raise ConfigError("play 'kept' needs protocol 'authors' (its kept checkpoint)")
 
 
 _OURS = TrainConfig(hands=1, seed=0)
@@ -563,7 +565,7 @@ def _train_many(
     reward_print = None
     if first.reward == RewardMode.LEARNED:
         if first.reward_run is None:
-            raise ConfigError("--reward learned needs --reward-run RUN_DIR (or authors:FILE)")
+            raise ConfigError("reward 'learned' needs a reward_run (a run folder, or authors:FILE)")
         reward_print = reward_run_fingerprint(first.reward_run)
         if reward_fn is None:
             load_reward_fn(first.reward_run)  # errors name the user's files, not a worker's copy

@@ -127,22 +127,23 @@ def parse_param(text: str) -> tuple[str, tuple[float, ...]]:
     name = name.strip()
     if not sign or name not in PARAMS:
         raise StudyError(
-            f"bad --param {text!r}; write NAME=V1,V2,... with NAME one of {', '.join(PARAMS)}"
+            f"bad sweep parameter {text!r}; write NAME=V1,V2,... with NAME one of "
+            f"{', '.join(PARAMS)}"
         )
     try:
         parsed = tuple(float(v) for v in values.split(",") if v.strip())
     except ValueError:
-        raise StudyError(f"bad --param {text!r}: the values must be numbers") from None
+        raise StudyError(f"bad sweep parameter {text!r}: the values must be numbers") from None
     if not parsed:
-        raise StudyError(f"bad --param {text!r}: no values")
+        raise StudyError(f"bad sweep parameter {text!r}: no values")
     if len(set(parsed)) != len(parsed):
-        raise StudyError(f"bad --param {text!r}: a value is repeated")
+        raise StudyError(f"bad sweep parameter {text!r}: a value is repeated")
     bad = [
         v for v in parsed if not math.isfinite(v) or v < 0 or (name in ("alpha", "beta") and v > 1)
     ]
     if bad:
         bounds = "in [0, 1]" if name in ("alpha", "beta") else "at least 0"
-        raise StudyError(f"bad --param {text!r}: {name} must be {bounds}, got {bad[0]:g}")
+        raise StudyError(f"bad sweep parameter {text!r}: {name} must be {bounds}, got {bad[0]:g}")
     return name, parsed
 
 
@@ -180,7 +181,7 @@ def run_sweep(
         raise StudyError(f"unknown task {env!r}; choose one of {', '.join(TASKS)}")
     check_rl_backend(rl_backend)
     if not params:
-        raise StudyError("give at least one --param, e.g. --param alpha=0,0.5,1")
+        raise StudyError("no parameter to sweep; give one, e.g. alpha=0,0.5,1")
     backend = backend or Backend()
     out = study_folder(out)
     points = sweep_points(env, params, preset)
