@@ -48,7 +48,7 @@ FINAL_EVAL_SEED = 1_000_000
 class Expert:
     """A loaded expert: its SB3 policy (eval mode, CPU) and its config record, as read (an
     expert folder needs only ``env``, ``algo`` and ``policy_kwargs`` to load; one written by
-    :func:`train_expert` reads as an :class:`ExpertRecord`)."""
+    :func:`train_expert_record` reads as an :class:`ExpertRecord`)."""
 
     env_id: str
     algo: str
@@ -128,7 +128,7 @@ class ManifestEntry:
 
 @dataclass(frozen=True, kw_only=True)
 class ExpertRecord:
-    """An expert folder's ``config.json``, as :func:`train_expert` writes it."""
+    """An expert folder's ``config.json``, as :func:`train_expert_record` writes it."""
 
     env: str
     algo: str
@@ -353,30 +353,6 @@ ZOO_PPO: dict[str, PPOSettings] = {
         n_epochs=10,
     ),
 }
-
-
-def train_expert(
-    out: str | os.PathLike[str],
-    env_id: str,
-    *,
-    seed: int = 0,
-    timesteps: int | None = None,
-    hyper: str = "paper",
-    eval_every: int | None = None,
-    eval_episodes: int = 5,
-    final_episodes: int = 20,
-) -> Mapping[str, Any]:
-    """:func:`train_expert_record`, its record as JSON (the command line reads it by key)."""
-    return train_expert_record(
-        out,
-        env_id,
-        seed=seed,
-        timesteps=timesteps,
-        hyper=hyper,
-        eval_every=eval_every,
-        eval_episodes=eval_episodes,
-        final_episodes=final_episodes,
-    ).to_json()
 
 
 def train_expert_record(
