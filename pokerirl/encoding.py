@@ -84,3 +84,42 @@ def encode_obs(cards: np.ndarray, raise_nums: np.ndarray) -> np.ndarray:
     obs[card_slots] = 1
     obs[raise_slots.reshape(-1)] = 1
     return obs.reshape(n, OBS_SIZE)
+
+
+def cards_from_text(hole: list[str], board: list[str]) -> np.ndarray:
+    """(N, 7) int8: a decision table's ``hole_cards`` and ``board`` texts as card indices,
+    hole cards first, ``-1`` for cards not shown (an empty ``hole_cards`` is concealed).
+
+    Vectorized: the texts are laid out as fixed-width code points, three characters a card
+    (rank, suit, space). ``ValueError`` names the first text that is not cards.
+
+    >>> cards_from_text(["As Kc", ""], ["Qc Th 2d", ""]).tolist()
+    [[0, 51, 50, 22, 27, -1, -1], [-1, -1, -1, -1, -1, -1, -1]]
+    """
+    found = np.full((len(hole), 7), -1, dtype=np.int8)
+    for first, texts, lengths in ((0, hole, (0, 5)), (2, board, (0, 8, 11, 14))):
+        if not len(texts):
+            continue
+        width = lengths[-1] + 1
+        array = np.asarray(texts, dtype=str)
+        codes = array.astype(f"<U{width}").view(np.uint32).reshape(len(texts), width)
+        rank = _RANK_OF_CODE[np.minimum(codes[:, 0::3], 127)]
+        suit = _SUIT_OF_CODE[np.minimum(codes[:, 1::3], 127)]
+        count = (np.char.str_len(array) + 1) // 3
+        expected = np.arange(width // 3) < count[:, None]
+        spaced = np.arange(width // 3) < count[:, None] - 1  # a space after every card but the last
+        valid = np.isin(np.char.str_len(array), lengths) & (
+            (((rank >= 0) & (suit >= 0)) | ~expected) & ((codes[:, 2::3] == 32) | ~spaced)
+        ).all(axis=1)
+        if not valid.all():
+            raise ValueError(f"bad cards {texts[int(np.flatnonzero(~valid)[0])]!r}")
+        found[:, first : first + width // 3] = np.where(expected, suit * 13 + rank, -1)
+    return found
+
+
+_RANK_OF_CODE = np.full(128, -1, dtype=np.int64)
+_SUIT_OF_CODE = np.full(128, -1, dtype=np.int64)
+for _i, _r in enumerate(RANKS):
+    _RANK_OF_CODE[ord(_r)] = _RANK_OF_CODE[ord(_r.lower())] = _i
+for _i, _s in enumerate(SUITS):
+    _SUIT_OF_CODE[ord(_s)] = _SUIT_OF_CODE[ord(_s.lower())] = _i

@@ -2,7 +2,7 @@
 
 Generic (no poker, no Gymnasium): the poker decision tables (:mod:`pokerirl.datasets.decisions`),
 the environments' rollouts (:meth:`pokerirl.irl.Transitions.from_parquet`) and the reward
-card's states (:mod:`pokerirl.agents.reward_card`) all read their files through it. It sits in
+card's states (:mod:`pokerirl.poker.reward_card`) all read their files through it. It sits in
 the lowest layer so that each of those layers may use it.
 
 >>> import pyarrow as pa

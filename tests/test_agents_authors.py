@@ -14,12 +14,12 @@ import torch
 from torch import nn
 from torch.nn import functional
 
-from pokerirl.agents.authors_reward import AuthorsReward, authors_state, read_authors_file
 from pokerirl.agents.dqn import train_dqn
-from pokerirl.agents.rewards import Decisions, PokerReward, TransformedReward
 from pokerirl.agents.train import AGENT_PRESETS, TrainConfig, agent_preset, train_agent
 from pokerirl.encoding import NUM_ACTIONS, RANKS, SUITS
 from pokerirl.game import make_agent, play_match
+from pokerirl.poker.authors_reward import AuthorsReward, authors_state, read_authors_file
+from pokerirl.poker.rewards import Decisions, PokerReward, TransformedReward
 
 torch.set_num_threads(1)
 

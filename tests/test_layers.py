@@ -33,7 +33,8 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("store",),
     ("parsers", "datasets", "game"),
     ("irl",),
-    ("agents", "gym", "poker"),  # poker: decision tables as Transitions, `pokerirl train`
+    ("poker",),  # decision tables as Transitions, `pokerirl train`, the poker rewards
+    ("agents", "gym"),  # DQN agents learn from poker rewards; poker knows no agent
     ("tournaments",),
     ("studies",),
     ("cli", "__main__"),

@@ -8,7 +8,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from pokerirl.agents.reward_card import (
+from pokerirl.encoding import CALL, CHECK, FOLD, RAISE, encode_obs, parse_card
+from pokerirl.poker.reward_card import (
     CARD_FIGURE,
     CARD_FILE,
     CardStates,
@@ -17,8 +18,7 @@ from pokerirl.agents.reward_card import (
     read_card,
     reward_card,
 )
-from pokerirl.agents.rewards import ObsReward
-from pokerirl.encoding import CALL, CHECK, FOLD, RAISE, encode_obs, parse_card
+from pokerirl.poker.rewards import ObsReward
 
 
 def _cards(text: str) -> list[int]:

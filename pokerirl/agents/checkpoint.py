@@ -32,6 +32,7 @@ from pokerirl.agents.dqn import GreedyQAgent, QNetwork
 from pokerirl.agents.registry import CONFIG_FILE, KEPT_FILE, MODEL_FILE
 from pokerirl.atomic import write_bytes, write_torch
 from pokerirl.errors import InputError
+from pokerirl.game.encodings import ENCODINGS, Encoding, EncodingName
 
 
 class Plays(StrEnum):
@@ -106,19 +107,23 @@ def load_agent(folder: str | os.PathLike[str]) -> GreedyQAgent:
     folder = Path(folder)
     if not is_finished(folder):
         raise InputError(f"{folder}: not an agent folder (needs {MODEL_FILE} and {CONFIG_FILE})")
-    hidden, plays = _read_config(folder / CONFIG_FILE)
+    hidden, plays, encoding = _read_config(folder / CONFIG_FILE)
     checkpoint = folder / (KEPT_FILE if plays == Plays.KEPT else MODEL_FILE)
     state = _read_state_dict(checkpoint)
-    network = QNetwork(hidden=hidden)
+    network = QNetwork(hidden=hidden, obs_size=encoding.width)
     try:
         network.load_state_dict(state)
     except (RuntimeError, ValueError, TypeError) as error:
         raise _bad(
             checkpoint,
-            f"does not fit {CONFIG_FILE}'s hidden {list(hidden)}: {_first_line(error)}",
+            f"does not fit {CONFIG_FILE}'s hidden {list(hidden)} on the {encoding.name} "
+            f"encoding ({encoding.width}-d): {_first_line(error)}",
         ) from None
     return GreedyQAgent(
-        name=str(folder), network=network.eval(), fingerprint=folder_fingerprint(folder)
+        name=str(folder),
+        network=network.eval(),
+        fingerprint=folder_fingerprint(folder),
+        encoding=encoding.name,
     )
 
 
@@ -131,9 +136,10 @@ def _first_line(error: BaseException) -> str:
     return text.splitlines()[0] if text else type(error).__name__
 
 
-def _read_config(path: Path) -> tuple[tuple[int, ...], str]:
-    """The hidden widths in an agent's ``config.json`` and which checkpoint plays;
-    ValueError naming ``path`` if bad."""
+def _read_config(path: Path) -> tuple[tuple[int, ...], str, Encoding]:
+    """The hidden widths in an agent's ``config.json``, which checkpoint plays and the
+    encoding it reads (``rlcard`` for agents made before encodings); ValueError naming
+    ``path`` if bad."""
     try:
         config = json.loads(path.read_text(encoding="utf-8"))
     except OSError as error:
@@ -156,7 +162,10 @@ def _read_config(path: Path) -> tuple[tuple[int, ...], str]:
         raise _bad(path, f"plays must be final or kept, got {str(plays)[:40]!r}")
     if plays == Plays.KEPT and not (path.parent / KEPT_FILE).is_file():
         raise _bad(path, f"plays the kept checkpoint, but there is no {KEPT_FILE}")
-    return tuple(hidden), plays
+    name = config.get("encoding", EncodingName.RLCARD)
+    if name not in ENCODINGS:
+        raise _bad(path, f"unknown encoding {str(name)[:40]!r} (known: {', '.join(ENCODINGS)})")
+    return tuple(hidden), plays, ENCODINGS[name]
 
 
 def _read_state_dict(path: Path) -> dict[str, torch.Tensor]:

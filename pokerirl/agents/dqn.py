@@ -36,17 +36,18 @@ import torch
 from torch import nn
 from tqdm import tqdm
 
-from pokerirl.agents.rewards import RAISE_COUNTS, Decisions, PokerReward, as_poker_reward
-from pokerirl.encoding import NUM_ACTIONS, OBS_SIZE, encode_obs
+from pokerirl.encoding import NUM_ACTIONS, OBS_SIZE
 from pokerirl.errors import ConfigError
 from pokerirl.game.agents import Agent, RandomAgent, agent_actions
 from pokerirl.game.deals import DEAL_BLOCK, deal_cards
+from pokerirl.game.encodings import RLCARD, Encoding, EncodingName, States, get_encoding
 from pokerirl.game.engine import LimitHoldemBatch
-from pokerirl.game.match import turn_cards
+from pokerirl.game.match import agent_encoding, observe, turn_cards
+from pokerirl.poker.rewards import RAISE_COUNTS, Decisions, PokerReward, as_poker_reward
 
 RewardFn = Callable[[np.ndarray, np.ndarray], np.ndarray] | PokerReward
 """A learned reward: f(obs (B, 72) uint8, actions (B,) int64) -> (B,) float rewards, or a
-:class:`pokerirl.agents.rewards.PokerReward` (which may read the cards and legal actions)."""
+:class:`pokerirl.poker.rewards.PokerReward` (which may read the cards and legal actions)."""
 
 
 
@@ -116,15 +117,16 @@ class QNetwork(nn.Module):
     """RLCard's ``EstimatorNetwork``: batch norm of the input, tanh MLP, one value per action.
 
     The same layers as RLCard (less its no-op ``Flatten``), so its checkpoints load here.
+    ``obs_size`` is the width of the encoding it reads (RLCard's 72 by default).
 
     >>> QNetwork(hidden=(8,))(torch.zeros(3, 72)).shape
     torch.Size([3, 4])
     """
 
-    def __init__(self, *, hidden: tuple[int, ...] = (64, 64)) -> None:
+    def __init__(self, *, hidden: tuple[int, ...] = (64, 64), obs_size: int = OBS_SIZE) -> None:
         super().__init__()
-        sizes = (OBS_SIZE, *hidden)
-        self.norm = nn.BatchNorm1d(OBS_SIZE)
+        sizes = (obs_size, *hidden)
+        self.norm = nn.BatchNorm1d(obs_size)
         layers: list[nn.Module] = []
         for fan_in, fan_out in itertools.pairwise(sizes):
             layers += [nn.Linear(fan_in, fan_out), nn.Tanh()]
@@ -187,9 +189,11 @@ def epsilon_at(config: DQNConfig, step: int) -> float:
 
 @dataclass(kw_only=True)
 class ReplayMemory:
-    """A ring buffer of transitions in preallocated arrays (RLCard drops the oldest, too)."""
+    """A ring buffer of transitions in preallocated arrays (RLCard drops the oldest, too);
+    states are stored as ``encoding`` makes them (RLCard's: 72 uint8)."""
 
     capacity: int
+    encoding: Encoding = RLCARD
     obs: np.ndarray = field(init=False, repr=False)
     actions: np.ndarray = field(init=False, repr=False)
     rewards: np.ndarray = field(init=False, repr=False)
@@ -200,10 +204,11 @@ class ReplayMemory:
     position: int = 0  # where the next transition goes
 
     def __post_init__(self) -> None:
-        self.obs = np.zeros((self.capacity, OBS_SIZE), np.uint8)
+        width, dtype = self.encoding.width, self.encoding.dtype
+        self.obs = np.zeros((self.capacity, width), dtype)
         self.actions = np.zeros(self.capacity, np.int64)
         self.rewards = np.zeros(self.capacity, np.float32)
-        self.next_obs = np.zeros((self.capacity, OBS_SIZE), np.uint8)
+        self.next_obs = np.zeros((self.capacity, width), dtype)
         self.next_legal = np.zeros((self.capacity, NUM_ACTIONS), bool)
         self.done = np.zeros(self.capacity, bool)
 
@@ -240,15 +245,17 @@ class ReplayMemory:
 class GreedyQAgent:
     """The engine's agent protocol over a q-network: argmax over legal actions, batched.
 
-    ``fingerprint`` identifies the weights (e.g. the sha256 of a saved agent's files).
+    ``fingerprint`` identifies the weights (e.g. the sha256 of a saved agent's files);
+    ``encoding`` names what the network reads (the engine builds its observations so).
     """
 
     name: str
     network: QNetwork = field(repr=False)
     fingerprint: str = ""
+    encoding: str = EncodingName.RLCARD
 
     def q_values(self, obs: np.ndarray) -> np.ndarray:
-        """(B, 4) q-values of (B, 72) observations, all actions (legal or not)."""
+        """(B, 4) q-values of (B, width) observations, all actions (legal or not)."""
         with torch.inference_mode():
             return self.network(torch.from_numpy(np.asarray(obs)).float()).numpy()
 
@@ -270,10 +277,13 @@ class DQNLearner:
     train_t: int = 0  # gradient updates done (RLCard's train_t)
     last_loss: float = float("nan")
 
+    encoding: Encoding = RLCARD
+
     @classmethod
-    def create(cls, config: DQNConfig) -> DQNLearner:
-        """Fresh networks (seed torch first for reproducible weights)."""
-        q_net = QNetwork(hidden=config.hidden)
+    def create(cls, config: DQNConfig, encoding: Encoding = RLCARD) -> DQNLearner:
+        """Fresh networks on ``encoding``'s states (seed torch first for reproducible
+        weights)."""
+        q_net = QNetwork(hidden=config.hidden, obs_size=encoding.width)
         return cls(
             config=config,
             q_net=q_net,
@@ -282,12 +292,14 @@ class DQNLearner:
             optimizer=torch.optim.Adam(
                 q_net.parameters(), lr=config.learning_rate, fused=torch.__version__ >= "2.4"
             ),
-            replay=ReplayMemory(capacity=config.replay_size),
+            replay=ReplayMemory(capacity=config.replay_size, encoding=encoding),
+            encoding=encoding,
         )
 
     def greedy_agent(self, name: str = "dqn") -> GreedyQAgent:
         """A frozen greedy copy of the current q-network."""
-        return GreedyQAgent(name=name, network=copy.deepcopy(self.q_net).eval())
+        return GreedyQAgent(name=name, network=copy.deepcopy(self.q_net).eval(),
+                            encoding=self.encoding.name)  # fmt: skip
 
     def update(self, rng: np.random.Generator) -> float:
         """One gradient step on a replay minibatch; copies the target network like RLCard."""
@@ -333,6 +345,7 @@ def train_dqn(
     raise_counts: str = "decision",
     progress: bool = False,
     on_hands: Callable[[int, DQNLearner], None] | None = None,
+    encoding: str | Encoding | None = None,
 ) -> DQNLearner:
     """Train a DQN for ``hands`` hands of the engine against ``opponent``; return the learner.
 
@@ -350,6 +363,8 @@ def train_dqn(
             the hand's final raise counts, and is called when the hand ends).
         progress: show a tqdm bar over hands on stderr.
         on_hands: called as ``on_hands(hands_done, learner)`` after every lock-step batch.
+        encoding: what the q-network reads (:mod:`pokerirl.game.encodings`; default RLCard's
+            72-d observation). The reward reads its own encoding, whatever this one is.
     """
     _check_training(hands=hands, payoff_weight=payoff_weight, opponent=opponent,
                     raise_counts=raise_counts)  # fmt: skip
@@ -357,14 +372,17 @@ def train_dqn(
     torch.manual_seed(seed)
     streams = np.random.SeedSequence(seed, spawn_key=(TRAIN_STREAM,)).spawn(2)
     rng, opponent_rng = (np.random.Generator(np.random.PCG64(s)) for s in streams)
-    learner = DQNLearner.create(config)
+    encoding = get_encoding(encoding)
+    plain = encoding.name == EncodingName.RLCARD
+    learner = DQNLearner.create(config, encoding)
     self_play = opponent == SELF_PLAY
     rival: Agent = learner.greedy_agent("self") if isinstance(opponent, str) else opponent
+    rival_encoding = agent_encoding(rival)
     explore = RandomAgent()
     decision_weight = 0.0 if reward is None else 1.0 - payoff_weight
     payoff_scale = 1.0 if reward is None else payoff_weight
     at_end = reward is not None and raise_counts == "end-of-hand"
-    needs_cards = at_end or (reward is not None and reward.needs_cards)
+    needs_cards = at_end or (reward is not None and reward.needs_cards) or not plain
     deals = _Deals(seed=seed, chunk=max(config.concurrent_hands, DEAL_BLOCK))
 
     with tqdm(total=hands, unit="hand", unit_scale=True, disable=not progress) as bar:
@@ -379,7 +397,17 @@ def train_dqn(
                 mine = game.to_act[active] == my_seat[active]
                 learner_hands, rival_hands = active[mine], active[~mine]
                 if learner_hands.size:
-                    obs, legal = game.observe(learner_hands), game.legal_mask(learner_hands)
+                    legal = game.legal_mask(learner_hands)
+                    plain_obs = game.observe(learner_hands)  # RLCard's: what rewards get
+                    cards = turn_cards(game, learner_hands) if needs_cards else None
+                    encoded: dict[str, np.ndarray] = {}
+                    if plain:
+                        obs = plain_obs
+                    else:
+                        assert cards is not None  # a non-RLCard encoding reads the cards
+                        states = States(cards=cards, raise_nums=game.raises[learner_hands],
+                                        legal_mask=legal)  # fmt: skip
+                        obs = encoded[encoding.name] = encoding.encode(states)
                     # This state closes the learner's previous transition in these hands.
                     waiting = pending.waiting[learner_hands]
                     before = learner_hands[waiting]
@@ -394,18 +422,19 @@ def train_dqn(
                     randomize = rng.random(actions.size) < epsilon
                     actions[randomize] = explore.act(obs[randomize], legal[randomize], rng)
 
-                    cards = turn_cards(game, learner_hands) if needs_cards else None
                     rewards: np.ndarray = np.zeros(actions.size, np.float32)
                     if pending.staged is not None:  # f comes when the hand ends
                         assert cards is not None  # staging needs the cards (needs_cards)
                         pending.staged.note(learner_hands, cards, legal, actions)
                     elif reward is not None:
-                        decisions = Decisions(obs=obs, legal_mask=legal, cards=cards)
+                        decisions = Decisions(obs=plain_obs, legal_mask=legal, cards=cards,
+                                              encoded=encoded)  # fmt: skip
                         rewards = decision_weight * reward(decisions, actions)
                     pending.open(learner_hands, obs, actions, rewards)
                     game.step(actions, learner_hands)
                 if rival_hands.size:
-                    rival_obs, rival_legal = game.observe(rival_hands), game.legal_mask(rival_hands)
+                    rival_obs = observe(game, rival_hands, rival_encoding)
+                    rival_legal = game.legal_mask(rival_hands)
                     cards_of = functools.partial(turn_cards, game, rival_hands)
                     game.step(
                         agent_actions(rival, rival_obs, rival_legal, opponent_rng, cards_of),
@@ -416,8 +445,11 @@ def train_dqn(
                 ended = np.flatnonzero(game.done & pending.waiting)
                 if ended.size:
                     payoff = game.payoffs[ended, my_seat[ended]].astype(np.float32)
-                    pending.close(ended, pending.reward[ended] + payoff_scale * payoff,
-                                  game.observe(ended, my_seat[ended]),
+                    # A terminal state is never bootstrapped from: RLCard's observation of
+                    # it, or zeros in another encoding (not worth encoding).
+                    terminal = (game.observe(ended, my_seat[ended]) if plain else
+                                np.zeros((ended.size, encoding.width), encoding.dtype))
+                    pending.close(ended, pending.reward[ended] + payoff_scale * payoff, terminal,
                                   np.zeros((ended.size, NUM_ACTIONS), bool), done=True)  # fmt: skip
                     if pending.staged is not None:
                         pending.staged.flush(ended, game.raises, reward, decision_weight, learner)  # type: ignore[arg-type]
@@ -469,7 +501,7 @@ class _Pending:
     def __init__(self, count: int, learner: DQNLearner, staged: _Staged | None) -> None:
         self.learner, self.staged = learner, staged
         self.waiting = np.zeros(count, bool)
-        self.obs = np.zeros((count, OBS_SIZE), np.uint8)
+        self.obs = np.zeros((count, learner.encoding.width), learner.encoding.dtype)
         self.action = np.zeros(count, np.int64)
         self.reward = np.zeros(count, np.float32)
 
@@ -526,7 +558,8 @@ class _Staged:
         (_, obs, taken, rewards, next_obs, next_legal, done), self.closed = self._take(
             self.closed, ended
         )
-        decisions = Decisions(obs=encode_obs(cards, raises[hands]), legal_mask=legal, cards=cards)
+        states = States(cards=cards, raise_nums=raises[hands], legal_mask=legal)
+        decisions = Decisions(obs=RLCARD.encode(states), legal_mask=legal, cards=cards)
         f = reward(decisions, actions) if weight else np.zeros(len(actions), np.float32)
         learner.replay.add(obs, taken, rewards + weight * f, next_obs, next_legal, done=done)
         learner.total_t += len(taken)

@@ -71,26 +71,24 @@ from pokerirl.agents.dqn import (
     train_dqn,
 )
 from pokerirl.agents.registry import agent_fingerprint, resolve_agent
-from pokerirl.agents.rewards import (
+from pokerirl.atomic import atomic_path
+from pokerirl.errors import ConfigError, InputError
+from pokerirl.errors import report as error_report
+from pokerirl.execution import Backend, read_files
+from pokerirl.game import make_agent, play_match
+from pokerirl.game.agents import Agent
+from pokerirl.game.encodings import EncodingName, get_encoding
+from pokerirl.irl.run import REWARD_RUN_FILES  # noqa: F401 - re-exported: pokerirl.agents.train.REWARD_RUN_FILES
+from pokerirl.poker.rewards import (
     RAISE_COUNTS,
     TRANSFORMS,
     PokerReward,
     RaiseCounts,
+    RewardSource,
     Transform,
     TransformedReward,
     as_poker_reward,
-    landed_spec,
-    load_reward_source,
-    reward_source_files,
-    reward_source_fingerprint,
 )
-from pokerirl.atomic import atomic_path
-from pokerirl.errors import ConfigError, InputError
-from pokerirl.errors import report as error_report
-from pokerirl.execution import Backend, read_files, write_files
-from pokerirl.game import make_agent, play_match
-from pokerirl.game.agents import Agent
-from pokerirl.irl.run import REWARD_RUN_FILES  # noqa: F401 - re-exported: pokerirl.agents.train.REWARD_RUN_FILES
 from pokerirl.store import Unit, UnitConflict, UnitOutput, run_units
 
 
@@ -143,8 +141,10 @@ class TrainConfig:
     raise_counts: str = RaiseCounts.DECISION
     protocol: str = TrainingProtocol.POKERIRL
     play: str = Plays.FINAL
+    encoding: str = EncodingName.RLCARD  # what the q-network reads (pokerirl.game.encodings)
 
     def __post_init__(self) -> None:
+        get_encoding(self.encoding)  # one line naming the known ones
         if self.reward not in REWARD_MODES:
             raise ConfigError(f"unknown reward mode {self.reward!r} (sparse or learned)")
         if self.reward == RewardMode.SPARSE and self.reward_run is not None:
@@ -380,13 +380,8 @@ def load_agent_config(path: str | os.PathLike[str]) -> AgentOverrides:
 
 def reward_run_fingerprint(run_dir: str | os.PathLike[str]) -> str:
     """``sha256:<hex>`` of a reward source: a run's ``reward.pt`` and ``config.json``, or an
-    ``authors:FILE`` (:func:`pokerirl.agents.rewards.reward_source_fingerprint`)."""
-    return reward_source_fingerprint(run_dir)
-
-
-def load_reward_fn(run_dir: str | os.PathLike[str], transform: str = Transform.RAW) -> PokerReward:
-    """f_θ of a run folder or ``authors:FILE``, after ``transform`` over the legal actions."""
-    return TransformedReward(load_reward_source(run_dir), transform)
+    ``authors:FILE`` (:class:`pokerirl.poker.rewards.RewardSource`)."""
+    return RewardSource.resolve(run_dir).fingerprint
 
 
 def _evaluate(
@@ -514,7 +509,7 @@ class _TrainUnit:
     """What a worker needs to train one agent: settings and the bytes of its inputs."""
 
     config: TrainConfig
-    reward_files: tuple[tuple[str, bytes], ...]
+    reward_source: RewardSource | None  # None: sparse, or a reward_fn given in this process
     reward_fingerprint: str | None
     opponent: ShippedAgent | None  # None: self-play
     threads: int
@@ -542,7 +537,7 @@ def agent_unit_config(
         "dqn": dataclasses.asdict(config.dqn),
         "threads": threads,
     }
-    for name in ("reward_transform", "raise_counts", "protocol", "play"):
+    for name in ("reward_transform", "raise_counts", "protocol", "play", "encoding"):
         if getattr(config, name) != getattr(_OURS, name):
             found[name] = getattr(config, name)
     return found
@@ -560,16 +555,15 @@ def _train_many(
     if not units:
         return {}
     first = next(iter(units.values()))[1]  # every unit shares these settings but the seed
-    # Bad input fails here, in one line, before any worker starts.
-    reward_files: dict[str, bytes] = {}
+    # Bad input fails here, in one line, before any worker starts; the reward is resolved
+    # once (read, checked, hashed) and its bytes travel in the units.
+    source: RewardSource | None = None
     reward_print = None
     if first.reward == RewardMode.LEARNED:
         if first.reward_run is None:
             raise ConfigError("reward 'learned' needs a reward_run (a run folder, or authors:FILE)")
-        reward_print = reward_run_fingerprint(first.reward_run)
-        if reward_fn is None:
-            load_reward_fn(first.reward_run)  # errors name the user's files, not a worker's copy
-            reward_files = reward_source_files(first.reward_run)
+        source = RewardSource.resolve(first.reward_run)
+        reward_print = source.fingerprint
     opponent_print: str
     if first.opponent == SELF_PLAY:
         opponent, opponent_print = None, SELF_PLAY
@@ -588,7 +582,7 @@ def _train_many(
         )  # fmt: skip
         unit = _TrainUnit(
             config=config,
-            reward_files=tuple(reward_files.items()),
+            reward_source=None if reward_fn is not None else source,
             reward_fingerprint=reward_print,
             opponent=opponent,
             threads=backend.threads,
@@ -629,8 +623,8 @@ def _train_unit(unit: _TrainUnit, reward_fn: RewardFn | None = None) -> UnitOutp
     with tempfile.TemporaryDirectory(prefix="pokerirl-agent-") as private:
         if config.reward == RewardMode.LEARNED:
             if reward_fn is None:
-                landed = write_files(Path(private, "reward-run"), dict(unit.reward_files))
-                reward = load_reward_source(landed_spec(str(config.reward_run), landed))
+                assert unit.reward_source is not None  # resolved by the driver
+                reward = unit.reward_source.load()
             else:
                 reward = as_poker_reward(reward_fn)
             reward = TransformedReward(reward, config.reward_transform)  # type: ignore[arg-type]
@@ -735,9 +729,11 @@ def _train_into(
         raise_counts=config.raise_counts,
         progress=progress,
         on_hands=evaluate,
+        encoding=config.encoding,
     )
     record = {
         "hidden": list(config.dqn.hidden),
+        "encoding": str(config.encoding),
         "source": {"kind": "pokerirl-dqn", "version": __version__, "torch": torch.__version__},
         "reward": {
             "mode": config.reward,

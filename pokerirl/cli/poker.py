@@ -312,7 +312,7 @@ def _echo_run(
 ) -> None:
     """One IRL run's last epoch, its baselines and its reward card, as ``pokerirl train``
     prints them."""
-    from pokerirl.agents.reward_card import read_card
+    from pokerirl.poker.reward_card import read_card
 
     last = metrics[-1]
     echo(
@@ -356,8 +356,8 @@ def reward_card_command(
     actions by street and equity, its agreement with the expert and the legal-majority rule,
     and what a DQN is predicted to learn. Writes OUT/reward_card.json and reward_card.png.
     """
-    from pokerirl.agents.reward_card import CardStates, reward_card, write_card
-    from pokerirl.agents.rewards import TRANSFORMS, TransformedReward, load_reward_source
+    from pokerirl.poker.reward_card import CardStates, reward_card, write_card
+    from pokerirl.poker.rewards import TRANSFORMS, TransformedReward, load_reward_source
 
     if transform not in TRANSFORMS:
         raise UsageError(f"unknown --transform {transform!r} ({', '.join(TRANSFORMS)})")

@@ -11,6 +11,11 @@ Required columns: ``hand_id`` (string), ``obs`` (fixed_size_list<uint8>[72]), ``
 big blinds on the player's last decision of a hand, else 0) and ``player`` (string), which
 gives next_obs (the same player's next decision in the hand) and done (their last one).
 
+A table's ``obs`` column is RLCard's 72-d observation. Another encoding
+(:mod:`pokerirl.game.encodings`) is computed on reading from the columns that hold the state
+apart: ``hole_cards`` and ``board`` (texts) and ``raise_nums``; a table without them cannot
+give it, and is refused in one line.
+
 >>> from pokerirl.datasets.toy import toy_expert_table
 >>> decisions = decisions_from_arrow(toy_expert_table(num_hands=20, seed=1))
 >>> decisions.obs.shape[1], decisions.num_actions, decisions.dones is not None
@@ -27,19 +32,21 @@ import numpy as np
 import pyarrow as pa
 import pyarrow.compute as pc
 
-from pokerirl.encoding import NUM_ACTIONS, OBS_SIZE
+from pokerirl.encoding import NUM_ACTIONS, NUM_ROUNDS, OBS_SIZE, cards_from_text
 from pokerirl.errors import InputError
+from pokerirl.game.encodings import Encoding, EncodingName, States, get_encoding
 from pokerirl.parquet import fixed_width, read_parquet
 
 REQUIRED_COLUMNS = ("hand_id", "obs", "action_id", "legal_mask")
 OPTIONAL_COLUMNS = ("reward", "player")
+STATE_COLUMNS = ("hole_cards", "board", "raise_nums")  # what other encodings are computed from
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
 class DecisionArrays:
     """A validated decision table as numpy arrays, one row per expert decision."""
 
-    obs: np.ndarray  # (N, 72) uint8
+    obs: np.ndarray  # (N, width) in ``encoding``: (N, 72) uint8 for rlcard
     action_ids: np.ndarray  # (N,) int64, legal under legal_mask
     groups: np.ndarray  # (N,) hand_id strings
     legal_mask: np.ndarray  # (N, 4) bool
@@ -47,19 +54,27 @@ class DecisionArrays:
     dones: np.ndarray | None = None  # (N,) bool: the player's last decision of the hand
     rewards: np.ndarray | None = None  # (N,) float32
     num_actions: int = NUM_ACTIONS
+    encoding: str = EncodingName.RLCARD
 
-def read_decisions(path: str | os.PathLike[str]) -> DecisionArrays:
-    """Read and validate the decision table at ``path``.
+def read_decisions(
+    path: str | os.PathLike[str], *, encoding: str | Encoding | None = None
+) -> DecisionArrays:
+    """Read and validate the decision table at ``path``, its states in ``encoding`` (default
+    ``rlcard``, the ``obs`` column as it is).
 
     Raises ``FileNotFoundError`` for a missing file and ``ValueError`` for anything else wrong
     (not Parquet, missing columns, wrong types or widths, nulls, empty, illegal expert actions).
     """
-    table = read_parquet(path, REQUIRED_COLUMNS, OPTIONAL_COLUMNS, what="table")
-    return decisions_from_arrow(table, source=str(Path(path)))
+    optional = (*OPTIONAL_COLUMNS, *STATE_COLUMNS)
+    table = read_parquet(path, REQUIRED_COLUMNS, optional, what="table")
+    return decisions_from_arrow(table, source=str(Path(path)), encoding=encoding)
 
 
-def decisions_from_arrow(table: pa.Table, *, source: str = "table") -> DecisionArrays:
+def decisions_from_arrow(
+    table: pa.Table, *, source: str = "table", encoding: str | Encoding | None = None
+) -> DecisionArrays:
     """Validate an Arrow table with the decision-table schema and convert it."""
+    chosen = get_encoding(encoding)
     if table.num_rows == 0:
         raise InputError(f"{source} is empty: no expert decisions to learn from")
     for name in (*REQUIRED_COLUMNS, *OPTIONAL_COLUMNS):
@@ -88,6 +103,8 @@ def decisions_from_arrow(table: pa.Table, *, source: str = "table") -> DecisionA
             raise InputError(f"{source}: column 'reward' must be numeric, got {reward.type}")
         rewards = reward.to_numpy().astype(np.float32)
 
+    if chosen.name != EncodingName.RLCARD:
+        obs = chosen.encode(table_states(table, mask, source, chosen.name))
     next_obs = dones = None
     if "player" in table.column_names:
         player = _strings(table, "player", source)
@@ -103,7 +120,32 @@ def decisions_from_arrow(table: pa.Table, *, source: str = "table") -> DecisionA
         next_obs=next_obs,
         dones=dones,
         rewards=rewards,
+        encoding=chosen.name,
     )
+
+
+def table_states(table: pa.Table, legal_mask: np.ndarray, source: str, why: str) -> States:
+    """The decision states of a table's rows, from its ``hole_cards``, ``board`` and
+    ``raise_nums`` columns; one line naming ``why`` (the encoding) when it lacks them."""
+    missing = [name for name in STATE_COLUMNS if name not in table.column_names]
+    if missing:
+        raise InputError(
+            f"{source} has no {', '.join(missing)} column(s): the {why} encoding is computed "
+            "from them (a table of pokerirl ingest has them)"
+        )
+    for name in STATE_COLUMNS:
+        if table.column(name).null_count:
+            raise InputError(f"{source}: column {name!r} has null values")
+    hole, board = (table.column(c).to_pylist() for c in ("hole_cards", "board"))
+    try:
+        cards = cards_from_text(hole, board)
+    except ValueError as error:
+        raise InputError(f"{source}: {error} in hole_cards or board") from None
+    if (cards[:, 0] < 0).any():
+        row = int(np.flatnonzero(cards[:, 0] < 0)[0])
+        raise InputError(f"{source}: row {row} has no hole cards (concealed decisions are none)")
+    raise_nums = fixed_width(table, "raise_nums", NUM_ROUNDS, source)
+    return States(cards=cards, raise_nums=raise_nums, legal_mask=legal_mask)
 
 
 class _Encoded:

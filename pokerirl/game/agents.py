@@ -35,9 +35,11 @@ _KTH_LEGAL = np.array(
 class Agent(Protocol):
     """Anything that picks legal actions for a batch of decisions.
 
-    ``act(obs, legal_mask, rng)``: obs (B, 72) uint8 in RLCard's limit-holdem encoding,
-    legal_mask (B, 4) bool over (call, raise, fold, check), ``rng`` the only randomness to use
-    (for reproducible matches); returns (B,) int64 action ids, always legal.
+    ``act(obs, legal_mask, rng)``: obs (B, 72) uint8 in RLCard's limit-holdem encoding (or,
+    for an agent with an ``encoding`` attribute, in that encoding of
+    :mod:`pokerirl.game.encodings`: the engine builds each agent's own), legal_mask (B, 4)
+    bool over (call, raise, fold, check), ``rng`` the only randomness to use (for
+    reproducible matches); returns (B,) int64 action ids, always legal.
     """
 
     @property

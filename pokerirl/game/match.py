@@ -23,6 +23,7 @@ from tqdm import tqdm
 from pokerirl.errors import ConfigError
 from pokerirl.game.agents import Agent, agent_actions, seat_cards
 from pokerirl.game.deals import deal_cards
+from pokerirl.game.encodings import Encoding, EncodingName, States, get_encoding
 from pokerirl.game.engine import IllegalActionError, LimitHoldemBatch
 from pokerirl.game.evaluator import prepare_tables
 
@@ -73,9 +74,26 @@ def turn_cards(game: LimitHoldemBatch, hands: np.ndarray) -> np.ndarray:
     return seat_cards(game.cards[hands], game.round[hands], game.to_act[hands])
 
 
+def agent_encoding(agent: Agent) -> Encoding:
+    """The encoding ``agent`` reads its observations in: its ``encoding`` attribute, else
+    RLCard's 72-d observation."""
+    return get_encoding(getattr(agent, "encoding", None))
+
+
+def observe(game: LimitHoldemBatch, hands: np.ndarray, encoding: Encoding) -> np.ndarray:
+    """The observations of the seat to act in ``hands``, in ``encoding`` (the engine's own
+    72-d one for ``rlcard``)."""
+    if encoding.name == EncodingName.RLCARD:
+        return game.observe(hands)
+    states = States(cards=turn_cards(game, hands), raise_nums=game.raises[hands],
+                    legal_mask=game.legal_mask(hands))  # fmt: skip
+    return encoding.encode(states)
+
+
 @dataclass(frozen=True, kw_only=True)
 class DecisionLog:
-    """Every decision one agent took in a match: what it saw and what it did, in play order."""
+    """Every decision one agent took in a match: what it saw and what it did, in play order
+    (``obs`` is RLCard's 72-d observation, whatever the agent's own encoding)."""
 
     obs: np.ndarray  # (N, 72) uint8
     legal_mask: np.ndarray  # (N, 4) bool
@@ -110,21 +128,23 @@ def play_batch(
         log: when given, the first agent's decisions are appended to it, one part per step.
     """
     game = LimitHoldemBatch(deals=deals)
+    encodings = tuple(agent_encoding(agent) for agent in agents)
     while game.active().size:
         hands = game.active()
         first_to_act = game.to_act[hands] == seat_of_first[hands]
         # Each agent decides for all hands where it is to act: one batched call per agent.
-        for which, agent, rng, turn in zip(
-            (0, 1), agents, rngs, (first_to_act, ~first_to_act), strict=True
+        for which, agent, encoding, rng, turn in zip(
+            (0, 1), agents, encodings, rngs, (first_to_act, ~first_to_act), strict=True
         ):
             mine = hands[turn]
             if mine.size == 0:
                 continue
-            obs, legal = game.observe(mine), game.legal_mask(mine)
+            obs, legal = observe(game, mine, encoding), game.legal_mask(mine)
             cards = functools.partial(turn_cards, game, mine)
             actions = agent_actions(agent, obs, legal, rng, cards)
             if log is not None and which == 0:
-                log.append(DecisionLog(obs=obs, legal_mask=legal, cards=cards(), actions=actions))
+                seen = obs if encoding.name == EncodingName.RLCARD else game.observe(mine)
+                log.append(DecisionLog(obs=seen, legal_mask=legal, cards=cards(), actions=actions))
             try:
                 game.step(actions, mine)
             except IllegalActionError as error:

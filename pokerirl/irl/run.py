@@ -27,6 +27,7 @@ dtype('float32')
 
 from __future__ import annotations
 
+import io
 import json
 import os
 from collections.abc import Mapping, Sequence
@@ -191,12 +192,14 @@ def train_into(
     device: str = "cpu",
     progress: bool = False,
     data_path: str | os.PathLike[str] | None = None,
+    data_notes: Mapping[str, object] | None = None,
 ) -> RunSummary:
     """Split, compute the baselines, train and write a run into the (new) ``folder``.
 
     Validation is a seeded share of the *groups* (``config.val_fraction``), never of rows.
     ``data_path`` is where the data came from, for the record (``config.json``'s
-    ``data.path``)."""
+    ``data.path``); ``data_notes`` are the caller's own keys of ``data`` (the poker layer's
+    ``encoding``), which this layer records without reading."""
     train_data, val_data, val_groups = data.split(
         val_fraction=config.val_fraction, seed=config.seed
     )
@@ -210,7 +213,7 @@ def train_into(
         progress=progress,
         on_epoch=log.write,
     )
-    data_info = data_record(data, train_data, val_data, path=data_path)
+    data_info = {**data_record(data, train_data, val_data, path=data_path), **(data_notes or {})}
     save_run(result, folder, algo=algo, data=data_info, baselines=found, device=device)
     plot_curves(result.metrics, folder, baselines=found)
     return RunSummary(
@@ -374,20 +377,29 @@ def load_run_config(run_dir: str | os.PathLike[str]) -> Mapping[str, Any]:
     if not path.is_file():
         raise RunError(f"no {CONFIG_FILE} in {run_dir}: not a training run folder")
     try:
-        record = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as error:
+        data = path.read_bytes()
+    except OSError as error:
         raise RunError(f"{path}: not readable JSON ({first_line(error)})") from None
+    return parse_run_config(data, where=path)
+
+
+def parse_run_config(data: bytes, *, where: str | os.PathLike[str]) -> Mapping[str, Any]:
+    """A run's ``config.json`` from its bytes, checked; ``RunError`` naming ``where``."""
+    try:
+        record = json.loads(data.decode("utf-8"))
+    except (UnicodeDecodeError, json.JSONDecodeError) as error:
+        raise RunError(f"{where}: not readable JSON ({first_line(error)})") from None
     if not isinstance(record, dict):
-        raise RunError(f"{path}: must hold a JSON object, got {type(record).__name__}")
+        raise RunError(f"{where}: must hold a JSON object, got {type(record).__name__}")
     version = record.get("format_version")
     if version not in (1, FORMAT_VERSION):
-        raise RunError(f"{path}: unsupported format_version {version!r}")
+        raise RunError(f"{where}: unsupported format_version {version!r}")
     arch = record.get("architecture")
     if not isinstance(arch, dict):
-        raise RunError(f"{path}: lacks an 'architecture' object")
+        raise RunError(f"{where}: lacks an 'architecture' object")
     problem = _architecture_problem(arch)
     if problem:
-        raise RunError(f"{path}: architecture: {problem}")
+        raise RunError(f"{where}: architecture: {problem}")
     return record
 
 
@@ -459,18 +471,22 @@ def build_from_record(record: Mapping[str, Any]) -> tuple[nn.Module, nn.Module]:
 def _load_state(module: nn.Module, path: Path) -> None:
     if not path.is_file():
         raise RunError(f"checkpoint not found: {path}")
+    _load_state_bytes(module, path.read_bytes(), where=path)
+
+
+def _load_state_bytes(module: nn.Module, data: bytes, *, where: str | os.PathLike[str]) -> None:
     try:
-        state = torch.load(path, map_location="cpu", weights_only=True)
+        state = torch.load(io.BytesIO(data), map_location="cpu", weights_only=True)
     except Exception:
         raise RunError(
-            f"{path}: not a readable PyTorch state_dict (corrupt or truncated)"
+            f"{where}: not a readable PyTorch state_dict (corrupt or truncated)"
         ) from None
     if not isinstance(state, dict):
-        raise RunError(f"{path}: holds a {type(state).__name__}, not a state_dict")
+        raise RunError(f"{where}: holds a {type(state).__name__}, not a state_dict")
     try:
         module.load_state_dict(state)
     except (RuntimeError, TypeError, ValueError) as error:
-        raise RunError(f"{path} does not match its {CONFIG_FILE}: {first_line(error)}") from None
+        raise RunError(f"{where} does not match its {CONFIG_FILE}: {first_line(error)}") from None
     module.eval()
 
 
@@ -532,8 +548,23 @@ def load_reward(run_dir: str | os.PathLike[str], *, full: bool = False) -> Rewar
     :class:`RunError` (a ``ValueError``) of one line naming the file.
     """
     record = load_run_config(run_dir)
+    path = Path(run_dir) / REWARD_FILE
+    if not path.is_file():
+        raise RunError(f"checkpoint not found: {path}")
+    return reward_from_bytes(record, path.read_bytes(), where=path, full=full)
+
+
+def reward_from_bytes(
+    record: Mapping[str, Any],
+    reward_bytes: bytes,
+    *,
+    where: str | os.PathLike[str],
+    full: bool = False,
+) -> RewardFunction:
+    """:func:`load_reward` from a checked ``config.json`` (:func:`parse_run_config`) and the
+    bytes of ``reward.pt`` (``where`` names them in errors): no file is read."""
     reward, _ = build_from_record(record)
-    _load_state(reward, Path(run_dir) / REWARD_FILE)
+    _load_state_bytes(reward, reward_bytes, where=where)
     space = record["architecture"]["action_space"]
     num_actions = space["num_actions"] if space["type"] == "discrete" else None
     return RewardFunction(reward, num_actions=num_actions, full=full)

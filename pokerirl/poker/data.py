@@ -17,21 +17,27 @@ import os
 import pyarrow as pa
 
 from pokerirl.datasets.decisions import DecisionArrays, decisions_from_arrow, read_decisions
+from pokerirl.game.encodings import Encoding
 from pokerirl.irl.transitions import Transitions
 
 
-def read_table(path: str | os.PathLike[str]) -> Transitions:
-    """The decision table at ``path`` (``pokerirl ingest``'s) as ``Transitions``.
+def read_table(
+    path: str | os.PathLike[str], *, encoding: str | Encoding | None = None
+) -> Transitions:
+    """The decision table at ``path`` (``pokerirl ingest``'s) as ``Transitions``, its states
+    in ``encoding`` (default ``rlcard``; see :mod:`pokerirl.game.encodings`).
 
     Raises ``FileNotFoundError`` for a missing file and ``ValueError`` for anything else wrong
     (see :func:`pokerirl.datasets.decisions.read_decisions`).
     """
-    return as_transitions(read_decisions(path))
+    return as_transitions(read_decisions(path, encoding=encoding))
 
 
-def transitions_from_arrow(table: pa.Table, *, source: str = "table") -> Transitions:
+def transitions_from_arrow(
+    table: pa.Table, *, source: str = "table", encoding: str | Encoding | None = None
+) -> Transitions:
     """An Arrow table with the decision-table schema as ``Transitions``, validated."""
-    return as_transitions(decisions_from_arrow(table, source=source))
+    return as_transitions(decisions_from_arrow(table, source=source, encoding=encoding))
 
 
 def as_transitions(decisions: DecisionArrays) -> Transitions:

@@ -3,7 +3,7 @@
 The run folder's format and the trainer are poker-free (:mod:`pokerirl.irl.run`,
 :mod:`pokerirl.irl.airl`); this module adds what is poker's: reading the decision table
 (:func:`pokerirl.poker.read_table`), the reward card of a table with cards
-(``reward_card.json`` and ``reward_card.png``, :mod:`pokerirl.agents.reward_card`), and the
+(``reward_card.json`` and ``reward_card.png``, :mod:`pokerirl.poker.reward_card`), and the
 fan-out of several runs on an execution backend. A folder of several runs holds ``run-<k>``
 folders, each with seed ``seed + k``, and ``summary.json`` (mean and std over runs) with a
 banded plot.
@@ -32,6 +32,7 @@ from __future__ import annotations
 import json
 import os
 import tempfile
+import warnings
 from collections.abc import Mapping
 from dataclasses import replace
 from pathlib import Path
@@ -40,10 +41,10 @@ from typing import Any
 import numpy as np
 import torch
 
-from pokerirl.agents.reward_card import CARD_FILE
 from pokerirl.atomic import write_text
 from pokerirl.errors import ConfigError, Remedy
 from pokerirl.execution import Backend
+from pokerirl.game.encodings import EncodingName
 from pokerirl.irl.airl import resolve_device
 from pokerirl.irl.config import AIRLConfig, Algo
 from pokerirl.irl.plots import plot_bands
@@ -62,6 +63,7 @@ from pokerirl.irl.run import (
 )
 from pokerirl.irl.transitions import Transitions
 from pokerirl.poker.data import read_table
+from pokerirl.poker.reward_card import CARD_FILE
 from pokerirl.store import Unit, UnitConflict, UnitOutput, digest, run_units, staged_folder
 
 CARD_COLUMNS = ("hole_cards", "board")  # what the card reads beyond the trainer's columns
@@ -79,21 +81,55 @@ def train_table(
     device: str = "cpu",
     progress: bool = True,
     overwrite: bool = False,
+    encoding: str = EncodingName.RLCARD,
 ) -> RunSummary:
-    """Train on a Parquet decision table and write the run folder ``out_dir``.
+    """Train on a Parquet decision table, its states in ``encoding``, and write the run
+    folder ``out_dir``.
 
-    Validation is a seeded share of the *hands* (``config.val_fraction``), never of rows.
+    Validation is a seeded share of the *hands* (``config.val_fraction``), never of rows. A
+    reward whose argmax agrees with the expert less than the run's own behaviour-cloning
+    baseline is flagged (:class:`RewardBelowBC`, a warning).
     """
     config = config or AIRLConfig.for_algo(algo)
     resolve_device(device)  # fail before reading a large table
     out = Path(out_dir)
     check_destination(out, overwrite=overwrite)
-    data = read_table(table)
+    data = read_table(table, encoding=encoding)
     with staged_folder(out) as folder:  # the store's: a kill leaves out as it was
         summary = train_table_into(
-            data, folder, algo=algo, config=config, device=device, progress=progress, table=table
-        )
+            data, folder, algo=algo, config=config, device=device, progress=progress,
+            table=table, encoding=encoding,
+        )  # fmt: skip
+    warn_below_bc(out, summary.metrics[-1], summary.baselines)
     return replace(summary, out_dir=out)
+
+
+class RewardBelowBC(UserWarning):
+    """A reward whose argmax agrees with the expert less than behaviour cloning does on the
+    same split: it has learned less of the expert than a plain classifier."""
+
+
+def below_bc(metrics: Mapping[str, Any], baselines: Mapping[str, float]) -> float | None:
+    """How far the reward's argmax alignment (``val_reward_alignment``) falls below the
+    run's BC baseline, or None when it does not (or either is missing)."""
+    reward, bc = metrics.get("val_reward_alignment"), baselines.get("bc")
+    if reward is None or bc is None or reward >= bc:
+        return None
+    return float(bc - reward)
+
+
+def warn_below_bc(run: Path, metrics: Mapping[str, Any], baselines: Mapping[str, float]) -> None:
+    """Warn, in one line naming the run, when its reward falls below its BC baseline."""
+    gap = below_bc(metrics, baselines)
+    if gap is not None:
+        warnings.warn(
+            RewardBelowBC(
+                f"{run}: the reward's argmax agrees with the expert on "
+                f"{metrics['val_reward_alignment']:.1%} of validation states, below its own "
+                f"behaviour cloning's {baselines['bc']:.1%}"
+            ),
+            stacklevel=2,
+        )
 
 
 def train_table_into(
@@ -106,14 +142,17 @@ def train_table_into(
     progress: bool = False,
     table: str | os.PathLike[str] | None = None,
     table_file: str | os.PathLike[str] | None = None,
+    encoding: str = EncodingName.RLCARD,
 ) -> RunSummary:
     """:func:`pokerirl.irl.run.train_into`, then the reward card.
 
-    ``table`` is the table's path for the record; ``table_file`` the file to read the reward
-    card's states from (default ``table``)."""
+    ``data`` holds the table's states in ``encoding`` (recorded in ``config.json``'s
+    ``data.encoding``); ``table`` is the table's path for the record; ``table_file`` the
+    file to read the reward card's states from (default ``table``)."""
     summary = train_into(
-        data, folder, algo=algo, config=config, device=device, progress=progress, data_path=table
-    )
+        data, folder, algo=algo, config=config, device=device, progress=progress,
+        data_path=table, data_notes={"encoding": str(encoding)},
+    )  # fmt: skip
     write_reward_card(folder, table_file or table, label=None if table is None else str(table))
     return summary
 
@@ -133,7 +172,7 @@ def write_reward_card(
     except (OSError, pa.ArrowException):
         return
     if all(name in names for name in CARD_COLUMNS):
-        from pokerirl.agents.reward_card import run_card, write_card
+        from pokerirl.poker.reward_card import run_card, write_card
 
         write_card(run_card(folder, table, label=label), folder)
 
@@ -142,7 +181,12 @@ def write_reward_card(
 
 
 def train_unit(
-    table: bytes, table_path: str, algo: str, settings: Mapping[str, Any], device: str
+    table: bytes,
+    table_path: str,
+    algo: str,
+    settings: Mapping[str, Any],
+    device: str,
+    encoding: str = EncodingName.RLCARD,
 ) -> UnitOutput[None]:
     """One run of a fan-out: a top-level, picklable function of plain arguments.
 
@@ -159,13 +203,14 @@ def train_unit(
             torch.manual_seed(settings["seed"])
             run = Path(scratch) / "run"
             train_table_into(
-                read_table(path),
+                read_table(path, encoding=encoding),
                 run,
                 algo=algo,
                 config=AIRLConfig(**settings),
                 device=device,
                 table=table_path,
                 table_file=path,
+                encoding=encoding,
             )
             files = {f.name: f.read_bytes() for f in sorted(run.iterdir()) if f.is_file()}
     finally:
@@ -202,9 +247,11 @@ def train_runs(
     progress: bool = True,
     overwrite: bool = False,
     backend: Backend | None = None,
+    encoding: str = EncodingName.RLCARD,
 ) -> RunSummary:
     """``runs`` runs of ``config`` with seeds ``seed + k`` into ``out_dir/run-<k>``, then
     ``summary.json`` and ``alignment_bands.png``. One run keeps the single-folder layout.
+    The table's states are read in ``encoding`` (:mod:`pokerirl.game.encodings`).
 
     Each run is a unit of :func:`pokerirl.store.run_units` on ``backend`` (default: in this
     process): written atomically with a record of its settings and table, reused by a
@@ -223,6 +270,7 @@ def train_runs(
             device=device,
             progress=progress,
             overwrite=overwrite,
+            encoding=encoding,
         )
     resolve_device(device)
     out = Path(out_dir)
@@ -232,20 +280,23 @@ def train_runs(
         raise RunError(
             f"{out} holds a single run, not a folder of {runs} runs", remedy=Remedy.ELSEWHERE
         )
-    read_table(table)  # a bad table fails once, before any unit starts
+    read_table(table, encoding=encoding)  # a bad table fails once, before any unit starts
     table_bytes = Path(table).read_bytes()
     folders = [out / f"run-{k}" for k in range(runs)]
     units = []
     for k, folder in enumerate(folders):
         settings = {**config.to_dict(), "seed": config.seed + k}
+        unit_config: dict[str, object] = {"algo": algo, "device": device, "settings": settings}
+        if encoding != EncodingName.RLCARD:  # runs of the 72-d encoding keep their prints
+            unit_config["encoding"] = str(encoding)
         units.append(
             Unit(
                 key=folder.name,
                 target=folder,
-                config={"algo": algo, "device": device, "settings": settings},
+                config=unit_config,
                 inputs={"table": digest(table_bytes)},
                 fn=train_unit,
-                args=(table_bytes, str(Path(table).resolve()), algo, settings, device),
+                args=(table_bytes, str(Path(table).resolve()), algo, settings, device, encoding),
             )
         )
     try:
@@ -256,6 +307,8 @@ def train_runs(
         if not (folder / CARD_FILE).is_file():
             write_reward_card(folder, table)
     results = [_run_result(folder) for folder in folders]
+    for folder, result in zip(folders, results, strict=True):
+        warn_below_bc(folder, result.metrics[-1], result.baselines)
     summary = summarize(results).to_json()
     write_text(out / SUMMARY_FILE, json.dumps(summary, indent=2) + "\n")
     plot_bands(summary, out)

@@ -22,7 +22,7 @@ IRL_ALGOS = ("airl", "hairl")
 BUILT_INS = ("random", "call", "raise")
 IRL_SETTINGS = ("ours", "authors")
 AGENT_PRESETS = ("default", "authors")  # pokerirl.agents.train.AGENT_PRESETS
-TRANSFORMS = ("raw", "centered", "log_softmax")  # pokerirl.agents.rewards.TRANSFORMS
+TRANSFORMS = ("raw", "centered", "log_softmax")  # pokerirl.poker.rewards.TRANSFORMS
 
 # The authors' poker IRL settings (silue-dev/hairl, src/utils/training.py, LimitHoldem-v0):
 # one hidden layer of 64 in both nets, leaky ReLU, lr 1e-3 for both, weight decay 5e-3 on the

@@ -335,18 +335,19 @@ def single_run(
 
 def reward_source_prints(config: StudyConfig) -> dict[str, str]:
     """The fingerprint of each reward that replaces IRL runs; one-line StudyError if bad."""
-    from pokerirl.agents.rewards import reward_source_fingerprint
+    from pokerirl.poker.rewards import RewardSource
 
     try:
-        return {algo: reward_source_fingerprint(spec) for algo, spec in config.reward_sources}
+        sources = config.reward_sources
+        return {algo: RewardSource.resolve(spec).fingerprint for algo, spec in sources}
     except ValueError as error:
         raise StudyError(str(error)) from None
 
 
 def replaced_irl(study: Study, algo: str, source: str, out: Path) -> Replaced:
     """An algorithm whose IRL runs a given reward replaces: its card over the whole table."""
-    from pokerirl.agents.reward_card import CardStates, reward_card, write_card
-    from pokerirl.agents.rewards import load_reward_source
+    from pokerirl.poker.reward_card import CardStates, reward_card, write_card
+    from pokerirl.poker.rewards import load_reward_source
 
     study.say(f"      {algo}: replaced by {source}")
     card = reward_card(load_reward_source(source), CardStates.from_table(study.root / TABLE))
@@ -520,7 +521,7 @@ def reward_cards(root: Path, config: StudyConfig) -> dict[str, CardSummary | Non
     """Each algorithm's reward cards (its runs' ``reward_card.json``), summarized over runs;
     None for an algorithm without cards (runs of an older pokerirl, or a table without
     cards)."""
-    from pokerirl.agents.reward_card import CARD_FIGURE, card_summary, read_card
+    from pokerirl.poker.reward_card import CARD_FIGURE, card_summary, read_card
 
     found: dict[str, CardSummary | None] = {}
     for algo in IRL_ALGOS:

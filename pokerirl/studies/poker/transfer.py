@@ -1,7 +1,7 @@
 """The transfer test (``pokerirl transfer``): does a learned reward teach the expert's play?
 
 For one reward (an IRL run folder or ``authors:FILE``), DQNs are trained on each reward
-transform (``raw`` f, ``centered``, ``log_softmax``; :mod:`pokerirl.agents.rewards`) and each
+transform (``raw`` f, ``centered``, ``log_softmax``; :mod:`pokerirl.poker.rewards`) and each
 payoff weight, and a sparse DQN on the same seeds and hands. Each greedy agent then plays
 ``eval_hands`` duplicate hands against random, which gives:
 
@@ -59,7 +59,7 @@ class TransferConfig:
     experts: tuple[str, ...] = RULES
 
     def __post_init__(self) -> None:
-        from pokerirl.agents.rewards import TRANSFORMS
+        from pokerirl.poker.rewards import TRANSFORMS
 
         if not self.transforms or any(t not in TRANSFORMS for t in self.transforms):
             raise ConfigError(f"transforms must be some of {', '.join(TRANSFORMS)}")
@@ -176,8 +176,8 @@ def _folder(transform: str, weight: float) -> str:
 
 def _rule(name: str, seen: Any) -> np.ndarray:
     """The actions of rule ``name`` on logged decisions."""
-    from pokerirl.agents.reward_card import legal_majority
     from pokerirl.game import make_agent
+    from pokerirl.poker.reward_card import legal_majority
 
     if name == "legal_majority":
         return legal_majority(seen.legal_mask)
@@ -222,10 +222,10 @@ def run_transfer(
     """Train and judge the agents of the transfer test into ``out``; write
     ``transfer.json`` and ``transfer.md`` there."""
     from pokerirl.agents import resolve_agent
-    from pokerirl.agents.rewards import reward_source_fingerprint
     from pokerirl.agents.train import agent_preset, train_seeds
+    from pokerirl.poker.rewards import RewardSource
 
-    reward_source_fingerprint(reward_run)  # one line for a bad reward, before anything runs
+    RewardSource.resolve(reward_run)  # one line for a bad reward, before anything runs
     out = Path(out)
     base = agent_preset(config.agent_preset, hands=config.hands, seed=config.seeds[0],
                         eval_every=config.hands, eval_hands=2_000)  # fmt: skip

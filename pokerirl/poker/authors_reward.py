@@ -36,9 +36,9 @@ from pathlib import Path
 
 import numpy as np
 
-from pokerirl.agents.rewards import AUTHORS_PREFIX, Decisions, PokerReward
 from pokerirl.encoding import NUM_ACTIONS
 from pokerirl.errors import InputError
+from pokerirl.poker.rewards import AUTHORS_PREFIX, Decisions, PokerReward
 
 STATE_SIZE = 61  # 7 cards x 7 bits, then 4 rounds x 3 bits
 HIDDEN = 64
@@ -122,6 +122,11 @@ def read_authors_file(path: str | os.PathLike[str]) -> AuthorsWeights:
         raw = path.read_bytes()
     except OSError as error:
         raise AuthorsFileError(f"{where}: cannot read ({error.strerror or error})") from None
+    return read_authors_bytes(raw, where=where)
+
+
+def read_authors_bytes(raw: bytes, *, where: str) -> AuthorsWeights:
+    """The weights in the bytes of an authors' reward file (``where`` names it in errors)."""
     try:
         import io
 

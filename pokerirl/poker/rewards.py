@@ -5,14 +5,14 @@ learner saw) and the actions it took, it returns one float per decision. Three k
 
 * :class:`ObsReward` wraps any ``f(obs, actions)`` on RLCard's 72-d observation, such as the
   learned reward of an AIRL / H-AIRL run folder (``pokerirl.irl.load_reward``);
-* :class:`pokerirl.agents.authors_reward.AuthorsReward`, one of the authors' published
+* :class:`pokerirl.poker.authors_reward.AuthorsReward`, one of the authors' published
   rewards (``authors:FILE``), which reads the cards in the order they were dealt;
 * :class:`TransformedReward`: f minus its mean (``centered``) or its logsumexp
   (``log_softmax``) over the legal actions of the state; ``raw`` is f.
 
-:func:`load_reward_source` resolves what a user typed (a run folder or ``authors:FILE``);
-:func:`reward_source_files` and :func:`reward_source_fingerprint` give the bytes a worker needs
-and their identity.
+:class:`RewardSource` resolves what a user typed (a run folder or ``authors:FILE``) once, in
+the driver: its bytes, checked, and their fingerprint; a worker builds the reward from those
+bytes (:meth:`RewardSource.load`).
 
 >>> reward = ObsReward(lambda obs, actions: actions.astype(np.float32), name="id")
 >>> decisions = Decisions(obs=np.zeros((2, 72), np.uint8),
@@ -25,17 +25,19 @@ and their identity.
 
 from __future__ import annotations
 
-import json
 import os
-from collections.abc import Callable
-from dataclasses import dataclass
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
 from enum import StrEnum
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
-from pokerirl.encoding import MAX_RAISES, NUM_ACTIONS, NUM_ROUNDS, OBS_SIZE, RAISE_OFFSET
+from pokerirl.encoding import MAX_RAISES, NUM_ACTIONS, NUM_ROUNDS, RAISE_OFFSET
 from pokerirl.errors import ConfigError, InputError
+from pokerirl.game.encodings import ENCODINGS, Encoding, EncodingName, States, get_encoding
+from pokerirl.store import digest
 
 
 class Transform(StrEnum):
@@ -66,11 +68,14 @@ class Decisions:
     ``cards`` (hole cards, then the board shown, -1 beyond; see
     :func:`pokerirl.game.agents.seat_cards`) is there when the reward reads cards in order
     (``needs_cards``); the 72-d observation cannot tell hole cards from the board.
+    ``encoded`` holds the states already computed in other encodings (name -> rows), so a
+    learner and its reward on the same encoding compute it once.
     """
 
     obs: np.ndarray  # (N, 72) uint8
     legal_mask: np.ndarray  # (N, 4) bool
     cards: np.ndarray | None = None  # (N, 7) int8
+    encoded: dict[str, np.ndarray] = field(default_factory=dict, repr=False)
 
     def __len__(self) -> int:
         return len(self.obs)
@@ -79,6 +84,20 @@ class Decisions:
         """(N, 4) raises per round, read from the observation's one-hot slots."""
         slots = RAISE_OFFSET + (MAX_RAISES + 1) * np.arange(NUM_ROUNDS)[:, None] + np.arange(5)
         return np.asarray(self.obs)[:, slots].argmax(axis=2)
+
+    def states(self) -> States:
+        """The decisions as :class:`~pokerirl.game.encodings.States` (needs ``cards``)."""
+        if self.cards is None:
+            raise ValueError("these decisions carry no cards: Decisions.cards is missing")
+        return States(cards=self.cards, raise_nums=self.raise_counts(), legal_mask=self.legal_mask)
+
+    def encode(self, encoding: Encoding) -> np.ndarray:
+        """The states in ``encoding`` (the 72-d ``obs`` as it is for ``rlcard``)."""
+        if encoding.name == EncodingName.RLCARD:
+            return self.obs
+        if encoding.name not in self.encoded:
+            self.encoded[encoding.name] = encoding.encode(self.states())
+        return self.encoded[encoding.name]
 
 
 class PokerReward:
@@ -105,7 +124,8 @@ class PokerReward:
 
 
 class ObsReward(PokerReward):
-    """``f(obs, actions)`` on the 72-d observation (e.g. ``pokerirl.irl.load_reward``)."""
+    """``f(obs, actions)`` on the states in ``encoding`` (default RLCard's 72-d observation),
+    e.g. ``pokerirl.irl.load_reward`` of a run."""
 
     def __init__(
         self,
@@ -113,16 +133,20 @@ class ObsReward(PokerReward):
         *,
         name: str = "reward",
         fingerprint: str = "",
+        encoding: str | Encoding | None = None,
     ) -> None:
         self.fn, self.name, self.fingerprint = fn, name, fingerprint
+        self.encoding = get_encoding(encoding)
+        self.needs_cards = self.encoding.needs_cards
 
     def __call__(self, decisions: Decisions, actions: np.ndarray) -> np.ndarray:
-        return np.asarray(self.fn(decisions.obs, np.asarray(actions)), np.float32)
+        obs = decisions.encode(self.encoding)
+        return np.asarray(self.fn(obs, np.asarray(actions)), np.float32)
 
     def action_values(self, decisions: Decisions) -> np.ndarray:
         # One call on the four actions of every state, stacked: one forward pass, not four.
         n = len(decisions)
-        obs = np.tile(np.asarray(decisions.obs), (NUM_ACTIONS, 1))
+        obs = np.tile(np.asarray(decisions.encode(self.encoding)), (NUM_ACTIONS, 1))
         actions = np.repeat(np.arange(NUM_ACTIONS, dtype=np.int64), n)
         return np.asarray(self.fn(obs, actions), np.float32).reshape(NUM_ACTIONS, n).T.copy()
 
@@ -186,77 +210,103 @@ def is_authors_spec(spec: str | os.PathLike[str]) -> bool:
     return str(spec).startswith(AUTHORS_PREFIX)
 
 
-def _authors_path(spec: str | os.PathLike[str]) -> Path:
-    return Path(str(spec).removeprefix(AUTHORS_PREFIX))
+@dataclass(frozen=True, kw_only=True)
+class RewardSource:
+    """A reward a user named (a run folder of ``pokerirl train``, or ``authors:FILE``),
+    resolved once: its files read, checked and hashed here, in the driver. It travels to
+    workers as it is (plain bytes), and :meth:`load` builds the reward from those bytes, so
+    no worker reads the user's files again.
+
+    ``fingerprint`` is ``sha256:<hex>`` over the files' bytes in order (a run's ``reward.pt``
+    then ``config.json``; an authors' file), as agent and study records have named rewards.
+    """
+
+    spec: str
+    files: tuple[tuple[str, bytes], ...] = field(repr=False)
+    fingerprint: str
+
+    @property
+    def is_authors(self) -> bool:
+        return is_authors_spec(self.spec)
+
+    @classmethod
+    def resolve(cls, spec: str | os.PathLike[str]) -> RewardSource:
+        """Read and check ``spec``; :class:`~pokerirl.errors.InputError` (one line) when it
+        is neither a poker reward run nor an ``authors:`` file."""
+        from pokerirl.irl.run import REWARD_RUN_FILES
+
+        text = str(spec)
+        if is_authors_spec(text):
+            path = Path(text.removeprefix(AUTHORS_PREFIX))
+            if not path.is_file():
+                raise InputError(f"{text}: no such file (authors:FILE names an authors' reward)")
+            files: tuple[tuple[str, bytes], ...] = ((AUTHORS_FILE, path.read_bytes()),)
+        else:
+            for name in REWARD_RUN_FILES:
+                if not (Path(text) / name).is_file():
+                    raise InputError(f"{text}: not a reward run (no {name}) nor authors:FILE")
+            files = tuple((name, (Path(text) / name).read_bytes()) for name in REWARD_RUN_FILES)
+        source = cls(spec=text, files=files, fingerprint=digest(b"".join(d for _, d in files)))
+        source.load()  # every problem now, in one line naming the user's files
+        return source
+
+    def load(self) -> PokerReward:
+        """The reward, built from the bytes (never from the user's files)."""
+        from pokerirl.irl.run import CONFIG_FILE, REWARD_FILE, parse_run_config, reward_from_bytes
+
+        files = dict(self.files)
+        if self.is_authors:
+            from pokerirl.poker.authors_reward import AuthorsReward, read_authors_bytes
+
+            weights = read_authors_bytes(files[AUTHORS_FILE], where=self.spec)
+            return AuthorsReward(weights, name=self.spec)
+        run = Path(self.spec)
+        record = parse_run_config(files[CONFIG_FILE], where=run / CONFIG_FILE)
+        encoding = run_encoding(run, record)
+        fn = reward_from_bytes(record, files[REWARD_FILE], where=run / REWARD_FILE)
+        return ObsReward(fn, name=self.spec, fingerprint=self.fingerprint, encoding=encoding)
+
+    @property
+    def encoding(self) -> str | None:
+        """The encoding the reward reads (its run's), or None for an authors' reward (which
+        reads its own 61-d state of the cards)."""
+        if self.is_authors:
+            return None
+        from pokerirl.irl.run import CONFIG_FILE, parse_run_config
+
+        record = parse_run_config(dict(self.files)[CONFIG_FILE], where=self.spec)
+        return run_encoding(Path(self.spec), record).name
 
 
-def reward_source_files(spec: str | os.PathLike[str]) -> dict[str, bytes]:
-    """The bytes of a reward source, to carry to a worker (checked first, in one line)."""
-    from pokerirl.irl.run import REWARD_RUN_FILES
+def run_encoding(run: Path, record: Mapping[str, Any]) -> Encoding:
+    """The encoding a poker run's ``config.json`` records (``data.encoding``; ``rlcard`` for
+    runs made before encodings), checked against the reward's input width.
 
-    reward_source_fingerprint(spec)
-    if is_authors_spec(spec):
-        return {AUTHORS_FILE: _authors_path(spec).read_bytes()}
-    return {name: (Path(spec) / name).read_bytes() for name in REWARD_RUN_FILES}
-
-
-def landed_spec(spec: str | os.PathLike[str], folder: str | os.PathLike[str]) -> str:
-    """The spec of a source's copy written (by :func:`reward_source_files`) into ``folder``."""
-    if is_authors_spec(spec):
-        return f"{AUTHORS_PREFIX}{Path(folder) / AUTHORS_FILE}"
-    return str(folder)
-
-
-def reward_source_fingerprint(spec: str | os.PathLike[str]) -> str:
-    """``sha256:<hex>`` of an ``authors:`` file, or of a run's ``reward.pt`` and
-    ``config.json``; ``ValueError`` (one line) when ``spec`` is neither."""
-    from pokerirl.agents.checkpoint import files_fingerprint
-    from pokerirl.irl.run import REWARD_RUN_FILES
-
-    if is_authors_spec(spec):
-        path = _authors_path(spec)
-        if not path.is_file():
-            raise InputError(f"{spec}: no such file (authors:FILE names an authors' reward)")
-        return files_fingerprint(path.parent, (path.name,))
-    for name in REWARD_RUN_FILES:
-        if not (Path(spec) / name).is_file():
-            raise InputError(f"{spec}: not a reward run (no {name}) nor authors:FILE")
-    _check_poker_run(Path(spec))
-    return files_fingerprint(spec, REWARD_RUN_FILES)
-
-
-def _check_poker_run(run: Path) -> None:
-    """``ValueError`` (one line) for a run whose reward is not on poker decisions: a
-    Gymnasium run (its task named), or one on other observations or actions. What cannot be
-    read is left to :func:`pokerirl.irl.load_reward`, which names the problem."""
-    from pokerirl.irl.run import CONFIG_FILE
-
-    try:
-        record = json.loads((run / CONFIG_FILE).read_bytes())
-        data, architecture = record.get("data") or {}, record.get("architecture") or {}
-        task = data.get("env")
-        sizes = architecture.get("obs_dim"), architecture["action_space"].get("num_actions")
-    except (OSError, ValueError, AttributeError, KeyError, TypeError):
-        return
+    :class:`~pokerirl.errors.InputError` (one line naming the run) for a Gymnasium run, an
+    unknown encoding, or a width or action count that does not fit it.
+    """
+    data = record.get("data") or {}
+    data = data if isinstance(data, dict) else {}
+    task = data.get("env")
     if task is not None:
         raise InputError(
             f"{run}: a Gymnasium IRL run (reward of {task}), not a poker reward; "
             "give a run of pokerirl train"
         )
-    if sizes != (OBS_SIZE, NUM_ACTIONS):
+    name = data.get("encoding", EncodingName.RLCARD)
+    if name not in ENCODINGS:
+        raise InputError(f"{run}: unknown encoding {name!r} (known: {', '.join(ENCODINGS)})")
+    encoding = ENCODINGS[name]
+    architecture = record["architecture"]
+    sizes = architecture["obs_dim"], architecture["action_space"].get("num_actions")
+    if sizes != (encoding.width, NUM_ACTIONS):
         raise InputError(
-            f"{run}: a reward on {sizes[0]}-d observations and {sizes[1]} actions, not "
-            f"poker's {OBS_SIZE}-d observation and {NUM_ACTIONS} actions"
+            f"{run}: a reward on {sizes[0]}-d observations and {sizes[1]} actions, not the "
+            f"{encoding.name} encoding's {encoding.width}-d states and {NUM_ACTIONS} actions"
         )
+    return encoding
 
 
 def load_reward_source(spec: str | os.PathLike[str]) -> PokerReward:
-    """The reward of a run folder (via ``pokerirl.irl.load_reward``) or of ``authors:FILE``."""
-    fingerprint = reward_source_fingerprint(spec)  # a clear error before anything loads
-    if is_authors_spec(spec):
-        from pokerirl.agents.authors_reward import AuthorsReward
-
-        return AuthorsReward.from_file(_authors_path(spec))
-    from pokerirl.irl import load_reward
-
-    return ObsReward(load_reward(spec), name=str(spec), fingerprint=fingerprint)
+    """The reward of a run folder or of ``authors:FILE`` (:meth:`RewardSource.resolve`)."""
+    return RewardSource.resolve(spec).load()

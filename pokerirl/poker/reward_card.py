@@ -1,6 +1,6 @@
 """The reward card: what a poker reward prefers, in one JSON file and one figure.
 
-For a reward (any :class:`~pokerirl.agents.rewards.PokerReward`: a run folder's f, an
+For a reward (any :class:`~pokerirl.poker.rewards.PokerReward`: a run folder's f, an
 ``authors:FILE``, a transform of either) over a set of decision states (a decision table's
 rows, or a run's validation hands), the card holds:
 
@@ -20,7 +20,7 @@ rows, or a run's validation hands), the card holds:
 * ``expert_share`` (and ``expert_share_by_strength``): the expert's own actions on the same
   states, to read the argmax shares against.
 
->>> from pokerirl.agents.rewards import ObsReward
+>>> from pokerirl.poker.rewards import ObsReward
 >>> states = CardStates.from_arrays(
 ...     obs=np.zeros((2, 72), np.uint8), legal_mask=np.array([[1, 1, 1, 0], [0, 1, 1, 1]], bool),
 ...     cards=np.array([[0, 13, -1, -1, -1, -1, -1]] * 2), expert=np.array([0, 3]))
@@ -39,11 +39,11 @@ from pathlib import Path
 
 import numpy as np
 
-from pokerirl.agents.rewards import Decisions, PokerReward
 from pokerirl.encoding import ACTIONS, CALL, CHECK, FOLD, NUM_ACTIONS, parse_card
 from pokerirl.errors import InputError
 from pokerirl.game.agents import street_of
 from pokerirl.game.evaluator import hand_strength
+from pokerirl.poker.rewards import Decisions, PokerReward
 
 CARD_FILE, CARD_FIGURE = "reward_card.json", "reward_card.png"
 CARD_FORMAT = "pokerirl-reward-card/1"
@@ -409,8 +409,8 @@ def run_card(
     """The card of a run folder's reward over its validation hands (``split.json``) of
     ``table``, the decision table it was trained on; ``label`` names the table in the card
     (default: ``table``'s path; a worker's scratch copy passes the real table's path)."""
-    from pokerirl.agents.rewards import load_reward_source
     from pokerirl.irl.run import CONFIG_FILE, SPLIT_FILE
+    from pokerirl.poker.rewards import load_reward_source
 
     split = json.loads((Path(run_dir) / SPLIT_FILE).read_text())
     groups = {str(g) for g in split["validation_groups"]}

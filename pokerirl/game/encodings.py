@@ -1,0 +1,392 @@
+"""Feature encodings of a poker decision: what a reward, a policy or a DQN sees of a state.
+
+A decision state is what the engine and the decision tables both hold (:class:`States`): the
+player's hole cards and the board shown so far (in the order dealt, ``-1`` beyond), the
+raises per round as RLCard counts them, and the legal actions. An :class:`Encoding` turns a
+batch of them into one row of features each. Two exist:
+
+* ``rlcard``: RLCard 1.2.0's 72-d ``limit-holdem`` observation (:func:`~pokerirl.encoding.
+  encode_obs`), bit for bit: 52 card bits with hole and board merged, and a raise-count
+  one-hot per round. The paper's protocol and the authors' stay on it.
+* ``strength``: hole and board kept apart, and generic hand features computed by the
+  vectorized evaluator (:data:`STRENGTH_FEATURES` lists them; ``docs/encodings.md`` says why
+  each). None is a synthetic bot's own score.
+
+Every table row, run and agent records the name of its encoding; a mismatch is refused in
+one line where it is loaded (:func:`get_encoding`).
+
+>>> from pokerirl.encoding import parse_card
+>>> cards = np.array([[parse_card(c) for c in "As Ah Ad Kc 7h".split()] + [-1, -1]], np.int8)
+>>> states = States(cards=cards, raise_nums=np.zeros((1, 4), np.int8),
+...                 legal_mask=np.array([[False, True, True, True]]))
+>>> RLCARD.encode(states).shape, STRENGTH.encode(states).shape
+((1, 72), (1, 174))
+>>> row = STRENGTH.features(states)
+>>> int(row["category"].argmax()) + 1, bool(row["equity"][0, 0] > 0.85)  # trips, far ahead
+(4, True)
+"""
+
+from __future__ import annotations
+
+import functools
+from collections.abc import Mapping
+from dataclasses import dataclass
+from enum import StrEnum
+from typing import ClassVar
+
+import numpy as np
+
+from pokerirl.encoding import (
+    CALL,
+    MAX_RAISES,
+    NUM_CARDS,
+    NUM_ROUNDS,
+    OBS_SIZE,
+    encode_obs,
+)
+from pokerirl.errors import ConfigError
+from pokerirl.game.evaluator import hand_strength
+from pokerirl.game.preflop import preflop_equity
+
+NUM_RANKS = 13
+BOARD_CARDS_BY_STREET = (0, 3, 4, 5)
+# Chips in this game: blinds 1 and 2, bets 2 preflop and on the flop, 4 on the turn and river.
+BET_BY_STREET = np.array([2, 2, 4, 4])
+MAX_POT = 100  # 50 chips a player: 2 + 2·4 preflop, + 2·4 flop, + 4·4 turn, + 4·4 river
+EQUITY_SAMPLES = 64  # Monte Carlo runouts per state after the flop (preflop: a table)
+_SAMPLE_SEED = 20_261_204  # the fixed sample bank: the same state, the same features
+
+
+class EncodingName(StrEnum):
+    """The feature encodings."""
+
+    RLCARD = "rlcard"
+    STRENGTH = "strength"
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class States:
+    """A batch of decision states, as the engine and the tables hold them.
+
+    ``cards`` (N, 7): hole cards, then the board shown so far, ``-1`` beyond (see
+    :func:`pokerirl.game.agents.seat_cards`); ``raise_nums`` (N, 4): raises per round as
+    RLCard counts them (big blind excluded, capped at 4); ``legal_mask`` (N, 4) over (call,
+    raise, fold, check).
+    """
+
+    cards: np.ndarray
+    raise_nums: np.ndarray
+    legal_mask: np.ndarray
+
+    def __post_init__(self) -> None:
+        n = len(self.cards)
+        shapes = (np.shape(self.cards), np.shape(self.raise_nums), np.shape(self.legal_mask))
+        if shapes != ((n, 7), (n, NUM_ROUNDS), (n, 4)):
+            raise ValueError(f"States need (N, 7), (N, 4) and (N, 4) arrays, got {shapes}")
+
+    def __len__(self) -> int:
+        return len(self.cards)
+
+    @property
+    def street(self) -> np.ndarray:
+        """(N,) 0 preflop .. 3 river, from how many board cards are shown."""
+        shown = (np.asarray(self.cards)[:, 2:] >= 0).sum(axis=1)
+        return np.searchsorted(np.array(BOARD_CARDS_BY_STREET), shown).astype(np.int64)
+
+    def take(self, rows: np.ndarray) -> States:
+        rows = np.asarray(rows)
+        return States(cards=self.cards[rows], raise_nums=self.raise_nums[rows],
+                      legal_mask=self.legal_mask[rows])  # fmt: skip
+
+
+class Encoding:
+    """A named feature map of :class:`States` to (N, ``width``) rows of ``dtype``.
+
+    ``needs_cards``: whether it reads the cards in the order dealt (hole apart from board),
+    which RLCard's observation cannot give back.
+    """
+
+    name: ClassVar[EncodingName]
+    width: ClassVar[int]
+    dtype: ClassVar[type[np.generic]]
+    needs_cards: ClassVar[bool]
+
+    def encode(self, states: States) -> np.ndarray:
+        raise NotImplementedError
+
+    def __repr__(self) -> str:
+        return f"Encoding({self.name!r}, width={self.width})"
+
+
+class RLCardEncoding(Encoding):
+    """RLCard 1.2.0's 72-d observation (uint8), bit for bit."""
+
+    name = EncodingName.RLCARD
+    width = OBS_SIZE
+    dtype = np.uint8
+    needs_cards = False
+
+    def encode(self, states: States) -> np.ndarray:
+        return encode_obs(states.cards, states.raise_nums)
+
+
+# The strength encoding's blocks, in order: name -> width.
+STRENGTH_FEATURES: Mapping[str, int] = {
+    "hole": NUM_CARDS,  # one-hot of the two hole cards
+    "board": NUM_CARDS,  # one-hot of the board shown
+    "raises": NUM_ROUNDS * (MAX_RAISES + 1),  # RLCard's raise-count one-hot per round
+    "street": NUM_ROUNDS,  # one-hot
+    "high_rank": NUM_RANKS,  # one-hot of the higher hole rank (2 .. A)
+    "low_rank": NUM_RANKS,  # ... and of the lower one
+    "pocket_pair": 1,
+    "suited": 1,
+    "category": 9,  # one-hot made hand of the visible cards: high card .. straight flush
+    "hole_pairs_board": 1,  # hole cards whose rank is on the board: 0, 1/2 or 1
+    "top_pair": 1,  # a hole card pairs the board's highest rank
+    "overpair": 1,  # a pocket pair above every board card
+    "flush_draw": 1,  # four of a suit with a hole card among them, cards to come
+    "straight_draw": 1,  # four of five consecutive ranks with a hole card, cards to come
+    "equity": 1,  # P(win) + P(tie)/2 against a random hand, the board rolled out
+    "facing_bet": 1,
+    "pot": 1,  # chips in the pot / MAX_POT
+    "pot_odds": 1,  # to call / (pot + to call); 0 when not facing a bet
+}
+
+
+class StrengthEncoding(Encoding):
+    """Hole and board apart, plus generic hand features (float32; see the module docstring)."""
+
+    name = EncodingName.STRENGTH
+    width = sum(STRENGTH_FEATURES.values())
+    dtype = np.float32
+    needs_cards = True
+
+    def __init__(self, *, equity_samples: int = EQUITY_SAMPLES) -> None:
+        self.equity_samples = equity_samples
+
+    def encode(self, states: States) -> np.ndarray:
+        blocks = self.features(states)
+        return np.concatenate([blocks[name] for name in STRENGTH_FEATURES], axis=1)
+
+    def features(self, states: States) -> dict[str, np.ndarray]:
+        """Each block of :data:`STRENGTH_FEATURES` as an (N, width) float32 array."""
+        cards = np.asarray(states.cards, dtype=np.int64)
+        street = states.street
+        hole, board = cards[:, :2], cards[:, 2:]
+        shown = board >= 0
+        rank = (cards % NUM_RANKS + NUM_RANKS - 1) % NUM_RANKS  # 2 .. A as 0 .. 12
+        hole_rank, board_rank = rank[:, :2], np.where(shown, rank[:, 2:], -1)
+        high, low = hole_rank.max(axis=1), hole_rank.min(axis=1)
+        top_board = board_rank.max(axis=1)
+        pocket = hole_rank[:, 0] == hole_rank[:, 1]
+        on_board = (hole_rank[:, :, None] == board_rank[:, None, :]).any(axis=2)  # (N, 2)
+        flush_draw, straight_draw = _draws(cards, rank, street)
+        facing = np.asarray(states.legal_mask, dtype=bool)[:, CALL]
+        pot, to_call = pot_and_call(street, np.asarray(states.raise_nums), facing)
+        found = {
+            "hole": _one_hot_cards(hole),
+            "board": _one_hot_cards(board),
+            "raises": _raise_one_hot(states.raise_nums),
+            "street": _one_hot(street, NUM_ROUNDS),
+            "high_rank": _one_hot(high, NUM_RANKS),
+            "low_rank": _one_hot(low, NUM_RANKS),
+            "pocket_pair": pocket[:, None],
+            "suited": (hole[:, 0] // NUM_RANKS == hole[:, 1] // NUM_RANKS)[:, None],
+            "category": _one_hot(visible_category(cards) - 1, 9),
+            "hole_pairs_board": on_board.sum(axis=1)[:, None] / 2,
+            "top_pair": (on_board & (hole_rank == top_board[:, None])).any(axis=1)[:, None],
+            "overpair": (pocket & (street > 0) & (high > top_board))[:, None],
+            "flush_draw": flush_draw[:, None],
+            "straight_draw": straight_draw[:, None],
+            "equity": self.equity(cards)[:, None],
+            "facing_bet": facing[:, None],
+            "pot": (pot / MAX_POT)[:, None],
+            "pot_odds": np.where(facing, to_call / np.maximum(pot + to_call, 1), 0.0)[:, None],
+        }
+        return {k: v.astype(np.float32) for k, v in found.items()}
+
+    def equity(self, cards: np.ndarray) -> np.ndarray:
+        """(N,) equity against a uniformly random hand, the board rolled out: preflop from the
+        169-class table (:func:`pokerirl.game.preflop.preflop_equity`), after the flop by
+        ``equity_samples`` runouts of a fixed sample bank (so a state's equity is a function
+        of its cards alone: the same state, the same bytes)."""
+        cards = np.asarray(cards, dtype=np.int64)
+        found = np.empty(len(cards))
+        preflop = cards[:, 2] < 0
+        found[preflop] = preflop_equity(cards[preflop, :2])
+        later = np.flatnonzero(~preflop)
+        for first in range(0, later.size, 4096):  # bounded memory: 4096 x samples x 7 cards
+            rows = later[first : first + 4096]
+            found[rows] = sampled_equity(cards[rows], samples=self.equity_samples)
+        return found
+
+
+@functools.cache
+def _sample_bank(samples: int) -> np.ndarray:
+    """(samples, 16) the first 16 cards of ``samples`` fixed random deck orders."""
+    rng = np.random.default_rng(_SAMPLE_SEED)
+    return rng.random((samples, NUM_CARDS)).argsort(axis=1)[:, :16]
+
+
+def sampled_equity(cards: np.ndarray, *, samples: int = EQUITY_SAMPLES) -> np.ndarray:
+    """(N,) Monte Carlo equity against a random hand of states with a board shown.
+
+    Sample k deals, from the k-th fixed deck order, the first cards not already known: the
+    opponent's two, then the board still to come. At most 7 cards are known and at most 7
+    drawn, so the first 16 cards of an order always suffice.
+    """
+    cards = np.asarray(cards, dtype=np.int64)
+    n = len(cards)
+    bank = _sample_bank(samples)  # (K, 16)
+    known = np.zeros((n, NUM_CARDS), dtype=bool)
+    rows = np.repeat(np.arange(n), 7)
+    flat = cards.reshape(-1)
+    known[rows[flat >= 0], flat[flat >= 0]] = True
+    free = ~known[:, bank]  # (N, K, 16): candidates not already known
+    slot = np.cumsum(free, axis=2, dtype=np.int8) - 1  # the k-th free candidate goes to slot k
+    keep = free & (slot < 7)
+    drawn = np.empty((n, samples, 7), dtype=np.int64)
+    where_n, where_k, where_j = np.nonzero(keep)
+    drawn[where_n, where_k, slot[keep]] = bank[where_k, where_j]
+    # The board still to come, in the order drawn after the opponent's two cards.
+    missing = cards[:, 2:] < 0  # (N, 5), the same for every sample of a state
+    fill = np.maximum(np.cumsum(missing, axis=1) - 1, 0) + 2
+    to_come = np.take_along_axis(drawn, np.broadcast_to(fill[:, None, :], (n, samples, 5)), 2)
+    board = np.where(missing[:, None, :], to_come, cards[:, None, 2:])
+    mine = np.concatenate([np.broadcast_to(cards[:, None, :2], (n, samples, 2)), board], axis=2)
+    theirs = np.concatenate([drawn[:, :, :2], board], axis=2)
+    ours = hand_strength(mine.reshape(-1, 7)).reshape(n, samples)
+    other = hand_strength(theirs.reshape(-1, 7)).reshape(n, samples)
+    return ((ours > other) + 0.5 * (ours == other)).mean(axis=1)
+
+
+def pot_and_call(
+    street: np.ndarray, raise_nums: np.ndarray, facing: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """(pot, to call) in chips for the player to act, from what RLCard's state holds.
+
+    A round closes only with both players level, so each has ``2 + 2·r₀`` chips in after
+    preflop, plus the bet size times the raises of each later closed round. In the current
+    round the opponent is at the top level (the blind, or the last raise) and the player one
+    bet below it when facing a bet (the small blind's 1 chip before any raise), else level.
+
+    >>> pot, call = pot_and_call(np.array([0, 0, 1]), np.array([[0, 0, 0, 0], [1, 0, 0, 0],
+    ...     [2, 1, 0, 0]]), np.array([True, True, True]))
+    >>> pot.tolist(), call.tolist()
+    ([3, 6, 14], [1, 2, 2])
+    """
+    street = np.asarray(street, dtype=np.int64)
+    raises = np.asarray(raise_nums, dtype=np.int64)
+    closed = np.arange(NUM_ROUNDS)[None, :] < street[:, None]
+    before = np.where(closed[:, 0], 2, 0) + (np.where(closed, raises, 0) * BET_BY_STREET).sum(1)
+    now = raises[np.arange(len(street)), street]
+    bet = BET_BY_STREET[street]
+    top = np.where(street == 0, 2, 0) + bet * now
+    below = np.where((street == 0) & (now == 0), 1, top - bet)
+    mine = np.where(facing, below, top)
+    return 2 * before + top + mine, top - mine
+
+
+def visible_category(cards: np.ndarray) -> np.ndarray:
+    """(N,) made-hand category (1 high card .. 9 straight flush, as
+    :func:`pokerirl.game.evaluator.category`) of the visible cards, 2 to 7 of them
+    (``-1`` pads)."""
+    cards = np.asarray(cards, dtype=np.int64)
+    n = len(cards)
+    shown = cards >= 0
+    rank = np.where(shown, (cards % NUM_RANKS + NUM_RANKS - 1) % NUM_RANKS, 0)
+    suit = np.where(shown, cards // NUM_RANKS, 0)
+    rows = np.repeat(np.arange(n), 7)[shown.reshape(-1)]
+    by_suit = np.zeros((n, 4, NUM_RANKS), dtype=bool)
+    by_suit[rows, suit[shown], rank[shown]] = True
+    counts = by_suit.sum(axis=1)  # (N, 13) cards of each rank
+    present = counts > 0
+    largest = counts.max(axis=1)
+    pairs_or_more = (counts >= 2).sum(axis=1)
+    flush_suits = by_suit.sum(axis=2) >= 5
+    straight = _has_straight(present)
+    straight_flush = (flush_suits & _has_straight(by_suit.reshape(n * 4, -1)).reshape(n, 4)).any(1)
+    category = np.ones(n, dtype=np.int64)
+    for applies, value in (
+        (largest == 2, 2),
+        (pairs_or_more >= 2, 3),
+        (largest == 3, 4),
+        (straight, 5),
+        (flush_suits.any(axis=1), 6),
+        ((largest == 3) & (pairs_or_more >= 2), 7),
+        (largest == 4, 8),
+        (straight_flush, 9),
+    ):
+        category[applies] = value
+    return category
+
+
+def _has_straight(present: np.ndarray) -> np.ndarray:
+    """(M,) whether a (M, 13) rank-presence matrix (2 .. A) holds five ranks in a row."""
+    with_wheel = np.concatenate([present[:, 12:], present], axis=1)  # the ace plays low too
+    windows = np.lib.stride_tricks.sliding_window_view(with_wheel, 5, axis=1)
+    return np.any(np.all(windows, axis=2), axis=1)
+
+
+def _draws(cards: np.ndarray, rank: np.ndarray, street: np.ndarray) -> tuple[np.ndarray, ...]:
+    """(flush draw, straight draw) flags: four cards to a flush (or to five ranks in a row)
+    among the visible cards, a hole card among them, no such hand made yet, and cards to come
+    (the flop or the turn)."""
+    n = len(cards)
+    shown = cards >= 0
+    suit = np.where(shown, cards // NUM_RANKS, -1)
+    suit_counts = (suit[:, :, None] == np.arange(4)).sum(axis=1)  # (N, 4)
+    hole_suits = (suit[:, :2, None] == np.arange(4)).any(axis=1)
+    to_come = (street >= 1) & (street <= 2)
+    flush_draw = ((suit_counts == 4) & hole_suits).any(axis=1) & ~(suit_counts >= 5).any(axis=1)
+
+    present = np.zeros((n, NUM_RANKS), dtype=bool)
+    rows = np.repeat(np.arange(n), 7)[shown.reshape(-1)]
+    present[rows, rank[shown]] = True
+    hole = np.zeros((n, NUM_RANKS), dtype=bool)
+    hole[np.repeat(np.arange(n), 2), rank[:, :2].reshape(-1)] = True
+    wheel = lambda m: np.concatenate([m[:, 12:], m], axis=1)  # noqa: E731
+    windows = np.lib.stride_tricks.sliding_window_view(wheel(present), 5, axis=1).sum(axis=2)
+    with_hole = np.lib.stride_tricks.sliding_window_view(wheel(hole), 5, axis=1).any(axis=2)
+    straight_draw = ((windows == 4) & with_hole).any(axis=1) & ~(windows == 5).any(axis=1)
+    return flush_draw & to_come, straight_draw & to_come
+
+
+def _one_hot(index: np.ndarray, width: int) -> np.ndarray:
+    return np.eye(width, dtype=np.float32)[np.asarray(index, dtype=np.int64)]
+
+
+def _one_hot_cards(cards: np.ndarray) -> np.ndarray:
+    found = np.zeros((len(cards), NUM_CARDS), dtype=np.float32)
+    rows, columns = np.nonzero(cards >= 0)
+    found[rows, cards[rows, columns]] = 1.0
+    return found
+
+
+def _raise_one_hot(raise_nums: np.ndarray) -> np.ndarray:
+    capped = np.minimum(np.asarray(raise_nums, dtype=np.int64), MAX_RAISES)
+    slots = (MAX_RAISES + 1) * np.arange(NUM_ROUNDS) + capped  # (N, 4)
+    found = np.zeros((len(capped), NUM_ROUNDS * (MAX_RAISES + 1)), dtype=np.float32)
+    found[np.arange(len(capped))[:, None], slots] = 1.0
+    return found
+
+
+RLCARD = RLCardEncoding()
+STRENGTH = StrengthEncoding()
+ENCODINGS: Mapping[str, Encoding] = {e.name: e for e in (RLCARD, STRENGTH)}
+DEFAULT_ENCODING = EncodingName.RLCARD
+
+
+def get_encoding(name: str | Encoding | None) -> Encoding:
+    """The encoding called ``name`` (None: ``rlcard``); :class:`ConfigError` naming the
+    known ones otherwise.
+
+    >>> get_encoding("strength").width, get_encoding(None).name
+    (174, <EncodingName.RLCARD: 'rlcard'>)
+    """
+    if isinstance(name, Encoding):
+        return name
+    found = ENCODINGS.get(DEFAULT_ENCODING if name is None else name)
+    if found is None:
+        raise ConfigError(f"unknown encoding {name!r} (known: {', '.join(ENCODINGS)})")
+    return found
