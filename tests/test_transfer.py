@@ -39,10 +39,16 @@ def test_transfer_table_has_every_row_and_the_expert_baselines(
     labels = [row["label"] for row in found["rows"]]
     learned = ["raw", "raw, payoff weight 0.5", "centered", "centered, payoff weight 0.5"]
     fixed = ["tightbot", "loosebot", "always-call", "always-raise"]
-    assert labels == [*learned, "sparse DQN", *fixed]
+    assert labels == ["f argmax", "π greedy", *learned, "sparse DQN", *fixed]
     rows = {row["label"]: row for row in found["rows"]}
-    assert found["best"] in labels[:4]
-    for label in labels[:5]:
+    assert found["best"] in learned  # the best transform is a DQN's
+    assert [rows[label]["kind"] for label in ("f argmax", "π greedy", "raw", "tightbot")] == [
+        "argmax", "policy", "dqn", "fixed"]  # fmt: skip
+    # Every row plays each expert bot head to head; a bot against itself is near 0.
+    for row in found["rows"]:
+        assert set(row["mean_vs_experts"]) == {"tightbot", "loosebot"}
+    assert abs(rows["tightbot"]["mean_vs_experts"]["tightbot"]) < 500
+    for label in labels[2:7]:
         assert len(rows[label]["vs_random"]) == 2  # one per seed
         shares = rows[label]["mean_action_shares"]
         assert sum(shares.values()) == pytest.approx(1.0)

@@ -27,6 +27,8 @@ from pokerirl.agents.registry import (
     CONFIG_FILE,
     KEPT_FILE,
     MODEL_FILE,
+    POLICY_PREFIX,
+    REWARD_PREFIX,
     RLCARD_PREFIX,
     agent_fingerprint,
     resolve_agent,
@@ -49,6 +51,16 @@ def ship_agent(spec: str) -> ShippedAgent:
     """``spec`` with the bytes a worker needs to load it (read here, once)."""
     if spec in BUILT_IN_AGENTS:
         return ShippedAgent(spec=spec)
+    if spec.startswith(REWARD_PREFIX):
+        from pokerirl.poker.rewards import RewardSource
+
+        source = RewardSource.resolve(spec.removeprefix(REWARD_PREFIX))
+        return ShippedAgent(spec=spec, files=source.files)
+    if spec.startswith(POLICY_PREFIX):
+        from pokerirl.poker.agents import policy_files
+
+        files = policy_files(spec.removeprefix(POLICY_PREFIX))
+        return ShippedAgent(spec=spec, files=tuple(files.items()))
     if spec.startswith(RLCARD_PREFIX):
         path = Path(spec.removeprefix(RLCARD_PREFIX))
         return ShippedAgent(spec=spec, files=(("checkpoint.pt", path.read_bytes()),))
@@ -70,6 +82,14 @@ def land_agent(shipped: ShippedAgent, folder: str | os.PathLike[str]) -> Agent:
     folder.mkdir(parents=True, exist_ok=True)
     for name, data in shipped.files:
         (folder / name).write_bytes(data)
+    if shipped.spec.startswith(REWARD_PREFIX):
+        from pokerirl.poker.rewards import AUTHORS_FILE, AUTHORS_PREFIX, is_authors_spec
+
+        source = shipped.spec.removeprefix(REWARD_PREFIX)
+        landed = f"{AUTHORS_PREFIX}{folder / AUTHORS_FILE}" if is_authors_spec(source) else folder
+        return resolve_agent(f"{REWARD_PREFIX}{landed}")
+    if shipped.spec.startswith(POLICY_PREFIX):
+        return resolve_agent(f"{POLICY_PREFIX}{folder}")
     if shipped.spec.startswith(RLCARD_PREFIX):
         from pokerirl.agents.rlcard_import import UntrustedCheckpointWarning
 

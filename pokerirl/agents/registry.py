@@ -10,6 +10,7 @@ from pathlib import Path
 
 from pokerirl.errors import InputError
 from pokerirl.game.agents import BUILT_IN_AGENTS, Agent, make_agent
+from pokerirl.poker.agent_specs import POLICY_PREFIX, REWARD_PREFIX
 
 RLCARD_PREFIX = "rlcard:"
 # An agent folder's files, named here (torch-free) so that shipping an agent needs no torch.
@@ -17,14 +18,23 @@ MODEL_FILE, CONFIG_FILE, KEPT_FILE = "model.pt", "config.json", "kept.pt"
 
 
 def resolve_agent(spec: str) -> Agent:
-    """A built-in agent by name, the agent saved in the folder ``spec``, or, for
-    ``rlcard:PATH``, the greedy policy of an RLCard ``DQNAgent`` checkpoint file (which is
-    unpickled: trusted files only).
+    """A built-in agent by name, the agent saved in the folder ``spec``, ``reward:RUN`` (the
+    argmax of a learned reward; ``reward:authors:FILE`` too), ``policy:RUN`` (an IRL run's
+    policy, greedy), or, for ``rlcard:PATH``, the greedy policy of an RLCard ``DQNAgent``
+    checkpoint file (which is unpickled: trusted files only).
 
     Raises ``ValueError`` with a one-line message when ``spec`` is none of these.
     """
     if spec in BUILT_IN_AGENTS:
         return make_agent(spec)
+    if spec.startswith(REWARD_PREFIX):
+        from pokerirl.poker.agents import reward_agent
+
+        return reward_agent(spec)
+    if spec.startswith(POLICY_PREFIX):
+        from pokerirl.poker.agents import policy_agent
+
+        return policy_agent(spec)
     if spec.startswith(RLCARD_PREFIX):
         from pokerirl.agents.rlcard_import import load_rlcard_dqn
 

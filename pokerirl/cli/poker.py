@@ -29,6 +29,11 @@ from pokerirl.errors import InputError, UsageError
 if TYPE_CHECKING:
     from pokerirl.irl.records import EpochMetrics
 
+ENCODING_HELP = (
+    "What the reward and policy read: rlcard (RLCard's 72-d observation, the paper's) or "
+    "strength (hole and board apart, with hand features: docs/encodings.md)."
+)
+
 
 @app.command()
 def ingest(
@@ -57,13 +62,19 @@ def synth(
     seed: int = typer.Option(
         0, "--seed", **SEED_OPTION, help="Random seed: the same seed, the same files."
     ),
+    reveal_all: bool = typer.Option(
+        False,
+        "--reveal-all",
+        help="Show every player's hole cards, folds included (the truth to score rewards "
+        "on); the deals and actions are the same as without it.",
+    ),
 ) -> None:
     """Write a synthetic IRC-format month of heads-up 10-20 limit hold'em between two bots."""
     from pokerirl.game.synth import MAX_HANDS, write_synthetic_month
 
     if hands > MAX_HANDS:
         raise UsageError(f"--hands must be at most {MAX_HANDS:,} (one month), got {hands:,}")
-    folder = write_synthetic_month(out, hands=hands, seed=seed)
+    folder = write_synthetic_month(out, hands=hands, seed=seed, reveal_all=reveal_all)
     echo(f"wrote {hands} hands to {folder}")
 
 
@@ -246,6 +257,7 @@ def train(
     sigma_start: float | None = typer.Option(None, "--sigma-start"),
     sigma_end: float | None = typer.Option(None, "--sigma-end"),
     val_fraction: float | None = typer.Option(None, "--val-fraction", help="Share of hands."),
+    encoding: str = typer.Option("rlcard", "--encoding", help=ENCODING_HELP),
     threads: int = typer.Option(
         1, "--threads", min=1, help="CPU threads; small nets train best on 1."
     ),
@@ -282,6 +294,7 @@ def train(
     }
     settings = settings_from_options(load_config, algo, config_file=config, overrides=overrides)
     settings_from_options(resolve_device, device)
+    encoding = _encoding(encoding)
     summary = train_runs(
         table,
         out,
@@ -292,6 +305,7 @@ def train(
         progress=not quiet,
         overwrite=overwrite,
         backend=_backend(jobs, ray),
+        encoding=encoding,
     )
     if summary.results:  # several runs: each one, named by its folder
         for run in summary.results:
@@ -345,23 +359,42 @@ def reward_card_command(
     reward: str = typer.Argument(
         ..., help="An AIRL / H-AIRL run folder, or authors:FILE (one of the authors' rewards)."
     ),
-    table: Path = typer.Option(..., "--table", help="Decision table (pokerirl ingest) of states."),
-    out: Path = typer.Option(..., "--out", "-o", help="Folder for reward_card.json and .png."),
+    table: Path | None = typer.Option(
+        None,
+        "--table",
+        help="Decision table (pokerirl ingest) of states; default: the run's own table. On a "
+        "table of synth --reveal-all (every hand, folds too), the card scores the reward "
+        "against the expert's true actions on all states.",
+    ),
+    out: Path | None = typer.Option(
+        None, "--out", "-o", help="Folder for reward_card.json and .png; default: the run."
+    ),
     validation: bool = typer.Option(
         False, "--validation", help="Only the run's validation hands (its split.json)."
     ),
     transform: str = typer.Option("raw", "--transform", help="raw, centered or log_softmax."),
+    encoding: str | None = typer.Option(
+        None,
+        "--encoding",
+        help="The encoding the run must read (rlcard or strength); default: the run's own. "
+        "A run of another encoding is refused.",
+    ),
 ) -> None:
     """What a reward prefers: f per action, the per-decision bonus, the argmax over legal
     actions by street and equity, its agreement with the expert and the legal-majority rule,
     and what a DQN is predicted to learn. Writes OUT/reward_card.json and reward_card.png.
     """
     from pokerirl.poker.reward_card import CardStates, reward_card, write_card
-    from pokerirl.poker.rewards import TRANSFORMS, TransformedReward, load_reward_source
+    from pokerirl.poker.rewards import TRANSFORMS, RewardSource, TransformedReward
 
     if transform not in TRANSFORMS:
         raise UsageError(f"unknown --transform {transform!r} ({', '.join(TRANSFORMS)})")
-    source = load_reward_source(reward)
+    resolved = RewardSource.resolve(reward)
+    if encoding is not None:
+        _check_encoding(resolved, _encoding(encoding))
+    table = table if table is not None else _run_table(resolved)
+    out = out if out is not None else _run_folder(resolved, "--out")
+    source = resolved.load()
     groups = None
     if validation:
         split = Path(reward) / "split.json"
@@ -472,6 +505,11 @@ def agent_train(
     train_every: int | None = typer.Option(None, help="Stored transitions per gradient update."),
     concurrent_hands: int | None = typer.Option(None, help="Hands played in lock-step."),
     self_play_every: int | None = typer.Option(None, help="Updates between refreshes of 'self'."),
+    encoding: str = typer.Option(
+        Default(TRAIN_CONFIG, "encoding"),
+        help="What the q-network reads: rlcard (RLCard's 72-d observation) or strength (hole "
+        "and board apart, with hand features). The reward reads its own run's encoding.",
+    ),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bar."),
 ) -> None:
     """Train a DQN agent (or one per seed) on the sparse payoff or a learned reward.
@@ -507,6 +545,7 @@ def agent_train(
         "eval_every": eval_every,
         "eval_hands": eval_hands,
         "eval_seed": eval_seed,
+        **{k: _encoding(v) for k, v in given(ctx, encoding=encoding).items()},
     }
     dqn_flags = {
         "hidden": widths,
@@ -559,3 +598,44 @@ def agent_train(
                 f"{kept.eval['random'].mbb_per_hand:+.0f} mbb/h in its evaluation); "
                 f"{MODEL_FILE} is the final model"
             )
+
+
+
+def _encoding(name: str) -> str:
+    """``--encoding NAME``, checked (a usage error naming the known ones)."""
+    from pokerirl.game.encodings import ENCODINGS
+
+    if name not in ENCODINGS:
+        raise UsageError(f"unknown --encoding {name!r} ({', '.join(ENCODINGS)})")
+    return name
+
+
+def _check_encoding(source: object, expected: str) -> None:
+    """Refuse, in one line naming the run, a reward run of another encoding."""
+    found = getattr(source, "encoding", None)
+    if found is not None and found != expected:
+        raise InputError(
+            f"{getattr(source, 'spec', source)}: a reward on the {found} encoding, not "
+            f"{expected} (its config.json's data.encoding)"
+        )
+
+
+def _run_folder(source: object, option: str) -> Path:
+    """A reward run's folder, as the default of ``option`` (an authors' file has none)."""
+    spec = str(getattr(source, "spec", source))
+    if getattr(source, "is_authors", False):
+        raise UsageError(f"{option} is needed for {spec} (an authors' file, not a run folder)")
+    return Path(spec)
+
+
+def _run_table(source: object) -> Path:
+    """The decision table a reward run was trained on (its ``config.json``'s data.path)."""
+    from pokerirl.irl.run import load_run_config
+
+    folder = _run_folder(source, "--table")
+    path = (load_run_config(folder).get("data") or {}).get("path")
+    if not isinstance(path, str) or not Path(path).is_file():
+        raise UsageError(
+            f"--table is needed: {folder} records no table that still exists ({path!r})"
+        )
+    return Path(path)

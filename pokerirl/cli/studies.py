@@ -104,6 +104,12 @@ def study(
     reward_transform: str | None = typer.Option(
         None, "--reward-transform", help="raw, centered or log_softmax: the learned-reward DQNs'."
     ),
+    encoding: str | None = typer.Option(
+        None,
+        "--encoding",
+        help="What rewards, policies and DQNs read: rlcard (the paper's 72-d, the default) or "
+        "strength (hole and board apart, with hand features).",
+    ),
     jobs: int = typer.Option(2, "--jobs", min=1, help="Processes for training and play."),
     ray: str | None = typer.Option(None, "--ray", metavar="ADDRESS", help=RAY_HELP),
     overwrite: bool = typer.Option(
@@ -132,6 +138,7 @@ def study(
         jobs=jobs,
         reward_sources=tuple(sources_given) or None,
         reward_transform=reward_transform,
+        encoding=encoding,
     )
     result = run_study(
         sources,
@@ -178,13 +185,19 @@ def transfer(
         help="Rules to compare the agents' actions with (tightbot, loosebot, legal_majority), "
         "or none.",
     ),
+    encoding: str | None = typer.Option(
+        None,
+        "--encoding",
+        help="What the DQNs read: rlcard or strength; default: the reward run's encoding.",
+    ),
     jobs: int = typer.Option(2, "--jobs", min=1, help="Processes training seeds at once."),
     ray: str | None = typer.Option(None, "--ray", metavar="ADDRESS", help=RAY_HELP),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bars."),
 ) -> None:
     """Does a learned reward teach the expert's play? DQNs on each reward transform (and
-    payoff weight), each judged against random, against the expert rules on the states it
-    visits and by its action shares, beside the expert bots, always-call and a sparse DQN.
+    payoff weight), and f's argmax and the IRL policy (no RL), each judged against random,
+    head to head against each expert bot, against the expert rules on the states it visits
+    and by its action shares, beside the expert bots, always-call and a sparse DQN.
     Writes OUT/transfer.json and transfer.md; a rerun reuses the trained agents."""
     from pokerirl.seeds import parse_seeds
     from pokerirl.studies.poker.transfer import TransferConfig, parse_list, run_transfer
@@ -198,6 +211,7 @@ def transfer(
         agent_preset=agent_preset,
         eval_hands=eval_hands,
         experts=settings_from_options(parse_list, experts),
+        encoding=encoding,
     )
     result = run_transfer(
         reward_run, out, config, backend=_backend(jobs, ray), progress=not quiet, say=echo

@@ -67,6 +67,7 @@ class IngestSummary:
     single_blind_hands: int
     chips_mismatch_hands: int
     orphan_pdb_lines: int
+    kept_fold_hands: int = 0  # kept hands that ended in a fold (cards shown: synth --reveal-all)
 
     def to_json(self) -> dict[str, object]:
         return {
@@ -90,6 +91,7 @@ class IngestSummary:
             "single_blind_hands": self.single_blind_hands,
             "chips_mismatch_hands": self.chips_mismatch_hands,
             "orphan_pdb_lines": self.orphan_pdb_lines,
+            "kept_fold_hands": self.kept_fold_hands,
         }
 
     @classmethod
@@ -158,6 +160,7 @@ def _ingest(
     # (month key, arrival order, table in memory or spilled part file)
     months: list[tuple[str, int, pa.Table | Path]] = []
     in_memory = 0
+    # Showdown hands hold no fold; a fold row (a hand with its cards revealed) adds the key.
     counts = {action: 0 for action in ACTIONS if action != ACTIONS[FOLD]}
     with tqdm(desc="ingest", unit=" hands", disable=not progress, smoothing=0) as bar:
         for order, month in enumerate(iter_months(sources)):
@@ -165,7 +168,7 @@ def _ingest(
             table, concealed = month_table(hands)
             stats.decisions_concealed += concealed
             for action, count in zip(*_value_counts(table.column("action")), strict=True):
-                counts[action] += count
+                counts[action] = counts.get(action, 0) + count
             if table.num_rows == 0:
                 continue
             months.append((month.key, order, table))
@@ -242,4 +245,5 @@ def _summary(
         single_blind_hands=stats.single_blind_hands,
         chips_mismatch_hands=stats.chips_mismatch_hands,
         orphan_pdb_lines=stats.orphan_pdb_lines,
+        kept_fold_hands=stats.kept_fold_hands,
     )

@@ -150,7 +150,7 @@ def month_table(hands: MonthHands) -> tuple[pa.Table, int]:
         [
             text[:length]
             for text in (
-                " ".join(map(CARD_TEXT.__getitem__, flat_board[i : i + 5]))
+                " ".join(CARD_TEXT[card] for card in flat_board[i : i + 5] if card >= 0)
                 for i in range(0, len(flat_board), 5)
             )
             for length in _BOARD_TEXT_LENGTH

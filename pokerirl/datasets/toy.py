@@ -21,6 +21,7 @@ from pokerirl.encoding import (
     ACTIONS,
     BOARD_SIZE_BY_ROUND,
     CALL,
+    CARD_TEXT,
     CHECK,
     FOLD,
     MAX_RAISES,
@@ -63,6 +64,8 @@ def toy_expert_table(
     raise_nums = rng.integers(0, MAX_RAISES + 1, size=(n, 4))
     raise_nums[np.arange(4) > street[:, None]] = 0  # no raises on streets not yet reached
     obs = encode_obs(cards, raise_nums)
+    hole_text = np.array([" ".join(CARD_TEXT[c] for c in row[:2]) for row in cards])
+    board_text = np.array([" ".join(CARD_TEXT[c] for c in row[2:] if c >= 0) for row in cards])
 
     facing_bet = rng.random(n) < 0.5
     legal = np.zeros((n, NUM_ACTIONS), dtype=bool)
@@ -96,5 +99,7 @@ def toy_expert_table(
             "action_id": pa.array(action_id, pa.int8()),
             "legal_mask": fixed_size_list(legal, pa.bool_()),
             "reward": pa.array(reward, pa.float32()),
+            "hole_cards": pa.array(hole_text, pa.string()),
+            "board": pa.array(board_text, pa.string()),
         }
     )

@@ -100,8 +100,14 @@ def write_synthetic_month(
     hands: int,
     seed: int,
     players: tuple[ScriptedPlayer, ScriptedPlayer] = DEFAULT_PLAYERS,
+    reveal_all: bool = False,
 ) -> Path:
     """Write ``hands`` heads-up hands as ``out_dir/holdem/<YYYYMM>/``; return that folder.
+
+    ``reveal_all`` writes every player's hole cards in ``pdb``, in hands that end in a fold
+    too (real logs show them only at showdown), so that ingest keeps every hand: the truth
+    against which a reward learned from showdowns alone is scored. The deals and the bots'
+    actions are the same as without it, for the same seed.
 
     Raises:
         ValueError: one line, for ``hands`` outside [1, :data:`MAX_HANDS`] or a negative seed.
@@ -160,7 +166,7 @@ def write_synthetic_month(
         roster_lines.append(f"{timestamp}  2 " + " ".join(sorted(p.nick for p in players)))
         for position, player in enumerate(by_position):
             cards = ""
-            if outcome.folder is None:
+            if outcome.folder is None or reveal_all:
                 cards = " " + " ".join(card_str(c) for c in holes[hand, position])
             actions = [a if a else "-" for a in outcome.actions[position]]
             pdb_lines[player.nick].append(

@@ -97,7 +97,9 @@ class AIRLConfig:
     # optimization
     reward_lr: float = 1e-3
     policy_lr: float = 1e-3
-    reward_weight_decay: float = 5e-3
+    # 0, not the authors' 5e-3: on poker tables their decay flattens f into one value per
+    # action, whose legal argmax is "check, else call" (issue 31; their preset keeps it).
+    reward_weight_decay: float = 0.0
     batch_size: int = 256
     epochs: int = 50
     # H-AIRL

@@ -56,6 +56,7 @@ REWARD_FILE, POLICY_FILE, CONFIG_FILE = "reward.pt", "policy.pt", "config.json"
 METRICS_FILE, BASELINES_FILE, SPLIT_FILE = "metrics.jsonl", "baselines.json", "split.json"
 TIMINGS_FILE, SUMMARY_FILE = "timings.json", "summary.json"
 REWARD_RUN_FILES = (REWARD_FILE, CONFIG_FILE)  # what identifies a learned-reward run
+POLICY_RUN_FILES = (POLICY_FILE, CONFIG_FILE)  # ... and its policy
 
 
 class RunError(PokerIRLError, ValueError):
@@ -494,6 +495,15 @@ def load_policy(run_dir: str | os.PathLike[str]) -> nn.Module:
     """The trained policy of a run (on CPU, in eval mode)."""
     _, policy = build_from_record(load_run_config(run_dir))
     _load_state(policy, Path(run_dir) / POLICY_FILE)
+    return policy
+
+
+def policy_from_bytes(
+    record: Mapping[str, Any], policy_bytes: bytes, *, where: str | os.PathLike[str]
+) -> nn.Module:
+    """:func:`load_policy` from a checked ``config.json`` and the bytes of ``policy.pt``."""
+    _, policy = build_from_record(record)
+    _load_state_bytes(policy, policy_bytes, where=where)
     return policy
 
 

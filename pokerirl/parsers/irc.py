@@ -31,7 +31,7 @@ from typing import IO
 
 import numpy as np
 
-from pokerirl.encoding import CARD_INDEX
+from pokerirl.encoding import BOARD_SIZE_BY_ROUND, CARD_INDEX
 from pokerirl.errors import PokerIRLError
 from pokerirl.parsers.replay import Replay, ReplayError, replay_actions
 
@@ -100,6 +100,7 @@ class IngestStats:
     chips_mismatch_hands: int = 0
     decisions_concealed: int = 0
     orphan_pdb_lines: int = 0
+    kept_fold_hands: int = 0  # kept hands that ended in a fold, their cards shown
     months: list[str] = field(default_factory=list)
 
     def malformed(self, where: str, why: str) -> None:
@@ -741,6 +742,38 @@ def _showdown_inconsistency(
     return None
 
 
+def _fold_inconsistency(
+    board: tuple[int, ...], hole: tuple[int, ...], last_street: int, *, chips: tuple[int, ...]
+) -> str | None:
+    """Why a hand that ended in a fold, cards shown, cannot have happened as logged, or None."""
+    in_a, in_b, won_a, won_b = chips
+    if len(board) != BOARD_SIZE_BY_ROUND[last_street]:
+        return "board does not match the street the hand ended on"
+    if in_a + in_b != won_a + won_b:
+        return "chips won differ from chips put in"
+    shown = [card for card in (*hole, *board) if card >= 0]
+    if len(set(shown)) != len(shown):
+        return "a card dealt twice"
+    return None
+
+
+def _hand_inconsistency(
+    replay: Replay,
+    board: tuple[int, ...],
+    hole: tuple[int, ...],
+    chips: tuple[int, int, int, int],
+    stats: IngestStats,
+) -> str | None:
+    """Why a hand with cards shown cannot be kept as logged, or None (a kept fold is counted)."""
+    if replay.showdown:
+        both_shown = min(hole) >= 0
+        return _showdown_inconsistency(board, hole, both_shown=both_shown, chips=chips)
+    # A fold with cards shown: never in the real logs; `pokerirl synth --reveal-all` writes it.
+    reason = _fold_inconsistency(board, hole, replay.last_street, chips=chips)
+    stats.kept_fold_hands += reason is None
+    return reason
+
+
 def _classify_hand(
     timestamp: int,
     hdb_fields: list[str],
@@ -786,12 +819,10 @@ def _classify_hand(
     if replay.max_raises > _MAX_RAISES:
         stats.malformed(hdb_where, f"{replay.max_raises} raises in a round, beyond int16")
         return "malformed_line"
-    if not replay.showdown or (cards_a is None and cards_b is None):
+    if cards_a is None and cards_b is None:
         return "cards_concealed"
     hole = (cards_a or (-1, -1)) + (cards_b or (-1, -1))
-    reason = _showdown_inconsistency(
-        board, hole, both_shown=bool(cards_a and cards_b), chips=(in_a, in_b, won_a, won_b)
-    )
+    reason = _hand_inconsistency(replay, board, hole, (in_a, in_b, won_a, won_b), stats)
     if reason is not None:
         stats.inconsistent_reasons[reason] += 1
         return "inconsistent_hand"
@@ -804,7 +835,7 @@ def _classify_hand(
     hands.replays.append(replay)
     hands.players += (first[0], second[0])
     hands.hole_cards += hole
-    hands.boards += board
+    hands.boards += board + (-1,) * (5 - len(board))  # a fold's board stops where it ended
     hands.chips_in += (in_a, in_b)
     hands.chips_won += (won_a, won_b)
     return KEPT

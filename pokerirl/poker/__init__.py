@@ -13,7 +13,22 @@ package joins the two. For example::
 
 from __future__ import annotations
 
-from pokerirl.poker.data import read_table, transitions_from_arrow
-from pokerirl.poker.train import train_runs, train_table
+from typing import Any
+
+_LAZY = {
+    "read_table": "data",
+    "transitions_from_arrow": "data",
+    "train_runs": "train",
+    "train_table": "train",
+}
 
 __all__ = ["read_table", "train_runs", "train_table", "transitions_from_arrow"]
+
+
+def __getattr__(name: str) -> Any:
+    # torch takes a second to import: naming a reward or an agent spec should not pay for it.
+    if name in _LAZY:
+        import importlib
+
+        return getattr(importlib.import_module(f"pokerirl.poker.{_LAZY[name]}"), name)
+    raise AttributeError(f"module 'pokerirl.poker' has no attribute {name!r}")

@@ -31,6 +31,7 @@ rows, or a run's validation hands), the card holds:
 
 from __future__ import annotations
 
+import dataclasses
 import io
 import json
 import os
@@ -205,7 +206,16 @@ class RewardCard:
     preference_spread: float | None = None  # mean over states of max - min f, legal, no fold
     expert_share: dict[str, float] | None = None  # the expert's own actions, for comparison
     expert_share_by_strength: list[dict[str, float]] | None = None
+    # A run's own validation numbers (run_card): f's argmax alignment beside its BC baseline.
+    reward_alignment: float | None = None
+    bc_alignment: float | None = None
     format: str = CARD_FORMAT
+
+    @property
+    def below_bc(self) -> bool:
+        """Whether the run's reward agrees with the expert less than its BC baseline."""
+        reward, bc = self.reward_alignment, self.bc_alignment
+        return reward is not None and bc is not None and reward < bc
 
     def to_json(self) -> str:
         return json.dumps(asdict(self), indent=2) + "\n"
@@ -247,6 +257,12 @@ class RewardCard:
             + ("" if rule is None else f" (legal majority = expert {rule:.1%})")
         )
         lines.append(f"  prediction: {self.prediction}")
+        if self.below_bc:
+            lines.append(
+                f"  warning: on its validation hands the run's reward argmax agrees with the "
+                f"expert {self.reward_alignment:.1%}, below its behaviour cloning's "
+                f"{self.bc_alignment:.1%}"
+            )
         return "\n".join(lines)
 
 
@@ -418,7 +434,13 @@ def run_card(
     record = json.loads((Path(run_dir) / CONFIG_FILE).read_text())
     reward = load_reward_source(run_dir)
     reward.name = f"{record['algo']} reward (seed {record['hyperparameters']['seed']})"
-    return reward_card(reward, states)
+    result = record.get("result") or {}
+    final = result.get("final_metrics") or {}
+    return dataclasses.replace(
+        reward_card(reward, states),
+        reward_alignment=final.get("val_reward_alignment"),
+        bc_alignment=(result.get("baselines") or {}).get("bc"),
+    )
 
 
 def card_summary(cards: list[RewardCard]) -> dict[str, object]:
@@ -445,6 +467,11 @@ def card_summary(cards: list[RewardCard]) -> dict[str, object]:
         if all(c.expert_share for c in cards)
         else None,
         "predictions": [c.prediction for c in cards],
+        **(
+            {"below_bc": sum(c.below_bc for c in cards)}
+            if any(c.bc_alignment is not None for c in cards)
+            else {}
+        ),
     }
 
 

@@ -23,6 +23,7 @@ BUILT_INS = ("random", "call", "raise")
 IRL_SETTINGS = ("ours", "authors")
 AGENT_PRESETS = ("default", "authors")  # pokerirl.agents.train.AGENT_PRESETS
 TRANSFORMS = ("raw", "centered", "log_softmax")  # pokerirl.poker.rewards.TRANSFORMS
+ENCODINGS = ("rlcard", "strength")  # pokerirl.game.encodings.ENCODINGS (torch-free here)
 
 # The authors' poker IRL settings (silue-dev/hairl, src/utils/training.py, LimitHoldem-v0):
 # one hidden layer of 64 in both nets, leaky ReLU, lr 1e-3 for both, weight decay 5e-3 on the
@@ -92,6 +93,7 @@ class StudyConfig:
     authors_games: int = 1_000
     reward_sources: tuple[tuple[str, str], ...] = ()
     reward_transform: str = "raw"
+    encoding: str = "rlcard"  # what rewards, policies and DQNs read (pokerirl.game.encodings)
     jobs: int = 2  # processes; the one setting that does not change a result
 
     def __post_init__(self) -> None:
@@ -117,6 +119,7 @@ class StudyConfig:
             )
             and len({algo for algo, _ in self.reward_sources}) == len(self.reward_sources),
             f"reward transform in {', '.join(TRANSFORMS)}": self.reward_transform in TRANSFORMS,
+            f"encoding in {', '.join(ENCODINGS)}": self.encoding in ENCODINGS,
         }
         broken = [name for name, ok in checks.items() if not ok]
         if broken:
@@ -126,6 +129,8 @@ class StudyConfig:
         """What determines the results: every field but ``jobs``."""
         found = dataclasses.asdict(self)
         found.pop("jobs")
+        if self.encoding == "rlcard":  # studies made before encodings keep their records
+            found.pop("encoding")
         found["seeds"] = list(self.seeds)
         found["reward_sources"] = [list(pair) for pair in self.reward_sources]
         return found

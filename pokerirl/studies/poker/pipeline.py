@@ -88,7 +88,7 @@ class Execution:
     overwrite: bool = False  # recompute units made with other settings instead of refusing
 
     def train_runs(
-        self, table: Path, out: Path, *, algo: str, runs: int, config: AIRLConfig
+        self, table: Path, out: Path, *, algo: str, runs: int, config: AIRLConfig, encoding: str
     ) -> None:
         from pokerirl.poker.train import train_runs
 
@@ -101,6 +101,7 @@ class Execution:
             progress=self.progress,
             overwrite=self.overwrite,
             backend=self.backend,
+            encoding=encoding,
         )
 
     def train_seeds(self, out: Path, config: TrainConfig, seeds: Sequence[int]) -> None:
@@ -280,7 +281,7 @@ def irl_stage(study: Study, ingested: Ingested) -> IRLResult:
         "epochs": config.irl_epochs,
         "seed": config.irl_seed,
         "upstream": ingested.fingerprint,
-        **_non_default(config, "irl_settings"),
+        **_non_default(config, "irl_settings", "encoding"),
     }
     if config.reward_sources:
         stage["reward_sources"] = reward_source_prints(config)
@@ -304,7 +305,8 @@ def irl_stage(study: Study, ingested: Ingested) -> IRLResult:
         if config.runs == 1:
             single_run(study, algo, settings, out, legacy)
         else:  # run-<k> units, each with its record
-            study.execution.train_runs(table, out, algo=algo, runs=config.runs, config=settings)
+            study.execution.train_runs(table, out, algo=algo, runs=config.runs, config=settings,
+                                       encoding=config.encoding)  # fmt: skip
         found[algo] = summarize_irl(out, config.runs)
     return found
 
@@ -319,18 +321,22 @@ def single_run(
     from pokerirl.poker.train import train_table_into
 
     table = study.root / TABLE
+    encoding = study.config.encoding
+    unit_config = {"unit": "poker-study-irl", "algo": algo, "settings": settings.to_dict(),
+                   **_non_default(study.config, "encoding")}  # fmt: skip
     unit: Unit[None] = Unit(
         key=f"{algo} run",
         target=out,
-        config={"unit": "poker-study-irl", "algo": algo, "settings": settings.to_dict()},
+        config=unit_config,
         inputs={"table": digest(table.read_bytes())},
         legacy=(legacy,),
     )
     if check(unit, overwrite=study.overwrite).fate is Fate.REUSED:
         return
     with writing(unit, unhashed={TIMINGS_FILE}) as folder:
-        train_table_into(read_table(table), folder, algo=algo, config=settings,
-                         progress=study.execution.progress, table=table)  # fmt: skip
+        train_table_into(read_table(table, encoding=encoding), folder, algo=algo,
+                         config=settings, progress=study.execution.progress, table=table,
+                         encoding=encoding)  # fmt: skip
 
 
 def reward_source_prints(config: StudyConfig) -> dict[str, str]:
@@ -406,6 +412,7 @@ def agents_stage(study: Study, irl: IRLResult) -> AgentsResult:
             seed=config.seeds[0],
             eval_every=min(config.eval_every, hands),
             eval_hands=config.eval_hands,
+            encoding=config.encoding,
         )
         if algo is None:
             study.execution.train_seeds(out, base, config.seeds)

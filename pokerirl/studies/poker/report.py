@@ -444,6 +444,15 @@ def cards_markdown(report: StudyReport) -> list[str]:
             lines.append(f"- {algo}: {card.predictions[0]}")
             if card.figure:
                 lines.append(f"  ![{algo} reward card]({card.figure})")
+    for algo, card in cards.items():
+        if card and card.below_bc:
+            lines += [
+                "",
+                f"**Warning: {card.below_bc} of {card.runs} {algo} rewards agree with the expert "
+                "less than behaviour cloning on the same validation hands** (f's argmax below "
+                "BC's alignment): such a reward has learned less of the expert than a plain "
+                "classifier.",
+            ]
     return [*lines, ""]
 
 

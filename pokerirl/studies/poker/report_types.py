@@ -293,6 +293,7 @@ class CardSummary:
     expert_share: Mapping[str, MeanStd] | None
     predictions: list[str]
     figure: str | None = None
+    below_bc: int | None = None  # runs whose reward argmax falls below their BC baseline
 
     def to_json(self) -> Json:
         found: Json = {
@@ -308,6 +309,8 @@ class CardSummary:
         }
         if self.figure is not None:
             found["figure"] = self.figure
+        if self.below_bc is not None:
+            found["below_bc"] = self.below_bc
         return found
 
     @classmethod
@@ -324,6 +327,7 @@ class CardSummary:
             expert_share=None if expert is None else _stats(expert),
             predictions=list(data["predictions"]),
             figure=data.get("figure"),
+            below_bc=data.get("below_bc"),
         )
 
 

@@ -2,10 +2,14 @@
 
 For one reward (an IRL run folder or ``authors:FILE``), DQNs are trained on each reward
 transform (``raw`` f, ``centered``, ``log_softmax``; :mod:`pokerirl.poker.rewards`) and each
-payoff weight, and a sparse DQN on the same seeds and hands. Each greedy agent then plays
-``eval_hands`` duplicate hands against random, which gives:
+payoff weight, and a sparse DQN on the same seeds and hands, all on the reward run's encoding
+(or ``encoding``). Beside them, two agents that need no RL: f's argmax (``reward:RUN``) and the
+IRL policy π played greedily (``policy:RUN``): if f's argmax plays like the expert and the DQNs
+do not, the RL failed, not the reward. Each agent then plays ``eval_hands`` duplicate hands
+against random and against each expert bot, which gives:
 
-* its result against random (mbb/h; mean and SE over seeds);
+* its result against random and head to head against each expert bot (mbb/h; mean and SE
+  over seeds): against random alone rewards calling stations;
 * the share of its decisions where it takes the action of each expert rule (the synthetic
   months' ``tightbot`` and ``loosebot`` without their noise), on the states it visits, and
   of the legal-majority rule (check if legal, else call: a calling station's);
@@ -57,6 +61,7 @@ class TransferConfig:
     agent_preset: str = "default"
     eval_hands: int = 20_000
     experts: tuple[str, ...] = RULES
+    encoding: str | None = None  # the DQNs' encoding; None: the reward run's own
 
     def __post_init__(self) -> None:
         from pokerirl.poker.rewards import TRANSFORMS
@@ -74,6 +79,10 @@ class TransferConfig:
             raise ConfigError(
                 f"unknown agent preset {self.agent_preset!r}; choose {', '.join(AGENT_PRESETS)}"
             )
+        if self.encoding is not None:
+            from pokerirl.game.encodings import get_encoding
+
+            get_encoding(self.encoding)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -86,6 +95,8 @@ class TransferRow:
     vs_random: list[float]  # mbb/h per seed
     agreement: dict[str, list[float]]  # expert rule -> share per seed
     action_shares: list[dict[str, float]]  # per seed
+    vs_experts: dict[str, list[float]] = field(default_factory=dict)  # bot -> mbb/h per seed
+    kind: str = "dqn"  # dqn, argmax (f's), policy (π greedy), or fixed (a bot, a rule)
 
     @property
     def mean_vs_random(self) -> float:
@@ -105,11 +116,20 @@ class TransferRow:
     def mean_share(self, action: str) -> float:
         return float(np.mean([shares[action] for shares in self.action_shares]))
 
+    def mean_vs(self, expert: str) -> float:
+        return float(np.mean(self.vs_experts[expert]))
+
+    def se_vs(self, expert: str) -> float:
+        values = np.asarray(self.vs_experts[expert])
+        return float(values.std(ddof=1) / math.sqrt(values.size)) if values.size > 1 else 0.0
+
     def summary(self) -> dict[str, Any]:
         return {
             **dataclasses.asdict(self),
             "mean_vs_random": self.mean_vs_random,
             "se_vs_random": self.se_vs_random,
+            "mean_vs_experts": {e: self.mean_vs(e) for e in self.vs_experts},
+            "se_vs_experts": {e: self.se_vs(e) for e in self.vs_experts},
             "mean_agreement": {e: self.mean_agreement(e) for e in self.agreement},
             "mean_action_shares": {a: self.mean_share(a) for a in ACTIONS},
         }
@@ -123,13 +143,15 @@ class TransferResult:
     best: str
     eval_seed: int = EVAL_SEED
     notes: list[str] = field(default_factory=list)
+    encoding: str = "rlcard"  # the DQNs'
 
     def to_json(self) -> str:
         body = {
-            "format": "pokerirl-transfer/1",
+            "format": "pokerirl-transfer/2",
             "reward": self.reward,
             "config": dataclasses.asdict(self.config),
             "eval_seed": self.eval_seed,
+            "encoding": self.encoding,
             "rows": [row.summary() for row in self.rows],
             "best": self.best,
         }
@@ -137,22 +159,30 @@ class TransferResult:
 
     def markdown(self) -> str:
         experts = list(self.config.experts)
-        head = ["agent", "vs random (mbb/h)", *[f"= {e} rule" for e in experts],
-                *[f"{a} share" for a in ACTIONS]]  # fmt: skip
+        bots = [e for e in experts if e in EXPERTS]
+        head = ["agent", "vs random (mbb/h)", *[f"vs {b} (mbb/h)" for b in bots],
+                *[f"= {e} rule" for e in experts], *[f"{a} share" for a in ACTIONS]]  # fmt: skip
         lines = [
             f"# Transfer test: {self.reward}",
             "",
             f"{len(self.config.seeds)} seeds x {self.config.hands:,} training hands "
-            f"({self.config.agent_preset} DQN preset); each agent then plays "
-            f"{self.config.eval_hands:,} duplicate hands against random (seed {self.eval_seed}),"
-            " on which its actions are compared with the expert rules (noiseless). ± is the SE "
-            "over seeds.",
+            f"({self.config.agent_preset} DQN preset, {self.encoding} encoding); each agent "
+            f"then plays {self.config.eval_hands:,} duplicate hands against random and against "
+            f"each expert bot (seed {self.eval_seed}); its actions against random are compared "
+            "with the expert rules (noiseless). ± is the SE over seeds. `f argmax` and "
+            "`π greedy` need no RL: they are the reward's and the IRL policy's own play.",
             "",
         ]
+
+        def result(mean: float, se: float) -> str:
+            return f"{mean:+,.0f} ± {se:,.0f}"
+
         lines += markdown_table(
             head,
             (
-                [row.label, f"{row.mean_vs_random:+,.0f} ± {row.se_vs_random:,.0f}",
+                [row.label, result(row.mean_vs_random, row.se_vs_random),
+                 *[result(row.mean_vs(b), row.se_vs(b)) if b in row.vs_experts else "-"
+                   for b in bots],
                  *[f"{row.mean_agreement(e):.1%}" for e in experts],
                  *[f"{row.mean_share(a):.1%}" for a in ACTIONS]]
                 for row in self.rows
@@ -184,8 +214,17 @@ def _rule(name: str, seen: Any) -> np.ndarray:
     return make_agent(name).rule(seen.obs, seen.legal_mask, seen.cards)  # type: ignore[attr-defined]
 
 
-def _judge(agent: Any, config: TransferConfig) -> tuple[float, dict[str, float], dict[str, float]]:
-    """An agent against random: mbb/h, agreement with each expert rule, action shares."""
+@dataclass(frozen=True, kw_only=True)
+class _Judged:
+    vs_random: float
+    agreement: dict[str, float]
+    shares: dict[str, float]
+    vs_experts: dict[str, float]
+
+
+def _judge(agent: Any, config: TransferConfig) -> _Judged:
+    """An agent against random (mbb/h, agreement with each expert rule, action shares) and
+    head to head against each expert bot (mbb/h), all on the same duplicate deals."""
     from pokerirl.game import DecisionLog, make_agent, play_match
 
     log: list[DecisionLog] = []
@@ -194,19 +233,27 @@ def _judge(agent: Any, config: TransferConfig) -> tuple[float, dict[str, float],
     seen = DecisionLog.concatenate(log)
     agreement = {rule: float((_rule(rule, seen) == seen.actions).mean()) for rule in config.experts}
     counts = np.bincount(seen.actions, minlength=len(ACTIONS)) / max(len(seen.actions), 1)
-    return result.mbb_per_hand, agreement, {a: float(counts[i]) for i, a in enumerate(ACTIONS)}
+    vs_experts = {}
+    for bot in (e for e in config.experts if e in EXPERTS):
+        match = play_match(agent, make_agent(bot), hands=config.eval_hands, seed=EVAL_SEED)
+        vs_experts[bot] = match.mbb_per_hand
+    return _Judged(vs_random=result.mbb_per_hand, agreement=agreement,
+                   shares={a: float(counts[i]) for i, a in enumerate(ACTIONS)},
+                   vs_experts=vs_experts)  # fmt: skip
 
 
 def _row(label: str, agents: list[Any], config: TransferConfig, transform: str | None = None,
-         weight: float | None = None) -> TransferRow:  # fmt: skip
+         weight: float | None = None, kind: str = "dqn") -> TransferRow:  # fmt: skip
     judged = [_judge(agent, config) for agent in agents]
     return TransferRow(
         label=label,
         transform=transform,
         payoff_weight=weight,
-        vs_random=[j[0] for j in judged],
-        agreement={e: [j[1][e] for j in judged] for e in config.experts},
-        action_shares=[j[2] for j in judged],
+        vs_random=[j.vs_random for j in judged],
+        agreement={e: [j.agreement[e] for j in judged] for e in config.experts},
+        action_shares=[j.shares for j in judged],
+        vs_experts={b: [j.vs_experts[b] for j in judged] for b in judged[0].vs_experts},
+        kind=kind,
     )
 
 
@@ -223,12 +270,15 @@ def run_transfer(
     ``transfer.json`` and ``transfer.md`` there."""
     from pokerirl.agents import resolve_agent
     from pokerirl.agents.train import agent_preset, train_seeds
+    from pokerirl.poker.agent_specs import POLICY_PREFIX, REWARD_PREFIX
     from pokerirl.poker.rewards import RewardSource
 
-    RewardSource.resolve(reward_run)  # one line for a bad reward, before anything runs
+    source = RewardSource.resolve(reward_run)  # one line for a bad reward, before anything runs
+    encoding = config.encoding or source.encoding or "rlcard"
     out = Path(out)
     base = agent_preset(config.agent_preset, hands=config.hands, seed=config.seeds[0],
-                        eval_every=config.hands, eval_hands=2_000)  # fmt: skip
+                        eval_every=config.hands, eval_hands=2_000,
+                        encoding=encoding)  # fmt: skip
 
     def agents_of(folder: Path) -> list[Any]:
         return [resolve_agent(str(folder / f"seed-{s}")) for s in config.seeds]
@@ -237,6 +287,12 @@ def run_transfer(
         train_seeds(folder, train_config, list(config.seeds), backend=backend, progress=progress)
 
     rows: list[TransferRow] = []
+    say(f"transfer: f's argmax and the IRL policy (no RL), {config.eval_hands:,} hands each")
+    rows.append(_row("f argmax", [resolve_agent(f"{REWARD_PREFIX}{reward_run}")], config,
+                     kind="argmax"))  # fmt: skip
+    if not source.is_authors:  # an authors' file holds a reward only
+        rows.append(_row("π greedy", [resolve_agent(f"{POLICY_PREFIX}{reward_run}")], config,
+                         kind="policy"))  # fmt: skip
     for transform in config.transforms:
         for weight in config.payoff_weights:
             folder = out / "agents" / _folder(transform, weight)
@@ -254,11 +310,11 @@ def run_transfer(
     bots = [e for e in config.experts if e in EXPERTS]
     for name in (*bots, "call", "raise"):
         rows.append(_row(name if name in bots else f"always-{name}", [resolve_agent(name)],
-                         config))  # fmt: skip
+                         config, kind="fixed"))  # fmt: skip
     learned_rows = [row for row in rows if row.transform is not None]
     best = max(learned_rows, key=lambda row: (round(row.mean_agreement(), 3), row.mean_vs_random))
     result = TransferResult(reward=str(reward_run), config=config, rows=tuple(rows),
-                            best=best.label)  # fmt: skip
+                            best=best.label, encoding=encoding)  # fmt: skip
     out.mkdir(parents=True, exist_ok=True)
     write_text(out / TRANSFER_FILE, result.to_json())
     write_text(out / TRANSFER_MARKDOWN, result.markdown())
