@@ -381,7 +381,7 @@ def load_agent_config(path: str | os.PathLike[str]) -> AgentOverrides:
 def reward_run_fingerprint(run_dir: str | os.PathLike[str]) -> str:
     """``sha256:<hex>`` of a reward source: a run's ``reward.pt`` and ``config.json``, or an
     ``authors:FILE`` (:class:`pokerirl.poker.rewards.RewardSource`)."""
-    return RewardSource.resolve(run_dir).fingerprint
+    return RewardSource.read(run_dir).fingerprint
 
 
 def _evaluate(
@@ -562,7 +562,9 @@ def _train_many(
     if first.reward == RewardMode.LEARNED:
         if first.reward_run is None:
             raise ConfigError("reward 'learned' needs a reward_run (a run folder, or authors:FILE)")
-        source = RewardSource.resolve(first.reward_run)
+        # A reward given in this process is used as it is: its run is only named and hashed.
+        read = RewardSource.read if reward_fn is not None else RewardSource.resolve
+        source = read(first.reward_run)
         reward_print = source.fingerprint
     opponent_print: str
     if first.opponent == SELF_PLAY:

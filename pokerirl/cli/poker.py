@@ -403,6 +403,11 @@ def reward_card_command(
         groups = _validation_groups(split)
     states = CardStates.from_table(table, groups=groups)
     card = reward_card(TransformedReward(source, transform), states)
+    if not resolved.is_authors and transform == "raw":  # the run's own numbers, to flag below-BC
+        from pokerirl.irl.run import load_run_config
+        from pokerirl.poker.reward_card import with_run_alignments
+
+        card = with_run_alignments(card, load_run_config(reward))
     write_card(card, out)
     echo(card.render())
     echo(f"wrote {out / 'reward_card.json'} and reward_card.png")

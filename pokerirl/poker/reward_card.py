@@ -35,8 +35,10 @@ import dataclasses
 import io
 import json
 import os
+from collections.abc import Mapping
 from dataclasses import asdict, dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -434,10 +436,16 @@ def run_card(
     record = json.loads((Path(run_dir) / CONFIG_FILE).read_text())
     reward = load_reward_source(run_dir)
     reward.name = f"{record['algo']} reward (seed {record['hyperparameters']['seed']})"
+    return with_run_alignments(reward_card(reward, states), record)
+
+
+def with_run_alignments(card: RewardCard, record: Mapping[str, Any]) -> RewardCard:
+    """``card`` with its run's own validation numbers (a run's ``config.json``): f's argmax
+    alignment and the BC baseline's, so that a reward below BC is flagged."""
     result = record.get("result") or {}
     final = result.get("final_metrics") or {}
     return dataclasses.replace(
-        reward_card(reward, states),
+        card,
         reward_alignment=final.get("val_reward_alignment"),
         bc_alignment=(result.get("baselines") or {}).get("bc"),
     )

@@ -233,6 +233,14 @@ class RewardSource:
     def resolve(cls, spec: str | os.PathLike[str]) -> RewardSource:
         """Read and check ``spec``; :class:`~pokerirl.errors.InputError` (one line) when it
         is neither a poker reward run nor an ``authors:`` file."""
+        source = cls.read(spec)
+        source.load()  # every problem now, in one line naming the user's files
+        return source
+
+    @classmethod
+    def read(cls, spec: str | os.PathLike[str]) -> RewardSource:
+        """Read and hash ``spec``'s files without checking what they hold (:meth:`resolve`
+        checks); a missing file is one line."""
         from pokerirl.irl.run import REWARD_RUN_FILES
 
         text = str(spec)
@@ -246,9 +254,7 @@ class RewardSource:
                 if not (Path(text) / name).is_file():
                     raise InputError(f"{text}: not a reward run (no {name}) nor authors:FILE")
             files = tuple((name, (Path(text) / name).read_bytes()) for name in REWARD_RUN_FILES)
-        source = cls(spec=text, files=files, fingerprint=digest(b"".join(d for _, d in files)))
-        source.load()  # every problem now, in one line naming the user's files
-        return source
+        return cls(spec=text, files=files, fingerprint=digest(b"".join(d for _, d in files)))
 
     def load(self) -> PokerReward:
         """The reward, built from the bytes (never from the user's files)."""
