@@ -217,14 +217,17 @@ def speed(args: argparse.Namespace) -> None:
     rlcard_loop.train(args.rlcard_hands // 2)
     default = DQNConfig()
     runs = {}
-    for label, config in (
-        (f"pokerirl train_dqn (train_every={default.train_every})", default),
-        ("pokerirl train_dqn (train_every=1)", dataclasses.replace(default, train_every=1)),
-    ):
+    for label, config, encoding in (
+        (f"pokerirl train_dqn (train_every={default.train_every})", default, "rlcard"),
+        ("pokerirl train_dqn (train_every=1)", dataclasses.replace(default, train_every=1),
+         "rlcard"),
+        (f"  ... strength encoding (train_every={default.train_every})", default, "strength"),
+    ):  # fmt: skip
         hands = args.hands if config.train_every > 1 else args.hands // 10
         tally = Tally()
         with tally.timing():
-            learner = train_dqn(config, hands=hands, seed=args.seed, opponent=make_agent("random"))
+            learner = train_dqn(config, hands=hands, seed=args.seed, opponent=make_agent("random"),
+                                encoding=encoding)  # fmt: skip
         tally.decisions = learner.total_t
         runs[label] = (tally, learner)
     rlcard_loop.train(args.rlcard_hands - args.rlcard_hands // 2)
@@ -238,6 +241,12 @@ def speed(args: argparse.Namespace) -> None:
             f"{label + ':':40s} {wall:10,.0f} {cpu:10,.0f}"
             f"  {wall / rlcard_wall:5.1f}x {cpu / rlcard_cpu:5.1f}x"
         )
+
+    # Both ran args.hands hands: the ratio of their times is that of their hands per second.
+    (ours, _), (strength, _) = runs[next(iter(runs))], runs[list(runs)[-1]]
+    print(f"strength / rlcard training hands per second: {ours.wall / strength.wall:.2f} wall, "
+          f"{ours.cpu / strength.cpu:.2f} CPU ({args.hands / strength.wall:,.0f} and "
+          f"{args.hands / ours.wall:,.0f} hands/s wall)")  # fmt: skip
 
     random = make_agent("random")
     default_learner = next(iter(runs.values()))[1]

@@ -18,6 +18,7 @@ os.environ.setdefault("MKL_NUM_THREADS", "1")
 
 import argparse
 import time
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -111,6 +112,32 @@ def main() -> None:
         f"raise vs random, RLCard env.run ({args.rlcard_hands:,} hands): "
         f"{mbb:.1f} +- {se:.1f} mbb/h ({speed:,.0f} hands/s)"
     )
+    encodings(args)
+
+
+@dataclass(frozen=True)
+class EncodedRandom:
+    """A random agent that reads its observations in ``encoding``: what an agent of that
+    encoding costs the engine to feed (the agent itself costs nothing)."""
+
+    encoding: str
+    name: str = "random"
+
+    def act(self, obs: np.ndarray, legal_mask: np.ndarray, rng: np.random.Generator) -> Any:
+        return make_agent("random").act(obs, legal_mask, rng)
+
+
+def encodings(args: argparse.Namespace) -> None:
+    """Hands per second of random vs random when one agent reads each encoding."""
+    hands = max(args.hands // 10, 2)
+    rates = {}
+    for name in ("rlcard", "strength"):
+        match = play_match(EncodedRandom(encoding=name), make_agent("random"), hands=hands,
+                           seed=args.seed, duplicate=False)  # fmt: skip
+        rates[name] = match.hands_per_second
+        print(f"random ({name} observations) vs random ({hands:,} hands): "
+              f"{match.hands_per_second:12,.0f} hands/s")  # fmt: skip
+    print(f"ratio strength / rlcard: {rates['strength'] / rates['rlcard']:.2f}")
 
 
 if __name__ == "__main__":

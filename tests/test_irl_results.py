@@ -111,8 +111,10 @@ def test_the_settings_enums_are_their_names_in_json_and_fingerprints() -> None:
     assert json.dumps(config.to_dict()) == json.dumps(
         {k: str(v) if isinstance(v, str) else v for k, v in config.to_dict().items()}
     )
-    # `pokerirl train`'s unit identity, as main fingerprinted it before the enums.
-    unit = {"algo": Algo.HAIRL, "device": "cpu", "settings": AIRLConfig.for_algo("hairl").to_dict()}
+    # `pokerirl train`'s unit identity, as main fingerprinted it before the enums (with the
+    # reward weight decay of the time: the default is 0 since issue 31).
+    settings = AIRLConfig.for_algo("hairl", reward_weight_decay=5e-3).to_dict()
+    unit = {"algo": Algo.HAIRL, "device": "cpu", "settings": settings}
     assert fingerprint(unit) == (
         "sha256:ccea3d3748da9efb737962c9362b235fe8a291d38c79b7d2ec3492b7dd8082d8"
     )

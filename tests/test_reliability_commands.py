@@ -218,8 +218,8 @@ def test_a_reward_on_other_observations_is_named(inputs: Inputs, tmp_path: Path)
     code, lines = run_cli("reward-card", str(run), "--table", str(inputs.table), "--out", str(out))
     assert (code, one_error_line(lines)) == (
         1,
-        f"error: {run}: a reward on 8-d observations and 4 actions, not poker's 72-d "
-        "observation and 4 actions",
+        f"error: {run}: a reward on 8-d observations and 4 actions, not the rlcard encoding's "
+        "72-d states and 4 actions",
     )
 
 
