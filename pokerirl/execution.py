@@ -638,7 +638,7 @@ def run_unit_in_scratch(fn: Callable[..., R], args: tuple[Any, ...], threads: in
 def _ray_init(ray: Any, address: str, temp_dir: str | None) -> None:
     import logging
 
-    _check_reachable(address)
+    check_reachable(address)
     options: dict[str, Any] = {"log_to_driver": False, "logging_level": logging.WARNING}
     if address == LOCAL_RAY:
         options.update(include_dashboard=False, _temp_dir=temp_dir)
@@ -719,7 +719,7 @@ PROBE_SECONDS = 5.0  # how long a Ray head has to answer the first bytes of gRPC
 _HTTP2_PREFACE = b"PRI * HTTP/2.0\r\n\r\nSM\r\n\r\n" + bytes([0, 0, 0, 4, 0, 0, 0, 0, 0])
 
 
-def _check_reachable(address: str, timeout: float = 10.0) -> None:
+def check_reachable(address: str, timeout: float = 10.0) -> None:
     """Fail in one line, within seconds, when nothing listens at a ``HOST:PORT`` address, or
     something that is not a Ray head (an HTTP server, a silent port): ``ray.init`` would
     otherwise retry for ever."""

@@ -172,7 +172,7 @@ def test_other_layouts_are_refused_in_one_line(
         wider: "data/0 holds",
         other: "not the authors' Discriminator",
         not_zip: "not a torch.save zip",
-        tmp_path / "missing.model": "cannot read",
+        tmp_path / "missing.model": "no such file",
     }
     for bad, message in cases.items():
         with pytest.raises(ValueError, match=message) as error:

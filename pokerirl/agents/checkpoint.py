@@ -21,6 +21,7 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+import warnings
 from collections.abc import Mapping
 from enum import StrEnum
 from pathlib import Path
@@ -174,7 +175,9 @@ def _read_state_dict(path: Path) -> dict[str, torch.Tensor]:
     suggest ``weights_only=False``, which is the wrong advice."""
     try:
         empty = path.stat().st_size == 0
-        state = None if empty else torch.load(path, map_location="cpu", weights_only=True)
+        with warnings.catch_warnings():  # torch warns of a plain pickle before refusing it
+            warnings.simplefilter("ignore")
+            state = None if empty else torch.load(path, map_location="cpu", weights_only=True)
     except OSError as error:
         raise _bad(path, f"cannot read ({error.strerror or error})") from None
     except Exception:
@@ -185,4 +188,7 @@ def _read_state_dict(path: Path) -> dict[str, torch.Tensor]:
         isinstance(key, str) and isinstance(value, torch.Tensor) for key, value in state.items()
     ):
         raise _bad(path, "not a state_dict (a mapping of names to tensors)")
+    bad = [k for k, v in state.items() if v.is_floating_point() and not torch.isfinite(v).all()]
+    if bad:  # a NaN network plays whatever argmax NaN gives, without a word
+        raise _bad(path, f"weights hold NaN or infinity ({bad[0]})")
     return state

@@ -292,7 +292,11 @@ def _backend(jobs: int, ray: str | None, threads: int = 1) -> execution.Backend:
     """The execution backend of a fan-out command: --ray, else $RAY_ADDRESS, else --jobs."""
     if ray is not None and not ray.strip():
         raise UsageError("--ray needs an address (HOST:PORT) or 'local'")
-    return execution.choose_backend(jobs=jobs, ray=ray, threads=threads)
+    backend = execution.choose_backend(jobs=jobs, ray=ray, threads=threads)
+    if backend.kind == "ray" and backend.address != execution.LOCAL_RAY:
+        # Before any work: a study would otherwise build its data first, then fail.
+        execution.check_reachable(backend.address or "")
+    return backend
 
 
 RAY_HELP = (

@@ -12,6 +12,7 @@ import typer
 from pokerirl.cli.app import (
     INTERRUPTED,
     MAX_SEED,
+    MAX_SEEDS,
     RAY_HELP,
     RUN_ADVICE,
     SEED_OPTION,
@@ -179,7 +180,9 @@ def gym_rl(
         None, help="IRL run folder whose learned reward replaces the env reward."
     ),
     env_reward: bool = typer.Option(False, help="Train on the env reward (the baseline)."),
-    runs: int = typer.Option(10, min=1, help="Runs (seeds 0..runs-1), in OUT/run-<k>."),
+    runs: int = typer.Option(
+        10, min=1, max=MAX_SEEDS, help="Runs (seeds 0..runs-1), in OUT/run-<k>."
+    ),
     out: Path = typer.Option(..., "--out", "-o", help="Folder of the runs."),
     timesteps: int | None = typer.Option(None, min=1, help="Budget (default: the authors')."),
     evaluations: int = typer.Option(10, min=1, help="Points on the true-return curve."),
@@ -229,7 +232,9 @@ def gym_irl(
         "shipped expert into OUT/expert.parquet.",
     ),
     algo: str = typer.Option("hairl", help="airl or hairl."),
-    runs: int | None = typer.Option(None, min=1, help="Runs in lock-step (default: preset's)."),
+    runs: int | None = typer.Option(
+        None, min=1, max=MAX_SEEDS, help="Runs in lock-step (default: preset's)."
+    ),
     preset: str = typer.Option("paper", help="quick or paper: the budgets."),
     seed: int = typer.Option(
         0, **SEED_OPTION, help="Run k uses seed + k; the data split uses seed."
@@ -373,7 +378,9 @@ def gym_study(
     task: str = typer.Argument(..., metavar="ENV|all", help="A task, e.g. MountainCar-v0, or all."),
     out: Path = typer.Option(..., "--out", "-o", help="The study folder."),
     preset_name: str = typer.Option("quick", "--preset", help="quick or paper: the budgets."),
-    runs: int | None = typer.Option(None, "--runs", min=1, help="Runs per algorithm and reward."),
+    runs: int | None = typer.Option(
+        None, "--runs", min=1, max=MAX_SEEDS, help="Runs per algorithm and reward."
+    ),
     seed: int | None = GYM_SEED,
     transitions: int | None = GYM_TRANSITIONS,
     epochs: int | None = GYM_EPOCHS,
@@ -418,7 +425,9 @@ def gym_sweep(
     ),
     out: Path = typer.Option(..., "--out", "-o", help="The sweep folder."),
     preset_name: str = typer.Option("quick", "--preset", help="quick or paper: the budgets."),
-    runs: int | None = typer.Option(None, "--runs", min=1, help="Runs per point."),
+    runs: int | None = typer.Option(
+        None, "--runs", min=1, max=MAX_SEEDS, help="Runs per point."
+    ),
     seed: int | None = GYM_SEED,
     transitions: int | None = GYM_TRANSITIONS,
     epochs: int | None = GYM_EPOCHS,

@@ -12,6 +12,7 @@ import typer
 
 from pokerirl.cli.app import (
     INTERRUPTED,
+    MAX_SEEDS,
     RAY_HELP,
     RUN_ADVICE,
     SEED_OPTION,
@@ -231,7 +232,8 @@ def train(
     out: str = typer.Option(..., "--out", help="Run folder (with --runs > 1: a folder of runs)."),
     algo: str = typer.Option("hairl", "--algo", help="hairl or airl (picks the defaults)."),
     runs: int = typer.Option(
-        1, "--runs", min=1, help="Runs with seeds seed..seed+runs-1, in OUT/run-<k>."
+        1, "--runs", min=1, max=MAX_SEEDS,
+        help="Runs with seeds seed..seed+runs-1, in OUT/run-<k>.",
     ),
     overwrite: bool = typer.Option(
         False, "--overwrite", help="Replace a finished run (with --runs: runs of other settings)."

@@ -10,6 +10,7 @@ import typer
 
 from pokerirl.cli.app import (
     INTERRUPTED,
+    MAX_SEEDS,
     RAY_HELP,
     SEED_OPTION,
     Default,
@@ -89,7 +90,9 @@ def study(
         help="quick, paper (ours) or authors (their IRL and DQN settings and their "
         "tournament protocol, beside our duplicate-deal Table 1).",
     ),
-    runs: int | None = typer.Option(None, "--runs", min=1, help="IRL runs per algorithm."),
+    runs: int | None = typer.Option(
+        None, "--runs", min=1, max=MAX_SEEDS, help="IRL runs per algorithm."
+    ),
     seeds: str | None = typer.Option(
         None, "--seeds", callback=seed_list, help="Agent seeds, e.g. 0-19."
     ),
@@ -199,14 +202,14 @@ def transfer(
     head to head against each expert bot, against the expert rules on the states it visits
     and by its action shares, beside the expert bots, always-call and a sparse DQN.
     Writes OUT/transfer.json and transfer.md; a rerun reuses the trained agents."""
-    from pokerirl.seeds import parse_seeds
+    from pokerirl.seeds import seeds_as_written
     from pokerirl.studies.poker.transfer import TransferConfig, parse_list, run_transfer
 
     config = settings_from_options(
         TransferConfig,
         transforms=settings_from_options(parse_list, transforms),
         payoff_weights=settings_from_options(parse_list, payoff_weights, float),
-        seeds=tuple(parse_seeds(seeds)),
+        seeds=seeds_as_written(seeds),  # as written: a repeat is refused, as study does
         hands=hands,
         agent_preset=agent_preset,
         eval_hands=eval_hands,

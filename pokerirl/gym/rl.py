@@ -116,7 +116,7 @@ def train_rl(
     budget: int = timesteps or settings.timesteps
     if budget < 1 or evaluations < 1 or eval_episodes < 1:
         raise ConfigError("timesteps, evaluations and eval_episodes must be positive")
-    check_reward(env_id, reward)
+    check_reward(env_id, reward, f"the reward of {reward_name}")
     venv: Any = DummyVecEnv([lambda: Monitor(make_env(env_id))])
     if reward is not None:
         venv = learned_reward_env(venv, reward)
@@ -156,8 +156,9 @@ def train_rl(
     return result
 
 
-def check_reward(env_id: str, reward: RewardCallable | None) -> None:
-    """Fail in one line, before training, on an unknown env or a reward that does not fit it."""
+def check_reward(env_id: str, reward: RewardCallable | None, name: str = "the reward") -> None:
+    """Fail in one line, before training, on an unknown env or a reward that does not fit it
+    (``name``: where the reward comes from, e.g. its run folder)."""
     env = make_env(env_id)
     try:
         obs, _ = env.reset(seed=0)
@@ -168,9 +169,9 @@ def check_reward(env_id: str, reward: RewardCallable | None) -> None:
         try:
             values = np.asarray(reward(obs, action))
         except (ValueError, RuntimeError, IndexError) as error:
-            raise InputError(f"the reward does not fit {env_id}: {error}") from None
+            raise InputError(f"{name} does not fit {env_id}: {error}") from None
         if values.shape != (1,):
-            raise InputError(f"the reward gives shape {values.shape} on {env_id}, not (1,)")
+            raise InputError(f"{name} gives shape {values.shape} on {env_id}, not (1,)")
     finally:
         env.close()
 

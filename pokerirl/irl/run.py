@@ -30,6 +30,7 @@ from __future__ import annotations
 import io
 import json
 import os
+import warnings
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -477,13 +478,22 @@ def _load_state(module: nn.Module, path: Path) -> None:
 
 def _load_state_bytes(module: nn.Module, data: bytes, *, where: str | os.PathLike[str]) -> None:
     try:
-        state = torch.load(io.BytesIO(data), map_location="cpu", weights_only=True)
+        with warnings.catch_warnings():  # torch warns of a plain pickle before refusing it
+            warnings.simplefilter("ignore")
+            state = torch.load(io.BytesIO(data), map_location="cpu", weights_only=True)
     except Exception:
         raise RunError(
             f"{where}: not a readable PyTorch state_dict (corrupt or truncated)"
         ) from None
     if not isinstance(state, dict):
         raise RunError(f"{where}: holds a {type(state).__name__}, not a state_dict")
+    bad = next(
+        (k for k, v in state.items() if isinstance(v, Tensor) and v.is_floating_point()
+         and not bool(torch.isfinite(v).all())),
+        None,
+    )  # fmt: skip
+    if bad is not None:  # a NaN net trains agents on NaN rewards without a word
+        raise RunError(f"{where}: weights hold NaN or infinity ({bad})")
     try:
         module.load_state_dict(state)
     except (RuntimeError, TypeError, ValueError) as error:

@@ -38,7 +38,7 @@ import numpy as np
 
 from pokerirl.encoding import NUM_ACTIONS
 from pokerirl.errors import InputError
-from pokerirl.poker.rewards import AUTHORS_PREFIX, Decisions, PokerReward
+from pokerirl.poker.rewards import AUTHORS_PREFIX, Decisions, PokerReward, read_capped
 
 STATE_SIZE = 61  # 7 cards x 7 bits, then 4 rounds x 3 bits
 HIDDEN = 64
@@ -114,25 +114,50 @@ def _storages(pickle_bytes: bytes) -> list[tuple[str, int, str]]:
     return found
 
 
+# A real file is about 20 KB and its data.pkl under 2 KB: anything far larger is not one, and
+# is refused before it is read or inflated (a 4 MB zip can declare a 4 GiB member).
+MAX_FILE_BYTES = 1024 * 1024
+MAX_MEMBER_BYTES = 256 * 1024
+
+
 def read_authors_file(path: str | os.PathLike[str]) -> AuthorsWeights:
     """The weights of an authors' reward file; :class:`AuthorsFileError` for any other file."""
     path = Path(path)
     where = f"{AUTHORS_PREFIX}{path}"
     try:
-        raw = path.read_bytes()
-    except OSError as error:
-        raise AuthorsFileError(f"{where}: cannot read ({error.strerror or error})") from None
+        raw = read_capped(path, MAX_FILE_BYTES, where=where)
+    except InputError as error:
+        raise AuthorsFileError(str(error)) from None
     return read_authors_bytes(raw, where=where)
+
+
+def _inflated(archive: zipfile.ZipFile, name: str, cap: int, where: str) -> bytes:
+    """A member's bytes, inflating at most ``cap`` + 1 of them; a damaged member (bad CRC, a
+    broken deflate stream, a truncated archive) is one line naming the file."""
+    import zlib
+
+    try:
+        with archive.open(name) as member:
+            data = member.read(cap + 1)
+    except (zipfile.BadZipFile, zlib.error, EOFError, OSError, ValueError) as error:
+        raise AuthorsFileError(f"{where}: damaged zip member {name} ({error})") from None
+    if len(data) > cap:
+        raise AuthorsFileError(f"{where}: member {name} inflates beyond {cap:,} bytes")
+    return data
 
 
 def read_authors_bytes(raw: bytes, *, where: str) -> AuthorsWeights:
     """The weights in the bytes of an authors' reward file (``where`` names it in errors)."""
+    if len(raw) > MAX_FILE_BYTES:
+        raise AuthorsFileError(
+            f"{where}: {len(raw):,} bytes, more than the {MAX_FILE_BYTES:,} such a file can hold"
+        )
     try:
         import io
 
         archive = zipfile.ZipFile(io.BytesIO(raw))
         infos = {info.filename: info for info in archive.infolist()}
-    except (zipfile.BadZipFile, OSError, ValueError):
+    except (zipfile.BadZipFile, OSError, ValueError, EOFError):
         raise AuthorsFileError(f"{where}: not a torch.save zip (an authors' reward)") from None
     prefixes = {name.split("/", 1)[0] for name in infos}
     if len(prefixes) != 1 or any("/" not in name for name in infos):
@@ -155,10 +180,22 @@ def read_authors_bytes(raw: bytes, *, where: str) -> AuthorsWeights:
                 f"{where}: {member} holds {members[member].file_size} bytes, not the "
                 f"{size} of {parameter} {shape} in float32"
             )
-    if "byteorder" in members and archive.read(prefix + "byteorder").strip() != b"little":
+    for member, info in members.items():
+        if member not in TENSORS and info.file_size > MAX_MEMBER_BYTES:
+            raise AuthorsFileError(
+                f"{where}: member {member} declares {info.file_size:,} bytes, more than the "
+                f"{MAX_MEMBER_BYTES:,} an authors' reward holds"
+            )
+
+    def read(member: str) -> bytes:
+        size = members[member].file_size
+        cap = size if member in TENSORS else MAX_MEMBER_BYTES
+        return _inflated(archive, prefix + member, cap, where)
+
+    if "byteorder" in members and read("byteorder").strip() != b"little":
         raise AuthorsFileError(f"{where}: tensors are not little-endian")
     try:
-        storages = _storages(archive.read(prefix + "data.pkl"))
+        storages = _storages(read("data.pkl"))
     except (ValueError, IndexError, TypeError, KeyError):
         raise AuthorsFileError(f"{where}: data.pkl is not a torch module pickle") from None
     wanted = [(m.removeprefix("data/"), int(np.prod(s))) for m, (_, s) in TENSORS.items()]
@@ -169,7 +206,7 @@ def read_authors_bytes(raw: bytes, *, where: str) -> AuthorsWeights:
             f"{storages[0][2] if storages else '?'!r})"
         )
     tensors = [
-        np.frombuffer(archive.read(prefix + member), dtype="<f4").reshape(shape).astype(np.float32)
+        np.frombuffer(read(member), dtype="<f4").reshape(shape).astype(np.float32)
         for member, (_, shape) in TENSORS.items()
     ]
     if not all(np.isfinite(t).all() for t in tensors):

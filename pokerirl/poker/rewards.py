@@ -210,6 +210,40 @@ def is_authors_spec(spec: str | os.PathLike[str]) -> bool:
     return str(spec).startswith(AUTHORS_PREFIX)
 
 
+# An authors' reward is about 20 KB; a run's reward.pt and config.json are small nets' and a
+# record's. Far larger files are not rewards: refused before they are read (issue 36).
+MAX_AUTHORS_BYTES = 1024 * 1024
+MAX_RUN_FILE_BYTES = 64 * 1024 * 1024
+
+
+def read_capped(path: Path, cap: int, *, where: str) -> bytes:
+    """The bytes of the regular file ``path``, refused in one line naming ``where`` when it
+    is missing, not a regular file (a folder, a device, a FIFO) or larger than ``cap``: its
+    kind and size are checked before a byte is read."""
+    import stat
+
+    try:
+        info = path.stat()
+    except FileNotFoundError:
+        raise InputError(f"{where}: no such file") from None
+    except OSError as error:
+        raise InputError(f"{where}: cannot read ({error.strerror or error})") from None
+    if stat.S_ISDIR(info.st_mode):
+        raise InputError(f"{where}: is a folder, not a file")
+    if not stat.S_ISREG(info.st_mode):
+        raise InputError(f"{where}: not a regular file (a device, a FIFO or a socket)")
+    if info.st_size > cap:
+        raise InputError(f"{where}: {info.st_size:,} bytes, more than the {cap:,} it may hold")
+    try:
+        with path.open("rb") as stream:
+            data = stream.read(cap + 1)
+    except OSError as error:
+        raise InputError(f"{where}: cannot read ({error.strerror or error})") from None
+    if len(data) > cap:  # it grew since the check
+        raise InputError(f"{where}: more than the {cap:,} bytes it may hold")
+    return data
+
+
 @dataclass(frozen=True, kw_only=True)
 class RewardSource:
     """A reward a user named (a run folder of ``pokerirl train``, or ``authors:FILE``),
@@ -246,14 +280,18 @@ class RewardSource:
         text = str(spec)
         if is_authors_spec(text):
             path = Path(text.removeprefix(AUTHORS_PREFIX))
-            if not path.is_file():
+            if not os.path.lexists(path):
                 raise InputError(f"{text}: no such file (authors:FILE names an authors' reward)")
-            files: tuple[tuple[str, bytes], ...] = ((AUTHORS_FILE, path.read_bytes()),)
+            data = read_capped(path, MAX_AUTHORS_BYTES, where=text)
+            files: tuple[tuple[str, bytes], ...] = ((AUTHORS_FILE, data),)
         else:
             for name in REWARD_RUN_FILES:
-                if not (Path(text) / name).is_file():
+                if not os.path.lexists(Path(text) / name):
                     raise InputError(f"{text}: not a reward run (no {name}) nor authors:FILE")
-            files = tuple((name, (Path(text) / name).read_bytes()) for name in REWARD_RUN_FILES)
+            files = tuple(
+                (name, read_capped(Path(text) / name, MAX_RUN_FILE_BYTES, where=f"{text}/{name}"))
+                for name in REWARD_RUN_FILES
+            )
         return cls(spec=text, files=files, fingerprint=digest(b"".join(d for _, d in files)))
 
     def load(self) -> PokerReward:

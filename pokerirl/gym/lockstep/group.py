@@ -123,8 +123,9 @@ def train_rl_group(
                                                                and len(outs) != R):
         raise ValueError(f"a lock-step group needs one reward, name (and folder) per seed; "
                          f"got {R} seeds, {len(rewards)} rewards, {len(reward_names)} names")
-    for reward in {id(reward): reward for reward in rewards}.values():
-        check_reward(env_id, reward)
+    named = {id(reward): (reward, name) for reward, name in zip(rewards, reward_names, strict=True)}
+    for reward, name in named.values():
+        check_reward(env_id, reward, f"the reward of {name}")
     algo = make_group(env_id, settings, seeds=seeds, rewards=rewards)
     every = max(timesteps // evaluations, 1)
     curves: list[list[CurvePoint]] = [[] for _ in range(R)]

@@ -72,6 +72,9 @@ class TransferConfig:
             raise ConfigError("payoff weights must lie in [0, 1]")
         if not self.seeds or self.hands < 1 or self.eval_hands < 2 or self.eval_hands % 2:
             raise ConfigError("need seeds, hands >= 1 and an even eval_hands >= 2")
+        if len(set(self.seeds)) != len(self.seeds):
+            repeated = next(s for s in self.seeds if self.seeds.count(s) > 1)
+            raise ConfigError(f"seed {repeated} is given twice: every DQN seed once")
         unknown = [e for e in self.experts if e not in RULES]
         if unknown:
             raise ConfigError(f"unknown rule {unknown[0]!r} ({', '.join(RULES)})")
