@@ -15,11 +15,15 @@ expert's true action. For each (encoding, reward weight decay), ``--runs`` runs:
   centered) with the strength encoding, ``--seeds`` each, f's argmax and π greedy, judged
   against random, head to head against each bot and against each bot's rule.
 
+With ``--source MONTH`` (real IRC data, e.g. the April 1995 sample) there is no truth: the
+runs are trained and scored on the month's own table (every expert row), and BC on the truth
+is left out; the rest is the same.
+
 Everything is resumable (the runs and agents are store units) and seeded: the same arguments
 give the same numbers. Writes ``OUT/recovery.json`` and prints a markdown summary.
 
     python benchmarks/recovery.py --out /work/exp [--hands 30000] [--runs 3] [--jobs 2]
-        [--dqn-seeds 0-2] [--dqn-hands 50000] [--no-transfer]
+        [--dqn-seeds 0-2] [--dqn-hands 50000] [--no-transfer] [--source MONTH]
 """
 
 from __future__ import annotations
@@ -119,16 +123,23 @@ def main() -> None:
     parser.add_argument("--dqn-seeds", default="0-2")
     parser.add_argument("--dqn-hands", type=int, default=50_000)
     parser.add_argument("--no-transfer", action="store_true")
+    parser.add_argument("--source", type=Path, help="a real IRC month instead of a synthetic one")
     args = parser.parse_args()
     torch.set_num_threads(1)
     started = time.time()
     out: Path = args.out
     out.mkdir(parents=True, exist_ok=True)
-    showdown, truth_table = tables(out, args.hands, args.month_seed)
+    if args.source is None:
+        showdown, truth_table = tables(out, args.hands, args.month_seed)
+    else:  # real data: the table is its own (and only) judge
+        showdown = truth_table = out / "expert.parquet"
+        if not showdown.is_file():
+            ingest_table([args.source], showdown)
     truth = CardStates.from_table(truth_table)
     backend = Backend(jobs=args.jobs)
+    source = None if args.source is None else str(args.source)
     found: dict[str, Any] = {"hands": args.hands, "month_seed": args.month_seed,
-                             "runs": args.runs, "configs": {}}  # fmt: skip
+                             "runs": args.runs, "configs": {}, "source": source}  # fmt: skip
     for encoding, decay in CONFIGS:
         key = f"{encoding}, decay {decay:g}"
         folder = out / "runs" / f"hairl-{encoding}-decay{decay:g}"
@@ -138,8 +149,10 @@ def main() -> None:
                    backend=backend, encoding=encoding)  # fmt: skip
         runs = [folder / f"run-{k}" for k in range(args.runs)] if args.runs > 1 else [folder]
         scores = [score_run(run, truth) for run in runs]
-        bc_truth = [bc_on_truth(showdown, truth_table, encoding, decay, k)
-                    for k in range(args.runs)]  # fmt: skip
+        bc_truth = [float("nan")]  # no truth on real data
+        if args.source is None:
+            bc_truth = [bc_on_truth(showdown, truth_table, encoding, decay, k)
+                        for k in range(args.runs)]  # fmt: skip
         summary = {name: mean_se([s[name] for s in scores]) for name in (
             "agree_expert", "top_bucket_raise", "weak_facing_bet_fold", "agree_legal_majority",
             "val_reward_alignment", "val_alignment", "bc_val")}  # fmt: skip
@@ -197,10 +210,16 @@ def markdown(found: dict[str, Any]) -> str:
     def pct(stat: dict[str, float]) -> str:
         return f"{100 * stat['mean']:.1f} ± {100 * stat['se']:.1f}"
 
-    lines = [
+    source = found.get("source")
+    what = (
         f"Synthetic month: {found['hands']:,} hands (seed {found['month_seed']}); H-AIRL on the "
-        f"showdown-only table, {found['runs']} runs per row (seeds 0..{found['runs'] - 1}); "
-        "scored on every state of the --reveal-all table. ± is the SE over runs.",
+        "showdown-only table, scored on every state of the --reveal-all table"
+        if source is None
+        else f"Real data ({source}): H-AIRL on its table, scored on every row of it"
+    )
+    lines = [
+        f"{what}; {found['runs']} runs per row (seeds 0..{found['runs'] - 1}). ± is the SE "
+        "over runs.",
         "",
         "| encoding, decay | argmax = expert (%) | top-bucket raise (%) | fold share (%) | "
         "folds weak facing bet (%) | = legal majority (%) | BC val (%) | BC on truth (%) |",

@@ -47,11 +47,39 @@ def read_parquet(
         missing = [name for name in required if name not in schema.names]
         if missing:
             raise InputError(f"{path} lacks required column(s): {', '.join(missing)}")
+        check_footer(parquet.metadata, os.fstat(file.fileno()).st_size, str(path))
         columns = [*required, *(c for c in optional if c in schema.names)]
         try:
             return parquet.read(columns=columns)
         except (pa.ArrowException, OSError) as error:
             raise InputError(f"cannot read {path}: {first_line(error)}") from None
+
+
+# Our tables inflate about 20 times (zstd over small integers); a footer that declares far
+# more than this many bytes per byte of file is not a table, and reading it would allocate
+# what it declares before failing (issue 36).
+MAX_INFLATION = 1000
+
+
+def check_footer(metadata: pq.FileMetaData, file_bytes: int, source: str) -> None:
+    """Refuse, in one line naming ``source``, a Parquet footer whose declared sizes the file
+    cannot hold: a column chunk larger than the file, or rows that would inflate more than
+    :data:`MAX_INFLATION` times its size. Checked before a row is read."""
+    declared = 0
+    for group in range(metadata.num_row_groups):
+        row_group = metadata.row_group(group)
+        declared += row_group.total_byte_size
+        for column in range(row_group.num_columns):
+            if row_group.column(column).total_compressed_size > file_bytes:
+                raise InputError(
+                    f"{source}: its footer declares a column chunk larger than the file "
+                    f"({file_bytes:,} bytes): not a readable table"
+                )
+    if declared > MAX_INFLATION * max(file_bytes, 1):
+        raise InputError(
+            f"{source}: its footer declares {metadata.num_rows:,} rows and {declared:,} bytes, "
+            f"more than {MAX_INFLATION:,} times the file's {file_bytes:,}: not a readable table"
+        )
 
 
 def fixed_width(

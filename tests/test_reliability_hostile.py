@@ -212,3 +212,28 @@ def test_a_ray_address_that_is_not_a_head_is_refused_before_any_work(tmp_path: P
     assert result.exit_code == 1 and "an HTTP server answers there" in result.output
     assert result.output.count("\n") == 1, result.output  # no progress line before it
     assert not (tmp_path / "g").exists() and time.perf_counter() - started < 15
+
+
+def test_a_parquet_footer_that_declares_more_than_the_file_holds_is_refused(
+    tmp_path: Path,
+) -> None:
+    """A footer declaring 2^31 rows and 2 GB in a small file: refused before any row is read
+    (a stub of the footer: pyarrow writes only true ones); a true table passes."""
+    from types import SimpleNamespace
+
+    import pyarrow.parquet as pq
+
+    from pokerirl.datasets.toy import toy_expert_table
+    from pokerirl.parquet import check_footer, read_parquet
+
+    chunk = SimpleNamespace(total_compressed_size=1_000)
+    group = SimpleNamespace(total_byte_size=2 << 30, num_columns=1, column=lambda j: chunk)
+    lying = SimpleNamespace(num_rows=2**31, num_row_groups=1, row_group=lambda i: group)
+    with pytest.raises(InputError, match="declares 2,147,483,648 rows and 2,147,483,648 bytes"):
+        check_footer(lying, 100_000, "t.parquet")  # type: ignore[arg-type]
+    chunk.total_compressed_size = 200_000
+    group.total_byte_size = 1_000
+    with pytest.raises(InputError, match="a column chunk larger than the file"):
+        check_footer(lying, 100_000, "t.parquet")  # type: ignore[arg-type]
+    pq.write_table(toy_expert_table(num_hands=50), tmp_path / "true.parquet")
+    assert read_parquet(tmp_path / "true.parquet", ["obs"], what="table").num_rows > 50
