@@ -337,3 +337,9 @@ def test_sweep_runs_irl_then_rl_per_point_and_shares_the_preset_point(tmp_path: 
         assert (out / name).read_bytes().startswith(b"\x89PNG")
     again = CliRunner().invoke(app, args)
     assert again.exit_code == 0 and (out / "sweep.csv").read_text().splitlines() == rows
+
+
+def test_every_json_file_of_a_gym_study_is_strict_json(mountaincar: Path) -> None:
+    from test_study import strict_json_files
+
+    assert strict_json_files(mountaincar) > 10

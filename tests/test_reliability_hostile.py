@@ -237,3 +237,27 @@ def test_a_parquet_footer_that_declares_more_than_the_file_holds_is_refused(
         check_footer(lying, 100_000, "t.parquet")  # type: ignore[arg-type]
     pq.write_table(toy_expert_table(num_hands=50), tmp_path / "true.parquet")
     assert read_parquet(tmp_path / "true.parquet", ["obs"], what="table").num_rows > 50
+
+
+def test_nan_or_infinity_in_a_gym_table_is_one_line(tmp_path: Path) -> None:
+    import numpy as np
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    from pokerirl.irl import Transitions
+
+    n = 20
+    obs = np.zeros((n, 2), np.float32)
+    obs[7, 1] = np.nan
+    columns = {
+        "obs": pa.FixedSizeListArray.from_arrays(pa.array(obs.reshape(-1)), 2),
+        "next_obs": pa.FixedSizeListArray.from_arrays(pa.array(np.zeros(2 * n, np.float32)), 2),
+        "action": pa.array(np.zeros(n, np.int64)),
+        "reward": pa.array(np.full(n, np.inf, np.float32)),
+        "done": pa.array(np.zeros(n, bool)),
+        "episode": pa.array(np.arange(n) // 5),
+    }
+    pq.write_table(pa.table(columns), tmp_path / "rollouts.parquet")
+    with pytest.raises(InputError, match=r"column 'obs' holds NaN or infinity \(1 row\(s\), the "
+                       "first row 7\\)"):  # fmt: skip
+        Transitions.from_parquet(tmp_path / "rollouts.parquet")

@@ -317,3 +317,31 @@ def test_a_study_folder_of_main_is_reused_or_refused_naming_its_stage_record(
                                          r"\(settings.epochs 3 -> 2\)"):  # fmt: skip
         run_study([month], out, config)
     assert units_of(out) == units
+
+
+def strict_json_files(folder: Path) -> int:
+    """Parse every JSON and JSON-lines file under ``folder`` refusing NaN and Infinity (which
+    Python writes by default and no other JSON reader accepts); the number of files read."""
+
+    def refuse(constant: str) -> None:
+        raise ValueError(f"bare {constant}")
+
+    count = 0
+    for path in sorted(folder.rglob("*.json*")):
+        if path.suffix not in (".json", ".jsonl"):
+            continue
+        text = path.read_text()
+        for line in text.splitlines() if path.suffix == ".jsonl" else [text]:
+            if line.strip():
+                try:
+                    json.loads(line, parse_constant=refuse)
+                except ValueError as error:
+                    raise AssertionError(f"{path}: {error}") from None
+        count += 1
+    return count
+
+
+@pytest.mark.slow
+def test_every_json_file_of_a_study_is_strict_json(finished: tuple[Path, Path, list[str]]) -> None:
+    _, out, _ = finished
+    assert strict_json_files(out) > 20

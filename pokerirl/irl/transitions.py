@@ -149,13 +149,24 @@ class Transitions:
             kind = table.column(name).type
             if not (pa.types.is_floating(kind) or pa.types.is_integer(kind)):
                 raise InputError(f"{path}: column {name!r} must be numeric, got {kind}")
+        rewards = table.column("reward").to_numpy().astype(np.float32)
+        # NaN or infinity trains to a NaN reward without a word, and its metrics are not JSON.
+        for name, values in (("obs", obs), ("next_obs", next_obs), ("action", actions),
+                             ("reward", rewards)):  # fmt: skip
+            finite = np.isfinite(values).reshape(len(values), -1).all(axis=1)
+            if not finite.all():
+                row = int(np.flatnonzero(~finite)[0])
+                raise InputError(
+                    f"{path}: column {name!r} holds NaN or infinity ({int((~finite).sum())} "
+                    f"row(s), the first row {row})"
+                )
         return cls.from_arrays(
             obs,
             actions,
             groups=table.column("episode").to_numpy().astype(np.int64),
             next_obs=next_obs,
             dones=table.column("done").to_numpy(zero_copy_only=False),
-            rewards=table.column("reward").to_numpy().astype(np.float32),
+            rewards=rewards,
             low=low,
             high=high,
         )
