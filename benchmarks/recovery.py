@@ -11,9 +11,11 @@ expert's true action. For each (encoding, reward weight decay), ``--runs`` runs:
 * behaviour cloning (the same policy net, α = 1, no adversary): its validation alignment on
   the showdown table (``baselines.json``), and its agreement with the expert on the truth
   table when trained on the showdown table's training hands;
-* then ``pokerirl transfer`` on each run of the chosen configuration: DQNs on f (raw and
-  centered) with the strength encoding, ``--seeds`` each, f's argmax and π greedy, judged
-  against random, head to head against each bot and against each bot's rule.
+* then ``pokerirl transfer`` on each run of the chosen configuration: DQNs on f (``raw`` and
+  ``advantage``, the transform under which f's argmax is the optimal policy) with the strength
+  encoding, ``--dqn-seeds`` each, and on run 0 with the 72-d encoding; f's argmax and π
+  greedy; all judged against random, head to head against each bot and against each bot's
+  rule.
 
 With ``--source MONTH`` (real IRC data, e.g. the April 1995 sample) there is no truth: the
 runs are trained and scored on the month's own table (every expert row), and BC on the truth
@@ -123,6 +125,7 @@ def main() -> None:
     parser.add_argument("--dqn-seeds", default="0-2")
     parser.add_argument("--dqn-hands", type=int, default=50_000)
     parser.add_argument("--no-transfer", action="store_true")
+    parser.add_argument("--transforms", default="raw,advantage", help="the DQNs' reward transforms")
     parser.add_argument("--source", type=Path, help="a real IRC month instead of a synthetic one")
     args = parser.parse_args()
     torch.set_num_threads(1)
@@ -183,7 +186,7 @@ def transfer_all(out: Path, args: argparse.Namespace, found: dict[str, Any],
             target = out / "transfer" / f"{run.name}-{dqn_encoding}"
             print(f"[{time.time() - started:6.0f}s] transfer {run} ({dqn_encoding} DQNs)",
                   flush=True)  # fmt: skip
-            config = TransferConfig(transforms=("raw", "centered"), seeds=seeds,
+            config = TransferConfig(transforms=tuple(args.transforms.split(",")), seeds=seeds,
                                     hands=args.dqn_hands, encoding=dqn_encoding)  # fmt: skip
             result = run_transfer(run, target, config, backend=Backend(jobs=args.jobs))
             for row in result.rows:

@@ -218,7 +218,7 @@ def test_an_agent_folder_of_an_unknown_encoding_is_refused(tmp_path: Path) -> No
     from pokerirl.agents.checkpoint import load_agent, save_agent
     from pokerirl.agents.dqn import QNetwork
 
-    save_agent(tmp_path / "a", QNetwork(hidden=(8,), obs_size=STRENGTH.width),
+    save_agent(tmp_path / "a", QNetwork(hidden=(8,), obs_size=STRENGTH.width, input_norm=False),
                {"hidden": [8], "encoding": "strength"})  # fmt: skip
     assert load_agent(tmp_path / "a").encoding == "strength"
     save_agent(tmp_path / "b", QNetwork(hidden=(8,)), {"hidden": [8], "encoding": "colour"})

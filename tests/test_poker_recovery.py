@@ -101,3 +101,44 @@ def test_a_reward_below_its_behaviour_cloning_is_flagged(weak_run: Path) -> None
     again = CliRunner().invoke(app, ["reward-card", str(weak_run / "run")])
     assert again.exit_code == 0, again.output
     assert "warning: on its validation hands the run's reward argmax" in again.output
+
+
+def test_a_dqn_on_the_strength_encoding_follows_a_strength_dependent_reward() -> None:
+    """Cause 4 of issue 31: a reward that pays raising only with strong hands. On the
+    strength encoding (no input batch norm) and its advantage transform, the DQN raises
+    strong hands and checks or calls weak ones, as the reward's argmax does (88% and 2%
+    here). Checked to fail with the input batch norm of RLCard's network (67% of strong
+    hands) and with the raw reward (it never raises: fold's -20 swamps the regression)."""
+    from pokerirl.agents.dqn import DQNConfig, train_dqn
+    from pokerirl.game import DecisionLog, make_agent, play_match
+    from pokerirl.game.encodings import STRENGTH, STRENGTH_FEATURES
+    from pokerirl.poker.rewards import Decisions, ObsReward, TransformedReward
+
+    column = list(STRENGTH_FEATURES).index("equity")
+    offset = sum(list(STRENGTH_FEATURES.values())[:column])
+
+    def f(obs: np.ndarray, actions: np.ndarray) -> np.ndarray:
+        strong = obs[:, offset] > 0.65
+        raise_value = np.where(strong, 1.0, -1.0)
+        return np.select([actions == 1, actions == 2], [raise_value, -20.0], 0.0).astype(
+            np.float32
+        )
+
+    reward = TransformedReward(ObsReward(f, encoding="strength"), "advantage")
+    torch.set_num_threads(1)
+    torch.manual_seed(0)
+    config = DQNConfig(concurrent_hands=256, learning_rate=5e-4, train_every=4,
+                       epsilon_decay_steps=5_000)  # fmt: skip
+    learner = train_dqn(config, hands=10_000, seed=0, opponent=make_agent("random"),
+                        reward_fn=reward, encoding="strength")  # fmt: skip
+    log: list[DecisionLog] = []
+    play_match(learner.greedy_agent(), make_agent("random"), hands=4_000, seed=1, log=log)
+    seen = DecisionLog.concatenate(log)
+    strong = Decisions(obs=seen.obs, legal_mask=seen.legal_mask, cards=seen.cards).encode(
+        STRENGTH
+    )[:, offset] > 0.65
+    can_raise = seen.legal_mask[:, 1]
+    raised = seen.actions == 1
+    assert raised[strong & can_raise].mean() > 0.8, raised[strong & can_raise].mean()
+    assert raised[~strong & can_raise].mean() < 0.2, raised[~strong & can_raise].mean()
+    assert (seen.actions == 2).mean() < 0.05  # it does not fold

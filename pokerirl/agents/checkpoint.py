@@ -29,7 +29,7 @@ from typing import Any
 
 import torch
 
-from pokerirl.agents.dqn import GreedyQAgent, QNetwork
+from pokerirl.agents.dqn import GreedyQAgent, QNetwork, input_norm
 from pokerirl.agents.registry import CONFIG_FILE, KEPT_FILE, MODEL_FILE
 from pokerirl.atomic import write_bytes, write_torch
 from pokerirl.errors import InputError
@@ -111,7 +111,7 @@ def load_agent(folder: str | os.PathLike[str]) -> GreedyQAgent:
     hidden, plays, encoding = _read_config(folder / CONFIG_FILE)
     checkpoint = folder / (KEPT_FILE if plays == Plays.KEPT else MODEL_FILE)
     state = _read_state_dict(checkpoint)
-    network = QNetwork(hidden=hidden, obs_size=encoding.width)
+    network = QNetwork(hidden=hidden, obs_size=encoding.width, input_norm=input_norm(encoding))
     try:
         network.load_state_dict(state)
     except (RuntimeError, ValueError, TypeError) as error:

@@ -117,16 +117,23 @@ class QNetwork(nn.Module):
     """RLCard's ``EstimatorNetwork``: batch norm of the input, tanh MLP, one value per action.
 
     The same layers as RLCard (less its no-op ``Flatten``), so its checkpoints load here.
-    ``obs_size`` is the width of the encoding it reads (RLCard's 72 by default).
+    ``obs_size`` is the width of the encoding it reads (RLCard's 72 by default);
+    ``input_norm`` False leaves out the batch norm (an identity in its place). Encodings other
+    than RLCard's go without it: their features are already scaled, and batch statistics of
+    their rare one-hot columns over 32 samples swing so much that a q-network fitted through
+    them agrees with its own reward's argmax on 42% of states, against 95% without (issue 31).
 
     >>> QNetwork(hidden=(8,))(torch.zeros(3, 72)).shape
     torch.Size([3, 4])
     """
 
-    def __init__(self, *, hidden: tuple[int, ...] = (64, 64), obs_size: int = OBS_SIZE) -> None:
+    def __init__(
+        self, *, hidden: tuple[int, ...] = (64, 64), obs_size: int = OBS_SIZE,
+        input_norm: bool = True,
+    ) -> None:  # fmt: skip
         super().__init__()
         sizes = (obs_size, *hidden)
-        self.norm = nn.BatchNorm1d(obs_size)
+        self.norm: nn.Module = nn.BatchNorm1d(obs_size) if input_norm else nn.Identity()
         layers: list[nn.Module] = []
         for fan_in, fan_out in itertools.pairwise(sizes):
             layers += [nn.Linear(fan_in, fan_out), nn.Tanh()]
@@ -139,6 +146,12 @@ class QNetwork(nn.Module):
 
     def forward(self, obs: torch.Tensor) -> torch.Tensor:
         return self.mlp(self.norm(obs))
+
+
+def input_norm(encoding: Encoding) -> bool:
+    """Whether a q-network on ``encoding`` normalizes its input: RLCard's network does (and
+    its checkpoints hold the statistics); the scaled encodings go without (see QNetwork)."""
+    return encoding.name == EncodingName.RLCARD
 
 
 def greedy_actions(q_values: torch.Tensor, legal_mask: torch.Tensor) -> torch.Tensor:
@@ -283,7 +296,8 @@ class DQNLearner:
     def create(cls, config: DQNConfig, encoding: Encoding = RLCARD) -> DQNLearner:
         """Fresh networks on ``encoding``'s states (seed torch first for reproducible
         weights)."""
-        q_net = QNetwork(hidden=config.hidden, obs_size=encoding.width)
+        q_net = QNetwork(hidden=config.hidden, obs_size=encoding.width,
+                         input_norm=input_norm(encoding))  # fmt: skip
         return cls(
             config=config,
             q_net=q_net,

@@ -46,6 +46,9 @@ class Transform(StrEnum):
     RAW = "raw"
     CENTERED = "centered"  # minus its mean over the legal actions
     LOG_SOFTMAX = "log_softmax"
+    # f minus its max over the legal actions, floored: 0 for f's argmax, negative otherwise, so
+    # following f's argmax earns the most any policy can (0), whatever the horizon.
+    ADVANTAGE = "advantage"
 
 
 class RaiseCounts(StrEnum):
@@ -56,6 +59,7 @@ class RaiseCounts(StrEnum):
 
 
 TRANSFORMS: tuple[str, ...] = tuple(Transform)
+ADVANTAGE_FLOOR = 10.0  # in units of f: far below the spread of the actions the expert takes
 RAISE_COUNTS: tuple[str, ...] = tuple(RaiseCounts)
 AUTHORS_PREFIX = "authors:"
 AUTHORS_FILE = "authors.model"  # a shipped authors: file's name in a worker's folder
@@ -166,6 +170,9 @@ def transform_values(values: np.ndarray, legal_mask: np.ndarray, transform: str)
     [[-1.0, 1.0, nan, nan]]
     >>> round(float(np.exp(transform_values(values, legal, "log_softmax")[0, :2]).sum()), 6)
     1.0
+    >>> transform_values(np.array([[1.0, 3.0, -200.0, 9.0]]), np.array([[1, 1, 1, 0]], bool),
+    ...                  "advantage").tolist()
+    [[-2.0, 0.0, -10.0, nan]]
     """
     if transform not in TRANSFORMS:
         raise ConfigError(f"unknown reward transform {transform!r} ({', '.join(TRANSFORMS)})")
@@ -176,6 +183,11 @@ def transform_values(values: np.ndarray, legal_mask: np.ndarray, transform: str)
     elif transform == Transform.LOG_SOFTMAX:
         top = np.nanmax(values, axis=1, keepdims=True)
         values = values - top - np.log(np.nansum(np.exp(values - top), axis=1, keepdims=True))
+    elif transform == Transform.ADVANTAGE:
+        # The floor: an action the expert never takes (fold, in showdown-only data) sits at
+        # f = -200 and would swamp a q-network's squared error; -ADVANTAGE_FLOOR still rules it
+        # out (issue 31).
+        values = np.maximum(values - np.nanmax(values, axis=1, keepdims=True), -ADVANTAGE_FLOOR)
     return values.astype(np.float32)
 
 

@@ -22,7 +22,7 @@ IRL_ALGOS = ("airl", "hairl")
 BUILT_INS = ("random", "call", "raise")
 IRL_SETTINGS = ("ours", "authors")
 AGENT_PRESETS = ("default", "authors")  # pokerirl.agents.train.AGENT_PRESETS
-TRANSFORMS = ("raw", "centered", "log_softmax")  # pokerirl.poker.rewards.TRANSFORMS
+TRANSFORMS = ("raw", "centered", "log_softmax", "advantage")  # pokerirl.poker.rewards
 ENCODINGS = ("rlcard", "strength")  # pokerirl.game.encodings.ENCODINGS (torch-free here)
 
 # The authors' poker IRL settings (silue-dev/hairl, src/utils/training.py, LimitHoldem-v0):

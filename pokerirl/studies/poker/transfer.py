@@ -1,7 +1,8 @@
 """The transfer test (``pokerirl transfer``): does a learned reward teach the expert's play?
 
 For one reward (an IRL run folder or ``authors:FILE``), DQNs are trained on each reward
-transform (``raw`` f, ``centered``, ``log_softmax``; :mod:`pokerirl.poker.rewards`) and each
+transform (``raw`` f, ``centered``, ``log_softmax``, ``advantage``;
+:mod:`pokerirl.poker.rewards`) and each
 payoff weight, and a sparse DQN on the same seeds and hands, all on the reward run's encoding
 (or ``encoding``). Beside them, two agents that need no RL: f's argmax (``reward:RUN``) and the
 IRL policy π played greedily (``policy:RUN``): if f's argmax plays like the expert and the DQNs
@@ -54,7 +55,7 @@ RULES = (*EXPERTS, "legal_majority")  # what an agent's actions are compared wit
 class TransferConfig:
     """What to train and how to judge it."""
 
-    transforms: tuple[str, ...] = ("raw", "centered", "log_softmax")
+    transforms: tuple[str, ...] = ("raw", "centered", "log_softmax", "advantage")
     payoff_weights: tuple[float, ...] = (0.0,)
     seeds: tuple[int, ...] = (0, 1, 2)
     hands: int = 50_000  # DQN training hands
