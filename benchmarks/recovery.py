@@ -126,6 +126,10 @@ def main() -> None:
     parser.add_argument("--dqn-hands", type=int, default=50_000)
     parser.add_argument("--no-transfer", action="store_true")
     parser.add_argument("--transforms", default="raw,advantage", help="the DQNs' reward transforms")
+    parser.add_argument("--transfer-runs", type=int, default=None,
+                        help="transfer on the first N runs only (default: all)")
+    parser.add_argument("--transfer-only", action="store_true",
+                        help="keep OUT/recovery.json's IRL numbers; redo the transfer only")
     parser.add_argument("--source", type=Path, help="a real IRC month instead of a synthetic one")
     args = parser.parse_args()
     torch.set_num_threads(1)
@@ -143,7 +147,9 @@ def main() -> None:
     source = None if args.source is None else str(args.source)
     found: dict[str, Any] = {"hands": args.hands, "month_seed": args.month_seed,
                              "runs": args.runs, "configs": {}, "source": source}  # fmt: skip
-    for encoding, decay in CONFIGS:
+    if args.transfer_only:
+        found = json.loads((out / "recovery.json").read_text())
+    for encoding, decay in () if args.transfer_only else CONFIGS:
         key = f"{encoding}, decay {decay:g}"
         folder = out / "runs" / f"hairl-{encoding}-decay{decay:g}"
         print(f"[{time.time() - started:6.0f}s] {key}: {args.runs} runs -> {folder}", flush=True)
@@ -178,6 +184,7 @@ def transfer_all(out: Path, args: argparse.Namespace, found: dict[str, Any],
     encoding, decay = CHOSEN
     folder = out / "runs" / f"hairl-{encoding}-decay{decay:g}"
     runs = [folder / f"run-{k}" for k in range(args.runs)] if args.runs > 1 else [folder]
+    runs = runs[: args.transfer_runs]
     seeds = tuple(parse_seeds(args.dqn_seeds))
     rows: dict[str, dict[str, list[float]]] = {}
     for dqn_encoding in ("strength", "rlcard"):
