@@ -203,6 +203,8 @@ def transfer_all(out: Path, args: argparse.Namespace, found: dict[str, Any],
                     label = f"sparse DQN ({dqn_encoding})"
                 if dqn_encoding == "rlcard" and row.kind != "dqn":
                     continue  # the same rows as the strength transfer's
+                if (row.kind == "fixed" or row.label == "sparse DQN") and run != chosen[0]:
+                    continue  # the same agents in every run's transfer: counted once
                 entry = rows.setdefault(label, {})
                 for name, values in (
                     ("vs_random", row.vs_random),
