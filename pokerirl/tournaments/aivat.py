@@ -32,8 +32,11 @@ the agents' draws, so it cannot correlate with the play):
 whose betting depends on their cards) and that the corrected standard error is smaller.
 
 >>> from pokerirl.game.agents import make_agent
->>> found = play_corrected_match(make_agent("random"), make_agent("random"), hands=2_000,
-...                              seed=0)
+>>> from pokerirl.game.match import play_match
+>>> agents = make_agent("tightbot"), make_agent("call")
+>>> found = play_corrected_match(*agents, hands=2_000, seed=0)
+>>> found.match.mbb_per_hand == play_match(*agents, hands=2_000, seed=0).mbb_per_hand
+True
 >>> bool(found.corrected.std_error < found.raw.std_error)
 True
 """
@@ -75,24 +78,35 @@ CHUNK = 4096  # deals whose equities are computed together
 @dataclass(frozen=True, kw_only=True)
 class CorrectedMatch:
     """A match's raw result (:class:`~pokerirl.game.match.MatchResult`, the same numbers
-    :func:`~pokerirl.game.match.play_match` gives) and its chance-corrected twin.
+    :func:`~pokerirl.game.match.play_match` gives) and its chance-corrected twin: A's mean
+    and standard error in mbb/h over the same independent units (NaN with one unit).
 
     ``corrected_bb``: A's corrected net big blinds in every hand, in hand order.
     """
 
     match: MatchResult
+    corrected_mbb_per_hand: float
+    corrected_std_error: float
     corrected_bb: np.ndarray = field(repr=False, compare=False)
 
     @property
     def raw(self) -> Estimate:
-        """A's raw mbb/h over the match's independent units (duplicate pairs, or hands)."""
+        """A's raw mbb/h over the match's independent units (at least two)."""
         return estimate(1000.0 * self.match.units_bb)
 
     @property
     def corrected(self) -> Estimate:
-        """A's corrected mbb/h over the same units."""
-        units = independent_units(self.corrected_bb, duplicate=self.match.duplicate)
-        return estimate(1000.0 * units)
+        """A's corrected mbb/h over the same units (at least two)."""
+        return estimate(
+            1000.0 * independent_units(self.corrected_bb, duplicate=self.match.duplicate)
+        )
+
+
+def _mean_and_error(units_bb: np.ndarray) -> tuple[float, float]:
+    """1000 x (mean, standard error) of independent units, the error NaN for one unit (as
+    :func:`~pokerirl.game.match.play_match` reports it)."""
+    error = float(units_bb.std(ddof=1) / np.sqrt(units_bb.size)) if units_bb.size > 1 else np.nan
+    return 1000.0 * float(units_bb.mean()), 1000.0 * error
 
 
 def committed(raises: np.ndarray, street: int) -> np.ndarray:
@@ -278,18 +292,23 @@ def play_corrected_match(
             corrected[start : start + count] = mine - np.where(seat_of_a == 0, 1, -1) * correction
             bar.update(count)
     seconds = time.perf_counter() - started
-    units = independent_units(results, duplicate=duplicate)
-    std_error = float(units.std(ddof=1) / np.sqrt(units.size)) if units.size > 1 else float("nan")
+    mean, error = _mean_and_error(independent_units(results, duplicate=duplicate))
     match = MatchResult(
         agent_a=agent_a.name,
         agent_b=agent_b.name,
         hands=hands,
         seed=seed,
         duplicate=duplicate,
-        mbb_per_hand=1000.0 * float(units.mean()),
-        std_error=1000.0 * std_error,
+        mbb_per_hand=mean,
+        std_error=error,
         seconds=seconds,
         hands_per_second=hands / seconds if seconds > 0 else float("inf"),
         results_bb=results,
     )
-    return CorrectedMatch(match=match, corrected_bb=corrected)
+    fixed_mean, fixed_error = _mean_and_error(independent_units(corrected, duplicate=duplicate))
+    return CorrectedMatch(
+        match=match,
+        corrected_mbb_per_hand=fixed_mean,
+        corrected_std_error=fixed_error,
+        corrected_bb=corrected,
+    )

@@ -77,8 +77,20 @@ class Street(StrEnum):
     RIVER = "river"
 
     @property
-    def index(self) -> int:
+    def number(self) -> int:
+        """0 preflop .. 3 river, as the engine's ``round``."""
         return list(Street).index(self)
+
+
+def parse_street(name: str) -> Street:
+    """The street called ``name``; :class:`ConfigError` naming the streets otherwise.
+
+    >>> parse_street("turn").number
+    2
+    """
+    if name not in tuple(Street):
+        raise ConfigError(f"unknown street {name!r} ({', '.join(Street)})")
+    return Street(name)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -90,7 +102,7 @@ class LBRSettings:
     enumeration and the preflop estimate, and gives up what betting earlier would win.
     ``preflop_boards``: random boards for the preflop equity.
 
-    >>> LBRSettings(check_until="turn").check_until.index
+    >>> LBRSettings(check_until="turn").check_until.number
     2
     """
 
@@ -98,10 +110,8 @@ class LBRSettings:
     preflop_boards: int = 256
 
     def __post_init__(self) -> None:
-        if self.check_until not in tuple(Street):
-            names = ", ".join(Street)
-            raise ConfigError(f"unknown street {self.check_until!r} to check until ({names})")
-        object.__setattr__(self, "check_until", Street(self.check_until))
+        # A street's name is taken too (LBRSettings(check_until="turn")).
+        object.__setattr__(self, "check_until", parse_street(self.check_until))
         if not 1 <= self.preflop_boards <= 100_000:
             raise ConfigError(
                 f"preflop_boards must be between 1 and 100,000, got {self.preflop_boards}"
@@ -113,13 +123,15 @@ class LBRBatch:
     """What :func:`play_lbr` found for each hand of a batch.
 
     ``payoffs`` (B,) LBR's net big blinds; ``end_round`` (B,) the round the hand ended in (0
-    preflop .. 3 river by a fold, 4 after a showdown); ``range_resets`` how many empty ranges
-    were reset. With ``trace``: ``ranges`` (B, 1326), each hand's range when it ended
-    (normalized), and ``history``, every step as (hands, acting seats, actions).
+    preflop .. 3 river by a fold, 4 after a showdown); ``raises`` (B, 4) the raises of each
+    round, as the engine counts them; ``range_resets`` how many empty ranges were reset.
+    With ``trace``: ``ranges`` (B, 1326), each hand's range when it ended (normalized), and
+    ``history``, every step as (hands, acting seats, actions).
     """
 
     payoffs: np.ndarray
     end_round: np.ndarray
+    raises: np.ndarray
     range_resets: int
     ranges: np.ndarray | None = field(default=None, repr=False)
     history: list[tuple[np.ndarray, np.ndarray, np.ndarray]] | None = field(
@@ -252,7 +264,7 @@ class _LBRHands:
         legal = game.legal_mask(hands)
         actions = np.where(legal[:, CALL], CALL, CHECK)
         street = game.round[hands].astype(np.int64)
-        playing = np.flatnonzero(street >= self.settings.check_until.index)
+        playing = np.flatnonzero(street >= self.settings.check_until.number)
         if playing.size == 0:
             return actions
         hands, legal, street = hands[playing], legal[playing], street[playing]
@@ -402,6 +414,7 @@ def play_lbr(
     return LBRBatch(
         payoffs=game.payoffs[rows, lbr.lbr_seat].copy(),
         end_round=game.round.astype(np.int64),
+        raises=game.raises.astype(np.int64),
         range_resets=resets,
         ranges=ranges,
         history=history if trace else None,

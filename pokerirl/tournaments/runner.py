@@ -51,8 +51,9 @@ import numpy as np
 from pokerirl.agents import ShippedAgent, agent_fingerprint, land_agent, resolve_agent, ship_agent
 from pokerirl.errors import report as error_report
 from pokerirl.execution import Backend
-from pokerirl.game.match import DEFAULT_BATCH_SIZE, check_match_size, play_match
+from pokerirl.game.match import DEFAULT_BATCH_SIZE, check_match_size
 from pokerirl.store import Json, Layout, Unit, UnitConflict, UnitOutput, run_units
+from pokerirl.tournaments.aivat import play_corrected_match
 from pokerirl.tournaments.lineup import (
     TournamentError,
     agent_label,
@@ -88,11 +89,12 @@ class SeedKey:
 
 @dataclass(frozen=True, kw_only=True)
 class SeedResult:
-    """One seed of one matchup before corrections: ``key`` and ``estimate`` are saved and
-    reused; the timings (None for a reused seed) only go to ``timings.json``."""
+    """One seed of one matchup before corrections: ``key``, ``estimate`` and its AIVAT twin
+    are saved and reused; the timings (None for a reused seed) only go to ``timings.json``."""
 
     key: SeedKey
     estimate: Estimate
+    aivat: Estimate | None = None  # None for a seed saved before the corrections
     seconds: float | None = None
     hands_per_second: float | None = None
 
@@ -131,7 +133,7 @@ def _play_seed(
     if found != (key.fingerprint_a, key.fingerprint_b):
         raise TournamentError(f"seed {key.seed}: an agent changed on disk during the run")
     with _torch_for_play():
-        result = play_match(
+        played = play_corrected_match(
             agent_a,
             agent_b,
             hands=key.hands,
@@ -139,7 +141,8 @@ def _play_seed(
             duplicate=key.duplicate,
             batch_size=key.batch_size,
         )
-    outcome = {"estimate": asdict(estimate(1000.0 * result.units_bb))}
+    result = played.match  # play_match's numbers, byte for byte; AIVAT's beside them
+    outcome = {"estimate": asdict(played.raw), "aivat": asdict(played.corrected)}
     return UnitOutput(result=outcome, extra=(result.seconds, result.hands_per_second))
 
 
@@ -170,10 +173,11 @@ def _seed_unit(
     )
 
 
-def _estimate(result: Json) -> Estimate | None:
+def _estimate(result: Json, name: str = "estimate") -> Estimate | None:
     """The estimate of a saved seed's result (older files also hold timings: ignored), or
-    None when it has none."""
-    saved: Any = result.get("estimate") if isinstance(result, dict) else None
+    None when it has none; ``name="aivat"``: its chance-corrected twin (absent in seeds saved
+    before the corrections)."""
+    saved: Any = result.get(name) if isinstance(result, dict) else None
     try:
         return Estimate(**{**saved, "ci95": tuple(saved["ci95"])})
     except (KeyError, TypeError, ValueError):
@@ -362,7 +366,11 @@ def run_tournament(
             raise TournamentError(f"{item.unit.target}: a saved seed without an estimate")
         seconds, hands_per_second = item.extra or (None, None)
         done[cell] = SeedResult(
-            key=key, estimate=saved, seconds=seconds, hands_per_second=hands_per_second
+            key=key,
+            estimate=saved,
+            aivat=_estimate(item.record.result, "aivat"),
+            seconds=seconds,
+            hands_per_second=hands_per_second,
         )
         if item.extra is not None:
             played.append(cell)
@@ -397,6 +405,17 @@ def run_tournament(
     return report
 
 
+def _pooled_aivat(per_seed: list[Estimate | None]) -> Estimate | None:
+    """The corrected twin of the pooled line: over the seeds' corrected means as the raw one
+    is over theirs (one seed: that seed's); None unless every seed has one."""
+    found = [e for e in per_seed if e is not None]
+    if len(found) < len(per_seed):
+        return None
+    if len(found) == 1:
+        return found[0]
+    return estimate(np.array([e.mbb_per_hand for e in found]))
+
+
 def _build_report(
     matchups: Sequence[tuple[str, str]],
     seeds: Sequence[int],
@@ -428,6 +447,7 @@ def _build_report(
                 hands=hands,
                 fingerprint_a=done[m, seed].key.fingerprint_a,
                 fingerprint_b=done[m, seed].key.fingerprint_b,
+                aivat=done[m, seed].aivat,
             )
             for seed in seeds
         )
@@ -440,6 +460,7 @@ def _build_report(
                 pooled=pooled[m],
                 pooled_over="seeds" if len(seeds) > 1 else "units of the only seed",
                 seeds=lines,
+                aivat=_pooled_aivat([done[m, seed].aivat for seed in seeds]),
             )
         )
     return TournamentReport(
