@@ -178,6 +178,24 @@ def range_policy(
     return probs
 
 
+def state_after_raise(raises: np.ndarray, street: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """What the agent would face after LBR's raise on ``street`` (n,): the raise counts
+    (n, 4) with one more in that round, and its legal actions (call, raise while fewer than 4,
+    fold; no check).
+
+    >>> nums, legal = state_after_raise(np.array([[1, 3, 0, 0]]), np.array([1]))
+    >>> nums.tolist(), legal.astype(int).tolist()
+    ([[1, 4, 0, 0]], [[1, 0, 1, 0]])
+    """
+    rows = np.arange(len(street))
+    raise_nums = np.array(raises, dtype=np.int8)  # a copy, as the engine keeps them
+    raise_nums[rows, street] += 1
+    legal = np.zeros((len(street), NUM_ACTIONS), dtype=bool)
+    legal[:, CALL] = legal[:, FOLD] = True
+    legal[:, RAISE] = raise_nums[rows, street] < MAX_RAISES
+    return raise_nums, legal
+
+
 def _sample(probs: np.ndarray, rng: np.random.Generator) -> np.ndarray:
     """One action per row of (n, 4) probabilities; an action of probability 0 is never drawn."""
     cumulative = np.cumsum(probs, axis=1)
@@ -301,12 +319,7 @@ class _LBRHands:
     ) -> np.ndarray:
         """u(raise): the agent's fold probability after the raise over the range (one batched
         call over the hypothetical states), then the equity against the pairs that stay."""
-        game = self.game
-        raise_nums = game.raises[hands].copy()
-        raise_nums[np.arange(hands.size), street] += 1  # the state the agent would face
-        legal = np.zeros((hands.size, NUM_ACTIONS), dtype=bool)
-        legal[:, CALL] = legal[:, FOLD] = True
-        legal[:, RAISE] = raise_nums[np.arange(hands.size), street] < MAX_RAISES
+        raise_nums, legal = state_after_raise(self.game.raises[hands], street)
         local, pairs, probs = self._policy(hands, weights > 0, raise_nums, legal)
         folds = np.zeros(weights.shape)
         folds[local, pairs] = probs[:, FOLD]
