@@ -40,6 +40,7 @@ from pokerirl.tournaments.equity import (
 from pokerirl.tournaments.exploit import ExploitConfig, lbr_of, load_lbr_report, run_lbr
 from pokerirl.tournaments.lbr import (
     LBRSettings,
+    _LBRHands,
     play_lbr,
     range_policy,
     state_after_raise,
@@ -231,6 +232,33 @@ def test_an_agent_without_action_probabilities_is_refused() -> None:
     deals, seats = _duplicate(seed=0, hands=2)
     with pytest.raises(ConfigError, match="'blind' has no action_probs"):
         play_lbr(Blind(), deals, seats, np.random.default_rng(0), LBRSettings())
+
+
+@pytest.mark.parametrize("street", [1, 2, 3])
+def test_lbr_equity_is_exact_after_the_flop(street: int) -> None:
+    """LBR's equity against a pair, every runout enumerated, against the game's evaluator
+    over the same runouts written out one by one."""
+    deals, seats = _duplicate(seed=13, hands=4)
+    lbr = _LBRHands(make_agent("call"), deals, seats, np.random.default_rng(0), LBRSettings())
+    lbr.game.round[:] = street  # the equity reads only the cards and the street
+    found = lbr._equity(np.arange(4), street)
+    rng = np.random.default_rng(street)
+    for hand in range(4):
+        deal = deals[hand].astype(np.int64)
+        hole, board = lbr.lbr_hole[hand], deal[4 : 4 + (0, 3, 4, 5)[street]]
+        possible = np.flatnonzero(~CLASH[np.concatenate([hole, board])].any(axis=0))
+        for pair in rng.choice(possible, 6, replace=False):
+            rest = np.setdiff1d(np.arange(NUM_CARDS), np.concatenate([hole, board, PAIRS[pair]]))
+            runs = [()] if street == 3 else (
+                [(c,) for c in rest] if street == 2
+                else [(a, b) for i, a in enumerate(rest) for b in rest[i + 1 :]]
+            )  # fmt: skip
+            full = np.array([np.concatenate([board, run]) for run in runs], dtype=np.int64)
+            mine = hand_strength(np.concatenate([np.repeat(hole[None], len(full), 0), full], 1))
+            theirs = hand_strength(np.concatenate([np.repeat(PAIRS[pair][None], len(full), 0),
+                                                   full], 1))  # fmt: skip
+            share = ((mine > theirs) + 0.5 * (mine == theirs)).mean()
+            assert found[hand, pair] == pytest.approx(share, abs=1e-12)
 
 
 # --- LBR's value -----------------------------------------------------------------------------
