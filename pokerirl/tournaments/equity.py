@@ -56,6 +56,9 @@ _PAIR_BITS = np.zeros((4, NUM_PAIRS), dtype=np.int32)
 for _k in (0, 1):
     np.add.at(_PAIR_BITS, (_SUIT[PAIRS[:, _k]], np.arange(NUM_PAIRS)), 1 << _RANK[PAIRS[:, _k]])
 _CARD_BIT = (1 << _RANK).astype(np.int32)  # a card's bit in its suit's 13-bit rank mask
+# _HOLDING[s][k]: the pairs with at least k cards of suit s (k = 0, 1, 2).
+_SUITED_CARDS = (_SUIT[PAIRS][:, :, None] == np.arange(4)).sum(axis=1)  # (1326, 4)
+_HOLDING = [[np.flatnonzero(_SUITED_CARDS[:, s] >= k) for k in range(3)] for s in range(4)]
 _LOW = 5**7  # a rank key's part for ranks 2 .. 8 (key % _LOW), the rest is key // _LOW
 
 
@@ -137,29 +140,33 @@ def pair_index(a: np.ndarray | int, b: np.ndarray | int) -> np.ndarray:
     return _INDEX[np.asarray(a, dtype=np.int64), np.asarray(b, dtype=np.int64)]
 
 
-def board_strengths(boards: np.ndarray, pairs: np.ndarray | None = None) -> np.ndarray:
-    """(M, P) strength of each pair on each of M five-card boards, as ``hand_strength``.
-
-    Args:
-        boards: (M, 5) card indices.
-        pairs: (P,) pair numbers to rank (default all 1,326).
-    """
+def board_strengths(boards: np.ndarray) -> np.ndarray:
+    """(M, 1326) strength of every pair on each of M five-card boards (M, 5), as
+    ``hand_strength`` ranks the seven cards."""
     boards = np.asarray(boards, dtype=np.int64)
-    pairs = np.arange(NUM_PAIRS) if pairs is None else np.asarray(pairs, dtype=np.int64)
     # Rank multiset key: the board's part once per board, then one of 91 combinations.
     board_key = _card_sum(_CARD_KEY, boards)
-    strength = np.take(_non_flush(board_key[:, None] + _COMBO_KEY[None, :]), _PAIR_COMBO[pairs], 1)
+    strength = np.take(_non_flush(board_key[:, None] + _COMBO_KEY[None, :]), _PAIR_COMBO, axis=1)
     # Flushes: five cards of a suit need three of it on the board (only one suit can have
-    # three of five cards), so only those boards are looked at, and only with that suit.
+    # three of five cards), and then only the pairs holding the cards still missing.
     rows = np.flatnonzero(_flushable(_card_sum(_CARD_SUIT, boards), to_come=2))
-    if rows.size:
-        suits = _SUIT[boards[rows]]
-        suit = (suits[:, :, None] == np.arange(4)).sum(axis=1).argmax(axis=1)
-        board_bits = np.where(suits == suit[:, None], _CARD_BIT[boards[rows]], 0).sum(axis=1)
-        mask = board_bits.astype(np.int32)[:, None] | _PAIR_BITS[suit][:, pairs]
-        # The flush table is 0 below five cards of the suit, and a flush beats every hand
-        # that can be made beside it (no quads or full house fit in seven cards with one).
-        strength[rows] = np.maximum(strength[rows], _dense().flush[mask])
+    if rows.size == 0:
+        return strength
+    suits = _SUIT[boards[rows]]
+    counts = (suits[:, :, None] == np.arange(4)).sum(axis=1)
+    suit, have = counts.argmax(axis=1), counts.max(axis=1)
+    board_bits = np.where(suits == suit[:, None], _CARD_BIT[boards[rows]], 0).sum(axis=1)
+    flush = _dense().flush
+    for s in range(4):
+        for count in (3, 4, 5):
+            at = np.flatnonzero((suit == s) & (have == count))
+            if at.size == 0:
+                continue
+            cells = np.ix_(rows[at], _HOLDING[s][5 - count])
+            mask = board_bits[at].astype(np.int32)[:, None] | _PAIR_BITS[s][cells[1]]
+            # The flush table is 0 below five cards of the suit, and a flush beats every
+            # hand that can be made beside it (no quads or full house fit in seven cards).
+            strength[cells] = np.maximum(strength[cells], flush[mask])
     return strength
 
 

@@ -61,7 +61,7 @@ from pokerirl.tournaments.equity import (
     pair_index,
 )
 
-ROWS_PER_PASS = 131_072  # observations per action_probs call: bounded memory
+ROWS_PER_PASS = 16_384  # observations per action_probs call: bounded memory
 EQUITY_BOARDS = 2_048  # boards ranked against all 1,326 pairs at once (about 10 MB each)
 _BOARD_SHOWN = np.arange(5) < np.array([0, 3, 4, 5, 5])[:, None]  # (round, board card)
 _CLASH_OR_NONE = np.vstack([CLASH, np.zeros((1, NUM_PAIRS), dtype=bool)])  # row 52: no card
