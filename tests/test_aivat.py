@@ -142,3 +142,12 @@ def test_the_tournament_reports_raw_and_corrected_side_by_side(tmp_path: Path) -
     assert load_report(tmp_path) == report
     data = json.loads((tmp_path / "report.json").read_text())
     assert data["matchups"][0]["aivat"]["mbb_per_hand"] == m.aivat.mbb_per_hand
+
+
+def test_a_tournament_without_the_corrections_reports_only_the_raw_line(tmp_path: Path) -> None:
+    report = run_tournament([("tightbot", "call")], hands=400, seeds=[0], out=tmp_path,
+                            aivat=False)  # fmt: skip
+    assert report.matchups[0].aivat is None and report.matchups[0].seeds[0].aivat is None
+    assert "AIVAT" not in (tmp_path / "report.md").read_text()
+    again = run_tournament([("tightbot", "call")], hands=400, seeds=[0], out=tmp_path)
+    assert again.timing["seeds_reused"] == 1 and again.matchups[0].aivat is None

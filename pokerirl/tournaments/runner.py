@@ -37,6 +37,7 @@ as they are.
 from __future__ import annotations
 
 import contextlib
+import functools
 import re
 import sys
 import tempfile
@@ -51,9 +52,9 @@ import numpy as np
 from pokerirl.agents import ShippedAgent, agent_fingerprint, land_agent, resolve_agent, ship_agent
 from pokerirl.errors import report as error_report
 from pokerirl.execution import Backend
-from pokerirl.game.match import DEFAULT_BATCH_SIZE, check_match_size
+from pokerirl.game.match import DEFAULT_BATCH_SIZE, check_match_size, play_match
 from pokerirl.store import Json, Layout, Unit, UnitConflict, UnitOutput, run_units
-from pokerirl.tournaments.aivat import play_corrected_match
+from pokerirl.tournaments.aivat import CorrectedMatch, play_corrected_match
 from pokerirl.tournaments.lineup import (
     TournamentError,
     agent_label,
@@ -122,27 +123,28 @@ def _torch_for_play() -> Iterator[None]:
 
 
 def _play_seed(
-    key: SeedKey, shipped_a: ShippedAgent, shipped_b: ShippedAgent
+    key: SeedKey, shipped_a: ShippedAgent, shipped_b: ShippedAgent, aivat: bool = True
 ) -> UnitOutput[tuple[float, float]]:
     """Play one seed (a unit: in this process or a worker) from the agents' bytes; its
-    estimate is saved, its seconds and hands/s go to ``timings.json`` only."""
+    estimate (and with ``aivat`` its chance-corrected twin) is saved, its seconds and
+    hands/s go to ``timings.json`` only."""
     with tempfile.TemporaryDirectory(prefix="pokerirl-seed-") as private:
         agent_a = land_agent(shipped_a, Path(private, "a"))
         agent_b = land_agent(shipped_b, Path(private, "b"))
     found = (agent_fingerprint(agent_a), agent_fingerprint(agent_b))
     if found != (key.fingerprint_a, key.fingerprint_b):
         raise TournamentError(f"seed {key.seed}: an agent changed on disk during the run")
+    play = functools.partial(play_corrected_match if aivat else play_match, agent_a, agent_b,
+                             hands=key.hands, seed=key.seed, duplicate=key.duplicate,
+                             batch_size=key.batch_size)  # fmt: skip
     with _torch_for_play():
-        played = play_corrected_match(
-            agent_a,
-            agent_b,
-            hands=key.hands,
-            seed=key.seed,
-            duplicate=key.duplicate,
-            batch_size=key.batch_size,
-        )
-    result = played.match  # play_match's numbers, byte for byte; AIVAT's beside them
-    outcome = {"estimate": asdict(played.raw), "aivat": asdict(played.corrected)}
+        played = play()
+    if isinstance(played, CorrectedMatch):  # play_match's numbers, byte for byte, and AIVAT's
+        result = played.match
+        outcome = {"estimate": asdict(played.raw), "aivat": asdict(played.corrected)}
+    else:
+        result = played
+        outcome = {"estimate": asdict(estimate(1000.0 * result.units_bb))}
     return UnitOutput(result=outcome, extra=(result.seconds, result.hands_per_second))
 
 
@@ -154,7 +156,12 @@ def _seed_path(out: Path, folder: str, seed: int) -> Path:
 
 
 def _seed_unit(
-    out: Path, folder: str, key: SeedKey, shipped_a: ShippedAgent, shipped_b: ShippedAgent
+    out: Path,
+    folder: str,
+    key: SeedKey,
+    shipped_a: ShippedAgent,
+    shipped_b: ShippedAgent,
+    aivat: bool,
 ) -> Unit[tuple[float, float]]:
     """Seed ``key.seed`` of a matchup: a record unit whose result is its estimate. Its
     identity is what the record of the writers before the store held (``kind`` and the key's
@@ -168,7 +175,7 @@ def _seed_unit(
         config={"kind": SEED_KIND, **settings},
         inputs=agents,
         fn=_play_seed,
-        args=(key, shipped_a, shipped_b),
+        args=(key, shipped_a, shipped_b, aivat),
         accepts=_has_estimate,
     )
 
@@ -298,6 +305,7 @@ def run_tournament(
     overwrite: bool = False,
     progress: bool = False,
     backend: Backend | None = None,
+    aivat: bool = True,
 ) -> TournamentReport:
     """Play every (A, B) matchup on every seed, write the report files to ``out``, return it.
 
@@ -315,6 +323,9 @@ def run_tournament(
         progress: a tqdm bar over seeds on stderr (done, reused, failed, ETA).
         backend: where the seeds run (:mod:`pokerirl.execution`); default ``jobs`` local
             processes. Results do not depend on it.
+        aivat: also the chance-corrected estimate of each seed
+            (:mod:`pokerirl.tournaments.aivat`); it costs a few microseconds a hand. Not part
+            of a seed's identity: a seed saved without it is reused as it is.
 
     Raises:
         TournamentError: bad input, a missing ``seed-<k>`` folder, an agent that does not load,
@@ -348,7 +359,7 @@ def run_tournament(
             batch_size=batch_size,
         )
         keys.append(key)
-        units.append(_seed_unit(out, folders[m], key, shipped_a, shipped_b))
+        units.append(_seed_unit(out, folders[m], key, shipped_a, shipped_b, aivat))
 
     started = time.perf_counter()
     try:  # each seed is saved as it finishes: resumable from there
