@@ -110,8 +110,6 @@ def match(
         summary = {
             "mbb_per_hand": result.mbb_per_hand,
             "std_error": result.std_error,
-            "aivat_mbb_per_hand": found.corrected_mbb_per_hand,
-            "aivat_std_error": found.corrected_std_error,
             "hands": result.hands,
             "hands_per_second": result.hands_per_second,
         }

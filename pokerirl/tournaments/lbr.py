@@ -278,6 +278,8 @@ class _LBRHands:
     # --- LBR -----------------------------------------------------------------------------
 
     def lbr_moves(self, hands: np.ndarray) -> np.ndarray:
+        """LBR's actions in ``hands``: check or call before ``check_until``, else the best of
+        fold, check/call and raise by the utilities of the module docstring."""
         game = self.game
         legal = game.legal_mask(hands)
         actions = np.where(legal[:, CALL], CALL, CHECK)
