@@ -45,6 +45,7 @@ USAGE: dict[str, str] = {  # a command line that cannot be run: exit 2
     "synth": "synth --out {O} --hands lots",
     "match": "match random call --hands lots",
     "tournament": "tournament random call --out {O} --alpha 2",
+    "exploit": "exploit random --out {O} --check-until nope",
     "train": "train {G} --out {O} --epochs 0",
     "reward-card": "reward-card {E} --table {G} --out {O} --transform nope",
     "demo": "demo --out {O} --jobs 0",
@@ -68,6 +69,7 @@ MISSING: dict[str, str | None] = {  # an input that is not there: exit 1, naming
     "synth": None,
     "match": "match {F} random --hands 10",
     "tournament": "tournament {F} random --out {O} --hands 4 --seeds 0-1",
+    "exploit": "exploit {F} --out {O} --hands 2",
     "train": "train {F} --out {O}",
     "reward-card": "reward-card {F} --table {G} --out {O}",
     "demo": None,
@@ -91,6 +93,7 @@ REFUSED: dict[str, str | None] = {  # a setting or a file the library refuses: e
     "synth": "synth --out {A}/x",  # an OSError: the path, and why
     "match": "match random nope --hands 10",
     "tournament": "tournament random nope --out {O} --hands 4 --seeds 0-1",
+    "exploit": "exploit random --out {O} --hands 2 --epsilon 0.1",  # no epsilon to set
     "train": "train {G} --out {O}",
     "reward-card": "reward-card {E} --table {G} --out {O}",
     "demo": "demo --out {A}",
@@ -176,15 +179,16 @@ def _boom(*_: object, **__: object) -> None:
 
 
 def test_a_bug_keeps_its_traceback(monkeypatch: pytest.MonkeyPatch) -> None:
-    monkeypatch.setattr("pokerirl.game.play_match", _boom)
+    # pokerirl match plays through the AIVAT module (raw and corrected results).
+    monkeypatch.setattr("pokerirl.tournaments.aivat.play_corrected_match", _boom)
     result = CliRunner().invoke(app, ["match", "random", "call", "--hands", "10"])
     assert isinstance(result.exception, KeyError)  # not turned into SystemExit
     assert "error:" not in result.stderr
     # The script: Python prints the traceback.
     script = (
-        "import sys, pokerirl.game as game\n"
+        "import sys, pokerirl.tournaments.aivat as aivat\n"
         "def boom(*a, **k):\n    raise KeyError('a bug')\n"
-        "game.play_match = boom\n"
+        "aivat.play_corrected_match = boom\n"
         "from pokerirl.cli import app\n"
         "sys.argv = ['pokerirl', 'match', 'random', 'call', '--hands', '10']\n"
         "app()\n"
@@ -219,7 +223,16 @@ def _interrupt(*_: object, **__: object) -> None:
 @pytest.mark.parametrize(
     ("line", "target", "says"),
     [
-        ("match random call --hands 10", "pokerirl.game.play_match", "error: interrupted"),
+        (
+            "match random call --hands 10",
+            "pokerirl.tournaments.aivat.play_corrected_match",
+            "error: interrupted",
+        ),
+        (
+            "exploit random --hands 2 --out {O}",
+            "pokerirl.tournaments.exploit.run_lbr",
+            "error: interrupted: finished units are kept; rerun the same command to resume",
+        ),
         (
             "tournament random call --hands 4 --seeds 0-1 --out {O}",
             "pokerirl.tournaments.run_tournament",

@@ -80,6 +80,6 @@ def test_random_agent_is_uniform_over_legal_actions_and_seeded() -> None:
 
 
 def test_unknown_agent_is_a_value_error() -> None:
-    known = "call, loosebot, raise, random, tightbot"
+    known = "call, fold, loosebot, raise, random, tightbot"
     with pytest.raises(ValueError, match=f"unknown agent .dqn. .built-in agents: {known}"):
         make_agent("dqn")

@@ -260,12 +260,19 @@ class GreedyQAgent:
 
     ``fingerprint`` identifies the weights (e.g. the sha256 of a saved agent's files);
     ``encoding`` names what the network reads (the engine builds its observations so).
+    ``epsilon`` (default 0, greedy): with that probability a uniformly random legal action
+    instead, as RLCard's epsilon-greedy ``step`` (``dataclasses.replace(agent, epsilon=e)``).
     """
 
     name: str
     network: QNetwork = field(repr=False)
     fingerprint: str = ""
     encoding: str = EncodingName.RLCARD
+    epsilon: float = 0.0
+
+    def __post_init__(self) -> None:
+        if not 0.0 <= self.epsilon <= 1.0:
+            raise ConfigError(f"epsilon must lie in [0, 1], got {self.epsilon}")
 
     def q_values(self, obs: np.ndarray) -> np.ndarray:
         """(B, 4) q-values of (B, width) observations, all actions (legal or not)."""
@@ -274,7 +281,24 @@ class GreedyQAgent:
 
     def act(self, obs: np.ndarray, legal_mask: np.ndarray, rng: np.random.Generator) -> np.ndarray:
         q = torch.from_numpy(self.q_values(obs))
-        return greedy_actions(q, torch.from_numpy(np.asarray(legal_mask, bool))).numpy()
+        greedy = greedy_actions(q, torch.from_numpy(np.asarray(legal_mask, bool))).numpy()
+        if self.epsilon == 0.0:  # greedy: draws nothing, so matches are as before epsilon
+            return greedy
+        explore = rng.random(len(greedy)) < self.epsilon
+        uniform = RandomAgent().act(obs, legal_mask, rng)
+        return np.where(explore, uniform, greedy)
+
+    def action_probs(self, obs: np.ndarray, legal_mask: np.ndarray) -> np.ndarray:
+        """(B, 4) float64: 1 on the greedy legal action (with ``epsilon``: ``1 - epsilon``
+        plus ``epsilon`` spread evenly over the legal actions), 0 elsewhere."""
+        legal = np.asarray(legal_mask, bool)
+        q = torch.from_numpy(self.q_values(obs))
+        greedy = greedy_actions(q, torch.from_numpy(legal)).numpy()
+        probs = np.zeros(legal.shape)
+        probs[np.arange(len(greedy)), greedy] = 1.0 - self.epsilon
+        if self.epsilon:
+            probs += self.epsilon * legal / legal.sum(axis=1, keepdims=True)
+        return probs
 
 
 @dataclass(kw_only=True)

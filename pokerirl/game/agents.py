@@ -5,10 +5,17 @@ makes one batched forward pass. An agent whose ``sees_cards`` is true also gets 
 its hole cards and the board shown so far, in the order they were dealt (the observation's
 card bits cannot tell hole cards from board cards); :func:`agent_actions` passes them.
 
+An agent that can say how likely each of its actions is (every built-in, the DQN agents)
+also has ``action_probs(obs, legal_mask)`` (:class:`PolicyAgent`): what local best response
+(:mod:`pokerirl.tournaments.lbr`) needs to keep the agent's range.
+:func:`agent_action_probs` calls it, with the cards for an agent that sees them.
+
 >>> agent = make_agent("raise")
 >>> mask = np.array([[True, True, True, False], [True, False, True, False]])
 >>> agent.act(np.zeros((2, 72), np.uint8), mask, np.random.default_rng(0)).tolist()
 [1, 0]
+>>> make_agent("random").action_probs(np.zeros((2, 72), np.uint8), mask).round(3).tolist()
+[[0.333, 0.333, 0.333, 0.0], [0.5, 0.0, 0.5, 0.0]]
 """
 
 from __future__ import annotations
@@ -19,7 +26,15 @@ from typing import Protocol, runtime_checkable
 
 import numpy as np
 
-from pokerirl.encoding import BOARD_SIZE_BY_ROUND, CALL, CHECK, FOLD, RAISE, RAISE_OFFSET
+from pokerirl.encoding import (
+    BOARD_SIZE_BY_ROUND,
+    CALL,
+    CHECK,
+    FOLD,
+    NUM_ACTIONS,
+    RAISE,
+    RAISE_OFFSET,
+)
 from pokerirl.errors import ConfigError
 from pokerirl.game.synth import DEFAULT_PLAYERS, ScriptedPlayer, visible_strength
 
@@ -50,6 +65,31 @@ class Agent(Protocol):
     ) -> np.ndarray: ...
 
 
+@runtime_checkable
+class PolicyAgent(Agent, Protocol):
+    """An :class:`Agent` that also gives the probability of each of its actions.
+
+    ``action_probs(obs, legal_mask)``: the same obs and legal_mask as ``act``; returns (B, 4)
+    float64 over (call, raise, fold, check), zero on illegal actions, each row summing to 1:
+    the distribution ``act`` draws from. An agent with ``sees_cards`` takes ``cards=`` too
+    (see :func:`agent_action_probs`).
+    """
+
+    def action_probs(self, obs: np.ndarray, legal_mask: np.ndarray) -> np.ndarray: ...
+
+
+def one_hot_actions(actions: np.ndarray) -> np.ndarray:
+    """(B, 4) float64 probabilities of a deterministic choice of (B,) action ids.
+
+    >>> one_hot_actions(np.array([3, 0])).tolist()
+    [[0.0, 0.0, 0.0, 1.0], [1.0, 0.0, 0.0, 0.0]]
+    """
+    actions = np.asarray(actions, dtype=np.int64)
+    probs = np.zeros((actions.size, NUM_ACTIONS))
+    probs[np.arange(actions.size), actions] = 1.0
+    return probs
+
+
 @dataclass(frozen=True, kw_only=True)
 class RandomAgent:
     """Uniform over the legal actions, like RLCard's ``RandomAgent``."""
@@ -62,6 +102,10 @@ class RandomAgent:
         k = (rng.random(pattern.size) * _LEGAL_COUNT[pattern]).astype(np.int64)
         return _KTH_LEGAL[pattern, k]
 
+    def action_probs(self, obs: np.ndarray, legal_mask: np.ndarray) -> np.ndarray:
+        legal = np.asarray(legal_mask, dtype=np.float64)
+        return legal / legal.sum(axis=1, keepdims=True)
+
 
 @dataclass(frozen=True, kw_only=True)
 class RaiseAgent:
@@ -73,6 +117,9 @@ class RaiseAgent:
         passive = np.where(legal_mask[:, CALL], CALL, CHECK)
         return np.where(legal_mask[:, RAISE], RAISE, passive).astype(np.int64)
 
+    def action_probs(self, obs: np.ndarray, legal_mask: np.ndarray) -> np.ndarray:
+        return one_hot_actions(self.act(obs, legal_mask, _NO_RNG))
+
 
 @dataclass(frozen=True, kw_only=True)
 class CallAgent:
@@ -82,6 +129,28 @@ class CallAgent:
 
     def act(self, obs: np.ndarray, legal_mask: np.ndarray, rng: np.random.Generator) -> np.ndarray:
         return np.where(legal_mask[:, CALL], CALL, CHECK).astype(np.int64)
+
+    def action_probs(self, obs: np.ndarray, legal_mask: np.ndarray) -> np.ndarray:
+        return one_hot_actions(self.act(obs, legal_mask, _NO_RNG))
+
+
+@dataclass(frozen=True, kw_only=True)
+class FoldAgent:
+    """Fold, always: even when checking is free, which RLCard's rules allow (the folder loses
+    what it has put in). The weakest agent there is: local best response wins 1 big blind
+    against it from the small blind and 0.5 from the big blind."""
+
+    name: str = "fold"
+
+    def act(self, obs: np.ndarray, legal_mask: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+        return np.full(len(legal_mask), FOLD, dtype=np.int64)
+
+    def action_probs(self, obs: np.ndarray, legal_mask: np.ndarray) -> np.ndarray:
+        return one_hot_actions(self.act(obs, legal_mask, _NO_RNG))
+
+
+# Deterministic agents draw nothing; their action_probs call act with this placeholder.
+_NO_RNG = np.random.default_rng(0)
 
 
 # Cards a seat sees, by round (4 is after the river): its 2 hole cards, then the board.
@@ -178,6 +247,23 @@ class ScriptedAgent:
         random_pick = options[pick, np.arange(len(action))]
         return np.where(noisy, random_pick, action).astype(np.int64)
 
+    def action_probs(
+        self, obs: np.ndarray, legal_mask: np.ndarray, *, cards: np.ndarray | None = None
+    ) -> np.ndarray:
+        """What :meth:`act` draws from: the rule with probability ``1 - noise``, else uniform
+        over its options (check or call; fold when facing a bet; raise when allowed)."""
+        if cards is None:
+            raise ValueError(f"{self.name} sees the cards: pass cards= (see agent_action_probs)")
+        _score, facing, can_raise, passive = self._options(obs, legal_mask, cards)
+        rows = np.arange(len(passive))
+        noise = self.player.noise
+        probs = (1.0 - noise) * one_hot_actions(self.rule(obs, legal_mask, cards))
+        share = noise / (1 + facing + can_raise)  # options as act counts them
+        np.add.at(probs, (rows, passive), share)
+        probs[rows[facing], FOLD] += share[facing]
+        probs[rows[can_raise], RAISE] += share[can_raise]
+        return probs
+
 
 def agent_actions(
     agent: Agent,
@@ -192,6 +278,37 @@ def agent_actions(
     return agent.act(obs, legal_mask, rng)
 
 
+def agent_action_probs(
+    agent: Agent,
+    obs: np.ndarray,
+    legal_mask: np.ndarray,
+    cards: np.ndarray | Callable[[], np.ndarray] | None = None,
+) -> np.ndarray:
+    """``agent.action_probs``: (B, 4) float64 over (call, raise, fold, check), zero on illegal
+    actions, rows summing to 1; given the cards (an array, or ``cards()`` computed only then)
+    if the agent sees them.
+
+    Raises:
+        ConfigError: the agent has no ``action_probs`` (it cannot say how it plays).
+
+    >>> mask = np.array([[True, True, True, False]])
+    >>> agent_action_probs(make_agent("fold"), np.zeros((1, 72), np.uint8), mask).tolist()
+    [[0.0, 0.0, 1.0, 0.0]]
+    """
+    action_probs = getattr(agent, "action_probs", None)
+    if action_probs is None:
+        raise ConfigError(
+            f"agent {agent.name!r} has no action_probs: it cannot say how likely its actions "
+            "are"
+        )
+    if getattr(agent, "sees_cards", False):
+        if cards is None:
+            raise ValueError(f"{agent.name} sees the cards: pass cards")
+        seen = cards() if callable(cards) else cards
+        return np.asarray(action_probs(obs, legal_mask, cards=seen), dtype=np.float64)
+    return np.asarray(action_probs(obs, legal_mask), dtype=np.float64)
+
+
 def _scripted(index: int) -> Callable[[], Agent]:
     player = DEFAULT_PLAYERS[index]
     return lambda: ScriptedAgent(name=player.nick.lower(), player=player)
@@ -201,6 +318,7 @@ BUILT_IN_AGENTS: dict[str, Callable[[], Agent]] = {
     "random": RandomAgent,
     "raise": RaiseAgent,
     "call": CallAgent,
+    "fold": FoldAgent,
     "tightbot": _scripted(0),  # the synthetic months' experts, with their noise
     "loosebot": _scripted(1),
 }

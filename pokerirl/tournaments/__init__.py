@@ -1,5 +1,7 @@
 """Multi-seed head-to-head tournaments: mbb/h per seed and pooled, t-tests, Bonferroni and
-Holm corrections, and the report files (``pokerirl tournament``, ``pokerirl report``).
+Holm corrections, and the report files (``pokerirl tournament``, ``pokerirl report``);
+AIVAT-corrected matches (:mod:`~pokerirl.tournaments.aivat`) and local best response
+(:mod:`~pokerirl.tournaments.lbr`, ``pokerirl exploit``: :mod:`~pokerirl.tournaments.exploit`).
 
 >>> import tempfile
 >>> with tempfile.TemporaryDirectory() as out:
@@ -13,11 +15,14 @@ Holm corrections, and the report files (``pokerirl tournament``, ``pokerirl repo
 from __future__ import annotations
 
 from pokerirl.seeds import format_seeds, parse_seeds
+from pokerirl.tournaments.aivat import CorrectedMatch, play_corrected_match
 from pokerirl.tournaments.authors import (
     AuthorsMatchup,
     load_authors_tournament,
     run_authors_tournament,
 )
+from pokerirl.tournaments.exploit import ExploitConfig, LBRReport, lbr_of, run_lbr
+from pokerirl.tournaments.lbr import LBRSettings, Street
 from pokerirl.tournaments.lineup import TournamentError
 from pokerirl.tournaments.report import (
     Line,
@@ -33,21 +38,29 @@ from pokerirl.tournaments.stats import Estimate, bonferroni, estimate, holm
 
 __all__ = [
     "AuthorsMatchup",
+    "CorrectedMatch",
     "Estimate",
+    "ExploitConfig",
+    "LBRReport",
+    "LBRSettings",
     "Line",
     "MatchupReport",
     "SeedLine",
+    "Street",
     "TournamentError",
     "TournamentReport",
     "bonferroni",
     "estimate",
     "format_seeds",
     "holm",
+    "lbr_of",
     "load_authors_tournament",
     "load_report",
     "parse_seeds",
+    "play_corrected_match",
     "render_report",
     "run_authors_tournament",
+    "run_lbr",
     "run_tournament",
     "write_report",
 ]

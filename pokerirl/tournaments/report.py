@@ -23,6 +23,7 @@ from typing import Any, Literal
 from pokerirl import atomic
 from pokerirl.seeds import format_seeds
 from pokerirl.tournaments.lineup import TournamentError
+from pokerirl.tournaments.stats import Estimate
 
 REPORT_FORMAT = "pokerirl-tournament/1"
 TIMINGS_FILE = "timings.json"
@@ -57,6 +58,7 @@ class SeedLine(Line):
     hands: int
     fingerprint_a: str
     fingerprint_b: str
+    aivat: Estimate | None = None  # the chance-corrected twin (None: saved before AIVAT)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -70,6 +72,7 @@ class MatchupReport:
     pooled: Line
     pooled_over: Literal["seeds", "units of the only seed"]
     seeds: tuple[SeedLine, ...]
+    aivat: Estimate | None = None  # the pooled line's chance-corrected twin (AIVAT)
 
     @property
     def seeds_significant_bonferroni(self) -> int:
@@ -156,6 +159,7 @@ class TournamentReport:
                     **_pick(MatchupReport, m),
                     "pooled": _line(Line, m["pooled"]),
                     "seeds": tuple(_line(SeedLine, s) for s in m["seeds"]),
+                    "aivat": _aivat(m.get("aivat")),
                 }
             )
             for m in data["matchups"]
@@ -176,7 +180,12 @@ def _pick(kind: type, data: Mapping[str, Any]) -> dict[str, Any]:
 
 
 def _line(kind: type[Line], data: Mapping[str, Any]) -> Line:
-    return kind(**{**_pick(kind, data), "ci95": tuple(data["ci95"])})
+    extra = {"aivat": _aivat(data.get("aivat"))} if kind is SeedLine else {}
+    return kind(**{**_pick(kind, data), "ci95": tuple(data["ci95"]), **extra})
+
+
+def _aivat(data: Mapping[str, Any] | None) -> Estimate | None:
+    return None if data is None else Estimate(**{**data, "ci95": tuple(data["ci95"])})
 
 
 # --- writing and reading -------------------------------------------------------------------
@@ -303,6 +312,7 @@ def render_markdown(report: TournamentReport) -> str:
         "",
         f"Pooled: {pooled_how}. Bonferroni and Holm over the {family.pooled_tests} pooled "
         f"test(s), one per matchup.",
+        *_aivat_section(report),
         "",
         "## Per seed",
         "",
@@ -343,6 +353,34 @@ def render_markdown(report: TournamentReport) -> str:
     return "\n".join(out)
 
 
+def _aivat_section(report: TournamentReport) -> list[str]:
+    """The raw and the chance-corrected (AIVAT) pooled results side by side, when known."""
+    rows = [m for m in report.matchups if m.aivat is not None]
+    if not rows:
+        return []
+    out = [
+        "",
+        "## Variance-reduced (AIVAT chance corrections)",
+        "",
+        "The same hands, each corrected at the flop, turn and river by v(after the card) - "
+        "E[v] with v = chips committed x (2 equity - 1), fixed in code "
+        "(`pokerirl.tournaments.aivat`): an unbiased estimate of the same payoff, usually "
+        "with a smaller standard error.",
+        "",
+        "| Model | Opponent | Raw (mbb/h) ± SE | Corrected (mbb/h) ± SE | SE corrected / raw |",
+        "|---|---|---|---|---|",
+    ]
+    for m in rows:
+        raw, fixed = m.pooled, m.aivat
+        assert fixed is not None
+        ratio = f"{fixed.std_error / raw.std_error:.2f}" if raw.std_error > 0 else "n/a"
+        out.append(
+            f"| {m.agent_a} | {m.agent_b} | {_mbb(raw.mbb_per_hand)} ± {raw.std_error:.2f} | "
+            f"{_mbb(fixed.mbb_per_hand)} ± {fixed.std_error:.2f} | {ratio} |"
+        )
+    return out
+
+
 CSV_COLUMNS = (
     "agent_a",
     "agent_b",
@@ -360,6 +398,8 @@ CSV_COLUMNS = (
     "significant_holm",
     "fingerprint_a",
     "fingerprint_b",
+    "aivat_mbb_per_hand",
+    "aivat_std_error",
 )
 
 
@@ -372,8 +412,10 @@ def render_csv(report: TournamentReport) -> str:
         for s in m.seeds:
             row = {k: v for k, v in asdict(s).items() if k in CSV_COLUMNS}
             row.update(
-                agent_a=m.agent_a, agent_b=m.agent_b, ci95_low=s.ci95[0], ci95_high=s.ci95[1]
-            )
+                agent_a=m.agent_a, agent_b=m.agent_b, ci95_low=s.ci95[0], ci95_high=s.ci95[1],
+                aivat_mbb_per_hand=None if s.aivat is None else s.aivat.mbb_per_hand,
+                aivat_std_error=None if s.aivat is None else s.aivat.std_error,
+            )  # fmt: skip
             writer.writerow({k: repr(v) if isinstance(v, float) else v for k, v in row.items()})
     return buffer.getvalue()
 

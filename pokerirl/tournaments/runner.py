@@ -37,6 +37,7 @@ as they are.
 from __future__ import annotations
 
 import contextlib
+import functools
 import re
 import sys
 import tempfile
@@ -53,6 +54,7 @@ from pokerirl.errors import report as error_report
 from pokerirl.execution import Backend
 from pokerirl.game.match import DEFAULT_BATCH_SIZE, check_match_size, play_match
 from pokerirl.store import Json, Layout, Unit, UnitConflict, UnitOutput, run_units
+from pokerirl.tournaments.aivat import CorrectedMatch, play_corrected_match
 from pokerirl.tournaments.lineup import (
     TournamentError,
     agent_label,
@@ -88,11 +90,12 @@ class SeedKey:
 
 @dataclass(frozen=True, kw_only=True)
 class SeedResult:
-    """One seed of one matchup before corrections: ``key`` and ``estimate`` are saved and
-    reused; the timings (None for a reused seed) only go to ``timings.json``."""
+    """One seed of one matchup before corrections: ``key``, ``estimate`` and its AIVAT twin
+    are saved and reused; the timings (None for a reused seed) only go to ``timings.json``."""
 
     key: SeedKey
     estimate: Estimate
+    aivat: Estimate | None = None  # None for a seed saved before the corrections
     seconds: float | None = None
     hands_per_second: float | None = None
 
@@ -120,26 +123,28 @@ def _torch_for_play() -> Iterator[None]:
 
 
 def _play_seed(
-    key: SeedKey, shipped_a: ShippedAgent, shipped_b: ShippedAgent
+    key: SeedKey, shipped_a: ShippedAgent, shipped_b: ShippedAgent, aivat: bool = True
 ) -> UnitOutput[tuple[float, float]]:
     """Play one seed (a unit: in this process or a worker) from the agents' bytes; its
-    estimate is saved, its seconds and hands/s go to ``timings.json`` only."""
+    estimate (and with ``aivat`` its chance-corrected twin) is saved, its seconds and
+    hands/s go to ``timings.json`` only."""
     with tempfile.TemporaryDirectory(prefix="pokerirl-seed-") as private:
         agent_a = land_agent(shipped_a, Path(private, "a"))
         agent_b = land_agent(shipped_b, Path(private, "b"))
     found = (agent_fingerprint(agent_a), agent_fingerprint(agent_b))
     if found != (key.fingerprint_a, key.fingerprint_b):
         raise TournamentError(f"seed {key.seed}: an agent changed on disk during the run")
+    play = functools.partial(play_corrected_match if aivat else play_match, agent_a, agent_b,
+                             hands=key.hands, seed=key.seed, duplicate=key.duplicate,
+                             batch_size=key.batch_size)  # fmt: skip
     with _torch_for_play():
-        result = play_match(
-            agent_a,
-            agent_b,
-            hands=key.hands,
-            seed=key.seed,
-            duplicate=key.duplicate,
-            batch_size=key.batch_size,
-        )
-    outcome = {"estimate": asdict(estimate(1000.0 * result.units_bb))}
+        played = play()
+    if isinstance(played, CorrectedMatch):  # play_match's numbers, byte for byte, and AIVAT's
+        result = played.match
+        outcome = {"estimate": asdict(played.raw), "aivat": asdict(played.corrected)}
+    else:
+        result = played
+        outcome = {"estimate": asdict(estimate(1000.0 * result.units_bb))}
     return UnitOutput(result=outcome, extra=(result.seconds, result.hands_per_second))
 
 
@@ -151,7 +156,12 @@ def _seed_path(out: Path, folder: str, seed: int) -> Path:
 
 
 def _seed_unit(
-    out: Path, folder: str, key: SeedKey, shipped_a: ShippedAgent, shipped_b: ShippedAgent
+    out: Path,
+    folder: str,
+    key: SeedKey,
+    shipped_a: ShippedAgent,
+    shipped_b: ShippedAgent,
+    aivat: bool,
 ) -> Unit[tuple[float, float]]:
     """Seed ``key.seed`` of a matchup: a record unit whose result is its estimate. Its
     identity is what the record of the writers before the store held (``kind`` and the key's
@@ -165,15 +175,16 @@ def _seed_unit(
         config={"kind": SEED_KIND, **settings},
         inputs=agents,
         fn=_play_seed,
-        args=(key, shipped_a, shipped_b),
+        args=(key, shipped_a, shipped_b, aivat),
         accepts=_has_estimate,
     )
 
 
-def _estimate(result: Json) -> Estimate | None:
+def _estimate(result: Json, name: str = "estimate") -> Estimate | None:
     """The estimate of a saved seed's result (older files also hold timings: ignored), or
-    None when it has none."""
-    saved: Any = result.get("estimate") if isinstance(result, dict) else None
+    None when it has none; ``name="aivat"``: its chance-corrected twin (absent in seeds saved
+    before the corrections)."""
+    saved: Any = result.get(name) if isinstance(result, dict) else None
     try:
         return Estimate(**{**saved, "ci95": tuple(saved["ci95"])})
     except (KeyError, TypeError, ValueError):
@@ -294,6 +305,7 @@ def run_tournament(
     overwrite: bool = False,
     progress: bool = False,
     backend: Backend | None = None,
+    aivat: bool = True,
 ) -> TournamentReport:
     """Play every (A, B) matchup on every seed, write the report files to ``out``, return it.
 
@@ -311,6 +323,9 @@ def run_tournament(
         progress: a tqdm bar over seeds on stderr (done, reused, failed, ETA).
         backend: where the seeds run (:mod:`pokerirl.execution`); default ``jobs`` local
             processes. Results do not depend on it.
+        aivat: also the chance-corrected estimate of each seed
+            (:mod:`pokerirl.tournaments.aivat`); it costs a few microseconds a hand. Not part
+            of a seed's identity: a seed saved without it is reused as it is.
 
     Raises:
         TournamentError: bad input, a missing ``seed-<k>`` folder, an agent that does not load,
@@ -344,7 +359,7 @@ def run_tournament(
             batch_size=batch_size,
         )
         keys.append(key)
-        units.append(_seed_unit(out, folders[m], key, shipped_a, shipped_b))
+        units.append(_seed_unit(out, folders[m], key, shipped_a, shipped_b, aivat))
 
     started = time.perf_counter()
     try:  # each seed is saved as it finishes: resumable from there
@@ -362,7 +377,11 @@ def run_tournament(
             raise TournamentError(f"{item.unit.target}: a saved seed without an estimate")
         seconds, hands_per_second = item.extra or (None, None)
         done[cell] = SeedResult(
-            key=key, estimate=saved, seconds=seconds, hands_per_second=hands_per_second
+            key=key,
+            estimate=saved,
+            aivat=_estimate(item.record.result, "aivat"),
+            seconds=seconds,
+            hands_per_second=hands_per_second,
         )
         if item.extra is not None:
             played.append(cell)
@@ -397,6 +416,17 @@ def run_tournament(
     return report
 
 
+def _pooled_aivat(per_seed: list[Estimate | None]) -> Estimate | None:
+    """The corrected twin of the pooled line: over the seeds' corrected means as the raw one
+    is over theirs (one seed: that seed's); None unless every seed has one."""
+    found = [e for e in per_seed if e is not None]
+    if len(found) < len(per_seed):
+        return None
+    if len(found) == 1:
+        return found[0]
+    return estimate(np.array([e.mbb_per_hand for e in found]))
+
+
 def _build_report(
     matchups: Sequence[tuple[str, str]],
     seeds: Sequence[int],
@@ -428,6 +458,7 @@ def _build_report(
                 hands=hands,
                 fingerprint_a=done[m, seed].key.fingerprint_a,
                 fingerprint_b=done[m, seed].key.fingerprint_b,
+                aivat=done[m, seed].aivat,
             )
             for seed in seeds
         )
@@ -440,6 +471,7 @@ def _build_report(
                 pooled=pooled[m],
                 pooled_over="seeds" if len(seeds) > 1 else "units of the only seed",
                 seeds=lines,
+                aivat=_pooled_aivat([done[m, seed].aivat for seed in seeds]),
             )
         )
     return TournamentReport(
