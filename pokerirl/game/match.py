@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import functools
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -127,6 +128,20 @@ def play_batch(
         rngs: each agent's generator.
         log: when given, the first agent's decisions are appended to it, one part per step.
     """
+    game = play_game(agents, deals, seat_of_first, rngs, log=log)
+    return game.payoffs[np.arange(game.size), seat_of_first]
+
+
+def play_game(
+    agents: tuple[Agent, Agent],
+    deals: np.ndarray,
+    seat_of_first: np.ndarray,
+    rngs: tuple[np.random.Generator, np.random.Generator],
+    *,
+    log: list[DecisionLog] | None = None,
+) -> LimitHoldemBatch:
+    """:func:`play_batch`, returning the finished game itself (its payoffs, raises and
+    rounds, for callers that read more than the result: the chance corrections)."""
     game = LimitHoldemBatch(deals=deals)
     encodings = tuple(agent_encoding(agent) for agent in agents)
     while game.active().size:
@@ -149,7 +164,7 @@ def play_batch(
                 game.step(actions, mine)
             except IllegalActionError as error:
                 raise IllegalActionError(f"agent {agent.name!r}: {error}") from error
-    return game.payoffs[np.arange(game.size), seat_of_first]
+    return game
 
 
 def check_match_size(hands: int, *, duplicate: bool, batch_size: int = DEFAULT_BATCH_SIZE) -> None:
@@ -190,6 +205,7 @@ def play_match(
     progress: bool = False,
     log: list[DecisionLog] | None = None,
     seating: str = "alternate",
+    on_batch: Callable[[int, LimitHoldemBatch, np.ndarray], None] | None = None,
 ) -> MatchResult:
     """Play ``hands`` hands of A against B, ``batch_size`` hands in lock-step at a time.
 
@@ -197,7 +213,9 @@ def play_match(
     agents' random draws do. ``progress`` shows a tqdm bar on stderr; ``log`` collects A's
     decisions (see :func:`play_batch`). ``seating="random"`` (without duplicate) draws A's
     seat for every hand, as RLCard draws the small blind for every game; the default
-    alternates it.
+    alternates it. ``on_batch(start, game, seat_of_a)`` is called with each finished batch
+    (hands ``start`` ..), for what a caller reads beyond the result (the chance corrections
+    of :mod:`pokerirl.tournaments.aivat`).
 
     Raises:
         ValueError: as :func:`check_match_size`, or on a negative seed.
@@ -226,9 +244,10 @@ def play_match(
                 seat_of_a = seat_rng.integers(0, 2, count).astype(np.int8)
             else:
                 seat_of_a = (np.arange(start, start + count) % 2).astype(np.int8)
-            results[start : start + count] = play_batch(
-                (agent_a, agent_b), deals, seat_of_a, rngs, log=log
-            )
+            game = play_game((agent_a, agent_b), deals, seat_of_a, rngs, log=log)
+            results[start : start + count] = game.payoffs[np.arange(count), seat_of_a]
+            if on_batch is not None:
+                on_batch(start, game, seat_of_a)
             bar.update(count)
     seconds = time.perf_counter() - started
 

@@ -43,27 +43,17 @@ True
 
 from __future__ import annotations
 
-import functools
-import time
 from dataclasses import dataclass, field
 
 import numpy as np
-from tqdm import tqdm
 
-from pokerirl.errors import ConfigError
-from pokerirl.game.agents import Agent, agent_actions
-from pokerirl.game.deals import deal_cards
-from pokerirl.game.engine import IllegalActionError, LimitHoldemBatch
-from pokerirl.game.evaluator import prepare_tables
+from pokerirl.game.agents import Agent
+from pokerirl.game.engine import LimitHoldemBatch
 from pokerirl.game.match import (
-    AGENT_STREAM,
     DEFAULT_BATCH_SIZE,
     MatchResult,
-    agent_encoding,
-    check_match_size,
     independent_units,
-    observe,
-    turn_cards,
+    play_match,
 )
 from pokerirl.tournaments.equity import showdown_shares
 from pokerirl.tournaments.stats import Estimate, estimate
@@ -213,44 +203,6 @@ def chance_corrections(
     return correction
 
 
-def play_tracked(
-    agents: tuple[Agent, Agent],
-    deals: np.ndarray,
-    seat_of_first: np.ndarray,
-    rngs: tuple[np.random.Generator, np.random.Generator],
-) -> LimitHoldemBatch:
-    """:func:`pokerirl.game.match.play_batch` to the end, returning the finished game (its
-    ``payoffs``, ``raises`` and ``round`` are what the corrections read).
-
-    The loop is play_batch's, step for step (the same observations, the same draws from the
-    same generators), so the payoffs are the same bytes: ``tests/test_aivat.py`` checks it.
-    """
-    game = LimitHoldemBatch(deals=deals)
-    encodings = tuple(agent_encoding(agent) for agent in agents)
-    while game.active().size:
-        hands = game.active()
-        first_to_act = game.to_act[hands] == seat_of_first[hands]
-        for agent, encoding, rng, turn in zip(
-            agents, encodings, rngs, (first_to_act, ~first_to_act), strict=True
-        ):
-            mine = hands[turn]
-            if mine.size == 0:
-                continue
-            obs, legal = observe(game, mine, encoding), game.legal_mask(mine)
-            cards = functools.partial(turn_cards, game, mine)
-            actions = agent_actions(agent, obs, legal, rng, cards)
-            try:
-                game.step(actions, mine)
-            except IllegalActionError as error:
-                raise IllegalActionError(f"agent {agent.name!r}: {error}") from error
-    return game
-
-
-def _rng(seed: int, stream: int, which: int) -> np.random.Generator:
-    sequence = np.random.SeedSequence(seed, spawn_key=(stream, which))
-    return np.random.Generator(np.random.PCG64(sequence))
-
-
 def play_corrected_match(
     agent_a: Agent,
     agent_b: Agent,
@@ -261,50 +213,26 @@ def play_corrected_match(
     batch_size: int = DEFAULT_BATCH_SIZE,
     progress: bool = False,
 ) -> CorrectedMatch:
-    """:func:`pokerirl.game.match.play_match` (seats alternating) with each hand's chance
-    correction: the raw result is play_match's to the byte, the corrected one is beside it.
+    """:func:`pokerirl.game.match.play_match` (seats alternating), which plays and reports
+    the raw result, with each hand's chance correction computed from the finished batches.
 
     Raises:
         ConfigError: as :func:`~pokerirl.game.match.check_match_size`, or a negative seed.
     """
-    check_match_size(hands, duplicate=duplicate, batch_size=batch_size)
-    if seed < 0:
-        raise ConfigError(f"seed must be non-negative, got {seed}")
-    rngs = (_rng(seed, AGENT_STREAM, 0), _rng(seed, AGENT_STREAM, 1))
-    estimates = _rng(seed, AIVAT_STREAM, 0)
-    results = np.empty(hands, dtype=np.float64)
-    corrected = np.empty(hands, dtype=np.float64)
-    prepare_tables()
-    started = time.perf_counter()
-    with tqdm(total=hands, unit="hand", unit_scale=True, disable=not progress) as bar:
-        for start in range(0, hands, batch_size):
-            count = min(batch_size, hands - start)
-            if duplicate:
-                deals = np.repeat(deal_cards(seed=seed, start=start // 2, count=count // 2), 2, 0)
-            else:
-                deals = deal_cards(seed=seed, start=start, count=count)
-            seat_of_a = (np.arange(start, start + count) % 2).astype(np.int8)
-            game = play_tracked((agent_a, agent_b), deals, seat_of_a, rngs)
-            mine = game.payoffs[np.arange(count), seat_of_a]
-            correction = chance_corrections(game.cards, game.raises, game.round, estimates)
-            results[start : start + count] = mine
-            # Seat 0's correction, from A's side: minus where A sat in seat 1.
-            corrected[start : start + count] = mine - np.where(seat_of_a == 0, 1, -1) * correction
-            bar.update(count)
-    seconds = time.perf_counter() - started
-    mean, error = _mean_and_error(independent_units(results, duplicate=duplicate))
-    match = MatchResult(
-        agent_a=agent_a.name,
-        agent_b=agent_b.name,
-        hands=hands,
-        seed=seed,
-        duplicate=duplicate,
-        mbb_per_hand=mean,
-        std_error=error,
-        seconds=seconds,
-        hands_per_second=hands / seconds if seconds > 0 else float("inf"),
-        results_bb=results,
+    estimates = np.random.Generator(
+        np.random.PCG64(np.random.SeedSequence(seed, spawn_key=(AIVAT_STREAM, 0)))
     )
+    corrected = np.empty(hands, dtype=np.float64)
+
+    def correct(start: int, game: LimitHoldemBatch, seat_of_a: np.ndarray) -> None:
+        mine = game.payoffs[np.arange(game.size), seat_of_a]
+        correction = chance_corrections(game.cards, game.raises, game.round, estimates)
+        # Seat 0's correction, from A's side: minus where A sat in seat 1.
+        sign = np.where(seat_of_a == 0, 1, -1)
+        corrected[start : start + game.size] = mine - sign * correction
+
+    match = play_match(agent_a, agent_b, hands=hands, seed=seed, duplicate=duplicate,
+                       batch_size=batch_size, progress=progress, on_batch=correct)  # fmt: skip
     fixed_mean, fixed_error = _mean_and_error(independent_units(corrected, duplicate=duplicate))
     return CorrectedMatch(
         match=match,
