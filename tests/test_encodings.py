@@ -249,3 +249,20 @@ def test_agents_of_different_encodings_meet_in_one_match(strength_run: Path) -> 
 
     landed = land_agent(ship_agent(f"policy:{strength_run}"), tempfile.mkdtemp())
     assert landed.fingerprint == policy.fingerprint  # type: ignore[attr-defined]
+
+
+def test_match_and_tournament_check_the_agents_encoding(strength_run: Path, tmp_path: Path) -> None:
+    runner = CliRunner()
+    policy = f"policy:{strength_run}"
+    ok = runner.invoke(app, ["match", policy, "tightbot", "--hands", "20", "--encoding",
+                             "strength", "--format", "json"])  # fmt: skip
+    assert ok.exit_code == 0, ok.output
+    for args in (
+        ["match", policy, "tightbot", "--hands", "20", "--encoding", "rlcard"],
+        ["tournament", policy, "call", "--hands", "20", "--seeds", "0",
+         "--out", str(tmp_path / "t"), "--encoding", "rlcard"],
+    ):  # fmt: skip
+        result = runner.invoke(app, args)
+        assert result.exit_code == 1 and result.output.count("\n") == 1, result.output
+        assert f"{policy}: an agent on the strength encoding, not rlcard" in result.output
+    assert not (tmp_path / "t").exists()

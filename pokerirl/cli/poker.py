@@ -30,6 +30,11 @@ from pokerirl.errors import InputError, UsageError
 if TYPE_CHECKING:
     from pokerirl.irl.records import EpochMetrics
 
+AGENTS_ENCODING_HELP = (
+    "Check that every agent reads this encoding (rlcard or strength; the built-ins read what "
+    "they need): one line names an agent that does not. Agents of different encodings can "
+    "meet without it: the engine builds each one's own observations."
+)
 ENCODING_HELP = (
     "What the reward and policy read: rlcard (RLCard's 72-d observation, the paper's) or "
     "strength (hole and board apart, with hand features: docs/encodings.md)."
@@ -83,9 +88,10 @@ def synth(
 def match(
     agent_a: str = typer.Argument(
         ...,
-        help="Agent A (reported): random, raise, call, an agent folder or rlcard:CKPT "
-        "(an RLCard checkpoint: it is unpickled, which runs any code it holds; trusted "
-        "files only).",
+        help="Agent A (reported): a built-in (random, raise, call, fold, tightbot, "
+        "loosebot), an agent folder, reward:RUN (a learned reward's argmax), policy:RUN (an "
+        "IRL policy, greedy) or rlcard:CKPT (an RLCard checkpoint: it is unpickled, which "
+        "runs any code it holds; trusted files only).",
     ),
     agent_b: str = typer.Argument(..., help="Agent B: as agent A."),
     hands: int = typer.Option(100_000, min=1, help="Hands to play (even with --duplicate)."),
@@ -96,6 +102,7 @@ def match(
         True, "--duplicate/--no-duplicate", help="Play every deal from both seats."
     ),
     output_format: str = typer.Option("text", "--format", help="text or json."),
+    encoding: str | None = typer.Option(None, "--encoding", help=AGENTS_ENCODING_HELP),
 ) -> None:
     """Play A against B and print A's result in milli-big-blinds per hand.
 
@@ -109,9 +116,12 @@ def match(
     if output_format not in ("text", "json"):
         raise UsageError(f"unknown --format {output_format!r} (text or json)")
     settings_from_options(check_match_size, hands, duplicate=duplicate)
+    players = resolve_agent(agent_a), resolve_agent(agent_b)
+    if encoding is not None:
+        _check_agents_encoding(dict(zip((agent_a, agent_b), players, strict=True)),
+                               _encoding(encoding))  # fmt: skip
     found = play_corrected_match(
-        resolve_agent(agent_a),
-        resolve_agent(agent_b),
+        *players,
         hands=hands,
         seed=seed,
         duplicate=duplicate,
@@ -172,6 +182,7 @@ def tournament(
     overwrite: bool = typer.Option(
         False, "--overwrite", help="Recompute saved seeds from another configuration."
     ),
+    encoding: str | None = typer.Option(None, "--encoding", help=AGENTS_ENCODING_HELP),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bar, no report."),
 ) -> None:
     """Multi-seed head-to-head evaluation: mbb/h, duplicate deals, Bonferroni and Holm.
@@ -213,6 +224,9 @@ def tournament(
             f"--hands must be at least 4 with duplicate deals (two pairs), got {hands}"
         )
     settings_from_options(check_match_size, hands, duplicate=duplicate, batch_size=batch_size)
+    if encoding is not None:
+        _check_agents_encoding(_resolve_lineup([a for pair in matchups for a in pair]),
+                               _encoding(encoding))  # fmt: skip
     report = run_tournament(
         matchups,
         hands=hands,
@@ -653,3 +667,28 @@ def _run_table(source: object) -> Path:
             f"--table is needed: {folder} records no table that still exists ({path!r})"
         )
     return Path(path)
+
+
+def _check_agents_encoding(agents: Mapping[str, object], expected: str) -> None:
+    """Refuse, in one line naming it, an agent (spec -> agent) that reads another encoding
+    than ``expected``; the built-ins read what they need and pass."""
+    from pokerirl.game import BUILT_IN_AGENTS
+    from pokerirl.game.match import agent_encoding
+
+    for spec, agent in agents.items():
+        found = agent_encoding(agent).name  # type: ignore[arg-type]
+        if spec not in BUILT_IN_AGENTS and found != expected:
+            raise InputError(f"{spec}: an agent on the {found} encoding, not {expected}")
+
+
+def _resolve_lineup(specs: Sequence[str]) -> dict[str, object]:
+    """Every agent a lineup names (an agent set's ``seed-<k>`` folders one by one)."""
+    from pokerirl.agents import resolve_agent
+    from pokerirl.game import BUILT_IN_AGENTS
+
+    found: dict[str, object] = {}
+    for spec in dict.fromkeys(specs):
+        seeds = [] if spec in BUILT_IN_AGENTS else sorted(Path(spec).glob("seed-*"))
+        for member in [str(folder) for folder in seeds] or [spec]:
+            found[member] = resolve_agent(member)
+    return found
