@@ -174,6 +174,7 @@ def main() -> None:
     if not args.no_transfer:
         transfer_all(out, args, found, started)
     (out / "recovery.json").write_text(json.dumps(found, indent=2) + "\n")
+    figure(found, out / "recovery.png")
     print(markdown(found))
 
 
@@ -216,6 +217,54 @@ def transfer_all(out: Path, args: argparse.Namespace, found: dict[str, Any],
                     entry.setdefault(name, []).extend(values)
     found["transfer"] = {label: {k: mean_se(v) for k, v in entry.items()}
                          for label, entry in rows.items()}  # fmt: skip
+
+
+def figure(found: dict[str, Any], path: Path) -> None:
+    """recovery.png: f's argmax = the expert and its top-bucket raise share per (encoding,
+    decay), mean ± SE over runs with each run's point; then the transfer rows' agreement with
+    each bot's rule and raise share."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    panels = 3 if "transfer" in found else 2
+    fig = Figure(figsize=(5 * panels, 4.8), dpi=100)
+    FigureCanvasAgg(fig)
+    axes = fig.subplots(1, panels)
+    keys = list(found["configs"])
+    titles = {"agree_expert": "f's argmax = the expert (all states)",
+              "top_bucket_raise": "f raises, top equity bucket"}  # fmt: skip
+    for ax, (name, title) in zip(axes, titles.items(), strict=False):
+        means = [100 * found["configs"][k][name]["mean"] for k in keys]
+        errors = [100 * found["configs"][k][name]["se"] for k in keys]
+        ax.bar(range(len(keys)), means, yerr=errors, capsize=3, color="C0", alpha=0.7)
+        for i, key in enumerate(keys):
+            points = [100 * run[name] for run in found["configs"][key]["per_run"]]
+            ax.plot([i] * len(points), points, "k.", markersize=4)
+        ax.set_xticks(range(len(keys)), [k.replace(", ", "\n") for k in keys], fontsize=8)
+        ax.set(title=title, ylabel="% of states (bars: mean ± SE over runs; dots: runs)")
+    axes[0].axhline(100 * found["configs"][keys[0]]["bc_truth"]["mean"], color="C2", ls="--",
+                    label="BC, strength (on the same truth)")  # fmt: skip
+    axes[0].legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.16))
+    if found.get("expert_top_bucket_raise") is not None:
+        axes[1].axhline(100 * found["expert_top_bucket_raise"], color="C3", ls="--",
+                        label="the expert")  # fmt: skip
+        axes[1].legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.16))
+    if panels == 3:
+        ax = axes[2]
+        rows = {k: v for k, v in found["transfer"].items() if "agree_tightbot" in v}
+        names = list(rows)
+        for j, (metric, label) in enumerate((("agree_tightbot", "= tightbot rule"),
+                                             ("agree_loosebot", "= loosebot rule"),
+                                             ("raise_share", "raise share"))):  # fmt: skip
+            ax.barh([i + 0.27 * j for i in range(len(names))],
+                    [100 * rows[n][metric]["mean"] for n in names], height=0.27,
+                    xerr=[100 * rows[n][metric]["se"] for n in names], label=label)  # fmt: skip
+        ax.set_yticks([i + 0.27 for i in range(len(names))], names, fontsize=7)
+        ax.invert_yaxis()
+        ax.set(title="agents vs random: decisions (%)", xlabel="% of decisions (± SE)")
+        ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.16), ncol=3)
+    fig.tight_layout()
+    fig.savefig(path, format="png", metadata={"Software": None})
 
 
 def markdown(found: dict[str, Any]) -> str:
