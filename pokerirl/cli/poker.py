@@ -35,22 +35,79 @@ ENCODING_HELP = (
 )
 
 
+IMPUTE_CONFIG = "pokerirl.poker.folds:ImputeConfig"
+
+
 @app.command()
 def ingest(
+    ctx: typer.Context,
     sources: list[Path] = typer.Argument(
         ..., help="Month folders, folders of months, month .tgz archives or IRCdata.tgz."
     ),
     out: Path = typer.Option(..., "--out", "-o", help="The Parquet table to write."),
     strict: bool = typer.Option(False, "--strict", help="Stop at the first malformed line."),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bar, no summary."),
+    folds: str = typer.Option(
+        "drop",
+        "--folds",
+        help="drop: leave out the hands that end in a fold with the cards hidden (the table "
+        "of before, byte for byte); impute: keep them, each hidden player's cards drawn from "
+        "a posterior over the 1,326 pairs under a behaviour model (docs/folds.md).",
+    ),
+    imputations: int = typer.Option(
+        Default(IMPUTE_CONFIG, "imputations"), "--imputations", min=1,
+        help="With --folds impute: posterior draws K per hidden player (equal draws merge "
+        "into one row set of weight count/K).",
+    ),  # fmt: skip
+    behaviour: Path | None = typer.Option(
+        None, "--behaviour", metavar="RUN",
+        help="With --folds impute: a pokerirl train run whose policy is the behaviour model "
+        "(in its own encoding); default: behaviour cloning on this table's shown hands, "
+        "then EM rounds.",
+    ),  # fmt: skip
+    behaviour_encoding: str = typer.Option(
+        Default(IMPUTE_CONFIG, "behaviour_encoding"), "--behaviour-encoding",
+        help="With --folds impute and no --behaviour: what the fitted behaviour model reads "
+        "(rlcard or strength).",
+    ),  # fmt: skip
+    behaviour_rounds: int = typer.Option(
+        Default(IMPUTE_CONFIG, "behaviour_rounds"), "--behaviour-rounds", min=0,
+        help="With --folds impute and no --behaviour: EM rounds after the first fit.",
+    ),  # fmt: skip
+    seed: int = typer.Option(
+        Default(IMPUTE_CONFIG, "seed"), "--seed", **SEED_OPTION,
+        help="With --folds impute: seeds the behaviour model's fit and the draws.",
+    ),  # fmt: skip
 ) -> None:
     """Turn IRC Poker Database hand histories into a Parquet state-action table.
 
     Writes TABLE and TABLE.summary.json (where every hand went) and prints the summary.
+    With --folds impute the table gains the columns imputed, weight, imputation and
+    posterior_entropy, and the summary a folds section.
     """
-    from pokerirl.datasets.ingest import ingest_table
+    from pokerirl.poker.folds import FoldsMode, ImputeConfig
 
-    summary = ingest_table(sources, out, strict=strict, progress=not quiet)
+    if folds not in tuple(FoldsMode):
+        raise UsageError(f"unknown --folds {folds!r} ({', '.join(FoldsMode)})")
+    imputing = given(ctx, imputations=imputations, behaviour=behaviour,
+                     behaviour_encoding=behaviour_encoding, behaviour_rounds=behaviour_rounds,
+                     seed=seed)  # fmt: skip
+    if folds == FoldsMode.DROP:
+        if imputing:
+            flags = ", ".join("--" + name.replace("_", "-") for name in imputing)
+            raise UsageError(f"{flags} apply only with --folds impute")
+        from pokerirl.datasets.ingest import ingest_table
+
+        summary = ingest_table(sources, out, strict=strict, progress=not quiet)
+    else:
+        config = settings_from_options(
+            ImputeConfig, imputations=imputations,
+            behaviour=None if behaviour is None else str(behaviour),
+            behaviour_encoding=behaviour_encoding, behaviour_rounds=behaviour_rounds, seed=seed,
+        )  # fmt: skip
+        from pokerirl.poker.impute import ingest_imputed
+
+        summary = ingest_imputed(sources, out, config, strict=strict, progress=not quiet)
     if not quiet:
         echo(json.dumps(summary.to_json(), indent=2))
 

@@ -48,6 +48,14 @@ SCHEMA = pa.schema(
     ]
 )
 REQUIRED_COLUMNS: tuple[str, ...] = tuple(SCHEMA.names[:15])
+# ``ingest --folds impute`` (docs/folds.md) appends these; a table without them is as before.
+IMPUTED_FIELDS = (
+    ("imputed", pa.bool_()),  # the hole cards are a draw from the posterior, not shown
+    ("weight", pa.float32()),  # the row's weight: 1 observed, (draws of this pair) / K imputed
+    ("imputation", pa.int16()),  # which distinct draw of the player's cards (1..), 0 observed
+    ("posterior_entropy", pa.float32()),  # bits, of the player's posterior; 0 observed
+)
+IMPUTED_SCHEMA = pa.schema([*SCHEMA, *(pa.field(name, kind) for name, kind in IMPUTED_FIELDS)])
 _BOARD_TEXT_LENGTH = tuple(max(3 * n - 1, 0) for n in BOARD_SIZE_BY_ROUND)
 
 
