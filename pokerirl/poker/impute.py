@@ -110,6 +110,18 @@ class Hidden:
         """(P,) decisions per player."""
         return np.bincount(self.owner, minlength=self.players)
 
+    def select(self, players: np.ndarray) -> Hidden:
+        """The hidden players ``players`` (indices, in that order) and their decisions."""
+        players = np.asarray(players, dtype=np.int64)
+        new = np.full(self.players, -1, dtype=np.int64)
+        new[players] = np.arange(len(players))
+        rows = np.flatnonzero(new[self.owner] >= 0)
+        per_player = {name: getattr(self, name)[players] for name in (
+            "hand_id", "player", "known", "outcome", "rival", "final_board")}  # fmt: skip
+        per_decision = {name: getattr(self, name)[rows] for name in (
+            "board", "raise_nums", "legal_mask", "action")}  # fmt: skip
+        return Hidden(**per_player, **per_decision, owner=new[self.owner[rows]])
+
 
 @dataclass(frozen=True, kw_only=True, eq=False)
 class SplitTable:
