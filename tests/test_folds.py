@@ -279,3 +279,39 @@ def test_a_run_policy_is_a_behaviour(month: Path, tmp_path: Path) -> None:
     assert summary.folds.behaviour == str(run) and summary.folds.behaviour_encoding == "strength"
     assert summary.folds.rounds == ()
     assert CARD_INDEX  # the module's card names are the tables'
+
+
+def test_em_rounds_reimpute_with_the_run_policy(month: Path, tmp_path: Path) -> None:
+    from typer.testing import CliRunner
+
+    from pokerirl.cli import app
+
+    table = tmp_path / "t.parquet"
+    runner = CliRunner()
+    result = runner.invoke(app, ["ingest", str(month), "--out", str(table), "--folds", "impute",
+                                 "--imputations", "2", "--behaviour-rounds", "0", "-q"])  # fmt: skip
+    assert result.exit_code == 0, result.output
+    out = tmp_path / "em"
+    result = runner.invoke(app, ["train", str(table), "--out", str(out), "--epochs", "1",
+                                 "--em-rounds", "1", "--quiet"])  # fmt: skip
+    assert result.exit_code == 0, result.output
+    report = json.loads((out / "em.json").read_text())
+    assert [r["round"] for r in report["rounds"]] == [0, 1]
+    second = report["rounds"][1]
+    assert second["policy_agree_imputed_change"] == pytest.approx(
+        second["policy_agree_imputed"] - report["rounds"][0]["policy_agree_imputed"])
+    assert 0 <= second["reward_agree_observed"] <= 1 and "mean_entropy_bits" in second
+    reimputed = pq.read_table(out / "table-1.parquet")
+    assert reimputed.schema.equals(IMPUTED_SCHEMA)
+    assert (out / "round-1" / "reward.pt").is_file()
+    assert "round 1: policy argmax = imputed actions" in result.output
+    # The flags of impute are refused with drop, and EM with several runs.
+    refused = runner.invoke(app, ["ingest", str(month), "--out", str(tmp_path / "x.parquet"),
+                                  "--imputations", "3"])  # fmt: skip
+    assert refused.exit_code == 2 and "only with --folds impute" in refused.stderr
+    refused = runner.invoke(app, ["train", str(table), "--out", str(tmp_path / "y"),
+                                  "--em-rounds", "1", "--runs", "2"])  # fmt: skip
+    assert refused.exit_code == 2 and "--runs 1" in refused.stderr
+    refused = runner.invoke(app, ["ingest", str(month), "--out", str(tmp_path / "x.parquet"),
+                                  "--folds", "maybe"])  # fmt: skip
+    assert refused.exit_code == 2 and "unknown --folds" in refused.stderr

@@ -319,6 +319,12 @@ def train(
         1, "--threads", min=1, help="CPU threads; small nets train best on 1."
     ),
     quiet: bool = typer.Option(False, "--quiet", help="No progress bar."),
+    em_rounds: int = typer.Option(
+        0, "--em-rounds", min=0,
+        help="On a table of ingest --folds impute: after the first run, re-impute the hidden "
+        "cards N times with the last run's policy as the behaviour model and train again "
+        "(OUT/round-<r>, OUT/table-<r>.parquet, OUT/em.json); one run only.",
+    ),  # fmt: skip
 ) -> None:
     """Learn a reward function with AIRL or Hybrid-AIRL from an expert decision table.
 
@@ -352,6 +358,23 @@ def train(
     settings = settings_from_options(load_config, algo, config_file=config, overrides=overrides)
     settings_from_options(resolve_device, device)
     encoding = _encoding(encoding)
+    if em_rounds:
+        if runs > 1:
+            raise UsageError("--em-rounds re-imputes with one run's policy: give --runs 1")
+        from pokerirl.poker.train import train_em
+
+        report = train_em(table, out, rounds=em_rounds, algo=algo, config=settings,
+                          device=device, progress=not quiet, overwrite=overwrite,
+                          encoding=encoding)  # fmt: skip
+        for found in report["rounds"]:
+            change = found.get("policy_agree_imputed_change")
+            echo(f"round {found['round']}: policy argmax = imputed actions "
+                 f"{found['policy_agree_imputed']:.1%}"
+                 + ("" if change is None else f" ({change:+.1%} from the round before)")
+                 + f", = observed actions {found['policy_agree_observed']:.1%}; reward "
+                 f"argmax = imputed {found['reward_agree_imputed']:.1%}")  # fmt: skip
+        echo(f"wrote {out}/round-0..{em_rounds} and {out}/em.json")
+        return
     summary = train_runs(
         table,
         out,
