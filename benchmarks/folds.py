@@ -175,7 +175,9 @@ def quality(hidden: Hidden, loglik: np.ndarray, true: np.ndarray) -> dict[str, f
     rows = np.arange(hidden.players)
     lp = post.log_probs[rows, true]
     ok = post.explained & np.isfinite(lp)
-    rank = (post.log_probs > lp[:, None]).sum(axis=1) + 1
+    # Mid-rank: a pair tied with the truth counts half (the bots' rule ties many pairs).
+    rank = (post.log_probs > lp[:, None]).sum(axis=1) + ((post.log_probs == lp[:, None]).sum(
+        axis=1) + 1) / 2  # fmt: skip
     gain = (lp + np.log(post.support)) / np.log(2)
     return {
         "players": int(hidden.players),
@@ -260,9 +262,8 @@ def irl_stage(out: Path, args: argparse.Namespace, truth: CardStates) -> dict[st
         found[name] = {"per_run": scores, "seconds": time.time() - started,
                        **{key: mean_se([s[key] for s in scores]) for key in (
                            "agree_expert", "fold_share", "raise_share", "weak_facing_bet_fold",
-                           "top_bucket_raise", "val_reward_alignment", "val_alignment")}}  # fmt: skip
-        print(f"  irl {name}: {json.dumps({k: v for k, v in found[name].items() if k != 'per_run'})}",
-              flush=True)  # fmt: skip
+                           "top_bucket_raise", "val_reward_alignment", "val_alignment")}}
+        print(f"  irl {name}: {json.dumps(without_runs(found[name]))}", flush=True)
     return found
 
 
@@ -323,12 +324,11 @@ def real_stage(out: Path, args: argparse.Namespace) -> dict[str, Any]:
             "raise_share": mean_se([c.argmax_share["raise"] for c in cards]),
             "agree_expert": mean_se([c.agree_expert or 0.0 for c in cards]),
             "agree_expert_observed": mean_se([(c.by_part or {})["observed"]["agree_expert"]
-                                              for c in cards]),  # fmt: skip
+                                              for c in cards]),
             "agree_expert_imputed": mean_se([(c.by_part or {})["imputed"]["agree_expert"]
-                                             for c in cards]),  # fmt: skip
+                                             for c in cards]),
         }
-        print(f"  real {name}: {json.dumps({k: v for k, v in found['cards'][name].items() if k != 'per_run'})}",
-              flush=True)  # fmt: skip
+        print(f"  real {name}: {json.dumps(without_runs(found['cards'][name]))}", flush=True)
     return found
 
 
@@ -352,6 +352,10 @@ def speed_stage(out: Path) -> dict[str, Any]:
 
 
 # --------------------------------------------------------------------------- report
+
+
+def without_runs(row: dict[str, Any]) -> dict[str, Any]:
+    return {k: v for k, v in row.items() if k != "per_run"}
 
 
 def mean_se(values: list[float]) -> dict[str, float]:
@@ -381,7 +385,7 @@ def markdown(found: dict[str, Any]) -> str:
         for name in TABLES:
             row = found["irl"][name]
             lines.append(f"| {name} | {pct(row['fold_share'])} | "
-                         f"{pct(row['weak_facing_bet_fold'])} | {pct(row['agree_expert'])} |")  # fmt: skip
+                         f"{pct(row['weak_facing_bet_fold'])} | {pct(row['agree_expert'])} |")
     if "quality" in found:
         lines += ["", "| posterior | mean rank of the truth | median | top 10% | gain over "
                   "uniform (bits) | entropy (bits) |", "|---|---|---|---|---|---|"]  # fmt: skip

@@ -288,8 +288,9 @@ def test_em_rounds_reimpute_with_the_run_policy(month: Path, tmp_path: Path) -> 
 
     table = tmp_path / "t.parquet"
     runner = CliRunner()
-    result = runner.invoke(app, ["ingest", str(month), "--out", str(table), "--folds", "impute",
-                                 "--imputations", "2", "--behaviour-rounds", "0", "-q"])  # fmt: skip
+    result = runner.invoke(app, ["ingest", str(month), "--out", str(table), "--folds",
+                                 "impute", "--imputations", "2", "--behaviour-rounds", "0",
+                                 "-q"])  # fmt: skip
     assert result.exit_code == 0, result.output
     out = tmp_path / "em"
     result = runner.invoke(app, ["train", str(table), "--out", str(out), "--epochs", "1",

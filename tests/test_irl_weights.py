@@ -158,3 +158,16 @@ def test_weighted_hand_derived_gradients_match_autograd(alpha: float, beta: floa
                                      alpha, weights=w)  # fmt: skip
     for a, p in zip(grads, policy.parameters(), strict=True):
         torch.testing.assert_close(a, p.grad, atol=1e-5, rtol=1e-4)
+
+
+def test_runs_in_lock_step_read_the_weights() -> None:
+    from pokerirl.irl.airl import train_many
+
+    config = AIRLConfig.for_algo("hairl", epochs=30, batch_size=50, alpha=1.0, seed=0)
+    data = conflicting(weighted=True)
+    many = train_many(data, data, config=config, seeds=[0, 1], adversarial=False,
+                      progress=False)  # fmt: skip
+    for run in many.runs:
+        with torch.no_grad():
+            probs = run.policy(torch.tensor([STATE_A]), None).exp()[0]
+        assert int(probs.argmax()) == 0, probs

@@ -58,26 +58,26 @@ def ingest(
         Default(IMPUTE_CONFIG, "imputations"), "--imputations", min=1,
         help="With --folds impute: posterior draws K per hidden player (equal draws merge "
         "into one row set of weight count/K).",
-    ),  # fmt: skip
+    ),
     behaviour: Path | None = typer.Option(
         None, "--behaviour", metavar="RUN",
         help="With --folds impute: a pokerirl train run whose policy is the behaviour model "
         "(in its own encoding); default: behaviour cloning on this table's shown hands, "
         "then EM rounds.",
-    ),  # fmt: skip
+    ),
     behaviour_encoding: str = typer.Option(
         Default(IMPUTE_CONFIG, "behaviour_encoding"), "--behaviour-encoding",
         help="With --folds impute and no --behaviour: what the fitted behaviour model reads "
         "(rlcard or strength).",
-    ),  # fmt: skip
+    ),
     behaviour_rounds: int = typer.Option(
         Default(IMPUTE_CONFIG, "behaviour_rounds"), "--behaviour-rounds", min=0,
         help="With --folds impute and no --behaviour: EM rounds after the first fit.",
-    ),  # fmt: skip
+    ),
     seed: int = typer.Option(
         Default(IMPUTE_CONFIG, "seed"), "--seed", **SEED_OPTION,
         help="With --folds impute: seeds the behaviour model's fit and the draws.",
-    ),  # fmt: skip
+    ),
 ) -> None:
     """Turn IRC Poker Database hand histories into a Parquet state-action table.
 
@@ -324,7 +324,7 @@ def train(
         help="On a table of ingest --folds impute: after the first run, re-impute the hidden "
         "cards N times with the last run's policy as the behaviour model and train again "
         "(OUT/round-<r>, OUT/table-<r>.parquet, OUT/em.json); one run only.",
-    ),  # fmt: skip
+    ),
 ) -> None:
     """Learn a reward function with AIRL or Hybrid-AIRL from an expert decision table.
 

@@ -777,13 +777,17 @@ def _hand_inconsistency(
     chips: tuple[int, int, int, int],
     stats: IngestStats,
 ) -> str | None:
-    """Why a hand with cards shown cannot be kept as logged, or None (a kept fold is counted)."""
+    """Why a hand cannot be kept as logged, or None (a kept fold is counted: with cards shown,
+    or with none, which only ``keep_concealed`` lets through)."""
     if replay.showdown:
         both_shown = min(hole) >= 0
         return _showdown_inconsistency(board, hole, both_shown=both_shown, chips=chips)
     # A fold with cards shown: never in the real logs; `pokerirl synth --reveal-all` writes it.
     reason = _fold_inconsistency(board, hole, replay.last_street, chips=chips)
-    stats.kept_fold_hands += reason is None
+    if max(hole) >= 0:
+        stats.kept_fold_hands += reason is None
+    else:
+        stats.concealed_fold_hands += reason is None
     return reason
 
 
@@ -835,13 +839,9 @@ def _classify_hand(
         return "malformed_line"
     hole = (cards_a or (-1, -1)) + (cards_b or (-1, -1))
     chips = (in_a, in_b, won_a, won_b)
-    if cards_a is None and cards_b is None:
-        if not keep_concealed or replay.showdown:
-            return "cards_concealed"
-        reason = _fold_inconsistency(board, hole, replay.last_street, chips=chips)
-        stats.concealed_fold_hands += reason is None
-    else:
-        reason = _hand_inconsistency(replay, board, hole, chips, stats)
+    if cards_a is None and cards_b is None and (not keep_concealed or replay.showdown):
+        return "cards_concealed"
+    reason = _hand_inconsistency(replay, board, hole, chips, stats)
     if reason is not None:
         stats.inconsistent_reasons[reason] += 1
         return "inconsistent_hand"

@@ -34,7 +34,7 @@ class ImputeConfig:
     imputations: int = 4
     behaviour: str | None = None
     behaviour_encoding: str = EncodingName.RLCARD
-    behaviour_rounds: int = 3
+    behaviour_rounds: int = 5
     behaviour_epochs: int = 20
     seed: int = 0
 

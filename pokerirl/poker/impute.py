@@ -36,7 +36,7 @@ import dataclasses
 import itertools
 import math
 import os
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -48,14 +48,20 @@ import torch
 from torch import nn
 from tqdm.auto import tqdm
 
-from pokerirl.datasets.ingest import FoldsResult, FoldsSummary
+from pokerirl.datasets.ingest import FoldsResult, FoldsSummary, IngestSummary, ingest_table
 from pokerirl.datasets.table import IMPUTED_SCHEMA, SCHEMA, fixed_size_list
-from pokerirl.encoding import ACTIONS, CARD_TEXT, FOLD, NUM_ACTIONS, NUM_CARDS, NUM_ROUNDS
+from pokerirl.encoding import (
+    ACTIONS,
+    CARD_TEXT,
+    FOLD,
+    NUM_ACTIONS,
+    NUM_CARDS,
+    NUM_ROUNDS,
+    encode_obs,
+)
 from pokerirl.encoding import cards_from_text as _cards_from_text
-from pokerirl.encoding import encode_obs
 from pokerirl.errors import InputError
 from pokerirl.game.encodings import (
-    EncodingName,
     Encoding,
     States,
     StrengthEncoding,
@@ -165,8 +171,9 @@ def split_table(table: pa.Table, source: str = "table") -> SplitTable:
     )
 
 
-def _codes(column: pa.ChunkedArray, dictionary: pa.Array | None = None) -> tuple[np.ndarray,
-                                                                                  pa.Array]:  # fmt: skip
+def _codes(
+    column: pa.ChunkedArray, dictionary: pa.Array | None = None
+) -> tuple[np.ndarray, pa.Array]:
     """Integer codes of a string column (within ``dictionary`` when given)."""
     if dictionary is None:
         encoded = pc.dictionary_encode(column.combine_chunks())
@@ -708,7 +715,8 @@ def impute(
         rounds=tuple(rounds),
     )  # fmt: skip
     return Imputation(table=result, split=split, behaviour=behaviour, posterior=post,
-                      draws=draws, summary=summary, dropped_decisions=dropped_decisions)  # fmt: skip
+                      draws=draws, summary=summary,
+                      dropped_decisions=dropped_decisions)  # fmt: skip
 
 
 def _quantiles(values: np.ndarray) -> dict[str, float]:
@@ -729,22 +737,16 @@ def folds_step(config: ImputeConfig) -> Callable[..., FoldsResult]:
 
 
 def ingest_imputed(
-    sources: list[str | os.PathLike[str]] | list[Path],
+    sources: Sequence[str | os.PathLike[str]],
     out: str | os.PathLike[str],
     config: ImputeConfig,
     *,
     strict: bool = False,
     progress: bool = False,
-) -> Any:
+) -> IngestSummary:
     """``pokerirl ingest --folds impute``: the table with the fold hands' hidden cards
-    imputed, and its summary (:class:`~pokerirl.datasets.ingest.IngestSummary`)."""
-    from pokerirl.datasets.ingest import ingest_table
+    imputed, and its summary."""
 
     if config.behaviour is not None:
         Behaviour.from_run(config.behaviour)  # a bad run fails before the sources are read
-    torch_threads = torch.get_num_threads()
-    try:
-        return ingest_table(sources, out, strict=strict, progress=progress,
-                            folds=folds_step(config))  # fmt: skip
-    finally:
-        torch.set_num_threads(torch_threads)
+    return ingest_table(sources, out, strict=strict, progress=progress, folds=folds_step(config))

@@ -290,7 +290,8 @@ class RewardCard:
         for part, numbers in (self.by_part or {}).items():
             agree = numbers.get("agree_expert")
             lines.append(
-                f"  {part} rows (weight {numbers['weight']:,.0f}): argmax {row(numbers['argmax_share'])}"
+                f"  {part} rows (weight {numbers['weight']:,.0f}): argmax "
+                f"{row(numbers['argmax_share'])}"
                 + ("" if agree is None else f"; = expert {agree:.1%}")
             )
         lines.append(f"  prediction: {self.prediction}")
@@ -452,7 +453,7 @@ def _weighted_card(
         decision_bonus_sign=int(np.sign(bonus)),
         argmax_share=shares,
         argmax_share_by_street=[_shares(best[states.street == s], w[states.street == s])
-                                for s in range(4)],  # fmt: skip
+                                for s in range(4)],
         states_by_street=[int((states.street == s).sum()) for s in range(4)],
         argmax_share_by_strength=[_shares(best[bucket == b], w[bucket == b]) for b in buckets],
         states_by_strength=[int((bucket == b).sum()) for b in buckets],
@@ -466,7 +467,7 @@ def _weighted_card(
         expert_share_by_strength=(
             None if expert is None
             else [_shares(expert[bucket == b], w[bucket == b]) for b in buckets]
-        ),  # fmt: skip
+        ),
         weighted_states=float(w.sum()),
         by_part=by_part,
     )
