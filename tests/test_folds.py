@@ -316,3 +316,29 @@ def test_em_rounds_reimpute_with_the_run_policy(month: Path, tmp_path: Path) -> 
     refused = runner.invoke(app, ["ingest", str(month), "--out", str(tmp_path / "x.parquet"),
                                   "--folds", "maybe"])  # fmt: skip
     assert refused.exit_code == 2 and "unknown --folds" in refused.stderr
+
+
+def test_reward_cards_weigh_rows_and_report_the_parts(month: Path, tmp_path: Path) -> None:
+    from pokerirl.poker.reward_card import CardStates, RewardCard, reward_card
+    from pokerirl.poker.rewards import ObsReward
+
+    out = tmp_path / "t.parquet"
+    summary = ingest_imputed([month], out, ImputeConfig(behaviour_rounds=0, behaviour_epochs=1))
+    states = CardStates.from_table(out)
+    fold_first = ObsReward(lambda obs, a: (a == FOLD).astype(np.float32), name="folds")
+    card = reward_card(fold_first, states)
+    assert card.by_part is not None and set(card.by_part) == {"observed", "imputed"}
+    assert summary.folds is not None
+    decisions = summary.rows - summary.folds.imputed_rows + summary.folds.imputed_decisions
+    assert card.weighted_states == pytest.approx(decisions, rel=1e-5)
+    assert card.by_part["imputed"]["weight"] == pytest.approx(summary.folds.imputed_decisions,
+                                                              rel=1e-5)  # fmt: skip
+    # The expert's fold share counts each hidden decision once, not once per draw.
+    folds = summary.folds.imputed_decisions_per_action["fold"]
+    assert card.expert_share is not None
+    assert card.expert_share["fold"] == pytest.approx(folds / decisions, rel=1e-5)
+    assert card.argmax_share["fold"] == 1.0 and "imputed rows" in card.render()
+    assert RewardCard.from_json(card.to_json()) == card
+    ingest_table([month], tmp_path / "drop.parquet")
+    plain = reward_card(fold_first, CardStates.from_table(tmp_path / "drop.parquet"))
+    assert "by_part" not in json.loads(plain.to_json())  # cards of plain tables as before
