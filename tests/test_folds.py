@@ -342,3 +342,13 @@ def test_reward_cards_weigh_rows_and_report_the_parts(month: Path, tmp_path: Pat
     ingest_table([month], tmp_path / "drop.parquet")
     plain = reward_card(fold_first, CardStates.from_table(tmp_path / "drop.parquet"))
     assert "by_part" not in json.loads(plain.to_json())  # cards of plain tables as before
+
+
+def test_study_settings_name_folds_only_when_imputing() -> None:
+    from pokerirl.studies.common import StudyError
+    from pokerirl.studies.poker.config import preset
+
+    assert "folds" not in preset("quick").settings()  # studies of before keep their records
+    assert preset("quick", folds="impute").settings()["folds"] == "impute"
+    with pytest.raises(StudyError, match="folds"):
+        preset("quick", folds="maybe")
