@@ -425,13 +425,19 @@ def main() -> None:
     result_file = out / "folds.json"
     found: dict[str, Any] = json.loads(result_file.read_text()) if result_file.is_file() else {}
     found.update(hands=args.hands, month_seed=args.month_seed, runs=args.runs)
+    mine: set[str] = set()
 
-    def save() -> None:
-        result_file.write_text(json.dumps(found, indent=2) + "\n")
+    def save() -> None:  # merged: stages may run in several processes at once
+        merged = json.loads(result_file.read_text()) if result_file.is_file() else {}
+        merged.update({key: found[key] for key in (*mine, "hands", "month_seed", "runs")})
+        found.update(merged)
+        result_file.write_text(json.dumps(merged, indent=2) + "\n")
 
-    logs, truth_month = months(out, args.hands, args.month_seed)
-    plain_tables(out, logs, truth_month)
+    if stages & {"quality", "irl", "transfer"}:
+        logs, truth_month = months(out, args.hands, args.month_seed)
+        plain_tables(out, logs, truth_month)
     if "quality" in stages:
+        mine.add("quality")
         configs = QUALITY_CONFIGS
         if args.quality_configs:
             configs = {k: ImputeConfig(**v) for k, v in json.loads(args.quality_configs).items()}
@@ -439,18 +445,20 @@ def main() -> None:
             found.setdefault("quality", {})[name] = quality_stage(
                 out, logs, out / "truth.parquet", config, name)
             save()
-    imputed_table(out, logs, ImputeConfig())
-    if "irl" in stages:
-        found["irl"] = irl_stage(out, args, CardStates.from_table(out / "truth.parquet"))
-        save()
-    if "transfer" in stages:
-        found["transfer"] = transfer_stage(out, args)
-        save()
-    if "real" in stages and SAMPLE.is_dir():
-        found["real"] = real_stage(out, args)
-        save()
-    if "speed" in stages and SAMPLE.is_dir():
-        found["speed"] = speed_stage(out)
+    if stages & {"irl", "transfer"}:
+        imputed_table(out, logs, ImputeConfig())
+    for stage in ("irl", "transfer", "real", "speed"):
+        if stage not in stages or (stage in ("real", "speed") and not SAMPLE.is_dir()):
+            continue
+        mine.add(stage)
+        if stage == "irl":
+            found["irl"] = irl_stage(out, args, CardStates.from_table(out / "truth.parquet"))
+        elif stage == "transfer":
+            found["transfer"] = transfer_stage(out, args)
+        elif stage == "real":
+            found["real"] = real_stage(out, args)
+        else:
+            found["speed"] = speed_stage(out)
         save()
     print(markdown(found))
 
