@@ -333,21 +333,37 @@ def real_stage(out: Path, args: argparse.Namespace) -> dict[str, Any]:
 
 
 def speed_stage(out: Path) -> dict[str, Any]:
-    """The April 1995 sample imputed on one core, twice: the median time and hands/s."""
+    """The April 1995 sample imputed on one core, twice: the whole ``ingest --folds impute``
+    (parse, π_B's fit and EM rounds, the final posterior, the table) and one posterior pass
+    alone (every hidden decision x 1,326 pairs through π_B)."""
     from pokerirl.poker.impute import ingest_imputed
 
     torch.set_num_threads(1)
-    times, summary = [], None
+    times, passes, summary = [], [], None
+    captured: dict[str, Any] = {}
+
+    def step(table: Any, *, progress: bool) -> Any:
+        captured["imputation"] = impute(table, ImputeConfig(behaviour_rounds=0))
+        return captured["imputation"].result()
+
     for k in range(2):
         started = time.perf_counter()
         summary = ingest_imputed([SAMPLE], out / f"speed-{k}.parquet", ImputeConfig())
         times.append(time.perf_counter() - started)
+        ingest_table([SAMPLE], out / f"speed-pass-{k}.parquet", folds=step)
+        imputation = captured["imputation"]
+        started = time.perf_counter()
+        log_likelihoods(imputation.split.hidden, imputation.behaviour)
+        passes.append(time.perf_counter() - started)
     assert summary is not None and summary.folds is not None
-    seconds = float(np.median(times))
+    seconds, one_pass = float(np.median(times)), float(np.median(passes))
     return {"seconds": times, "hands_imputed": summary.folds.imputed_hands,
             "hands_per_second": summary.folds.imputed_hands / seconds,
             "decisions": summary.folds.imputed_decisions,
-            "posterior_passes": summary.folds.imputations and len(summary.folds.rounds),
+            "posterior_passes": len(summary.folds.rounds),  # EM rounds' passes and the last
+            "one_pass_seconds": passes,
+            "one_pass_hands_per_second": summary.folds.imputed_hands / one_pass,
+            "one_pass_states_per_second": summary.folds.imputed_decisions * NUM_PAIRS / one_pass,
             "load": os.getloadavg()}  # fmt: skip
 
 

@@ -582,7 +582,7 @@ def fit_bc(table: pa.Table, encoding: Encoding, *, epochs: int, seed: int,
     from pokerirl.irl.config import AIRLConfig
     from pokerirl.poker.data import transitions_from_arrow
 
-    data = transitions_from_arrow(table, source="the table's observed rows", encoding=encoding)
+    data = transitions_from_arrow(table, source="the table being imputed", encoding=encoding)
     config = AIRLConfig.for_algo("hairl", epochs=epochs, alpha=1.0, seed=seed)
     train_data, val_data, _ = data.split(val_fraction=config.val_fraction, seed=seed)
     with torch.random.fork_rng(devices=[]):
