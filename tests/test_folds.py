@@ -352,3 +352,24 @@ def test_study_settings_name_folds_only_when_imputing() -> None:
     assert preset("quick", folds="impute").settings()["folds"] == "impute"
     with pytest.raises(StudyError, match="folds"):
         preset("quick", folds="maybe")
+
+
+def test_fold_errors_are_one_line(month: Path, tmp_path: Path) -> None:
+    from typer.testing import CliRunner
+
+    from pokerirl.cli import app
+
+    runner = CliRunner()
+    drop = tmp_path / "drop.parquet"
+    ingest_table([month], drop)
+    for line, code, words in (
+        (["ingest", str(month), "--out", str(tmp_path / "x.parquet"), "--folds", "impute",
+          "--behaviour", str(tmp_path / "missing")], 1, "not a training run folder"),
+        (["ingest", str(month), "--out", str(tmp_path / "x.parquet"), "--folds", "impute",
+          "--behaviour-encoding", "nope"], 2, "unknown behaviour encoding"),
+        (["train", str(drop), "--out", str(tmp_path / "em"), "--em-rounds", "1"], 1,
+         "needs a table of ingest's fold imputation"),
+    ):  # fmt: skip
+        result = runner.invoke(app, line)
+        errors = [text for text in result.stderr.splitlines() if text.startswith("error: ")]
+        assert result.exit_code == code and len(errors) == 1 and words in errors[0], result.stderr
