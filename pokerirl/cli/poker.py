@@ -41,22 +41,79 @@ ENCODING_HELP = (
 )
 
 
+IMPUTE_CONFIG = "pokerirl.poker.folds:ImputeConfig"
+
+
 @app.command()
 def ingest(
+    ctx: typer.Context,
     sources: list[Path] = typer.Argument(
         ..., help="Month folders, folders of months, month .tgz archives or IRCdata.tgz."
     ),
     out: Path = typer.Option(..., "--out", "-o", help="The Parquet table to write."),
     strict: bool = typer.Option(False, "--strict", help="Stop at the first malformed line."),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bar, no summary."),
+    folds: str = typer.Option(
+        "drop",
+        "--folds",
+        help="drop: leave out the hands that end in a fold with the cards hidden (the table "
+        "of before, byte for byte); impute: keep them, each hidden player's cards drawn from "
+        "a posterior over the 1,326 pairs under a behaviour model (docs/folds.md).",
+    ),
+    imputations: int = typer.Option(
+        Default(IMPUTE_CONFIG, "imputations"), "--imputations", min=1,
+        help="With --folds impute: posterior draws K per hidden player (equal draws merge "
+        "into one row set of weight count/K).",
+    ),
+    behaviour: Path | None = typer.Option(
+        None, "--behaviour", metavar="RUN",
+        help="With --folds impute: a pokerirl train run whose policy is the behaviour model "
+        "(in its own encoding); default: behaviour cloning on this table's shown hands, "
+        "then EM rounds.",
+    ),
+    behaviour_encoding: str = typer.Option(
+        Default(IMPUTE_CONFIG, "behaviour_encoding"), "--behaviour-encoding",
+        help="With --folds impute and no --behaviour: what the fitted behaviour model reads "
+        "(rlcard or strength).",
+    ),
+    behaviour_rounds: int = typer.Option(
+        Default(IMPUTE_CONFIG, "behaviour_rounds"), "--behaviour-rounds", min=0,
+        help="With --folds impute and no --behaviour: EM rounds after the first fit.",
+    ),
+    seed: int = typer.Option(
+        Default(IMPUTE_CONFIG, "seed"), "--seed", **SEED_OPTION,
+        help="With --folds impute: seeds the behaviour model's fit and the draws.",
+    ),
 ) -> None:
     """Turn IRC Poker Database hand histories into a Parquet state-action table.
 
     Writes TABLE and TABLE.summary.json (where every hand went) and prints the summary.
+    With --folds impute the table gains the columns imputed, weight, imputation and
+    posterior_entropy, and the summary a folds section.
     """
-    from pokerirl.datasets.ingest import ingest_table
+    from pokerirl.poker.folds import FoldsMode, ImputeConfig
 
-    summary = ingest_table(sources, out, strict=strict, progress=not quiet)
+    if folds not in tuple(FoldsMode):
+        raise UsageError(f"unknown --folds {folds!r} ({', '.join(FoldsMode)})")
+    imputing = given(ctx, imputations=imputations, behaviour=behaviour,
+                     behaviour_encoding=behaviour_encoding, behaviour_rounds=behaviour_rounds,
+                     seed=seed)  # fmt: skip
+    if folds == FoldsMode.DROP:
+        if imputing:
+            flags = ", ".join("--" + name.replace("_", "-") for name in imputing)
+            raise UsageError(f"{flags} apply only with --folds impute")
+        from pokerirl.datasets.ingest import ingest_table
+
+        summary = ingest_table(sources, out, strict=strict, progress=not quiet)
+    else:
+        config = settings_from_options(
+            ImputeConfig, imputations=imputations,
+            behaviour=None if behaviour is None else str(behaviour),
+            behaviour_encoding=behaviour_encoding, behaviour_rounds=behaviour_rounds, seed=seed,
+        )  # fmt: skip
+        from pokerirl.poker.impute import ingest_imputed
+
+        summary = ingest_imputed(sources, out, config, strict=strict, progress=not quiet)
     if not quiet:
         echo(json.dumps(summary.to_json(), indent=2))
 
@@ -285,6 +342,12 @@ def train(
         1, "--threads", min=1, help="CPU threads; small nets train best on 1."
     ),
     quiet: bool = typer.Option(False, "--quiet", help="No progress bar."),
+    em_rounds: int = typer.Option(
+        0, "--em-rounds", min=0,
+        help="On a table of ingest --folds impute: after the first run, re-impute the hidden "
+        "cards N times with the last run's policy as the behaviour model and train again "
+        "(OUT/round-<r>, OUT/table-<r>.parquet, OUT/em.json); one run only.",
+    ),
 ) -> None:
     """Learn a reward function with AIRL or Hybrid-AIRL from an expert decision table.
 
@@ -318,6 +381,23 @@ def train(
     settings = settings_from_options(load_config, algo, config_file=config, overrides=overrides)
     settings_from_options(resolve_device, device)
     encoding = _encoding(encoding)
+    if em_rounds:
+        if runs > 1:
+            raise UsageError("--em-rounds re-imputes with one run's policy: give --runs 1")
+        from pokerirl.poker.train import train_em
+
+        report = train_em(table, out, rounds=em_rounds, algo=algo, config=settings,
+                          device=device, progress=not quiet, overwrite=overwrite,
+                          encoding=encoding)  # fmt: skip
+        for found in report["rounds"]:
+            change = found.get("policy_agree_imputed_change")
+            echo(f"round {found['round']}: policy argmax = imputed actions "
+                 f"{found['policy_agree_imputed']:.1%}"
+                 + ("" if change is None else f" ({change:+.1%} from the round before)")
+                 + f", = observed actions {found['policy_agree_observed']:.1%}; reward "
+                 f"argmax = imputed {found['reward_agree_imputed']:.1%}")  # fmt: skip
+        echo(f"wrote {out}/round-0..{em_rounds} and {out}/em.json")
+        return
     summary = train_runs(
         table,
         out,

@@ -113,6 +113,12 @@ def study(
         help="What rewards, policies and DQNs read: rlcard (the paper's 72-d, the default) or "
         "strength (hole and board apart, with hand features).",
     ),
+    folds: str | None = typer.Option(
+        None,
+        "--folds",
+        help="drop (default: the hands that end in a fold hide the cards and are left out) "
+        "or impute (kept, the hidden cards drawn from a posterior; docs/folds.md).",
+    ),
     jobs: int = typer.Option(2, "--jobs", min=1, help="Processes for training and play."),
     ray: str | None = typer.Option(None, "--ray", metavar="ADDRESS", help=RAY_HELP),
     overwrite: bool = typer.Option(
@@ -142,6 +148,7 @@ def study(
         reward_sources=tuple(sources_given) or None,
         reward_transform=reward_transform,
         encoding=encoding,
+        folds=folds,
     )
     result = run_study(
         sources,

@@ -11,6 +11,11 @@ Required columns: ``hand_id`` (string), ``obs`` (fixed_size_list<uint8>[72]), ``
 big blinds on the player's last decision of a hand, else 0) and ``player`` (string), which
 gives next_obs (the same player's next decision in the hand) and done (their last one).
 
+Optional columns of ``pokerirl ingest --folds impute`` (docs/folds.md): ``weight`` (float: the
+row's weight in every mean), ``imputed`` (bool: its hole cards are a posterior draw) and
+``imputation`` (integer: which draw, 0 for observed rows); a player's next decision is then
+looked up within the same draw.
+
 A table's ``obs`` column is RLCard's 72-d observation. Another encoding
 (:mod:`pokerirl.game.encodings`) is computed on reading from the columns that hold the state
 apart: ``hole_cards`` and ``board`` (texts) and ``raise_nums``; a table without them cannot
@@ -39,6 +44,7 @@ from pokerirl.parquet import fixed_width, read_parquet
 
 REQUIRED_COLUMNS = ("hand_id", "obs", "action_id", "legal_mask")
 OPTIONAL_COLUMNS = ("reward", "player")
+IMPUTATION_COLUMNS = ("weight", "imputed", "imputation")  # ingest --folds impute
 STATE_COLUMNS = ("hole_cards", "board", "raise_nums")  # what other encodings are computed from
 
 
@@ -55,6 +61,8 @@ class DecisionArrays:
     rewards: np.ndarray | None = None  # (N,) float32
     num_actions: int = NUM_ACTIONS
     encoding: str = EncodingName.RLCARD
+    weights: np.ndarray | None = None  # (N,) float32 > 0, from a ``weight`` column
+    imputed: np.ndarray | None = None  # (N,) bool, from an ``imputed`` column
 
 def read_decisions(
     path: str | os.PathLike[str], *, encoding: str | Encoding | None = None
@@ -65,7 +73,7 @@ def read_decisions(
     Raises ``FileNotFoundError`` for a missing file and ``ValueError`` for anything else wrong
     (not Parquet, missing columns, wrong types or widths, nulls, empty, illegal expert actions).
     """
-    optional = (*OPTIONAL_COLUMNS, *STATE_COLUMNS)
+    optional = (*OPTIONAL_COLUMNS, *STATE_COLUMNS, *IMPUTATION_COLUMNS)
     table = read_parquet(path, REQUIRED_COLUMNS, optional, what="table")
     return decisions_from_arrow(table, source=str(Path(path)), encoding=encoding)
 
@@ -77,7 +85,7 @@ def decisions_from_arrow(
     chosen = get_encoding(encoding)
     if table.num_rows == 0:
         raise InputError(f"{source} is empty: no expert decisions to learn from")
-    for name in (*REQUIRED_COLUMNS, *OPTIONAL_COLUMNS):
+    for name in (*REQUIRED_COLUMNS, *OPTIONAL_COLUMNS, *IMPUTATION_COLUMNS):
         if name in table.column_names and table.column(name).null_count:
             raise InputError(f"{source}: column {name!r} has null values")
     hand = _strings(table, "hand_id", source)
@@ -103,12 +111,13 @@ def decisions_from_arrow(
             raise InputError(f"{source}: column 'reward' must be numeric, got {reward.type}")
         rewards = reward.to_numpy().astype(np.float32)
 
+    weights, imputed, draw = _imputation_columns(table, source)
     if chosen.name != EncodingName.RLCARD:
         obs = chosen.encode(table_states(table, mask, source, chosen.name))
     next_obs = dones = None
     if "player" in table.column_names:
         player = _strings(table, "player", source)
-        following = next_decision(hand.indices, player.indices)
+        following = next_decision(hand.indices, player.indices, draw)
         dones = following < 0
         next_obs = obs[np.where(dones, np.arange(len(obs)), following)]
 
@@ -121,7 +130,35 @@ def decisions_from_arrow(
         dones=dones,
         rewards=rewards,
         encoding=chosen.name,
+        weights=weights,
+        imputed=imputed,
     )
+
+
+def _imputation_columns(
+    table: pa.Table, source: str
+) -> tuple[np.ndarray | None, np.ndarray | None, np.ndarray | None]:
+    """(weights, imputed, draw) from the optional columns of an imputed table, or Nones."""
+    names = table.column_names
+    weights = imputed = draw = None
+    if "weight" in names:
+        column = table.column("weight")
+        if not pa.types.is_floating(column.type):
+            raise InputError(f"{source}: column 'weight' must be float, got {column.type}")
+        weights = column.to_numpy().astype(np.float32)
+        if not (np.isfinite(weights).all() and (weights > 0).all()):
+            raise InputError(f"{source}: column 'weight' must hold finite positive numbers")
+    if "imputed" in names:
+        column = table.column("imputed")
+        if not pa.types.is_boolean(column.type):
+            raise InputError(f"{source}: column 'imputed' must be bool, got {column.type}")
+        imputed = column.to_numpy(zero_copy_only=False).astype(bool)
+    if "imputation" in names:
+        column = table.column("imputation")
+        if not pa.types.is_integer(column.type):
+            raise InputError(f"{source}: column 'imputation' must be integer, got {column.type}")
+        draw = column.to_numpy().astype(np.int64)
+    return weights, imputed, draw
 
 
 def table_states(table: pa.Table, legal_mask: np.ndarray, source: str, why: str) -> States:
@@ -162,15 +199,22 @@ def _strings(table: pa.Table, name: str, source: str) -> _Encoded:
     return _Encoded(indices, encoded.dictionary)
 
 
-def next_decision(hand: np.ndarray, player: np.ndarray) -> np.ndarray:
-    """Per row, the row of the same player's next decision in the same hand, or -1.
+def next_decision(
+    hand: np.ndarray, player: np.ndarray, draw: np.ndarray | None = None
+) -> np.ndarray:
+    """Per row, the row of the same player's next decision in the same hand (and the same
+    imputation ``draw``, when given), or -1.
 
     Rows of a hand are in decision order, as ``pokerirl ingest`` writes them.
 
     >>> next_decision(np.array([0, 0, 0, 0, 1]), np.array([0, 1, 0, 1, 0])).tolist()
     [2, 3, -1, -1, -1]
+    >>> next_decision(np.array([0, 0, 0, 0]), np.zeros(4, int), np.array([1, 2, 1, 2])).tolist()
+    [2, 3, -1, -1]
     """
     key = hand * (int(player.max()) + 1) + player
+    if draw is not None:
+        key = key * (int(draw.max()) + 1) + draw
     order = np.argsort(key, kind="stable")  # rows of one (hand, player), in table order
     same = key[order[1:]] == key[order[:-1]]
     following = np.full(len(key), -1, dtype=np.int64)

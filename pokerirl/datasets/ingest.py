@@ -1,24 +1,32 @@
 """``pokerirl ingest``: IRC hand histories in, one Parquet state-action table out.
 
+With a ``folds`` step (``ingest --folds impute``, :mod:`pokerirl.poker.impute`; this layer
+knows nothing of how it imputes), the hands that ended in a fold with nobody's cards shown
+are kept too: the step gets every row, concealed ones with an empty ``hole_cards``, and
+returns the table to write (with the columns of
+:data:`~pokerirl.datasets.table.IMPUTED_SCHEMA`) and what it did. Without it, the table and
+its summary are exactly what they were before folds could be kept.
+
 >>> # ingest(["holdem/199504"], "table.parquet")  # writes table.parquet and table.summary.json
 """
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import os
 import shutil
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, Protocol
 
 import numpy as np
 import pyarrow as pa
 import pyarrow.parquet as pq
 from tqdm import tqdm
 
-from pokerirl.datasets.table import SCHEMA, month_table
+from pokerirl.datasets.table import IMPUTED_SCHEMA, SCHEMA, month_table
 from pokerirl.encoding import ACTIONS, FOLD
 from pokerirl.parsers.irc import (
     DROP_REASONS,
@@ -41,6 +49,76 @@ PARQUET_OPTIONS: Mapping[str, Any] = {
     "write_statistics": ["hand_id", "timestamp", "player", "street", "action_id", "channel"],
 }
 SPILL_BYTES = 512 * 1024 * 1024  # months held in memory before they go to temporary parts
+# The drop reason of a hand whose actions no hole cards explain (impute mode only).
+UNEXPLAINED = "unexplained_by_behaviour"
+
+
+@dataclass(frozen=True, kw_only=True)
+class FoldsSummary:
+    """What ``--folds impute`` did: the ``folds`` key of the summary, keys in this order.
+
+    ``hidden_players``: (hand, player) pairs whose cards were concealed; each is imputed or
+    dropped (its actions have likelihood ~0 under π_B for every pair of cards). A hand with a
+    dropped player is dropped whole (``unexplained_by_behaviour``) unless the other player's
+    cards were shown, in which case it keeps that player's rows as before.
+    ``entropy_bits``: quantiles of the imputed players' posterior entropies, beside
+    ``uniform_bits`` (a posterior that learnt nothing). ``rounds``: the behaviour model's
+    fitting rounds (BC on the observed rows, then EM with imputed ones)."""
+
+    behaviour: str  # where π_B came from: "bc" (fitted on this table) or a run folder
+    behaviour_encoding: str
+    imputations: int  # K posterior draws per hidden player (equal draws merge, weight count/K)
+    seed: int
+    hidden_players: int
+    imputed_players: int
+    dropped_players: int
+    imputed_hands: int
+    dropped_hands: int
+    imputed_decisions: int
+    imputed_rows: int
+    imputed_decisions_per_action: Mapping[str, int]
+    entropy_bits: Mapping[str, float]  # mean, p10, p50, p90 over imputed players
+    uniform_bits: float  # mean entropy of the uniform posterior over the same players
+    rounds: tuple[Mapping[str, Any], ...] = ()
+
+    def to_json(self) -> dict[str, object]:
+        return {
+            "behaviour": self.behaviour,
+            "behaviour_encoding": self.behaviour_encoding,
+            "imputations": self.imputations,
+            "seed": self.seed,
+            "hidden_players": self.hidden_players,
+            "imputed_players": self.imputed_players,
+            "dropped_players": self.dropped_players,
+            "imputed_hands": self.imputed_hands,
+            "dropped_hands": self.dropped_hands,
+            "imputed_decisions": self.imputed_decisions,
+            "imputed_rows": self.imputed_rows,
+            "imputed_decisions_per_action": dict(self.imputed_decisions_per_action),
+            "entropy_bits": dict(self.entropy_bits),
+            "uniform_bits": self.uniform_bits,
+            "rounds": [dict(r) for r in self.rounds],
+        }
+
+    @classmethod
+    def from_json(cls, data: Mapping[str, Any]) -> FoldsSummary:
+        return cls(**{**data, "rounds": tuple(data.get("rounds", ()))})
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class FoldsResult:
+    """What a :class:`FoldsStep` returns: the table to write and its summary."""
+
+    table: pa.Table  # IMPUTED_SCHEMA
+    summary: FoldsSummary
+    dropped_decisions: int  # concealed decisions left out (their players were dropped)
+
+
+class FoldsStep(Protocol):
+    """Turns every row of an ingest (concealed players' rows with an empty ``hole_cards``)
+    into the table to write."""
+
+    def __call__(self, table: pa.Table, *, progress: bool) -> FoldsResult: ...
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -68,9 +146,12 @@ class IngestSummary:
     chips_mismatch_hands: int
     orphan_pdb_lines: int
     kept_fold_hands: int = 0  # kept hands that ended in a fold (cards shown: synth --reveal-all)
+    # --folds impute only (absent from the JSON otherwise): hands kept with imputed cards.
+    imputed_hands: int | None = None
+    folds: FoldsSummary | None = None
 
     def to_json(self) -> dict[str, object]:
-        return {
+        found: dict[str, object] = {
             "table": self.table,
             "sources": list(self.sources),
             "months": list(self.months),
@@ -93,11 +174,17 @@ class IngestSummary:
             "orphan_pdb_lines": self.orphan_pdb_lines,
             "kept_fold_hands": self.kept_fold_hands,
         }
+        if self.folds is not None:
+            found["imputed_hands"] = self.imputed_hands
+            found["folds"] = self.folds.to_json()
+        return found
 
     @classmethod
     def from_json(cls, data: Mapping[str, Any]) -> IngestSummary:
         listed = ("sources", "months", "malformed_examples")
         found: dict[str, Any] = {k: tuple(v) if k in listed else v for k, v in data.items()}
+        if found.get("folds") is not None:
+            found["folds"] = FoldsSummary.from_json(found["folds"])
         return cls(**found)
 
 
@@ -113,12 +200,14 @@ def ingest_table(
     *,
     strict: bool = False,
     progress: bool = False,
+    folds: FoldsStep | None = None,
 ) -> IngestSummary:
     """Read IRC sources, write the table to ``out`` and its summary beside it; return the summary.
 
     Months are parsed one at a time; their tables are held until they pass ``SPILL_BYTES``,
     then spilled to temporary Parquet parts, so memory stays bounded. Months are joined in
-    (channel, month) order at the end.
+    (channel, month) order at the end. With ``folds`` (see the module docstring), the fold
+    hands nobody showed are kept for it, and the whole table is held in memory for it.
 
     The table and its summary are written through the store (:func:`staged_files`, key: the
     table's name): nothing changes at ``out`` unless the whole ingest succeeds, and a kill
@@ -135,7 +224,8 @@ def ingest_table(
         with staged_files(out_path.parent, key=out_path.name, make_parent=False) as new:
             scratch = new / _SPILL_FOLDER  # inside the staging folder; gone before the swap
             scratch.mkdir()
-            summary = _ingest(sources, out_path, new, scratch, strict=strict, progress=progress)
+            summary = _ingest(sources, out_path, new, scratch, strict=strict, progress=progress,
+                              folds=folds)  # fmt: skip
             shutil.rmtree(scratch)
             summary_path(out_path).unlink(missing_ok=True)
     except OSError as error:  # sources' read errors are IngestErrors: this is a write
@@ -154,8 +244,10 @@ def _ingest(
     *,
     strict: bool,
     progress: bool,
+    folds: FoldsStep | None = None,
 ) -> IngestSummary:
     stats = IngestStats(strict=strict)
+    keep = folds is not None
     seen: dict[str, np.ndarray] = {}
     # (month key, arrival order, table in memory or spilled part file)
     months: list[tuple[str, int, pa.Table | Path]] = []
@@ -164,8 +256,8 @@ def _ingest(
     counts = {action: 0 for action in ACTIONS if action != ACTIONS[FOLD]}
     with tqdm(desc="ingest", unit=" hands", disable=not progress, smoothing=0) as bar:
         for order, month in enumerate(iter_months(sources)):
-            hands = parse_month(month, stats, seen, on_hands=bar.update)
-            table, concealed = month_table(hands)
+            hands = parse_month(month, stats, seen, on_hands=bar.update, keep_concealed=keep)
+            table, concealed = month_table(hands, keep_concealed=keep)
             stats.decisions_concealed += concealed
             for action, count in zip(*_value_counts(table.column("action")), strict=True):
                 counts[action] = counts.get(action, 0) + count
@@ -173,21 +265,62 @@ def _ingest(
                 continue
             months.append((month.key, order, table))
             in_memory += table.nbytes
-            if in_memory > SPILL_BYTES:
+            if in_memory > SPILL_BYTES and not keep:
                 months = [_spill(item, scratch) for item in months]
                 in_memory = 0
-    summary = _summary(stats, sources, out_path, counts)
     table_file, summary_file = new / out_path.name, new / summary_path(out_path).name
-    with (
-        _file(table_file, "wb") as sink,
-        pq.ParquetWriter(sink, SCHEMA, **PARQUET_OPTIONS) as writer,
-    ):
-        for _, _, data in sorted(months, key=lambda item: item[:2]):
-            if isinstance(data, Path):
-                with _file(data, "rb") as part:
-                    data = pq.read_table(part)
-            writer.write_table(data)
+    ordered = [data for _, _, data in sorted(months, key=lambda item: item[:2])]
+    if folds is not None:
+        summary = _write_with_folds(folds, ordered, stats, sources, out_path, table_file,
+                                    progress=progress)  # fmt: skip
+    else:
+        summary = _summary(stats, sources, out_path, counts)
+        with (
+            _file(table_file, "wb") as sink,
+            pq.ParquetWriter(sink, SCHEMA, **PARQUET_OPTIONS) as writer,
+        ):
+            for data in ordered:
+                if isinstance(data, Path):
+                    with _file(data, "rb") as part:
+                        data = pq.read_table(part)
+                writer.write_table(data)
     summary_file.write_text(json.dumps(summary.to_json(), indent=2) + "\n", encoding="utf-8")
+    return summary
+
+
+def _write_with_folds(
+    folds: FoldsStep,
+    months: list[pa.Table | Path],
+    stats: IngestStats,
+    sources: Sequence[str | os.PathLike[str]],
+    out_path: Path,
+    table_file: Path,
+    *,
+    progress: bool,
+) -> IngestSummary:
+    """Run the folds step on every row and write its table; the summary's buckets move the
+    hands it imputed or dropped out of ``kept``."""
+    tables = [data for data in months if isinstance(data, pa.Table)]  # never spilled here
+    every = pa.concat_tables(tables) if tables else SCHEMA.empty_table()
+    result = folds(every, progress=progress)
+    folds_summary = result.summary
+    stats.buckets[KEPT] -= folds_summary.imputed_hands + folds_summary.dropped_hands
+    stats.decisions_concealed += result.dropped_decisions
+    counts = {action: 0 for action in ACTIONS if action != ACTIONS[FOLD]}
+    for action, count in zip(*_value_counts(result.table.column("action")), strict=True):
+        counts[action] = counts.get(action, 0) + count
+    summary = _summary(stats, sources, out_path, counts,
+                       extra_drops={UNEXPLAINED: folds_summary.dropped_hands})  # fmt: skip
+    summary = dataclasses.replace(
+        summary,
+        imputed_hands=folds_summary.imputed_hands,
+        folds=folds_summary,
+        buckets_total=summary.buckets_total + folds_summary.imputed_hands,
+        buckets_add_up=summary.buckets_total + folds_summary.imputed_hands
+        == summary.hands_read_total,
+    )
+    with _file(table_file, "wb") as sink:
+        pq.write_table(result.table.cast(IMPUTED_SCHEMA), sink, **PARQUET_OPTIONS)
     return summary
 
 
@@ -221,9 +354,11 @@ def _summary(
     sources: Sequence[str | os.PathLike[str]],
     out_path: Path,
     rows_per_action: dict[str, int],
+    extra_drops: Mapping[str, int] | None = None,
 ) -> IngestSummary:
     hands_total = sum(stats.hands_read.values())
-    buckets = {KEPT: stats.buckets[KEPT]} | {r: stats.buckets[r] for r in DROP_REASONS}
+    dropped = {reason: stats.buckets[reason] for reason in DROP_REASONS} | dict(extra_drops or {})
+    buckets = {KEPT: stats.buckets[KEPT]} | dropped
     return IngestSummary(
         table=str(out_path),
         sources=tuple(str(s) for s in sources),
@@ -234,7 +369,7 @@ def _summary(
         kept_hands=stats.buckets[KEPT],
         rows=sum(rows_per_action.values()),
         rows_per_action=rows_per_action,
-        dropped={reason: stats.buckets[reason] for reason in DROP_REASONS},
+        dropped=dropped,
         buckets_total=sum(buckets.values()),
         buckets_add_up=sum(buckets.values()) == hands_total,
         inconsistent_reasons=dict(stats.inconsistent_reasons.most_common()),

@@ -48,6 +48,14 @@ SCHEMA = pa.schema(
     ]
 )
 REQUIRED_COLUMNS: tuple[str, ...] = tuple(SCHEMA.names[:15])
+# ``ingest --folds impute`` (docs/folds.md) appends these; a table without them is as before.
+IMPUTED_FIELDS = (
+    ("imputed", pa.bool_()),  # the hole cards are a draw from the posterior, not shown
+    ("weight", pa.float32()),  # the row's weight: 1 observed, (draws of this pair) / K imputed
+    ("imputation", pa.int16()),  # which distinct draw of the player's cards (1..), 0 observed
+    ("posterior_entropy", pa.float32()),  # bits, of the player's posterior; 0 observed
+)
+IMPUTED_SCHEMA = pa.schema([*SCHEMA, *(pa.field(name, kind) for name, kind in IMPUTED_FIELDS)])
 _BOARD_TEXT_LENGTH = tuple(max(3 * n - 1, 0) for n in BOARD_SIZE_BY_ROUND)
 
 
@@ -96,8 +104,13 @@ def fixed_size_list(matrix: np.ndarray, value_type: pa.DataType) -> pa.FixedSize
     return pa.FixedSizeListArray.from_arrays(flat, matrix.shape[1])
 
 
-def month_table(hands: MonthHands) -> tuple[pa.Table, int]:
-    """Rows of one month's kept hands, and the number of decisions dropped as concealed."""
+def month_table(hands: MonthHands, *, keep_concealed: bool = False) -> tuple[pa.Table, int]:
+    """Rows of one month's kept hands, and the number of decisions dropped as concealed.
+
+    ``keep_concealed`` keeps the decisions of players whose cards are concealed too, with an
+    empty ``hole_cards`` and no hole cards in ``obs``: the templates an imputation of their
+    cards fills in (:mod:`pokerirl.poker.impute`); then none is dropped.
+    """
     if len(hands) == 0:
         return SCHEMA.empty_table(), 0
     templates = _Templates(hands.replays)
@@ -111,6 +124,8 @@ def month_table(hands: MonthHands) -> tuple[pa.Table, int]:
     hole = np.array(hands.hole_cards, dtype=np.int64).reshape(n_hands, 2, 2)
     seat = templates.position[decision] - 1
     known = hole[hand_of_row, seat, 0] >= 0
+    if keep_concealed:
+        known[:] = True
     concealed = int((~known).sum())
     hand_of_row, decision, seat = hand_of_row[known], decision[known], seat[known]
 

@@ -60,6 +60,7 @@ from pokerirl.irl.losses import (
     gaussian_log_prob,
     noise_schedule,
     sample_one_hot,
+    weighted_mean,
 )
 from pokerirl.irl.nets import MASKED_LOGIT, RewardFamily, build_nets, project_to_simplex
 from pokerirl.irl.optim import FlatAdam
@@ -302,6 +303,7 @@ class _Loop:
         self.env = None if data.rewards is None else data.rewards.to(device)
         self.next_obs = None if data.next_obs is None else data.next_obs.to(device)
         self.dones = None if data.dones is None else data.dones.to(device)
+        self.weights = None if data.weights is None else data.weights.to(device)
         if self.discrete:
             eye = torch.eye(data.action_dim, device=device)
             self.each_action = eye[:, None, :]  # (K, 1, K): every one-hot, broadcast over B
@@ -358,6 +360,7 @@ class _Loop:
                 ("env", self.env),
                 ("next_obs", self.next_obs),
                 ("dones", self.dones),
+                ("weights", self.weights),
             )
         }
         return Batch(obs=self.obs[rows], expert=self.action_vectors[rows], **optional)
@@ -369,6 +372,7 @@ class _Loop:
         policy rows, log π of both, then the :class:`StepLosses`.
         """
         obs, expert, mask, env = batch.obs, batch.expert, batch.mask, batch.env
+        weights = batch.weights  # (R, B) or None: every row once
         zero = obs.new_zeros(self.runs)
 
         # 1. the policy at s (kept with its graph for step 3)
@@ -411,8 +415,9 @@ class _Loop:
             else:
                 f = self.rewards(obs[:, None], both)
             d_loss, _d_airl, _d_env = discriminator_loss(
-                f[:, 0], log_pi_expert, f[:, 1], log_pi_seen, beta=self.beta, env_reward=env
-            )
+                f[:, 0], log_pi_expert, f[:, 1], log_pi_seen, beta=self.beta, env_reward=env,
+                weights=weights,
+            )  # fmt: skip
             self.reward_opt.zero_grad()
             d_loss.sum().backward()
             self.reward_opt.step()
@@ -425,24 +430,24 @@ class _Loop:
         if self.discrete:
             if self.config.supervised_form == "sum_mse":
                 # The authors': mse_loss(π's probabilities, one-hot a_E, reduction="sum").
-                supervised = (probs - expert).square().sum((-2, -1))
+                supervised = _summed((probs - expert).square(), weights)
             else:
-                supervised = -(expert * log_pi).sum(-1).mean(-1)
+                supervised = weighted_mean(-(expert * log_pi).sum(-1), weights)
             if self.alpha < 1:
                 with torch.no_grad():
                     g = self.rewards(obs[:, None], self.each_action, shared=(False, True))
                     g = g.transpose(1, 2)
-                adversarial = (probs * (log_pi - g)).sum(-1).mean(-1)
+                adversarial = weighted_mean((probs * (log_pi - g)).sum(-1), weights)
             else:
                 adversarial = zero
         else:
-            if self.config.supervised_form == "sum_mse":
-                supervised = (sample - expert).square().sum((-2, -1))  # authors': summed
+            if self.config.supervised_form == "sum_mse":  # authors': summed
+                supervised = _summed((sample - expert).square(), weights)
             else:
-                supervised = (mean - expert).square().sum(-1).mean(-1)
+                supervised = weighted_mean((mean - expert).square().sum(-1), weights)
             if self.alpha < 1:
                 g = self.rewards(obs[:, None], sample[:, None])[:, 0]
-                adversarial = (gaussian_log_prob(sample, mean, log_std) - g).mean(-1)
+                adversarial = weighted_mean(gaussian_log_prob(sample, mean, log_std) - g, weights)
             else:
                 adversarial = zero
         p_loss = (1 - self.alpha) * adversarial + self.alpha * supervised
@@ -469,7 +474,7 @@ class _Loop:
         reward: Any = self.rewards.modules[0]  # fast.supports() checked their types
         policy: Any = self.policies.modules[0]
         one = batch.at(0)  # the one run
-        obs, expert, mask, env = one.obs, one.expert, one.mask, one.env
+        obs, expert, mask, env, weights = one.obs, one.expert, one.mask, one.env, one.weights
         acts = fast.mlp_forward(policy.mlp, obs)
         logits = acts[-1] if mask is None else acts[-1].masked_fill(~mask, MASKED_LOGIT)
         log_pi = torch.log_softmax(logits, dim=-1)
@@ -480,7 +485,8 @@ class _Loop:
             lp = torch.cat(((expert * log_pi).sum(-1), (seen * log_pi).sum(-1)))
             cache = fast.reward_forward(reward, obs, torch.stack((expert, seen)))
             f = cache.head_acts[-1].view(-1)
-            grad_f = fast.discriminator_grad(f, lp, beta=self.beta, env_reward=env)
+            grad_f = fast.discriminator_grad(f, lp, beta=self.beta, env_reward=env,
+                                             weights=weights)  # fmt: skip
             self.reward_opt.set_grad(fast.reward_backward(reward, cache, grad_f))
             self.reward_opt.step()
             disc_record = torch.cat((f, lp))
@@ -491,10 +497,14 @@ class _Loop:
             g = each.view(-1, len(obs)).T
         else:
             g = torch.zeros_like(log_pi)
-        self.policy_opt.set_grad(fast.policy_backward(policy, acts, log_pi, g, expert, self.alpha))
+        self.policy_opt.set_grad(
+            fast.policy_backward(policy, acts, log_pi, g, expert, self.alpha, weights=weights)
+        )
         self.policy_opt.step()
-        supervised = -(expert * log_pi).sum(-1).mean()
-        adversarial = (probs * (log_pi - g)).sum(-1).mean() if self.alpha < 1 else g[0, 0]
+        supervised = weighted_mean(-(expert * log_pi).sum(-1), weights)
+        adversarial = (
+            weighted_mean((probs * (log_pi - g)).sum(-1), weights) if self.alpha < 1 else g[0, 0]
+        )
         p_loss = (1 - self.alpha) * adversarial + self.alpha * supervised
         return pack_step(disc_record, StepLosses(p_loss, adversarial, supervised))[None]
 
@@ -504,9 +514,11 @@ class _Loop:
         f_expert, f_seen = disc.f_expert, disc.f_policy
         lp_expert, lp_seen = disc.log_pi_expert, disc.log_pi_policy
         env = None if self.env is None else self.env[perm]  # (steps, R, B)
+        weights = None if self.weights is None else self.weights[perm]
         d_loss, d_airl, d_env = discriminator_loss(
-            f_expert, lp_expert, f_seen, lp_seen, beta=self.beta, env_reward=env
-        )
+            f_expert, lp_expert, f_seen, lp_seen, beta=self.beta, env_reward=env,
+            weights=weights,
+        )  # fmt: skip
         values = {
             "disc_loss": d_loss.mean(0),
             "disc_airl_loss": d_airl.mean(0),
@@ -623,6 +635,15 @@ class _Loop:
             result.reward.eval()
             result.policy.eval()
         return many
+
+
+def _summed(squares: Tensor, weights: Tensor | None) -> Tensor:
+    """(..., B, k) squared errors summed over the batch and k (the authors'
+    ``reduction="sum"``); with ``weights``, the weighted mean over the batch times B, so
+    that the scale stays a sum's."""
+    if weights is None:
+        return squares.sum((-2, -1))
+    return weighted_mean(squares.sum(-1), weights) * squares.shape[-2]
 
 
 def resolve_device(device: str | torch.device) -> torch.device:

@@ -13,12 +13,14 @@ def baselines(train_data: Transitions, val_data: Transitions) -> dict[str, float
 
     ``majority``: always the most frequent training action. ``legal_majority``: for each set
     of legal actions, the most frequent expert action among training rows with that set
-    (the overall majority among legal actions for a set never seen in training).
+    (the overall majority among legal actions for a set never seen in training). Rows with
+    weights count that many times, in the rules' counts and in their alignment.
     """
     k = train_data.action_dim
-    counts = torch.bincount(train_data.actions, minlength=k).float()
+    row_weights = train_data.weights
+    counts = torch.bincount(train_data.actions, weights=row_weights, minlength=k).float()
     expert = val_data.actions
-    result = {"majority": (expert == counts.argmax()).float().mean().item()}
+    result = {"majority": _aligned(expert == counts.argmax(), val_data.weights)}
     if train_data.legal_mask is None or val_data.legal_mask is None:
         result["legal_majority"] = result["majority"]
         return result
@@ -26,12 +28,20 @@ def baselines(train_data: Transitions, val_data: Transitions) -> dict[str, float
     train_key = (train_data.legal_mask.long() * weights).sum(-1)
     val_key = (val_data.legal_mask.long() * weights).sum(-1)
     table = torch.zeros(2**k, k)
-    table.index_put_((train_key, train_data.actions), torch.ones(len(train_key)), accumulate=True)
+    ones = torch.ones(len(train_key)) if row_weights is None else row_weights.float()
+    table.index_put_((train_key, train_data.actions), ones, accumulate=True)
     table += counts * 1e-6  # unseen sets fall back to the overall counts; ties to majority
     table = table.masked_fill(~_mask_of(torch.arange(2**k), k), -1.0)
     predicted = table[val_key].argmax(-1)
-    result["legal_majority"] = (predicted == expert).float().mean().item()
+    result["legal_majority"] = _aligned(predicted == expert, val_data.weights)
     return result
+
+
+def _aligned(hit: Tensor, weights: Tensor | None) -> float:
+    """The (weighted) share of rows where ``hit``."""
+    if weights is None:
+        return hit.float().mean().item()
+    return ((hit.float() * weights).sum() / weights.sum()).item()
 
 
 def _mask_of(keys: Tensor, k: int) -> Tensor:

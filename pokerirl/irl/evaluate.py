@@ -21,6 +21,11 @@ def evaluate(
     ``val_policy_dist`` (mean π), ``val_policy_argmax_dist`` and ``val_expert_dist``
     (action histograms). Continuous: ``val_mse`` of the mean action and ``log_std``, the
     policy's mean log σ.
+
+    Rows with ``val.weights`` count that many times in every mean and histogram. When
+    ``val.imputed`` is given, both alignments are also reported over the observed and the
+    imputed rows apart (``val_alignment_observed``, ``val_alignment_imputed``,
+    ``val_reward_alignment_observed``, ...; a part with no rows is left out).
     """
     was_training = reward.training, policy.training
     reward.eval()
@@ -48,17 +53,51 @@ def evaluate(
         log_pi = torch.cat(log_probs)
         expert = val.actions.to(device)
         predicted = log_pi.argmax(-1)
-        return {
-            "val_alignment": (predicted == expert).float().mean().item(),
-            "val_reward_alignment": (torch.cat(reward_ids) == expert).float().mean().item(),
-            "val_policy_dist": log_pi.exp().mean(0).tolist(),
-            "val_policy_argmax_dist": _histogram(predicted, k),
-            "val_expert_dist": _histogram(expert, k),
-        }
+        by_reward = torch.cat(reward_ids)
+        if val.weights is None and val.imputed is None:
+            return {
+                "val_alignment": (predicted == expert).float().mean().item(),
+                "val_reward_alignment": (by_reward == expert).float().mean().item(),
+                "val_policy_dist": log_pi.exp().mean(0).tolist(),
+                "val_policy_argmax_dist": _histogram(predicted, k),
+                "val_expert_dist": _histogram(expert, k),
+            }
+        return _weighted_metrics(val, log_pi, predicted, by_reward, expert)
     finally:
         reward.train(was_training[0])
         policy.train(was_training[1])
 
 
-def _histogram(ids: Tensor, num_actions: int) -> list[float]:
+def _histogram(ids: Tensor, num_actions: int, weights: Tensor | None = None) -> list[float]:
+    if weights is not None:
+        counts = torch.bincount(ids, weights=weights, minlength=num_actions)
+        return (counts / weights.sum()).float().tolist()
     return (torch.bincount(ids, minlength=num_actions).float() / max(len(ids), 1)).tolist()
+
+
+def _weighted_metrics(
+    val: Transitions, log_pi: Tensor, predicted: Tensor, by_reward: Tensor, expert: Tensor
+) -> dict[str, float | list[float]]:
+    """The discrete metrics with row weights, and over the observed and imputed rows apart."""
+    device = log_pi.device
+    w = torch.ones(len(expert), device=device) if val.weights is None else val.weights.to(device)
+    k = log_pi.shape[1]
+
+    def share(hit: Tensor, rows: Tensor) -> float:
+        return ((hit.float() * w)[rows].sum() / w[rows].sum()).item()
+
+    every = torch.ones(len(expert), dtype=torch.bool, device=device)
+    found: dict[str, float | list[float]] = {
+        "val_alignment": share(predicted == expert, every),
+        "val_reward_alignment": share(by_reward == expert, every),
+        "val_policy_dist": ((log_pi.exp() * w[:, None]).sum(0) / w.sum()).tolist(),
+        "val_policy_argmax_dist": _histogram(predicted, k, w),
+        "val_expert_dist": _histogram(expert, k, w),
+    }
+    if val.imputed is not None:
+        imputed = val.imputed.to(device)
+        for part, rows in (("observed", ~imputed), ("imputed", imputed)):
+            if rows.any():
+                found[f"val_alignment_{part}"] = share(predicted == expert, rows)
+                found[f"val_reward_alignment_{part}"] = share(by_reward == expert, rows)
+    return found

@@ -112,15 +112,30 @@ def reward_backward(reward: StateActionReward, cache: RewardCache, grad_f: Tenso
 
 
 def discriminator_grad(
-    f: Tensor, log_pi: Tensor, *, beta: float, env_reward: Tensor | None
+    f: Tensor,
+    log_pi: Tensor,
+    *,
+    beta: float,
+    env_reward: Tensor | None,
+    weights: Tensor | None = None,
 ) -> Tensor:
     """dL/df of ``discriminator_loss`` for f = (expert rows, then policy rows), both (B,).
 
-    With D = σ(f − log π): d/df of −log D is D − 1, of −log(1 − D) is D.
+    With D = σ(f − log π): d/df of −log D is D − 1, of −log(1 − D) is D. With row
+    ``weights`` (B,) each mean is Σ w·(...) / Σ w, so row i's terms scale by w_i / Σ w
+    (its policy row is drawn at the same state and shares its weight).
     """
     batch = len(f) // 2
     grad = torch.sigmoid(f - log_pi)
     grad[:batch] -= 1
+    if weights is not None:
+        scale = weights / weights.sum()  # (B,): replaces 1 / B
+        grad *= torch.cat((scale, scale))
+        if env_reward is None:
+            return grad
+        grad *= 1 - beta
+        grad[:batch] += (2 * beta) * scale * (f[:batch] - env_reward)
+        return grad
     if env_reward is None:
         return grad / batch
     grad *= (1 - beta) / batch
@@ -135,14 +150,23 @@ def policy_backward(
     g: Tensor,
     expert: Tensor,
     alpha: float,
+    *,
+    weights: Tensor | None = None,
 ) -> list[Tensor]:
     """Gradients of (1−α)·mean Σ_k π_k (log π_k − g_k) + α·mean CE(π, a_E).
 
     d/d logits of Σ π·h with h = (1−α)/B·(log π − g) is π ⊙ (h − Σ π h) (the entropy's "+1"
-    cancels, Σ π = 1); the cross-entropy adds α/B·(π − a_E). Masked logits get zero.
+    cancels, Σ π = 1); the cross-entropy adds α/B·(π − a_E). Masked logits get zero. With
+    row ``weights`` (B,), the means are weighted: 1/B becomes w_i / Σ w on row i.
     """
     probs = log_probs.exp()
     batch = len(probs)
+    if weights is not None:
+        scale = (weights / weights.sum())[:, None]  # (B, 1): replaces 1 / B
+        h = (log_probs - g) * ((1 - alpha) * scale)
+        grad_logits = probs * (h - (probs * h).sum(dim=-1, keepdim=True))
+        grad_logits += (probs - expert) * (alpha * scale)
+        return mlp_backward(policy.mlp, acts, grad_logits)[0]
     h = (log_probs - g) * ((1 - alpha) / batch)
     grad_logits = probs * (h - (probs * h).sum(dim=-1, keepdim=True))
     grad_logits.add_(probs - expert, alpha=alpha / batch)

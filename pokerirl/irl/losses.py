@@ -54,6 +54,17 @@ def noise_schedule(
     return torch.linspace(sigma_start, sigma_end, batch_size)
 
 
+def weighted_mean(values: Tensor, weights: Tensor | None) -> Tensor:
+    """The mean over the last dimension, each entry counted ``weights`` times (None: once).
+
+    >>> weighted_mean(torch.tensor([1.0, 4.0]), torch.tensor([3.0, 1.0])).item()
+    1.75
+    """
+    if weights is None:
+        return values.mean(-1)
+    return (values * weights).sum(-1) / weights.sum(-1)
+
+
 def discriminator_loss(
     f_expert: Tensor,
     log_pi_expert: Tensor,
@@ -62,8 +73,10 @@ def discriminator_loss(
     *,
     beta: float = 0.0,
     env_reward: Tensor | None = None,
+    weights: Tensor | None = None,
 ) -> tuple[Tensor, Tensor, Tensor]:
-    """(total, L_AIRL, env MSE), means over the last dimension.
+    """(total, L_AIRL, env MSE), means over the last dimension (weighted by the expert
+    rows' ``weights`` when given: the policy's actions are drawn at the same states).
 
     L_AIRL = −E_E[log D(s, a_E)] − E_π[log(1 − D(s, ã))] with D = σ(f − log π), the
     log-space form of exp f / (exp f + π). total = (1−β)·L_AIRL + β·E_E[(f − r_env)²].
@@ -73,12 +86,12 @@ def discriminator_loss(
     1.3863
     """
     airl = -(
-        F.logsigmoid(f_expert - log_pi_expert).mean(-1)
-        + F.logsigmoid(log_pi_policy - f_policy).mean(-1)
+        weighted_mean(F.logsigmoid(f_expert - log_pi_expert), weights)
+        + weighted_mean(F.logsigmoid(log_pi_policy - f_policy), weights)
     )
     if env_reward is None:
         return airl, airl, torch.zeros_like(airl)
-    env = (f_expert - env_reward).square().mean(-1)
+    env = weighted_mean((f_expert - env_reward).square(), weights)
     return (1 - beta) * airl + beta * env, airl, env
 
 

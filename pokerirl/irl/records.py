@@ -28,6 +28,7 @@ class Batch:
     env: Tensor | None = None  # the environment's reward r_env
     next_obs: Tensor | None = None
     dones: Tensor | None = None
+    weights: Tensor | None = None  # each row's weight in the losses' means
 
     def at(self, step: int) -> Batch:
         """The rows at first index ``step`` (one step of an epoch's batches, or one run)."""
@@ -38,6 +39,7 @@ class Batch:
             env=_index(self.env, step),
             next_obs=_index(self.next_obs, step),
             dones=_index(self.dones, step),
+            weights=_index(self.weights, step),
         )
 
 

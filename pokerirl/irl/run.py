@@ -236,7 +236,7 @@ def data_record(
     path: str | os.PathLike[str] | None,
 ) -> dict[str, object]:
     """What a run's ``config.json`` says of its data: where, which bytes, how it was split."""
-    return {
+    found: dict[str, object] = {
         "path": None if path is None else str(Path(path).resolve()),
         "sha256": data.fingerprint(),
         "rows": len(data),
@@ -246,6 +246,11 @@ def data_record(
         "has_reward": data.rewards is not None,
         "has_next_obs": data.next_obs is not None,
     }
+    if data.imputed is not None:  # only then: records of other data keep their bytes
+        found["imputed_rows"] = int(data.imputed.sum())
+    if data.weights is not None:
+        found["total_weight"] = float(data.weights.double().sum())
+    return found
 
 
 def run_baselines(
@@ -259,7 +264,8 @@ def run_baselines(
     """``majority`` and ``legal_majority`` (discrete), and ``bc``: the same policy net, same
     initialization and epochs, trained with α = 1 and no adversary, on the same split.
 
-    ``bc`` is its final validation alignment (discrete) or validation MSE (continuous).
+    ``bc`` is its final validation alignment (discrete) or validation MSE (continuous);
+    with imputed rows in the data, ``bc_observed`` and ``bc_imputed`` too.
     The dict is plain: callers (the Gymnasium layer) add keys such as ``random``, ``expert``.
     """
     found = baselines(train_data, val_data) if train_data.discrete else {}
@@ -276,6 +282,9 @@ def run_baselines(
     )
     last = bc.metrics[-1]
     found["bc"] = last["val_alignment"] if train_data.discrete else last["val_mse"]
+    for part in ("observed", "imputed"):  # data with imputed rows: BC on each part apart
+        if f"val_alignment_{part}" in last:
+            found[f"bc_{part}"] = last[f"val_alignment_{part}"]
     return found
 
 

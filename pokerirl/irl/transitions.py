@@ -4,6 +4,12 @@ Rows are expert decisions (s, a) with, optionally, the next state s', whether th
 ended there, the environment's reward and the legal actions. Every row has a group id (a
 poker hand, an environment episode): the train/validation split never cuts a group.
 
+Rows may carry a **weight** (``weights``: every loss, baseline and alignment metric is then a
+weighted mean) and an **imputed** flag (``imputed``: rows whose inputs were imputed rather
+than observed, e.g. several weighted guesses of a hidden state; the validation metrics are
+then also reported for the observed and the imputed rows apart). Without them every row
+counts once, exactly as before.
+
 Poker tables come in through :func:`pokerirl.poker.read_table` (which builds them with
 :meth:`Transitions.from_arrays`: this module knows nothing of poker); environment rollouts
 through :meth:`Transitions.from_parquet` (the schema ``pokerirl gym collect`` writes) or
@@ -50,6 +56,8 @@ class Transitions:
     num_actions: int | None = None  # K, discrete only
     action_low: tuple[float, ...] | None = None  # box bounds, continuous only
     action_high: tuple[float, ...] | None = None
+    weights: Tensor | None = None  # (N,) float32 > 0: each row's weight in every mean
+    imputed: Tensor | None = None  # (N,) bool: the row's inputs are imputed, not observed
 
     def __post_init__(self) -> None:
         n = len(self.obs)
@@ -60,12 +68,18 @@ class Transitions:
                 raise ValueError("discrete Transitions need action ids (N,) and num_actions")
         elif self.actions.ndim != 2 or self.action_low is None or self.action_high is None:
             raise ValueError("continuous Transitions need actions (N, k) and the box bounds")
-        for name in ("actions", "groups", "next_obs", "dones", "rewards", "legal_mask"):
+        for name in ("actions", "groups", "next_obs", "dones", "rewards", "legal_mask",
+                     "weights", "imputed"):  # fmt: skip
             value = getattr(self, name)
             if value is not None and len(value) != n:
                 raise ValueError(f"Transitions.{name} has {len(value)} rows, obs has {n}")
         if (self.next_obs is None) != (self.dones is None):
             raise ValueError("Transitions need next_obs and dones together")
+        if self.weights is not None and (
+            self.weights.ndim != 1 or not bool(torch.isfinite(self.weights).all())
+            or bool((self.weights <= 0).any())
+        ):  # fmt: skip
+            raise InputError("row weights must be finite and positive")
 
     @classmethod
     def from_arrays(
@@ -81,10 +95,13 @@ class Transitions:
         num_actions: int | None = None,
         low: Sequence[float] | None = None,
         high: Sequence[float] | None = None,
+        weights: Any = None,
+        imputed: Any = None,
     ) -> Transitions:
         """From numpy arrays (or tensors). Integer ``actions`` (N,) are discrete (``num_actions``
         defaults to the legal mask's width, else max + 1); float ones (N, k) are continuous
-        (bounds default to the actions' range)."""
+        (bounds default to the actions' range). ``weights`` and ``imputed``: see the module
+        docstring (None: every row observed, weight 1)."""
         actions_t = torch.tensor(np.asarray(actions))
         discrete = not actions_t.is_floating_point()
         opt = lambda x, dtype: None if x is None else torch.tensor(np.asarray(x), dtype=dtype)  # noqa: E731
@@ -108,6 +125,8 @@ class Transitions:
             dones=opt(dones, torch.bool),
             rewards=opt(rewards, torch.float32),
             legal_mask=mask,
+            weights=opt(weights, torch.float32),
+            imputed=opt(imputed, torch.bool),
             **bounds,
         )
 
@@ -209,6 +228,8 @@ class Transitions:
             dones=pick(self.dones),
             rewards=pick(self.rewards),
             legal_mask=pick(self.legal_mask),
+            weights=pick(self.weights),
+            imputed=pick(self.imputed),
         )
 
     def split(self, *, val_fraction: float, seed: int) -> tuple[Transitions, Transitions, list]:
@@ -244,5 +265,8 @@ class Transitions:
                 digest.update(value.cpu().contiguous().numpy().tobytes())
         if self.legal_mask is not None:
             digest.update(self.legal_mask.cpu().contiguous().numpy().tobytes())
+        for extra in (self.weights, self.imputed):  # absent: the digest of data before them
+            if extra is not None:
+                digest.update(extra.cpu().contiguous().numpy().tobytes())
         digest.update("\0".join(map(str, self.groups.tolist())).encode())
         return digest.hexdigest()

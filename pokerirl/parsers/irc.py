@@ -101,6 +101,8 @@ class IngestStats:
     decisions_concealed: int = 0
     orphan_pdb_lines: int = 0
     kept_fold_hands: int = 0  # kept hands that ended in a fold, their cards shown
+    # Kept with ``keep_concealed`` (``ingest --folds impute``): fold hands nobody showed.
+    concealed_fold_hands: int = 0
     months: list[str] = field(default_factory=list)
 
     def malformed(self, where: str, why: str) -> None:
@@ -566,12 +568,19 @@ def parse_month(
     stats: IngestStats,
     seen: dict[str, np.ndarray],
     on_hands: Callable[[int], None] | None = None,
+    *,
+    keep_concealed: bool = False,
 ) -> MonthHands:
     """Parse one month: count every hdb line into a bucket and return the kept hands.
 
     ``seen`` maps each month key (``channel/month``) to the timestamps already read and is
     updated, so a hand given twice, in one hdb or in two sources, is a ``duplicate_hand``.
     ``on_hands(n)`` is called as hdb lines are read, for progress bars.
+
+    ``keep_concealed`` also keeps the hands that ended in a fold with nobody's cards shown
+    (their hole cards ``-1``, counted in ``concealed_fold_hands`` and in ``kept``), for an
+    imputation of the hidden cards to place (:mod:`pokerirl.poker.impute`). A showdown with
+    both pairs concealed stays ``cards_concealed``: nothing but the betting tells its cards.
     """
     hdb_lines = _lines(month.hdb)
     stats.hands_read[month.channel] += len(hdb_lines)
@@ -586,7 +595,9 @@ def parse_month(
         return hands
 
     with _gc_paused():
-        return _parse_limit_holdem_month(month, hdb_lines, stats, seen, on_hands, hands)
+        return _parse_limit_holdem_month(
+            month, hdb_lines, stats, seen, on_hands, hands, keep_concealed
+        )
 
 
 @contextmanager
@@ -609,6 +620,7 @@ def _parse_limit_holdem_month(
     seen: dict[str, np.ndarray],
     on_hands: Callable[[int], None] | None,
     hands: MonthHands,
+    keep_concealed: bool = False,
 ) -> MonthHands:
     pdb, pdb_lost = _read_pdb(month, stats)
     roster, roster_lost = _read_roster(month, stats)
@@ -657,6 +669,7 @@ def _parse_limit_holdem_month(
             roster.get(timestamp),
             hands,
             stats,
+            keep_concealed,
         )
         if bucket in ("missing_pdb_line", "roster_mismatch"):
             bucket = _lost_or(bucket, timestamp, pdb_lost, roster_lost, roster.get(timestamp))
@@ -764,13 +777,17 @@ def _hand_inconsistency(
     chips: tuple[int, int, int, int],
     stats: IngestStats,
 ) -> str | None:
-    """Why a hand with cards shown cannot be kept as logged, or None (a kept fold is counted)."""
+    """Why a hand cannot be kept as logged, or None (a kept fold is counted: with cards shown,
+    or with none, which only ``keep_concealed`` lets through)."""
     if replay.showdown:
         both_shown = min(hole) >= 0
         return _showdown_inconsistency(board, hole, both_shown=both_shown, chips=chips)
     # A fold with cards shown: never in the real logs; `pokerirl synth --reveal-all` writes it.
     reason = _fold_inconsistency(board, hole, replay.last_street, chips=chips)
-    stats.kept_fold_hands += reason is None
+    if max(hole) >= 0:
+        stats.kept_fold_hands += reason is None
+    else:
+        stats.concealed_fold_hands += reason is None
     return reason
 
 
@@ -782,6 +799,7 @@ def _classify_hand(
     roster_names: list[str] | None,
     hands: MonthHands,
     stats: IngestStats,
+    keep_concealed: bool = False,
 ) -> str:
     """Return the bucket of one heads-up hand, appending the hand to ``hands`` if kept."""
     try:
@@ -819,10 +837,11 @@ def _classify_hand(
     if replay.max_raises > _MAX_RAISES:
         stats.malformed(hdb_where, f"{replay.max_raises} raises in a round, beyond int16")
         return "malformed_line"
-    if cards_a is None and cards_b is None:
-        return "cards_concealed"
     hole = (cards_a or (-1, -1)) + (cards_b or (-1, -1))
-    reason = _hand_inconsistency(replay, board, hole, (in_a, in_b, won_a, won_b), stats)
+    chips = (in_a, in_b, won_a, won_b)
+    if cards_a is None and cards_b is None and (not keep_concealed or replay.showdown):
+        return "cards_concealed"
+    reason = _hand_inconsistency(replay, board, hole, chips, stats)
     if reason is not None:
         stats.inconsistent_reasons[reason] += 1
         return "inconsistent_hand"

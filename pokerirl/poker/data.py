@@ -44,4 +44,5 @@ def as_transitions(decisions: DecisionArrays) -> Transitions:
     d = decisions
     return Transitions.from_arrays(d.obs, d.action_ids, groups=d.groups, next_obs=d.next_obs,
                                    dones=d.dones, rewards=d.rewards, legal_mask=d.legal_mask,
-                                   num_actions=d.num_actions)  # fmt: skip
+                                   num_actions=d.num_actions, weights=d.weights,
+                                   imputed=d.imputed)  # fmt: skip

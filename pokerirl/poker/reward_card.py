@@ -20,6 +20,10 @@ rows, or a run's validation hands), the card holds:
 * ``expert_share`` (and ``expert_share_by_strength``): the expert's own actions on the same
   states, to read the argmax shares against.
 
+On a table of ``ingest --folds impute`` (``weight`` and ``imputed`` columns) every share and
+mean weighs each row by its weight (a hidden decision counts once over its draws), and
+``by_part`` gives the main numbers over the observed rows and the imputed ones apart.
+
 >>> from pokerirl.poker.rewards import ObsReward
 >>> states = CardStates.from_arrays(
 ...     obs=np.zeros((2, 72), np.uint8), legal_mask=np.array([[1, 1, 1, 0], [0, 1, 1, 1]], bool),
@@ -57,6 +61,8 @@ EQUITY_SAMPLES = 256
 EQUITY_SEED = 20_240_601
 BONUS_TOLERANCE = 0.05  # |bonus| below this reads as "about 0 per decision"
 TABLE_COLUMNS = ("hand_id", "obs", "legal_mask", "action_id", "hole_cards", "board")
+WEIGHT_COLUMNS = ("weight", "imputed")  # a table of ingest --folds impute
+PARTS = ("observed", "imputed")
 
 
 # --------------------------------------------------------------------------- states
@@ -120,6 +126,8 @@ class CardStates:
     street: np.ndarray  # (N,) 0..3
     strength: np.ndarray  # (N,) equity against a random hand
     source: str = ""
+    weights: np.ndarray | None = None  # (N,) each state's weight (imputed tables)
+    imputed: np.ndarray | None = None  # (N,) bool: the hole cards are a posterior draw
 
     @classmethod
     def from_arrays(
@@ -130,6 +138,8 @@ class CardStates:
         cards: np.ndarray,
         expert: np.ndarray | None = None,
         source: str = "",
+        weights: np.ndarray | None = None,
+        imputed: np.ndarray | None = None,
     ) -> CardStates:
         decisions = Decisions(
             obs=np.asarray(obs, np.uint8),
@@ -142,6 +152,8 @@ class CardStates:
             street=street_of(decisions.obs),
             strength=equity(decisions.cards),  # type: ignore[arg-type]
             source=source,
+            weights=None if weights is None else np.asarray(weights, np.float64),
+            imputed=None if imputed is None else np.asarray(imputed, bool),
         )
 
     @classmethod
@@ -156,7 +168,7 @@ class CardStates:
         ``label`` names the table in ``source`` (default: ``path``)."""
         from pokerirl.parquet import fixed_width, read_parquet
 
-        table = read_parquet(path, TABLE_COLUMNS, what="table")
+        table = read_parquet(path, TABLE_COLUMNS, WEIGHT_COLUMNS, what="table")
         hand_ids = table.column("hand_id").to_pylist()
         keep = np.ones(len(hand_ids), bool) if groups is None else np.isin(hand_ids, list(groups))
         if not keep.any():
@@ -171,13 +183,22 @@ class CardStates:
             cards=cards_from_text(hole, board),
             expert=table.column("action_id").to_numpy()[index],
             source=f"{label or path}" + ("" if groups is None else f" ({len(groups)} hands)"),
+            **{
+                name: table.column(column).to_numpy(zero_copy_only=False)[index]
+                for name, column in (("weights", "weight"), ("imputed", "imputed"))
+                if column in table.column_names
+            },
         )
 
 
 # --------------------------------------------------------------------------- the card
 
 
-def _shares(actions: np.ndarray) -> dict[str, float]:
+def _shares(actions: np.ndarray, weights: np.ndarray | None = None) -> dict[str, float]:
+    if weights is not None:
+        found = np.bincount(actions, weights=weights, minlength=NUM_ACTIONS)
+        total = found.sum() if found.sum() > 0 else 1.0
+        return {name: float(found[a] / total) for a, name in enumerate(ACTIONS)}
     counts = np.bincount(actions, minlength=NUM_ACTIONS)
     total = max(int(counts.sum()), 1)
     return {name: float(counts[a] / total) for a, name in enumerate(ACTIONS)}
@@ -212,6 +233,10 @@ class RewardCard:
     reward_alignment: float | None = None
     bc_alignment: float | None = None
     format: str = CARD_FORMAT
+    # Imputed tables only (left out of the JSON otherwise): the states' total weight, and
+    # per part ("observed", "imputed"): weight, argmax_share, agree_expert, expert_share.
+    weighted_states: float | None = None
+    by_part: dict[str, dict[str, Any]] | None = None
 
     @property
     def below_bc(self) -> bool:
@@ -220,7 +245,11 @@ class RewardCard:
         return reward is not None and bc is not None and reward < bc
 
     def to_json(self) -> str:
-        return json.dumps(asdict(self), indent=2) + "\n"
+        found = asdict(self)
+        for name in ("weighted_states", "by_part"):  # cards of plain tables keep their bytes
+            if found[name] is None:
+                del found[name]
+        return json.dumps(found, indent=2) + "\n"
 
     @classmethod
     def from_json(cls, text: str) -> RewardCard:
@@ -258,6 +287,13 @@ class RewardCard:
             f"  argmax = expert {expert}, = legal majority {self.agree_legal_majority:.1%}"
             + ("" if rule is None else f" (legal majority = expert {rule:.1%})")
         )
+        for part, numbers in (self.by_part or {}).items():
+            agree = numbers.get("agree_expert")
+            lines.append(
+                f"  {part} rows (weight {numbers['weight']:,.0f}): argmax "
+                f"{row(numbers['argmax_share'])}"
+                + ("" if agree is None else f"; = expert {agree:.1%}")
+            )
         lines.append(f"  prediction: {self.prediction}")
         if self.below_bc:
             lines.append(
@@ -311,6 +347,8 @@ def reward_card(reward: PokerReward, states: CardStates) -> RewardCard:
     legal = states.decisions.legal_mask
     values = reward.action_values(states.decisions).astype(np.float64)
     best = np.where(legal, values, -np.inf).argmax(axis=1)
+    if states.weights is not None or states.imputed is not None:
+        return _weighted_card(reward, states, values, best)
     going_on = legal.copy()
     going_on[:, FOLD] = False  # every state has a legal call or check
     bonus = float((np.where(going_on, values, 0.0).sum(axis=1) / going_on.sum(axis=1)).mean())
@@ -357,6 +395,81 @@ def reward_card(reward: PokerReward, states: CardStates) -> RewardCard:
             if states.expert is None
             else [_shares(states.expert[bucket == b]) for b in range(len(STRENGTH_LABELS))]
         ),
+    )
+
+
+def _weighted_card(
+    reward: PokerReward, states: CardStates, values: np.ndarray, best: np.ndarray
+) -> RewardCard:
+    """:func:`reward_card` with each state weighed, and the observed and imputed states apart."""
+    n = len(best)
+    w = np.ones(n) if states.weights is None else np.asarray(states.weights, np.float64)
+    imputed = np.zeros(n, bool) if states.imputed is None else np.asarray(states.imputed, bool)
+    legal = states.decisions.legal_mask
+    expert = states.expert
+
+    def mean(x: np.ndarray, rows: np.ndarray | slice = slice(None)) -> float:
+        return float(np.average(x[rows], weights=w[rows])) if w[rows].sum() > 0 else 0.0
+
+    going_on = legal.copy()
+    going_on[:, FOLD] = False
+    bonus = mean(np.where(going_on, values, 0.0).sum(axis=1) / going_on.sum(axis=1))
+    spread = mean(np.where(going_on, values, -np.inf).max(1)
+                  - np.where(going_on, values, np.inf).min(1))  # fmt: skip
+    mean_f: dict[str, float | None] = {}
+    std_f: dict[str, float | None] = {}
+    for action, name in enumerate(ACTIONS):
+        rows = legal[:, action]
+        if rows.any() and w[rows].sum() > 0:
+            mu = mean(values[:, action], rows)
+            mean_f[name] = mu
+            std_f[name] = float(np.sqrt(mean((values[:, action] - mu) ** 2, rows)))
+        else:
+            mean_f[name] = std_f[name] = None
+    bucket = np.searchsorted(np.array(STRENGTH_EDGES), states.strength, side="right")
+    rule = legal_majority(legal)
+    agree_rule = mean((best == rule).astype(float))
+    shares = _shares(best, w)
+    buckets = range(len(STRENGTH_LABELS))
+    by_part: dict[str, dict[str, Any]] = {}
+    for part, rows in (("observed", ~imputed), ("imputed", imputed)):
+        if rows.any():
+            by_part[part] = {
+                "states": int(rows.sum()),
+                "weight": float(w[rows].sum()),
+                "argmax_share": _shares(best[rows], w[rows]),
+                "agree_expert": None if expert is None else mean((best == expert) * 1.0, rows),
+                "agree_legal_majority": mean((best == rule) * 1.0, rows),
+                "expert_share": None if expert is None else _shares(expert[rows], w[rows]),
+            }
+    return RewardCard(
+        reward=reward.name,
+        fingerprint=reward.fingerprint,
+        source=states.source,
+        states=n,
+        mean_f=mean_f,
+        std_f=std_f,
+        decision_bonus=bonus,
+        decision_bonus_sign=int(np.sign(bonus)),
+        argmax_share=shares,
+        argmax_share_by_street=[_shares(best[states.street == s], w[states.street == s])
+                                for s in range(4)],
+        states_by_street=[int((states.street == s).sum()) for s in range(4)],
+        argmax_share_by_strength=[_shares(best[bucket == b], w[bucket == b]) for b in buckets],
+        states_by_strength=[int((bucket == b).sum()) for b in buckets],
+        strength_buckets=list(STRENGTH_LABELS),
+        agree_expert=None if expert is None else mean((best == expert) * 1.0),
+        agree_legal_majority=agree_rule,
+        legal_majority_agree_expert=None if expert is None else mean((rule == expert) * 1.0),
+        prediction=predict(bonus, shares, agree_rule, mean_f["fold"], spread),
+        preference_spread=spread,
+        expert_share=None if expert is None else _shares(expert, w),
+        expert_share_by_strength=(
+            None if expert is None
+            else [_shares(expert[bucket == b], w[bucket == b]) for b in buckets]
+        ),
+        weighted_states=float(w.sum()),
+        by_part=by_part,
     )
 
 

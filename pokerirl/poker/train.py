@@ -324,6 +324,105 @@ def train_runs(
     )
 
 
+# --------------------------------------------------------------------------- EM
+
+
+EM_FILE = "em.json"
+
+
+def train_em(
+    table: str | os.PathLike[str],
+    out_dir: str | os.PathLike[str],
+    *,
+    rounds: int,
+    algo: str = Algo.HAIRL,
+    config: AIRLConfig | None = None,
+    device: str = "cpu",
+    progress: bool = True,
+    overwrite: bool = False,
+    encoding: str = EncodingName.RLCARD,
+) -> dict[str, Any]:
+    """EM over the hidden cards of an imputed table (``ingest --folds impute``): train on it
+    (``OUT/round-0``), then ``rounds`` times re-impute its hidden players with the last run's
+    IRL policy as π_B (``OUT/table-<r>.parquet``, K and the draws' seed as the table's
+    summary says, else the defaults) and train again (``OUT/round-<r>``).
+
+    ``OUT/em.json`` reports per round the agreement of the run's policy argmax (and of its
+    reward's) with the actions of the imputed rows and of the observed rows of the table it
+    was trained on (weighted), its change from the round before, and the posterior's mean
+    entropy; returned too.
+    """
+    import pyarrow.parquet as pq
+
+    from pokerirl.datasets.ingest import IngestSummary, summary_path
+    from pokerirl.poker.folds import ImputeConfig
+    from pokerirl.poker.impute import Behaviour, impute
+
+    if rounds < 0:
+        raise ConfigError(f"EM rounds must be >= 0, got {rounds}")
+    config = config or AIRLConfig.for_algo(algo)
+    out = Path(out_dir)
+    check_destination(out, overwrite=overwrite)
+    names = pq.read_schema(table).names
+    if "imputed" not in names or "imputation" not in names:
+        raise ConfigError(
+            f"{table}: EM re-imputes hidden cards: it needs a table of ingest's fold imputation "
+            "(with the imputed and imputation columns)"
+        )
+    impute_config = ImputeConfig(seed=config.seed)
+    summary_file = summary_path(table)
+    if summary_file.is_file():
+        folds = IngestSummary.from_json(json.loads(summary_file.read_text())).folds
+        if folds is not None:
+            impute_config = ImputeConfig(imputations=folds.imputations, seed=folds.seed)
+    out.mkdir(parents=True, exist_ok=True)
+    current = Path(table)
+    history: list[dict[str, Any]] = []
+    for r in range(rounds + 1):
+        run = out / f"round-{r}"
+        if r > 0:
+            behaviour = Behaviour.from_run(out / f"round-{r - 1}")
+            config_r = replace(impute_config, seed=impute_config.seed + r)
+            imputation = impute(pq.read_table(current), config_r, behaviour=behaviour,
+                                progress=progress, source=str(current))  # fmt: skip
+            current = out / f"table-{r}.parquet"
+            pq.write_table(imputation.table, current, compression="zstd")
+        train_table(current, run, algo=algo, config=config, device=device, progress=progress,
+                    overwrite=overwrite, encoding=encoding)  # fmt: skip
+        found = {"round": r, "table": str(current), **_agreement(run, current, encoding)}
+        if r > 0:
+            found["mean_entropy_bits"] = imputation.summary.entropy_bits["mean"]
+            for key in ("policy_agree_imputed", "reward_agree_imputed"):
+                found[f"{key}_change"] = found[key] - history[-1][key]
+        history.append(found)
+    report = {"rounds": history}
+    write_text(out / EM_FILE, json.dumps(report, indent=2) + "\n")
+    return report
+
+
+def _agreement(run: Path, table: Path, encoding: str) -> dict[str, float]:
+    """How often the run's policy argmax and reward argmax (legal actions) take the action of
+    the table's rows, weighted, over its imputed rows and its observed rows apart."""
+    from pokerirl.irl.run import load_policy, load_reward
+
+    data = read_table(table, encoding=encoding)
+    assert data.weights is not None and data.imputed is not None and data.legal_mask is not None
+    policy, reward = load_policy(run), load_reward(run)
+    with torch.no_grad():
+        by_policy = policy(data.obs, data.legal_mask).argmax(-1)
+    with torch.no_grad():
+        values = torch.stack([reward(data.obs, torch.full((len(data),), a))
+                              for a in range(data.action_dim)], dim=1)  # fmt: skip
+    by_reward = values.masked_fill(~data.legal_mask, -torch.inf).argmax(-1)
+    found = {}
+    for part, rows in (("imputed", data.imputed), ("observed", ~data.imputed)):
+        w = data.weights[rows].double()
+        for name, best in (("policy", by_policy), ("reward", by_reward)):
+            hit = (best[rows] == data.actions[rows]).double()
+            found[f"{name}_agree_{part}"] = float((hit * w).sum() / w.sum()) if len(w) else 0.0
+    return found
+
+
 # --------------------------------------------------------------------------- folders
 
 

@@ -24,6 +24,7 @@ IRL_SETTINGS = ("ours", "authors")
 AGENT_PRESETS = ("default", "authors")  # pokerirl.agents.train.AGENT_PRESETS
 TRANSFORMS = ("raw", "centered", "log_softmax", "advantage")  # pokerirl.poker.rewards
 ENCODINGS = ("rlcard", "strength")  # pokerirl.game.encodings.ENCODINGS (torch-free here)
+FOLDS = ("drop", "impute")  # pokerirl.poker.folds.FoldsMode: ingest's fold hands
 
 # The authors' poker IRL settings (silue-dev/hairl, src/utils/training.py, LimitHoldem-v0):
 # one hidden layer of 64 in both nets, leaky ReLU, lr 1e-3 for both, weight decay 5e-3 on the
@@ -94,6 +95,7 @@ class StudyConfig:
     reward_sources: tuple[tuple[str, str], ...] = ()
     reward_transform: str = "raw"
     encoding: str = "rlcard"  # what rewards, policies and DQNs read (pokerirl.game.encodings)
+    folds: str = "drop"  # ingest's hands that end in a fold: left out, or imputed (docs/folds.md)
     jobs: int = 2  # processes; the one setting that does not change a result
 
     def __post_init__(self) -> None:
@@ -120,6 +122,7 @@ class StudyConfig:
             and len({algo for algo, _ in self.reward_sources}) == len(self.reward_sources),
             f"reward transform in {', '.join(TRANSFORMS)}": self.reward_transform in TRANSFORMS,
             f"encoding in {', '.join(ENCODINGS)}": self.encoding in ENCODINGS,
+            f"folds in {', '.join(FOLDS)}": self.folds in FOLDS,
         }
         broken = [name for name, ok in checks.items() if not ok]
         if broken:
@@ -131,6 +134,8 @@ class StudyConfig:
         found.pop("jobs")
         if self.encoding == "rlcard":  # studies made before encodings keep their records
             found.pop("encoding")
+        if self.folds == "drop":  # ... and before fold imputation
+            found.pop("folds")
         found["seeds"] = list(self.seeds)
         found["reward_sources"] = [list(pair) for pair in self.reward_sources]
         return found

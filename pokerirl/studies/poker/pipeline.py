@@ -222,19 +222,28 @@ def ingest_stage(study: Study, sources: Sequence[str | os.PathLike[str]]) -> Ing
 
     study.step("ingest")
     sources_print = _sources_fingerprint(sources)
-    legacy = study.legacy("ingest", {"sources": sources_print})
+    imputing = study.config.folds == "impute"
+    folds = {"folds": "impute"} if imputing else {}  # drop: the records of before
+    legacy = study.legacy("ingest", {"sources": sources_print, **folds})
     unit: Unit[None] = Unit(
         key="ingest",
         target=study.root / TABLE,
         layout=Layout.FILE,
-        config={"unit": "poker-study-ingest", **sources_print},
+        config={"unit": "poker-study-ingest", **sources_print, **folds},
         legacy=(legacy,),
     )
     if check(unit, overwrite=study.overwrite).fate is Fate.REUSED:
         study.say("      the table is finished already, reused")
     else:
         with writing(unit) as folder:
-            ingest_table(sources, folder / TABLE, progress=study.execution.progress)
+            if imputing:  # the default imputation (docs/folds.md), seeded
+                from pokerirl.poker.folds import ImputeConfig
+                from pokerirl.poker.impute import ingest_imputed
+
+                ingest_imputed(sources, folder / TABLE, ImputeConfig(),
+                               progress=study.execution.progress)  # fmt: skip
+            else:
+                ingest_table(sources, folder / TABLE, progress=study.execution.progress)
     summary = json.loads(summary_path(study.root / TABLE).read_text())
     return Ingested(summary=summary, fingerprint=fingerprint(legacy.identity))
 
