@@ -261,3 +261,50 @@ def test_nan_or_infinity_in_a_gym_table_is_one_line(tmp_path: Path) -> None:
     with pytest.raises(InputError, match=r"column 'obs' holds NaN or infinity \(1 row\(s\), the "
                        "first row 7\\)"):  # fmt: skip
         Transitions.from_parquet(tmp_path / "rollouts.parquet")
+
+
+def test_a_reward_card_table_whose_mask_forbids_the_expert_is_one_line(
+    poker_run: Path, tmp_path: Path
+) -> None:
+    import numpy as np
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    table = pq.read_table(poker_run.parent / "table.parquet")
+    masks = np.array(table.column("legal_mask").to_pylist(), bool)
+    forbidden, empty = masks.copy(), masks.copy()
+    forbidden[0, table.column("action_id")[0].as_py()] = False
+    empty[1] = False
+    for name, mask, message in (
+        ("forbidden", forbidden, "1 row(s) take an action their 'legal_mask' forbids"),
+        ("empty", empty, "1 row(s) have no legal action in 'legal_mask'"),
+    ):
+        column = pa.array(mask.tolist(), table.schema.field("legal_mask").type)
+        index = table.column_names.index("legal_mask")
+        pq.write_table(table.set_column(index, "legal_mask", column), tmp_path / f"{name}.parquet")
+        args = ["reward-card", str(poker_run), "--table", str(tmp_path / f"{name}.parquet"),
+                "--out", str(tmp_path / name)]  # fmt: skip
+        result = CliRunner().invoke(app, args)
+        assert result.exit_code == 1, result.output
+        assert result.output.count("\n") == 1 and message in result.output, result.output
+        assert not (tmp_path / name / "reward_card.json").exists()
+
+
+def test_a_folder_without_irc_data_is_the_error_line_alone(tmp_path: Path) -> None:
+    (tmp_path / "empty").mkdir()
+    for args in (
+        ["ingest", str(tmp_path / "empty"), "--out", str(tmp_path / "table.parquet")],
+        ["study", str(tmp_path / "empty"), "--out", str(tmp_path / "study")],
+    ):
+        result = CliRunner().invoke(app, args)
+        assert result.exit_code == 1
+        assert result.output == f"error: {tmp_path / 'empty'}: no IRC data here (no hdb file " \
+            "and no .tgz archive)\n", args  # fmt: skip
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["empty"]
+
+
+def test_study_names_a_bad_reward_algorithm_and_transform(tmp_path: Path) -> None:
+    for option, value in (("--reward-run", "nope=authors:F"), ("--reward-transform", "nope")):
+        args = ["study", str(tmp_path), "--out", str(tmp_path / "s"), option, value]
+        result = CliRunner().invoke(app, args)
+        assert result.exit_code == 2 and "(got 'nope')" in result.output, result.output

@@ -345,3 +345,23 @@ def strict_json_files(folder: Path) -> int:
 def test_every_json_file_of_a_study_is_strict_json(finished: tuple[Path, Path, list[str]]) -> None:
     _, out, _ = finished
     assert strict_json_files(out) > 20
+
+
+def test_two_studies_of_the_same_sources_ingest_the_same_bytes(tmp_path: Path) -> None:
+    """The summary names the table by its place in the study folder, not by the unit's staging
+    folder (a random suffix), so two study folders hold the same bytes."""
+    from pokerirl.execution import Backend
+    from pokerirl.studies.poker.pipeline import Execution, Study, ingest_stage
+
+    month = write_synthetic_month(tmp_path / "irc", hands=60, seed=0)
+    written = {}
+    for name in ("first", "second"):
+        root = tmp_path / name
+        root.mkdir()
+        study = Study(root, preset("quick", **TOY), Execution(Backend(jobs=1), progress=False))
+        summary = ingest_stage(study, [month]).summary
+        assert summary["table"] == "expert.parquet"
+        written[name] = {p.name: p.read_bytes() for p in root.iterdir()}
+    assert sorted(written["first"]) == [
+        "expert.parquet", "expert.summary.json", "expert.unit.json"]  # fmt: skip
+    assert written["first"] == written["second"]

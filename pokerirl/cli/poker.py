@@ -475,7 +475,9 @@ def reward_card_command(
     validation: bool = typer.Option(
         False, "--validation", help="Only the run's validation hands (its split.json)."
     ),
-    transform: str = typer.Option("raw", "--transform", help="raw, centered or log_softmax."),
+    transform: str = typer.Option(
+        "raw", "--transform", help="raw, centered, log_softmax or advantage (docs/rewards.md)."
+    ),
     encoding: str | None = typer.Option(
         None,
         "--encoding",

@@ -201,8 +201,12 @@ def ingest_table(
     strict: bool = False,
     progress: bool = False,
     folds: FoldsStep | None = None,
+    recorded_as: str | os.PathLike[str] | None = None,
 ) -> IngestSummary:
     """Read IRC sources, write the table to ``out`` and its summary beside it; return the summary.
+
+    ``recorded_as`` is the table's path that the summary records, when ``out`` is a staging
+    path that is moved into place afterwards (a study's unit); its file name must be ``out``'s.
 
     Months are parsed one at a time; their tables are held until they pass ``SPILL_BYTES``,
     then spilled to temporary Parquet parts, so memory stays bounded. Months are joined in
@@ -219,12 +223,15 @@ def ingest_table(
         raise IngestError(f"{out_path}: is a folder; give a file name such as table.parquet")
     if not out_path.parent.is_dir():
         raise IngestError(f"{out_path.parent}: output folder does not exist")
+    named = out_path if recorded_as is None else Path(recorded_as)
+    if named.name != out_path.name:
+        raise ValueError(f"recorded_as {named} must keep the file name {out_path.name}")
     check_sources(sources)
     try:
         with staged_files(out_path.parent, key=out_path.name, make_parent=False) as new:
             scratch = new / _SPILL_FOLDER  # inside the staging folder; gone before the swap
             scratch.mkdir()
-            summary = _ingest(sources, out_path, new, scratch, strict=strict, progress=progress,
+            summary = _ingest(sources, named, new, scratch, strict=strict, progress=progress,
                               folds=folds)  # fmt: skip
             shutil.rmtree(scratch)
             summary_path(out_path).unlink(missing_ok=True)

@@ -174,6 +174,8 @@ def check_sources(sources: Sequence[str | os.PathLike[str]]) -> None:
                 f"{path}: not IRC data (expected a month folder, a folder of months, "
                 "or a .tgz archive)"
             )
+        if path.is_dir():
+            _folder_items(path)  # a folder without IRC data fails here, before any progress
 
 
 def iter_months(sources: Sequence[str | os.PathLike[str]]) -> Iterator[MonthFiles]:
@@ -199,9 +201,17 @@ def _present(path: Path) -> bool:
 
 
 def _iter_folder(path: Path) -> Iterator[MonthFiles]:
+    for item in _folder_items(path):
+        if item.is_dir():
+            yield _read_month_folder(item)
+        else:
+            yield from _iter_archive_file(item)
+
+
+def _folder_items(path: Path) -> list[Path]:
+    """The month folders and archives under ``path``, sorted; IngestError when there are none."""
     if _present(path / "hdb"):
-        yield _read_month_folder(path)
-        return
+        return [path]
     found: list[Path] = []
     try:
         for root, dirs, files in os.walk(path):
@@ -215,11 +225,7 @@ def _iter_folder(path: Path) -> Iterator[MonthFiles]:
         raise IngestError(f"{path}: cannot read ({error.strerror})") from error
     if not found:
         raise IngestError(f"{path}: no IRC data here (no hdb file and no .tgz archive)")
-    for item in sorted(found):
-        if item.is_dir():
-            yield _read_month_folder(item)
-        else:
-            yield from _iter_archive_file(item)
+    return sorted(found)
 
 
 def _check_size(where: str, size: int, month_total: int) -> None:

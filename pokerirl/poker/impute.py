@@ -743,10 +743,12 @@ def ingest_imputed(
     *,
     strict: bool = False,
     progress: bool = False,
+    recorded_as: str | os.PathLike[str] | None = None,
 ) -> IngestSummary:
     """``pokerirl ingest --folds impute``: the table with the fold hands' hidden cards
-    imputed, and its summary."""
+    imputed, and its summary (``recorded_as``: as :func:`ingest_table`'s)."""
 
     if config.behaviour is not None:
         Behaviour.from_run(config.behaviour)  # a bad run fails before the sources are read
-    return ingest_table(sources, out, strict=strict, progress=progress, folds=folds_step(config))
+    return ingest_table(sources, out, strict=strict, progress=progress, folds=folds_step(config),
+                        recorded_as=recorded_as)

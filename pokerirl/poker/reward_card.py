@@ -146,6 +146,20 @@ class CardStates:
             legal_mask=np.asarray(legal_mask, bool),
             cards=np.asarray(cards, np.int8),
         )
+        where = source or "the states"
+        if not decisions.legal_mask.any(axis=1).all():
+            bad = int((~decisions.legal_mask.any(axis=1)).sum())
+            raise InputError(f"{where}: {bad} row(s) have no legal action in 'legal_mask'")
+        if expert is not None:
+            actions = np.asarray(expert, np.int64)
+            if len(actions) and (actions.min() < 0 or actions.max() >= NUM_ACTIONS):
+                raise InputError(f"{where}: 'action_id' must lie in 0..{NUM_ACTIONS - 1}")
+            illegal = ~decisions.legal_mask[np.arange(len(actions)), actions]
+            if illegal.any():
+                raise InputError(
+                    f"{where}: {int(illegal.sum())} row(s) take an action their 'legal_mask' "
+                    "forbids"
+                )
         return cls(
             decisions=decisions,
             expert=None if expert is None else np.asarray(expert, np.int64),
@@ -452,8 +466,9 @@ def _weighted_card(
         decision_bonus=bonus,
         decision_bonus_sign=int(np.sign(bonus)),
         argmax_share=shares,
-        argmax_share_by_street=[_shares(best[states.street == s], w[states.street == s])
-                                for s in range(4)],
+        argmax_share_by_street=[
+            _shares(best[states.street == s], w[states.street == s]) for s in range(4)
+        ],
         states_by_street=[int((states.street == s).sum()) for s in range(4)],
         argmax_share_by_strength=[_shares(best[bucket == b], w[bucket == b]) for b in buckets],
         states_by_strength=[int((bucket == b).sum()) for b in buckets],
@@ -465,7 +480,8 @@ def _weighted_card(
         preference_spread=spread,
         expert_share=None if expert is None else _shares(expert, w),
         expert_share_by_strength=(
-            None if expert is None
+            None
+            if expert is None
             else [_shares(expert[bucket == b], w[bucket == b]) for b in buckets]
         ),
         weighted_states=float(w.sum()),
@@ -574,9 +590,7 @@ def card_summary(cards: list[RewardCard]) -> dict[str, object]:
 
     return {
         "runs": len(cards),
-        "mean_f": {
-            a: stat([f for c in cards if (f := c.mean_f[a]) is not None]) for a in ACTIONS
-        },
+        "mean_f": {a: stat([f for c in cards if (f := c.mean_f[a]) is not None]) for a in ACTIONS},
         "decision_bonus": stat([c.decision_bonus for c in cards]),
         "argmax_share": {a: stat([c.argmax_share[a] for c in cards]) for a in ACTIONS},
         "agree_expert": stat([c.agree_expert or 0.0 for c in cards]),

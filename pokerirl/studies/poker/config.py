@@ -12,6 +12,7 @@ and ``authors`` (the authors' protocol, from their code).
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -64,6 +65,11 @@ def irl_overrides(settings: str, algo: str) -> dict[str, object]:
 
 
 @dataclass(frozen=True, kw_only=True)
+def one_of(name: str, value: str, allowed: Sequence[str]) -> dict[str, bool]:
+    """A settings check that names the value given: ``folds in drop, impute (got 'x')``."""
+    return {f"{name} in {', '.join(allowed)} (got {value!r})": value in allowed}
+
+
 class StudyConfig:
     """Every setting that determines a study's results (``jobs`` does not).
 
@@ -99,6 +105,7 @@ class StudyConfig:
     jobs: int = 2  # processes; the one setting that does not change a result
 
     def __post_init__(self) -> None:
+        algos = ", ".join(repr(algo) for algo, _ in self.reward_sources)
         checks = {
             "runs >= 1": self.runs >= 1,
             "at least one seed": len(self.seeds) >= 1,
@@ -112,17 +119,17 @@ class StudyConfig:
             "eval hands >= 2": self.eval_hands >= 2,
             "IRL epochs >= 1": self.irl_epochs is None or self.irl_epochs >= 1,
             "jobs >= 1": self.jobs >= 1,
-            f"irl settings in {', '.join(IRL_SETTINGS)}": self.irl_settings in IRL_SETTINGS,
-            f"agent preset in {', '.join(AGENT_PRESETS)}": self.agent_preset in AGENT_PRESETS,
+            **one_of("irl settings", self.irl_settings, IRL_SETTINGS),
+            **one_of("agent preset", self.agent_preset, AGENT_PRESETS),
             "authors' repeats >= 0": self.authors_repeats >= 0,
             "authors' games >= 2": self.authors_games >= 2,
-            "reward sources for airl or hairl, once each": all(
+            f"reward sources for airl or hairl, once each (got {algos})": all(
                 algo in IRL_ALGOS for algo, _ in self.reward_sources
             )
             and len({algo for algo, _ in self.reward_sources}) == len(self.reward_sources),
-            f"reward transform in {', '.join(TRANSFORMS)}": self.reward_transform in TRANSFORMS,
-            f"encoding in {', '.join(ENCODINGS)}": self.encoding in ENCODINGS,
-            f"folds in {', '.join(FOLDS)}": self.folds in FOLDS,
+            **one_of("reward transform", self.reward_transform, TRANSFORMS),
+            **one_of("encoding", self.encoding, ENCODINGS),
+            **one_of("folds", self.folds, FOLDS),
         }
         broken = [name for name, ok in checks.items() if not ok]
         if broken:

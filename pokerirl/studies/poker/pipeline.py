@@ -241,9 +241,13 @@ def ingest_stage(study: Study, sources: Sequence[str | os.PathLike[str]]) -> Ing
                 from pokerirl.poker.impute import ingest_imputed
 
                 ingest_imputed(sources, folder / TABLE, ImputeConfig(),
-                               progress=study.execution.progress)  # fmt: skip
+                               progress=study.execution.progress,
+                               recorded_as=TABLE)  # fmt: skip
             else:
-                ingest_table(sources, folder / TABLE, progress=study.execution.progress)
+                # The summary names the table relative to the study folder, where it sits:
+                # not the unit's staging path, and the same bytes in any study folder.
+                ingest_table(sources, folder / TABLE, progress=study.execution.progress,
+                             recorded_as=TABLE)  # fmt: skip
     summary = json.loads(summary_path(study.root / TABLE).read_text())
     return Ingested(summary=summary, fingerprint=fingerprint(legacy.identity))
 
