@@ -64,12 +64,12 @@ def irl_overrides(settings: str, algo: str) -> dict[str, object]:
     return {**AUTHORS_IRL, **(AUTHORS_HAIRL if algo == "hairl" else {})}
 
 
-@dataclass(frozen=True, kw_only=True)
 def one_of(name: str, value: str, allowed: Sequence[str]) -> dict[str, bool]:
     """A settings check that names the value given: ``folds in drop, impute (got 'x')``."""
     return {f"{name} in {', '.join(allowed)} (got {value!r})": value in allowed}
 
 
+@dataclass(frozen=True, kw_only=True)
 class StudyConfig:
     """Every setting that determines a study's results (``jobs`` does not).
 
