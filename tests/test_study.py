@@ -26,6 +26,7 @@ TOY = dict(
     eval_every=300,
     eval_hands=200,
     irl_epochs=2,
+    lbr_hands=100,
     jobs=1,
 )
 
@@ -114,6 +115,17 @@ def test_report_json_has_the_issue_names_and_the_tournaments_numbers(
     markdown = (out / "report.md").read_text()
     assert "+96 ± 14" in markdown and "-693 ± 34" in markdown and "Reduced sizes" in markdown
     assert "duplicate" in markdown and "5,000 episodes" in markdown
+    # LBR against every member: the mean of its per-seed reports, beside the result vs random.
+    from pokerirl.tournaments.exploit import load_lbr_report
+
+    assert panel["lbr_hands"] == 100 and panel["lbr_check_until"] == "turn"
+    for k, name in enumerate(panel["agents"]):
+        seeds = [load_lbr_report(out / "panel" / "lbr" / name / f"seed-{s}") for s in (0, 1)]
+        assert {r.config.hands for r in seeds} == {100}
+        assert panel["lbr_mbb_per_hand"][k] == pytest.approx(
+            sum(r.lbr_mbb_per_hand for r in seeds) / 2)  # fmt: skip
+        assert panel["lbr_std_error"][k] > 0
+    assert "How exploitable each agent is" in markdown
 
 
 def units_of(out: Path) -> dict[Path, tuple[bytes, int]]:
@@ -231,6 +243,7 @@ def test_cli_refuses_a_missing_source(tmp_path: Path) -> None:
 AUTHORS_TOY = dict(
     runs=2, hands=400, panel_hands=200, agent_hands=300, short_agent_hands=300,
     eval_every=100, eval_hands=100, irl_epochs=2, authors_repeats=3, authors_games=100, jobs=1,
+    lbr_hands=0,
 )  # fmt: skip
 
 

@@ -26,6 +26,7 @@ AGENT_PRESETS = ("default", "authors")  # pokerirl.agents.train.AGENT_PRESETS
 TRANSFORMS = ("raw", "centered", "log_softmax", "advantage")  # pokerirl.poker.rewards
 ENCODINGS = ("rlcard", "strength")  # pokerirl.game.encodings.ENCODINGS (torch-free here)
 FOLDS = ("drop", "impute")  # pokerirl.poker.folds.FoldsMode: ingest's fold hands
+LBR_CHECK_UNTIL = "turn"  # a study's LBR checks or calls before the turn: faster (exploit.md)
 
 # The authors' poker IRL settings (silue-dev/hairl, src/utils/training.py, LimitHoldem-v0):
 # one hidden layer of 64 in both nets, leaky ReLU, lr 1e-3 for both, weight decay 5e-3 on the
@@ -102,6 +103,8 @@ class StudyConfig:
     reward_transform: str = "raw"
     encoding: str = "rlcard"  # what rewards, policies and DQNs read (pokerirl.game.encodings)
     folds: str = "drop"  # ingest's hands that end in a fold: left out, or imputed (docs/folds.md)
+    # LBR (docs/exploit.md) against every panel member, per seed, from the turn; 0: none.
+    lbr_hands: int = 10_000
     jobs: int = 2  # processes; the one setting that does not change a result
 
     def __post_init__(self) -> None:
@@ -119,6 +122,7 @@ class StudyConfig:
             "eval hands >= 2": self.eval_hands >= 2,
             "IRL epochs >= 1": self.irl_epochs is None or self.irl_epochs >= 1,
             "jobs >= 1": self.jobs >= 1,
+            "LBR hands even and >= 0": self.lbr_hands >= 0 and self.lbr_hands % 2 == 0,
             **one_of("irl settings", self.irl_settings, IRL_SETTINGS),
             **one_of("agent preset", self.agent_preset, AGENT_PRESETS),
             "authors' repeats >= 0": self.authors_repeats >= 0,
@@ -177,6 +181,7 @@ PRESETS: dict[str, StudyConfig] = {
         eval_every=4_000,
         eval_hands=4_000,
         irl_epochs=20,
+        lbr_hands=500,
     ),
     # The authors' protocol (src/main.py, train_rl.py): per experiment k, IRL run k with their
     # settings, then a sparse DQN, an AIRL-DQN and an H-AIRL-DQN with their DQN preset (5,000
@@ -195,6 +200,7 @@ PRESETS: dict[str, StudyConfig] = {
         irl_settings="authors",
         agent_preset="authors",
         authors_repeats=50,
+        lbr_hands=1_000,
     ),
 }
 

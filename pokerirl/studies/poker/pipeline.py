@@ -23,6 +23,7 @@ where units run (processes now; the execution layer's backends later).
 from __future__ import annotations
 
 import json
+import math
 import os
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
@@ -41,6 +42,7 @@ from pokerirl.studies.poker.config import (
     AGENT_KINDS,
     BUILT_INS,
     IRL_ALGOS,
+    LBR_CHECK_UNTIL,
     StudyConfig,
     StudyError,
     irl_overrides,
@@ -580,4 +582,29 @@ def panel_stage(study: Study, agents: AgentsResult) -> Panel:
     for (i, j), matchup in zip(pairs, report.matchups, strict=True):
         mbb[i][j], mbb[j][i] = matchup.pooled.mbb_per_hand, -matchup.pooled.mbb_per_hand
         se[i][j] = se[j][i] = matchup.pooled.std_error
-    return Panel(agents=[name for name, _ in members], mbb_per_hand=mbb, std_error=se)
+    lbr = [lbr_pooled(study, name, spec) for name, spec in members]
+    return Panel(agents=[name for name, _ in members], mbb_per_hand=mbb, std_error=se,
+                 lbr_mbb_per_hand=[m for m, _ in lbr],
+                 lbr_std_error=[e for _, e in lbr])  # fmt: skip
+
+
+def lbr_pooled(study: Study, name: str, spec: str) -> tuple[float | None, float | None]:
+    """LBR against ``spec`` on every seed (resumable units under ``panel/lbr/NAME/seed-S``):
+    the mean of the seeds' win rates and its SE from theirs (equal hands per seed)."""
+    from pokerirl.tournaments.exploit import lbr_of
+    from pokerirl.tournaments.lineup import agent_spec_for_seed
+
+    hands = study.config.lbr_hands
+    if not hands:
+        return None, None
+    study.say(f"      LBR against {name}: {hands:,} hands x {len(study.config.seeds)} seeds")
+    found = [
+        lbr_of(agent_spec_for_seed(spec, seed), hands=hands, seed=seed,
+               check_until=LBR_CHECK_UNTIL, backend=study.execution.backend,
+               out=study.root / "panel" / "lbr" / name / f"seed-{seed}",
+               overwrite=study.overwrite, progress=study.execution.progress)
+        for seed in study.config.seeds
+    ]  # fmt: skip
+    mean = sum(r.lbr_mbb_per_hand for r in found) / len(found)
+    error = math.sqrt(sum(r.lbr_std_error**2 for r in found)) / len(found)
+    return mean, error

@@ -14,7 +14,13 @@ from pokerirl.encoding import ACTIONS
 from pokerirl.meanstd import MeanStd, mean_and_std
 from pokerirl.studies.common import REPORT_JSON, REPORT_MD, markdown_table
 from pokerirl.studies.poker import paper
-from pokerirl.studies.poker.config import AGENT_KINDS, IRL_ALGOS, StudyConfig, StudyError
+from pokerirl.studies.poker.config import (
+    AGENT_KINDS,
+    IRL_ALGOS,
+    LBR_CHECK_UNTIL,
+    StudyConfig,
+    StudyError,
+)
 from pokerirl.studies.poker.report_types import (
     AuthorsRow,
     BCPart,
@@ -156,7 +162,8 @@ def build_report(
             long=_hands_result(length.agent_hands, length.long),
             paper=paper.DQN_TRAINING,
         ),
-        panel=PanelPart(panel=panel, hands=config.panel_hands),
+        panel=PanelPart(panel=panel, hands=config.panel_hands, lbr_hands=config.lbr_hands,
+                        lbr_check_until=LBR_CHECK_UNTIL),
         figures=figures,
         paper=paper.paper_values(),
         reward_cards=cards,
@@ -376,7 +383,38 @@ def render_markdown(report: StudyReport) -> str:
         f"![panel]({figures['panel_heatmap']})",
         "",
     ]
+    lines += lbr_markdown(report.panel, n_seeds)
     return "\n".join(lines)
+
+
+def lbr_markdown(part: PanelPart, n_seeds: int) -> list[str]:
+    """Each panel member's exploitability by LBR, beside its result against random."""
+    panel = part.panel
+    if not part.lbr_hands or not panel.lbr_mbb_per_hand:
+        return []
+    versus_random = panel.agents.index("random") if "random" in panel.agents else None
+    rows = []
+    for k, name in enumerate(panel.agents):
+        lbr, error = panel.lbr_mbb_per_hand[k], panel.lbr_std_error[k]
+        vs = None if versus_random is None else panel.mbb_per_hand[k][versus_random]
+        vs_error = None if versus_random is None else panel.std_error[k][versus_random]
+        rows.append([
+            name,
+            "-" if lbr is None else f"{lbr:+,.0f} ± {error:,.0f}",
+            "-" if vs is None else f"{vs:+,.0f} ± {vs_error:,.0f}",
+        ])  # fmt: skip
+    return [
+        "## How exploitable each agent is: local best response (mbb/hand ± SE)",
+        "",
+        *markdown_table(["agent", "LBR wins against it", "it wins against random"], rows),
+        "",
+        f"LBR (docs/exploit.md) plays {part.lbr_hands:,} duplicate hands per seed against each "
+        f"agent, {n_seeds} seeds pooled; it only checks or calls before the "
+        f"{part.lbr_check_until}. Its win rate is a lower bound on the agent's exploitability: "
+        "higher is weaker. Always-fold gives exactly +750; a result against random says little "
+        "(always-call beats random by about +1,190 and is exploited by as much).",
+        "",
+    ]
 
 
 def rl_measured(report: StudyReport) -> str:

@@ -263,19 +263,30 @@ class TrainingLengthPart:
 
 @dataclass(frozen=True, kw_only=True)
 class PanelPart:
-    """The panel's cross-table and its hands per seed per pair."""
+    """The panel's cross-table and its hands per seed per pair; LBR's hands per seed against
+    each member, and the street from which it bets (it checks or calls before)."""
 
     panel: Panel
     hands: int
+    lbr_hands: int = 0
+    lbr_check_until: str = "turn"
 
     def to_json(self) -> Json:
-        return {**self.panel.to_json(), "hands": self.hands}
+        found = {**self.panel.to_json(), "hands": self.hands}
+        if not self.lbr_hands:  # no LBR: the keys of reports written before it
+            found.pop("lbr_mbb_per_hand")
+            found.pop("lbr_std_error")
+            return found
+        return {**found, "lbr_hands": self.lbr_hands, "lbr_check_until": self.lbr_check_until}
 
     @classmethod
     def from_json(cls, data: Mapping[str, Any]) -> PanelPart:
         panel = Panel(agents=list(data["agents"]), mbb_per_hand=data["mbb_per_hand"],
-                      std_error=data["std_error"])  # fmt: skip
-        return cls(panel=panel, hands=data["hands"])
+                      std_error=data["std_error"],
+                      lbr_mbb_per_hand=list(data.get("lbr_mbb_per_hand", [])),
+                      lbr_std_error=list(data.get("lbr_std_error", [])))  # fmt: skip
+        return cls(panel=panel, hands=data["hands"], lbr_hands=data.get("lbr_hands", 0),
+                   lbr_check_until=data.get("lbr_check_until", "turn"))  # fmt: skip
 
 
 @dataclass(frozen=True, kw_only=True)

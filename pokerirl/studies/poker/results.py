@@ -211,11 +211,14 @@ class Table1Line:
 @dataclass(frozen=True, kw_only=True)
 class Panel:
     """Every panel member against every other: row agent's mbb/h and its SE (None on the
-    diagonal)."""
+    diagonal); and LBR's win rate against each member with its SE, pooled over seeds (None:
+    not measured)."""
 
     agents: list[str]
     mbb_per_hand: list[list[float | None]]
     std_error: list[list[float | None]]
+    lbr_mbb_per_hand: list[float | None] = field(default_factory=list)
+    lbr_std_error: list[float | None] = field(default_factory=list)
 
     def to_json(self) -> Json:
         return asdict(self)
