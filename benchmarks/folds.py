@@ -18,7 +18,8 @@ Stages (``--stages``, all by default):
   share, how often it folds a weak hand (equity < 25%) facing a bet, and its agreement with
   the expert's true actions.
 * ``transfer``: ``pokerirl transfer`` on each run of the showdown and imputed tables: DQNs on f
-  (``strength``, raw), their fold share and agreement with each bot's rule.
+  (``strength``, ``--transforms``: advantage by default), their fold share and agreement
+  with each bot's rule.
 * ``real``: the April 1995 sample imputed: counts, entropies, and H-AIRL runs on it with and
   without the imputed folds, their reward cards on the imputed table.
 * ``speed``: the April 1995 sample imputed on one core (throughput in hands/s).
@@ -275,7 +276,8 @@ def transfer_stage(out: Path, args: argparse.Namespace) -> dict[str, Any]:
     for name in ("showdown", "imputed"):
         rows: dict[str, dict[str, list[float]]] = {}
         for run in runs_of(out / "runs" / f"hairl-{name}", args.runs):
-            config = TransferConfig(transforms=("raw",), seeds=seeds, hands=args.dqn_hands,
+            config = TransferConfig(transforms=tuple(args.transforms.split(",")), seeds=seeds,
+                                    hands=args.dqn_hands,
                                     encoding=ENCODING)  # fmt: skip
             result = run_transfer(run, out / "transfer" / f"{name}-{run.name}", config,
                                   backend=Backend(jobs=args.jobs))  # fmt: skip
@@ -430,6 +432,8 @@ def main() -> None:
     parser.add_argument("--jobs", type=int, default=2)
     parser.add_argument("--dqn-seeds", default="0-2")
     parser.add_argument("--dqn-hands", type=int, default=50_000)
+    parser.add_argument("--transforms", default="advantage",
+                        help="the DQNs' reward transforms (raw f makes always-call: recovery.md)")
     parser.add_argument("--stages", default="quality,irl,transfer,real,speed")
     parser.add_argument("--quality-configs", default=None,
                         help='JSON {"name": {ImputeConfig fields}} to compare (quality only)')
