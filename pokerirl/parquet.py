@@ -59,11 +59,16 @@ def read_parquet(
 # more than this many bytes per byte of file is not a table, and reading it would allocate
 # what it declares before failing (issue 36).
 MAX_INFLATION = 1000
+# Our tables take about 16 bytes of file per row (0.06 rows per byte); encoded with
+# dictionaries and run lengths, a few bytes of true footer can declare a million identical rows,
+# and each row takes a hundred bytes or more in memory once decoded.
+MAX_ROWS_PER_BYTE = 1
 
 
 def check_footer(metadata: pq.FileMetaData, file_bytes: int, source: str) -> None:
     """Refuse, in one line naming ``source``, a Parquet footer whose declared sizes the file
-    cannot hold: a column chunk larger than the file, or rows that would inflate more than
+    cannot hold: a column chunk larger than the file, more rows than
+    :data:`MAX_ROWS_PER_BYTE` per byte, or rows that would inflate more than
     :data:`MAX_INFLATION` times its size. Checked before a row is read."""
     declared = 0
     for group in range(metadata.num_row_groups):
@@ -79,6 +84,12 @@ def check_footer(metadata: pq.FileMetaData, file_bytes: int, source: str) -> Non
         raise InputError(
             f"{source}: its footer declares {metadata.num_rows:,} rows and {declared:,} bytes, "
             f"more than {MAX_INFLATION:,} times the file's {file_bytes:,}: not a readable table"
+        )
+    if metadata.num_rows > MAX_ROWS_PER_BYTE * max(file_bytes, 1):
+        raise InputError(
+            f"{source}: its footer declares {metadata.num_rows:,} rows in a file of "
+            f"{file_bytes:,} bytes, more than {MAX_ROWS_PER_BYTE} per byte: not a table of "
+            "decisions (runs of identical rows?)"
         )
 
 

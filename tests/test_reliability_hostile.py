@@ -237,6 +237,14 @@ def test_a_parquet_footer_that_declares_more_than_the_file_holds_is_refused(
         check_footer(lying, 100_000, "t.parquet")  # type: ignore[arg-type]
     pq.write_table(toy_expert_table(num_hands=50), tmp_path / "true.parquet")
     assert read_parquet(tmp_path / "true.parquet", ["obs"], what="table").num_rows > 50
+    # A true footer, but 500,000 copies of one row: dictionary and run-length encoding hold
+    # them in a few KB (8M such rows in 716 KB cost `train` 8.4 GB before this check).
+    import pyarrow as pa
+
+    one = toy_expert_table(num_hands=2).slice(0, 1)
+    pq.write_table(one.take(pa.array([0] * 500_000)), tmp_path / "runs.parquet")
+    with pytest.raises(InputError, match=r"500,000 rows in a file of [\d,]+ bytes, more than 1"):
+        read_parquet(tmp_path / "runs.parquet", ["obs"], what="table")
 
 
 def test_nan_or_infinity_in_a_gym_table_is_one_line(tmp_path: Path) -> None:
