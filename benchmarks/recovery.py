@@ -158,14 +158,14 @@ def main() -> None:
                    backend=backend, encoding=encoding)  # fmt: skip
         runs = [folder / f"run-{k}" for k in range(args.runs)] if args.runs > 1 else [folder]
         scores = [score_run(run, truth) for run in runs]
-        bc_truth = [float("nan")]  # no truth on real data
+        bc_truth = None  # no truth on real data
         if args.source is None:
             bc_truth = [bc_on_truth(showdown, truth_table, encoding, decay, k)
                         for k in range(args.runs)]  # fmt: skip
         summary = {name: mean_se([s[name] for s in scores]) for name in (
             "agree_expert", "top_bucket_raise", "weak_facing_bet_fold", "agree_legal_majority",
             "val_reward_alignment", "val_alignment", "bc_val")}  # fmt: skip
-        summary["bc_truth"] = mean_se(bc_truth)
+        summary["bc_truth"] = None if bc_truth is None else mean_se(bc_truth)
         summary["fold_share"] = mean_se([s["argmax_share"]["fold"] for s in scores])
         summary["raise_share"] = mean_se([s["argmax_share"]["raise"] for s in scores])
         found["configs"][key] = {"per_run": scores, "bc_truth_per_run": bc_truth, **summary}
@@ -242,9 +242,11 @@ def figure(found: dict[str, Any], path: Path) -> None:
             ax.plot([i] * len(points), points, "k.", markersize=4)
         ax.set_xticks(range(len(keys)), [k.replace(", ", "\n") for k in keys], fontsize=8)
         ax.set(title=title, ylabel="% of states (bars: mean ± SE over runs; dots: runs)")
-    axes[0].axhline(100 * found["configs"][keys[0]]["bc_truth"]["mean"], color="C2", ls="--",
-                    label="BC, strength (on the same truth)")  # fmt: skip
-    axes[0].legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.16))
+    bc_truth = found["configs"][keys[0]]["bc_truth"]
+    if bc_truth is not None:  # synthetic months only: real data have no truth table
+        axes[0].axhline(100 * bc_truth["mean"], color="C2", ls="--",
+                        label="BC, strength (on the same truth)")  # fmt: skip
+        axes[0].legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.16))
     if found.get("expert_top_bucket_raise") is not None:
         axes[1].axhline(100 * found["expert_top_bucket_raise"], color="C3", ls="--",
                         label="the expert")  # fmt: skip
@@ -268,8 +270,8 @@ def figure(found: dict[str, Any], path: Path) -> None:
 
 
 def markdown(found: dict[str, Any]) -> str:
-    def pct(stat: dict[str, float]) -> str:
-        return f"{100 * stat['mean']:.1f} ± {100 * stat['se']:.1f}"
+    def pct(stat: dict[str, float] | None) -> str:
+        return "-" if stat is None else f"{100 * stat['mean']:.1f} ± {100 * stat['se']:.1f}"
 
     source = found.get("source")
     what = (
