@@ -16,6 +16,8 @@ block:
 * a :class:`UsageError` (a command line that cannot be run) does the same with exit code 2,
   like the command-line parser's own errors;
 * Ctrl-C prints one line (``interrupted``, or what the command says) and exits 130;
+  SIGTERM (SLURM, ``timeout``, ``docker stop``) inside :func:`sigterm_as_interrupt` is
+  :class:`Terminated`, a Ctrl-C by another name: the same cleanup, the same line, exit 143;
 * anything else is a bug: it keeps its traceback;
 * with ``POKERIRL_DEBUG=1`` in the environment (the group's ``--debug`` sets it), every
   error also prints its traceback.
@@ -37,15 +39,18 @@ from __future__ import annotations
 
 import contextlib
 import os
+import signal
 import sys
+import threading
 import traceback
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Iterator, Mapping
 from enum import StrEnum
 from types import TracebackType
 from typing import ClassVar, Literal, TextIO
 
 DEBUG_VARIABLE = "POKERIRL_DEBUG"
 INTERRUPTED_CODE = 130  # 128 + SIGINT, what a shell reports for Ctrl-C
+TERMINATED_CODE = 143  # 128 + SIGTERM, what a shell reports for a process SIGTERM ended
 
 
 class Remedy(StrEnum):
@@ -106,6 +111,41 @@ class MissingExtra(PokerIRLError, ImportError):
     """An optional dependency is missing: one line naming the pip extra that installs it."""
 
 
+class Terminated(KeyboardInterrupt):
+    """SIGTERM, raised where Ctrl-C raises ``KeyboardInterrupt`` (a subclass: every cleanup
+    that Ctrl-C runs runs for it too); a command exits 143 (see :func:`sigterm_as_interrupt`)."""
+
+
+@contextlib.contextmanager
+def sigterm_as_interrupt() -> Iterator[None]:
+    """Inside the block, SIGTERM raises :class:`Terminated` in the main thread, once: a second
+    SIGTERM is ignored while the first one's cleanup runs (``timeout`` signals its child, then
+    the child's whole group, so the driver gets two at once). Elsewhere than the main thread
+    (where Python cannot set a handler) nothing changes. The handler before is put back after.
+
+    >>> import os
+    >>> with sigterm_as_interrupt():
+    ...     try:
+    ...         os.kill(os.getpid(), signal.SIGTERM)
+    ...     except Terminated:
+    ...         print("terminated")
+    terminated
+    """
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+
+    def terminated(signum: int, frame: object) -> None:
+        signal.signal(signal.SIGTERM, signal.SIG_IGN)
+        raise Terminated()
+
+    before = signal.signal(signal.SIGTERM, terminated)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, before)
+
+
 def debug_enabled(environ: Mapping[str, str] | None = None) -> bool:
     """Whether ``POKERIRL_DEBUG`` asks for tracebacks (``1``, ``true``, ``yes`` or ``on``)."""
     value = (os.environ if environ is None else environ).get(DEBUG_VARIABLE, "")
@@ -153,7 +193,8 @@ class one_line_errors(contextlib.ContextDecorator):  # lower case: a decorator
     ``with`` block.
 
     Args:
-        interrupted: the line Ctrl-C prints (a resumable command says how to resume).
+        interrupted: the line Ctrl-C (and SIGTERM: :class:`Terminated`) prints (a
+            resumable command says how to resume).
         advice: the command line's words for each :class:`Remedy`.
         debug: print tracebacks too; default: :func:`debug_enabled`, read when an error
             arrives (so a ``--debug`` handled after this object was made still counts).
@@ -188,8 +229,9 @@ class one_line_errors(contextlib.ContextDecorator):  # lower case: a decorator
     ) -> Literal[False]:
         if error is None:
             return False
-        if isinstance(error, KeyboardInterrupt):
-            code, line = INTERRUPTED_CODE, self.interrupted
+        if isinstance(error, KeyboardInterrupt):  # Terminated (SIGTERM) too, with its code
+            code = TERMINATED_CODE if isinstance(error, Terminated) else INTERRUPTED_CODE
+            line = self.interrupted
         else:
             found = report(error, self.advice)
             if found is None:

@@ -7,9 +7,10 @@ results in unit order, whatever the backend:
   ``multiprocessing`` fork server that imported the unit's module (torch) once, so starting
   a worker costs no second import. Each worker dies with the driver (the fork server exits
   with it; ``PR_SET_PDEATHSIG`` on Linux, and a watchdog on the parent's and the driver's
-  pids everywhere), ignores Ctrl-C (the driver stops them), and works in a private empty
-  folder, so no unit can depend on the driver's working directory. One unit, or one job, runs in the
-  driver itself, with the same thread pinning.
+  pids everywhere), ignores Ctrl-C and SIGTERM (the driver stops them), leaves quietly when
+  the driver is gone, and works in a private empty folder, so no unit can depend on the
+  driver's working directory. One unit, or one job, runs in the driver itself, with the same
+  thread pinning.
 * **Ray** (``--ray ADDRESS``, or ``RAY_ADDRESS`` set; ``--ray local`` starts a private
   single-machine instance): one task per unit with one CPU. ``ray`` is imported only then
   (``pip install 'pokerirl[ray]'``). An address is used as given, loopback included, and one
@@ -280,7 +281,10 @@ def _worker(connection: Any, parent: int, threads: int, temp: str) -> None:
     ``temp``: the driver's temporary folder, where this worker's scratch folder goes.
     """
     _die_with(parent)
-    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the driver's to handle
+    # Ctrl-C, and SIGTERM sent to the whole group (timeout, SLURM), are the driver's to
+    # handle: it stops its workers itself, after it keeps what finished.
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_IGN)
     # tqdm's default lock is a multiprocessing semaphore: a worker killed mid-unit would leak
     # it and the resource tracker would complain. Workers draw no bars; a thread lock does.
     tqdm.set_lock(threading.RLock())
@@ -291,7 +295,7 @@ def _worker(connection: Any, parent: int, threads: int, temp: str) -> None:
         while True:
             try:
                 message = connection.recv()
-            except EOFError:
+            except (EOFError, OSError):  # the driver is gone: leave quietly, no traceback
                 return
             if message is None:
                 return
@@ -301,7 +305,10 @@ def _worker(connection: Any, parent: int, threads: int, temp: str) -> None:
                 data = pickle.dumps(reply)
             except Exception as error:  # the unit raised, or its result does not pickle
                 data = pickle.dumps((index, False, _portable(error)))
-            connection.send_bytes(data)
+            try:
+                connection.send_bytes(data)
+            except OSError:  # the driver is gone (BrokenPipeError): leave quietly
+                return
     finally:
         os.chdir(temp)
         _leave_scratch()
@@ -642,11 +649,18 @@ def _ray_init(ray: Any, address: str, temp_dir: str | None) -> None:
     options: dict[str, Any] = {"log_to_driver": False, "logging_level": logging.WARNING}
     if address == LOCAL_RAY:
         options.update(include_dashboard=False, _temp_dir=temp_dir)
+    # ray.init sets a SIGTERM handler that exits with code 15 and no line; a handler the
+    # program set (the command line's: SIGTERM is Ctrl-C) is put back.
+    main = threading.current_thread() is threading.main_thread()
+    handler = signal.getsignal(signal.SIGTERM) if main else None
     try:
         with _address_as_given():
             ray.init(address=address, **options)
     except (ConnectionError, RuntimeError, ValueError) as error:
         raise ExecutionError(f"cannot connect to Ray at {address}: {_why(error)}") from None
+    finally:
+        if callable(handler):
+            signal.signal(signal.SIGTERM, handler)
 
 
 def _why(error: BaseException) -> str:

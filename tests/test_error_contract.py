@@ -11,8 +11,10 @@ its cases fails :func:`test_every_command_has_its_cases`.
 from __future__ import annotations
 
 import os
+import signal
 import subprocess
 import sys
+import time
 from pathlib import Path
 from typing import Any
 
@@ -246,6 +248,38 @@ def test_ctrl_c_is_one_line_and_exit_130(
     monkeypatch.setattr(target, _interrupt)
     result = CliRunner().invoke(app, [word.format(**places) for word in line.split()])
     assert result.exit_code == 130 and result.stderr.splitlines() == [says]
+
+
+def _terminate(*_: object, **__: object) -> None:
+    os.kill(os.getpid(), signal.SIGTERM)  # a real SIGTERM, as SLURM or docker stop sends
+    time.sleep(30)  # the handler interrupts this
+
+
+@pytest.mark.parametrize(
+    ("line", "target", "says"),
+    [
+        (
+            "match random call --hands 10",
+            "pokerirl.tournaments.aivat.play_corrected_match",
+            "error: interrupted",
+        ),
+        (
+            "tournament random call --hands 4 --seeds 0-1 --out {O}",
+            "pokerirl.tournaments.run_tournament",
+            "error: interrupted: finished units are kept; rerun the same command to resume",
+        ),
+    ],
+)
+def test_sigterm_is_ctrl_c_with_exit_143(
+    line: str, target: str, says: str, places: dict[str, str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setattr(target, _terminate)
+    before = signal.getsignal(signal.SIGTERM)
+    started = time.monotonic()
+    result = CliRunner().invoke(app, [word.format(**places) for word in line.split()])
+    assert result.exit_code == 143 and result.stderr.splitlines() == [says]
+    assert time.monotonic() - started < 20  # stopped at once, not after the sleep
+    assert signal.getsignal(signal.SIGTERM) == before  # the command put the handler back
 
 
 def test_help_imports_no_heavy_module() -> None:

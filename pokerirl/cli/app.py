@@ -31,6 +31,7 @@ from pokerirl.errors import (
     Remedy,
     UsageError,
     one_line_errors,
+    sigterm_as_interrupt,
 )
 
 P = ParamSpec("P")
@@ -60,7 +61,8 @@ class OneLineErrors(TyperGroup):
     applied once here, around every command's invoke); the parser's usage errors are one
     ``error: ...`` line (exit code 2) instead of click's usage text or typer's boxed panel;
     warnings (such as the library's warning before it unpickles an ``rlcard:`` checkpoint)
-    are one ``warning: ...`` line on stderr. Help (``--help``, or no arguments) is unchanged.
+    are one ``warning: ...`` line on stderr; SIGTERM is Ctrl-C (its line, exit code 143).
+    Help (``--help``, or no arguments) is unchanged.
 
     Works wherever the group's ``main`` runs: the ``pokerirl`` script (``pokerirl.cli:app``),
     ``python -m pokerirl`` and typer's ``CliRunner``.
@@ -80,7 +82,8 @@ class OneLineErrors(TyperGroup):
         try:
             # Not standalone: click errors come here instead of being printed; typer.Exit(code)
             # and --help come back as the exit code, a command's normal end as its result.
-            with warnings.catch_warnings():
+            # SIGTERM (SLURM, timeout, docker stop) takes Ctrl-C's path: its line, exit 143.
+            with warnings.catch_warnings(), sigterm_as_interrupt():
                 warnings.showwarning = _one_line_warning
                 result = super().main(
                     args, prog_name, complete_var, False, windows_expand_args, **extra

@@ -237,7 +237,10 @@ def tournament(
     alpha: float = typer.Option(0.05, help="Family-wise error rate (Bonferroni, Holm)."),
     batch_size: int = typer.Option(65_536, min=2, help="Hands in lock-step (part of the config)."),
     overwrite: bool = typer.Option(
-        False, "--overwrite", help="Recompute saved seeds from another configuration."
+        False,
+        "--overwrite",
+        help="Recompute saved seeds from another configuration; replace the report of a "
+        "tournament of other matchups in --out (else refused).",
     ),
     encoding: str | None = typer.Option(None, "--encoding", help=AGENTS_ENCODING_HELP),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bar, no report."),
@@ -257,6 +260,8 @@ def tournament(
     Resumable: each seed is saved when it finishes. A rerun reuses saved seeds
     whose agents, hands, duplicate mode and batch size match, and refuses the
     others (--overwrite recomputes them); a corrupt saved seed is recomputed.
+    A DIR that holds a tournament of other matchups is refused (--overwrite
+    replaces its report; its saved seeds stay).
     pokerirl report DIR prints it again.
     """
     from pokerirl.game import check_match_size

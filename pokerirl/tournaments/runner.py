@@ -38,6 +38,7 @@ from __future__ import annotations
 
 import contextlib
 import functools
+import json
 import re
 import sys
 import tempfile
@@ -50,6 +51,7 @@ from typing import Any
 import numpy as np
 
 from pokerirl.agents import ShippedAgent, agent_fingerprint, land_agent, resolve_agent, ship_agent
+from pokerirl.errors import Remedy
 from pokerirl.errors import report as error_report
 from pokerirl.execution import Backend
 from pokerirl.game.match import DEFAULT_BATCH_SIZE, check_match_size, play_match
@@ -62,6 +64,7 @@ from pokerirl.tournaments.lineup import (
     check_specs,
 )
 from pokerirl.tournaments.report import (
+    REPORT_FILE,
     FamilySizes,
     Line,
     MatchupReport,
@@ -206,14 +209,47 @@ def _advised(error: UnitConflict) -> str:
 
 def _folder_names(matchups: Sequence[tuple[str, str]]) -> list[str]:
     """``<A>-vs-<B>`` per matchup, file-safe, numbered when two labels collide."""
+    return _label_names([(agent_label(a), agent_label(b)) for a, b in matchups])
+
+
+def _label_names(labels: Sequence[tuple[str, str]]) -> list[str]:
+    """:func:`_folder_names` of matchups given by their agents' labels."""
     names: list[str] = []
-    for a, b in matchups:
-        base = re.sub(r"[^A-Za-z0-9._-]+", "_", f"{agent_label(a)}-vs-{agent_label(b)}")
+    for a, b in labels:
+        base = re.sub(r"[^A-Za-z0-9._-]+", "_", f"{a}-vs-{b}")
         name, k = base, 2
         while name in names:
             name, k = f"{base}-{k}", k + 1
         names.append(name)
     return names
+
+
+def _held_matchups(out: Path) -> tuple[str, list[str]]:
+    """What ``out`` holds already: ``("report", names)`` from its report.json, else
+    ``("saved seeds", names)`` from its seed folders (a run stopped before its report);
+    names as :func:`_folder_names` gives them. Nothing readable: ``("", [])``."""
+    try:
+        data = json.loads((out / REPORT_FILE).read_text())
+        labels = [(str(m["agent_a"]), str(m["agent_b"])) for m in data["matchups"]]
+    except (OSError, ValueError, KeyError, TypeError):  # none, or damaged: the run rewrites it
+        labels = []
+    if labels:
+        return "report", _label_names(labels)
+    with contextlib.suppress(OSError):
+        return "saved seeds", sorted(p.name for p in (out / "seeds").iterdir() if p.is_dir())
+    return "", []
+
+
+def _check_same_matchups(out: Path, names: Sequence[str]) -> None:
+    """Refuse matchups other than those of the tournament in ``out``: its report files would
+    be replaced by this run's (matchups compare by label, as the seed folders do, so a moved
+    agent folder is the same matchup)."""
+    what, held = _held_matchups(out)
+    if held and set(held) != set(names):
+        raise TournamentError(
+            f"{out}: holds the {what} of {', '.join(held)}, not {', '.join(names)}",
+            remedy=Remedy.REPLACE,
+        )
 
 
 # --- the run -------------------------------------------------------------------------------
@@ -319,7 +355,8 @@ def run_tournament(
         alpha: family-wise error rate for Bonferroni and Holm.
         jobs: local worker processes (results do not depend on it).
         batch_size: hands in lock-step; part of the result (agents' random draws depend on it).
-        overwrite: recompute saved seeds that do not match instead of refusing.
+        overwrite: recompute saved seeds that do not match instead of refusing, and replace
+            the report of other matchups in ``out`` (else refused before anything is written).
         progress: a tqdm bar over seeds on stderr (done, reused, failed, ETA).
         backend: where the seeds run (:mod:`pokerirl.execution`); default ``jobs`` local
             processes. Results do not depend on it.
@@ -329,7 +366,7 @@ def run_tournament(
 
     Raises:
         TournamentError: bad input, a missing ``seed-<k>`` folder, an agent that does not load,
-            or a saved seed from another configuration.
+            a saved seed from another configuration, or ``out`` holding other matchups.
 
     >>> import tempfile
     >>> with tempfile.TemporaryDirectory() as out:
@@ -341,10 +378,12 @@ def run_tournament(
     _validate(matchups, hands, seeds, duplicate, alpha, jobs, batch_size)
     check_specs(sorted({spec for pair in matchups for spec in pair}), seeds)
     out = Path(out)
+    folders = _folder_names(matchups)
+    if not overwrite:
+        _check_same_matchups(out, folders)
     prints = {spec: _fingerprints(spec, seeds) for spec in {s for pair in matchups for s in pair}}
 
     backend = backend or Backend(jobs=jobs)
-    folders = _folder_names(matchups)
     cells = [(m, seed) for m in range(len(matchups)) for seed in seeds]
     keys, units = [], []
     for m, seed in cells:
