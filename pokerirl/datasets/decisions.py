@@ -64,6 +64,22 @@ class DecisionArrays:
     weights: np.ndarray | None = None  # (N,) float32 > 0, from a ``weight`` column
     imputed: np.ndarray | None = None  # (N,) bool, from an ``imputed`` column
 
+def check_legal_actions(actions: np.ndarray, legal_mask: np.ndarray, source: str) -> None:
+    """Refuse, in one line naming ``source``, action ids outside 0..3, rows with no legal
+    action, and actions their row's legal mask forbids."""
+    if len(actions) and (actions.min() < 0 or actions.max() >= NUM_ACTIONS):
+        raise InputError(f"{source}: 'action_id' must lie in 0..{NUM_ACTIONS - 1}")
+    empty = ~legal_mask.any(axis=1)
+    if empty.any():
+        bad = int(empty.sum())
+        raise InputError(f"{source}: {bad} row(s) have no legal action in 'legal_mask'")
+    illegal = ~legal_mask[np.arange(len(actions)), actions]
+    if illegal.any():
+        raise InputError(
+            f"{source}: {int(illegal.sum())} row(s) take an action their 'legal_mask' forbids"
+        )
+
+
 def read_decisions(
     path: str | os.PathLike[str], *, encoding: str | Encoding | None = None
 ) -> DecisionArrays:
@@ -96,13 +112,7 @@ def decisions_from_arrow(
     if not pa.types.is_integer(action.type):
         raise InputError(f"{source}: column 'action_id' must be integer, got {action.type}")
     action_ids = action.to_numpy().astype(np.int64)
-    if action_ids.min() < 0 or action_ids.max() >= NUM_ACTIONS:
-        raise InputError(f"{source}: 'action_id' must lie in 0..{NUM_ACTIONS - 1}")
-    illegal = ~mask[np.arange(len(action_ids)), action_ids]
-    if illegal.any():
-        raise InputError(
-            f"{source}: {int(illegal.sum())} row(s) take an action their 'legal_mask' forbids"
-        )
+    check_legal_actions(action_ids, mask, source)
 
     rewards = None
     if "reward" in table.column_names:

@@ -46,6 +46,7 @@ from typing import Any
 
 import numpy as np
 
+from pokerirl.datasets.decisions import check_legal_actions
 from pokerirl.encoding import ACTIONS, CALL, CHECK, FOLD, NUM_ACTIONS, parse_card
 from pokerirl.errors import InputError
 from pokerirl.game.agents import street_of
@@ -146,20 +147,9 @@ class CardStates:
             legal_mask=np.asarray(legal_mask, bool),
             cards=np.asarray(cards, np.int8),
         )
-        where = source or "the states"
-        if not decisions.legal_mask.any(axis=1).all():
-            bad = int((~decisions.legal_mask.any(axis=1)).sum())
-            raise InputError(f"{where}: {bad} row(s) have no legal action in 'legal_mask'")
         if expert is not None:
-            actions = np.asarray(expert, np.int64)
-            if len(actions) and (actions.min() < 0 or actions.max() >= NUM_ACTIONS):
-                raise InputError(f"{where}: 'action_id' must lie in 0..{NUM_ACTIONS - 1}")
-            illegal = ~decisions.legal_mask[np.arange(len(actions)), actions]
-            if illegal.any():
-                raise InputError(
-                    f"{where}: {int(illegal.sum())} row(s) take an action their 'legal_mask' "
-                    "forbids"
-                )
+            check_legal_actions(np.asarray(expert, np.int64), decisions.legal_mask,
+                                source or "the states")  # fmt: skip
         return cls(
             decisions=decisions,
             expert=None if expert is None else np.asarray(expert, np.int64),
