@@ -412,7 +412,8 @@ def lbr_markdown(part: PanelPart, n_seeds: int) -> list[str]:
         f"agent, {n_seeds} seeds pooled; it only checks or calls before the "
         f"{part.lbr_check_until}. Its win rate is a lower bound on the agent's exploitability: "
         "higher is weaker. Always-fold gives exactly +750; a result against random says little "
-        "(always-call beats random by about +1,190 and is exploited by as much).",
+        "(always-call beats random by about +1,190 and LBR from the turn beats it by about "
+        "900).",
         "",
     ]
 
