@@ -175,7 +175,7 @@ class Default:
     >>> Default("pokerirl.studies.poker.transfer:TransferConfig", "hands")()
     50000
     >>> str(Default("pokerirl.studies.poker.transfer:TransferConfig", "transforms"))
-    'raw,centered,log_softmax'
+    'raw,centered,log_softmax,advantage'
     """
 
     def __init__(self, config: str, field: str) -> None:
