@@ -216,6 +216,9 @@ def test_bad_settings_are_one_line() -> None:
         preset("fast")
     with pytest.raises(StudyError, match="runs >= 1"):
         preset("quick", runs=0)
+    with pytest.raises(StudyError, match=r"LBR hands even and >= 0 \(got 3\)"):
+        preset("quick", lbr_hands=3)
+    assert preset("quick").lbr_hands == 500 and preset("paper").lbr_hands == 10_000
     with pytest.raises(ValueError, match="bad seed range 'a-b'"):
         seeds_as_written("a-b")
     assert seeds_as_written("5,0-2") == (5, 0, 1, 2)  # the study keeps the order written

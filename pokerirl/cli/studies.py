@@ -97,6 +97,11 @@ def study(
         None, "--seeds", callback=seed_list, help="Agent seeds, e.g. 0-19."
     ),
     hands: int | None = typer.Option(None, "--hands", min=2, help="Tournament hands per seed."),
+    lbr_hands: int | None = typer.Option(
+        None, "--lbr-hands", min=0,
+        help="LBR's hands per seed against each panel agent (even; 0: no LBR); default: the "
+        "preset's (quick 500, paper 10,000).",
+    ),
     reward_run: list[str] = typer.Option(
         [],
         "--reward-run",
@@ -144,6 +149,7 @@ def study(
         # As written: the first seeds the agents, and a repeat is refused, not dropped.
         seeds=None if seeds is None else seeds_as_written(seeds),
         hands=hands,
+        lbr_hands=lbr_hands,
         jobs=jobs,
         reward_sources=tuple(sources_given) or None,
         reward_transform=reward_transform,

@@ -122,7 +122,8 @@ class StudyConfig:
             "eval hands >= 2": self.eval_hands >= 2,
             "IRL epochs >= 1": self.irl_epochs is None or self.irl_epochs >= 1,
             "jobs >= 1": self.jobs >= 1,
-            "LBR hands even and >= 0": self.lbr_hands >= 0 and self.lbr_hands % 2 == 0,
+            f"LBR hands even and >= 0 (got {self.lbr_hands})": self.lbr_hands >= 0
+            and self.lbr_hands % 2 == 0,
             **one_of("irl settings", self.irl_settings, IRL_SETTINGS),
             **one_of("agent preset", self.agent_preset, AGENT_PRESETS),
             "authors' repeats >= 0": self.authors_repeats >= 0,
