@@ -6,7 +6,6 @@ from __future__ import annotations
 
 import json
 import multiprocessing
-import os
 import signal
 import subprocess
 import sys
@@ -14,6 +13,7 @@ import time
 from pathlib import Path
 
 import pytest
+from processes import alive, command, descendants, environment
 from typer.testing import CliRunner
 
 from pokerirl.cli import app
@@ -25,40 +25,8 @@ SMALL = ["--eval-hands", "100", "--concurrent-hands", "64", "-q"]
 SET = ["--hands", "1536", "--eval-every", "1536", *SMALL]  # about a second a seed
 
 
-def _command(*args: str) -> list[str]:
-    return [sys.executable, "-m", "pokerirl", *args]
 
 
-def _environment() -> dict[str, str]:
-    root = str(Path(__file__).resolve().parents[1])
-    path = os.environ.get("PYTHONPATH")
-    return {**os.environ, "PYTHONPATH": root + (os.pathsep + path if path else "")}
-
-
-def descendants(pid: int) -> set[int]:
-    """Every live process below ``pid`` (Linux /proc)."""
-    found: set[int] = set()
-    todo = [pid]
-    while todo:
-        parent = todo.pop()
-        for task in Path(f"/proc/{parent}/task").glob("*"):
-            try:
-                children = (task / "children").read_text().split()
-            except OSError:
-                continue
-            for child in map(int, children):
-                if child not in found:
-                    found.add(child)
-                    todo.append(child)
-    return found
-
-
-def alive(pid: int) -> bool:
-    try:
-        state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
-    except (OSError, IndexError):
-        return False
-    return state != "Z"  # a zombie has ended
 
 
 def _wait_for(condition, process: subprocess.Popen, seconds: float = 120) -> None:
@@ -92,7 +60,7 @@ def test_killing_the_driver_kills_its_workers_and_a_rerun_completes_the_set(
     out = tmp_path / "set"
     args = ["agent", "train", "--out", str(out), "--seeds", "0-7", "--jobs", "2", *SET]
     driver = subprocess.Popen(
-        _command(*args), env=_environment(), stdout=subprocess.DEVNULL, stderr=subprocess.PIPE
+        command(*args), env=environment(), stdout=subprocess.DEVNULL, stderr=subprocess.PIPE
     )
     workers: set[int] = set()
 
@@ -111,7 +79,7 @@ def test_killing_the_driver_kills_its_workers_and_a_rerun_completes_the_set(
         time.sleep(0.1)
     assert not [pid for pid in workers if alive(pid)], "workers outlived their driver"
 
-    rerun = subprocess.run(_command(*args), env=_environment(), capture_output=True, text=True)
+    rerun = subprocess.run(command(*args), env=environment(), capture_output=True, text=True)
     assert rerun.returncode == 0, rerun.stderr
     assert rerun.stdout.count("already finished with these settings, reused") == len(done)
     for name, record in done.items():  # finished seeds were kept as they were
@@ -127,7 +95,7 @@ def test_workers_busy_with_long_units_die_with_the_driver(tmp_path: Path) -> Non
         "from pokerirl.execution import Backend, map_units\n"
         "map_units(time.sleep, [(120,)] * 4, backend=Backend(jobs=2))\n"
     )
-    driver = subprocess.Popen([sys.executable, "-c", script], env=_environment())
+    driver = subprocess.Popen([sys.executable, "-c", script], env=environment())
     workers: set[int] = set()
 
     # Two workers, and with the fork server the server itself (it has the same command line).
@@ -160,8 +128,8 @@ def test_ctrl_c_stops_cleanly_and_keeps_finished_seeds(tmp_path: Path) -> None:
     out = tmp_path / "set"
     args = ["agent", "train", "--out", str(out), "--seeds", "0-7", "--jobs", "2", *SET]
     driver = subprocess.Popen(
-        _command(*args),
-        env=_environment(),
+        command(*args),
+        env=environment(),
         stdout=subprocess.DEVNULL,
         stderr=subprocess.PIPE,
         text=True,
@@ -199,7 +167,7 @@ def test_a_killed_overwrite_leaves_the_finished_agent_byte_for_byte(tmp_path: Pa
     # Retrain it with other settings, long enough to be killed in the middle.
     args = ["agent", "train", "--out", str(agent), "--hands", "200000", "--overwrite", *SMALL]
     driver = subprocess.Popen(
-        _command(*args), env=_environment(), stdout=subprocess.DEVNULL, stderr=subprocess.PIPE
+        command(*args), env=environment(), stdout=subprocess.DEVNULL, stderr=subprocess.PIPE
     )
     time.sleep(8)
     assert driver.poll() is None, "finished before it could be killed"

@@ -10,11 +10,11 @@ import json
 import os
 import signal
 import subprocess
-import sys
 import time
 from pathlib import Path
 
 import pytest
+from processes import alive, command, descendants, environment
 
 from pokerirl.store import Fate, Unit, check
 
@@ -26,38 +26,8 @@ SMALL = ["--eval-hands", "100", "--concurrent-hands", "64", "-q"]
 LINE = "error: interrupted: finished units are kept; rerun the same command to resume\n"
 
 
-def _command(*args: str) -> list[str]:
-    return [sys.executable, "-m", "pokerirl", *args]
 
 
-def _environment() -> dict[str, str]:
-    root = str(Path(__file__).resolve().parents[1])
-    path = os.environ.get("PYTHONPATH")
-    return {**os.environ, "PYTHONPATH": root + (os.pathsep + path if path else "")}
-
-
-def _descendants(pid: int) -> set[int]:
-    found: set[int] = set()
-    todo = [pid]
-    while todo:
-        for task in Path(f"/proc/{todo.pop()}/task").glob("*"):
-            try:
-                children = (task / "children").read_text().split()
-            except OSError:
-                continue
-            for child in map(int, children):
-                if child not in found:
-                    found.add(child)
-                    todo.append(child)
-    return found
-
-
-def _alive(pid: int) -> bool:
-    try:
-        state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
-    except (OSError, IndexError):
-        return False
-    return state != "Z"
 
 
 def _finished(out: Path) -> dict[str, bytes]:
@@ -67,10 +37,10 @@ def _finished(out: Path) -> dict[str, bytes]:
 @pytest.mark.parametrize("to", ["driver", "group"])
 def test_sigterm_is_ctrl_c_exit_143_and_a_rerun_resumes(to: str, tmp_path: Path) -> None:
     out = tmp_path / "set"
-    args = _command("agent", "train", "--out", str(out), *TRAIN, *SMALL)
+    args = command("agent", "train", "--out", str(out), *TRAIN, *SMALL)
     driver = subprocess.Popen(
         args,
-        env=_environment(),
+        env=environment(),
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
@@ -79,7 +49,7 @@ def test_sigterm_is_ctrl_c_exit_143_and_a_rerun_resumes(to: str, tmp_path: Path)
     workers: set[int] = set()
     deadline = time.monotonic() + 180
     while not _finished(out):
-        workers.update(_descendants(driver.pid))
+        workers.update(descendants(driver.pid))
         assert driver.poll() is None, driver.communicate()[1]
         assert time.monotonic() < deadline, "no seed finished in time"
         time.sleep(0.05)
@@ -96,9 +66,9 @@ def test_sigterm_is_ctrl_c_exit_143_and_a_rerun_resumes(to: str, tmp_path: Path)
     assert 1 <= len(done) < 4, "signalled too late to test anything"
     assert len(workers) >= 2
     deadline = time.monotonic() + 10
-    while any(_alive(pid) for pid in workers) and time.monotonic() < deadline:
+    while any(alive(pid) for pid in workers) and time.monotonic() < deadline:
         time.sleep(0.05)
-    assert not [pid for pid in workers if _alive(pid)], "a worker outlived the driver"
+    assert not [pid for pid in workers if alive(pid)], "a worker outlived the driver"
     record = json.loads(next(iter(done.values())))
     for name in done:  # finished seeds are whole units of these settings
         config = {**record["config"], "seed": int(name[5:])}
@@ -106,7 +76,7 @@ def test_sigterm_is_ctrl_c_exit_143_and_a_rerun_resumes(to: str, tmp_path: Path)
         assert check(unit).fate is Fate.REUSED
     assert not [p for p in out.iterdir() if p.name.startswith(".")]  # nothing half-written
 
-    rerun = subprocess.run(args, env=_environment(), capture_output=True, text=True)
+    rerun = subprocess.run(args, env=environment(), capture_output=True, text=True)
     assert rerun.returncode == 0, rerun.stderr
     assert rerun.stdout.count("already finished with these settings, reused") == len(done)
     for name, data in done.items():  # kept as they were
