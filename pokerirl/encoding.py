@@ -19,6 +19,9 @@ import numpy as np
 SUITS = "SHDC"
 RANKS = "A23456789TJQK"
 NUM_CARDS = 52
+NUM_PAIRS = NUM_CARDS * (NUM_CARDS - 1) // 2  # 1,326 hole-card pairs
+# Every pair (a, b), a < b, in itertools.combinations order: pair p's index everywhere.
+PAIRS = np.array([(a, b) for a in range(NUM_CARDS) for b in range(a + 1, NUM_CARDS)], np.int64)
 
 ACTIONS: tuple[str, ...] = ("call", "raise", "fold", "check")
 CALL, RAISE, FOLD, CHECK = 0, 1, 2, 3

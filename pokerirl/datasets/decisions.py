@@ -64,6 +64,16 @@ class DecisionArrays:
     weights: np.ndarray | None = None  # (N,) float32 > 0, from a ``weight`` column
     imputed: np.ndarray | None = None  # (N,) bool, from an ``imputed`` column
 
+def table_cards(table: pa.Table, source: str) -> np.ndarray:
+    """(N, 7) int8 cards of a table's ``hole_cards`` and ``board`` texts (``-1`` not shown);
+    :class:`InputError` naming ``source`` for a text that is not cards."""
+    hole, board = (table.column(c).to_pylist() for c in ("hole_cards", "board"))
+    try:
+        return cards_from_text(hole, board)
+    except ValueError as error:
+        raise InputError(f"{source}: {error} in hole_cards or board") from None
+
+
 def check_legal_actions(actions: np.ndarray, legal_mask: np.ndarray, source: str) -> None:
     """Refuse, in one line naming ``source``, action ids outside 0..3, rows with no legal
     action, and actions their row's legal mask forbids."""
@@ -183,11 +193,7 @@ def table_states(table: pa.Table, legal_mask: np.ndarray, source: str, why: str)
     for name in STATE_COLUMNS:
         if table.column(name).null_count:
             raise InputError(f"{source}: column {name!r} has null values")
-    hole, board = (table.column(c).to_pylist() for c in ("hole_cards", "board"))
-    try:
-        cards = cards_from_text(hole, board)
-    except ValueError as error:
-        raise InputError(f"{source}: {error} in hole_cards or board") from None
+    cards = table_cards(table, source)
     if (cards[:, 0] < 0).any():
         row = int(np.flatnonzero(cards[:, 0] < 0)[0])
         raise InputError(f"{source}: row {row} has no hole cards (concealed decisions are none)")

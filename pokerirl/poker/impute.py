@@ -33,7 +33,6 @@ of the players who fold are what the deals hold beyond those who go on.
 from __future__ import annotations
 
 import dataclasses
-import itertools
 import math
 import os
 from collections.abc import Callable, Sequence
@@ -48,6 +47,7 @@ import torch
 from torch import nn
 from tqdm.auto import tqdm
 
+from pokerirl.datasets.decisions import table_cards
 from pokerirl.datasets.ingest import FoldsResult, FoldsSummary, IngestSummary, ingest_table
 from pokerirl.datasets.table import IMPUTED_SCHEMA, SCHEMA, fixed_size_list
 from pokerirl.encoding import (
@@ -56,10 +56,11 @@ from pokerirl.encoding import (
     FOLD,
     NUM_ACTIONS,
     NUM_CARDS,
+    NUM_PAIRS,
     NUM_ROUNDS,
+    PAIRS,
     encode_obs,
 )
-from pokerirl.encoding import cards_from_text as _cards_from_text
 from pokerirl.errors import InputError
 from pokerirl.game.encodings import (
     Encoding,
@@ -71,8 +72,6 @@ from pokerirl.game.evaluator import hand_strength
 from pokerirl.parquet import fixed_width
 from pokerirl.poker.folds import ImputeConfig
 
-NUM_PAIRS = 1326
-PAIRS = np.array(list(itertools.combinations(range(NUM_CARDS), 2)), dtype=np.int64)
 PAIR_TEXT = tuple(f"{CARD_TEXT[a]} {CARD_TEXT[b]}" for a, b in PAIRS)
 # One forward pass of π_B reads this many states: 49 decisions x 1,326 pairs.
 CHUNK_ROWS = 1 << 16
@@ -256,11 +255,7 @@ def _no_hidden_players() -> Hidden:
 
 def _cards(table: pa.Table, source: str) -> np.ndarray:
     """(N, 7) int64 hole cards (``-1`` when concealed) and board of a table's rows."""
-    try:
-        return _cards_from_text(table.column("hole_cards").to_pylist(),
-                                table.column("board").to_pylist()).astype(np.int64)  # fmt: skip
-    except ValueError as error:
-        raise InputError(f"{source}: {error} in hole_cards or board") from None
+    return table_cards(table, source).astype(np.int64)
 
 
 # --------------------------------------------------------------------------- the behaviour

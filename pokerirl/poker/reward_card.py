@@ -46,8 +46,8 @@ from typing import Any
 
 import numpy as np
 
-from pokerirl.datasets.decisions import check_legal_actions
-from pokerirl.encoding import ACTIONS, CALL, CHECK, FOLD, NUM_ACTIONS, parse_card
+from pokerirl.datasets.decisions import check_legal_actions, table_cards
+from pokerirl.encoding import ACTIONS, CALL, CHECK, FOLD, NUM_ACTIONS
 from pokerirl.errors import InputError
 from pokerirl.game.agents import street_of
 from pokerirl.game.evaluator import hand_strength
@@ -106,15 +106,6 @@ def equity(cards: np.ndarray, *, samples: int = EQUITY_SAMPLES, seed: int = EQUI
 def legal_majority(legal_mask: np.ndarray) -> np.ndarray:
     """The legal-majority rule: check if legal, else call."""
     return np.where(np.asarray(legal_mask)[:, CHECK], CHECK, CALL)
-
-
-def cards_from_text(hole: list[str], board: list[str]) -> np.ndarray:
-    """(N, 7) int8 cards from a decision table's ``hole_cards`` and ``board`` texts."""
-    found = np.full((len(hole), 7), -1, dtype=np.int8)
-    for row, (h, b) in enumerate(zip(hole, board, strict=True)):
-        cards = [parse_card(c) for c in f"{h} {b}".split()]
-        found[row, : len(cards)] = cards
-    return found
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -178,13 +169,10 @@ class CardStates:
         if not keep.any():
             raise InputError(f"{path}: none of its rows are in the states asked for")
         index = np.flatnonzero(keep)
-        hole_texts, board_texts = (table.column(c).to_pylist() for c in ("hole_cards", "board"))
-        hole = [hole_texts[i] for i in index]
-        board = [board_texts[i] for i in index]
         return cls.from_arrays(
             obs=fixed_width(table, "obs", 72, str(path))[index],
             legal_mask=fixed_width(table, "legal_mask", NUM_ACTIONS, str(path))[index],
-            cards=cards_from_text(hole, board),
+            cards=table_cards(table, str(path))[index],
             expert=table.column("action_id").to_numpy()[index],
             source=f"{label or path}" + ("" if groups is None else f" ({len(groups)} hands)"),
             **{

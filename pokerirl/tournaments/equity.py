@@ -26,12 +26,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pokerirl.encoding import NUM_CARDS
+from pokerirl.encoding import NUM_CARDS, NUM_PAIRS, PAIRS
 from pokerirl.game.evaluator import _tables, hand_strength  # noqa: F401 (doctests)
 
 NUM_RANKS = 13
-NUM_PAIRS = NUM_CARDS * (NUM_CARDS - 1) // 2  # 1,326
-PAIRS = np.array(list(itertools.combinations(range(NUM_CARDS), 2)), dtype=np.int64)
 _INDEX = np.full((NUM_CARDS, NUM_CARDS), -1, dtype=np.int64)
 _INDEX[PAIRS[:, 0], PAIRS[:, 1]] = _INDEX[PAIRS[:, 1], PAIRS[:, 0]] = np.arange(NUM_PAIRS)
 # CLASH[c, p]: pair p holds card c (so p is impossible once c is seen elsewhere).
