@@ -58,7 +58,8 @@ def test_killing_the_driver_kills_its_workers_and_a_rerun_completes_the_set(
     tmp_path: Path, uninterrupted: Path
 ) -> None:
     out = tmp_path / "set"
-    args = ["agent", "train", "--out", str(out), "--seeds", "0-7", "--jobs", "2", *SET]
+    # Enough seeds that, under load, the set cannot finish between the first seed and the signal.
+    args = ["agent", "train", "--out", str(out), "--seeds", "0-31", "--jobs", "2", *SET]
     driver = subprocess.Popen(
         command(*args), env=environment(), stdout=subprocess.DEVNULL, stderr=subprocess.PIPE
     )
@@ -126,7 +127,8 @@ def _cmdline(pid: int) -> bytes:
 
 def test_ctrl_c_stops_cleanly_and_keeps_finished_seeds(tmp_path: Path) -> None:
     out = tmp_path / "set"
-    args = ["agent", "train", "--out", str(out), "--seeds", "0-7", "--jobs", "2", *SET]
+    # Enough seeds that, under load, the set cannot finish between the first seed and the signal.
+    args = ["agent", "train", "--out", str(out), "--seeds", "0-31", "--jobs", "2", *SET]
     driver = subprocess.Popen(
         command(*args),
         env=environment(),

@@ -87,8 +87,9 @@ def study(
     preset_name: str = typer.Option(
         "quick",
         "--preset",
-        help="quick, paper (ours) or authors (their IRL and DQN settings and their "
-        "tournament protocol, beside our duplicate-deal Table 1).",
+        help="smoke (seconds; checks the pipeline, its numbers mean nothing), quick, paper "
+        "(ours) or authors (their IRL and DQN settings and their tournament protocol, beside "
+        "our duplicate-deal Table 1).",
     ),
     runs: int | None = typer.Option(
         None, "--runs", min=1, max=MAX_SEEDS, help="IRL runs per algorithm."
@@ -110,7 +111,9 @@ def study(
         "default) or airl=authors:FILE2; repeatable.",
     ),
     reward_transform: str | None = typer.Option(
-        None, "--reward-transform", help="raw, centered or log_softmax: the learned-reward DQNs'."
+        None,
+        "--reward-transform",
+        help="raw, centered, log_softmax or advantage: the learned-reward DQNs' (docs/rewards.md).",
     ),
     encoding: str | None = typer.Option(
         None,

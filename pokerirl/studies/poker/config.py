@@ -184,6 +184,21 @@ PRESETS: dict[str, StudyConfig] = {
         irl_epochs=20,
         lbr_hands=500,
     ),
+    # Seconds, not minutes: every stage runs, at sizes whose numbers mean nothing. For
+    # checking a pipeline, a cluster or a data folder end to end before a real run.
+    "smoke": StudyConfig(
+        preset="smoke",
+        runs=2,
+        seeds=(0, 1),
+        hands=200,
+        panel_hands=100,
+        agent_hands=400,
+        short_agent_hands=200,
+        eval_every=200,
+        eval_hands=100,
+        irl_epochs=1,
+        lbr_hands=20,
+    ),
     # The authors' protocol (src/main.py, train_rl.py): per experiment k, IRL run k with their
     # settings, then a sparse DQN, an AIRL-DQN and an H-AIRL-DQN with their DQN preset (5,000
     # hands; the > 0.8 x best checkpoint plays), then 50 x 1,000 non-duplicate games per pair.
