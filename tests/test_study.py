@@ -137,6 +137,12 @@ def units_of(out: Path) -> dict[Path, tuple[bytes, int]]:
     return {p: (p.read_bytes(), p.stat().st_mtime_ns) for p in sorted(found)}
 
 
+def every_file(out: Path) -> dict[Path, tuple[bytes, int]]:
+    """Every file under ``out``: its bytes and modification time."""
+    return {p: (p.read_bytes(), p.stat().st_mtime_ns) for p in sorted(out.rglob("*"))
+            if p.is_file()}  # fmt: skip
+
+
 @pytest.mark.slow
 def test_rerun_reuses_every_unit_and_a_changed_setting_is_refused(
     finished: tuple[Path, Path, list[str]],
@@ -150,11 +156,16 @@ def test_rerun_reuses_every_unit_and_a_changed_setting_is_refused(
     assert units_of(out) == units  # nothing trained, played or rewritten
     assert not (out / "stages").exists()  # unit records suffice
     assert (out / "report.json").read_bytes() == before  # same inputs, same bytes
+    files = every_file(out)
     changed = preset("quick", **{**TOY, "panel_hands": 300})
-    with pytest.raises(ValueError, match=r"panel/tournament/seeds/.*was made with another "
-                                         r"configuration \(hands 200 -> 300\)"):  # fmt: skip
+    refused = r"is a study made with other settings \(panel_hands 200 -> 300\); nothing was"
+    with pytest.raises(ValueError, match=refused):
         run_study([month], out, changed)
-    assert (out / "report.json").read_bytes() == before and units_of(out) == units
+    # More IRL runs change which run each agent seed learns from (seed s on run s mod runs):
+    # refused before the new runs are trained or any summary or figure is rewritten.
+    with pytest.raises(ValueError, match=r"\(runs 2 -> 3\); nothing was written"):
+        run_study([month], out, preset("quick", **{**TOY, "runs": 3}))
+    assert every_file(out) == files
     # --overwrite recomputes the changed units only: the panel's seeds.
     result = run_study([month], out, changed, overwrite=True)
     again = units_of(out)
@@ -333,6 +344,32 @@ def test_a_study_folder_of_main_is_reused_or_refused_naming_its_stage_record(
                                          r"\(settings.epochs 3 -> 2\)"):  # fmt: skip
         run_study([month], out, config)
     assert units_of(out) == units
+
+
+def test_a_study_folder_takes_more_seeds_and_refuses_other_changes(tmp_path: Path) -> None:
+    """claim_folder: the settings recorded at the first run; growing seeds is an extension,
+    anything else a one-line refusal that writes nothing; settings added since an older
+    folder was made are not compared, and an older folder's finished report speaks for it."""
+    from pokerirl.studies.common import STUDY_JSON, claim_folder
+
+    root = tmp_path / "study"
+    settings = {"runs": 2, "seeds": [0, 1], "hands": 400}
+    claim_folder(root, settings, overwrite=False, grows=("seeds",))
+    recorded = (root / STUDY_JSON).read_bytes()
+    for change, named in (({"runs": 3}, "runs 2 -> 3"), ({"seeds": [1, 2]}, "seeds"),
+                          ({"hands": 500, "seeds": [0, 1, 2]}, "hands 400 -> 500")):  # fmt: skip
+        with pytest.raises(StudyError, match=rf"made with other settings \({named}"):
+            claim_folder(root, {**settings, **change}, overwrite=False, grows=("seeds",))
+        assert (root / STUDY_JSON).read_bytes() == recorded
+    grown = {**settings, "seeds": [0, 1, 2], "lbr_hands": 20}  # lbr_hands: added since
+    claim_folder(root, grown, overwrite=False, grows=("seeds",))
+    assert json.loads((root / STUDY_JSON).read_text())["settings"] == grown
+    claim_folder(root, {**grown, "runs": 3}, overwrite=True, grows=("seeds",))
+    assert json.loads((root / STUDY_JSON).read_text())["settings"]["runs"] == 3
+    older = tmp_path / "older"  # no study.json: its report's settings
+    with pytest.raises(StudyError, match=r"\(runs 2 -> 3\)"):
+        claim_folder(older, {**settings, "runs": 3}, overwrite=False, before=lambda: settings)
+    assert not older.exists()
 
 
 def strict_json_files(folder: Path) -> int:

@@ -12,7 +12,7 @@ from __future__ import annotations
 import dataclasses
 import json
 import os
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from pathlib import Path
 from typing import Any, TypeVar
 
@@ -53,6 +53,59 @@ def study_folder(out: str | os.PathLike[str]) -> Path:
     if folder.exists() and not folder.is_dir():
         raise StudyError(f"{folder} exists and is not a folder", remedy=Remedy.ELSEWHERE)
     return folder
+
+
+STUDY_JSON = "study.json"  # the settings a study folder was made with
+STUDY_FORMAT = "pokerirl-study-settings/1"
+
+
+def claim_folder(
+    root: Path,
+    settings: Mapping[str, Any],
+    *,
+    overwrite: bool,
+    grows: Sequence[str] = (),
+    before: Callable[[], Mapping[str, Any] | None] = lambda: None,
+) -> None:
+    """Check, before a study writes anything in ``root``, that it holds no study made with
+    other ``settings`` (JSON); then record them in ``root/study.json``.
+
+    A folder's settings are its ``study.json``'s, or for a folder of an older pokerirl
+    ``before()``'s (its finished report's). A rerun may change only the lists named in
+    ``grows``, and only by adding to them (more seeds: new units beside the finished ones);
+    settings added since the folder was made are not compared. Any other change is refused in
+    one line naming it, unless ``overwrite``: then the units it changes are recomputed.
+    """
+    path = root / STUDY_JSON
+    try:
+        found = json.loads(path.read_text())
+        old = found["settings"] if found.get("format") == STUDY_FORMAT else None
+    except FileNotFoundError:
+        old = before()
+    except (OSError, ValueError, TypeError, KeyError, AttributeError):
+        old = None  # damaged: the units' own records still guard every output
+    new = json.loads(json.dumps(settings))  # as JSON reads it back: tuples are lists
+    if isinstance(old, Mapping) and not overwrite:
+        kept = {key: new[key] for key in old if key in new}
+        if any(key not in new for key in old):
+            kept = new  # a setting this pokerirl no longer has: a change
+        for key in grows:
+            if key in kept and key in old and set(old[key]) <= set(kept[key]):
+                kept[key] = old[key]
+        if kept != dict(old):
+            from pokerirl.store import describe_changes
+
+            raise StudyError(
+                f"{root} is a study made with other settings "
+                f"({describe_changes(dict(old), kept)}); nothing was written",
+                remedy=Remedy.RECOMPUTE,
+            )
+    text = json.dumps({"format": STUDY_FORMAT, "settings": new}, indent=2) + "\n"
+    if not path.is_file() or path.read_text() != text:
+        from pokerirl.atomic import write_text
+
+        root.mkdir(parents=True, exist_ok=True)
+        write_text(path, text)
 
 
 def read_jsonl(path: Path) -> list[dict[str, Any]]:

@@ -19,7 +19,6 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import stats
 
 from pokerirl.errors import ConfigError
 
@@ -59,6 +58,8 @@ def estimate(units_mbb: np.ndarray) -> Estimate:
         return Estimate(
             mbb_per_hand=mean, std_error=0.0, ci95=(mean, mean), p_value=p_value, n=units.size
         )
+    from scipy import stats  # a second to import: ``pokerirl report`` reads estimates only
+
     std_error = float(units.std(ddof=1)) / math.sqrt(units.size)
     test = stats.ttest_1samp(units, 0.0)
     ci = test.confidence_interval(confidence_level=CONFIDENCE)

@@ -15,7 +15,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from pokerirl.execution import Backend
-from pokerirl.studies.common import study_folder
+from pokerirl.studies.common import claim_folder, study_folder
 from pokerirl.studies.poker import figures
 from pokerirl.studies.poker.config import PRESETS, StudyConfig, StudyError, preset
 from pokerirl.studies.poker.pipeline import (
@@ -94,7 +94,10 @@ def run_study(
     check_sources(sources)  # before anything is written: a missing path, a plain file
     reward_source_prints(config)  # a reward that replaces IRL runs, checked as early
     root = study_folder(out)
-    root.mkdir(parents=True, exist_ok=True)
+    # Every setting checked against the folder's before anything is written; more seeds only
+    # add units beside the finished ones.
+    claim_folder(root, config.settings(), overwrite=overwrite, grows=("seeds",),
+                 before=lambda: _report_settings(root))  # fmt: skip
     study = Study(
         root,
         config,
@@ -123,3 +126,11 @@ def run_study(
         figures.authors_tournament(authors, report, root / AUTHORS_FIGURE)
     write_study_report(root, report, panel)
     return StudyResult(root=root, report=report, markdown=render_markdown(report))
+
+
+def _report_settings(root: Path) -> dict[str, object] | None:
+    """The settings of a study an older pokerirl finished in ``root`` (its report's)."""
+    try:
+        return dict(load_study_report(root).settings) if is_study_report(root) else None
+    except StudyError:  # damaged: the units' own records still guard every output
+        return None
