@@ -16,7 +16,7 @@ import os
 import re
 import sys
 import warnings
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from types import TracebackType
 from typing import Any, Literal, ParamSpec, TypeVar
 
@@ -33,9 +33,24 @@ from pokerirl.errors import (
     one_line_errors,
     sigterm_as_interrupt,
 )
+from pokerirl.studies.poker.config import (  # torch-free: the values help lists
+    ENCODINGS,
+)
 
 P = ParamSpec("P")
 T = TypeVar("T")
+
+
+def choices(values: Iterable[str]) -> str:
+    """An option's metavar that lists its values, as ``--help`` shows them.
+
+    >>> choices(("rlcard", "strength"))
+    '[rlcard|strength]'
+    """
+    return f"[{'|'.join(values)}]"
+
+
+ENCODING_CHOICES = choices(ENCODINGS)
 
 
 def _command_line_errors() -> tuple[type[Exception], ...]:
@@ -229,6 +244,7 @@ app = typer.Typer(
     no_args_is_help=True,
     add_completion=False,
     pretty_exceptions_enable=False,
+    rich_markup_mode=None,  # plain help: fits 80 columns, no boxes cutting flag names
 )
 
 

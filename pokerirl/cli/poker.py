@@ -11,6 +11,7 @@ from typing import TYPE_CHECKING
 import typer
 
 from pokerirl.cli.app import (
+    ENCODING_CHOICES,
     INTERRUPTED,
     MAX_SEEDS,
     RAY_HELP,
@@ -19,6 +20,7 @@ from pokerirl.cli.app import (
     Default,
     _backend,
     app,
+    choices,
     echo,
     given,
     on_error,
@@ -26,6 +28,7 @@ from pokerirl.cli.app import (
     settings_from_options,
 )
 from pokerirl.errors import InputError, UsageError
+from pokerirl.studies.poker.config import AGENT_PRESETS, FOLDS, IRL_ALGOS, TRANSFORMS
 
 if TYPE_CHECKING:
     from pokerirl.irl.records import EpochMetrics
@@ -56,6 +59,7 @@ def ingest(
     folds: str = typer.Option(
         "drop",
         "--folds",
+        metavar=choices(FOLDS),
         help="drop: leave out the hands that end in a fold with the cards hidden (the table "
         "of before, byte for byte); impute: keep them, each hidden player's cards drawn from "
         "a posterior over the 1,326 pairs under a behaviour model (docs/folds.md).",
@@ -73,6 +77,7 @@ def ingest(
     ),
     behaviour_encoding: str = typer.Option(
         Default(IMPUTE_CONFIG, "behaviour_encoding"), "--behaviour-encoding",
+        metavar=ENCODING_CHOICES,
         help="With --folds impute and no --behaviour: what the fitted behaviour model reads "
         "(rlcard or strength).",
     ),
@@ -145,12 +150,13 @@ def synth(
 def match(
     agent_a: str = typer.Argument(
         ...,
+        metavar="AGENT_A",
         help="Agent A (reported): a built-in (random, raise, call, fold, tightbot, "
         "loosebot), an agent folder, reward:RUN (a learned reward's argmax), policy:RUN (an "
         "IRL policy, greedy) or rlcard:CKPT (an RLCard checkpoint: it is unpickled, which "
         "runs any code it holds; trusted files only).",
     ),
-    agent_b: str = typer.Argument(..., help="Agent B: as agent A."),
+    agent_b: str = typer.Argument(..., metavar="AGENT_B", help="Agent B: as agent A."),
     hands: int = typer.Option(100_000, min=1, help="Hands to play (even with --duplicate)."),
     seed: int = typer.Option(
         0, **SEED_OPTION, help="Seed of the deals and of the agents' random draws."
@@ -158,8 +164,18 @@ def match(
     duplicate: bool = typer.Option(
         True, "--duplicate/--no-duplicate", help="Play every deal from both seats."
     ),
-    output_format: str = typer.Option("text", "--format", help="text or json."),
-    encoding: str | None = typer.Option(None, "--encoding", help=AGENTS_ENCODING_HELP),
+    output_format: str = typer.Option(
+        "text",
+        "--format",
+        metavar=choices(("text", "json")),
+        help="text or json.",
+    ),
+    encoding: str | None = typer.Option(
+        None,
+        "--encoding",
+        metavar=ENCODING_CHOICES,
+        help=AGENTS_ENCODING_HELP,
+    ),
 ) -> None:
     """Play A against B and print A's result in milli-big-blinds per hand.
 
@@ -218,7 +234,7 @@ def tournament(
     ),
     hands: int = typer.Option(1_000_000, "--hands", "-n", min=2, help="Hands per seed."),
     seeds: str = typer.Option(
-        "0-19", "--seeds", callback=seed_list, help="Seeds, e.g. 0-19 or 0-4,10."
+        "0-19", "--seeds", callback=seed_list, metavar="SEEDS", help="Seeds, e.g. 0-19 or 0-4,10."
     ),
     out: Path = typer.Option(..., "--out", "-o", help="Report folder (resumes what it holds)."),
     duplicate: bool = typer.Option(
@@ -242,7 +258,12 @@ def tournament(
         help="Recompute saved seeds from another configuration; replace the report of a "
         "tournament of other matchups in --out (else refused).",
     ),
-    encoding: str | None = typer.Option(None, "--encoding", help=AGENTS_ENCODING_HELP),
+    encoding: str | None = typer.Option(
+        None,
+        "--encoding",
+        metavar=ENCODING_CHOICES,
+        help=AGENTS_ENCODING_HELP,
+    ),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bar, no report."),
 ) -> None:
     """Multi-seed head-to-head evaluation: mbb/h, duplicate deals, Bonferroni and Holm.
@@ -256,7 +277,6 @@ def tournament(
     the wall-clock figures, kept apart so the rest is the same bytes for the same seeds);
     prints the report.
 
-    \b
     Resumable: each seed is saved when it finishes. A rerun reuses saved seeds
     whose agents, hands, duplicate mode and batch size match, and refuses the
     others (--overwrite recomputes them); a corrupt saved seed is recomputed.
@@ -311,9 +331,23 @@ def tournament(
 @on_error(interrupted=INTERRUPTED, advice=RUN_ADVICE)
 def train(
     ctx: typer.Context,
-    table: str = typer.Argument(..., help="Parquet decision table written by `pokerirl ingest`."),
-    out: str = typer.Option(..., "--out", help="Run folder (with --runs > 1: a folder of runs)."),
-    algo: str = typer.Option("hairl", "--algo", help="hairl or airl (picks the defaults)."),
+    table: str = typer.Argument(
+        ...,
+        metavar="TABLE",
+        help="Parquet decision table written by `pokerirl ingest`.",
+    ),
+    out: str = typer.Option(
+        ...,
+        "--out",
+        metavar="DIR",
+        help="Run folder (with --runs > 1: a folder of runs).",
+    ),
+    algo: str = typer.Option(
+        "hairl",
+        "--algo",
+        metavar=choices(IRL_ALGOS),
+        help="hairl or airl (picks the defaults).",
+    ),
     runs: int = typer.Option(
         1, "--runs", min=1, max=MAX_SEEDS,
         help="Runs with seeds seed..seed+runs-1, in OUT/run-<k>.",
@@ -330,19 +364,40 @@ def train(
     seed: int | None = typer.Option(
         None, "--seed", **SEED_OPTION, help="Seed for init, split, shuffle, noise."
     ),
-    device: str = typer.Option("cpu", "--device", help="cpu or cuda."),
-    config: str | None = typer.Option(None, "--config", help="TOML file of hyperparameters."),
+    device: str = typer.Option("cpu", "--device", metavar="DEVICE", help="cpu or cuda."),
+    config: str | None = typer.Option(
+        None,
+        "--config",
+        metavar="FILE",
+        help="TOML file of hyperparameters.",
+    ),
     batch_size: int | None = typer.Option(None, "--batch-size", min=1),
-    hidden: str | None = typer.Option(None, "--hidden", help="Widths for both nets, e.g. 64,64."),
-    reward_lr: float | None = typer.Option(None, "--reward-lr"),
-    policy_lr: float | None = typer.Option(None, "--policy-lr"),
-    reward_weight_decay: float | None = typer.Option(None, "--reward-weight-decay"),
+    hidden: str | None = typer.Option(
+        None,
+        "--hidden",
+        metavar="WIDTHS",
+        help="Widths for both nets, e.g. 64,64.",
+    ),
+    reward_lr: float | None = typer.Option(None, "--reward-lr", help="Adam lr of f."),
+    policy_lr: float | None = typer.Option(None, "--policy-lr", help="Adam lr of the policy."),
+    reward_weight_decay: float | None = typer.Option(
+        None, "--reward-weight-decay", help="Weight decay of f (default 0; authors 5e-3)."
+    ),
     alpha: float | None = typer.Option(None, "--alpha", help="Supervised weight in policy loss."),
     beta: float | None = typer.Option(None, "--beta", help="Env-reward weight in disc. loss."),
-    sigma_start: float | None = typer.Option(None, "--sigma-start"),
-    sigma_end: float | None = typer.Option(None, "--sigma-end"),
+    sigma_start: float | None = typer.Option(
+        None, "--sigma-start", help="Noise std on the batch's first policy action (H-AIRL)."
+    ),
+    sigma_end: float | None = typer.Option(
+        None, "--sigma-end", help="Noise std on the batch's last policy action (H-AIRL)."
+    ),
     val_fraction: float | None = typer.Option(None, "--val-fraction", help="Share of hands."),
-    encoding: str = typer.Option("rlcard", "--encoding", help=ENCODING_HELP),
+    encoding: str = typer.Option(
+        "rlcard",
+        "--encoding",
+        metavar=ENCODING_CHOICES,
+        help=ENCODING_HELP,
+    ),
     threads: int = typer.Option(
         1, "--threads", min=1, help="CPU threads; small nets train best on 1."
     ),
@@ -465,7 +520,9 @@ def _widths(hidden: str) -> list[int]:
 @app.command("reward-card")
 def reward_card_command(
     reward: str = typer.Argument(
-        ..., help="An AIRL / H-AIRL run folder, or authors:FILE (one of the authors' rewards)."
+        ...,
+        metavar="REWARD",
+        help="An AIRL / H-AIRL run folder, or authors:FILE (one of the authors' rewards).",
     ),
     table: Path | None = typer.Option(
         None,
@@ -481,11 +538,15 @@ def reward_card_command(
         False, "--validation", help="Only the run's validation hands (its split.json)."
     ),
     transform: str = typer.Option(
-        "raw", "--transform", help="raw, centered, log_softmax or advantage (docs/rewards.md)."
+        "raw",
+        "--transform",
+        metavar=choices(TRANSFORMS),
+        help="raw, centered, log_softmax or advantage (docs/rewards.md).",
     ),
     encoding: str | None = typer.Option(
         None,
         "--encoding",
+        metavar=ENCODING_CHOICES,
         help="The encoding the run must read (rlcard or strength); default: the run's own. "
         "A run of another encoding is refused.",
     ),
@@ -546,6 +607,7 @@ def agent_train(
     preset: str = typer.Option(
         "default",
         "--preset",
+        metavar=choices(AGENT_PRESETS),
         help="default (ours: 50,000 hands, train_every 16) or authors (their train_rl.py: "
         "5,000 hands, lr 5e-4, train_every 1, epsilon 1 -> 0 over 5,000 steps, evaluation "
         "every 100 hands on 1,000 games, the > 0.8 x best checkpoint plays). Flags and "
@@ -555,28 +617,38 @@ def agent_train(
         None, "--config", help="TOML file of settings (any TrainConfig or DQNConfig field)."
     ),
     reward: str = typer.Option(
-        Default(TRAIN_CONFIG, "reward"), help="sparse (the payoff) or learned (--reward-run's f)."
+        Default(TRAIN_CONFIG, "reward"),
+        metavar=choices(("sparse", "learned")),
+        help="sparse (the payoff) or learned (--reward-run's f).",
     ),
     reward_run: str | None = typer.Option(
-        None, help="AIRL / H-AIRL run folder, or authors:FILE (one of the authors' rewards)."
+        None,
+        metavar="REWARD",
+        help="AIRL / H-AIRL run folder, or authors:FILE (one of the authors' rewards).",
     ),
     payoff_weight: float | None = typer.Option(
         None, help="w in r = w * payoff + (1 - w) * f(s, a); 0: the learned reward alone."
     ),
     reward_transform: str = typer.Option(
         Default(TRAIN_CONFIG, "reward_transform"),
-        help="raw (f), centered (f minus its mean over legal actions) or log_softmax (f minus "
-        "its logsumexp over legal actions).",
+        metavar=choices(TRANSFORMS),
+        help="raw (f), centered (f minus its mean over legal actions), log_softmax (f minus "
+        "its logsumexp over legal actions) or advantage (f minus its max over legal actions, "
+        "floored at -10; docs/rewards.md).",
     ),
     raise_counts: str = typer.Option(
         Default(TRAIN_CONFIG, "raise_counts"),
+        metavar=choices(("decision", "end-of-hand")),
         help="decision (f reads the raise counts of the decision) or end-of-hand (those the "
         "hand ended with, as the authors' agent read RLCard's live list).",
     ),
     hands: int | None = typer.Option(None, "--hands", "-n", help="Training hands."),
     seed: int = typer.Option(0, **SEED_OPTION, help="Seed of one agent."),
     seeds: str | None = typer.Option(
-        None, callback=seed_list, help="e.g. 0-19: one agent per seed, in OUT/seed-<k>."
+        None,
+        callback=seed_list,
+        metavar="SEEDS",
+        help="e.g. 0-19: one agent per seed, in OUT/seed-<k>.",
     ),
     jobs: int = typer.Option(
         1, "--jobs", "-j", min=1, help="Local processes training seeds at once."
@@ -593,21 +665,26 @@ def agent_train(
     ),
     opponent: str | None = typer.Option(
         None,
+        metavar="AGENT|self",
         help="random (default), raise, call, tightbot, loosebot, an agent folder, rlcard:CKPT "
         "(unpickled: runs any code it holds; trusted files only), or self.",
     ),
     protocol: str | None = typer.Option(
-        None, help="pokerirl (duplicate evaluations) or authors (their evaluation and kept model)."
+        None,
+        metavar=choices(("pokerirl", "authors")),
+        help="pokerirl (duplicate evaluations) or authors (their evaluation and kept model).",
     ),
     play: str | None = typer.Option(
-        None, help="final or kept (the authors' > 0.8 x best checkpoint; needs --protocol authors)."
+        None,
+        metavar=choices(("final", "kept")),
+        help="final or kept (the authors' > 0.8 x best checkpoint; needs --protocol authors).",
     ),
     eval_every: int | None = typer.Option(None, help="Evaluate every N training hands."),
     eval_hands: int | None = typer.Option(None, help="Hands per evaluation (even, duplicate)."),
     eval_seed: int | None = typer.Option(
         None, **SEED_OPTION, help="Deal seed of every evaluation."
     ),
-    hidden: str | None = typer.Option(None, help="Q-network widths, e.g. 64,64."),
+    hidden: str | None = typer.Option(None, metavar="WIDTHS", help="Q-network widths, e.g. 64,64."),
     replay_size: int | None = typer.Option(None, help="Replay memory size."),
     replay_init: int | None = typer.Option(None, help="Transitions before the first update."),
     batch_size: int | None = typer.Option(None, help="Update minibatch size."),
@@ -622,6 +699,7 @@ def agent_train(
     self_play_every: int | None = typer.Option(None, help="Updates between refreshes of 'self'."),
     encoding: str = typer.Option(
         Default(TRAIN_CONFIG, "encoding"),
+        metavar=ENCODING_CHOICES,
         help="What the q-network reads: rlcard (RLCard's 72-d observation) or strength (hole "
         "and board apart, with hand features). The reward reads its own run's encoding.",
     ),
@@ -629,7 +707,6 @@ def agent_train(
 ) -> None:
     """Train a DQN agent (or one per seed) on the sparse payoff or a learned reward.
 
-    \b
     A finished agent folder is never changed: a rerun with the same settings reuses it,
     one with other settings is refused (--overwrite retrains it). New folders are
     written beside the old and swapped in at the end, so a killed run loses nothing.

@@ -9,6 +9,7 @@ from pathlib import Path
 import typer
 
 from pokerirl.cli.app import (
+    ENCODING_CHOICES,
     INTERRUPTED,
     MAX_SEEDS,
     RAY_HELP,
@@ -16,12 +17,15 @@ from pokerirl.cli.app import (
     Default,
     _backend,
     app,
+    choices,
     echo,
     on_error,
     seed_list,
     settings_from_options,
 )
 from pokerirl.errors import InputError, MissingExtra, UsageError
+from pokerirl.studies.poker.config import AGENT_PRESETS, FOLDS, TRANSFORMS
+from pokerirl.studies.poker.config import PRESETS as STUDY_PRESETS
 
 DEMO_CONFIG = "pokerirl.studies.demo:DemoConfig"
 TRANSFER_CONFIG = "pokerirl.studies.poker.transfer:TransferConfig"
@@ -87,6 +91,7 @@ def study(
     preset_name: str = typer.Option(
         "quick",
         "--preset",
+        metavar=choices(STUDY_PRESETS),
         help="smoke (seconds; checks the pipeline, its numbers mean nothing), quick, paper "
         "(ours) or authors (their IRL and DQN settings and their tournament protocol, beside "
         "our duplicate-deal Table 1).",
@@ -95,7 +100,7 @@ def study(
         None, "--runs", min=1, max=MAX_SEEDS, help="IRL runs per algorithm."
     ),
     seeds: str | None = typer.Option(
-        None, "--seeds", callback=seed_list, help="Agent seeds, e.g. 0-19."
+        None, "--seeds", callback=seed_list, metavar="SEEDS", help="Agent seeds, e.g. 0-19."
     ),
     hands: int | None = typer.Option(None, "--hands", min=2, help="Tournament hands per seed."),
     lbr_hands: int | None = typer.Option(
@@ -113,17 +118,20 @@ def study(
     reward_transform: str | None = typer.Option(
         None,
         "--reward-transform",
+        metavar=choices(TRANSFORMS),
         help="raw, centered, log_softmax or advantage: the learned-reward DQNs' (docs/rewards.md).",
     ),
     encoding: str | None = typer.Option(
         None,
         "--encoding",
+        metavar=ENCODING_CHOICES,
         help="What rewards, policies and DQNs read: rlcard (the paper's 72-d, the default) or "
         "strength (hole and board apart, with hand features).",
     ),
     folds: str | None = typer.Option(
         None,
         "--folds",
+        metavar=choices(FOLDS),
         help="drop (default: the hands that end in a fold hide the cards and are left out) "
         "or impute (kept, the hidden cards drawn from a posterior; docs/folds.md).",
     ),
@@ -176,23 +184,37 @@ def study(
 @app.command()
 @on_error(interrupted=INTERRUPTED)
 def transfer(
-    reward_run: str = typer.Argument(..., help="An IRL run folder, or authors:FILE."),
+    reward_run: str = typer.Argument(
+        ...,
+        metavar="REWARD",
+        help="An IRL run folder, or authors:FILE.",
+    ),
     out: Path = typer.Option(..., "--out", "-o", help="Folder for the agents and the table."),
     transforms: str = typer.Option(
         Default(TRANSFER_CONFIG, "transforms"), "--transforms",
-        help="Reward transforms to train on.",
+        metavar="T[,T...]", help="Reward transforms to train on.",
     ),
     payoff_weights: str = typer.Option(
-        Default(TRANSFER_CONFIG, "payoff_weights"), "--payoff-weights", help="e.g. 0,0.5."
+        Default(TRANSFER_CONFIG, "payoff_weights"),
+        "--payoff-weights",
+        metavar="W[,W...]",
+        help="e.g. 0,0.5.",
     ),
     seeds: str = typer.Option(
-        Default(TRANSFER_CONFIG, "seeds"), "--seeds", callback=seed_list, help="DQN seeds."
+        Default(TRANSFER_CONFIG, "seeds"),
+        "--seeds",
+        callback=seed_list,
+        metavar="SEEDS",
+        help="DQN seeds.",
     ),
     hands: int = typer.Option(
         Default(TRANSFER_CONFIG, "hands"), "--hands", "-n", min=1, help="DQN training hands."
     ),
     agent_preset: str = typer.Option(
-        Default(TRANSFER_CONFIG, "agent_preset"), "--preset", help="DQN preset: default, authors."
+        Default(TRANSFER_CONFIG, "agent_preset"),
+        "--preset",
+        metavar=choices(AGENT_PRESETS),
+        help="DQN preset: default, authors.",
     ),
     eval_hands: int = typer.Option(
         Default(TRANSFER_CONFIG, "eval_hands"), "--eval-hands", min=2,
@@ -201,12 +223,14 @@ def transfer(
     experts: str = typer.Option(
         Default(TRANSFER_CONFIG, "experts"),
         "--experts",
+        metavar="RULE[,RULE...]",
         help="Rules to compare the agents' actions with (tightbot, loosebot, legal_majority), "
         "or none.",
     ),
     encoding: str | None = typer.Option(
         None,
         "--encoding",
+        metavar=ENCODING_CHOICES,
         help="What the DQNs read: rlcard or strength; default: the reward run's encoding.",
     ),
     jobs: int = typer.Option(2, "--jobs", min=1, help="Processes training seeds at once."),
@@ -244,7 +268,12 @@ def report(
     folder: Path = typer.Argument(
         ..., help="A folder written by pokerirl study, gym study or tournament."
     ),
-    output_format: str = typer.Option("markdown", "--format", help="markdown or json."),
+    output_format: str = typer.Option(
+        "markdown",
+        "--format",
+        metavar=choices(("markdown", "json")),
+        help="markdown or json.",
+    ),
 ) -> None:
     """Print a study or tournament report (Markdown, or JSON for scripts)."""
     from pokerirl.studies.gym import is_gym_study, load_gym_study
