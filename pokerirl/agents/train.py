@@ -427,6 +427,8 @@ def plot_learning_curve(metrics: Sequence[MetricsLine], path: Path) -> None:
     """mbb/h (± one standard error) of every evaluation against training hands, as a PNG."""
     import matplotlib
 
+    from pokerirl.figures import finish
+
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
@@ -438,9 +440,9 @@ def plot_learning_curve(metrics: Sequence[MetricsLine], path: Path) -> None:
         axes.plot(hands, mbb, marker="o", label=f"vs {label}")
         axes.fill_between(hands, mbb - error, mbb + error, alpha=0.25)
     axes.axhline(0.0, color="grey", linewidth=0.8)
-    axes.set_xlabel("training hands")
-    axes.set_ylabel("mbb/hand (greedy, duplicate)")
-    axes.legend()
+    finish(axes, title="Evaluations during training", xlabel="training hands",
+           ylabel="mbb/hand (greedy, duplicate deals)",
+           spread="bands: ± 1 standard error of each evaluation")  # fmt: skip
     figure.tight_layout()
     with atomic_path(path) as temporary:
         figure.savefig(temporary, format="png", dpi=100)

@@ -11,13 +11,14 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
 from pokerirl.atomic import atomic_path
+from pokerirl.figures import finish
 
 ALIGNMENT_FIGURE = "alignment.png"
 # file name -> (title, y label, [(metric key, legend label)])
 CURVES: dict[str, tuple[str, str, list[tuple[str, str]]]] = {
     ALIGNMENT_FIGURE: (
         "Validation action alignment",
-        "share of states",
+        "share of validation states",
         [
             ("val_alignment", "policy argmax = expert"),
             ("val_reward_alignment", "reward argmax = expert"),
@@ -34,7 +35,7 @@ CURVES: dict[str, tuple[str, str, list[tuple[str, str]]]] = {
     ),
     "disc_accuracy.png": (
         "Discriminator accuracy",
-        "accuracy",
+        "accuracy (share of samples)",
         [("disc_acc_expert", "on expert samples"), ("disc_acc_policy", "on policy samples")],
     ),
 }
@@ -48,11 +49,12 @@ def new_figure() -> tuple[Figure, Any]:
     return figure, figure.add_subplot()
 
 
-def save_figure(figure: Figure, axes: Any, path: Path, title: str, ylabel: str) -> Path:
-    """Title, labels (epochs on x), grid and legend; written atomically to ``path``."""
-    axes.set(title=title, xlabel="epoch", ylabel=ylabel)
-    axes.grid(alpha=0.3)
-    axes.legend(fontsize="small")
+def save_figure(
+    figure: Figure, axes: Any, path: Path, title: str, ylabel: str, *, spread: str | None = None
+) -> Path:
+    """Title, labels (whole epochs on x), grid and legend (:func:`pokerirl.figures.finish`);
+    written atomically to ``path``."""
+    finish(axes, title=title, xlabel="epoch", ylabel=ylabel, spread=spread, integer_x=True)
     figure.tight_layout()
     with atomic_path(path) as temporary:
         figure.savefig(temporary, format="png")
@@ -99,10 +101,11 @@ def plot_bands(summary: Mapping[str, Any], out_dir: str | os.PathLike[str]) -> P
     figure, axes = new_figure()
     for i, (key, label) in enumerate(series):
         mean, std = summary["metrics"][key]["mean"], summary["metrics"][key]["std"]
-        axes.plot(epochs, mean, color=f"C{i}", label=f"{label} (mean)")
+        axes.plot(epochs, mean, color=f"C{i}", label=label)
         low = [m - s for m, s in zip(mean, std, strict=True)]
         high = [m + s for m, s in zip(mean, std, strict=True)]
-        axes.fill_between(epochs, low, high, color=f"C{i}", alpha=0.25, label="± 1 std")
+        axes.fill_between(epochs, low, high, color=f"C{i}", alpha=0.25)
     _baseline_lines(axes, {k: v["mean"] for k, v in summary["baselines"].items()})
-    title = f"Validation alignment over {summary['runs']} runs"
-    return save_figure(figure, axes, Path(out_dir) / BANDS_FILE, title, "share of states")
+    spread = f"lines: mean over {summary['runs']} runs; bands: ± 1 std (sample) over runs"
+    return save_figure(figure, axes, Path(out_dir) / BANDS_FILE, "Validation alignment",
+                       "share of validation states", spread=spread)  # fmt: skip

@@ -217,7 +217,9 @@ def train_into(
     )
     data_info = {**data_record(data, train_data, val_data, path=data_path), **(data_notes or {})}
     save_run(result, folder, algo=algo, data=data_info, baselines=found, device=device)
-    plot_curves(result.metrics, folder, baselines=found)
+    # Without a legal mask, legal_majority is majority under another name: not drawn.
+    drawn = {k: v for k, v in found.items() if k != "legal_majority" or data.legal_mask is not None}
+    plot_curves(result.metrics, folder, baselines=drawn)
     return RunSummary(
         out_dir=folder,
         metrics=result.metrics,

@@ -280,6 +280,8 @@ def plot_param(record: Mapping[str, Any], param: str, path: Path) -> Path:
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
+    from pokerirl.figures import finish
+
     rows = sorted((r for r in record["rows"] if r["param"] == param), key=lambda r: r["value"])
     panels = [("irl_final_return", "IRL-phase return"), ("rl_final_return", "RL-phase return")]
     if rows[0]["final_alignment_mean"] is not None:
@@ -301,12 +303,12 @@ def plot_param(record: Mapping[str, Any], param: str, path: Path) -> Path:
             ):
                 if math.isfinite(value):
                     axes.axhline(value, color="grey", linestyle=style, linewidth=1, label=label)
-        axes.set(title=title, xlabel=LABELS[param], ylabel="return" if i < 2 else "alignment")
-        axes.grid(alpha=0.3)
-        axes.legend(fontsize="x-small")
+        finish(axes, title=title, xlabel=LABELS[param],
+               ylabel="return (sum of rewards per episode)" if i < 2
+               else "validation alignment (share of states)")  # fmt: skip
     figure.suptitle(
-        f"{record['env']}: H-AIRL, {LABELS[param]} varied ({record['preset']} preset, "
-        f"mean ± std of {record['runs']} runs)"
+        f"{record['env']}: H-AIRL, {LABELS[param]} varied ({record['preset']} preset); "
+        f"points: mean of {record['runs']} runs, bars: ± 1 std (sample) over runs", fontsize=10
     )
     figure.tight_layout()
     with atomic_path(path) as temporary:

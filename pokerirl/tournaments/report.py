@@ -427,6 +427,8 @@ def render_png(report: TournamentReport) -> bytes:
     """
     from matplotlib.figure import Figure
 
+    from pokerirl.figures import finish
+
     figure = Figure(figsize=(max(6.0, 0.35 * len(report.config.seeds) + 3), 4.0))
     axes = figure.subplots()
     width = 0.6 / max(1, len(report.matchups))
@@ -443,10 +445,9 @@ def render_png(report: TournamentReport) -> bytes:
         )
         axes.axhline(m.pooled.mbb_per_hand, linestyle="--", linewidth=1, color=bars[0].get_color())
     axes.axhline(0.0, color="black", linewidth=0.8)
-    axes.set_xlabel("seed")
-    axes.set_ylabel("mbb/h (first agent), 95% CI")
-    axes.set_title(f"{report.config.hands:,} hands per seed; dashed: pooled mean")
-    axes.legend(fontsize="small")
+    finish(axes, title=f"Per seed: {report.config.hands:,} hands each",
+           xlabel="seed", ylabel="mbb/hand of the first agent",
+           spread="bars: 95% CI of each seed; dashed: the pooled mean", integer_x=True)  # fmt: skip
     figure.tight_layout()
     buffer = io.BytesIO()
     figure.savefig(buffer, format="png", dpi=120)

@@ -11,6 +11,7 @@ import numpy as np
 
 from pokerirl.atomic import write_bytes
 from pokerirl.encoding import ACTIONS
+from pokerirl.figures import finish
 from pokerirl.studies.common import band
 from pokerirl.studies.poker.report_types import StudyReport
 from pokerirl.studies.poker.results import (
@@ -59,19 +60,31 @@ def _band_figure(
     path: Path,
     bands: Iterable[tuple[Any, Curve | HandsCurve, str]],
     lines: Iterable[tuple[float, str, str]] = (),
-    **axes: Any,
+    *,
+    title: str,
+    xlabel: str,
+    ylabel: str,
+    spread: str,
+    integer_x: bool = False,
+    ylim: tuple[float, float] | None = None,
 ) -> None:
-    """Mean ± std bands (x, curve, label), grey reference lines (value, style, label), then
-    ``axes`` (labels, title, limits) and a legend."""
+    """Mean ± std bands (x, curve, label) and grey reference lines (value, style, label),
+    finished by :func:`pokerirl.figures.finish`."""
     plt = _pyplot()
     figure, axis = plt.subplots(figsize=(6.4, 4))
     for x, curve, label in bands:
         band(axis, x, curve.to_json(), label)
     for value, style, label in lines:
         axis.axhline(value, color="grey", linestyle=style, label=label)
-    axis.set(**axes)
-    axis.legend(fontsize=8)
+    if ylim is not None:
+        axis.set_ylim(*ylim)
+    finish(axis, title=title, xlabel=xlabel, ylabel=ylabel, spread=spread, integer_x=integer_x)
     _save(figure, path)
+
+
+def _over_runs(irl: IRLResult) -> str:
+    runs = sorted({found.runs for _, found in _trained(irl).values()})
+    return f"lines: mean over {'/'.join(map(str, runs))} runs; bands: ± 1 std (sample) over runs"
 
 
 def _epochs(curve: Curve) -> np.ndarray:
@@ -88,8 +101,10 @@ def irl_alignment(irl: IRLResult, path: Path) -> None:
     for name, style in styles.items() if trained else ():
         value = list(trained.values())[-1][1].baselines[name].mean
         lines.append((value, style, f"{name} {value:.3f}"))
-    _band_figure(path, bands, lines, xlabel="epoch", ylabel="validation alignment",
-                 title="IRL: validation alignment")  # fmt: skip
+    _band_figure(path, bands, lines, xlabel="epoch",
+                 ylabel="validation alignment (share of decisions)",
+                 title="IRL: the policy's argmax against the expert's action",
+                 spread=_over_runs(irl), integer_x=True)  # fmt: skip
 
 
 def irl_discriminator(irl: IRLResult, path: Path) -> None:
@@ -99,8 +114,9 @@ def irl_discriminator(irl: IRLResult, path: Path) -> None:
         for label, runs in _trained(irl).values()
         for key, side in (("disc_acc_expert", "expert"), ("disc_acc_policy", "policy"))
     ]
-    _band_figure(path, bands, xlabel="epoch", ylabel="accuracy",
-                 title="IRL: discriminator accuracy", ylim=(0, 1))  # fmt: skip
+    _band_figure(path, bands, xlabel="epoch", ylabel="accuracy (share of samples)",
+                 title="IRL: discriminator accuracy", spread=_over_runs(irl), integer_x=True,
+                 ylim=(0, 1))  # fmt: skip
 
 
 def irl_actions(irl: IRLResult, path: Path) -> None:
@@ -125,8 +141,9 @@ def irl_actions(irl: IRLResult, path: Path) -> None:
         axis.bar(x + index * width, dist.mean, width, yerr=dist.std, label=label)
     names = ACTIONS if count == len(ACTIONS) else tuple(str(a) for a in range(count))
     axis.set_xticks(x + width * (len(groups) - 1) / 2, names)
-    axis.set(ylabel="share of validation decisions", title="Action distributions")
-    axis.legend(fontsize=8)
+    finish(axis, title="Action shares on the validation decisions", xlabel="action",
+           ylabel="share of validation decisions", spread="bars: mean over runs; "
+           "error bars: ± 1 std (sample) over runs", grid=False)  # fmt: skip
     _save(figure, path)
 
 
@@ -139,8 +156,10 @@ def rl_curves(agents: AgentsResult, path: Path) -> None:
     for name, style in (("call", ":"), ("raise", "--")):
         value = agents.references[name].mbb_per_hand
         lines.append((value, style, f"always-{name} {value:,.0f}"))
-    _band_figure(path, bands, lines, xlabel="training hands", ylabel="mbb/hand vs random",
-                 title="RL against random")  # fmt: skip
+    over = f" over {len(agents.final_vs_random['dqn'])} seeds"
+    _band_figure(path, bands, lines, xlabel="training hands",
+                 ylabel="mbb/hand against random (duplicate deals)", title="RL against random",
+                 spread=f"lines: mean{over}; bands: ± 1 std (sample){over}")  # fmt: skip
 
 
 def panel_heatmap(panel: Panel, path: Path) -> None:
@@ -200,9 +219,10 @@ def authors_tournament(
         theirs = row.paper
         paper_label = f"the paper {theirs.mbb_per_hand:+,} ± {theirs.std_error}"
         axis.axhline(theirs.mbb_per_hand, color="C3", linestyle=":", label=paper_label)
-        axis.set(title=label, xlabel="experiment (diamond: its mean)", xlim=(-0.5, right))
+        axis.set_xlim(-0.5, right)
         axis.set_xticks(range(len(repeats)))
-        axis.legend(fontsize=7)
-    axes[0].set_ylabel(f"mbb/hand of one repeat ({row.games:,} games)")
+        finish(axis, title=label, xlabel="experiment (diamond: its mean)",
+               ylabel=f"mbb/hand of one repeat ({row.games:,} games)" if axis is axes[0] else "",
+               spread="dots: repeats; shaded: mean ± their SE, ± SE over experiments")  # fmt: skip
     figure.suptitle("The authors' tournament protocol: every repeat of every pair", fontsize=10)
     _save(figure, path)
