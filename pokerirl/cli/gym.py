@@ -119,7 +119,7 @@ def gym_experts(
     format: str = typer.Option("text", "--format", help="json or text."),
 ) -> None:
     """Print the manifest of the experts shipped with pokerirl."""
-    from pokerirl.gym.experts import MANIFEST_KEYS, shipped_manifest
+    from pokerirl.gym.manifest import MANIFEST_KEYS, shipped_manifest  # no torch: issue 34
 
     if format not in ("json", "text"):
         raise UsageError(f"--format must be json or text, got {format!r}")
