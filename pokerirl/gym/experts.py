@@ -44,7 +44,8 @@ from pokerirl.gym.manifest import (  # noqa: F401
     shipped_manifest,
     write_manifest,
 )
-from pokerirl.gym.presets import TASKS, PPOSettings, RLSettings
+from pokerirl.gym.presets import PPOSettings, RLSettings
+from pokerirl.gym.tasks import task
 
 if TYPE_CHECKING:  # gymnasium and SB3 are imported lazily: a poker-only user never pays.
     import gymnasium
@@ -117,7 +118,7 @@ class ExpertRecord:
     episodes: int
     seed: int
     timesteps: int
-    target: float  # the authors' expert return
+    target: float | None  # the authors' expert return (None: a generic task)
     hyper: str
     settings: Mapping[str, Any]
     policy_kwargs: Mapping[str, Any]
@@ -299,14 +300,13 @@ def evaluate(
 
 
 def expert_settings(env_id: str, *, hyper: str = "paper") -> RLSettings:
-    """The settings an expert trains with: the authors' (``paper``) or a named alternative.
+    """The settings an expert trains with: the authors' (``paper``; for a task the paper lacks,
+    its generic settings, :func:`pokerirl.gym.presets.generic_task`) or a named alternative.
 
     ``zoo`` uses rl-zoo's tuned PPO settings (see :data:`ZOO_PPO`), for a retry where the
     authors' miss the target; MountainCar's DQN is rl-zoo's either way.
     """
-    if env_id not in TASKS:
-        raise ConfigError(f"no expert settings for {env_id!r}; tasks: {', '.join(TASKS)}")
-    settings = TASKS[env_id].rl
+    settings = task(env_id).rl  # the paper's, or a generic task's; refuses an unknown id
     if hyper == "paper":
         return settings
     if hyper == "zoo":
@@ -397,7 +397,7 @@ def train_expert_record(
         episodes=final_episodes,
         seed=seed,
         timesteps=timesteps,
-        target=TASKS[env_id].expert_target,
+        target=task(env_id).expert_target,
         hyper=hyper,
         settings=asdict(settings.own),
         policy_kwargs=policy_kwargs(settings),
@@ -439,7 +439,10 @@ def resolve_expert_dir(expert: str | os.PathLike[str], env_id: str) -> Path:
     if str(expert) == "shipped":
         folder = shipped_dir() / env_id
         if not (folder / CONFIG_FILE).is_file():
-            raise ConfigError(f"no shipped expert for {env_id!r}")
+            raise ConfigError(
+                f"no shipped expert for {env_id!r} (only the paper's tasks ship one): train one "
+                f"with `pokerirl gym expert {env_id}` and give its folder"
+            )
         return folder
     return Path(expert)
 

@@ -400,6 +400,7 @@ def task_summary(
     env_rl = rl_curves(root, "env", preset.runs)
     baselines = irl_summaries["hairl"].over_runs.baselines
     paper = task.paper
+    assert paper is not None  # StudyPreset admits the paper's tasks only
     return TaskSummary(
         format=SUMMARY_FORMAT,
         env=env,
