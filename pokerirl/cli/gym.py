@@ -415,6 +415,10 @@ def gym_study(
     overwrite: bool = GYM_OVERWRITE,
     quiet: bool = GYM_QUIET,
     rl_backend: str = RL_BACKEND,
+    expert: Path | None = typer.Option(
+        None, "--expert", help="An expert folder (gym expert) for the data; default: the "
+        "shipped one. Needed for a task the paper does not have.",
+    ),
 ) -> None:
     """The paper's Gymnasium study: shipped expert -> data -> IRL (AIRL and H-AIRL) -> RL (env
     reward, AIRL and H-AIRL rewards) -> summary.json, figures/ and report.md beside the
@@ -422,10 +426,14 @@ def gym_study(
     from pokerirl.studies.gym import run_gym_study
 
     _rl_backend(rl_backend)
+    if expert is not None and task == "all":
+        raise UsageError("--expert is for one task, not all")
     preset = _gym_preset(
         preset_name, task, runs=runs, seed=seed, transitions=transitions, epochs=epochs,
         eval_episodes=eval_episodes, rl_timesteps=timesteps,
     )  # fmt: skip
+    if expert is None and task != "all":
+        _no_shipped_expert(task, "pass --expert DIR")
     result = run_gym_study(
         out,
         preset,
@@ -434,6 +442,7 @@ def gym_study(
         progress=not quiet,
         say=echo,
         rl_backend=rl_backend,
+        expert=expert,
     )
     echo("")
     echo(result.markdown)
