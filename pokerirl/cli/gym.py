@@ -416,8 +416,10 @@ def gym_study(
     quiet: bool = GYM_QUIET,
     rl_backend: str = RL_BACKEND,
     expert: Path | None = typer.Option(
-        None, "--expert", help="An expert folder (gym expert) for the data; default: the "
-        "shipped one. Needed for a task the paper does not have.",
+        None,
+        "--expert",
+        help="An expert folder (gym expert) for the data; default: the shipped one. Needed "
+        "for a task the paper does not have.",
     ),
 ) -> None:
     """The paper's Gymnasium study: shipped expert -> data -> IRL (AIRL and H-AIRL) -> RL (env

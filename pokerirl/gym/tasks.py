@@ -67,7 +67,6 @@ def _generic(env_id: str) -> Task:
     discrete = isinstance(action, spaces.Discrete)
     if not flat or not (discrete or (isinstance(action, spaces.Box) and len(action.shape) == 1)):
         raise ConfigError(
-            f"task {env_id!r} has observation space {obs} and action space {action}; "
-            f"{accepted()}"
+            f"task {env_id!r} has observation space {obs} and action space {action}; {accepted()}"
         )
     return generic_task(env_id, discrete=discrete)

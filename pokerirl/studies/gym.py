@@ -168,9 +168,7 @@ def task_root(out: Path, env: str, tasks: Sequence[str]) -> Path:
 # --------------------------------------------------------------------------- the jobs
 
 
-def data_job(
-    root: Path, env: str, preset: StudyPreset, *, expert: Path | None = None
-) -> DataJob:
+def data_job(root: Path, env: str, preset: StudyPreset, *, expert: Path | None = None) -> DataJob:
     """The expert data: from the shipped expert, or (``expert``) from an expert folder."""
     transitions = preset.irl(env).transitions
     return DataJob(
@@ -688,10 +686,8 @@ def render_report(
             lines += ["", f"EPIC and Pearson against the true reward ({truth['kind']}: "
                       f"{truth['description']}), γ {quality['gamma']}; coverage: states "
                       f"{cover['states']}, actions {cover['actions']}."]  # fmt: skip
-        note = TASKS[env].version_note if env in TASKS else (
-            f"{env} is not one of the paper's tasks: generic settings (docs/gym.md), no "
-            "authors' values."
-        )
+        generic = f"{env} is not one of the paper's tasks: generic settings (docs/gym.md), no "
+        note = TASKS[env].version_note if env in TASKS else generic + "authors' values."
         if note:
             lines += ["", note]
         lines += [""]
