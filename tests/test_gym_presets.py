@@ -62,6 +62,41 @@ def test_importing_the_gym_package_and_the_cli_does_not_import_gymnasium_or_sb3(
     subprocess.run([sys.executable, "-c", code], check=True)
 
 
+# What a light command must not load: torch alone is about 2 s and 600 MB (issue 34).
+HEAVY = ("torch", "gymnasium", "stable_baselines3", "pyarrow", "mujoco")
+LIGHT_COMMANDS = (
+    ["--help"],
+    ["version"],
+    ["gym", "--help"],
+    ["gym", "experts"],
+    ["gym", "experts", "--format", "json"],
+)
+
+
+def test_light_commands_import_no_torch_gymnasium_sb3_or_pyarrow() -> None:
+    # Each command runs in one fresh interpreter, in turn; the first to load a heavy package
+    # is named. `gym experts` only prints the manifest (pokerirl.gym.manifest).
+    import json
+    import subprocess
+    import sys
+
+    code = (
+        "import json, sys\n"
+        "from typer.testing import CliRunner\n"
+        "from pokerirl.cli import app\n"
+        f"heavy, found = {HEAVY!r}, {{}}\n"
+        f"for args in {LIGHT_COMMANDS!r}:\n"
+        "    result = CliRunner().invoke(app, args)\n"
+        "    assert result.exit_code == 0, (args, result.output)\n"
+        "    found[' '.join(args)] = sorted(h for h in heavy if h in sys.modules)\n"
+        "print(json.dumps(found))\n"
+    )
+    done = subprocess.run([sys.executable, "-c", code], check=True, capture_output=True, text=True)
+    found = json.loads(done.stdout.splitlines()[-1])
+    assert list(found) == [" ".join(args) for args in LIGHT_COMMANDS]
+    assert all(loaded == [] for loaded in found.values()), found
+
+
 def test_gymnasium_tasks_use_no_reward_weight_decay_as_the_authors() -> None:
     # Issue 20: the poker default 5e-3 used to leak into every Gymnasium run.
     from pokerirl.gym.irl import irl_config

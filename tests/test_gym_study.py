@@ -294,8 +294,9 @@ def test_parse_tasks_and_points() -> None:
     assert all(authors_budget(env, paper) for env in paper.tasks)
     assert not authors_budget("Acrobot-v1", study_preset("paper", runs=3))
     assert not authors_budget("Acrobot-v1", study_preset("paper", rl_timesteps=1000))
-    with pytest.raises(StudyError):
-        parse_tasks("CartPole-v1")
+    assert parse_tasks("CartPole-v1") == ("CartPole-v1",)  # any Gymnasium task (issue 34)
+    with pytest.raises(StudyError, match=r"unknown task 'NoSuchEnv-v0'; choose one of .* or all"):
+        parse_tasks("NoSuchEnv-v0")
     assert parse_param("sigma_end=0.5, 0.04") == ("sigma_end", (0.5, 0.04))
     # A sweep row's fields are sweep.csv's columns, in order (and sweep.json's row names).
     assert tuple(f.name for f in fields(SweepRow)) == CSV_COLUMNS

@@ -24,7 +24,7 @@ from pokerirl.cli.app import (
     settings_from_options,
 )
 from pokerirl.errors import InputError, UsageError
-from pokerirl.gym.presets import MAX_TRANSITIONS, TASKS
+from pokerirl.gym.presets import MAX_TRANSITIONS
 
 gym_app = typer.Typer(
     help="The paper's Gymnasium tasks: SB3 experts, expert data, RL on a learned reward.",
@@ -52,9 +52,27 @@ def _rl_backend(name: str) -> str:
 
 
 def _known_task(env: str) -> None:
-    """Refuse an env id the toolkit has no settings for, naming the ones it has (exit 2)."""
-    if env not in TASKS:
-        raise UsageError(f"unknown task {env!r}; choose one of {', '.join(TASKS)}")
+    """Refuse an env id that is neither a paper task nor a registered Gymnasium environment
+    the toolkit can learn from, saying what is accepted (exit 2)."""
+    from pokerirl.errors import ConfigError
+    from pokerirl.gym.tasks import task
+
+    try:
+        task(env)  # a paper task costs nothing; another id imports Gymnasium to read its spaces
+    except ConfigError as error:
+        raise UsageError(str(error)) from None
+
+
+def _no_shipped_expert(env: str, then: str) -> None:
+    """Refuse a task without a shipped expert (any but the paper's) where the command would
+    use one, saying how to get one (exit 2)."""
+    from pokerirl.gym.tasks import task
+
+    if task(env).generic:
+        raise UsageError(
+            f"no shipped expert for {env!r} (only the paper's tasks ship one): train one with "
+            f"`pokerirl gym expert {env} --out DIR`, then {then}"
+        )
 
 
 def _folder_out(out: Path) -> None:
@@ -73,7 +91,9 @@ def _gym_threads(threads: int) -> None:
 @gym_app.command("expert")
 @on_error(interrupted=INTERRUPTED, advice=RUN_ADVICE)
 def gym_expert(
-    env: str = typer.Argument(..., help="Acrobot-v1, MountainCar-v0, LunarLander-v3, ..."),
+    env: str = typer.Argument(
+        ..., help="A paper task (Acrobot-v1, MountainCar-v0, ...) or any Gymnasium id."
+    ),
     out: Path = typer.Option(..., "--out", "-o", help="Expert folder to write."),
     seed: int = typer.Option(0, **SEED_OPTION, help="Training seed."),
     timesteps: int | None = typer.Option(None, min=1, help="Budget (default: the authors')."),
@@ -107,10 +127,10 @@ def gym_expert(
     record = done.record
     if done.reused:
         echo(f"reusing the expert in {out} (same settings)")
+    target = "" if record.target is None else f" (target {record.target:g})"  # paper tasks
     echo(
         f"{env}: {record.algo} expert, return {record.return_mean:.1f} "
-        f"+- {record.return_std:.1f} over {record.episodes} episodes "
-        f"(target {record.target:g}); wrote {out}"
+        f"+- {record.return_std:.1f} over {record.episodes} episodes{target}; wrote {out}"
     )
 
 
@@ -119,7 +139,7 @@ def gym_experts(
     format: str = typer.Option("text", "--format", help="json or text."),
 ) -> None:
     """Print the manifest of the experts shipped with pokerirl."""
-    from pokerirl.gym.experts import MANIFEST_KEYS, shipped_manifest
+    from pokerirl.gym.manifest import MANIFEST_KEYS, shipped_manifest  # no torch: issue 34
 
     if format not in ("json", "text"):
         raise UsageError(f"--format must be json or text, got {format!r}")
@@ -155,6 +175,8 @@ def gym_collect(
     from pokerirl.gym.experts import load_expert, resolve_expert_dir
 
     _known_task(env)
+    if expert == "shipped":
+        _no_shipped_expert(env, "pass --expert DIR")
     loaded = load_expert(resolve_expert_dir(expert, env))
     if loaded.env_id != env:
         raise InputError(f"{expert}: an expert for {loaded.env_id}, not {env}")
@@ -260,6 +282,8 @@ def gym_irl(
     _known_task(env)
     if data is not None and not data.is_file():
         raise InputError(f"--data {display(str(data))}: no such file")
+    if data is None:
+        _no_shipped_expert(env, f"`pokerirl gym collect {env} --expert DIR` and pass --data")
     settings = PRESETS[preset].irl(env)
     if epochs is not None:
         settings = replace(settings, epochs=epochs)
@@ -391,6 +415,12 @@ def gym_study(
     overwrite: bool = GYM_OVERWRITE,
     quiet: bool = GYM_QUIET,
     rl_backend: str = RL_BACKEND,
+    expert: Path | None = typer.Option(
+        None,
+        "--expert",
+        help="An expert folder (gym expert) for the data; default: the shipped one. Needed "
+        "for a task the paper does not have.",
+    ),
 ) -> None:
     """The paper's Gymnasium study: shipped expert -> data -> IRL (AIRL and H-AIRL) -> RL (env
     reward, AIRL and H-AIRL rewards) -> summary.json, figures/ and report.md beside the
@@ -398,10 +428,14 @@ def gym_study(
     from pokerirl.studies.gym import run_gym_study
 
     _rl_backend(rl_backend)
+    if expert is not None and task == "all":
+        raise UsageError("--expert is for one task, not all")
     preset = _gym_preset(
         preset_name, task, runs=runs, seed=seed, transitions=transitions, epochs=epochs,
         eval_episodes=eval_episodes, rl_timesteps=timesteps,
     )  # fmt: skip
+    if expert is None and task != "all":
+        _no_shipped_expert(task, "pass --expert DIR")
     result = run_gym_study(
         out,
         preset,
@@ -410,6 +444,7 @@ def gym_study(
         progress=not quiet,
         say=echo,
         rl_backend=rl_backend,
+        expert=expert,
     )
     echo("")
     echo(result.markdown)

@@ -21,7 +21,6 @@ import pickle
 import warnings
 from collections.abc import Mapping
 from dataclasses import asdict, dataclass, replace
-from importlib import resources
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -30,16 +29,29 @@ import torch
 
 from pokerirl.atomic import write_text, write_torch
 from pokerirl.errors import ConfigError, InputError, MissingExtra
-from pokerirl.gym.presets import TASKS, PPOSettings, RLSettings
+
+# Re-exported: the manifest's names lived here before pokerirl.gym.manifest (issue 34).
+from pokerirl.gym.manifest import (  # noqa: F401
+    CONFIG_FILE,
+    MANIFEST_FILE,
+    MANIFEST_KEYS,
+    METRICS_FILE,
+    MODEL_FILE,
+    ManifestEntry,
+    manifest_entry,
+    shipped_dir,
+    shipped_experts,
+    shipped_manifest,
+    write_manifest,
+)
+from pokerirl.gym.presets import PPOSettings, RLSettings
+from pokerirl.gym.tasks import task
 
 if TYPE_CHECKING:  # gymnasium and SB3 are imported lazily: a poker-only user never pays.
     import gymnasium
     from stable_baselines3.common.base_class import BaseAlgorithm
     from stable_baselines3.common.policies import BasePolicy
 
-MODEL_FILE, CONFIG_FILE, METRICS_FILE = "model.pt", "config.json", "metrics.jsonl"
-MANIFEST_FILE = "manifest.json"
-MANIFEST_KEYS = ("env", "algo", "return_mean", "return_std", "episodes", "seed", "timesteps")
 # Seeds of the final evaluation episodes start here, away from training and periodic-eval seeds.
 FINAL_EVAL_SEED = 1_000_000
 
@@ -96,37 +108,6 @@ class ExpertEvaluation:
 
 
 @dataclass(frozen=True, kw_only=True)
-class ManifestEntry:
-    """One shipped expert in ``manifest.json``: :data:`MANIFEST_KEYS`, then ``settings``
-    (``hyper`` first, then the hyper-parameters it was trained with)."""
-
-    env: str
-    algo: str
-    return_mean: float
-    return_std: float
-    episodes: int
-    seed: int
-    timesteps: int
-    settings: Mapping[str, Any]
-
-    def to_json(self) -> dict[str, object]:
-        return {
-            "env": self.env,
-            "algo": self.algo,
-            "return_mean": self.return_mean,
-            "return_std": self.return_std,
-            "episodes": self.episodes,
-            "seed": self.seed,
-            "timesteps": self.timesteps,
-            "settings": dict(self.settings),
-        }
-
-    @classmethod
-    def from_json(cls, data: Mapping[str, Any]) -> ManifestEntry:
-        return cls(**{key: data[key] for key in (*MANIFEST_KEYS, "settings")})
-
-
-@dataclass(frozen=True, kw_only=True)
 class ExpertRecord:
     """An expert folder's ``config.json``, as :func:`train_expert_record` writes it."""
 
@@ -137,7 +118,7 @@ class ExpertRecord:
     episodes: int
     seed: int
     timesteps: int
-    target: float  # the authors' expert return
+    target: float | None  # the authors' expert return (None: a generic task)
     hyper: str
     settings: Mapping[str, Any]
     policy_kwargs: Mapping[str, Any]
@@ -178,7 +159,6 @@ class ExpertRecord:
             evaluation=ExpertEvaluation.from_json(data["evaluation"]),
             versions=data["versions"],
         )
-
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -320,14 +300,13 @@ def evaluate(
 
 
 def expert_settings(env_id: str, *, hyper: str = "paper") -> RLSettings:
-    """The settings an expert trains with: the authors' (``paper``) or a named alternative.
+    """The settings an expert trains with: the authors' (``paper``; for a task the paper lacks,
+    its generic settings, :func:`pokerirl.gym.presets.generic_task`) or a named alternative.
 
     ``zoo`` uses rl-zoo's tuned PPO settings (see :data:`ZOO_PPO`), for a retry where the
     authors' miss the target; MountainCar's DQN is rl-zoo's either way.
     """
-    if env_id not in TASKS:
-        raise ConfigError(f"no expert settings for {env_id!r}; tasks: {', '.join(TASKS)}")
-    settings = TASKS[env_id].rl
+    settings = task(env_id).rl  # the paper's, or a generic task's; refuses an unknown id
     if hyper == "paper":
         return settings
     if hyper == "zoo":
@@ -418,7 +397,7 @@ def train_expert_record(
         episodes=final_episodes,
         seed=seed,
         timesteps=timesteps,
-        target=TASKS[env_id].expert_target,
+        target=task(env_id).expert_target,
         hyper=hyper,
         settings=asdict(settings.own),
         policy_kwargs=policy_kwargs(settings),
@@ -455,33 +434,15 @@ def gym_versions() -> dict[str, str | None]:
 # --------------------------------------------------------------------------- loading
 
 
-def shipped_dir() -> Path:
-    """The folder of the experts shipped in the package (``pokerirl/gym/experts``)."""
-    return Path(str(resources.files("pokerirl.gym") / "experts"))
-
-
-def shipped_manifest() -> list[Mapping[str, Any]]:
-    """The shipped experts' manifest as JSON: one object per expert with
-    :data:`MANIFEST_KEYS`, then ``settings`` (:func:`shipped_experts`: typed).
-    """
-    path = shipped_dir() / MANIFEST_FILE
-    if not path.is_file():
-        raise InputError(f"{path}: no shipped experts in this installation")
-    manifest: list[Mapping[str, Any]] = json.loads(path.read_text())
-    return manifest
-
-
-def shipped_experts() -> tuple[ManifestEntry, ...]:
-    """The shipped experts' manifest, in task order."""
-    return tuple(ManifestEntry.from_json(entry) for entry in shipped_manifest())
-
-
 def resolve_expert_dir(expert: str | os.PathLike[str], env_id: str) -> Path:
     """``shipped`` means the shipped expert for ``env_id``; anything else is a folder."""
     if str(expert) == "shipped":
         folder = shipped_dir() / env_id
         if not (folder / CONFIG_FILE).is_file():
-            raise ConfigError(f"no shipped expert for {env_id!r}")
+            raise ConfigError(
+                f"no shipped expert for {env_id!r} (only the paper's tasks ship one): train one "
+                f"with `pokerirl gym expert {env_id}` and give its folder"
+            )
         return folder
     return Path(expert)
 
@@ -523,25 +484,3 @@ def load_expert(folder: str | os.PathLike[str]) -> Expert:
         raise InputError(f"{folder}: bad expert files: {str(error).splitlines()[0]}") from None
     policy.set_training_mode(False)
     return Expert(env_id=record["env"], algo=record["algo"], policy=policy, record=record)
-
-
-def manifest_entry(record: Mapping[str, Any]) -> dict[str, object]:
-    """The manifest's object for one expert record: :data:`MANIFEST_KEYS`, plus its settings."""
-    entry: dict[str, object] = {key: record[key] for key in MANIFEST_KEYS}
-    entry["settings"] = {"hyper": record["hyper"], **record["settings"]}
-    return entry
-
-
-def write_manifest(folder: str | os.PathLike[str]) -> list[dict[str, object]]:
-    """Write ``folder/manifest.json`` from the expert folders inside it, in task order."""
-    from pokerirl.gym.presets import TASK_ORDER
-
-    folder = Path(folder)
-    records = [
-        json.loads((folder / env_id / CONFIG_FILE).read_text())
-        for env_id in TASK_ORDER
-        if (folder / env_id / CONFIG_FILE).is_file()
-    ]
-    manifest = [manifest_entry(record) for record in records]
-    write_text(folder / MANIFEST_FILE, json.dumps(manifest, indent=2) + "\n")
-    return manifest

@@ -38,9 +38,10 @@ from torch import Tensor, nn
 from pokerirl.atomic import make_shareable, write_text
 from pokerirl.errors import ConfigError, InputError, Remedy
 from pokerirl.gym.experts import make_env, shipped_experts
-from pokerirl.gym.presets import TASKS, IRLSettings
-from pokerirl.gym.quality import write_reward_quality
+from pokerirl.gym.presets import IRLSettings
+from pokerirl.gym.quality import has_true_reward, write_reward_quality
 from pokerirl.gym.rl import EVAL_SEED
+from pokerirl.gym.tasks import task
 from pokerirl.irl.airl import default_nets, train_many
 from pokerirl.irl.config import AIRLConfig, Algo, NoiseSchedule
 from pokerirl.irl.nets import fold_obs_standardization
@@ -326,11 +327,9 @@ def train_gym_irl(
     the data's path the run configs record (default ``data_path``; a worker that got the data
     as bytes names the driver's file, so the bytes do not depend on its scratch folder).
     """
-    if env_id not in TASKS:
-        raise ConfigError(f"unknown task {env_id!r}; choose one of {', '.join(TASKS)}")
     if runs < 1:
         raise ConfigError("runs must be at least 1")
-    settings = settings or TASKS[env_id].irl
+    settings = settings or task(env_id).irl  # refuses an unknown id in one line
     out = Path(out)
     products = [f"run-{k}" for k in range(runs)] + [SUMMARY_FILE, RETURNS_FILE]
     if out.exists() and not out.is_dir():
@@ -414,8 +413,10 @@ def train_gym_irl(
             fold_obs_standardization(result.policy, shift, scale)
             save_run(result, folders[k], algo=algo, data=data_info, baselines=found, device=device)
             plot_curves(result.metrics, folders[k], baselines=shares)
-            # The learned reward against the true one (EPIC, Pearson): reward_quality.json.
-            write_reward_quality(folders[k], env_id=env_id, data_path=data_path)
+            # The learned reward against the true one (EPIC, Pearson): reward_quality.json,
+            # for a task whose true reward is known (the paper's).
+            if has_true_reward(env_id):
+                write_reward_quality(folders[k], env_id=env_id, data_path=data_path)
             results.append(
                 RunResult(
                     out=str(out / folders[k].name),

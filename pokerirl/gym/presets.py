@@ -131,16 +131,24 @@ class PaperFinals:
 
 @dataclass(frozen=True, kw_only=True)
 class Task:
-    """One of the paper's six tasks."""
+    """One of the paper's six tasks, or (``paper`` None) any other Gymnasium task with the
+    generic settings of :func:`generic_task`."""
 
     env_id: str
     discrete: bool
     irl: IRLSettings
     rl: RLSettings
-    expert_target: float  # the authors' expert return, the bar for a shipped expert
-    random_return: float  # a random policy's return (issue 10)
-    paper: PaperFinals
+    # The authors' expert return (the bar for a shipped expert), a random policy's return
+    # (issue 10) and the paper's finals: None for a generic task, which the paper lacks.
+    expert_target: float | None
+    random_return: float | None
+    paper: PaperFinals | None
     version_note: str = ""
+
+    @property
+    def generic(self) -> bool:
+        """Not one of the paper's tasks: generic settings, no shipped expert, no finals."""
+        return self.paper is None
 
 
 # The authors' PPO policy for LunarLander, Ant and HalfCheetah: separate [256, 256] LeakyReLU
@@ -408,6 +416,48 @@ TASKS: dict[str, Task] = {
     )
 }
 
+# Any other registered Gymnasium task gets these (issue 34): the settings of the paper's tasks of
+# its kind, on modest budgets, and SB3's default PPO, which is tuned for no task in particular.
+# Discrete: MountainCar's IRL settings (Acrobot's learning rate, 1e-5, is its own). Continuous:
+# Pendulum's. 50,000 expert transitions and 100,000 RL steps keep a first run short; a task
+# that needs more takes the command line's overrides.
+GENERIC_PPO = PPOSettings(
+    n_steps=2048,
+    batch_size=64,
+    gamma=0.99,
+    gae_lambda=0.95,
+    clip_range=0.2,
+    ent_coef=0.0,
+    vf_coef=0.5,
+    max_grad_norm=0.5,
+    learning_rate=3e-4,
+    n_epochs=10,
+)
+GENERIC_TRANSITIONS = 50_000
+GENERIC_RL_TIMESTEPS = 100_000
+
+
+def generic_task(env_id: str, *, discrete: bool) -> Task:
+    """The settings for a task the paper does not have, from its action space's kind.
+
+    >>> task = generic_task("CartPole-v1", discrete=True)
+    >>> task.generic, task.irl.policy_hidden, task.rl.algo, task.irl.transitions
+    (True, (64,), 'ppo', 50000)
+    """
+    if env_id in TASKS:
+        raise ConfigError(f"{env_id} is one of the paper's tasks: use TASKS[{env_id!r}]")
+    like = TASKS["MountainCar-v0" if discrete else "Pendulum-v1"].irl
+    return Task(
+        env_id=env_id,
+        discrete=discrete,
+        irl=replace(like, transitions=GENERIC_TRANSITIONS),
+        rl=RLSettings(algo="ppo", timesteps=GENERIC_RL_TIMESTEPS, ppo=GENERIC_PPO),
+        expert_target=None,
+        random_return=None,
+        paper=None,
+    )
+
+
 # Cheapest first: the order experts are trained in and the study runs tasks in.
 # The most expert rows one table may hold: a table is held in memory until it is written
 # (10 million rows of Ant-v4 are about 2.4 GB); the paper uses at most 300,000.
@@ -444,9 +494,8 @@ class StudyPreset:
     notes: str = ""
 
     def __post_init__(self) -> None:
-        unknown = [t for t in self.tasks if t not in TASKS]
-        if unknown:
-            raise ConfigError(f"unknown task {unknown[0]!r}; choose one of {', '.join(TASKS)}")
+        for env_id in self.tasks:
+            _task(env_id)  # one line for an id that is neither a paper task nor usable
         checks = {
             "runs >= 1": self.runs >= 1,
             "at least one task": len(self.tasks) >= 1,
@@ -463,7 +512,7 @@ class StudyPreset:
 
     def irl(self, env_id: str) -> IRLSettings:
         """The task's IRL settings with this preset's budget overrides applied."""
-        base = TASKS[env_id].irl
+        base = _task(env_id).irl
         return replace(
             base,
             transitions=self.transitions or base.transitions,
@@ -474,8 +523,18 @@ class StudyPreset:
 
     def rl(self, env_id: str) -> RLSettings:
         """The task's RL settings with this preset's budget override applied."""
-        base = TASKS[env_id].rl
+        base = _task(env_id).rl
         return replace(base, timesteps=self.rl_timesteps or base.timesteps)
+
+
+def _task(env_id: str) -> Task:
+    # A task the paper lacks is resolved by pokerirl.gym.tasks, which imports Gymnasium to
+    # read its spaces: only then, so that the paper's tasks cost nothing.
+    if env_id in TASKS:
+        return TASKS[env_id]
+    from pokerirl.gym.tasks import task
+
+    return task(env_id)
 
 
 PRESETS: dict[str, StudyPreset] = {

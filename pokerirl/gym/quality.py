@@ -242,6 +242,13 @@ def _ant_unhealthy(next_obs: np.ndarray) -> np.ndarray:
     return ~(np.isfinite(next_obs).all(axis=1) & (z >= 0.2) & (z <= 1.0))
 
 
+def has_true_reward(env_id: str) -> bool:
+    """Whether :func:`true_reward` knows ``env_id``'s reward as a function of (s, a, s'): the
+    paper's six tasks. Another task's reward lives only in its environment's code, so its IRL
+    runs get no ``reward_quality.json`` (issue 34)."""
+    return env_id in TASKS
+
+
 def true_reward(env_id: str, gamma: float) -> TrueReward:
     """The true reward of one of the six tasks (see each ``description``)."""
     bonus = gamma / (1.0 - gamma)  # −γc/(1−γ) for c = −1; its negative for c = +1 (Ant)

@@ -30,8 +30,9 @@ from pokerirl.gym.experts import (
     policy_kwargs,
     require_gym,
 )
-from pokerirl.gym.presets import TASKS, RLSettings
+from pokerirl.gym.presets import RLSettings
 from pokerirl.gym.rewards import RewardCallable, learned_reward_env
+from pokerirl.gym.tasks import task
 from pokerirl.meanstd import mean_and_std
 
 EVAL_SEED = 2_000_000  # evaluation episodes' seeds, apart from the experts' and the data's
@@ -112,7 +113,7 @@ def train_rl(
 
     from pokerirl.gym.experts import evaluate
 
-    settings = settings or TASKS[env_id].rl
+    settings = settings or task(env_id).rl
     budget: int = timesteps or settings.timesteps
     if budget < 1 or evaluations < 1 or eval_episodes < 1:
         raise ConfigError("timesteps, evaluations and eval_episodes must be positive")

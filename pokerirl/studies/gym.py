@@ -36,11 +36,13 @@ from typing import Any
 import numpy as np
 
 from pokerirl.atomic import write_text
-from pokerirl.errors import PokerIRLError
+from pokerirl.errors import ConfigError, PokerIRLError
 from pokerirl.execution import Backend
 from pokerirl.gym.irl import GymIRLSummary
 from pokerirl.gym.presets import PRESETS, TASK_ORDER, TASKS, StudyPreset
+from pokerirl.gym.quality import has_true_reward
 from pokerirl.gym.rl import DEFAULT_RL_BACKEND, RLBackend, read_curve
+from pokerirl.gym.tasks import task
 from pokerirl.irl.run import CurveStats
 from pokerirl.meanstd import MeanStd, mean_std, mean_std_curve
 from pokerirl.studies.common import (
@@ -151,7 +153,10 @@ def parse_tasks(text: str) -> tuple[str, ...]:
     if text == "all":
         return TASK_ORDER
     if text not in TASKS:
-        raise StudyError(f"unknown task {text!r}; choose one of {', '.join(TASKS)} or all")
+        try:
+            task(text)  # any other registered Gymnasium task, with generic settings
+        except ConfigError as error:
+            raise StudyError(f"{error}; or all") from None
     return (text,)
 
 
@@ -163,9 +168,12 @@ def task_root(out: Path, env: str, tasks: Sequence[str]) -> Path:
 # --------------------------------------------------------------------------- the jobs
 
 
-def data_job(root: Path, env: str, preset: StudyPreset) -> DataJob:
+def data_job(root: Path, env: str, preset: StudyPreset, *, expert: Path | None = None) -> DataJob:
+    """The expert data: from the shipped expert, or (``expert``) from an expert folder."""
     transitions = preset.irl(env).transitions
-    return DataJob(env=env, transitions=transitions, seed=preset.seed, path=root / DATA_FILE)
+    return DataJob(
+        env=env, transitions=transitions, seed=preset.seed, path=root / DATA_FILE, expert=expert
+    )
 
 
 def irl_job(
@@ -223,8 +231,12 @@ def run_gym_study(
     progress: bool = False,
     say: Say = lambda message: None,
     rl_backend: str = DEFAULT_RL_BACKEND,
+    expert: str | os.PathLike[str] | None = None,
 ) -> GymStudyResult:
     """Run (or resume) the study of ``preset.tasks`` into ``out``; ``say`` hears a line per step.
+
+    The expert data comes from the shipped expert, or from the expert folder ``expert`` (one
+    task only; needed for a task the paper does not have, which ships none).
 
     Units run on ``backend`` (default: this process); results do not depend on it. The RL
     runs train with ``rl_backend`` (``pokerirl.gym.rl.RL_BACKENDS``; sb3, one unit per run, or
@@ -238,14 +250,23 @@ def run_gym_study(
 
     require_gym()
     check_rl_backend(rl_backend)
+    tasks = preset.tasks
+    expert_dir = None if expert is None else Path(expert)
+    if expert_dir is not None and len(tasks) > 1:
+        raise StudyError("an expert folder is for one task; give one task, not several")
+    generic = [env for env in tasks if task(env).generic]
+    if generic and expert_dir is None:
+        raise StudyError(
+            f"no shipped expert for {generic[0]!r} (only the paper's tasks ship one): train one "
+            f"with `pokerirl gym expert {generic[0]}` and give its folder"
+        )
     backend = backend or Backend()
     out = study_folder(out)
-    tasks = preset.tasks
     roots = {env: task_root(out, env, tasks) for env in tasks}
     names = ", ".join(tasks)
     options: dict[str, Any] = {"backend": backend, "overwrite": overwrite, "progress": progress}
     try:
-        data = [data_job(roots[env], env, preset) for env in tasks]
+        data = [data_job(roots[env], env, preset, expert=expert_dir) for env in tasks]
         say(f"[1/{STEPS}] expert data: {names}")
         reused = run_data_jobs(data, **options)
         _said_reused(say, reused, len(data))
@@ -371,8 +392,9 @@ def task_summary(
 ) -> TaskSummary:
     """The task's ``summary.json``: final values (mean ± std over runs) of every phase, the
     curves behind the figures, the baselines, the settings, and the authors' finals; with the
-    reward map drawn (Figure 4) where the task has one."""
-    task = TASKS[env]
+    reward map drawn (Figure 4) where the task has one; a task the paper does not have has
+    no authors' finals and (no true reward known) no reward quality."""
+    found_task = task(env)
     algos: dict[str, AlgoSummary] = {}
     irl_summaries = {}
     for algo in ALGOS:
@@ -389,24 +411,26 @@ def task_summary(
             irl_epochs=list(irl.over_runs.epochs),
             irl_return=Band.from_json(metrics["eval_return"].to_json()),
             rl_curve=rl.band(),
-            alignment=Band.from_json(metrics["val_alignment"].to_json()) if task.discrete else None,
-            final_alignment=irl.final_alignment if task.discrete else None,
+            alignment=Band.from_json(metrics["val_alignment"].to_json())
+            if found_task.discrete
+            else None,
+            final_alignment=irl.final_alignment if found_task.discrete else None,
             final_reward_alignment=_last(metrics["val_reward_alignment"])
-            if task.discrete
+            if found_task.discrete
             else None,
             final_disc_acc={key: _last(metrics[key]) for key in QUALITY_KEYS if key in metrics},
-            **reward_quality(root, env, algo, preset.runs),
+            **(reward_quality(root, env, algo, preset.runs) if has_true_reward(env) else {}),
         )
     env_rl = rl_curves(root, "env", preset.runs)
     baselines = irl_summaries["hairl"].over_runs.baselines
-    paper = task.paper
+    paper = found_task.paper
     return TaskSummary(
         format=SUMMARY_FORMAT,
         env=env,
         preset=preset.name,
         runs=preset.runs,
         seeds=[preset.seed + k for k in range(preset.runs)],
-        discrete=task.discrete,
+        discrete=found_task.discrete,
         expert_return=irl_summaries["hairl"].expert_return,
         random_return=baselines["random"].measured[0],
         algos=algos,
@@ -424,7 +448,9 @@ def task_summary(
             authors_budget=authors_budget(env, preset),
             rl_backend=rl_backend,
         ),
-        paper=PaperFinals(
+        paper=None
+        if paper is None
+        else PaperFinals(
             irl_final_return={"airl": paper.irl_airl, "hairl": paper.irl_hairl},
             expert_return=paper.irl_expert.mean,
             rl_final_return={
@@ -433,9 +459,9 @@ def task_summary(
                 "env_reward": paper.rl_env_reward,
             },
             final_alignment={"airl": paper.alignment_airl, "hairl": paper.alignment_hairl}
-            if task.discrete
+            if found_task.discrete
             else None,
-            random_return=task.random_return,
+            random_return=found_task.random_return,
         ),
         reward_map=draw_reward_map(root, env),
     )
@@ -475,10 +501,12 @@ def reward_quality(root: Path, env: str, algo: str, runs: int) -> dict[str, Any]
 
 def authors_budget(env: str, preset: StudyPreset) -> bool:
     """Whether ``preset`` trains ``env`` with the authors' budgets (data, epochs, evaluation
-    episodes, RL steps) and their 10 runs."""
-    task = TASKS[env]
-    irl = replace(preset.irl(env), standardize_obs=task.irl.standardize_obs)
-    return irl == task.irl and preset.rl(env) == task.rl and preset.runs == 10
+    episodes, RL steps) and their 10 runs (never, for a task the paper does not have)."""
+    if env not in TASKS:
+        return False
+    paper = TASKS[env]
+    irl = replace(preset.irl(env), standardize_obs=paper.irl.standardize_obs)
+    return irl == paper.irl and preset.rl(env) == paper.rl and preset.runs == 10
 
 
 def _per_run_final(folder: Path, runs: int, key: str) -> list[float]:
@@ -491,6 +519,8 @@ def draw_reward_map(root: Path, env: str) -> RewardMapSummary | None:
     expert's; returns the agreements (None for other tasks)."""
     from pokerirl.gym.reward_map import plot_reward_map, reward_map, task_space
 
+    if env not in TASKS:  # its reference panel is the shipped expert's
+        return None
     try:
         task_space(env)
     except ValueError:
@@ -514,6 +544,16 @@ def draw_reward_map(root: Path, env: str) -> RewardMapSummary | None:
 # --------------------------------------------------------------------------- report
 
 
+_NONE = MeanStd(mean=None)
+NO_PAPER = PaperFinals(
+    irl_final_return={"airl": _NONE, "hairl": _NONE},
+    expert_return=None,
+    rl_final_return={"airl": _NONE, "hairl": _NONE, "env_reward": _NONE},
+    final_alignment=None,
+    random_return=None,
+)
+
+
 def _value(value: MeanStd | None, *, percent: bool = False, digits: int = 1) -> str:
     if value is None or value.mean is None:
         return "–"
@@ -534,7 +574,8 @@ def _percent(share: float | None) -> float | None:
 
 def task_table(summary: TaskSummary) -> list[str]:
     """Our finals beside the authors', one row per figure of the paper."""
-    airl, hairl, paper = summary.algos["airl"], summary.algos["hairl"], summary.paper
+    airl, hairl = summary.algos["airl"], summary.algos["hairl"]
+    paper = summary.paper or NO_PAPER  # a task the paper does not have: "–" throughout
     rows = [
         ("IRL-phase return, AIRL", _value(airl.irl_final_return),
          _value(paper.irl_final_return["airl"])),
@@ -634,7 +675,7 @@ def render_report(
     for env, summary in summaries.items():
         where = f"{env}/" if prefix is None else prefix
         lines += ["", f"## {env}", "", _budget(summary), ""]
-        if not summary.settings.authors_budget:
+        if not summary.settings.authors_budget and summary.paper is not None:
             lines += ["**Not the authors' budget or number of runs** (theirs: 10 runs, "
                       "docs/gym.md): compare the directions, not the digits.", ""]  # fmt: skip
         lines += task_table(summary)
@@ -645,7 +686,8 @@ def render_report(
             lines += ["", f"EPIC and Pearson against the true reward ({truth['kind']}: "
                       f"{truth['description']}), γ {quality['gamma']}; coverage: states "
                       f"{cover['states']}, actions {cover['actions']}."]  # fmt: skip
-        note = TASKS[env].version_note
+        generic = f"{env} is not one of the paper's tasks: generic settings (docs/gym.md), no "
+        note = TASKS[env].version_note if env in TASKS else generic + "authors' values."
         if note:
             lines += ["", note]
         lines += [""]

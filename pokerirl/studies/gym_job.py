@@ -30,7 +30,7 @@ from typing import Any
 from pokerirl.atomic import write_text
 from pokerirl.errors import InputError, Remedy
 from pokerirl.gym.experts import CONFIG_FILE, METRICS_FILE, MODEL_FILE, ExpertRecord, require_gym
-from pokerirl.gym.presets import TASKS
+from pokerirl.gym.tasks import task
 from pokerirl.meanstd import MeanStd, mean_std
 from pokerirl.store import UnitConflict, describe_changes, digest, staged_files, staged_folder, tidy
 
@@ -185,7 +185,7 @@ def rl_runs(
     identity = {
         "env": env,
         "reward": reward_identity,
-        "timesteps": timesteps or TASKS[env].rl.timesteps,
+        "timesteps": timesteps or task(env).rl.timesteps,
         "evaluations": evaluations,
         "eval_episodes": eval_episodes,
         # Only for lockstep: folders written before the switch keep their identity.

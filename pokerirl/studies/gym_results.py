@@ -255,7 +255,7 @@ class TaskSummary:
     algos: dict[str, AlgoSummary]
     env_reward: EnvRewardSummary
     settings: StudySettings
-    paper: PaperFinals
+    paper: PaperFinals | None  # None: a task the paper does not have (issue 34)
     reward_map: RewardMapSummary | None = None
     has_reward_map: bool = True  # whether the file names it (null or not): older ones do not
 
@@ -272,7 +272,7 @@ class TaskSummary:
             "algos": {algo: summary.to_json() for algo, summary in self.algos.items()},
             "env_reward": self.env_reward.to_json(),
             "settings": self.settings.to_json(),
-            "paper": self.paper.to_json(),
+            "paper": None if self.paper is None else self.paper.to_json(),
         }
         if self.has_reward_map:
             found["reward_map"] = None if self.reward_map is None else self.reward_map.to_json()
@@ -293,7 +293,7 @@ class TaskSummary:
             algos={k: AlgoSummary.from_json(v) for k, v in data["algos"].items()},
             env_reward=EnvRewardSummary.from_json(data["env_reward"]),
             settings=StudySettings.from_json(data["settings"]),
-            paper=PaperFinals.from_json(data["paper"]),
+            paper=None if data["paper"] is None else PaperFinals.from_json(data["paper"]),
             reward_map=None if found is None else RewardMapSummary.from_json(found),
             has_reward_map="reward_map" in data,
         )

@@ -69,28 +69,54 @@ def _output(files: dict[str, bytes]) -> UnitOutput[None]:
     return UnitOutput(files=kept, unhashed=timed)
 
 
-def expert_fingerprint(env_id: str) -> dict[str, Json]:
-    """The shipped expert of ``env_id``: its manifest entry and the sha256 of its weights."""
+def expert_fingerprint(env_id: str, expert: Path | None = None) -> dict[str, Json]:
+    """The shipped expert of ``env_id`` (``expert`` None): its manifest entry and the sha256 of
+    its weights; or the expert folder ``expert``: the sha256 of its files."""
     from pokerirl.gym.experts import MODEL_FILE, resolve_expert_dir, shipped_manifest
 
+    if expert is not None:
+        return {"folder_sha256": {n: digest(b) for n, b in expert_files(expert).items()}}
     folder = resolve_expert_dir("shipped", env_id)
     entry = next((e for e in shipped_manifest() if e["env"] == env_id), None)
-    digest = hashlib.sha256((folder / MODEL_FILE).read_bytes()).hexdigest()
-    return {"manifest": None if entry is None else dict(entry), "model_sha256": digest}
+    sha256 = hashlib.sha256((folder / MODEL_FILE).read_bytes()).hexdigest()
+    return {"manifest": None if entry is None else dict(entry), "model_sha256": sha256}
+
+
+def expert_files(folder: Path) -> dict[str, bytes]:
+    """What :func:`pokerirl.gym.experts.load_expert` reads of an expert folder, by name: the
+    bytes travel to the unit, which may run on another machine."""
+    from pokerirl.gym.experts import CONFIG_FILE as EXPERT_CONFIG
+    from pokerirl.gym.experts import MODEL_FILE
+
+    try:
+        return {name: (folder / name).read_bytes() for name in (EXPERT_CONFIG, MODEL_FILE)}
+    except FileNotFoundError as error:
+        missing = Path(error.filename).name
+        raise JobError(f"{folder}: not an expert folder ({missing} missing)") from None
 
 
 # --------------------------------------------------------------------------- the units
 
 
-def collect_unit(env_id: str, transitions: int, seed: int) -> UnitOutput[None]:
-    """The shipped expert's ``transitions`` transitions (episode k from
-    ``reset(seed=seed + k)``), as the bytes of the Parquet table ``gym collect`` writes."""
+def collect_unit(
+    env_id: str, transitions: int, seed: int, expert_folder: dict[str, bytes] | None = None
+) -> UnitOutput[None]:
+    """The shipped expert's (or the expert folder's files') ``transitions`` transitions
+    (episode k from ``reset(seed=seed + k)``), as the bytes of the table ``gym collect``
+    writes."""
     from pokerirl.gym.collect import collect
     from pokerirl.gym.experts import load_expert, resolve_expert_dir
 
     with tempfile.TemporaryDirectory(prefix="pokerirl-collect-") as scratch:
         path = Path(scratch) / DATA_FILE
-        expert = load_expert(resolve_expert_dir("shipped", env_id))
+        if expert_folder is None:
+            expert = load_expert(resolve_expert_dir("shipped", env_id))
+        else:
+            for name, data in expert_folder.items():
+                (Path(scratch) / name).write_bytes(data)
+            expert = load_expert(scratch)
+            if expert.env_id != env_id:
+                raise JobError(f"the expert is for {expert.env_id}, not {env_id}")
         # deterministic=None: the task's default (continuous: sampled), recorded in the table
         collect(expert, path, transitions=transitions, seed=seed, deterministic=None)
         return UnitOutput(files={DATA_FILE: path.read_bytes()})
@@ -204,6 +230,7 @@ class DataJob:
     transitions: int
     seed: int
     path: Path
+    expert: Path | None = None  # an expert folder; None: the shipped expert
 
     def config(self) -> dict[str, Json]:
         from pokerirl.gym.collect import default_deterministic
@@ -211,7 +238,7 @@ class DataJob:
         return {
             "unit": "gym-data",
             "env": self.env,
-            "expert": expert_fingerprint(self.env),
+            "expert": expert_fingerprint(self.env, self.expert),
             "transitions": self.transitions,
             "seed": self.seed,
             # Only where the expert's actions are sampled (continuous tasks, issue 20): the
@@ -227,7 +254,8 @@ class DataJob:
             layout=Layout.FILE,
             config=self.config(),
             fn=collect_unit,
-            args=(self.env, self.transitions, self.seed),
+            args=(self.env, self.transitions, self.seed)
+            + (() if self.expert is None else (expert_files(self.expert),)),
         )
 
 

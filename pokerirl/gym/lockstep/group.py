@@ -22,9 +22,10 @@ from typing import Any, Protocol
 import numpy as np
 
 from pokerirl.errors import ConfigError
-from pokerirl.gym.presets import TASKS, RLSettings
+from pokerirl.gym.presets import RLSettings
 from pokerirl.gym.rewards import RewardCallable
 from pokerirl.gym.rl import EVAL_SEED, CurvePoint, RLBackend, RLResult, check_reward, save_run
+from pokerirl.gym.tasks import task
 
 BACKEND = RLBackend.LOCKSTEP
 
@@ -114,7 +115,7 @@ def train_rl_group(
     from pokerirl.gym.experts import require_gym
 
     require_gym()
-    settings = settings or TASKS[env_id].rl
+    settings = settings or task(env_id).rl
     timesteps = timesteps or settings.timesteps
     if timesteps < 1 or evaluations < 1 or eval_episodes < 1:
         raise ConfigError("timesteps, evaluations and eval_episodes must be positive")
