@@ -18,13 +18,15 @@ from pokerirl.cli.app import (
     SEED_OPTION,
     _backend,
     app,
+    choices,
     display,
     echo,
     on_error,
     settings_from_options,
 )
 from pokerirl.errors import InputError, UsageError
-from pokerirl.gym.presets import MAX_TRANSITIONS
+from pokerirl.gym.presets import MAX_TRANSITIONS, PRESETS
+from pokerirl.studies.poker.config import IRL_ALGOS
 
 gym_app = typer.Typer(
     help="The paper's Gymnasium tasks: SB3 experts, expert data, RL on a learned reward.",
@@ -97,7 +99,10 @@ def gym_expert(
     out: Path = typer.Option(..., "--out", "-o", help="Expert folder to write."),
     seed: int = typer.Option(0, **SEED_OPTION, help="Training seed."),
     timesteps: int | None = typer.Option(None, min=1, help="Budget (default: the authors')."),
-    hyper: str = typer.Option("paper", help="paper (the authors' settings) or zoo (rl-zoo's)."),
+    hyper: str = typer.Option(
+        "paper", metavar=choices(("paper", "zoo")),
+        help="paper (the authors' settings) or zoo (rl-zoo's).",
+    ),
     eval_every: int | None = typer.Option(None, help="Steps between evaluations (budget/20)."),
     eval_episodes: int = typer.Option(5, help="Episodes per periodic evaluation."),
     final_episodes: int = typer.Option(20, help="Episodes of the best policy's final evaluation."),
@@ -136,7 +141,9 @@ def gym_expert(
 
 @gym_app.command("experts")
 def gym_experts(
-    format: str = typer.Option("text", "--format", help="json or text."),
+    format: str = typer.Option(
+        "text", "--format", metavar=choices(("text", "json")), help="json or text."
+    ),
 ) -> None:
     """Print the manifest of the experts shipped with pokerirl."""
     from pokerirl.gym.manifest import MANIFEST_KEYS, shipped_manifest  # no torch: issue 34
@@ -157,7 +164,9 @@ def gym_experts(
 @gym_app.command("collect")
 def gym_collect(
     env: str = typer.Argument(..., help="The expert's environment."),
-    expert: str = typer.Option("shipped", help="An expert folder, or 'shipped'."),
+    expert: str = typer.Option(
+        "shipped", metavar="DIR|shipped", help="An expert folder, or 'shipped'."
+    ),
     transitions: int = typer.Option(
         ..., "--transitions", "-n", min=1, max=MAX_TRANSITIONS, help="Rows to write."
     ),
@@ -253,11 +262,13 @@ def gym_irl(
         help="Expert Parquet (gym collect); default: collect the preset's from the "
         "shipped expert into OUT/expert.parquet.",
     ),
-    algo: str = typer.Option("hairl", help="airl or hairl."),
+    algo: str = typer.Option("hairl", metavar=choices(IRL_ALGOS), help="airl or hairl."),
     runs: int | None = typer.Option(
         None, min=1, max=MAX_SEEDS, help="Runs in lock-step (default: preset's)."
     ),
-    preset: str = typer.Option("paper", help="quick or paper: the budgets."),
+    preset: str = typer.Option(
+        "paper", metavar=choices(PRESETS), help="quick or paper: the budgets."
+    ),
     seed: int = typer.Option(
         0, **SEED_OPTION, help="Run k uses seed + k; the data split uses seed."
     ),
@@ -273,7 +284,6 @@ def gym_irl(
     from dataclasses import replace
 
     from pokerirl.gym.irl import train_gym_irl
-    from pokerirl.gym.presets import PRESETS
 
     if preset not in PRESETS:
         raise UsageError(f"--preset must be one of {', '.join(PRESETS)}, got {preset!r}")
@@ -340,7 +350,8 @@ def gym_reward_map(
     out: Path = typer.Option(..., "--out", "-o", help="The PNG to write."),
     grid: int = typer.Option(101, "--grid", min=2, max=501, help="Cells per axis."),
     expert: str = typer.Option(
-        "shipped", "--expert", help="Reference panel: shipped, an expert folder, or none."
+        "shipped", "--expert", metavar="DIR|shipped|none",
+        help="Reference panel: shipped, an expert folder, or none.",
     ),
 ) -> None:
     """Draw the action each folder's learned reward f(s, a) prefers over the state space."""
@@ -401,7 +412,9 @@ def _gym_preset(name: str, task: str, **overrides: int | None) -> Any:
 def gym_study(
     task: str = typer.Argument(..., metavar="ENV|all", help="A task, e.g. MountainCar-v0, or all."),
     out: Path = typer.Option(..., "--out", "-o", help="The study folder."),
-    preset_name: str = typer.Option("quick", "--preset", help="quick or paper: the budgets."),
+    preset_name: str = typer.Option(
+        "quick", "--preset", metavar=choices(PRESETS), help="quick or paper: the budgets."
+    ),
     runs: int | None = typer.Option(
         None, "--runs", min=1, max=MAX_SEEDS, help="Runs per algorithm and reward."
     ),
@@ -459,7 +472,9 @@ def gym_sweep(
         ..., "--param", help="NAME=V1,V2,...: alpha, beta, sigma_start or sigma_end; repeatable."
     ),
     out: Path = typer.Option(..., "--out", "-o", help="The sweep folder."),
-    preset_name: str = typer.Option("quick", "--preset", help="quick or paper: the budgets."),
+    preset_name: str = typer.Option(
+        "quick", "--preset", metavar=choices(PRESETS), help="quick or paper: the budgets."
+    ),
     runs: int | None = typer.Option(
         None, "--runs", min=1, max=MAX_SEEDS, help="Runs per point."
     ),
