@@ -62,14 +62,19 @@ def test_importing_the_gym_package_and_the_cli_does_not_import_gymnasium_or_sb3(
     subprocess.run([sys.executable, "-c", code], check=True)
 
 
-# What a light command must not load: torch alone is about 2 s and 600 MB (issue 34).
-HEAVY = ("torch", "gymnasium", "stable_baselines3", "pyarrow", "mujoco")
+# What a light command must not load: torch alone is about 2 s and 600 MB (issue 34); scipy
+# about 1 s. The reports are the committed results: a gym study, a poker study, a tournament.
+HEAVY = ("torch", "gymnasium", "stable_baselines3", "pyarrow", "mujoco", "scipy")
+RESULTS = Path(__file__).resolve().parents[1] / "docs" / "results"
 LIGHT_COMMANDS = (
     ["--help"],
     ["version"],
     ["gym", "--help"],
     ["gym", "experts"],
     ["gym", "experts", "--format", "json"],
+    ["report", str(RESULTS / "mountaincar-paper10")],
+    ["report", str(RESULTS / "study-quick-strength"), "--format", "json"],
+    ["report", str(RESULTS / "study-quick-strength" / "tournament")],
 )
 
 

@@ -15,12 +15,21 @@ anything or imports Gymnasium.
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
+from enum import StrEnum
 from typing import Any, Literal
 
 from pokerirl.errors import ConfigError
 from pokerirl.meanstd import MeanStd
 
 Algo = Literal["ppo", "dqn"]
+
+
+class RLBackend(StrEnum):
+    """How RL runs train: ``sb3`` (one SB3 run per unit) or ``lockstep`` (many in one process,
+    :mod:`pokerirl.gym.lockstep`). Here, torch-free, for the reports that name it."""
+
+    SB3 = "sb3"
+    LOCKSTEP = "lockstep"
 
 
 @dataclass(frozen=True, kw_only=True)

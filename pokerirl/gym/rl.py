@@ -12,7 +12,6 @@ import json
 import os
 from collections.abc import Mapping
 from dataclasses import asdict, dataclass
-from enum import StrEnum
 from pathlib import Path
 from typing import Any
 
@@ -30,7 +29,7 @@ from pokerirl.gym.experts import (
     policy_kwargs,
     require_gym,
 )
-from pokerirl.gym.presets import RLSettings
+from pokerirl.gym.presets import RLBackend, RLSettings
 from pokerirl.gym.rewards import RewardCallable, learned_reward_env
 from pokerirl.gym.tasks import task
 from pokerirl.meanstd import mean_and_std
@@ -39,14 +38,6 @@ EVAL_SEED = 2_000_000  # evaluation episodes' seeds, apart from the experts' and
 # How the RL phase trains: SB3, one run per call (train_rl), or R runs of one task in one
 # process (pokerirl.gym.lockstep.group.train_rl_group). lockstep is the default since its
 # equivalence table with SB3 (docs/lockstep.md) holds on Acrobot, Pendulum and MountainCar.
-
-
-class RLBackend(StrEnum):
-    """How RL runs train: ``sb3`` (one SB3 run per unit) or ``lockstep`` (many in one process,
-    :mod:`pokerirl.gym.lockstep`)."""
-
-    SB3 = "sb3"
-    LOCKSTEP = "lockstep"
 
 
 RL_BACKENDS: tuple[str, ...] = tuple(RLBackend)

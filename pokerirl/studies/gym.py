@@ -28,7 +28,7 @@ from __future__ import annotations
 import json
 import math
 import os
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
 from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 from typing import Any
@@ -51,10 +51,15 @@ from pokerirl.studies.common import (
     SUMMARY_JSON,
     StudyError,
     band,
-    markdown_table,
     read_jsonl,
     study_folder,
     with_overrides,
+)
+from pokerirl.studies.gym_report import (
+    FIGURES,
+    SUMMARY_FORMAT,
+    GymStudySummary,
+    render_report,
 )
 from pokerirl.studies.gym_results import (
     QUALITY_KEYS,
@@ -77,17 +82,10 @@ from pokerirl.studies.gym_units import (
     run_rl_jobs,
 )
 
-SUMMARY_FORMAT = "pokerirl-gym-study/1"
 ALGOS = ("airl", "hairl")
 REWARDS = ("env", "airl", "hairl")  # RL-phase rewards: the env's, then each IRL algorithm's
 LABELS = {"airl": "AIRL", "hairl": "H-AIRL", "env": "env reward"}
 COLORS = {"airl": "C0", "hairl": "C1", "env": "C2"}  # the same in every figure
-FIGURES = {
-    "irl_returns": "figures/irl_returns.png",
-    "alignment": "figures/alignment.png",
-    "rl_returns": "figures/rl_returns.png",
-    "reward_map": "figures/reward_map.png",
-}
 MAP_GRID = 101  # cells per axis of the reward map
 STEPS = 4
 
@@ -99,40 +97,6 @@ class GymStudyResult:
     out: Path
     summaries: dict[str, TaskSummary]  # env -> the task's summary.json
     markdown: str
-
-
-@dataclass(frozen=True, kw_only=True)
-class GymStudySummary:
-    """A gym study's ``summary.json``: a single task's :class:`TaskSummary`, or (``all``)
-    the tasks' under ``tasks`` with the preset and the runs."""
-
-    preset: str
-    runs: int
-    tasks: dict[str, TaskSummary]
-    several: bool  # the ``tasks`` form, even for one task
-
-    def to_json(self) -> dict[str, object]:
-        if not self.several:
-            (only,) = self.tasks.values()
-            return only.to_json()
-        return {
-            "format": SUMMARY_FORMAT,
-            "preset": self.preset,
-            "runs": self.runs,
-            "tasks": {env: summary.to_json() for env, summary in self.tasks.items()},
-        }
-
-    @classmethod
-    def from_json(cls, data: Mapping[str, Any]) -> GymStudySummary:
-        if "tasks" in data:
-            tasks = {env: TaskSummary.from_json(task) for env, task in data["tasks"].items()}
-            return cls(preset=data["preset"], runs=data["runs"], tasks=tasks, several=True)
-        task = TaskSummary.from_json(data)
-        return cls(preset=task.preset, runs=task.runs, tasks={task.env: task}, several=False)
-
-    def render(self) -> str:
-        """The study's ``report.md``."""
-        return render_report(self.tasks, self.preset, prefix=None if self.several else "")
 
 
 def study_preset(name: str, **overrides: Any) -> StudyPreset:
@@ -314,30 +278,6 @@ def run_gym_study(
     markdown = overall.render()
     write_text(report, markdown)
     return GymStudyResult(out=out, summaries=summaries, markdown=markdown)
-
-
-def is_gym_study(folder: str | os.PathLike[str]) -> bool:
-    """Whether ``folder`` holds a gym study's ``summary.json``."""
-    try:
-        found = json.loads((Path(folder) / SUMMARY_JSON).read_text())
-    except (OSError, ValueError):
-        return False
-    return isinstance(found, dict) and found.get("format") == SUMMARY_FORMAT
-
-
-def load_gym_study(folder: str | os.PathLike[str]) -> tuple[GymStudySummary, str]:
-    """A finished study's ``summary.json`` and its report rendered again (``pokerirl report``)."""
-    from pokerirl.studies.gym_summary_check import check_summary
-
-    path = Path(folder) / SUMMARY_JSON
-    try:
-        found = json.loads(path.read_text())
-        check_summary(found)  # once, on reading: the renderer trusts what passes
-        summary = GymStudySummary.from_json(found)
-        return summary, summary.render()
-    except (OSError, ValueError, KeyError, TypeError, AttributeError) as error:
-        # check_summary names the fields the report reads; the others fail here, one line too.
-        raise StudyError(f"{path}: not a readable gym study summary ({error})") from None
 
 
 def check_rl_backend(rl_backend: str) -> None:
@@ -539,164 +479,6 @@ def draw_reward_map(root: Path, env: str) -> RewardMapSummary | None:
         constant_action=constant[0],
         constant_agreement=constant[1],
     )
-
-
-# --------------------------------------------------------------------------- report
-
-
-_NONE = MeanStd(mean=None)
-NO_PAPER = PaperFinals(
-    irl_final_return={"airl": _NONE, "hairl": _NONE},
-    expert_return=None,
-    rl_final_return={"airl": _NONE, "hairl": _NONE, "env_reward": _NONE},
-    final_alignment=None,
-    random_return=None,
-)
-
-
-def _value(value: MeanStd | None, *, percent: bool = False, digits: int = 1) -> str:
-    if value is None or value.mean is None:
-        return "–"
-    scale = 100.0 if percent else 1.0
-    text = f"{scale * value.mean:,.{digits}f}"
-    if value.std is not None:
-        text += f" ± {scale * value.std:,.{digits}f}"
-    return text + ("%" if percent else "")
-
-
-def _paper_percent(value: float | None) -> str:
-    return "–" if value is None else f"{value:.1f}%"
-
-
-def _percent(share: float | None) -> float | None:
-    return None if share is None else 100 * share
-
-
-def task_table(summary: TaskSummary) -> list[str]:
-    """Our finals beside the authors', one row per figure of the paper."""
-    airl, hairl = summary.algos["airl"], summary.algos["hairl"]
-    paper = summary.paper or NO_PAPER  # a task the paper does not have: "–" throughout
-    rows = [
-        ("IRL-phase return, AIRL", _value(airl.irl_final_return),
-         _value(paper.irl_final_return["airl"])),
-        ("IRL-phase return, H-AIRL", _value(hairl.irl_final_return),
-         _value(paper.irl_final_return["hairl"])),
-        ("expert (its data's episodes)", _value(MeanStd(mean=summary.expert_return)),
-         _value(MeanStd(mean=paper.expert_return))),
-        ("RL-phase return, AIRL reward", _value(airl.rl_final_return),
-         _value(paper.rl_final_return["airl"])),
-        ("RL-phase return, H-AIRL reward", _value(hairl.rl_final_return),
-         _value(paper.rl_final_return["hairl"])),
-        ("RL-phase return, env reward", _value(summary.env_reward.rl_final_return),
-         _value(paper.rl_final_return["env_reward"])),
-    ]  # fmt: skip
-    if summary.discrete:
-        alignment = paper.final_alignment or {}
-        rows += [
-            ("alignment, AIRL policy", _value(airl.final_alignment, percent=True),
-             _paper_percent(alignment.get("airl"))),
-            ("alignment, H-AIRL policy", _value(hairl.final_alignment, percent=True),
-             _paper_percent(alignment.get("hairl"))),
-            ("alignment, behaviour cloning (same net and epochs)",
-             _value(hairl.baselines["bc"], percent=True), "not reported"),
-            ("alignment, reward argmax: AIRL / H-AIRL",
-             f"{_value(airl.final_reward_alignment, percent=True)} / "
-             f"{_value(hairl.final_reward_alignment, percent=True)}", "not reported"),
-        ]  # fmt: skip
-    if "epic" in airl.quality:
-        a, h = airl.quality, hairl.quality
-        rows += [
-            ("EPIC distance to the true reward (0 same up to shaping and scale, 0.71 "
-             "unrelated, 1 opposite): AIRL / H-AIRL",
-             f"{_value(a['epic'], digits=3)} / {_value(h['epic'], digits=3)}", "not reported"),
-            ("EPIC of a random reward net (same architecture, the runs' initial nets): "
-             "AIRL / H-AIRL",
-             f"{_value(a['epic_random_baseline'], digits=3)} / "
-             f"{_value(h['epic_random_baseline'], digits=3)}", "not reported"),
-            ("EPIC on the expert's states and transitions only: AIRL / H-AIRL / random net",
-             f"{_value(a['epic_expert_coverage'], digits=3)} / "
-             f"{_value(h['epic_expert_coverage'], digits=3)} / "
-             f"{_value(a['epic_random_baseline_expert_coverage'], digits=3)}",
-             "not reported"),
-            ("Pearson of f and the true reward on expert / policy transitions: AIRL",
-             f"{_value(a['pearson_expert'], digits=3)} / "
-             f"{_value(a['pearson_policy'], digits=3)}", "not reported"),
-            ("Pearson of f and the true reward on expert / policy transitions: H-AIRL",
-             f"{_value(h['pearson_expert'], digits=3)} / "
-             f"{_value(h['pearson_policy'], digits=3)}", "not reported"),
-        ]  # fmt: skip
-    found = summary.reward_map
-    if found is not None:
-        agree = found.agreement
-        rows.append(
-            (f"reward map: cells where f prefers the expert's action ({found.grid}² lattice), "
-             "AIRL / H-AIRL",
-             f"{_paper_percent(_percent(agree['airl']))} / "
-             f"{_paper_percent(_percent(agree['hairl']))} "
-             f"(a constant {found.constant_action!r}: {100 * found.constant_agreement:.1f}%)",
-             "Figure 4: maps only"),
-        )  # fmt: skip
-    rows.append(
-        ("random policy", _value(MeanStd(mean=summary.random_return)),
-         _value(MeanStd(mean=paper.random_return)))
-    )  # fmt: skip
-    return markdown_table(["", "ours", "the authors"], rows)
-
-
-def _budget(summary: TaskSummary) -> str:
-    settings = summary.settings
-    irl, rl = settings.irl, settings.rl
-    seeds = summary.seeds
-    backend = settings.rl_backend or RLBackend.SB3
-    return (
-        f"{summary.runs} runs per algorithm (seeds {seeds[0]}–{seeds[-1]}); expert data "
-        f"{irl['transitions']:,} transitions; IRL {irl['epochs']} epochs, batch "
-        f"{irl['batch_size']}, α {irl['alpha']}, β {irl['beta']}, σ {irl['sigma_start']} → "
-        f"{irl['sigma_end']} (H-AIRL), each epoch's policy over {irl['eval_episodes']} "
-        f"episodes; RL {rl['algo'].upper()} for {rl['timesteps']:,} steps, each point "
-        f"{settings.rl_eval_episodes} deterministic episodes"
-        + ("." if backend == RLBackend.SB3 else f" ({backend} RL backend).")
-    )
-
-
-def render_report(
-    summaries: Mapping[str, TaskSummary], preset: str, *, prefix: str | None = ""
-) -> str:
-    """``report.md``: per task, the budget, our finals beside the authors', the figures.
-
-    ``preset`` is the preset's name; ``prefix`` is where each task's figures are, relative to
-    the report (None: ``<env>/``).
-    """
-    lines = [f"# pokerirl gym study ({preset} preset)", ""]
-    lines += [
-        "Mean ± std (sample std) over runs of each curve's last point; the authors' values are "
-        "the last points of their figures' curves, at their budgets."
-    ]
-    for env, summary in summaries.items():
-        where = f"{env}/" if prefix is None else prefix
-        lines += ["", f"## {env}", "", _budget(summary), ""]
-        if not summary.settings.authors_budget and summary.paper is not None:
-            lines += ["**Not the authors' budget or number of runs** (theirs: 10 runs, "
-                      "docs/gym.md): compare the directions, not the digits.", ""]  # fmt: skip
-        lines += task_table(summary)
-        quality = summary.algos["airl"].reward_quality
-        if quality is not None:
-            truth = quality["true_reward"]
-            cover = quality["coverage"]
-            lines += ["", f"EPIC and Pearson against the true reward ({truth['kind']}: "
-                      f"{truth['description']}), γ {quality['gamma']}; coverage: states "
-                      f"{cover['states']}, actions {cover['actions']}."]  # fmt: skip
-        generic = f"{env} is not one of the paper's tasks: generic settings (docs/gym.md), no "
-        note = TASKS[env].version_note if env in TASKS else generic + "authors' values."
-        if note:
-            lines += ["", note]
-        lines += [""]
-        figures = ["irl_returns", "alignment", "rl_returns"] if summary.discrete else [
-            "irl_returns", "rl_returns"]  # fmt: skip
-        if summary.reward_map is not None:
-            figures.append("reward_map")
-        lines += [f"![{name}]({where}{FIGURES[name]})" for name in figures]
-    return "\n".join(lines) + "\n"
 
 
 # --------------------------------------------------------------------------- figures
