@@ -90,6 +90,8 @@ def test_mismatched_lengths_are_one_line_errors() -> None:
         from_imitation_trajectories([trajectory, {**trajectory, "obs": trajectory["obs"][:3]}])
     with pytest.raises(InputError, match="trajectory 0: rews has 2 rows, acts has 3"):
         from_imitation_trajectories([{**trajectory, "rews": trajectory["rews"][:2]}])
+    with pytest.raises(InputError, match=r"trajectory 0: obs must be rows of features \(N, d\)"):
+        from_imitation_trajectories([{**trajectory, "obs": np.zeros((4, 2, 2))}])
     with pytest.raises(InputError, match="none given"):
         from_imitation_trajectories([])
 

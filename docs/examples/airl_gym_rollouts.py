@@ -5,7 +5,7 @@ keep each episode in the ``imitation`` library's trajectory layout (``obs`` T + 
 ``acts`` T, ``terminal``, ``rews``), turn the episodes into pokerirl's ``Transitions`` and
 train a reward and a policy on them.
 
-    python docs/examples/airl_gym_rollouts.py --episodes 20 --epochs 10 --algo hairl
+    python docs/examples/airl_gym_rollouts.py --episodes 20 --epochs 40 --algo hairl
 
 Needs the ``pokerirl[gym]`` extra (Gymnasium). Prints one ``result:`` line.
 """
@@ -50,7 +50,7 @@ def rollouts(episodes: int, *, seed: int) -> list[dict]:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--episodes", type=int, default=20, help="expert episodes to roll out")
-    parser.add_argument("--epochs", type=int, default=10, help="training epochs")
+    parser.add_argument("--epochs", type=int, default=40, help="training epochs")
     parser.add_argument("--algo", choices=["airl", "hairl"], default="hairl")
     parser.add_argument("--seed", type=int, default=0)
     args = parser.parse_args()

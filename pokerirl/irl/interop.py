@@ -12,7 +12,7 @@ to_dict` feeds imitation's own constructors (``imitation.data.types.Transitions(
 
 Episodes become :class:`Transitions` groups: a flat layout's episode ends where ``dones`` is
 true (or a new one starts after each trajectory). What imitation has no field for (legal
-masks, row weights, imputed flags, group ids) is not written; ``infos`` are not read.
+masks, row weights, imputed flags, group ids) is not written; ``infos`` are only counted.
 
 >>> flat = {"obs": np.array([[0.0], [1.0], [5.0]]), "acts": np.array([0, 1, 1]),
 ...         "next_obs": np.array([[1.0], [2.0], [6.0]]), "dones": np.array([False, True, True])}
@@ -92,6 +92,12 @@ def _check_rows(what: str, expected: int, against: str, **arrays: Any) -> None:
             raise InputError(f"{what}: {name} has {len(value)} rows, {against}")
 
 
+def _check_obs(what: str, obs: np.ndarray) -> None:
+    # Transitions hold flat feature rows; an image or dict observation needs flattening first.
+    if obs.ndim != 2:
+        raise InputError(f"{what}: obs must be rows of features (N, d), got shape {obs.shape}")
+
+
 def _actions(acts: np.ndarray) -> np.ndarray:
     # imitation stores discrete actions as integers and continuous ones as floats; keep that.
     acts = np.asarray(acts)
@@ -131,6 +137,7 @@ def from_imitation_transitions(
                 dones=dones, rews=rews, infos=infos)  # fmt: skip
     if len(obs) == 0:
         raise InputError(f"{what}: no rows")
+    _check_obs(what, obs)
     dones = dones.astype(bool).reshape(-1)
     groups = np.concatenate([[0], np.cumsum(dones)[:-1]]).astype(np.int64)
     return Transitions.from_arrays(
@@ -188,6 +195,7 @@ def from_imitation_trajectories(
         infos = _field(trajectory, "infos", what, required=False)
         if len(acts) == 0:
             raise InputError(f"{what}: no actions")
+        _check_obs(what, obs)
         if len(obs) != len(acts) + 1:
             raise InputError(f"{what}: obs has {len(obs)} rows, acts {len(acts)} (obs needs T + 1)")
         _check_rows(what, len(acts), f"acts has {len(acts)}", rews=rews, infos=infos)
