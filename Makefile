@@ -3,7 +3,7 @@ PYTHON ?= python3
 VENV := .venv
 BIN := $(VENV)/bin
 
-.PHONY: demo test install install-dev lint bench
+.PHONY: demo test install install-dev lint bench docs
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -26,6 +26,10 @@ test: install-dev
 lint: install-dev
 	$(BIN)/ruff check pokerirl tests benchmarks
 	$(BIN)/mypy pokerirl
+
+# The API reference (HTML, from the docstrings, pdoc) of the curated surface, into docs/api/.
+docs: install-dev
+	$(BIN)/python docs/build_api.py docs/api
 
 bench: install
 	$(BIN)/python benchmarks/ingest.py

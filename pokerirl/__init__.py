@@ -9,8 +9,12 @@ API"), each imported from its own module on first use, so ``import pokerirl`` (a
 
 * reward learning (:mod:`pokerirl.irl`): :class:`Transitions`, :class:`AIRLConfig`,
   :func:`train`, :func:`train_into`, :func:`load_reward`, :func:`load_policy`;
+  the ``imitation`` library's arrays to and from :class:`Transitions`
+  (:func:`from_imitation_transitions`, :func:`to_imitation_transitions`,
+  :func:`from_imitation_trajectories`, :func:`to_imitation_trajectories`);
 * poker play (:mod:`pokerirl.game`, :mod:`pokerirl.agents`): :func:`play_match`, the
-  :class:`Agent` protocol, :func:`load_agent`, :func:`resolve_agent`;
+  :class:`Agent` protocol, :func:`load_agent`, :func:`resolve_agent`, and
+  :class:`RLCardAgent` (any agent, playing inside RLCard);
 * Gymnasium (:mod:`pokerirl.gym`, the ``pokerirl[gym]`` extra): :func:`learned_reward_env`,
   :func:`load_expert`;
 * encodings (:mod:`pokerirl.game.encodings`): :class:`Encoding`, :func:`get_encoding`.
@@ -36,10 +40,15 @@ _PUBLIC: dict[str, str] = {
     "train_into": "pokerirl.irl",
     "load_reward": "pokerirl.irl",
     "load_policy": "pokerirl.irl",
+    "from_imitation_transitions": "pokerirl.irl",
+    "to_imitation_transitions": "pokerirl.irl",
+    "from_imitation_trajectories": "pokerirl.irl",
+    "to_imitation_trajectories": "pokerirl.irl",
     "play_match": "pokerirl.game",
     "Agent": "pokerirl.game",
     "load_agent": "pokerirl.agents",
     "resolve_agent": "pokerirl.agents",
+    "RLCardAgent": "pokerirl.agents",
     "learned_reward_env": "pokerirl.gym",
     "load_expert": "pokerirl.gym",
     "Encoding": "pokerirl.game.encodings",

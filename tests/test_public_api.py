@@ -22,10 +22,15 @@ HOME = {  # each public name and the module that defines it
     "train_into": "pokerirl.irl.run",
     "load_reward": "pokerirl.irl.run",
     "load_policy": "pokerirl.irl.run",
+    "from_imitation_transitions": "pokerirl.irl.interop",
+    "to_imitation_transitions": "pokerirl.irl.interop",
+    "from_imitation_trajectories": "pokerirl.irl.interop",
+    "to_imitation_trajectories": "pokerirl.irl.interop",
     "play_match": "pokerirl.game.match",
     "Agent": "pokerirl.game.agents",
     "load_agent": "pokerirl.agents.checkpoint",
     "resolve_agent": "pokerirl.agents.registry",
+    "RLCardAgent": "pokerirl.agents.rlcard_adapter",
     "learned_reward_env": "pokerirl.gym.rewards",
     "load_expert": "pokerirl.gym.experts",
     "Encoding": "pokerirl.game.encodings",
@@ -61,6 +66,9 @@ def test_subpackages_list_what_they_export() -> None:
             assert getattr(module, name) is not None
     assert {"learned_reward_env", "load_expert"} <= set(
         importlib.import_module("pokerirl.gym").__all__
+    )
+    assert {"RLCardAgent", "rlcard_states"} <= set(
+        importlib.import_module("pokerirl.agents").__all__
     )
 
 

@@ -3,6 +3,8 @@
 :func:`resolve_agent` is the one place that turns what a user typed into an agent: a built-in
 name (``random``, ``raise``, ``call``, ``tightbot``, ``loosebot``), an agent folder written by
 ``pokerirl agent train``, or ``rlcard:PATH`` for an RLCard DQN checkpoint.
+:class:`RLCardAgent` goes the other way: any agent, with RLCard's agent interface, plays in
+RLCard's own environment and ``tournament``.
 
 :func:`ship_agent` and :func:`land_agent` carry an agent to a worker as bytes (see
 :mod:`pokerirl.execution`): the driver reads the files, the worker writes them into a private
@@ -107,6 +109,8 @@ _LAZY = {
     "train_dqn": "dqn",
     "import_rlcard_dqn": "rlcard_import",
     "load_rlcard_dqn": "rlcard_import",
+    "RLCardAgent": "rlcard_adapter",
+    "rlcard_states": "rlcard_adapter",
     "TrainConfig": "train",
     "train_agent": "train",
     "train_seeds": "train",

@@ -3,7 +3,8 @@
 :mod:`pokerirl.irl.airl` is the trainer (one run, or R in lock-step; its pieces are
 :mod:`~.losses`, :mod:`~.stacked` nets, :mod:`~.records`, :mod:`~.evaluate` and
 :mod:`~.baselines`), :mod:`~.nets` the default networks (:class:`RewardNet`, :mod:`~.reward`),
-:mod:`~.transitions` the data, :mod:`~.run` the run folders and :func:`load_reward`.
+:mod:`~.transitions` the data (:mod:`~.interop`: to and from the ``imitation`` library's
+arrays), :mod:`~.run` the run folders and :func:`load_reward`.
 It knows nothing of poker or Gymnasium (``tests/test_layers.py``): poker tables and
 ``pokerirl train`` are :mod:`pokerirl.poker`, environments :mod:`pokerirl.gym`.
 For example::
@@ -28,6 +29,14 @@ from pokerirl.irl.airl import (
     train_many,
 )
 from pokerirl.irl.config import ALGOS, AIRLConfig, ConfigError, load_config
+from pokerirl.irl.interop import (
+    ImitationTrajectory,
+    ImitationTransitions,
+    from_imitation_trajectories,
+    from_imitation_transitions,
+    to_imitation_trajectories,
+    to_imitation_transitions,
+)
 from pokerirl.irl.nets import (
     DiscretePolicy,
     GaussianPolicy,
@@ -62,6 +71,8 @@ __all__ = [
     "EpochMetrics",
     "EpochRecord",
     "GaussianPolicy",
+    "ImitationTrajectory",
+    "ImitationTransitions",
     "ManyResult",
     "NetSpec",
     "RewardFn",
@@ -81,12 +92,16 @@ __all__ = [
     "default_nets",
     "discriminator_loss",
     "evaluate",
+    "from_imitation_trajectories",
+    "from_imitation_transitions",
     "load_config",
     "load_policy",
     "load_reward",
     "load_run_config",
     "noise_schedule",
     "project_to_simplex",
+    "to_imitation_trajectories",
+    "to_imitation_transitions",
     "train",
     "train_into",
     "train_many",
