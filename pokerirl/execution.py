@@ -47,6 +47,7 @@ from __future__ import annotations
 
 import atexit
 import contextlib
+import functools
 import os
 import pickle
 import shutil
@@ -164,6 +165,44 @@ def run_unit(fn: Callable[..., R], args: tuple[Any, ...], threads: int = 1) -> R
         return fn(*args)
 
 
+# --- progress from inside a unit ------------------------------------------------------------
+
+_report: Callable[[float], None] | None = None  # where the running unit's progress goes
+REPORT_EVERY = 0.5  # seconds: a unit's progress reaches the driver at most this often
+
+
+def unit_progress(done: float, total: float) -> None:
+    """Say how far the running unit is: ``done`` of ``total`` (steps, epochs, hands). The
+    driver's bar moves by the fraction, whether the unit runs in this process, in a local
+    worker or on Ray; a no-op outside a unit (a library call, progress off)."""
+    if _report is not None and total > 0:
+        _report(min(max(done / total, 0.0), 1.0))
+
+
+@contextlib.contextmanager
+def _reporting(send: Callable[[float], None]) -> Iterator[None]:
+    """Inside the block, :func:`unit_progress` calls ``send`` with the unit's fraction done,
+    at most every :data:`REPORT_EVERY` seconds (the last fraction is sent at the end)."""
+    global _report
+    last, pending = [0.0], [None]  # when we last sent; a fraction not sent yet
+
+    def report(fraction: float) -> None:
+        now = time.monotonic()
+        if now - last[0] >= REPORT_EVERY:
+            last[0], pending[0] = now, None
+            send(fraction)
+        else:
+            pending[0] = fraction  # type: ignore[call-overload]
+
+    previous, _report = _report, report
+    try:
+        yield
+    finally:
+        _report = previous
+        if pending[0] is not None:
+            send(pending[0])
+
+
 def map_units(
     fn: Callable[..., R],
     units: Sequence[tuple[Any, ...]],
@@ -200,37 +239,59 @@ def map_units(
             results[index] = result
             if on_result is not None:
                 on_result(index, result)
-            bar.done()
+            bar.done(index)
 
         if ray is not None:
             _map_ray(ray, fn, units, backend, finished, bar, names)
         elif backend.jobs == 1 or len(units) == 1:
             for index, args in enumerate(units):
-                finished(index, run_unit(fn, args, backend.threads))
+                with _reporting(functools.partial(bar.partial, index) if progress else _ignore):
+                    result = run_unit(fn, args, backend.threads)
+                finished(index, result)
         else:
             _map_local(fn, units, backend, finished, bar, names)
     return results
 
 
+def _ignore(fraction: float) -> None:
+    """Progress nobody shows."""
+
+
 class _Bar:
-    """One tqdm bar over units with reused and failed counts in its postfix."""
+    """One tqdm bar over units with reused and failed counts in its postfix; a running unit
+    counts by the fraction it reported (:func:`unit_progress`), so the bar and its ETA move
+    inside long units."""
 
     def __init__(self, total: int, *, reused: int, desc: str, enabled: bool) -> None:
-        self.reused, self.failed = reused, 0
+        self.enabled = enabled
+        self.reused, self.failed, self.finished = reused, 0, reused
+        self.running: dict[int, float] = {}  # unit index -> fraction done
         self.bar = tqdm(
-            total=total + reused, initial=reused, unit="unit", desc=desc, disable=not enabled
-        )
+            total=total + reused, initial=reused, unit="unit", desc=desc, disable=not enabled,
+            bar_format="{l_bar}{bar}| {n:.2f}/{total} [{elapsed}<{remaining}{postfix}]",
+        )  # fmt: skip
         self._postfix()
 
     def _postfix(self) -> None:
         self.bar.set_postfix_str(f"reused {self.reused}, failed {self.failed}", refresh=False)
 
-    def done(self) -> None:
-        self.bar.update(1)
+    def _show(self) -> None:
+        self.bar.update(self.finished + sum(self.running.values()) - self.bar.n)
 
-    def fail(self) -> None:
+    def partial(self, index: int, fraction: float) -> None:
+        self.running[index] = fraction
+        self._show()
+
+    def done(self, index: int | None = None) -> None:
+        self.running.pop(index, None)  # type: ignore[arg-type]
+        self.finished += 1
+        self._show()
+
+    def fail(self, index: int | None = None) -> None:
+        self.running.pop(index, None)  # type: ignore[arg-type]
         self.failed += 1
         self._postfix()
+        self._show()
         self.bar.refresh()
 
     def __enter__(self) -> _Bar:
@@ -300,9 +361,15 @@ def _worker(connection: Any, parent: int, threads: int, temp: str) -> None:
             if message is None:
                 return
             index, fn, args = message
+
+            def send(fraction: float, index: int = index) -> None:
+                with contextlib.suppress(OSError):  # the driver is gone: the unit goes on
+                    connection.send_bytes(pickle.dumps((index, None, fraction)))
+
             try:
-                reply = (index, True, run_unit(fn, args, threads))
-                data = pickle.dumps(reply)
+                with _reporting(send):
+                    value = run_unit(fn, args, threads)
+                data = pickle.dumps((index, True, value))
             except Exception as error:  # the unit raised, or its result does not pickle
                 data = pickle.dumps((index, False, _portable(error)))
             try:
@@ -470,7 +537,9 @@ def _map_local(
                     with contextlib.suppress(EOFError, OSError):
                         if slot.connection.poll():
                             reply = pickle.loads(slot.connection.recv_bytes())
-                    if reply is not None:
+                    if reply is not None and reply[1] is None:  # the unit's progress
+                        bar.partial(reply[0], reply[2])
+                    elif reply is not None:
                         index, ok, value = reply
                         slot.unit = None
                         if not ok:
@@ -482,7 +551,7 @@ def _map_local(
                         sweep_leftovers(temp)  # the dead worker's scratch folder
                         unit, slot.unit = slot.unit, None
                         deaths[unit] += 1
-                        bar.fail()
+                        bar.fail(unit)
                         if deaths[unit] > backend.retries:
                             raise ExecutionError(
                                 f"{names[unit]}: its worker died {deaths[unit]} times "
@@ -613,10 +682,22 @@ def _map_ray(
     from ray.exceptions import RayError, RayTaskError
 
     task = ray.remote(num_cpus=1, max_retries=backend.retries)(run_unit_in_scratch)
-    pending = {task.remote(fn, args, backend.threads): i for i, args in enumerate(units)}
+    # The units' progress: a small actor they tell, which the driver asks while it waits.
+    sink = ray.remote(num_cpus=0)(_ProgressSink).remote() if bar.enabled else None
+    pending = {
+        task.remote(fn, args, backend.threads, sink, i): i for i, args in enumerate(units)
+    }
     try:
         while pending:
-            ready, _ = ray.wait(list(pending), num_returns=1)
+            wait = REPORT_EVERY if sink is not None else None
+            ready, _ = ray.wait(list(pending), num_returns=1, timeout=wait)
+            if sink is not None:
+                running = set(pending.values())
+                for unit, fraction in ray.get(sink.take.remote()).items():
+                    if unit in running:
+                        bar.partial(unit, fraction)
+            if not ready:
+                continue
             index = pending.pop(ready[0])
             try:
                 value = ray.get(ready[0])
@@ -624,7 +705,7 @@ def _map_ray(
                 cause = error.cause if isinstance(error.cause, Exception) else None
                 raise (cause or ExecutionError(_first_line(error))) from None
             except RayError as error:
-                bar.fail()
+                bar.fail(index)
                 raise ExecutionError(
                     f"{names[index]}: failed on Ray after {backend.retries} retries "
                     f"({type(error).__name__}: {_first_line(error)})"
@@ -634,12 +715,34 @@ def _map_ray(
         for ref in pending:
             with contextlib.suppress(Exception):
                 ray.cancel(ref, force=True)
+        if sink is not None:
+            with contextlib.suppress(Exception):
+                ray.kill(sink)
 
 
-def run_unit_in_scratch(fn: Callable[..., R], args: tuple[Any, ...], threads: int) -> R:
-    """:func:`run_unit` in a Ray worker, with its temporary files in a scratch folder."""
+class _ProgressSink:
+    """A Ray actor holding each running unit's latest fraction done until the driver asks."""
+
+    def __init__(self) -> None:
+        self.latest: dict[int, float] = {}
+
+    def put(self, index: int, fraction: float) -> None:
+        self.latest[index] = fraction
+
+    def take(self) -> dict[int, float]:
+        latest, self.latest = self.latest, {}
+        return latest
+
+
+def run_unit_in_scratch(
+    fn: Callable[..., R], args: tuple[Any, ...], threads: int, sink: Any = None, index: int = 0
+) -> R:
+    """:func:`run_unit` in a Ray worker, with its temporary files in a scratch folder and its
+    progress told to ``sink`` (a :class:`_ProgressSink`), if any."""
     _enter_scratch(tempfile.gettempdir())
-    return run_unit(fn, args, threads)
+    send = _ignore if sink is None else (lambda fraction: sink.put.remote(index, fraction))
+    with _reporting(send):
+        return run_unit(fn, args, threads)
 
 
 def _ray_init(ray: Any, address: str, temp_dir: str | None) -> None:

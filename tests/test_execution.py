@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import os
 import pickle
+import re
 import signal
 from pathlib import Path
 
@@ -151,3 +152,29 @@ def test_an_unreachable_ray_address_is_one_line() -> None:
     assert (
         result.stderr == "error: cannot reach the Ray cluster at 127.0.0.1:1: Connection refused\n"
     )
+
+
+def slow_steps(k: int, steps: int) -> int:
+    """A unit that tells its progress: ``steps`` steps of 0.2 s."""
+    import time
+
+    from pokerirl.execution import unit_progress
+
+    for step in range(1, steps + 1):
+        time.sleep(0.2)
+        unit_progress(step, steps)
+    return k
+
+
+@pytest.mark.parametrize("jobs", [1, 2])
+def test_a_units_own_progress_moves_the_bar_before_it_finishes(
+    jobs: int, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """In this process and in local workers alike, the bar counts a running unit by the
+    fraction it reported: fractions of a unit appear before the first unit is done."""
+    found = map_units(slow_steps, [(0, 10), (1, 10)], backend=Backend(jobs=jobs), progress=True,
+                      desc="steps")  # fmt: skip
+    assert found == [0, 1]
+    shown = [float(n) for n in re.findall(r"steps: .*?\| (\d+\.\d\d)/2 ", capsys.readouterr().err)]
+    assert shown[-1] == 2.0
+    assert [n for n in shown if 0 < n < 1], shown  # inside the first units: not only 0, 1, 2

@@ -38,6 +38,7 @@ from tqdm import tqdm
 
 from pokerirl.encoding import NUM_ACTIONS, OBS_SIZE
 from pokerirl.errors import ConfigError
+from pokerirl.execution import unit_progress
 from pokerirl.game.agents import Agent, RandomAgent, agent_actions
 from pokerirl.game.deals import DEAL_BLOCK, deal_cards
 from pokerirl.game.encodings import RLCARD, Encoding, EncodingName, States, get_encoding
@@ -497,6 +498,7 @@ def train_dqn(
                     if self_play and learner.train_t % config.self_play_every == 0:
                         rival = learner.greedy_agent("self")
             bar.update(count)
+            unit_progress(start + count, hands)  # the driver's bar, when this is a unit
             if on_hands is not None:
                 on_hands(start + count, learner)
     return learner

@@ -41,7 +41,7 @@ import json
 import os
 import tempfile
 import time
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from enum import StrEnum
 from pathlib import Path
@@ -605,11 +605,17 @@ def _train_many(
     try:
         done = run_units(
             agents, backend, overwrite=overwrite, progress=progress and len(units) > 1,
-            desc="agents",
+            desc=_set_name(folder for folder, _ in units.values()),
         ).done  # fmt: skip
     except UnitConflict as error:
         raise UnitConflict(_advised(error)) from None
     return {key: agent.extra for key, agent in zip(units, done, strict=True)}
+
+
+def _set_name(folders: Iterable[Path]) -> str:
+    """A set's bar label: its folder, ``agents hairl-dqn`` (a study trains four sets)."""
+    parents = {Path(folder).parent.name for folder in folders}
+    return f"agents {parents.pop()}" if len(parents) == 1 else "agents"
 
 
 def _advised(error: UnitConflict) -> str:

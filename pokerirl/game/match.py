@@ -22,6 +22,7 @@ import numpy as np
 from tqdm import tqdm
 
 from pokerirl.errors import ConfigError
+from pokerirl.execution import unit_progress
 from pokerirl.game.agents import Agent, agent_actions, seat_cards
 from pokerirl.game.deals import deal_cards
 from pokerirl.game.encodings import Encoding, EncodingName, States, get_encoding
@@ -206,6 +207,7 @@ def play_match(
     log: list[DecisionLog] | None = None,
     seating: str = "alternate",
     on_batch: Callable[[int, LimitHoldemBatch, np.ndarray], None] | None = None,
+    report_progress: bool = False,
 ) -> MatchResult:
     """Play ``hands`` hands of A against B, ``batch_size`` hands in lock-step at a time.
 
@@ -215,7 +217,9 @@ def play_match(
     seat for every hand, as RLCard draws the small blind for every game; the default
     alternates it. ``on_batch(start, game, seat_of_a)`` is called with each finished batch
     (hands ``start`` ..), for what a caller reads beyond the result (the chance corrections
-    of :mod:`pokerirl.tournaments.aivat`).
+    of :mod:`pokerirl.tournaments.aivat`). ``report_progress``: the match is a unit of its
+    own (a tournament seed), whose hands move the driver's bar
+    (:func:`pokerirl.execution.unit_progress`).
 
     Raises:
         ValueError: as :func:`check_match_size`, or on a negative seed.
@@ -249,6 +253,8 @@ def play_match(
             if on_batch is not None:
                 on_batch(start, game, seat_of_a)
             bar.update(count)
+            if report_progress:
+                unit_progress(start + count, hands)
     seconds = time.perf_counter() - started
 
     units = independent_units(results, duplicate=duplicate)

@@ -32,6 +32,7 @@ import torch
 
 from pokerirl.atomic import atomic_path
 from pokerirl.errors import ConfigError
+from pokerirl.execution import unit_progress
 from pokerirl.gym.experts import Expert, make_env
 from pokerirl.gym.presets import MAX_TRANSITIONS, TASKS
 
@@ -127,6 +128,7 @@ def rollout(
                         finished[slot["id"]] = _episode(slot, terminated, truncated)
                         finished_steps += len(slot["rewards"])
                         slots[i] = None
+                        unit_progress(finished_steps, transitions)  # the driver's bar
                     else:
                         slot["obs"].append(obs)
     finally:

@@ -19,6 +19,7 @@ import numpy as np
 
 from pokerirl.atomic import write_text, write_torch
 from pokerirl.errors import ConfigError, InputError
+from pokerirl.execution import unit_progress
 from pokerirl.gym.experts import (
     CONFIG_FILE,
     METRICS_FILE,
@@ -128,6 +129,7 @@ def train_rl(
             for info in self.locals["infos"]:
                 if "episode" in info:  # Monitor: the true env return of a training episode
                     train_returns.append(float(info["episode"]["r"]))
+            unit_progress(self.num_timesteps, budget)  # the driver's bar, when a unit
             if self.num_timesteps % every == 0 and self.num_timesteps < budget:
                 evaluate_now()
             return True

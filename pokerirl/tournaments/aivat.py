@@ -212,6 +212,7 @@ def play_corrected_match(
     duplicate: bool = True,
     batch_size: int = DEFAULT_BATCH_SIZE,
     progress: bool = False,
+    report_progress: bool = False,
 ) -> CorrectedMatch:
     """:func:`pokerirl.game.match.play_match` (seats alternating), which plays and reports
     the raw result, with each hand's chance correction computed from the finished batches.
@@ -232,7 +233,8 @@ def play_corrected_match(
         corrected[start : start + game.size] = mine - sign * correction
 
     match = play_match(agent_a, agent_b, hands=hands, seed=seed, duplicate=duplicate,
-                       batch_size=batch_size, progress=progress, on_batch=correct)  # fmt: skip
+                       batch_size=batch_size, progress=progress, on_batch=correct,
+                       report_progress=report_progress)  # fmt: skip
     fixed_mean, fixed_error = _mean_and_error(independent_units(corrected, duplicate=duplicate))
     return CorrectedMatch(
         match=match,

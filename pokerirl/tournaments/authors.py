@@ -39,7 +39,7 @@ import numpy as np
 
 from pokerirl.agents import ShippedAgent, agent_fingerprint, land_agent, resolve_agent, ship_agent
 from pokerirl.atomic import write_text
-from pokerirl.execution import Backend
+from pokerirl.execution import Backend, unit_progress
 from pokerirl.game.match import play_match
 from pokerirl.store import Json, Layout, Unit, UnitConflict, UnitOutput, run_units
 from pokerirl.tournaments.lineup import (
@@ -164,6 +164,7 @@ def _play_experiment(
             seating="random",
         )
         results.append(match.mbb_per_hand)
+        unit_progress(repeat + 1, config["repeats"])
     return UnitOutput(result=results)
 
 

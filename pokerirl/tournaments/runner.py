@@ -139,7 +139,7 @@ def _play_seed(
         raise TournamentError(f"seed {key.seed}: an agent changed on disk during the run")
     play = functools.partial(play_corrected_match if aivat else play_match, agent_a, agent_b,
                              hands=key.hands, seed=key.seed, duplicate=key.duplicate,
-                             batch_size=key.batch_size)  # fmt: skip
+                             batch_size=key.batch_size, report_progress=True)  # fmt: skip
     with _torch_for_play():
         played = play()
     if isinstance(played, CorrectedMatch):  # play_match's numbers, byte for byte, and AIVAT's

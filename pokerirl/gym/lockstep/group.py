@@ -22,6 +22,7 @@ from typing import Any, Protocol
 import numpy as np
 
 from pokerirl.errors import ConfigError
+from pokerirl.execution import unit_progress
 from pokerirl.gym.presets import RLSettings
 from pokerirl.gym.rewards import RewardCallable
 from pokerirl.gym.rl import EVAL_SEED, CurvePoint, RLBackend, RLResult, check_reward, save_run
@@ -139,6 +140,7 @@ def train_rl_group(
                                         return_std=float(np.std(returns[r]))))
 
     def on_step(steps: int) -> None:
+        unit_progress(steps, timesteps)  # the driver's bar, when this group is a unit
         if steps % every == 0 and steps < timesteps:
             evaluate_now(steps)
 
