@@ -17,6 +17,7 @@ import re
 import sys
 import warnings
 from collections.abc import Callable, Iterable, Mapping, Sequence
+from pathlib import Path
 from types import TracebackType
 from typing import Any, Literal, ParamSpec, TypeVar
 
@@ -322,6 +323,22 @@ RAY_HELP = (
     "Run the units on the Ray cluster at ADDRESS (default: $RAY_ADDRESS when set), or 'local' "
     "for a private single-machine Ray. Results do not change."
 )
+LOG_DIR_HELP = (
+    "Also write each run's scalars into DIR as TensorBoard event files and progress.csv "
+    "(SB3's layout; needs pip install 'pokerirl[logs]'). metrics.jsonl stays the record."
+)
+
+
+def write_logs(out: Path, log_dir: Path | None) -> None:
+    """``--log-dir``: the scalars of the runs under ``out``, copied into ``log_dir``."""
+    if log_dir is None:
+        return
+    from pokerirl.scalars import export_scalars
+
+    written = export_scalars(out, log_dir)
+    echo(f"scalars of {len(written)} runs -> {log_dir} (tensorboard --logdir {log_dir})")
+
+
 INTERRUPTED = "interrupted: finished units are kept; rerun the same command to resume"
 # The words of train and gym expert, rl and irl for the remedies of their run folders (their
 # lines from before the library stopped naming flags).

@@ -11,6 +11,7 @@ import typer
 
 from pokerirl.cli.app import (
     INTERRUPTED,
+    LOG_DIR_HELP,
     MAX_SEED,
     MAX_SEEDS,
     RAY_HELP,
@@ -23,6 +24,7 @@ from pokerirl.cli.app import (
     echo,
     on_error,
     settings_from_options,
+    write_logs,
 )
 from pokerirl.errors import InputError, UsageError
 from pokerirl.gym.presets import MAX_TRANSITIONS, PRESETS
@@ -221,6 +223,7 @@ def gym_rl(
     overwrite: bool = typer.Option(False, help="Replace runs trained with other settings."),
     threads: int = typer.Option(1, min=1, help="torch threads."),
     rl_backend: str = RL_BACKEND,
+    log_dir: Path | None = typer.Option(None, "--log-dir", metavar="DIR", help=LOG_DIR_HELP),
 ) -> None:
     """Train SB3 PPO (DQN for MountainCar) on a learned reward; the curve is the true return.
 
@@ -251,6 +254,7 @@ def gym_rl(
         f"{env}: final true return {done.final.mean:.1f} +- {done.final.std:.1f} over {runs} "
         f"runs; wrote {out}"
     )
+    write_logs(out, log_dir)
 
 
 @gym_app.command("irl")

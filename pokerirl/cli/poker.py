@@ -13,6 +13,7 @@ import typer
 from pokerirl.cli.app import (
     ENCODING_CHOICES,
     INTERRUPTED,
+    LOG_DIR_HELP,
     MAX_SEEDS,
     RAY_HELP,
     RUN_ADVICE,
@@ -26,6 +27,7 @@ from pokerirl.cli.app import (
     on_error,
     seed_list,
     settings_from_options,
+    write_logs,
 )
 from pokerirl.errors import InputError, UsageError
 from pokerirl.studies.poker.config import AGENT_PRESETS, FOLDS, IRL_ALGOS, TRANSFORMS
@@ -703,6 +705,7 @@ def agent_train(
         help="What the q-network reads: rlcard (RLCard's 72-d observation) or strength (hole "
         "and board apart, with hand features). The reward reads its own run's encoding.",
     ),
+    log_dir: Path | None = typer.Option(None, "--log-dir", metavar="DIR", help=LOG_DIR_HELP),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bar."),
 ) -> None:
     """Train a DQN agent (or one per seed) on the sparse payoff or a learned reward.
@@ -790,6 +793,7 @@ def agent_train(
                 f"{kept.eval['random'].mbb_per_hand:+.0f} mbb/h in its evaluation); "
                 f"{MODEL_FILE} is the final model"
             )
+    write_logs(out, log_dir)
 
 
 
