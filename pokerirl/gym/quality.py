@@ -51,6 +51,7 @@ import torch
 
 from pokerirl.atomic import write_text
 from pokerirl.errors import PokerIRLError
+from pokerirl.execution import pinned_threads
 from pokerirl.gym.collect import read_transitions
 from pokerirl.gym.experts import make_env
 from pokerirl.gym.presets import TASKS
@@ -499,7 +500,6 @@ def write_reward_quality(
     truth = true_reward(env_id, gamma)
     family = record["architecture"].get("reward_family", RewardFamily.STATE_ACTION)
     rng = np.random.default_rng(seed)
-    torch_threads = torch.get_num_threads()
 
     env = make_env(env_id)
     space: Any = env.action_space  # Discrete (n) or Box (low, high)
@@ -546,8 +546,7 @@ def write_reward_quality(
     actions = np.concatenate([expert.actions, random.actions])
     next_obs = np.concatenate([expert.next_obs, random.next_obs])
 
-    try:
-        torch.set_num_threads(1)  # one summation order: the same bytes on any machine
+    with pinned_threads(1):  # one summation order: the same bytes on any machine
         shaped = family == RewardFamily.SHAPED
         f_full = _as_transition_reward(load_reward(run, full=shaped), full=shaped)
         g = _as_transition_reward(load_reward(run), full=False)
@@ -591,8 +590,6 @@ def write_reward_quality(
             "epic_expert_coverage": epic_on_expert(f_full),
             "epic_random_baseline_expert_coverage": epic_on_expert(initial),
         }
-    finally:
-        torch.set_num_threads(torch_threads)
     checks = {}
     for name, source in (("expert", expert), ("random", random)):
         step = np.asarray(truth.step(source.obs, source.actions, source.next_obs), np.float64)

@@ -53,7 +53,7 @@ import numpy as np
 from pokerirl.agents import ShippedAgent, agent_fingerprint, land_agent, resolve_agent, ship_agent
 from pokerirl.errors import Remedy
 from pokerirl.errors import report as error_report
-from pokerirl.execution import Backend
+from pokerirl.execution import Backend, pinned_threads
 from pokerirl.game.match import DEFAULT_BATCH_SIZE, check_match_size, play_match
 from pokerirl.store import Json, Layout, Unit, UnitConflict, UnitOutput, run_units
 from pokerirl.tournaments.aivat import CorrectedMatch, play_corrected_match
@@ -116,13 +116,8 @@ def _torch_for_play() -> Iterator[None]:
     if torch is None:
         yield
         return
-    threads = torch.get_num_threads()
-    torch.set_num_threads(1)
-    try:
-        with torch.inference_mode():
-            yield
-    finally:
-        torch.set_num_threads(threads)
+    with pinned_threads(1), torch.inference_mode():
+        yield
 
 
 def _play_seed(
