@@ -262,6 +262,13 @@ class MetricsLine:
         )
 
 
+def read_metrics(folder: str | os.PathLike[str]) -> list[MetricsLine]:
+    """An agent folder's evaluations during training (its ``metrics.jsonl``), typed: what a
+    study reads of the agents it trained, instead of the file's keys."""
+    text = (Path(folder) / METRICS_FILE).read_text()
+    return [MetricsLine.from_json(json.loads(line)) for line in text.splitlines() if line.strip()]
+
+
 @dataclass(frozen=True, kw_only=True)
 class Timings:
     """An agent's ``timings.json`` (never fingerprinted): the whole run, and the seconds

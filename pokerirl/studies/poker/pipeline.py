@@ -377,18 +377,19 @@ def replaced_irl(study: Study, algo: str, source: str, out: Path) -> Replaced:
 
 
 def _final_vs_random(agent_set: Path, seeds: Sequence[int]) -> list[float]:
-    return [
-        read_jsonl(agent_set / f"seed-{s}" / METRICS_JSONL)[-1]["eval"]["random"]["mbb_per_hand"]
-        for s in seeds
-    ]
+    from pokerirl.agents.train import read_metrics
+
+    return [read_metrics(agent_set / f"seed-{s}")[-1].eval["random"].mbb_per_hand for s in seeds]
 
 
 def _curve(agent_set: Path, seeds: Sequence[int]) -> HandsCurve:
-    lines = [read_jsonl(agent_set / f"seed-{s}" / METRICS_JSONL) for s in seeds]
+    from pokerirl.agents.train import read_metrics
+
+    lines = [read_metrics(agent_set / f"seed-{s}") for s in seeds]
     points = min(len(line) for line in lines)
-    values = [[line[i]["eval"]["random"]["mbb_per_hand"] for i in range(points)] for line in lines]
+    values = [[line[i].eval["random"].mbb_per_hand for i in range(points)] for line in lines]
     mean, std = mean_std_curve(values)
-    return HandsCurve(hands=[lines[0][i]["hands"] for i in range(points)], mean=mean, std=std)
+    return HandsCurve(hands=[lines[0][i].hands for i in range(points)], mean=mean, std=std)
 
 
 def _playing_vs_random(agent_set: Path, seeds: Sequence[int]) -> list[float]:
