@@ -289,7 +289,12 @@ def plot_reward_map(result: RewardMap, path: str | os.PathLike[str]) -> Path:
         Patch(color=c, label=name) for c, name in zip(colours, result.action_names, strict=True)
     ]
     figure.legend(handles=handles, loc="lower center", ncol=k, frameon=False)
-    figure.suptitle(f"{result.env_id}: the action the learned reward f(s, a) prefers")
+    first = "the expert's greedy action, then " if result.expert is not None else ""
+    figure.suptitle(
+        f"{result.env_id}: {first}the action each learned reward's f(s, a) prefers, on a "
+        f"{len(result.xs)} × {len(result.ys)} grid of states (one panel per IRL folder: the argmax "
+        "of f averaged over its runs)", fontsize=10
+    )
     figure.tight_layout(rect=(0, 0.07, 1, 1))
     buffer = io.BytesIO()
     # No "Software" entry (matplotlib's version): same inputs, same bytes, across upgrades too.

@@ -38,6 +38,7 @@ import numpy as np
 from pokerirl.atomic import write_text
 from pokerirl.errors import ConfigError, PokerIRLError
 from pokerirl.execution import Backend
+from pokerirl.figures import finish
 from pokerirl.gym.irl import GymIRLSummary
 from pokerirl.gym.presets import PRESETS, TASK_ORDER, TASKS, StudyPreset
 from pokerirl.gym.quality import has_true_reward
@@ -496,10 +497,11 @@ def draw_figures(root: Path, summary: TaskSummary) -> None:
         FigureCanvasAgg(fig)
         return fig, fig.add_subplot()
 
+    spread = f"lines: mean of {summary.runs} runs; bands: ± 1 std (sample) over runs"
+
     def save(fig: Figure, axes: Any, name: str, title: str, xlabel: str, ylabel: str) -> None:
-        axes.set(title=f"{summary.env}: {title}", xlabel=xlabel, ylabel=ylabel)
-        axes.grid(alpha=0.3)
-        axes.legend(fontsize="small")
+        finish(axes, title=f"{summary.env}: {title}", xlabel=xlabel, ylabel=ylabel,
+               spread=spread, integer_x=xlabel == "epoch")  # fmt: skip
         fig.tight_layout()
         path = root / FIGURES[name]
         path.parent.mkdir(parents=True, exist_ok=True)
@@ -508,20 +510,20 @@ def draw_figures(root: Path, summary: TaskSummary) -> None:
 
     def lines(axes: Any) -> None:
         for value, label, style in (
-            (summary.expert_return, "expert", "--"),
-            (summary.random_return, "random", ":"),
+            (summary.expert_return, "expert's demonstrations", "--"),
+            (summary.random_return, "random policy", ":"),
         ):
             if math.isfinite(value):
                 axes.axhline(value, color="grey", linestyle=style, linewidth=1, label=label)
 
-    runs = f"mean ± std of {summary.runs} runs"
+    episode = "return (sum of rewards per episode)"
     fig, axes = figure()
     for algo in ALGOS:
         found = summary.algos[algo]
         band(axes, found.irl_epochs, found.irl_return.to_json(), LABELS[algo],
              color=COLORS[algo], alpha=0.2)  # fmt: skip
     lines(axes)
-    save(fig, axes, "irl_returns", f"IRL-phase return ({runs})", "epoch", "return")
+    save(fig, axes, "irl_returns", "IRL-phase return of the policy", "epoch", episode)
 
     if summary.discrete:
         fig, axes = figure()
@@ -536,7 +538,8 @@ def draw_figures(root: Path, summary: TaskSummary) -> None:
             axes.axhline(
                 value, color="grey", linestyle=style, linewidth=1, label=f"{name} {value:.3f}"
             )
-        save(fig, axes, "alignment", f"validation alignment ({runs})", "epoch", "alignment")
+        save(fig, axes, "alignment", "validation alignment", "epoch",
+             "share of validation states (policy = expert)")
 
     fig, axes = figure()
     for reward in REWARDS:
@@ -545,4 +548,5 @@ def draw_figures(root: Path, summary: TaskSummary) -> None:
         band(axes, curve.timesteps, curve.to_json(), LABELS[reward], color=COLORS[reward],
              alpha=0.2)  # fmt: skip
     lines(axes)
-    save(fig, axes, "rl_returns", f"RL-phase true return ({runs})", "timesteps", "return")
+    save(fig, axes, "rl_returns", "RL-phase true return", "timesteps",
+         f"true {episode}")
