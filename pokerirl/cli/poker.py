@@ -27,8 +27,9 @@ from pokerirl.cli.app import (
     seed_list,
     settings_from_options,
 )
+from pokerirl.cli.gym import IRL_TRAINERS
 from pokerirl.errors import InputError, UsageError
-from pokerirl.studies.poker.config import AGENT_PRESETS, FOLDS, IRL_ALGOS, TRANSFORMS
+from pokerirl.studies.poker.config import AGENT_PRESETS, FOLDS, TRANSFORMS
 
 if TYPE_CHECKING:
     from pokerirl.irl.records import EpochMetrics
@@ -345,8 +346,8 @@ def train(
     algo: str = typer.Option(
         "hairl",
         "--algo",
-        metavar=choices(IRL_ALGOS),
-        help="hairl or airl (picks the defaults).",
+        metavar=choices(IRL_TRAINERS),
+        help="hairl, airl or gail (picks the defaults; gail also GAIL's discriminator).",
     ),
     runs: int = typer.Option(
         1, "--runs", min=1, max=MAX_SEEDS,
@@ -409,7 +410,7 @@ def train(
         "(OUT/round-<r>, OUT/table-<r>.parquet, OUT/em.json); one run only.",
     ),
 ) -> None:
-    """Learn a reward function with AIRL or Hybrid-AIRL from an expert decision table.
+    """Learn a reward function with AIRL, Hybrid-AIRL or GAIL from an expert decision table.
 
     Writes OUT/reward.pt, policy.pt, config.json, timings.json, metrics.jsonl,
     baselines.json, split.json and plots; with --runs N, OUT/run-<k> and OUT/summary.json.
