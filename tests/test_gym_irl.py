@@ -149,7 +149,7 @@ def test_bad_inputs_fail_in_one_line(tmp_path: Path) -> None:
     base = ["gym", "irl", "MountainCar-v0", "--out", str(tmp_path / "irl")]
     cases = {  # the message: the exit code (2: a usage error), the options
         "no such file": (1, ["--data", str(tmp_path / "missing.parquet")]),
-        "--algo must be": (2, ["--algo", "gail"]),
+        "--algo must be": (2, ["--algo", "sqil"]),
         "--preset must be": (2, ["--preset", "huge"]),
         "continuous actions": (1, ["--data", str(_pendulum(tmp_path))]),
     }

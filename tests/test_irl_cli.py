@@ -178,7 +178,7 @@ def test_bad_input_gives_one_line_errors(
         pq.write_table(table.slice(0, 0), tmp_path / "t.parquet")
         args["table"] = str(tmp_path / "t.parquet")
     elif case == "bad_algo":
-        args["algo"] = "gail"
+        args["algo"] = "sqil"
     elif case == "cuda":
         if torch.cuda.is_available():
             pytest.skip("CUDA is available here")

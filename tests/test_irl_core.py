@@ -166,7 +166,7 @@ def test_config_defaults_and_validation() -> None:
     )
     assert AIRLConfig.for_algo("airl", alpha=0.5).alpha == 0.5
     with pytest.raises(ValueError, match="unknown algo"):
-        AIRLConfig.for_algo("gail")
+        AIRLConfig.for_algo("sqil")
     with pytest.raises(ValueError, match="unknown setting"):
         AIRLConfig.for_algo("hairl", alhpa=0.5)
     with pytest.raises(ValueError, match="alpha"):

@@ -104,7 +104,7 @@ def test_the_settings_enums_are_their_names_in_json_and_fingerprints() -> None:
     from pokerirl.irl.nets import RewardFamily
     from pokerirl.store import fingerprint
 
-    assert json.dumps(Algo.AIRL) == '"airl"' and ALGOS == ("airl", "hairl")
+    assert json.dumps(Algo.AIRL) == '"airl"' and ALGOS == ("airl", "hairl", "gail")
     config = AIRLConfig(noise_schedule="authors", reward_family="shaped")
     assert config.noise_schedule is NoiseSchedule.AUTHORS
     assert config.reward_family is RewardFamily.SHAPED

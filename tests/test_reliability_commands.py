@@ -124,7 +124,7 @@ def _bad_values(i: Inputs, out: Path) -> list[tuple[list[str], str]]:
         (["train", table, "--out", str(out), "--threads", "0"], "'--threads'"),
         (["train", table, "--out", str(out), "--jobs", "0"], "'--jobs'"),
         (["train", table, "--out", str(out), "--reward-lr", "-1"], "need learning rates > 0"),
-        (["train", table, "--out", str(out), "--algo", "gail"], "unknown algo 'gail'"),
+        (["train", table, "--out", str(out), "--algo", "sqil"], "unknown algo 'sqil'"),
         (["train", table, "--out", str(out), "--hidden", "8,x"], "--hidden must be"),
         (["train", table, "--out", str(out), "--device", "tpu"], "device 'tpu'"),
         ([*agent, "--seed", BIG_SEED], "'--seed'"),

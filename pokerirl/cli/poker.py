@@ -29,8 +29,9 @@ from pokerirl.cli.app import (
     settings_from_options,
     write_logs,
 )
+from pokerirl.cli.gym import IRL_TRAINERS
 from pokerirl.errors import InputError, UsageError
-from pokerirl.studies.poker.config import AGENT_PRESETS, FOLDS, IRL_ALGOS, TRANSFORMS
+from pokerirl.studies.poker.config import AGENT_PRESETS, FOLDS, TRANSFORMS
 
 if TYPE_CHECKING:
     from pokerirl.irl.records import EpochMetrics
@@ -347,8 +348,8 @@ def train(
     algo: str = typer.Option(
         "hairl",
         "--algo",
-        metavar=choices(IRL_ALGOS),
-        help="hairl or airl (picks the defaults).",
+        metavar=choices(IRL_TRAINERS),
+        help="hairl, airl or gail (picks the defaults; gail also GAIL's discriminator).",
     ),
     runs: int = typer.Option(
         1, "--runs", min=1, max=MAX_SEEDS,
@@ -411,7 +412,7 @@ def train(
         "(OUT/round-<r>, OUT/table-<r>.parquet, OUT/em.json); one run only.",
     ),
 ) -> None:
-    """Learn a reward function with AIRL or Hybrid-AIRL from an expert decision table.
+    """Learn a reward function with AIRL, Hybrid-AIRL or GAIL from an expert decision table.
 
     Writes OUT/reward.pt, policy.pt, config.json, timings.json, metrics.jsonl,
     baselines.json, split.json and plots; with --runs N, OUT/run-<k> and OUT/summary.json.

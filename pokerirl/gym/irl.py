@@ -126,8 +126,8 @@ class GymIRLResult:
 def irl_config(algo: str, settings: IRLSettings, *, seed: int) -> AIRLConfig:
     """The task's IRL settings as an :class:`AIRLConfig`: nets, epochs, one learning rate for
     both nets, batch, the reward's weight decay, the log σ floor, the authors' noise schedule
-    with decay k; α, β, σ, the noise and supervised forms for H-AIRL only (``airl`` keeps
-    α = β = 0 and no noise)."""
+    with decay k; α, β, σ, the noise and supervised forms for H-AIRL only (``airl`` and
+    ``gail`` keep α = β = 0 and no noise)."""
     overrides: dict[str, Any] = {
         "policy_hidden": settings.policy_hidden,
         "reward_hidden": settings.reward_hidden,

@@ -1,10 +1,11 @@
-"""AIRL / Hybrid-AIRL reward learning on expert :class:`Transitions`.
+"""AIRL / Hybrid-AIRL / GAIL reward learning on expert :class:`Transitions`.
 
 :mod:`pokerirl.irl.airl` is the trainer (one run, or R in lock-step; its pieces are
-:mod:`~.losses`, :mod:`~.stacked` nets, :mod:`~.records`, :mod:`~.evaluate` and
-:mod:`~.baselines`), :mod:`~.nets` the default networks (:class:`RewardNet`, :mod:`~.reward`),
-:mod:`~.transitions` the data (:mod:`~.interop`: to and from the ``imitation`` library's
-arrays), :mod:`~.run` the run folders and :func:`load_reward`.
+:mod:`~.losses`, :mod:`~.discriminators` (AIRL's D or GAIL's), :mod:`~.stacked` nets,
+:mod:`~.records`, :mod:`~.evaluate` and :mod:`~.baselines`), :mod:`~.nets` the default
+networks (:class:`RewardNet`, :mod:`~.reward`), :mod:`~.transitions` the data
+(:mod:`~.interop`: to and from the ``imitation`` library's arrays), :mod:`~.run` the run
+folders and :func:`load_reward`.
 It knows nothing of poker or Gymnasium (``tests/test_layers.py``): poker tables and
 ``pokerirl train`` are :mod:`pokerirl.poker`, environments :mod:`pokerirl.gym`.
 For example::
@@ -29,6 +30,7 @@ from pokerirl.irl.airl import (
     train_many,
 )
 from pokerirl.irl.config import ALGOS, AIRLConfig, ConfigError, load_config
+from pokerirl.irl.discriminators import AIRLDiscriminator, Discriminator, GAILDiscriminator
 from pokerirl.irl.interop import (
     ImitationTrajectory,
     ImitationTransitions,
@@ -64,12 +66,15 @@ from pokerirl.irl.transitions import Transitions
 __all__ = [
     "ALGOS",
     "AIRLConfig",
+    "AIRLDiscriminator",
     "Batch",
     "ConfigError",
     "DiscretePolicy",
+    "Discriminator",
     "EpochCallback",
     "EpochMetrics",
     "EpochRecord",
+    "GAILDiscriminator",
     "GaussianPolicy",
     "ImitationTrajectory",
     "ImitationTransitions",

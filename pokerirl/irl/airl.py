@@ -1,4 +1,4 @@
-"""AIRL and Hybrid-AIRL on :class:`Transitions`, for one run or R runs in lock-step.
+"""AIRL, Hybrid-AIRL and GAIL on :class:`Transitions`, for one run or R runs in lock-step.
 
 Per shuffled mini-batch of expert rows (s, a_E[, s', done, r_env]):
 
@@ -15,7 +15,11 @@ Per shuffled mini-batch of expert rows (s, a_E[, s', done, r_env]):
    the reparameterized sample. g is the reward's action-dependent part: all of f for the
    ``state_action`` family; for ``shaped`` the γh(s') − h(s) terms do not depend on a.
 
-AIRL is α = β = 0 and no noise. ``docs/method.md`` says which choice comes from where.
+AIRL is α = β = 0 and no noise. GAIL is AIRL with another discriminator, D = σ(f): the
+loop asks its :class:`~pokerirl.irl.discriminators.Discriminator` for the logits
+log D − log(1 − D) wherever it needs them (AIRL's f − log π above, GAIL's f); the policy
+step is the same for both (GAIL's causal-entropy weight is 1). ``docs/method.md`` says
+which choice comes from where.
 
 Gradients are autograd's, except on the one architecture :mod:`pokerirl.irl.fast` covers
 (the default poker nets, one run on CPU), where hand-derived gradients, tested against
@@ -52,6 +56,7 @@ from pokerirl.errors import ConfigError, InputError
 from pokerirl.irl import fast
 from pokerirl.irl.baselines import baselines
 from pokerirl.irl.config import AIRLConfig, NoiseForm, NoiseSchedule
+from pokerirl.irl.discriminators import discriminator_for
 from pokerirl.irl.evaluate import evaluate
 from pokerirl.irl.losses import (
     LOG_2PI,
@@ -284,6 +289,7 @@ class _Loop:
         self.discrete = data.discrete
         self.beta = config.beta if data.rewards is not None else 0.0
         self.alpha = config.alpha
+        self.disc = discriminator_for(config.discriminator)  # how logits come from f and log π
         self.shaped = config.reward_family == RewardFamily.SHAPED
         self.batch = min(config.batch_size, len(data))
         self.steps = len(data) // self.batch  # drop the ragged tail; the next shuffle covers it
@@ -416,7 +422,7 @@ class _Loop:
                 f = self.rewards(obs[:, None], both)
             d_loss, _d_airl, _d_env = discriminator_loss(
                 f[:, 0], log_pi_expert, f[:, 1], log_pi_seen, beta=self.beta, env_reward=env,
-                weights=weights,
+                weights=weights, discriminator=self.disc,
             )  # fmt: skip
             self.reward_opt.zero_grad()
             d_loss.sum().backward()
@@ -486,7 +492,7 @@ class _Loop:
             cache = fast.reward_forward(reward, obs, torch.stack((expert, seen)))
             f = cache.head_acts[-1].view(-1)
             grad_f = fast.discriminator_grad(f, lp, beta=self.beta, env_reward=env,
-                                             weights=weights)  # fmt: skip
+                                             weights=weights, discriminator=self.disc)  # fmt: skip
             self.reward_opt.set_grad(fast.reward_backward(reward, cache, grad_f))
             self.reward_opt.step()
             disc_record = torch.cat((f, lp))
@@ -517,14 +523,15 @@ class _Loop:
         weights = None if self.weights is None else self.weights[perm]
         d_loss, d_airl, d_env = discriminator_loss(
             f_expert, lp_expert, f_seen, lp_seen, beta=self.beta, env_reward=env,
-            weights=weights,
+            weights=weights, discriminator=self.disc,
         )  # fmt: skip
         values = {
             "disc_loss": d_loss.mean(0),
             "disc_airl_loss": d_airl.mean(0),
             "disc_env_loss": d_env.mean(0),
-            "disc_acc_expert": (f_expert > lp_expert).float().mean((0, 2)),  # D > 1/2
-            "disc_acc_policy": (f_seen < lp_seen).float().mean((0, 2)),  # D < 1/2
+            # a logit above 0 is D > 1/2
+            "disc_acc_expert": (self.disc.logits(f_expert, lp_expert) > 0).float().mean((0, 2)),
+            "disc_acc_policy": (self.disc.logits(f_seen, lp_seen) < 0).float().mean((0, 2)),
             "reward_expert": f_expert.mean((0, 2)),
             "reward_policy": f_seen.mean((0, 2)),
             "reward_gap": (f_expert - f_seen).mean((0, 2)),  # expert minus policy

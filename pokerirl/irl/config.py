@@ -12,6 +12,8 @@ The TOML file is flat, with the field names as keys::
 
 >>> AIRLConfig.for_algo("airl").alpha, AIRLConfig.for_algo("hairl").alpha
 (0.0, 0.33)
+>>> AIRLConfig.for_algo("gail").discriminator
+<DiscriminatorForm.GAIL: 'gail'>
 >>> AIRLConfig(epochs=True)
 Traceback (most recent call last):
 ...
@@ -35,10 +37,20 @@ from pokerirl.irl.nets import ACTIVATIONS, REWARD_FAMILIES, NetSpec, RewardFamil
 
 
 class Algo(StrEnum):
-    """The reward learners: AIRL, and H-AIRL (AIRL with supervision and noise)."""
+    """The reward learners: AIRL, H-AIRL (AIRL with supervision and noise), and GAIL (the
+    same loop with GAIL's discriminator)."""
 
     AIRL = "airl"
     HAIRL = "hairl"
+    GAIL = "gail"
+
+
+class DiscriminatorForm(StrEnum):
+    """How D is made from f and π (:mod:`pokerirl.irl.discriminators`): AIRL's
+    exp f / (exp f + π), or GAIL's σ(f)."""
+
+    AIRL = "airl"
+    GAIL = "gail"
 
 
 class NoiseSchedule(StrEnum):
@@ -81,6 +93,7 @@ NOISE_SCHEDULES: tuple[str, ...] = tuple(NoiseSchedule)
 DISC_ACTIONS: tuple[str, ...] = tuple(DiscAction)
 NOISE_FORMS: tuple[str, ...] = tuple(NoiseForm)
 SUPERVISED_FORMS: tuple[str, ...] = tuple(SupervisedForm)
+DISCRIMINATOR_FORMS: tuple[str, ...] = tuple(DiscriminatorForm)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -102,6 +115,8 @@ class AIRLConfig:
     reward_weight_decay: float = 0.0
     batch_size: int = 256
     epochs: int = 50
+    # the discriminator's form; set by the algorithm (GAIL's for gail), never on its own
+    discriminator: DiscriminatorForm = DiscriminatorForm.AIRL
     # H-AIRL
     alpha: float = 0.33  # weight of the supervised term in the policy loss
     beta: float = 0.0  # weight of the (f - r_env)² term in the discriminator loss
@@ -148,6 +163,8 @@ class AIRLConfig:
             f"noise_form in {', '.join(NOISE_FORMS)}": self.noise_form in NOISE_FORMS,
             f"supervised_form in {', '.join(SUPERVISED_FORMS)}": self.supervised_form
             in SUPERVISED_FORMS,
+            f"discriminator in {', '.join(DISCRIMINATOR_FORMS)}": self.discriminator
+            in DISCRIMINATOR_FORMS,
             "log_std_min < log_std_max": self.log_std_min < self.log_std_max,
         }
         broken = [name for name, ok in checks.items() if not ok]
@@ -156,19 +173,27 @@ class AIRLConfig:
 
     @classmethod
     def for_algo(cls, algo: str, **overrides: Any) -> AIRLConfig:
-        """Defaults for ``"airl"`` (α = β = 0, no noise) or ``"hairl"``, then ``overrides``.
+        """Defaults for ``"airl"`` and ``"gail"`` (α = β = 0, no noise; GAIL's discriminator
+        for gail) or ``"hairl"``, then ``overrides``.
 
-        Unknown keys raise ``ConfigError`` naming them.
+        Unknown keys raise ``ConfigError`` naming them, and so does a ``discriminator`` that
+        is not the algorithm's (the run records the algorithm; its D must be that one's).
         """
         if algo not in ALGOS:
             raise ConfigError(f"unknown algo {algo!r}; choose one of {', '.join(ALGOS)}")
         unknown = sorted(set(overrides) - set(_HINTS))
         if unknown:
             raise ConfigError(f"unknown setting(s) {', '.join(unknown)}; known: {sorted(_HINTS)}")
-        base: dict[str, float] = {}
-        if algo == Algo.AIRL:
+        form = DiscriminatorForm.GAIL if algo == Algo.GAIL else DiscriminatorForm.AIRL
+        if overrides.get("discriminator", form) != form:
+            raise ConfigError(
+                f"discriminator {overrides['discriminator']!r} is not {algo}'s ({form}); "
+                "the algorithm sets it: leave it out"
+            )
+        base: dict[str, object] = {}
+        if algo in (Algo.AIRL, Algo.GAIL):
             base = {"alpha": 0.0, "beta": 0.0, "sigma_start": 0.0, "sigma_end": 0.0}
-        return cls(**{**base, **overrides})
+        return cls(**{**base, "discriminator": form, **overrides})
 
     def net_spec(self) -> NetSpec:
         return NetSpec(
@@ -196,6 +221,7 @@ _ADDED_LATER: dict[str, object] = {
     "supervised_form": SupervisedForm.MEAN_MSE,
     "log_std_min": -20.0,
     "log_std_max": 2.0,
+    "discriminator": DiscriminatorForm.AIRL,
 }
 
 

@@ -17,6 +17,7 @@ import torch
 from torch import Tensor, nn
 
 from pokerirl.errors import ConfigError
+from pokerirl.irl.discriminators import AIRL, Discriminator
 from pokerirl.irl.nets import DiscretePolicy, StateActionReward
 
 
@@ -118,15 +119,17 @@ def discriminator_grad(
     beta: float,
     env_reward: Tensor | None,
     weights: Tensor | None = None,
+    discriminator: Discriminator = AIRL,
 ) -> Tensor:
     """dL/df of ``discriminator_loss`` for f = (expert rows, then policy rows), both (B,).
 
-    With D = σ(f − log π): d/df of −log D is D − 1, of −log(1 − D) is D. With row
-    ``weights`` (B,) each mean is Σ w·(...) / Σ w, so row i's terms scale by w_i / Σ w
-    (its policy row is drawn at the same state and shares its weight).
+    With D = σ(logit), the logit's derivative in f being 1 (AIRL's f − log π, GAIL's f):
+    d/df of −log D is D − 1, of −log(1 − D) is D. With row ``weights`` (B,) each mean is
+    Σ w·(...) / Σ w, so row i's terms scale by w_i / Σ w (its policy row is drawn at the
+    same state and shares its weight).
     """
     batch = len(f) // 2
-    grad = torch.sigmoid(f - log_pi)
+    grad = torch.sigmoid(discriminator.logits(f, log_pi))
     grad[:batch] -= 1
     if weights is not None:
         scale = weights / weights.sum()  # (B,): replaces 1 / B

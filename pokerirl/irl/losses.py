@@ -13,6 +13,7 @@ import torch.nn.functional as F
 from torch import Tensor
 
 from pokerirl.irl.config import NoiseSchedule
+from pokerirl.irl.discriminators import AIRL, Discriminator
 
 LOG_2PI = math.log(2 * math.pi)
 LOSS_KEYS = (
@@ -74,20 +75,23 @@ def discriminator_loss(
     beta: float = 0.0,
     env_reward: Tensor | None = None,
     weights: Tensor | None = None,
+    discriminator: Discriminator = AIRL,
 ) -> tuple[Tensor, Tensor, Tensor]:
     """(total, L_AIRL, env MSE), means over the last dimension (weighted by the expert
     rows' ``weights`` when given: the policy's actions are drawn at the same states).
 
-    L_AIRL = −E_E[log D(s, a_E)] − E_π[log(1 − D(s, ã))] with D = σ(f − log π), the
-    log-space form of exp f / (exp f + π). total = (1−β)·L_AIRL + β·E_E[(f − r_env)²].
+    L_AIRL = −E_E[log D(s, a_E)] − E_π[log(1 − D(s, ã))] with D = σ(logit), the log-space
+    form of exp f / (exp f + π) for AIRL's logit f − log π (GAIL's: f, D = σ(f)).
+    total = (1−β)·L_AIRL + β·E_E[(f − r_env)²].
 
     >>> zero = torch.zeros(1)
     >>> round(discriminator_loss(zero, zero, zero, zero)[0].item(), 4)  # D = 1/2: 2 ln 2
     1.3863
     """
+    # log(1 − σ(x)) = log σ(−x)
     airl = -(
-        weighted_mean(F.logsigmoid(f_expert - log_pi_expert), weights)
-        + weighted_mean(F.logsigmoid(log_pi_policy - f_policy), weights)
+        weighted_mean(F.logsigmoid(discriminator.logits(f_expert, log_pi_expert)), weights)
+        + weighted_mean(F.logsigmoid(-discriminator.logits(f_policy, log_pi_policy)), weights)
     )
     if env_reward is None:
         return airl, airl, torch.zeros_like(airl)

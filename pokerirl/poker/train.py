@@ -1,4 +1,4 @@
-"""``pokerirl train``: AIRL / H-AIRL on a poker decision table, one run or several.
+"""``pokerirl train``: AIRL / H-AIRL / GAIL on a poker decision table, one run or several.
 
 The run folder's format and the trainer are poker-free (:mod:`pokerirl.irl.run`,
 :mod:`pokerirl.irl.airl`); this module adds what is poker's: reading the decision table
