@@ -180,6 +180,22 @@ def unit_progress(done: float, total: float) -> None:
 
 
 @contextlib.contextmanager
+def progress_share(start: float, stop: float) -> Iterator[None]:
+    """Inside the block, the running unit's reports cover ``start`` to ``stop`` of it: for a
+    unit of phases (a baseline, then the training), so its bar never moves back."""
+    global _report
+    outer = _report
+    if outer is None:
+        yield
+        return
+    _report = lambda fraction: outer(start + (stop - start) * fraction)  # noqa: E731
+    try:
+        yield
+    finally:
+        _report = outer
+
+
+@contextlib.contextmanager
 def _reporting(send: Callable[[float], None]) -> Iterator[None]:
     """Inside the block, :func:`unit_progress` calls ``send`` with the unit's fraction done,
     at most every :data:`REPORT_EVERY` seconds (the last fraction is sent at the end)."""
@@ -201,6 +217,22 @@ def _reporting(send: Callable[[float], None]) -> Iterator[None]:
         _report = previous
         if pending[0] is not None:
             send(pending[0])
+
+
+@contextlib.contextmanager
+def watched(desc: str, *, total: int = 1, enabled: bool = True) -> Iterator[Callable[[], None]]:
+    """A bar over ``total`` pieces of work done in this process, not as units (a command's
+    runs trained in turn, or together): :func:`unit_progress` inside moves it by the running
+    piece's fraction; call the function it yields when a piece is done."""
+    with _Bar(total, reused=0, desc=desc, enabled=enabled) as bar:
+        running = [0]
+
+        def piece_done() -> None:
+            bar.done(running[0])
+            running[0] += 1
+
+        with _reporting(lambda fraction: bar.partial(running[0], fraction)):
+            yield piece_done
 
 
 def map_units(

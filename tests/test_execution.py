@@ -178,3 +178,23 @@ def test_a_units_own_progress_moves_the_bar_before_it_finishes(
     shown = [float(n) for n in re.findall(r"steps: .*?\| (\d+\.\d\d)/2 ", capsys.readouterr().err)]
     assert shown[-1] == 2.0
     assert [n for n in shown if 0 < n < 1], shown  # inside the first units: not only 0, 1, 2
+
+
+def two_phases(k: int) -> int:
+    """A unit of two phases, each reporting 0 to 1 of itself (a baseline, then training)."""
+    import time
+
+    from pokerirl.execution import progress_share, unit_progress
+
+    for start, stop in ((0.0, 0.3), (0.3, 1.0)):
+        with progress_share(start, stop):
+            for step in range(1, 5):
+                time.sleep(0.15)
+                unit_progress(step, 4)
+    return k
+
+
+def test_a_unit_of_phases_never_moves_the_bar_back(capsys: pytest.CaptureFixture[str]) -> None:
+    map_units(two_phases, [(0,)], backend=Backend(), progress=True, desc="phases")
+    shown = [float(n) for n in re.findall(r"phases: .*?\| (\d+\.\d\d)/1 ", capsys.readouterr().err)]
+    assert shown == sorted(shown) and shown[-1] == 1.0 and any(0.3 < n < 1 for n in shown)

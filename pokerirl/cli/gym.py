@@ -228,6 +228,7 @@ def gym_rl(
     threads: int = typer.Option(1, min=1, help="torch threads."),
     rl_backend: str = RL_BACKEND,
     log_dir: Path | None = typer.Option(None, "--log-dir", metavar="DIR", help=LOG_DIR_HELP),
+    quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bar."),
 ) -> None:
     """Train SB3 PPO (DQN for MountainCar) on a learned reward; the curve is the true return.
 
@@ -253,6 +254,7 @@ def gym_rl(
         eval_episodes=eval_episodes,
         rl_backend=rl_backend,
         overwrite=overwrite,
+        progress=not quiet,
     )
     echo(
         f"{env}: final true return {done.final.mean:.1f} +- {done.final.std:.1f} over {runs} "

@@ -37,6 +37,7 @@ from torch import Tensor, nn
 
 from pokerirl.atomic import make_shareable, write_text
 from pokerirl.errors import ConfigError, InputError, Remedy
+from pokerirl.execution import progress_share
 from pokerirl.gym.experts import make_env, shipped_experts
 from pokerirl.gym.presets import IRLSettings
 from pokerirl.gym.quality import has_true_reward, write_reward_quality
@@ -48,6 +49,7 @@ from pokerirl.irl.nets import fold_obs_standardization
 from pokerirl.irl.plots import new_figure, plot_bands, plot_curves, save_figure
 from pokerirl.irl.records import EpochMetrics, EpochRecord
 from pokerirl.irl.run import (
+    BASELINE_SHARE,
     SUMMARY_FILE,
     RunError,
     RunResult,
@@ -349,7 +351,9 @@ def train_gym_irl(
         standardized(val_data, shift, scale),
     )
 
-    found = run_baselines(train_data, val_data, config=config, device=device, progress=progress)
+    with progress_share(0.0, BASELINE_SHARE):  # the baseline's epochs, then the runs'
+        found = run_baselines(train_data, val_data, config=config, device=device,
+                              progress=progress)  # fmt: skip
     found["random"] = random_return(env_id, episodes=settings.eval_episodes)
     found["expert"] = expert_return(env_id, data_path)
 
@@ -386,18 +390,19 @@ def train_gym_irl(
             for log, metrics in zip(logs, all_metrics, strict=False):
                 log.write(metrics)
 
-        many = train_many(
-            train_data,
-            val_data,
-            config=config,
-            seeds=seeds,
-            rewards=[r for r, _ in nets],
-            policies=policies,
-            device=device,
-            progress=progress,
-            on_epoch=on_epoch,
-            callback=env_returns,
-        )
+        with progress_share(BASELINE_SHARE, 1.0):
+            many = train_many(
+                train_data,
+                val_data,
+                config=config,
+                seeds=seeds,
+                rewards=[r for r, _ in nets],
+                policies=policies,
+                device=device,
+                progress=progress,
+                on_epoch=on_epoch,
+                callback=env_returns,
+            )
         data_info = {
             "env": env_id,
             **data_record(data, train_data, val_data, path=data_label or data_path),

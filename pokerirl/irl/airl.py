@@ -53,6 +53,7 @@ from torch import Tensor, nn
 from tqdm.auto import tqdm
 
 from pokerirl.errors import ConfigError, InputError
+from pokerirl.execution import unit_progress
 from pokerirl.irl import fast
 from pokerirl.irl.baselines import baselines
 from pokerirl.irl.config import AIRLConfig, NoiseForm, NoiseSchedule
@@ -593,8 +594,10 @@ class _Loop:
         ]
         many = ManyResult(runs=results, epoch_seconds=[], samples_per_epoch=0)
         many.samples_per_epoch = self.runs * self.steps * self.batch
+        # Two bars in one run: the behaviour-cloning baseline's, then the adversarial one's.
+        label = "IRL (adversarial)" if self.adversarial else "baseline (behaviour cloning)"
         bar = tqdm(
-            range(1, self.config.epochs + 1), desc="train", unit="epoch", disable=not progress
+            range(1, self.config.epochs + 1), desc=label, unit="epoch", disable=not progress
         )
         for epoch in bar:
             start = time.perf_counter()
@@ -632,6 +635,7 @@ class _Loop:
                 result.epoch_seconds.append(seconds / self.runs)
             if on_epoch is not None:
                 on_epoch(epoch_metrics)
+            unit_progress(epoch, self.config.epochs)  # the driver's bar, when this is a unit
             first = epoch_metrics[0]
             if "val_alignment" in first:
                 bar.set_postfix(

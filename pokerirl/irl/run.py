@@ -42,6 +42,7 @@ from torch import Tensor, nn
 
 from pokerirl.atomic import write_text, write_torch
 from pokerirl.errors import PokerIRLError
+from pokerirl.execution import progress_share
 from pokerirl.irl.airl import TrainResult, baselines, default_nets, train
 from pokerirl.irl.config import AIRLConfig
 from pokerirl.irl.nets import ACTIVATIONS, REWARD_FAMILIES, NetSpec, RewardFamily, build_nets
@@ -185,6 +186,9 @@ def begin_run(
     return MetricsLog(folder / METRICS_FILE)
 
 
+BASELINE_SHARE = 0.3  # of a run's time: behaviour cloning has no adversary to train
+
+
 def train_into(
     data: Transitions,
     folder: Path,
@@ -205,16 +209,19 @@ def train_into(
     train_data, val_data, val_groups = data.split(
         val_fraction=config.val_fraction, seed=config.seed
     )
-    found = run_baselines(train_data, val_data, config=config, device=device, progress=progress)
+    with progress_share(0.0, BASELINE_SHARE):  # the baseline's epochs, then the run's
+        found = run_baselines(train_data, val_data, config=config, device=device,
+                              progress=progress)  # fmt: skip
     log = begin_run(folder, val_groups=val_groups, baselines=found)
-    result = train(
-        train_data,
-        val_data,
-        config=config,
-        device=device,
-        progress=progress,
-        on_epoch=log.write,
-    )
+    with progress_share(BASELINE_SHARE, 1.0):
+        result = train(
+            train_data,
+            val_data,
+            config=config,
+            device=device,
+            progress=progress,
+            on_epoch=log.write,
+        )
     data_info = {**data_record(data, train_data, val_data, path=data_path), **(data_notes or {})}
     save_run(result, folder, algo=algo, data=data_info, baselines=found, device=device)
     # Without a legal mask, legal_majority is majority under another name: not drawn.

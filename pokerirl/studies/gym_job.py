@@ -29,6 +29,7 @@ from typing import Any
 
 from pokerirl.atomic import write_text
 from pokerirl.errors import InputError, Remedy
+from pokerirl.execution import watched
 from pokerirl.gym.experts import CONFIG_FILE, METRICS_FILE, MODEL_FILE, ExpertRecord, require_gym
 from pokerirl.gym.tasks import task
 from pokerirl.meanstd import MeanStd, mean_std
@@ -161,8 +162,10 @@ def rl_runs(
     eval_episodes: int,
     rl_backend: str,
     overwrite: bool,
+    progress: bool = False,
 ) -> RLRuns:
-    """RL runs ``out/run-<k>`` (seed k) on the env reward or ``reward_run``'s learned reward.
+    """RL runs ``out/run-<k>`` (seed k) on the env reward or ``reward_run``'s learned reward;
+    ``progress``: a bar that moves with the runs' timesteps.
 
     Resumable: the finished runs of a folder trained with the same settings are kept; other
     settings (the backend too) are refused, unless ``overwrite`` (``out/rl.job.json`` records
@@ -205,24 +208,27 @@ def rl_runs(
         else:
             todo.append(k)
     if rl_backend == "sb3":
-        for k in todo:
-            with staged_folder(out / f"run-{k}") as stage:  # a run is whole, or not at all
-                result = train_rl(
-                    env,
-                    reward=reward,
-                    reward_name=reward_name,
-                    seed=k,
-                    timesteps=timesteps,
-                    evaluations=evaluations,
-                    eval_episodes=eval_episodes,
-                    out=stage,
-                )
-            found[k] = result.final_return
+        with watched("RL runs", total=len(todo), enabled=progress and bool(todo)) as run_done:
+            for k in todo:
+                with staged_folder(out / f"run-{k}") as stage:  # a run is whole, or not at all
+                    result = train_rl(
+                        env,
+                        reward=reward,
+                        reward_name=reward_name,
+                        seed=k,
+                        timesteps=timesteps,
+                        evaluations=evaluations,
+                        eval_episodes=eval_episodes,
+                        out=stage,
+                    )
+                found[k] = result.final_return
+                run_done()
     elif todo:
         from pokerirl.gym.lockstep.group import train_rl_group
 
         with ExitStack() as stack:  # every run of the group lands whole, or none does
             stages = [stack.enter_context(staged_folder(out / f"run-{k}")) for k in todo]
+            stack.enter_context(watched(f"RL, {len(todo)} runs in lock-step", enabled=progress))
             results = train_rl_group(
                 env,
                 rewards=[reward] * len(todo),
