@@ -67,3 +67,20 @@ def test_without_tensorboard_it_is_one_line(
     monkeypatch.setitem(sys.modules, "torch.utils.tensorboard", None)  # as if not installed
     with pytest.raises(MissingExtra, match=r"pip install 'pokerirl\[logs\]'"):
         export_scalars(tmp_path / "out", tmp_path / "logs")
+
+
+def test_train_runs_write_their_epochs(tmp_path: Path) -> None:
+    import pyarrow.parquet as pq
+
+    from pokerirl.datasets.toy import toy_expert_table
+
+    table = tmp_path / "toy.parquet"
+    pq.write_table(toy_expert_table(num_hands=100, seed=1, slip=0.1), table)
+    args = ["train", str(table), "--algo", "airl", "--runs", "2", "--epochs", "2", "--out",
+            str(tmp_path / "runs"), "--quiet", "--log-dir", str(tmp_path / "logs")]  # fmt: skip
+    result = CliRunner().invoke(app, args)
+    assert result.exit_code == 0, result.output
+    for run in ("run-0", "run-1"):
+        found = _events(tmp_path / "logs" / run)
+        assert [step for step, _ in found["val_alignment"]] == [1, 2]
+        assert "disc_loss" in found

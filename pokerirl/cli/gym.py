@@ -289,6 +289,7 @@ def gym_irl(
     out: Path = typer.Option(..., "--out", "-o", help="Folder of run-<k> and summary.json."),
     overwrite: bool = typer.Option(False, help="Replace earlier runs in OUT."),
     threads: int = typer.Option(1, min=1, help="torch threads."),
+    log_dir: Path | None = typer.Option(None, "--log-dir", metavar="DIR", help=LOG_DIR_HELP),
 ) -> None:
     """AIRL, H-AIRL or GAIL on a task's expert data; each epoch's policy is evaluated in the env."""
     from dataclasses import replace
@@ -344,6 +345,7 @@ def gym_irl(
     if result.final_alignment is not None:
         line += f", alignment {100 * result.final_alignment.measured[0]:.1f}%"
     echo(f"{line}; wrote {out}")
+    write_logs(out, log_dir)
 
 
 @gym_app.command("reward-map")

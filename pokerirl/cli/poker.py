@@ -411,6 +411,7 @@ def train(
         "cards N times with the last run's policy as the behaviour model and train again "
         "(OUT/round-<r>, OUT/table-<r>.parquet, OUT/em.json); one run only.",
     ),
+    log_dir: Path | None = typer.Option(None, "--log-dir", metavar="DIR", help=LOG_DIR_HELP),
 ) -> None:
     """Learn a reward function with AIRL, Hybrid-AIRL or GAIL from an expert decision table.
 
@@ -460,6 +461,7 @@ def train(
                  + f", = observed actions {found['policy_agree_observed']:.1%}; reward "
                  f"argmax = imputed {found['reward_agree_imputed']:.1%}")  # fmt: skip
         echo(f"wrote {out}/round-0..{em_rounds} and {out}/em.json")
+        write_logs(Path(out), log_dir)
         return
     summary = train_runs(
         table,
@@ -481,6 +483,7 @@ def train(
         _echo_run(algo, summary.out_dir, summary.metrics, summary.baselines,
                   (summary.train_rows, summary.val_rows))  # fmt: skip
     echo(f"{summary.samples_per_second:,.0f} samples/s; wrote {summary.out_dir}")
+    write_logs(Path(out), log_dir)
 
 
 def _echo_run(
