@@ -43,9 +43,11 @@ True
 from __future__ import annotations
 
 import math
+import os
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field, replace
+from pathlib import Path
 from typing import Any
 
 import torch
@@ -135,6 +137,27 @@ class TrainResult:
         """Training throughput: expert samples per second of optimization steps."""
         seconds = sum(self.epoch_seconds)
         return self.samples_per_epoch * len(self.epoch_seconds) / seconds if seconds else math.nan
+
+    def save(
+        self,
+        folder: str | os.PathLike[str],
+        *,
+        algo: str,
+        data: Mapping[str, Any] | None = None,
+        baselines: Mapping[str, float] | None = None,
+    ) -> Path:
+        """Write this result as a run folder (``reward.pt``, ``policy.pt``, ``config.json``,
+        ``metrics.jsonl``), which :func:`~pokerirl.irl.run.load_reward`,
+        :func:`~pokerirl.irl.run.load_policy` and every command read; no training again.
+        ``algo`` is recorded (``airl``, ``hairl``, ``gail``); ``data`` describes the data."""
+        from pokerirl.irl.run import MetricsLog, save_run
+
+        out = Path(folder)
+        save_run(self, out, algo=algo, data=data or {}, baselines=baselines)
+        log = MetricsLog(out / "metrics.jsonl")
+        for line in self.metrics:
+            log.write(line)
+        return out
 
 
 @dataclass
