@@ -725,7 +725,11 @@ def _map_ray(
             ready, _ = ray.wait(list(pending), num_returns=1, timeout=wait)
             if sink is not None:
                 running = set(pending.values())
-                for unit, fraction in ray.get(sink.take.remote()).items():
+                try:
+                    latest = ray.get(sink.take.remote())
+                except RayError:  # progress is never worth a run: go on without it
+                    sink, latest = None, {}
+                for unit, fraction in latest.items():
                     if unit in running:
                         bar.partial(unit, fraction)
             if not ready:

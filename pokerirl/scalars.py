@@ -70,7 +70,7 @@ def _summary_writer() -> Any:
         from torch.utils.tensorboard import SummaryWriter
     except ImportError as error:  # torch's writer needs the tensorboard package
         raise MissingExtra(
-            f"--log-dir needs tensorboard (pip install 'pokerirl[logs]'): {error}"
+            f"TensorBoard scalars need tensorboard (pip install 'pokerirl[logs]'): {error}"
         ) from None
     return SummaryWriter
 
@@ -81,7 +81,7 @@ def export_scalars(out: str | os.PathLike[str], log_dir: str | os.PathLike[str])
     written. A run's folder there is replaced whole: no stale events from a run before."""
     out, log_dir = Path(out), Path(log_dir)
     if log_dir.exists() and not log_dir.is_dir():
-        raise InputError(f"--log-dir {log_dir} exists and is not a folder")
+        raise InputError(f"{log_dir} exists and is not a folder")
     runs = sorted(p.parent for p in out.rglob(METRICS) if not _hidden(p.relative_to(out)))
     if not runs:
         return []
