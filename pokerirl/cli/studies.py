@@ -43,13 +43,14 @@ def demo(
     ),
     overwrite: bool = typer.Option(False, "--overwrite", help="Recompute changed units."),
     gym: bool = typer.Option(
-        True, "--gym/--no-gym", help="Also run the Gymnasium study's demo preset (~3 min)."
+        True, "--gym/--no-gym", help="Also run the Gymnasium study's demo preset on MountainCar."
     ),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bars."),
 ) -> None:
     """Run the poker study (pokerirl study --preset demo) on built-in synthetic data and print
     its report, then the Gymnasium study (pokerirl gym study MountainCar-v0 --preset demo) on
-    the shipped expert. About 5 minutes on 2 cores, the poker report within the first 2.
+    the shipped expert. Sized for about 5 minutes on 2 idle cores, the poker report first
+    (docs/cli.md has the timings).
 
     synth -> ingest -> IRL (airl, hairl) -> agents (dqn, airl_dqn, hairl_dqn) -> Table 1
     tournament -> panel -> report.md, report.json and figures; then OUT/gym: expert data ->
