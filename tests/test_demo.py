@@ -32,3 +32,57 @@ def test_demo_is_the_study_on_synthetic_data(tmp_path: Path) -> None:
     run_demo(tmp_path, config, say=said.append)
     assert "      the table is finished already, reused" in said
     assert {p: p.stat().st_mtime_ns for p in units} == units
+
+
+def test_the_demo_defaults_are_the_demo_presets_smaller_than_quick() -> None:
+    from pokerirl.gym.presets import PRESETS as GYM_PRESETS
+    from pokerirl.studies.poker import PRESETS
+
+    config = DemoConfig()
+    assert config.study == PRESETS["demo"] and config.gym == GYM_PRESETS["demo"]
+    demo, quick = PRESETS["demo"], PRESETS["quick"]
+    # The quick preset's IRL and training length; fewer seeds and hands played.
+    assert (demo.runs, demo.irl_epochs, demo.agent_hands) == (
+        quick.runs, quick.irl_epochs, quick.agent_hands)  # fmt: skip
+    assert len(demo.seeds) < len(quick.seeds) and demo.hands < quick.hands
+    assert demo.panel_hands < quick.panel_hands and 0 < demo.lbr_hands < quick.lbr_hands
+    gym, gym_quick = GYM_PRESETS["demo"], GYM_PRESETS["quick"]
+    env = "MountainCar-v0"
+    assert gym.tasks == (env,) and gym.irl(env) == gym_quick.irl(env)
+    assert gym.rl(env).dqn == gym_quick.rl(env).dqn
+    assert gym.rl(env).timesteps < gym_quick.rl(env).timesteps and gym.runs < gym_quick.runs
+
+
+def test_the_demo_command_prints_the_poker_report_before_the_gym_half_starts(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    pytest.importorskip("gymnasium")
+    pytest.importorskip("stable_baselines3")
+    from types import SimpleNamespace
+
+    import typer
+    from typer.testing import CliRunner
+
+    from pokerirl.cli import app
+    from pokerirl.studies import demo
+
+    seen: list[DemoConfig] = []
+
+    def poker(out: Path, config: DemoConfig, **options: object) -> SimpleNamespace:
+        seen.append(config)
+        return SimpleNamespace(markdown="# THE POKER REPORT")
+
+    def gym(out: Path, config: DemoConfig, **options: object) -> SimpleNamespace:
+        seen.append(config)
+        typer.echo("THE GYM HALF STARTS")
+        return SimpleNamespace(markdown="# THE GYM REPORT")
+
+    monkeypatch.setattr(demo, "run_demo", poker)
+    monkeypatch.setattr(demo, "run_gym_demo", gym)
+    result = CliRunner().invoke(app, ["demo", "--out", str(tmp_path), "-q"])
+    assert result.exit_code == 0, result.output
+    text = result.output
+    order = ["# THE POKER REPORT", "gym: the demo study on MountainCar-v0",
+             "THE GYM HALF STARTS", "# THE GYM REPORT"]  # fmt: skip
+    assert [text.index(line) for line in order] == sorted(text.index(line) for line in order)
+    assert seen == [DemoConfig(), DemoConfig()]  # the command's defaults are the demo presets

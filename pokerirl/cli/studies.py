@@ -43,26 +43,24 @@ def demo(
     ),
     overwrite: bool = typer.Option(False, "--overwrite", help="Recompute changed units."),
     gym: bool = typer.Option(
-        True, "--gym/--no-gym", help="Also run the Gymnasium study's quick preset (~8 min)."
+        True, "--gym/--no-gym", help="Also run the Gymnasium study's demo preset on MountainCar."
     ),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bars."),
 ) -> None:
-    """Run the study (pokerirl study, quick preset) on built-in synthetic data, then the
-    Gymnasium study's quick preset (pokerirl gym study MountainCar-v0) on the shipped expert.
+    """Run the poker study (pokerirl study --preset demo) on built-in synthetic data and print
+    its report, then the Gymnasium study (pokerirl gym study MountainCar-v0 --preset demo) on
+    the shipped expert. Sized for about 5 minutes on 2 idle cores, the poker report first
+    (docs/cli.md has the timings).
 
     synth -> ingest -> IRL (airl, hairl) -> agents (dqn, airl_dqn, hairl_dqn) -> Table 1
     tournament -> panel -> report.md, report.json and figures; then OUT/gym: expert data ->
-    AIRL and H-AIRL -> DQN on each reward -> OUT/gym/report.md. A rerun skips finished work.
+    AIRL and H-AIRL -> DQN on each reward and on the env reward -> OUT/gym/report.md. A rerun
+    skips finished work.
     """
     from pokerirl.studies.demo import DemoConfig, run_demo, run_gym_demo
 
-    result = run_demo(
-        out,
-        settings_from_options(DemoConfig, seed=seed, jobs=jobs),
-        say=echo,
-        progress=not quiet,
-        overwrite=overwrite,
-    )
+    config = settings_from_options(DemoConfig, seed=seed, jobs=jobs)
+    result = run_demo(out, config, say=echo, progress=not quiet, overwrite=overwrite)
     echo("")
     echo(result.markdown)
     echo(f"report: {out / 'report.md'} (pokerirl report {out})")
@@ -76,8 +74,9 @@ def demo(
         warnings.warn(f"the Gymnasium demo is skipped: {error}", stacklevel=1)
         return
     echo("")
-    echo(f"gym: the quick study on MountainCar-v0 -> {out / 'gym'}")
-    gym_result = run_gym_demo(out, jobs=jobs, say=echo, progress=not quiet, overwrite=overwrite)
+    tasks = ", ".join(config.gym.tasks)
+    echo(f"gym: the {config.gym.name} study on {tasks} -> {out / 'gym'}")
+    gym_result = run_gym_demo(out, config, say=echo, progress=not quiet, overwrite=overwrite)
     echo("")
     echo(gym_result.markdown)
     echo(f"report: {out / 'gym' / 'report.md'}")

@@ -566,6 +566,20 @@ PRESETS: dict[str, StudyPreset] = {
             notes="MountainCar only, 3 runs, short IRL and RL phases; the demo runs it.",
         ),
         StudyPreset(
+            name="demo",
+            tasks=("MountainCar-v0",),
+            runs=2,
+            # `pokerirl demo`'s Gymnasium half: the quick preset's data and IRL budgets on 2 runs,
+            # and 20k DQN steps. The quick study's learned-reward DQN runs reached the flag from
+            # their first evaluation (5k steps) while the env-reward runs mostly did not by 50k,
+            # so 20k steps still separate them.
+            transitions=25_000,
+            epochs=20,
+            eval_episodes=5,
+            rl_timesteps=20_000,
+            notes="MountainCar only, 2 runs, the quick preset's IRL, 20k DQN steps; the demo.",
+        ),
+        StudyPreset(
             name="paper",
             tasks=TASK_ORDER,
             runs=10,

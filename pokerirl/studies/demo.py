@@ -1,15 +1,19 @@
-"""The poker study (:func:`pokerirl.studies.poker.run_study`, quick preset) on built-in
-synthetic data, then the Gymnasium study's quick preset on the shipped MountainCar expert.
+"""The poker study (:func:`pokerirl.studies.poker.run_study`, demo preset) on built-in
+synthetic data, then the Gymnasium study's demo preset on the shipped MountainCar expert.
 
 1. ``synth``: a month of heads-up 10-20 hands between two scripted players, in IRC format
    (written once; a rerun reuses it, so the study's stages resume);
 2. the study: ingest -> IRL (AIRL, H-AIRL) -> agents (DQN, AIRL-DQN, H-AIRL-DQN) -> Table 1
    tournament -> panel -> ``report.md``, ``report.json``, ``panel.csv`` and ``figures/``;
-3. :func:`run_gym_demo`: ``pokerirl gym study MountainCar-v0 --preset quick`` into
+3. :func:`run_gym_demo`: ``pokerirl gym study MountainCar-v0 --preset demo`` into
    ``out/gym`` (needs the ``pokerirl[gym]`` extra).
 
-One code path: ``pokerirl demo`` is ``pokerirl study`` on the synthetic month, then
-``pokerirl gym study``.
+One code path: ``pokerirl demo`` is ``pokerirl study --preset demo`` on the synthetic month,
+then ``pokerirl gym study MountainCar-v0 --preset demo``; both presets are sized so that the
+poker report prints within about 2 minutes and the whole demo takes about 5 on 2 cores.
+
+>>> DemoConfig().study.preset, DemoConfig().gym.name
+('demo', 'demo')
 """
 
 from __future__ import annotations
@@ -23,6 +27,8 @@ from typing import TYPE_CHECKING
 
 from pokerirl.execution import Backend
 from pokerirl.game.synth import write_synthetic_month
+from pokerirl.gym.presets import PRESETS as GYM_PRESETS
+from pokerirl.gym.presets import StudyPreset
 from pokerirl.studies.poker import PRESETS, StudyConfig, StudyResult, run_study
 
 if TYPE_CHECKING:  # the gym layer loads only when its demo runs
@@ -34,12 +40,14 @@ GYM_FOLDER = "gym"
 
 @dataclass(frozen=True, kw_only=True)
 class DemoConfig:
-    """The synthetic month's size and seed, and the study's settings (the quick preset)."""
+    """The synthetic month's size and seed, the poker study's settings and the Gymnasium
+    study's (both their ``demo`` presets)."""
 
     synthetic_hands: int = 5_000
     seed: int = 0
     jobs: int = 2
-    study: StudyConfig = field(default_factory=lambda: PRESETS["quick"])
+    study: StudyConfig = field(default_factory=lambda: PRESETS["demo"])
+    gym: StudyPreset = field(default_factory=lambda: GYM_PRESETS["demo"])
 
 
 def synthetic_month(root: Path, *, hands: int, seed: int) -> Path:
@@ -70,21 +78,20 @@ def run_demo(
 
 def run_gym_demo(
     out: str | os.PathLike[str],
+    config: DemoConfig = DemoConfig(),
     *,
-    jobs: int = 2,
     say: Callable[[str], None] = lambda message: None,
     progress: bool = False,
     overwrite: bool = False,
 ) -> GymStudyResult:
-    """The Gymnasium study's quick preset (MountainCar-v0: AIRL and H-AIRL, then DQN on each
-    reward and on the env reward, 3 runs each) into ``out/gym``."""
-    from pokerirl.gym.presets import PRESETS as GYM_PRESETS
+    """The Gymnasium study of ``config.gym`` (the demo preset: MountainCar-v0, AIRL and
+    H-AIRL, then DQN on each reward and on the env reward) into ``out/gym``."""
     from pokerirl.studies.gym import run_gym_study
 
     return run_gym_study(
         Path(out) / GYM_FOLDER,
-        GYM_PRESETS["quick"],
-        backend=Backend(jobs=jobs),
+        config.gym,
+        backend=Backend(jobs=config.jobs),
         overwrite=overwrite,
         progress=progress,
         say=say,

@@ -199,6 +199,21 @@ PRESETS: dict[str, StudyConfig] = {
         irl_epochs=1,
         lbr_hands=20,
     ),
+    # `pokerirl demo`'s poker half, sized so that its report prints within about 2 minutes on
+    # 2 cores: the quick preset's IRL (2 runs of 20 epochs) and training length (20k hands),
+    # on 2 seeds (one per IRL run), with fewer evaluation, tournament, panel and LBR hands.
+    "demo": StudyConfig(
+        preset="demo",
+        runs=2,
+        seeds=(0, 1),
+        hands=50_000,
+        panel_hands=10_000,
+        agent_hands=20_000,
+        eval_every=5_000,
+        eval_hands=2_000,
+        irl_epochs=20,
+        lbr_hands=200,
+    ),
     # The authors' protocol (src/main.py, train_rl.py): per experiment k, IRL run k with their
     # settings, then a sparse DQN, an AIRL-DQN and an H-AIRL-DQN with their DQN preset (5,000
     # hands; the > 0.8 x best checkpoint plays), then 50 x 1,000 non-duplicate games per pair.
