@@ -91,7 +91,8 @@ def study(
         "quick",
         "--preset",
         metavar=choices(STUDY_PRESETS),
-        help="smoke (seconds; checks the pipeline, its numbers mean nothing), quick, paper "
+        help="smoke (seconds; checks the pipeline, its numbers mean nothing), demo (what "
+        "pokerirl demo runs), quick, paper "
         "(ours) or authors (their IRL and DQN settings and their tournament protocol, beside "
         "our duplicate-deal Table 1).",
     ),
