@@ -446,6 +446,7 @@ def gym_study(
         help="An expert folder (gym expert) for the data; default: the shipped one. Needed "
         "for a task the paper does not have.",
     ),
+    log_dir: Path | None = typer.Option(None, "--log-dir", metavar="DIR", help=LOG_DIR_HELP),
 ) -> None:
     """The paper's Gymnasium study: shipped expert -> data -> IRL (AIRL and H-AIRL) -> RL (env
     reward, AIRL and H-AIRL rewards) -> summary.json, figures/ and report.md beside the
@@ -474,6 +475,7 @@ def gym_study(
     echo("")
     echo(result.markdown)
     echo(f"report: {out / 'report.md'}")
+    write_logs(out, log_dir)
 
 
 @gym_app.command("sweep")

@@ -11,6 +11,7 @@ import typer
 from pokerirl.cli.app import (
     ENCODING_CHOICES,
     INTERRUPTED,
+    LOG_DIR_HELP,
     MAX_SEEDS,
     RAY_HELP,
     SEED_OPTION,
@@ -22,6 +23,7 @@ from pokerirl.cli.app import (
     on_error,
     seed_list,
     settings_from_options,
+    write_logs,
 )
 from pokerirl.errors import InputError, MissingExtra, UsageError
 from pokerirl.studies.poker.config import AGENT_PRESETS, FOLDS, TRANSFORMS
@@ -141,6 +143,7 @@ def study(
         False, "--overwrite", help="Recompute changed units, and the units that read them."
     ),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bars."),
+    log_dir: Path | None = typer.Option(None, "--log-dir", metavar="DIR", help=LOG_DIR_HELP),
 ) -> None:
     """The paper's poker study in one command: ingest, IRL (AIRL and H-AIRL, several runs),
     DQN agents (sparse, AIRL and H-AIRL rewards), Table 1, the panel, and a report beside the
@@ -179,6 +182,7 @@ def study(
     echo("")
     echo(result.markdown)
     echo(f"report: {out / 'report.md'} (pokerirl report {out})")
+    write_logs(out, log_dir)
 
 
 @app.command()
