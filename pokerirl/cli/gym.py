@@ -160,6 +160,8 @@ def gym_experts(
     if format == "json":
         echo(json.dumps(manifest, indent=2))
         return
+    # The expert's evaluation, not the return of the demonstrations it gives (docs/gym.md).
+    echo("task             algo  the expert's evaluation: return over deterministic episodes")
     for e in manifest:
         echo(
             f"{e['env']:<16} {e['algo']:<4} {e['return_mean']:>9.1f} +- {e['return_std']:<7.1f}"
