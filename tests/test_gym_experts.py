@@ -159,5 +159,6 @@ def test_experts_command_prints_the_manifest_with_exactly_its_keys() -> None:
     assert [list(e) for e in printed] == [list(MANIFEST_KEYS)] * len(printed)
     assert [e["env"] for e in printed] == [e["env"] for e in shipped_manifest()]
     text = invoke("gym", "experts")
-    assert text.exit_code == 0 and len(text.output.splitlines()) == len(printed)
+    head, *rows = text.output.splitlines()  # a header naming the figure, then one per expert
+    assert text.exit_code == 0 and len(rows) == len(printed) and "evaluation" in head
     assert invoke("gym", "experts", "--format", "yaml").exit_code != 0
