@@ -279,7 +279,7 @@ def gym_irl(
         None, min=1, max=MAX_SEEDS, help="Runs in lock-step (default: preset's)."
     ),
     preset: str = typer.Option(
-        "paper", metavar=choices(PRESETS), help="quick or paper: the budgets."
+        "paper", metavar=choices(PRESETS), help="quick, demo or paper (budgets)."
     ),
     seed: int = typer.Option(
         0, **SEED_OPTION, help="Run k uses seed + k; the data split uses seed."
@@ -427,7 +427,7 @@ def gym_study(
     task: str = typer.Argument(..., metavar="ENV|all", help="A task, e.g. MountainCar-v0, or all."),
     out: Path = typer.Option(..., "--out", "-o", help="The study folder."),
     preset_name: str = typer.Option(
-        "quick", "--preset", metavar=choices(PRESETS), help="quick or paper: the budgets."
+        "quick", "--preset", metavar=choices(PRESETS), help="quick, demo or paper (budgets)."
     ),
     runs: int | None = typer.Option(
         None, "--runs", min=1, max=MAX_SEEDS, help="Runs per algorithm and reward."
@@ -489,7 +489,7 @@ def gym_sweep(
     ),
     out: Path = typer.Option(..., "--out", "-o", help="The sweep folder."),
     preset_name: str = typer.Option(
-        "quick", "--preset", metavar=choices(PRESETS), help="quick or paper: the budgets."
+        "quick", "--preset", metavar=choices(PRESETS), help="quick, demo or paper (budgets)."
     ),
     runs: int | None = typer.Option(
         None, "--runs", min=1, max=MAX_SEEDS, help="Runs per point."
