@@ -578,7 +578,7 @@ def reward_card_command(
         if not split.is_file():
             raise InputError(f"--validation needs a run folder with split.json; {reward} has none")
         groups = _validation_groups(split)
-    states = CardStates.from_table(table, groups=groups)
+    states = CardStates.from_table(table, groups=groups, progress=True)
     card = reward_card(TransformedReward(source, transform), states)
     if not resolved.is_authors and transform == "raw":  # the run's own numbers, to flag below-BC
         from pokerirl.irl.run import load_run_config
