@@ -197,13 +197,16 @@ def gym_collect(
     loaded = load_expert(resolve_expert_dir(expert, env))
     if loaded.env_id != env:
         raise InputError(f"{expert}: an expert for {loaded.env_id}, not {env}")
-    summary = collect(
-        loaded,
-        out,
-        transitions=transitions,
-        seed=seed,
-        deterministic=None if stochastic is None else not stochastic,
-    )
+    from pokerirl.execution import watched
+
+    with watched(f"expert data, {transitions:,} transitions"):  # the episodes report to it
+        summary = collect(
+            loaded,
+            out,
+            transitions=transitions,
+            seed=seed,
+            deterministic=None if stochastic is None else not stochastic,
+        )
     echo(
         f"wrote {summary.transitions:,} transitions ({summary.episodes} episodes) to {out}; "
         f"expert return {summary.return_mean:.1f} +- {summary.return_std:.1f} "
