@@ -78,12 +78,12 @@ def claim_folder(
     """
     path = root / STUDY_JSON
     try:
-        found = json.loads(path.read_text())
-        old = found["settings"] if found.get("format") == STUDY_FORMAT else None
+        recorded: str | None = path.read_text()
     except FileNotFoundError:
-        old = before()
-    except (OSError, ValueError, TypeError, KeyError, AttributeError):
-        old = None  # damaged: the units' own records still guard every output
+        recorded = None
+    except (OSError, ValueError):  # unreadable, or not text: damaged
+        recorded = ""
+    old = before() if recorded is None else _recorded_settings(recorded)
     new = json.loads(json.dumps(settings))  # as JSON reads it back: tuples are lists
     if isinstance(old, Mapping) and not overwrite:
         kept = {key: new[key] for key in old if key in new}
@@ -101,11 +101,21 @@ def claim_folder(
                 remedy=Remedy.RECOMPUTE,
             )
     text = json.dumps({"format": STUDY_FORMAT, "settings": new}, indent=2) + "\n"
-    if not path.is_file() or path.read_text() != text:
+    if recorded != text:
         from pokerirl.atomic import write_text
 
         root.mkdir(parents=True, exist_ok=True)
         write_text(path, text)
+
+
+def _recorded_settings(text: str) -> Any:
+    """The settings a ``study.json`` holds; None when it is damaged (the units' own records
+    still guard every output)."""
+    try:
+        found = json.loads(text)
+        return found["settings"] if found.get("format") == STUDY_FORMAT else None
+    except (ValueError, TypeError, KeyError, AttributeError):
+        return None
 
 
 def read_jsonl(path: Path) -> list[dict[str, Any]]:

@@ -131,6 +131,6 @@ def run_study(
 def _report_settings(root: Path) -> dict[str, object] | None:
     """The settings of a study an older pokerirl finished in ``root`` (its report's)."""
     try:
-        return dict(load_study_report(root).settings) if is_study_report(root) else None
-    except StudyError:  # damaged: the units' own records still guard every output
+        return dict(load_study_report(root).settings)
+    except StudyError:  # none, not a study's, or damaged: the units' records guard the rest
         return None
