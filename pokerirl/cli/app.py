@@ -323,9 +323,13 @@ RAY_HELP = (
     "Run the units on the Ray cluster at ADDRESS (default: $RAY_ADDRESS when set), or 'local' "
     "for a private single-machine Ray. Results do not change."
 )
-LOG_DIR_HELP = (
-    "Also write each run's scalars into DIR as TensorBoard event files and progress.csv "
-    "(SB3's layout; needs pip install 'pokerirl[logs]'). metrics.jsonl stays the record."
+# --log-dir DIR, one option for every command that trains runs (typer options may be shared).
+LOG_DIR = typer.Option(
+    None,
+    "--log-dir",
+    metavar="DIR",
+    help="Also write each run's scalars into DIR as TensorBoard event files and progress.csv "
+    "(SB3's layout; needs pip install 'pokerirl[logs]'). metrics.jsonl stays the record.",
 )
 
 

@@ -11,7 +11,7 @@ import typer
 
 from pokerirl.cli.app import (
     INTERRUPTED,
-    LOG_DIR_HELP,
+    LOG_DIR,
     MAX_SEED,
     MAX_SEEDS,
     RAY_HELP,
@@ -232,7 +232,7 @@ def gym_rl(
     overwrite: bool = typer.Option(False, help="Replace runs trained with other settings."),
     threads: int = typer.Option(1, min=1, help="torch threads."),
     rl_backend: str = RL_BACKEND,
-    log_dir: Path | None = typer.Option(None, "--log-dir", metavar="DIR", help=LOG_DIR_HELP),
+    log_dir: Path | None = LOG_DIR,
     quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bar."),
 ) -> None:
     """Train SB3 PPO (DQN for MountainCar) on a learned reward; the curve is the true return.
@@ -294,7 +294,7 @@ def gym_irl(
     out: Path = typer.Option(..., "--out", "-o", help="Folder of run-<k> and summary.json."),
     overwrite: bool = typer.Option(False, help="Replace earlier runs in OUT."),
     threads: int = typer.Option(1, min=1, help="torch threads."),
-    log_dir: Path | None = typer.Option(None, "--log-dir", metavar="DIR", help=LOG_DIR_HELP),
+    log_dir: Path | None = LOG_DIR,
 ) -> None:
     """AIRL, H-AIRL or GAIL on a task's expert data; each epoch's policy is evaluated in the env."""
     from dataclasses import replace
@@ -451,7 +451,7 @@ def gym_study(
         help="An expert folder (gym expert) for the data; default: the shipped one. Needed "
         "for a task the paper does not have.",
     ),
-    log_dir: Path | None = typer.Option(None, "--log-dir", metavar="DIR", help=LOG_DIR_HELP),
+    log_dir: Path | None = LOG_DIR,
 ) -> None:
     """The paper's Gymnasium study: shipped expert -> data -> IRL (AIRL and H-AIRL) -> RL (env
     reward, AIRL and H-AIRL rewards) -> summary.json, figures/ and report.md beside the

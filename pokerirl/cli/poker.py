@@ -13,7 +13,7 @@ import typer
 from pokerirl.cli.app import (
     ENCODING_CHOICES,
     INTERRUPTED,
-    LOG_DIR_HELP,
+    LOG_DIR,
     MAX_SEEDS,
     RAY_HELP,
     RUN_ADVICE,
@@ -411,7 +411,7 @@ def train(
         "cards N times with the last run's policy as the behaviour model and train again "
         "(OUT/round-<r>, OUT/table-<r>.parquet, OUT/em.json); one run only.",
     ),
-    log_dir: Path | None = typer.Option(None, "--log-dir", metavar="DIR", help=LOG_DIR_HELP),
+    log_dir: Path | None = LOG_DIR,
 ) -> None:
     """Learn a reward function with AIRL, Hybrid-AIRL or GAIL from an expert decision table.
 
@@ -709,7 +709,7 @@ def agent_train(
         help="What the q-network reads: rlcard (RLCard's 72-d observation) or strength (hole "
         "and board apart, with hand features). The reward reads its own run's encoding.",
     ),
-    log_dir: Path | None = typer.Option(None, "--log-dir", metavar="DIR", help=LOG_DIR_HELP),
+    log_dir: Path | None = LOG_DIR,
     quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bar."),
 ) -> None:
     """Train a DQN agent (or one per seed) on the sparse payoff or a learned reward.

@@ -11,7 +11,7 @@ import typer
 from pokerirl.cli.app import (
     ENCODING_CHOICES,
     INTERRUPTED,
-    LOG_DIR_HELP,
+    LOG_DIR,
     MAX_SEEDS,
     RAY_HELP,
     SEED_OPTION,
@@ -143,7 +143,7 @@ def study(
         False, "--overwrite", help="Recompute changed units, and the units that read them."
     ),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bars."),
-    log_dir: Path | None = typer.Option(None, "--log-dir", metavar="DIR", help=LOG_DIR_HELP),
+    log_dir: Path | None = LOG_DIR,
 ) -> None:
     """The paper's poker study in one command: ingest, IRL (AIRL and H-AIRL, several runs),
     DQN agents (sparse, AIRL and H-AIRL rewards), Table 1, the panel, and a report beside the
