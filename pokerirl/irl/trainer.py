@@ -129,6 +129,8 @@ class ManyResult:
 
 # --------------------------------------------------------------------------- the trainer
 
+_OPTIONAL = ("mask", "env", "next_obs", "dones", "weights")  # what a table may lack
+
 
 class AdversarialTrainer:
     """R runs of one config on the same data in lock-step, one per seed.
@@ -190,13 +192,21 @@ class AdversarialTrainer:
             decay=config.noise_decay,
         )
         self.sigma = sigma.to(device)
-        self.obs = data.obs.to(device)
-        self.action_vectors = data.action_vectors().to(device)
-        self.mask = None if data.legal_mask is None else data.legal_mask.to(device)
-        self.env = None if data.rewards is None else data.rewards.to(device)
-        self.next_obs = None if data.next_obs is None else data.next_obs.to(device)
-        self.dones = None if data.dones is None else data.dones.to(device)
-        self.weights = None if data.weights is None else data.weights.to(device)
+        optional = {
+            "mask": data.legal_mask,
+            "env": data.rewards,  # r_env
+            "next_obs": data.next_obs,
+            "dones": data.dones,
+            "weights": data.weights,
+        }
+        self.rows = Batch(  # every training row, on the device
+            obs=data.obs.to(device),
+            expert=data.action_vectors().to(device),
+            **{
+                name: None if value is None else value.to(device)
+                for name, value in optional.items()
+            },
+        )
         # One Adam over stacked parameters is R independent Adams (it is elementwise).
         self.reward_opt = FlatAdam(
             self.rewards.params, lr=config.reward_lr, weight_decay=config.reward_weight_decay
@@ -234,8 +244,8 @@ class AdversarialTrainer:
     def draw_epoch(self) -> EpochDraw:
         """All of an epoch's random numbers, per run from its own generator, in a fixed
         order (the rows, the head's, the noise's ε, then σ's shuffle)."""
-        n, steps, batch = len(self.obs), self.steps, self.batch
-        width = self.action_vectors.shape[1]
+        n, steps, batch = len(self.rows.obs), self.steps, self.batch
+        width = self.rows.expert.shape[1]
         perm, act, noise, sigma = [], [], [], []
         for gen in self.generators:
             kw: dict[str, Any] = {"generator": gen, "device": self.device}
@@ -256,17 +266,12 @@ class AdversarialTrainer:
 
     def gather(self, rows: Tensor) -> Batch:
         """The training tensors at ``rows`` (any shape of indices)."""
-        optional = {
-            name: None if value is None else value[rows]
-            for name, value in (
-                ("mask", self.mask),
-                ("env", self.env),
-                ("next_obs", self.next_obs),
-                ("dones", self.dones),
-                ("weights", self.weights),
-            )
-        }
-        return Batch(obs=self.obs[rows], expert=self.action_vectors[rows], **optional)
+        optional = {name: getattr(self.rows, name) for name in _OPTIONAL}
+        return Batch(
+            obs=self.rows.obs[rows],
+            expert=self.rows.expert[rows],
+            **{name: None if value is None else value[rows] for name, value in optional.items()},
+        )
 
     def step(self, batch: Batch, draw: StepDraw) -> Tensor:
         """One discriminator and one policy update on a batch of (R, B) rows.
@@ -319,8 +324,8 @@ class AdversarialTrainer:
         disc, losses = unpack_steps(record, self.batch)
         f_expert, f_seen = disc.f_expert, disc.f_policy
         lp_expert, lp_seen = disc.log_pi_expert, disc.log_pi_policy
-        env = None if self.env is None else self.env[perm]  # (steps, R, B)
-        weights = None if self.weights is None else self.weights[perm]
+        env = None if self.rows.env is None else self.rows.env[perm]  # (steps, R, B)
+        weights = None if self.rows.weights is None else self.rows.weights[perm]
         d_loss, d_airl, d_env = discriminator_loss(
             f_expert, lp_expert, f_seen, lp_seen, beta=self.beta, env_reward=env,
             weights=weights, discriminator=self.discriminator,
