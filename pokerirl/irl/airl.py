@@ -15,8 +15,12 @@ Per shuffled mini-batch of expert rows (s, a_E[, s', done, r_env]):
    the reparameterized sample. g is the reward's action-dependent part: all of f for the
    ``state_action`` family; for ``shaped`` the γh(s') − h(s) terms do not depend on a.
 
+:class:`~pokerirl.irl.trainer.AdversarialTrainer` runs these steps, with what depends on
+the action space (the forms above: discrete or continuous) in its
+:class:`~pokerirl.irl.heads.PolicyHead`; :func:`train` and :func:`train_many` build one.
+
 AIRL is α = β = 0 and no noise. GAIL is AIRL with another discriminator, D = σ(f): the
-loop asks its :class:`~pokerirl.irl.discriminators.Discriminator` for the logits
+trainer asks its :class:`~pokerirl.irl.discriminators.Discriminator` for the logits
 log D − log(1 − D) wherever it needs them (AIRL's f − log π above, GAIL's f); the policy
 step is the same for both (GAIL's causal-entropy weight is 1). ``docs/method.md`` says
 which choice comes from where.
