@@ -16,7 +16,6 @@ from pokerirl.irl import (
     Transitions,
     default_nets,
 )
-from pokerirl.irl.config import DiscriminatorForm
 from pokerirl.irl.heads import DiscreteActs
 from pokerirl.irl.records import Batch
 
@@ -57,9 +56,7 @@ def _train(
 
 
 class MyAIRL(Discriminator):
-    """AIRL's logit, written by a user."""
-
-    form = DiscriminatorForm.AIRL
+    """AIRL's logit, written by a user (no config or enum entry needed)."""
 
     def logits(self, f: Tensor, log_pi: Tensor) -> Tensor:
         return f - log_pi
@@ -67,8 +64,6 @@ class MyAIRL(Discriminator):
 
 class Shifted(Discriminator):
     """AIRL's logit plus one: another discriminator (still d logit / d f = 1)."""
-
-    form = DiscriminatorForm.AIRL
 
     def logits(self, f: Tensor, log_pi: Tensor) -> Tensor:
         return f - log_pi + 1

@@ -236,7 +236,6 @@ class AdversarialTrainer:
                 alpha=self.alpha,
                 beta=self.beta,
             )
-
         self.hand_derived = isinstance(self.update, fast.HandDerivedStep)
 
     # ------------------------------------------------------------------ one epoch's randomness
