@@ -1,11 +1,14 @@
 """AIRL / Hybrid-AIRL / GAIL reward learning on expert :class:`Transitions`.
 
-:mod:`pokerirl.irl.airl` is the trainer (one run, or R in lock-step; its pieces are
-:mod:`~.losses`, :mod:`~.discriminators` (AIRL's D or GAIL's), :mod:`~.stacked` nets,
-:mod:`~.records`, :mod:`~.evaluate` and :mod:`~.baselines`), :mod:`~.nets` the default
-networks (:class:`RewardNet`, :mod:`~.reward`), :mod:`~.transitions` the data
-(:mod:`~.interop`: to and from the ``imitation`` library's arrays), :mod:`~.run` the run
-folders and :func:`load_reward`.
+:mod:`pokerirl.irl.airl` is the algorithm and its entry points :func:`train` and
+:func:`train_many` (one run, or R in lock-step); :mod:`~.trainer` is its
+:class:`AdversarialTrainer`, made of strategies: a :class:`Discriminator` (AIRL's D or
+GAIL's, :mod:`~.discriminators`) and a :class:`PolicyHead` (discrete or Gaussian,
+:mod:`~.heads`). Its other pieces are :mod:`~.losses`, :mod:`~.fast`, :mod:`~.stacked` nets,
+:mod:`~.records`, :mod:`~.evaluate` and :mod:`~.baselines`; :mod:`~.nets` has the default
+networks (:class:`RewardNet` and :class:`PolicyNet`: :mod:`~.reward`), :mod:`~.transitions`
+the data (:mod:`~.interop`: to and from the ``imitation`` library's arrays), :mod:`~.run` the
+run folders and :func:`load_reward`.
 It knows nothing of poker or Gymnasium (``tests/test_layers.py``): poker tables and
 ``pokerirl train`` are :mod:`pokerirl.poker`, environments :mod:`pokerirl.gym`.
 For example::
@@ -19,6 +22,7 @@ For example::
 from __future__ import annotations
 
 from pokerirl.irl.airl import (
+    AdversarialTrainer,
     ManyResult,
     TrainResult,
     baselines,
@@ -31,6 +35,7 @@ from pokerirl.irl.airl import (
 )
 from pokerirl.irl.config import ALGOS, AIRLConfig, ConfigError, load_config
 from pokerirl.irl.discriminators import AIRLDiscriminator, Discriminator, GAILDiscriminator
+from pokerirl.irl.heads import DiscreteHead, GaussianHead, PolicyHead
 from pokerirl.irl.interop import (
     ImitationTrajectory,
     ImitationTransitions,
@@ -49,7 +54,7 @@ from pokerirl.irl.nets import (
     project_to_simplex,
 )
 from pokerirl.irl.records import Batch, EpochCallback, EpochMetrics, EpochRecord, StepLosses
-from pokerirl.irl.reward import RewardFn, RewardNet
+from pokerirl.irl.reward import PolicyNet, RewardFn, RewardNet
 from pokerirl.irl.run import (
     RewardFunction,
     RunError,
@@ -67,19 +72,24 @@ __all__ = [
     "ALGOS",
     "AIRLConfig",
     "AIRLDiscriminator",
+    "AdversarialTrainer",
     "Batch",
     "ConfigError",
+    "DiscreteHead",
     "DiscretePolicy",
     "Discriminator",
     "EpochCallback",
     "EpochMetrics",
     "EpochRecord",
     "GAILDiscriminator",
+    "GaussianHead",
     "GaussianPolicy",
     "ImitationTrajectory",
     "ImitationTransitions",
     "ManyResult",
     "NetSpec",
+    "PolicyHead",
+    "PolicyNet",
     "RewardFn",
     "RewardFunction",
     "RewardNet",

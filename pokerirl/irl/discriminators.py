@@ -1,6 +1,6 @@
 """The discriminator's form: its logit log D − log(1 − D) from f(s, a) and log π(a|s).
 
-The trainer (:mod:`pokerirl.irl.airl`) asks a :class:`Discriminator` for logits wherever it
+The trainer (:mod:`pokerirl.irl.trainer`) asks a :class:`Discriminator` for logits wherever it
 forms them: the discriminator's loss (:func:`~pokerirl.irl.losses.discriminator_loss`), its
 hand-derived gradient (:mod:`~pokerirl.irl.fast`) and the epoch's accuracies. Everything
 else (the nets, the data, the noise, the supervised term, the policy step) is shared, so

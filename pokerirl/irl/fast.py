@@ -7,10 +7,13 @@ core, building and walking autograd's graph costs more than the arithmetic (see
 activation), one run, discrete actions. :func:`supports` says whether a pair is covered;
 the functions below raise ``ValueError`` for anything else. ``tests/test_irl_fast.py``
 compares every gradient here with autograd on the documented losses.
+:class:`HandDerivedStep` is the trainer's step made of them, which
+:class:`~pokerirl.irl.trainer.AdversarialTrainer` uses in place of its own where they apply.
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import NamedTuple
 
 import torch
@@ -18,7 +21,11 @@ from torch import Tensor, nn
 
 from pokerirl.errors import ConfigError
 from pokerirl.irl.discriminators import AIRL, Discriminator
-from pokerirl.irl.nets import DiscretePolicy, StateActionReward
+from pokerirl.irl.heads import DiscreteHead, StepDraw
+from pokerirl.irl.losses import weighted_mean
+from pokerirl.irl.nets import MASKED_LOGIT, DiscretePolicy, StateActionReward
+from pokerirl.irl.optim import FlatAdam
+from pokerirl.irl.records import Batch, StepLosses, pack_step
 
 
 def _plain_relu_mlp(mlp: nn.Sequential) -> bool:
@@ -174,3 +181,56 @@ def policy_backward(
     grad_logits = probs * (h - (probs * h).sum(dim=-1, keepdim=True))
     grad_logits.add_(probs - expert, alpha=alpha / batch)
     return mlp_backward(policy.mlp, acts, grad_logits)[0]
+
+
+@dataclass(frozen=True, kw_only=True)
+class HandDerivedStep:
+    """:meth:`AdversarialTrainer.step <pokerirl.irl.trainer.AdversarialTrainer.step>` for
+    one run of the covered nets (:func:`supports`), with the gradients above: the same
+    draws, the same discriminator and policy updates, the same (1, 4B + 3) row."""
+
+    reward: StateActionReward
+    policy: DiscretePolicy
+    head: DiscreteHead
+    discriminator: Discriminator
+    reward_opt: FlatAdam
+    policy_opt: FlatAdam
+    adversarial: bool
+    alpha: float
+    beta: float
+
+    @torch.no_grad()
+    def __call__(self, batch: Batch, draw: StepDraw) -> Tensor:
+        one = batch.at(0)  # the one run
+        obs, expert, mask, env, weights = one.obs, one.expert, one.mask, one.env, one.weights
+        acts = mlp_forward(self.policy.mlp, obs)
+        logits = acts[-1] if mask is None else acts[-1].masked_fill(~mask, MASKED_LOGIT)
+        log_pi = torch.log_softmax(logits, dim=-1)
+        probs = log_pi.exp()
+        if self.adversarial:
+            seen = self.head.seen(probs[None], None if mask is None else mask[None], draw)[0]
+            lp = torch.cat(((expert * log_pi).sum(-1), (seen * log_pi).sum(-1)))
+            cache = reward_forward(self.reward, obs, torch.stack((expert, seen)))
+            f = cache.head_acts[-1].view(-1)
+            grad_f = discriminator_grad(f, lp, beta=self.beta, env_reward=env, weights=weights,
+                                        discriminator=self.discriminator)  # fmt: skip
+            self.reward_opt.set_grad(reward_backward(self.reward, cache, grad_f))
+            self.reward_opt.step()
+            disc_record = torch.cat((f, lp))
+        else:
+            disc_record = obs.new_zeros(4 * len(obs))
+        if self.alpha < 1:
+            each = reward_forward(self.reward, obs, self.head.each_action).head_acts[-1]
+            g = each.view(-1, len(obs)).T
+        else:
+            g = torch.zeros_like(log_pi)
+        self.policy_opt.set_grad(
+            policy_backward(self.policy, acts, log_pi, g, expert, self.alpha, weights=weights)
+        )
+        self.policy_opt.step()
+        supervised = weighted_mean(-(expert * log_pi).sum(-1), weights)
+        adversarial = (
+            weighted_mean((probs * (log_pi - g)).sum(-1), weights) if self.alpha < 1 else g[0, 0]
+        )
+        p_loss = (1 - self.alpha) * adversarial + self.alpha * supervised
+        return pack_step(disc_record, StepLosses(p_loss, adversarial, supervised))[None]

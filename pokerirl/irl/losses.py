@@ -1,6 +1,6 @@
 """The Hybrid-AIRL losses and the random pieces they need, as pure functions of tensors.
 
-The trainer (:mod:`pokerirl.irl.airl`) calls them once per batch and once per epoch (for the
+The trainer (:mod:`pokerirl.irl.trainer`) calls them once per batch and once per epoch (for the
 metrics); :mod:`pokerirl.irl.fast` has their hand-derived gradients.
 """
 

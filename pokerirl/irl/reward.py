@@ -6,6 +6,10 @@
   adds γh(s') − h(s)); :meth:`~RewardNet.predict` is the same on numpy arrays.
   The default nets (:class:`~pokerirl.irl.nets.StateActionReward`,
   :class:`~pokerirl.irl.nets.ShapedReward`) satisfy it.
+* :class:`PolicyNet`: a policy *module*, ``policy(obs, legal_mask)``: log π (B, K) for
+  discrete actions (:class:`~pokerirl.irl.nets.DiscretePolicy`), (mean, log σ) for a
+  Gaussian (:class:`~pokerirl.irl.nets.GaussianPolicy`); a
+  :class:`~pokerirl.irl.heads.PolicyHead` reads its output.
 * :data:`RewardFn`: a batched reward *callable* on numpy, ``(obs, actions) -> rewards``, what
   RL consumers take (:class:`pokerirl.irl.run.RewardFunction` is one, made by
   :func:`~pokerirl.irl.load_reward`). gym's ``RewardCallable`` is this type; agents'
@@ -17,6 +21,9 @@
 True
 >>> net.predict(np.zeros((5, 3)), np.ones((5, 2))).dtype
 dtype('float32')
+>>> from pokerirl.irl.nets import DiscretePolicy
+>>> isinstance(DiscretePolicy(obs_dim=3, num_actions=2, hidden=(4,)), PolicyNet)
+True
 """
 
 from __future__ import annotations
@@ -61,3 +68,17 @@ class RewardNet(Protocol):
     ) -> np.ndarray:
         """float32 numpy rewards of numpy inputs (action vectors), f with s' and done, else g."""
         ...
+
+
+@runtime_checkable
+class PolicyNet(Protocol):
+    """A policy module: ``forward(obs, legal_mask)`` with ``obs`` (..., B, obs_dim) gives
+    log π (..., B, K) for discrete actions (illegal ones masked), (mean, log σ), each
+    (..., B, k), for continuous ones (``legal_mask`` None)."""
+
+    obs_dim: int
+    action_dim: int
+
+    def forward(
+        self, obs: Tensor, legal_mask: Tensor | None = None
+    ) -> Tensor | tuple[Tensor, Tensor]: ...
