@@ -10,7 +10,9 @@ from pathlib import Path
 import pytest
 
 from pokerirl.game.synth import write_synthetic_month
+from pokerirl.studies.common import claim_folder
 from pokerirl.studies.poker import StudyError, load_study_report, preset, run_study
+from pokerirl.studies.poker.config import UNRECORDED_DEFAULTS
 from pokerirl.studies.poker.report import render_markdown
 
 TINY = dict(
@@ -63,3 +65,24 @@ def test_unknown_or_repeated_algorithms_are_one_line() -> None:
         preset("quick", algos=("gail", "gail"))
     with pytest.raises(StudyError, match="reward sources for the study's algos"):
         preset("quick", algos=("gail",), reward_sources=(("airl", "authors:x"),))
+
+
+def test_adding_an_algorithm_to_a_study_folder_is_refused_before_anything_is_written(
+    tmp_path: Path,
+) -> None:
+    """A default study records no ``algos`` (nor ``encoding``, ``folds``): a rerun with GAIL
+    is compared with the default all the same, refused in one line before any unit runs (its
+    Table 1 would hold another lineup), and taken with ``overwrite``."""
+    month = write_synthetic_month(tmp_path / "irc", hands=50, seed=0)
+    root = tmp_path / "out"
+    claim_folder(root, preset("quick").settings(), overwrite=False, implied=UNRECORDED_DEFAULTS)
+    recorded = (root / "study.json").read_bytes()
+    for changed, named in (({"algos": ("airl", "hairl", "gail")}, "algos"),
+                           ({"encoding": "strength"}, "encoding")):  # fmt: skip
+        with pytest.raises(StudyError, match=rf"other settings \({named} .*nothing was written"):
+            run_study([month], root, preset("quick", **changed))
+        assert sorted(p.name for p in root.iterdir()) == ["study.json"]
+        assert (root / "study.json").read_bytes() == recorded
+    gail = preset("quick", algos=("airl", "hairl", "gail")).settings()
+    claim_folder(root, gail, overwrite=True, implied=UNRECORDED_DEFAULTS)
+    assert json.loads((root / "study.json").read_text())["settings"]["algos"][-1] == "gail"

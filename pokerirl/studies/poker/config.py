@@ -63,6 +63,11 @@ AUTHORS_HAIRL: dict[str, object] = {
 }
 
 
+# Settings a study's record leaves out at these values (see StudyConfig.settings).
+UNRECORDED_DEFAULTS: dict[str, object] = {"encoding": "rlcard", "folds": "drop",
+                                          "algos": PAPER_ALGOS}  # fmt: skip
+
+
 def irl_overrides(settings: str, algo: str) -> dict[str, object]:
     """The IRL core's settings the study changes for ``settings`` (ours: none)."""
     if settings == "ours":
@@ -160,13 +165,12 @@ class StudyConfig:
         """What determines the results: every field but ``jobs``."""
         found = dataclasses.asdict(self)
         found.pop("jobs")
-        if self.encoding == "rlcard":  # studies made before encodings keep their records
-            found.pop("encoding")
-        if self.folds == "drop":  # ... and before fold imputation
-            found.pop("folds")
-        if self.algos == PAPER_ALGOS:  # ... and before a choice of algorithms
-            found.pop("algos")
-        else:
+        # Studies made before encodings, fold imputation and a choice of algorithms keep
+        # their records: these settings are written only when they are not the default.
+        for name, default in UNRECORDED_DEFAULTS.items():
+            if found[name] == default:
+                found.pop(name)
+        if "algos" in found:
             found["algos"] = list(self.algos)
         found["seeds"] = list(self.seeds)
         found["reward_sources"] = [list(pair) for pair in self.reward_sources]
