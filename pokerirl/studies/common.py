@@ -89,7 +89,7 @@ def claim_folder(
     old = before() if recorded is None else _recorded_settings(recorded)
     new = json.loads(json.dumps(settings))  # as JSON reads it back: tuples are lists
     if isinstance(old, Mapping) and not overwrite:
-        filled = {}
+        filled = json.loads(json.dumps(implied or {}))
         old, compared = {**filled, **old}, {**filled, **new}
         kept = {key: compared[key] for key in old if key in compared}
         if any(key not in compared for key in old):
