@@ -75,14 +75,14 @@ def test_adding_an_algorithm_to_a_study_folder_is_refused_before_anything_is_wri
     Table 1 would hold another lineup), and taken with ``overwrite``."""
     month = write_synthetic_month(tmp_path / "irc", hands=50, seed=0)
     root = tmp_path / "out"
-    claim_folder(root, preset("quick").settings(), overwrite=False, implied=UNRECORDED_DEFAULTS)
+    claim_folder(root, preset("smoke").settings(), overwrite=False, implied=UNRECORDED_DEFAULTS)
     recorded = (root / "study.json").read_bytes()
     for changed, named in (({"algos": ("airl", "hairl", "gail")}, "algos"),
                            ({"encoding": "strength"}, "encoding")):  # fmt: skip
         with pytest.raises(StudyError, match=rf"other settings \({named} .*nothing was written"):
-            run_study([month], root, preset("quick", **changed))
+            run_study([month], root, preset("smoke", **changed))
         assert sorted(p.name for p in root.iterdir()) == ["study.json"]
         assert (root / "study.json").read_bytes() == recorded
-    gail = preset("quick", algos=("airl", "hairl", "gail")).settings()
+    gail = preset("smoke", algos=("airl", "hairl", "gail")).settings()
     claim_folder(root, gail, overwrite=True, implied=UNRECORDED_DEFAULTS)
     assert json.loads((root / "study.json").read_text())["settings"]["algos"][-1] == "gail"
