@@ -26,7 +26,7 @@ from pokerirl.cli.app import (
     write_logs,
 )
 from pokerirl.errors import InputError, MissingExtra, UsageError
-from pokerirl.studies.poker.config import AGENT_PRESETS, FOLDS, TRANSFORMS
+from pokerirl.studies.poker.config import AGENT_PRESETS, FOLDS, IRL_ALGOS, TRANSFORMS
 from pokerirl.studies.poker.config import PRESETS as STUDY_PRESETS
 
 DEMO_CONFIG = "pokerirl.studies.demo:DemoConfig"
@@ -110,6 +110,13 @@ def study(
         help="LBR's hands per seed against each panel agent (even; 0: no LBR); default: the "
         "preset's (quick 500, paper 10,000).",
     ),
+    algos: str | None = typer.Option(
+        None,
+        "--algos",
+        metavar="ALGO[,ALGO...]",
+        help=f"The IRL algorithms trained, each with its DQN agents, among "
+        f"{', '.join(IRL_ALGOS)}; default: the paper's airl,hairl (gail: GAIL beside them).",
+    ),
     reward_run: list[str] = typer.Option(
         [],
         "--reward-run",
@@ -166,6 +173,7 @@ def study(
         lbr_hands=lbr_hands,
         jobs=jobs,
         reward_sources=tuple(sources_given) or None,
+        algos=None if algos is None else tuple(a.strip() for a in algos.split(",")),
         reward_transform=reward_transform,
         encoding=encoding,
         folds=folds,

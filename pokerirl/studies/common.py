@@ -66,6 +66,7 @@ def claim_folder(
     overwrite: bool,
     grows: Sequence[str] = (),
     before: Callable[[], Mapping[str, Any] | None] = lambda: None,
+    implied: Mapping[str, Any] | None = None,
 ) -> None:
     """Check, before a study writes anything in ``root``, that it holds no study made with
     other ``settings`` (JSON); then record them in ``root/study.json``.
@@ -73,8 +74,10 @@ def claim_folder(
     A folder's settings are its ``study.json``'s, or for a folder of an older pokerirl
     ``before()``'s (its finished report's). A rerun may change only the lists named in
     ``grows``, and only by adding to them (more seeds: new units beside the finished ones);
-    settings added since the folder was made are not compared. Any other change is refused in
-    one line naming it, unless ``overwrite``: then the units it changes are recomputed.
+    settings added since the folder was made are not compared, except those of ``implied``:
+    settings a record leaves out when they have these values (so that the folders of before
+    keep their bytes), compared as if written. Any other change is refused in one line naming
+    it, unless ``overwrite``: then the units it changes are recomputed.
     """
     path = root / STUDY_JSON
     try:
@@ -86,9 +89,11 @@ def claim_folder(
     old = before() if recorded is None else _recorded_settings(recorded)
     new = json.loads(json.dumps(settings))  # as JSON reads it back: tuples are lists
     if isinstance(old, Mapping) and not overwrite:
-        kept = {key: new[key] for key in old if key in new}
-        if any(key not in new for key in old):
-            kept = new  # a setting this pokerirl no longer has: a change
+        filled = json.loads(json.dumps(implied or {}))
+        old, compared = {**filled, **old}, {**filled, **new}
+        kept = {key: compared[key] for key in old if key in compared}
+        if any(key not in compared for key in old):
+            kept = compared  # a setting this pokerirl no longer has: a change
         for key in grows:
             if key in kept and key in old and set(old[key]) <= set(kept[key]):
                 kept[key] = old[key]

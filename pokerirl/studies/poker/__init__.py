@@ -17,7 +17,13 @@ from pathlib import Path
 from pokerirl.execution import Backend
 from pokerirl.studies.common import claim_folder, study_folder
 from pokerirl.studies.poker import figures
-from pokerirl.studies.poker.config import PRESETS, StudyConfig, StudyError, preset
+from pokerirl.studies.poker.config import (
+    PRESETS,
+    UNRECORDED_DEFAULTS,
+    StudyConfig,
+    StudyError,
+    preset,
+)
 from pokerirl.studies.poker.pipeline import (
     STAGES,
     Execution,
@@ -97,7 +103,8 @@ def run_study(
     # Every setting checked against the folder's before anything is written; more seeds only
     # add units beside the finished ones.
     claim_folder(root, config.settings(), overwrite=overwrite, grows=("seeds",),
-                 before=lambda: _report_settings(root))  # fmt: skip
+                 before=lambda: _report_settings(root),
+                 implied=UNRECORDED_DEFAULTS)  # fmt: skip
     study = Study(
         root,
         config,

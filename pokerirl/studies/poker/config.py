@@ -18,8 +18,13 @@ from typing import Any
 
 from pokerirl.studies.common import StudyError, with_overrides
 
-AGENT_KINDS = ("dqn", "airl_dqn", "hairl_dqn")  # report.json names
-IRL_ALGOS = ("airl", "hairl")
+# The IRL algorithms a study can train (pokerirl.irl.config.Algo, torch-free here); a study
+# trains the paper's two unless told otherwise (GAIL: `--algos airl,hairl,gail`).
+IRL_ALGOS = ("airl", "hairl", "gail")
+PAPER_ALGOS = ("airl", "hairl")
+TABLE1_ORDER = ("hairl", "airl", "gail")  # Table 1's rows, the paper's first
+ALGO_LABELS = {"airl": "AIRL", "hairl": "H-AIRL", "gail": "GAIL"}
+KIND_LABELS = {"dqn": "DQN", **{f"{algo}_dqn": f"{name}-DQN" for algo, name in ALGO_LABELS.items()}}
 BUILT_INS = ("random", "call", "raise")
 IRL_SETTINGS = ("ours", "authors")
 AGENT_PRESETS = ("default", "authors")  # pokerirl.agents.train.AGENT_PRESETS
@@ -58,11 +63,21 @@ AUTHORS_HAIRL: dict[str, object] = {
 }
 
 
+# Settings a study's record leaves out at these values (see StudyConfig.settings).
+UNRECORDED_DEFAULTS: dict[str, object] = {"encoding": "rlcard", "folds": "drop",
+                                          "algos": PAPER_ALGOS}  # fmt: skip
+
+
 def irl_overrides(settings: str, algo: str) -> dict[str, object]:
     """The IRL core's settings the study changes for ``settings`` (ours: none)."""
     if settings == "ours":
         return {}
     return {**AUTHORS_IRL, **(AUTHORS_HAIRL if algo == "hairl" else {})}
+
+
+def matchup_label(name: str) -> str:
+    """``hairl_dqn_vs_dqn`` -> ``H-AIRL-DQN vs DQN``."""
+    return " vs ".join(KIND_LABELS[kind] for kind in name.split("_vs_"))
 
 
 def one_of(name: str, value: str, allowed: Sequence[str]) -> dict[str, bool]:
@@ -80,7 +95,8 @@ class StudyConfig:
     choose ours or the authors' settings; ``authors_repeats`` > 0 adds the authors' tournament
     (that many repeats of ``authors_games`` games per experiment and matchup);
     ``reward_sources`` replaces an algorithm's IRL runs by a reward (``authors:FILE``), as
-    ``(algo, spec)`` pairs; ``reward_transform`` is the learned-reward DQNs' transform.
+    ``(algo, spec)`` pairs; ``reward_transform`` is the learned-reward DQNs' transform;
+    ``algos`` the IRL algorithms trained (each gives an ``<algo>_dqn`` agent kind).
     """
 
     preset: str
@@ -101,6 +117,7 @@ class StudyConfig:
     authors_games: int = 1_000
     reward_sources: tuple[tuple[str, str], ...] = ()
     reward_transform: str = "raw"
+    algos: tuple[str, ...] = PAPER_ALGOS
     encoding: str = "rlcard"  # what rewards, policies and DQNs read (pokerirl.game.encodings)
     folds: str = "drop"  # ingest's hands that end in a fold: left out, or imputed (docs/folds.md)
     # LBR (docs/exploit.md) against every panel member, per seed, from the turn; 0: none.
@@ -128,8 +145,12 @@ class StudyConfig:
             **one_of("agent preset", self.agent_preset, AGENT_PRESETS),
             "authors' repeats >= 0": self.authors_repeats >= 0,
             "authors' games >= 2": self.authors_games >= 2,
-            f"reward sources for airl or hairl, once each (got {algos})": all(
-                algo in IRL_ALGOS for algo, _ in self.reward_sources
+            f"algos among {', '.join(IRL_ALGOS)}, once each (got {', '.join(self.algos)})":
+            len(self.algos) >= 1
+            and set(self.algos) <= set(IRL_ALGOS)
+            and len(set(self.algos)) == len(self.algos),
+            f"reward sources for the study's algos, once each (got {algos})": all(
+                algo in self.algos for algo, _ in self.reward_sources
             )
             and len({algo for algo, _ in self.reward_sources}) == len(self.reward_sources),
             **one_of("reward transform", self.reward_transform, TRANSFORMS),
@@ -144,13 +165,26 @@ class StudyConfig:
         """What determines the results: every field but ``jobs``."""
         found = dataclasses.asdict(self)
         found.pop("jobs")
-        if self.encoding == "rlcard":  # studies made before encodings keep their records
-            found.pop("encoding")
-        if self.folds == "drop":  # ... and before fold imputation
-            found.pop("folds")
+        # Studies made before encodings, fold imputation and a choice of algorithms keep
+        # their records: these settings are written only when they are not the default.
+        for name, default in UNRECORDED_DEFAULTS.items():
+            if found[name] == default:
+                found.pop(name)
+        if "algos" in found:
+            found["algos"] = list(self.algos)
         found["seeds"] = list(self.seeds)
         found["reward_sources"] = [list(pair) for pair in self.reward_sources]
         return found
+
+    @property
+    def kinds(self) -> tuple[str, ...]:
+        """The agent kinds (report.json names): the sparse DQN, then one per algorithm."""
+        return ("dqn", *(f"{algo}_dqn" for algo in self.algos))
+
+    @property
+    def table1_kinds(self) -> tuple[str, ...]:
+        """The learned-reward kinds Table 1 plays against the sparse DQN, in its order."""
+        return tuple(f"{algo}_dqn" for algo in TABLE1_ORDER if algo in self.algos)
 
     def reward_source(self, algo: str) -> str | None:
         """The reward that replaces ``algo``'s IRL runs, if any."""
@@ -243,6 +277,9 @@ def preset(name: str, **overrides: Any) -> StudyConfig:
         changes["seeds"] = tuple(changes["seeds"])
     elif name == "authors" and "runs" in changes:
         changes["seeds"] = tuple(range(changes["runs"]))  # experiment k: IRL run k, seed k
+    if "algos" in changes:  # in one order, so that the same choice is the same study
+        rank = {algo: k for k, algo in enumerate(IRL_ALGOS)}
+        changes["algos"] = tuple(sorted(changes["algos"], key=lambda a: rank.get(a, len(rank))))
     if "reward_sources" in changes:
         changes["reward_sources"] = tuple(tuple(pair) for pair in changes["reward_sources"])
     return with_overrides(PRESETS, name, **changes)

@@ -13,6 +13,7 @@ from pokerirl.atomic import write_bytes
 from pokerirl.encoding import ACTIONS
 from pokerirl.figures import finish
 from pokerirl.studies.common import band
+from pokerirl.studies.poker.config import ALGO_LABELS, KIND_LABELS, TABLE1_ORDER, matchup_label
 from pokerirl.studies.poker.report_types import StudyReport
 from pokerirl.studies.poker.results import (
     AgentsResult,
@@ -26,8 +27,6 @@ from pokerirl.studies.poker.results import (
 if TYPE_CHECKING:
     from pokerirl.tournaments import AuthorsMatchup
 
-ALGO_LABELS = {"airl": "AIRL", "hairl": "H-AIRL"}
-KIND_LABELS = {"dqn": "DQN", "airl_dqn": "AIRL-DQN", "hairl_dqn": "H-AIRL-DQN"}
 
 
 def _pyplot() -> Any:
@@ -52,7 +51,7 @@ def _trained(irl: IRLResult) -> dict[str, tuple[str, IRLRuns]]:
     return {
         algo: (label, found)
         for algo, label in ALGO_LABELS.items()
-        if isinstance(found := irl[algo], IRLRuns)
+        if isinstance(found := irl.get(algo), IRLRuns)
     }
 
 
@@ -98,9 +97,11 @@ def irl_alignment(irl: IRLResult, path: Path) -> None:
     bands = [(_epochs(curve), curve, label) for label, curve in curves.items()]
     lines = []
     styles = {"majority": ":", "legal_majority": "--", "bc": "-."}
-    for name, style in styles.items() if trained else ():
-        value = list(trained.values())[-1][1].baselines[name].mean
-        lines.append((value, style, f"{name} {value:.3f}"))
+    reported = next((trained[algo][1] for algo in TABLE1_ORDER if algo in trained), None)
+    if reported is not None:
+        for name, style in styles.items():
+            value = reported.baselines[name].mean
+            lines.append((value, style, f"{name} {value:.3f}"))
     _band_figure(path, bands, lines, xlabel="epoch",
                  ylabel="validation alignment (share of decisions)",
                  title="IRL: the policy's argmax against the expert's action",
@@ -151,7 +152,7 @@ def rl_curves(agents: AgentsResult, path: Path) -> None:
     """Learning curves against random, mean ± std over seeds, with always-call and
     always-raise as reference lines (the paper's RL figure)."""
     bands = [(agents.curves[kind].hands, agents.curves[kind], label)
-             for kind, label in KIND_LABELS.items()]  # fmt: skip
+             for kind, label in KIND_LABELS.items() if kind in agents.curves]  # fmt: skip
     lines = []
     for name, style in (("call", ":"), ("raise", "--")):
         value = agents.references[name].mbb_per_hand
@@ -193,8 +194,10 @@ def authors_tournament(
     mean, the overall mean with their ± and with the SE over experiments, our duplicate-deal
     figure on the same agents and the paper's."""
     plt = _pyplot()
-    labels = {"hairl_dqn_vs_dqn": "H-AIRL-DQN vs DQN", "airl_dqn_vs_dqn": "AIRL-DQN vs DQN"}
-    figure, axes = plt.subplots(1, len(labels), figsize=(11, 4.2), sharey=True)
+    labels = {name: matchup_label(name) for name in report.table1_authors or {}}
+    figure, axes = plt.subplots(1, len(labels), figsize=(5.5 * len(labels), 4.2), sharey=True,
+                                squeeze=False)  # fmt: skip
+    axes = axes[0]
     rng = np.random.default_rng(0)  # jitter only
     for axis, (name, label) in zip(axes, labels.items(), strict=True):
         row = (report.table1_authors or {})[name]
@@ -217,8 +220,9 @@ def authors_tournament(
             axis.axhline(duplicate, color="C2", linestyle="--",
                          label=f"ours, duplicate {duplicate:+,.0f}")  # fmt: skip
         theirs = row.paper
-        paper_label = f"the paper {theirs.mbb_per_hand:+,} ± {theirs.std_error}"
-        axis.axhline(theirs.mbb_per_hand, color="C3", linestyle=":", label=paper_label)
+        if theirs is not None:
+            paper_label = f"the paper {theirs.mbb_per_hand:+,} ± {theirs.std_error}"
+            axis.axhline(theirs.mbb_per_hand, color="C3", linestyle=":", label=paper_label)
         axis.set_xlim(-0.5, right)
         axis.set_xticks(range(len(repeats)))
         finish(axis, title=label, xlabel="experiment (diamond: its mean)",

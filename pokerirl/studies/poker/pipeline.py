@@ -39,9 +39,7 @@ from pokerirl.studies.common import (
     read_jsonl,
 )
 from pokerirl.studies.poker.config import (
-    AGENT_KINDS,
     BUILT_INS,
-    IRL_ALGOS,
     LBR_CHECK_UNTIL,
     StudyConfig,
     StudyError,
@@ -70,11 +68,11 @@ if TYPE_CHECKING:  # the layers below load lazily: ``pokerirl report`` needs non
 
 STAGES = ("ingest", "irl", "agents", "tournament", "panel", "report")
 AUTHORS_STAGES = ("ingest", "irl", "agents", "tournament", "authors", "panel", "report")
-TABLE1_NAMES = ("hairl_dqn", "airl_dqn")  # the matchups against the sparse DQN
 PLAYING_HANDS = 20_000  # duplicate hands of the playing checkpoint against random (authors)
 STAGES_FOLDER = "stages"  # where an older pokerirl kept its stage records
 TABLE = "expert.parquet"
-AGENT_FOLDERS = {"dqn": "dqn", "airl_dqn": "airl-dqn", "hairl_dqn": "hairl-dqn"}
+AGENT_FOLDERS = {"dqn": "dqn", "airl_dqn": "airl-dqn", "hairl_dqn": "hairl-dqn",
+                 "gail_dqn": "gail-dqn"}
 SHORT_DQN = "dqn-short"  # sparse DQN at the paper's training length
 
 Say = Callable[[str], None]
@@ -296,14 +294,14 @@ def irl_stage(study: Study, ingested: Ingested) -> IRLResult:
         "epochs": config.irl_epochs,
         "seed": config.irl_seed,
         "upstream": ingested.fingerprint,
-        **_non_default(config, "irl_settings", "encoding"),
+        **_non_default(config, "irl_settings", "encoding", "algos"),
     }
     if config.reward_sources:
         stage["reward_sources"] = reward_source_prints(config)
     legacy = study.legacy("irl", stage)
     study.step("irl")
     found: IRLResult = {}
-    for algo in IRL_ALGOS:
+    for algo in config.algos:
         out = study.root / "irl" / algo
         source = config.reward_source(algo)
         if source is not None:
@@ -414,7 +412,7 @@ def agents_stage(study: Study, irl: IRLResult) -> AgentsResult:
 
     config = study.config
     folder = study.root / "agents"
-    sets = {kind: folder / name for kind, name in AGENT_FOLDERS.items()}
+    sets = {kind: folder / AGENT_FOLDERS[kind] for kind in config.kinds}
     short = folder / SHORT_DQN
     short_is_long = config.short_agent_hands == config.agent_hands
     # The authors' evaluations are 1,000 games; the references are measured as the agents are.
@@ -503,9 +501,10 @@ def tournament_stage(study: Study, agents: AgentsResult) -> dict[str, Table1Line
     config = study.config
     folder = study.root / "agents"
     baseline = str(folder / AGENT_FOLDERS["dqn"])
+    kinds = config.table1_kinds
     study.step("tournament")
     report = study.execution.tournament(
-        [(str(folder / AGENT_FOLDERS[name]), baseline) for name in TABLE1_NAMES],
+        [(str(folder / AGENT_FOLDERS[name]), baseline) for name in kinds],
         hands=config.hands,
         seeds=config.seeds,
         out=study.root / "tournament",
@@ -513,7 +512,7 @@ def tournament_stage(study: Study, agents: AgentsResult) -> dict[str, Table1Line
     )
     return {
         f"{name}_vs_dqn": _table1_line(matchup)
-        for name, matchup in zip(TABLE1_NAMES, report.matchups, strict=True)
+        for name, matchup in zip(kinds, report.matchups, strict=True)
     }
 
 
@@ -527,10 +526,10 @@ def authors_stage(
     config = study.config
     folder = study.root / "agents"
     baseline = str(folder / AGENT_FOLDERS["dqn"])
-    names = [f"{name}_vs_dqn" for name in TABLE1_NAMES]
+    names = [f"{name}_vs_dqn" for name in config.table1_kinds]
     study.step("authors")
     return study.execution.authors_tournament(
-        [(str(folder / AGENT_FOLDERS[name]), baseline) for name in TABLE1_NAMES],
+        [(str(folder / AGENT_FOLDERS[name]), baseline) for name in config.table1_kinds],
         names=names,
         experiments=config.seeds,
         repeats=config.authors_repeats,
@@ -547,7 +546,7 @@ def reward_cards(root: Path, config: StudyConfig) -> dict[str, CardSummary | Non
     from pokerirl.poker.reward_card import CARD_FIGURE, card_summary, read_card
 
     found: dict[str, CardSummary | None] = {}
-    for algo in IRL_ALGOS:
+    for algo in config.algos:
         out = root / "irl" / algo
         folders = [out] if config.reward_source(algo) else run_paths(out, config.runs)
         cards = [card for folder in folders if (card := read_card(folder)) is not None]
@@ -558,16 +557,16 @@ def reward_cards(root: Path, config: StudyConfig) -> dict[str, CardSummary | Non
     return found
 
 
-def panel_agents(root: Path) -> list[tuple[str, str]]:
+def panel_agents(root: Path, config: StudyConfig) -> list[tuple[str, str]]:
     """(name, spec) of every panel member: the agent kinds, then the built-ins."""
-    kinds = [(kind, str(root / "agents" / AGENT_FOLDERS[kind])) for kind in AGENT_KINDS]
+    kinds = [(kind, str(root / "agents" / AGENT_FOLDERS[kind])) for kind in config.kinds]
     return kinds + [(name, name) for name in BUILT_INS]
 
 
 def panel_stage(study: Study, agents: AgentsResult) -> Panel:
     """Every panel member against every other, once per pair."""
     config = study.config
-    members = panel_agents(study.root)
+    members = panel_agents(study.root, config)
     study.step("panel")
     pairs = [(i, j) for i in range(len(members)) for j in range(i + 1, len(members))]
     report = study.execution.tournament(

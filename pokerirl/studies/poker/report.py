@@ -15,11 +15,13 @@ from pokerirl.meanstd import MeanStd, mean_and_std
 from pokerirl.studies.common import REPORT_JSON, REPORT_MD, markdown_table
 from pokerirl.studies.poker import paper
 from pokerirl.studies.poker.config import (
-    AGENT_KINDS,
-    IRL_ALGOS,
+    ALGO_LABELS,
+    KIND_LABELS,
     LBR_CHECK_UNTIL,
+    TABLE1_ORDER,
     StudyConfig,
     StudyError,
+    matchup_label,
 )
 from pokerirl.studies.poker.report_types import (
     AuthorsRow,
@@ -60,7 +62,10 @@ FIGURES = {
     "panel_heatmap": "figures/panel_heatmap.png",
 }
 PANEL_CSV = "panel.csv"
-LABELS = {"dqn": "DQN", "airl_dqn": "AIRL-DQN", "hairl_dqn": "H-AIRL-DQN"}
+def _paper_line(name: str) -> PaperLine | None:
+    """The paper's Table 1 line of matchup ``name`` (None: the paper has no such row)."""
+    published = paper.TABLE1.get(name)
+    return None if published is None else PaperLine(**published)
 
 
 AUTHORS_FIGURE = "figures/authors_tournament.png"
@@ -83,30 +88,30 @@ def build_report(
     reward cards' summaries per algorithm (``reward_cards``).
     """
     table1 = {
-        name: Table1Row(line=tournament[name], paper=PaperLine(**paper.TABLE1[name]))
-        for name in paper.TABLE1
+        name: Table1Row(line=line, paper=_paper_line(name)) for name, line in tournament.items()
     }
     algos: dict[str, IRLAlgoPart | IRLReplacedPart] = {}
     runs = {algo: found for algo, found in irl.items() if isinstance(found, IRLRuns)}
-    trained = [algo for algo in IRL_ALGOS if algo in runs]
-    for algo in IRL_ALGOS:
+    # BC is trained inside every run on that run's split; H-AIRL's runs' BC is the one reported.
+    reported = next((algo for algo in TABLE1_ORDER if algo in runs), None)
+    for algo in config.algos:
         found = irl[algo]
         if isinstance(found, Replaced):
             algos[algo] = IRLReplacedPart(replaced_by=found.source)
             continue
         final = found.final
+        published = paper.IRL_ALIGNMENT.get(algo)  # GAIL is not in the paper
         algos[algo] = IRLAlgoPart(
             final_val_alignment=final["val_alignment"].stats,
             final_disc_acc_expert=final["disc_acc_expert"].stats,
             final_disc_acc_policy=final["disc_acc_policy"].stats,
             per_run_val_alignment=final["val_alignment"].values,
-            paper_val_alignment=MeanStd(**paper.IRL_ALIGNMENT[algo]),
-            paper_disc_acc=paper.DISC_ACC_FINAL[algo],
+            paper_val_alignment=None if published is None else MeanStd(**published),
+            paper_disc_acc=paper.DISC_ACC_FINAL.get(algo),
         )
-    # BC is trained inside every run on that run's split; H-AIRL's runs' BC is the one reported.
     irl_part = IRLPart(algos=algos, runs=config.runs)
-    if trained:
-        baselines = runs[trained[-1]].baselines
+    if reported is not None:
+        baselines = runs[reported].baselines
         irl_part = IRLPart(
             algos=algos,
             runs=config.runs,
@@ -115,17 +120,15 @@ def build_report(
             baselines={
                 name: baselines[name].stats for name in ("majority", "legal_majority")
             },
-            epochs=runs[trained[-1]].epochs,
+            epochs=runs[reported].epochs,
         )  # fmt: skip
     # The authors' preset plays its kept checkpoint: that one is measured against random.
     vs_random = agents.vs_random
     rl = RLPart(
-        kinds={
-            kind: _rl_kind(vs_random[kind], paper.RL_VS_RANDOM[kind])
-            for kind in AGENT_KINDS
-        },
+        kinds={kind: _rl_kind(vs_random[kind], paper.RL_VS_RANDOM.get(kind))
+               for kind in config.kinds},
         references=dict(agents.references),
-        per_seed={kind: vs_random[kind] for kind in AGENT_KINDS},
+        per_seed={kind: vs_random[kind] for kind in config.kinds},
         measured=(
             f"the playing checkpoint, {agents.playing_hands:,} duplicate hands"
             if agents.playing_vs_random is not None
@@ -137,10 +140,7 @@ def build_report(
     figures = dict(FIGURES)
     table1_authors = None
     if authors is not None:
-        table1_authors = {
-            name: _authors_row(authors[name], PaperLine(**paper.TABLE1[name]))
-            for name in paper.TABLE1
-        }
+        table1_authors = {name: _authors_row(authors[name], _paper_line(name)) for name in table1}
         figures["authors_tournament"] = AUTHORS_FIGURE
     return StudyReport(
         format=REPORT_FORMAT,
@@ -171,7 +171,7 @@ def build_report(
     )
 
 
-def _authors_row(matchup: AuthorsMatchup, theirs: PaperLine) -> AuthorsRow:
+def _authors_row(matchup: AuthorsMatchup, theirs: PaperLine | None) -> AuthorsRow:
     """``AuthorsMatchup.summary``'s numbers, typed, with the paper's line."""
     se = matchup.se_over_experiments
     return AuthorsRow(
@@ -188,7 +188,7 @@ def _authors_row(matchup: AuthorsMatchup, theirs: PaperLine) -> AuthorsRow:
     )
 
 
-def _rl_kind(values: Sequence[float], published: float) -> RLKindPart:
+def _rl_kind(values: Sequence[float], published: float | None) -> RLKindPart:
     mean, std = mean_and_std(values)
     return RLKindPart(mean=mean, std=std, paper=published)
 
@@ -252,16 +252,15 @@ def render_markdown(report: StudyReport) -> str:
         "| matchup | ours | SE | p | p (Bonferroni) | seeds with p < 0.05/m | the paper |",
         "|---|---|---|---|---|---|---|",
     ]
-    for name, label in (("hairl_dqn_vs_dqn", "H-AIRL-DQN vs DQN"),
-                        ("airl_dqn_vs_dqn", "AIRL-DQN vs DQN")):  # fmt: skip
-        row = report.table1[name].line
-        theirs = report.table1[name].paper
+    for name, entry in report.table1.items():
+        row, theirs = entry.line, entry.paper
         lines.append(
-            f"| {label} | {row.mbb_per_hand:+,.0f} | {row.std_error:,.0f} | "
+            f"| {matchup_label(name)} | {row.mbb_per_hand:+,.0f} | {row.std_error:,.0f} | "
             f"{_p(row.p_value)} | {_p(row.p_bonferroni)} | "
             f"{row.seeds_significant_bonferroni}/{n_seeds} | "
-            f"{theirs.mbb_per_hand:+,} ± {theirs.std_error} (p < 1e-10) |"
-        )
+            + ("not in the paper |" if theirs is None
+               else f"{theirs.mbb_per_hand:+,} ± {theirs.std_error} (p < 1e-10) |")
+        )  # fmt: skip
     spread = {
         name: (min(row.line.per_seed), max(row.line.per_seed))
         for name, row in report.table1.items()
@@ -286,8 +285,8 @@ def render_markdown(report: StudyReport) -> str:
     ]
     irl = report.irl
     trained: list[tuple[IRLAlgoPart, str]] = []
-    for algo, label in (("airl", "AIRL"), ("hairl", "H-AIRL")):
-        part = irl.algos[algo]
+    for algo, part in irl.algos.items():
+        label = ALGO_LABELS[algo]
         if isinstance(part, IRLReplacedPart):
             lines.append(f"| {label} | replaced by `{part.replaced_by}` | |")
             continue
@@ -295,8 +294,9 @@ def render_markdown(report: StudyReport) -> str:
         ours, published = part.final_val_alignment, part.paper_val_alignment
         lines.append(
             f"| {label} | {_pm(ours, 100, 1)}% | "
-            f"{published.measured[0] * 100:.1f} ± {published.measured[1] * 100:.1f}% |"
-        )
+            + ("not in the paper |" if published is None
+               else f"{published.measured[0] * 100:.1f} ± {published.measured[1] * 100:.1f}% |")
+        )  # fmt: skip
     if irl.bc is not None:
         lines.append(f"| BC (supervised only) | {_pm(irl.bc.final_val_alignment, 100, 1)}%"
                      " | not reported |")  # fmt: skip
@@ -314,8 +314,9 @@ def render_markdown(report: StudyReport) -> str:
         lines.append(
             f"| {label} | {_pm(part.final_disc_acc_expert, 100, 1)}% | "
             f"{_pm(part.final_disc_acc_policy, 100, 1)}% | "
-            f"{part.paper_disc_acc * 100:.0f}% |"
-        )
+            + ("not in the paper |" if part.paper_disc_acc is None
+               else f"{part.paper_disc_acc * 100:.0f}% |")
+        )  # fmt: skip
     figures = report.figures
     lines += [
         "",
@@ -331,13 +332,13 @@ def render_markdown(report: StudyReport) -> str:
         "|---|---|---|---|",
     ]
     rl = report.rl_vs_random
-    for kind, label in LABELS.items():
+    for kind, found in rl.kinds.items():
         values = rl.per_seed[kind]
-        found = rl.kinds[kind]
         lines.append(
-            f"| {label} | {_pm(MeanStd(mean=found.mean, std=found.std))} | "
-            f"{min(values):+,.0f} to {max(values):+,.0f} | {found.paper:+,} |"
-        )
+            f"| {KIND_LABELS[kind]} | {_pm(MeanStd(mean=found.mean, std=found.std))} | "
+            f"{min(values):+,.0f} to {max(values):+,.0f} | "
+            + ("not in the paper |" if found.paper is None else f"{found.paper:+,} |")
+        )  # fmt: skip
     for name in ("call", "raise"):
         ref = rl.references[name]
         lines.append(f"| always-{name} | {ref.mbb_per_hand:+,.0f} (SE {ref.std_error:,.0f})"
@@ -447,10 +448,10 @@ def cards_markdown(report: StudyReport) -> list[str]:
         "|---|---|---|---|---|---|---|---|---|",
     ]
     theirs = report.paper.get("authors_rewards", {})
-    for algo, label in (("airl", "AIRL"), ("hairl", "H-AIRL")):
-        card = cards.get(algo)
+    for algo, card in cards.items():
         if not card:
             continue
+        label = ALGO_LABELS[algo]
         f = card.mean_f
         lines.append(
             f"| {label} ({card.runs} runs) | {_f(f['call'])} | {_f(f['raise'])} | "
@@ -514,17 +515,17 @@ def authors_markdown(report: StudyReport) -> list[str]:
         "| matchup | mean | their ± | SE over experiments | ours: duplicate deals | the paper |",
         "|---|---|---|---|---|---|",
     ]
-    for name, label in (("hairl_dqn_vs_dqn", "H-AIRL-DQN vs DQN"),
-                        ("airl_dqn_vs_dqn", "AIRL-DQN vs DQN")):  # fmt: skip
-        row = table[name]
+    for name, row in table.items():
         se = row.se_over_experiments
         duplicate = row.duplicate_mbb_per_hand
+        theirs = row.paper
         lines.append(
-            f"| {label} | {row.mean:+,.0f} | {row.paper_style_se:,.0f} | "
+            f"| {matchup_label(name)} | {row.mean:+,.0f} | {row.paper_style_se:,.0f} | "
             f"{'n/a' if se is None else f'{se:,.0f}'} | "
             f"{'n/a' if duplicate is None else f'{duplicate:+,.0f}'} | "
-            f"{row.paper.mbb_per_hand:+,} ± {row.paper.std_error} |"
-        )
+            + ("not in the paper |" if theirs is None
+               else f"{theirs.mbb_per_hand:+,} ± {theirs.std_error} |")
+        )  # fmt: skip
         per = ", ".join(f"{v:+,.0f}" for v in row.per_experiment)
         lines.append(f"| (per experiment) | {per} | | | | |")
     return [*lines, "", f"![the authors' tournament]({report.figures['authors_tournament']})",

@@ -39,20 +39,29 @@ class PaperLine:
         return cls(mbb_per_hand=data["mbb_per_hand"], std_error=data["std_error"])
 
 
+def _paper_line(data: Mapping[str, Any] | None) -> PaperLine | None:
+    return None if data is None else PaperLine.from_json(data)
+
+
+def _json_or_none(part: PaperLine | MeanStd | None) -> Json | None:
+    return None if part is None else part.to_json()
+
+
 @dataclass(frozen=True, kw_only=True)
 class Table1Row:
-    """One Table 1 matchup: ours (the tournament's pooled line) and the paper's."""
+    """One Table 1 matchup: ours (the tournament's pooled line) and the paper's (None for a
+    matchup the paper does not have: GAIL's)."""
 
     line: Table1Line
-    paper: PaperLine
+    paper: PaperLine | None
 
     def to_json(self) -> Json:
-        return {**self.line.to_json(), "paper": self.paper.to_json()}
+        return {**self.line.to_json(), "paper": _json_or_none(self.paper)}
 
     @classmethod
     def from_json(cls, data: Mapping[str, Any]) -> Table1Row:
         line = Table1Line(**{k: v for k, v in data.items() if k != "paper"})
-        return cls(line=line, paper=PaperLine.from_json(data["paper"]))
+        return cls(line=line, paper=_paper_line(data["paper"]))
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -85,8 +94,8 @@ class IRLAlgoPart:
     final_disc_acc_expert: MeanStd
     final_disc_acc_policy: MeanStd
     per_run_val_alignment: list[float]
-    paper_val_alignment: MeanStd
-    paper_disc_acc: float
+    paper_val_alignment: MeanStd | None  # None: an algorithm the paper does not have
+    paper_disc_acc: float | None
 
     def to_json(self) -> Json:
         return {
@@ -95,7 +104,7 @@ class IRLAlgoPart:
             "final_disc_acc_policy": self.final_disc_acc_policy.to_json(),
             "per_run_val_alignment": self.per_run_val_alignment,
             "paper": {
-                "final_val_alignment": self.paper_val_alignment.to_json(),
+                "final_val_alignment": _json_or_none(self.paper_val_alignment),
                 "final_disc_acc": self.paper_disc_acc,
             },
         }
@@ -107,7 +116,8 @@ class IRLAlgoPart:
             final_disc_acc_expert=MeanStd.from_json(data["final_disc_acc_expert"]),
             final_disc_acc_policy=MeanStd.from_json(data["final_disc_acc_policy"]),
             per_run_val_alignment=list(data["per_run_val_alignment"]),
-            paper_val_alignment=MeanStd.from_json(data["paper"]["final_val_alignment"]),
+            paper_val_alignment=(None if data["paper"]["final_val_alignment"] is None
+                                 else MeanStd.from_json(data["paper"]["final_val_alignment"])),
             paper_disc_acc=data["paper"]["final_disc_acc"],
         )
 
@@ -185,11 +195,12 @@ class IRLPart:
 
 @dataclass(frozen=True, kw_only=True)
 class RLKindPart:
-    """One agent kind against random: mean and std over seeds, and the paper's figure."""
+    """One agent kind against random: mean and std over seeds, and the paper's figure (None:
+    a kind the paper does not have)."""
 
     mean: float
     std: float
-    paper: float
+    paper: float | None
 
     def to_json(self) -> Json:
         return {"mean": self.mean, "std": self.std, "paper": self.paper}
@@ -356,7 +367,7 @@ class AuthorsRow:
     games: int
     agent_a: str
     agent_b: str
-    paper: PaperLine
+    paper: PaperLine | None
 
     def to_json(self) -> Json:
         return {
@@ -369,7 +380,7 @@ class AuthorsRow:
             "games": self.games,
             "agent_a": self.agent_a,
             "agent_b": self.agent_b,
-            "paper": self.paper.to_json(),
+            "paper": _json_or_none(self.paper),
         }
 
     @classmethod
@@ -377,7 +388,7 @@ class AuthorsRow:
         return cls(
             **{k: v for k, v in data.items() if k not in ("paper", "per_experiment")},
             per_experiment=list(data["per_experiment"]),
-            paper=PaperLine.from_json(data["paper"]),
+            paper=_paper_line(data["paper"]),
         )
 
 
