@@ -311,13 +311,15 @@ def _grad(param: Tensor) -> Tensor:
     return param.grad
 
 
-def clip_grad_norm_per_run(grads: Sequence[Tensor], max_norm: float, runs: int) -> None:
-    """``torch.nn.utils.clip_grad_norm_`` on each run's slices of stacked (R, ...) gradients,
-    in place: each run's norm over its slices of all of them (of one, a single reduction)."""
+def clip_grad_norm_per_run(grads: Sequence[Tensor | None], max_norm: float, runs: int) -> None:
+    """``torch.nn.utils.clip_grad_norm_`` on each run's slices of stacked (R, ...) gradients
+    (None ones skipped, as there), in place: each run's norm over its slices of all of them
+    (of one, a single reduction)."""
+    present = [g for g in grads if g is not None]
     with torch.no_grad():
-        norms = [torch.linalg.vector_norm(g.reshape(runs, -1), 2, dim=1) for g in grads]
+        norms = [torch.linalg.vector_norm(g.reshape(runs, -1), 2, dim=1) for g in present]
         total = norms[0] if len(norms) == 1 else torch.linalg.vector_norm(
             torch.stack(norms), 2, dim=0)  # fmt: skip
         coef = torch.clamp(max_norm / (total + 1e-6), max=1.0)
-        for g in grads:
+        for g in present:
             g.mul_(coef.view(runs, *([1] * (g.dim() - 1))))
