@@ -13,7 +13,7 @@ from stable_baselines3.common.callbacks import BaseCallback
 from stable_baselines3.common.utils import polyak_update
 
 from pokerirl.gym.experts import make_model
-from pokerirl.gym.lockstep.dqn import LockstepDQN, clip_grad_norm_per_run, exploration_rate
+from pokerirl.gym.lockstep.dqn import LockstepDQN, exploration_rate
 from pokerirl.gym.presets import TASKS, DQNSettings, RLSettings
 
 _PRESET = TASKS["MountainCar-v0"].rl.dqn
@@ -75,27 +75,6 @@ def test_first_update_matches_sb3(env_id: str, settings: DQNSettings) -> None:
         losses = ours.train(1, indices=idx[None, None])
         assert losses[0, 0] == pytest.approx(model.logger.name_to_value["train/loss"], abs=1e-5)
         _assert_params(ours.run_state_dict(0), model.policy.state_dict(), atol=1e-5)
-
-
-def test_clip_grad_norm_per_run_matches_torch() -> None:
-    """Each run's slices clipped as torch's clip_grad_norm_ clips that run's own parameters."""
-    gen = torch.Generator().manual_seed(0)
-    shapes, scales = [(3, 2, 8), (3, 1, 8), (3, 8, 3)], torch.tensor([0.1, 10.0, 100.0])
-    grads = [torch.randn(shape, generator=gen) * scales.view(3, 1, 1) for shape in shapes]
-    params = [torch.nn.Parameter(torch.zeros(shape)) for shape in shapes]
-    for p, grad in zip(params, grads, strict=True):
-        p.grad = grad.clone()
-    alone = [[torch.nn.Parameter(p.data[r].clone()) for p in params] for r in range(3)]
-    for r, run in enumerate(alone):
-        for p, grad in zip(run, grads, strict=True):
-            p.grad = grad[r].clone()
-    clip_grad_norm_per_run(params, 10.0, 3)
-    for r, run in enumerate(alone):
-        norm = torch.nn.utils.clip_grad_norm_(run, 10.0)
-        assert (norm > 10) == (r > 0)  # run 0 below the bound, runs 1 and 2 above it
-        for p, q in zip(run, params, strict=True):
-            assert p.grad is not None and q.grad is not None
-            torch.testing.assert_close(q.grad[r], p.grad, atol=1e-6, rtol=1e-6)
 
 
 def test_exploration_and_target_updates_match_sb3(monkeypatch: pytest.MonkeyPatch) -> None:

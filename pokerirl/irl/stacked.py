@@ -1,8 +1,8 @@
 """R copies of one architecture called as one: the lock-step runs' nets.
 
 :class:`StackedNets` is what the trainer calls; :func:`stack_modules` turns the default
-nets' layers into batched products, and any other architecture goes through
-``torch.func.vmap``.
+nets' layers into the stacked layers of :mod:`pokerirl.stacking` (batched products), and any
+other architecture goes through ``torch.func.vmap``.
 """
 
 from __future__ import annotations
@@ -12,8 +12,9 @@ from collections.abc import Sequence
 from typing import Any
 
 import torch
-import torch.nn.functional as F
 from torch import Tensor, nn
+
+from pokerirl.stacking import StackedLayerNorm, StackedLinear
 
 
 class StackedNets:
@@ -75,44 +76,6 @@ class StackedNets:
                 value.copy_(source[name][r])
 
 
-class StackedLinear(nn.Module):
-    """R linear maps applied run by run to x of (R, ..., in): one batched product."""
-
-    def __init__(self, layers: Sequence[nn.Linear]) -> None:
-        super().__init__()
-        self.weight = nn.Parameter(torch.stack([m.weight.detach() for m in layers]))
-        self.bias = (
-            None
-            if layers[0].bias is None
-            else nn.Parameter(torch.stack([m.bias.detach() for m in layers]))  # type: ignore[union-attr]
-        )
-
-    def forward(self, x: Tensor) -> Tensor:
-        runs, out_dim = self.weight.shape[:2]
-        flat = x.reshape(runs, -1, x.shape[-1])
-        weight = self.weight.transpose(1, 2)
-        if self.bias is None:
-            y = torch.bmm(flat, weight)
-        else:
-            y = torch.baddbmm(self.bias[:, None, :], flat, weight)
-        return y.view(*x.shape[:-1], out_dim)
-
-
-class StackedLayerNorm(nn.Module):
-    """R layer norms (with their own affine parameters) over x of (R, ..., H)."""
-
-    def __init__(self, layers: Sequence[nn.LayerNorm]) -> None:
-        super().__init__()
-        self.shape, self.eps = layers[0].normalized_shape, layers[0].eps
-        self.weight = nn.Parameter(torch.stack([m.weight.detach() for m in layers]))
-        self.bias = nn.Parameter(torch.stack([m.bias.detach() for m in layers]))
-
-    def forward(self, x: Tensor) -> Tensor:
-        view = (x.shape[0],) + (1,) * (x.ndim - 2) + (x.shape[-1],)
-        normed = F.layer_norm(x, self.shape, eps=self.eps)
-        return torch.addcmul(self.bias.view(view), normed, self.weight.view(view))
-
-
 _STACKABLE = (nn.Sequential, nn.Identity, nn.ReLU, nn.Tanh, nn.LeakyReLU)
 
 
@@ -141,7 +104,8 @@ def stack_modules(modules: Sequence[nn.Module]) -> nn.Module | None:
         for name, child in list(target.named_children()):
             originals = [getattr(source, name) for source in sources]
             if type(child) is nn.Linear:
-                setattr(target, name, StackedLinear(originals))
+                biases = None if child.bias is None else [m.bias for m in originals]
+                setattr(target, name, StackedLinear.stack([m.weight for m in originals], biases))
             elif isinstance(child, nn.LayerNorm):
                 setattr(target, name, StackedLayerNorm(originals))
             else:

@@ -1,4 +1,4 @@
-"""DQN for R runs in lock-step: stacked Q-networks (R, out, in) driven by ``torch.baddbmm``.
+"""DQN for R runs in lock-step: stacked Q-networks (``pokerirl.stacking``).
 
 Follows SB3 2.9's DQN (dqn/dqn.py, common/off_policy_algorithm.py, common/buffers.py
 ``ReplayBuffer``, dqn/policies.py) for the settings ``pokerirl.gym.presets.DQNSettings`` holds,
@@ -33,12 +33,15 @@ Where it differs from SB3, and why (see docs/lockstep_dqn.md):
   network's maxima computed in bigger batches (cached per buffer row where that is cheaper,
   see ``cache_targets``) round differently from SB3's per-run ``addmm``; one update agrees to
   ~1e-7, but over training the gap grows until a greedy action flips (about 1k steps).
-- One Adam over stacked tensors = R per-run Adams (element-wise; every run steps together).
+- One Adam over stacked tensors = R per-run Adams (element-wise; every run steps together):
+  ``StackedAdam`` with torch.optim.Adam's numbers, its fused kernel where a tensor's per-run
+  part fills whole SIMD vectors, so that run r rounds alike in a group of R and of one.
 - One summed loss: runs share no parameters, so each run's gradient is its own loss's.
 """
 
 from __future__ import annotations
 
+import itertools
 import time
 from collections.abc import Callable, Sequence
 
@@ -49,10 +52,16 @@ import torch.nn.functional as F
 
 from pokerirl.gym.lockstep.ppo import GroupResult, RewardFn
 from pokerirl.gym.presets import DQNSettings
+from pokerirl.stacking import (
+    Product,
+    StackedAdam,
+    StackedLinear,
+    clip_grad_norm_per_run,
+    init_linears,
+)
 
 # SB3 DQN's defaults for what DQNSettings leaves out.
 EXPLORATION_INITIAL_EPS = 1.0
-FUSED_ALIGN = 16  # floats per SIMD vector (AVX-512; a multiple of AVX2's and NEON's)
 MAX_GRAD_NORM = 10.0  # tau is SB3's default 1.0: the target update is a copy
 
 Callback = Callable[[int], object]
@@ -72,64 +81,12 @@ def layer_keys(n_layers: int) -> list[str]:
     return [f"q_net.{2 * i}" for i in range(n_layers)]
 
 
-class _StackedLinearFn(torch.autograd.Function):
-    """x (R, B, in) -> x W + b with the weight stored (R, in, out) or, if ``out_in``, (R, out, in).
-
-    Written out because MKL's batched matmul is several times slower for some operand layouts
-    at these shapes (256 -> 3: 0.27 ms against 0.07 for the forward at R=9, 0.29 against 0.05
-    for the weight gradient); each layer keeps the layout whose products are fast.
-    """
-
-    @staticmethod
-    def forward(ctx, x: torch.Tensor, weight: torch.Tensor, bias: torch.Tensor,
-                out_in: bool) -> torch.Tensor:
-        ctx.save_for_backward(x, weight)
-        ctx.out_in = out_in
-        return torch.baddbmm(bias, x, weight.transpose(1, 2) if out_in else weight)
-
-    @staticmethod
-    def backward(ctx, grad: torch.Tensor):
-        x, weight = ctx.saved_tensors
-        gx = gw = gb = None
-        if ctx.needs_input_grad[0]:
-            gx = torch.bmm(grad, weight if ctx.out_in else weight.transpose(1, 2))
-        if ctx.needs_input_grad[1]:
-            gw = (torch.bmm(grad.transpose(1, 2), x) if ctx.out_in
-                  else torch.bmm(x.transpose(1, 2), grad))
-        if ctx.needs_input_grad[2]:
-            gb = grad.sum(1, keepdim=True)
-        return gx, gw, gb, None
-
-
-class _StackedLinear(torch.nn.Module):
-    """R independent linears: x (R, B, in) -> (R, B, out); bias (R, 1, out)."""
-
-    def __init__(self, weight_out_in: torch.Tensor, bias: torch.Tensor) -> None:
-        super().__init__()
-        self.out_in = weight_out_in.shape[1] < weight_out_in.shape[2]  # fewer outputs than inputs
-        w = weight_out_in if self.out_in else weight_out_in.transpose(1, 2)
-        self.weight = torch.nn.Parameter(w.float().contiguous())
-        self.bias = torch.nn.Parameter(bias.float().contiguous())
-
-    def forward(self, x: torch.Tensor) -> torch.Tensor:
-        if not torch.is_grad_enabled():  # acting and targets: no graph, no Function overhead
-            w = self.weight.transpose(1, 2) if self.out_in else self.weight
-            return torch.baddbmm(self.bias, x, w)
-        return _StackedLinearFn.apply(x, self.weight, self.bias, self.out_in)
-
-    def run_weight(self, r: int) -> torch.Tensor:
-        """Run r's weight as torch's Linear stores it, (out, in)."""
-        w = self.weight.data[r]
-        return (w if self.out_in else w.T).contiguous().clone()
-
-
 class StackedQNet(torch.nn.Module):
     """R QNetworks: obs (R, B, obs_dim) -> Q-values (R, B, n_actions)."""
 
-    def __init__(self, layers: Sequence[tuple[torch.Tensor, torch.Tensor]]) -> None:
+    def __init__(self, layers: Sequence[StackedLinear]) -> None:
         super().__init__()
-        # (weight (R, out, in) as torch's Linear, bias (R, 1, out)) per layer
-        self.layers = torch.nn.ModuleList(_StackedLinear(w, b) for w, b in layers)
+        self.layers = torch.nn.ModuleList(layers)
 
     def forward(self, x: torch.Tensor) -> torch.Tensor:
         for layer in self.layers[:-1]:
@@ -139,19 +96,19 @@ class StackedQNet(torch.nn.Module):
     @classmethod
     def from_state_dicts(cls, runs: Sequence[dict[str, torch.Tensor]], prefix: str,
                          n_layers: int) -> StackedQNet:
-        layers = []
-        for key in layer_keys(n_layers):
-            w = torch.stack([run[f"{prefix}{key}.weight"] for run in runs])
-            b = torch.stack([run[f"{prefix}{key}.bias"][None, :] for run in runs])
-            layers.append((w, b))
-        return cls(layers)
+        return cls([
+            StackedLinear.stack([run[f"{prefix}{key}.weight"].float() for run in runs],
+                                [run[f"{prefix}{key}.bias"].float() for run in runs],
+                                product=Product.WRITTEN_BACKWARD)  # the fast product layouts
+            for key in layer_keys(n_layers)
+        ])
 
     def run_state_dict(self, r: int, prefix: str) -> dict[str, torch.Tensor]:
         out = {}
         for key, layer in zip(layer_keys(len(self.layers)), self.layers, strict=True):
-            assert isinstance(layer, _StackedLinear)
+            assert isinstance(layer, StackedLinear) and layer.bias is not None
             out[f"{prefix}{key}.weight"] = layer.run_weight(r)
-            out[f"{prefix}{key}.bias"] = layer.bias.data[r, 0].clone()
+            out[f"{prefix}{key}.bias"] = layer.bias.data[r].clone()
         return out
 
 
@@ -206,7 +163,9 @@ class LockstepDQN:
         self.q_net = StackedQNet.from_state_dicts(weights, "q_net.", n_layers)
         self.q_net_target = StackedQNet.from_state_dicts(weights, "q_net_target.", n_layers)
         self.q_net_target.requires_grad_(False)
-        self.optimizers = _adams(list(self.q_net.parameters()), settings.learning_rate, self.R)
+        # SB3's Adam (torch's defaults), torch.optim.Adam's numbers (AdamKernel.TORCH)
+        self.optimizer = StackedAdam(self.q_net.parameters(), lr=settings.learning_rate,
+                                     runs=self.R)
         # Replay buffers, one (R, buffer_size, ...) array each; torch views share the memory.
         N, R = settings.buffer_size, self.R
         self.buf_obs = np.zeros((R, N, self.obs_dim), np.float32)
@@ -239,13 +198,9 @@ class LockstepDQN:
         """SB3's QNetwork init for ``seed``: torch.manual_seed(seed), default Linear init."""
         sizes = (self.obs_dim, *self.hidden, self.n_actions)
         out = {}
-        with torch.random.fork_rng(devices=[]):  # per-run init, global RNG untouched
-            torch.manual_seed(seed)
-            for key, n_in, n_out in zip(layer_keys(len(sizes) - 1), sizes[:-1], sizes[1:],
-                                        strict=True):
-                layer = torch.nn.Linear(n_in, n_out)
-                out[f"q_net.{key}.weight"] = layer.weight.data.clone()
-                out[f"q_net.{key}.bias"] = layer.bias.data.clone()
+        built = init_linears(seed, list(itertools.pairwise(sizes)))
+        for key, (weight, bias) in zip(layer_keys(len(built)), built, strict=True):
+            out[f"q_net.{key}.weight"], out[f"q_net.{key}.bias"] = weight, bias
         return out
 
     # ------------------------------------------------------------------ acting
@@ -372,11 +327,10 @@ class LockstepDQN:
         for g in range(G):
             q = self.q_net(obs[g]).gather(-1, actions[g].unsqueeze(-1)).squeeze(-1)  # (R, B)
             loss = F.smooth_l1_loss(q, targets[g], reduction="none").mean(1)  # (R,)
-            self.q_net.zero_grad()
+            self.optimizer.zero_grad()
             loss.sum().backward()
-            clip_grad_norm_per_run(params, MAX_GRAD_NORM, R)
-            for optimizer in self.optimizers:
-                optimizer.step()
+            clip_grad_norm_per_run([p.grad for p in params], MAX_GRAD_NORM, R)
+            self.optimizer.step()
             losses[g] = loss.detach()
         self.n_updates += G
         return losses.numpy()
@@ -429,33 +383,3 @@ class LockstepDQN:
         """Run r's networks under SB3 ``DQNPolicy``'s state_dict keys."""
         return {**self.q_net.run_state_dict(r, "q_net."),
                 **self.q_net_target.run_state_dict(r, "q_net_target.")}
-
-
-def _adams(params: list[torch.nn.Parameter], lr: float, R: int) -> list[torch.optim.Optimizer]:
-    """SB3's Adam (torch defaults) over stacked parameters, as one or two optimizers.
-
-    The fused kernel (one pass instead of ~10 over the stacked tensors) computes its SIMD lanes
-    and its scalar tail with different roundings, so it only gets the tensors whose per-run size
-    is a multiple of the vector width: then no run's element falls in a tail and run r rounds
-    alike in a group of R and a group of one. The rest (the output bias) take the foreach
-    kernels, exact per element.
-    """
-    aligned = [p for p in params if (p.numel() // R) % FUSED_ALIGN == 0]
-    rest = [p for p in params if (p.numel() // R) % FUSED_ALIGN != 0]
-    out: list[torch.optim.Optimizer] = []
-    if aligned:
-        out.append(torch.optim.Adam(aligned, lr=lr, fused=True))
-    if rest:
-        out.append(torch.optim.Adam(rest, lr=lr, foreach=True))
-    return out
-
-
-def clip_grad_norm_per_run(params: Sequence[torch.Tensor], max_norm: float, R: int) -> None:
-    """``torch.nn.utils.clip_grad_norm_`` on each run's slices of stacked (R, ...) parameters."""
-    with torch.no_grad():
-        grads = [p.grad for p in params if p.grad is not None]
-        norms = torch.stack([torch.linalg.vector_norm(g.reshape(R, -1), 2, dim=1) for g in grads])
-        total = torch.linalg.vector_norm(norms, 2, dim=0)  # (R,)
-        coef = torch.clamp(max_norm / (total + 1e-6), max=1.0)
-        for g in grads:
-            g.mul_(coef.view(R, *([1] * (g.dim() - 1))))

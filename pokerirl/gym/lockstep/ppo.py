@@ -1,4 +1,4 @@
-"""PPO for R runs in lock-step: stacked parameters (R, in, out) driven by ``torch.baddbmm``.
+"""PPO for R runs in lock-step: stacked parameters (R, in, out) (``pokerirl.stacking``).
 
 Follows SB3 2.9's PPO (ppo.py, on_policy_algorithm.py, buffers.py, policies.py) for the settings
 ``pokerirl.gym.presets.PPOSettings`` uses: GAE(lambda) as ``RolloutBuffer``, advantage
@@ -17,13 +17,13 @@ Where it differs from SB3, and why:
   run with seed s is not bit-equal to SB3 with seed s.
 - Action sampling uses inverse-CDF (discrete) or ``mean + std * normal`` (Box) from numpy draws;
   the same distributions as SB3's ``Categorical`` / ``Normal`` samplers.
-- Adam over the stacked tensors: Adam is element-wise, so one Adam over (R, ...) tensors is R
-  per-run Adams (same step counts: every run steps at every minibatch). All parameters live in
-  one (R, P) buffer (the layers' weights are views into it, their grads views into a second
-  one), so the per-run grad norm and the clip are two ops, and torch's fused Adam one, per
-  minibatch, whatever the number of layers (the update's speed, issue 19). The
-  per-run norm is taken over the whole buffer, not as ``clip_grad_norm_``'s norm of per-layer
-  norms: equal up to float rounding.
+- Adam over the stacked tensors (``pokerirl.stacking.StackedAdam``): Adam is element-wise, so
+  one Adam over (R, ...) tensors is R per-run Adams (same step counts: every run steps at every
+  minibatch). All parameters live in one (R, P) buffer (``Flat.RUNS``: the layers' weights are
+  views into it, their grads views into a second one), so the per-run grad norm and the clip
+  are two ops, and torch's fused Adam one, per minibatch, whatever the number of layers (the
+  update's speed, issue 19). The per-run norm is taken over the whole buffer, not as
+  ``clip_grad_norm_``'s norm of per-layer norms: equal up to float rounding.
 - One loss, the sum of the R runs' losses: runs share no parameters, so each run's gradient is
   its own loss's gradient.
 - Only ``MlpPolicy`` on flat Box observations, Discrete or Box actions, a constant learning rate,
@@ -45,6 +45,14 @@ import torch
 
 from pokerirl.gym.presets import PPOSettings
 from pokerirl.irl.reward import RewardFn
+from pokerirl.stacking import (
+    Flat,
+    Product,
+    StackedAdam,
+    StackedLinear,
+    clip_grad_norm_per_run,
+    init_linears,
+)
 
 
 class _Tanh(torch.autograd.Function):
@@ -65,32 +73,6 @@ class _Tanh(torch.autograd.Function):
 
 def fast_tanh(x: torch.Tensor) -> torch.Tensor:
     return _Tanh.apply(x)
-
-
-class StackedLinear(torch.nn.Module):
-    """R independent linears: x (R, B, in) -> (R, B, out)."""
-
-    def __init__(self, weight: torch.nn.Parameter, bias: torch.nn.Parameter) -> None:
-        super().__init__()
-        self.weight = weight  # (R, in, out)
-        self.bias = bias  # (R, 1, out)
-
-    def forward(self, x: torch.Tensor) -> torch.Tensor:
-        if self.weight.shape[-1] == 1:
-            # One output (the value head): a row-wise dot product. baddbmm's kernel for a
-            # (B, in) x (in, 1) product differs between R = 1 and R > 1, and with it the
-            # rounding; this keeps run r of a group bit-equal to a group of one.
-            return (x * self.weight.transpose(1, 2)).sum(-1, keepdim=True) + self.bias
-        return torch.baddbmm(self.bias, x, self.weight)
-
-
-def _init_linear(n_in: int, n_out: int, gain: float | None) -> tuple[torch.Tensor, torch.Tensor]:
-    """One run's (weight (out, in), bias) as SB3 builds it, from torch's (forked) global RNG."""
-    layer = torch.nn.Linear(n_in, n_out)
-    if gain is not None:  # SB3's ortho init: orthogonal weights, zero bias
-        torch.nn.init.orthogonal_(layer.weight, gain=gain)
-        layer.bias.data.fill_(0.0)
-    return layer.weight.data.clone(), layer.bias.data.clone()
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -118,8 +100,7 @@ def _layer_names(arch: _Arch) -> list[tuple[str, int, int, float]]:
 class StackedPolicy(torch.nn.Module):
     """R actor-critics with SB3 MlpPolicy's layout (separate pi and vf MLPs).
 
-    ``flat`` (R, P) holds every parameter of run r in row r; ``flat_grad`` their gradients
-    (backward accumulates into it in place: zero it, not the parameters' grads).
+    ``ordered``: the parameters in SB3's order, the order of the optimizer's flat buffer.
     """
 
     def __init__(self, arch: _Arch, *, activation: str, weights: list[dict[str, torch.Tensor]],
@@ -128,31 +109,18 @@ class StackedPolicy(torch.nn.Module):
         self.arch = arch
         self.act = fast_tanh if activation == "tanh" else torch.nn.functional.leaky_relu
         self.names = [name for name, *_ in _layer_names(arch)]
-        stacked: dict[str, torch.Tensor] = {}
-        for name in self.names:
-            stacked[f"{name}.weight"] = torch.stack([run[f"{name}.weight"].T for run in weights])
-            stacked[f"{name}.bias"] = torch.stack([run[f"{name}.bias"][None, :] for run in weights])
-        if log_std is not None:
-            stacked["log_std"] = log_std  # (R, act_dim)
-        R = len(weights)
-        flat = torch.cat([t.reshape(R, -1).float() for t in stacked.values()], 1)
-        # Rows padded to a multiple of 64 floats, so every run's row meets the vectorised
-        # kernels (fused Adam's) at the same lanes, with no scalar tail, whatever R: run r of
-        # a group then rounds exactly as a group of one (the padding's grads stay zero).
-        self.flat = torch.nn.functional.pad(flat, (0, -flat.shape[1] % 64))
-        self.flat_grad = torch.zeros_like(self.flat)
-        params: dict[str, torch.nn.Parameter] = {}
-        offset = 0
-        for key, tensor in stacked.items():
-            size = tensor[0].numel()
-            params[key] = torch.nn.Parameter(self.flat[:, offset:offset + size].view(tensor.shape))
-            params[key].grad = self.flat_grad[:, offset:offset + size].view(tensor.shape)
-            offset += size
         self.layers = torch.nn.ModuleDict()
         for name in self.names:
-            self.layers[name.replace(".", "_")] = StackedLinear(params[f"{name}.weight"],
-                                                                params[f"{name}.bias"])
-        self.log_std = params.get("log_std")  # (R, act_dim), None for discrete actions
+            # (R, in, out) weights; one output as a row-wise dot product (see Product).
+            self.layers[name.replace(".", "_")] = StackedLinear(
+                torch.stack([run[f"{name}.weight"].T for run in weights]).float(),
+                torch.stack([run[f"{name}.bias"] for run in weights]).float(),
+                out_in=False, product=Product.ONE_OUTPUT_DOT)
+        # (R, act_dim), None for discrete actions
+        self.log_std = None if log_std is None else torch.nn.Parameter(log_std.float())
+        self.ordered = [param for layer in self.layers.values() for param in layer.parameters()]
+        if self.log_std is not None:
+            self.ordered.append(self.log_std)
 
         # The layers' forwards in order, called directly: nn.Module's __call__ and ModuleDict
         # lookups were a fifth of a rollout step's Python time.
@@ -199,8 +167,8 @@ class StackedPolicy(torch.nn.Module):
         out: dict[str, torch.Tensor] = {}
         for name in self.names:
             layer: Any = self.layers[name.replace(".", "_")]
-            out[f"{name}.weight"] = layer.weight.data[r].T.contiguous().clone()
-            out[f"{name}.bias"] = layer.bias.data[r, 0].clone()
+            out[f"{name}.weight"] = layer.run_weight(r)
+            out[f"{name}.bias"] = layer.bias.data[r].clone()
         if self.log_std is not None:
             out["log_std"] = self.log_std.data[r].clone()
         return out
@@ -259,41 +227,6 @@ class _RunEnvs:
         return next_obs, rewards, dones, truncated_obs
 
 
-class _Adam:
-    """torch.optim.Adam (no weight decay, not amsgrad) on the one (R, P) parameter tensor.
-
-    One tensor holds every run's parameters, so torch's fused kernel does the whole step in
-    one pass; called directly, because ``Optimizer.step``'s Python wrapping cost more than the
-    step itself here. Without the fused kernel: torch's single-tensor formula, op for op.
-    """
-
-    def __init__(self, param: torch.Tensor, *, lr: float, eps: float,
-                 betas: tuple[float, float] = (0.9, 0.999)) -> None:
-        self.param, self.lr, self.eps, (self.beta1, self.beta2) = param, lr, eps, betas
-        self.exp_avg = torch.zeros_like(param)
-        self.exp_avg_sq = torch.zeros_like(param)
-        self.steps = 0
-        self.step_tensor = torch.zeros((), dtype=torch.float32)
-        self.fused = hasattr(torch, "_fused_adam_")
-
-    @torch.no_grad()
-    def step(self, grad: torch.Tensor) -> None:
-        self.steps += 1
-        if self.fused:
-            self.step_tensor += 1
-            torch._fused_adam_([self.param], [grad], [self.exp_avg], [self.exp_avg_sq], [],
-                               [self.step_tensor], lr=self.lr, beta1=self.beta1,
-                               beta2=self.beta2, weight_decay=0.0, eps=self.eps, amsgrad=False,
-                               maximize=False)
-            return
-        self.exp_avg.lerp_(grad, 1 - self.beta1)
-        self.exp_avg_sq.mul_(self.beta2).addcmul_(grad, grad, value=1 - self.beta2)
-        step_size = self.lr / (1 - self.beta1 ** self.steps)
-        bias_correction2_sqrt = (1 - self.beta2 ** self.steps) ** 0.5
-        denom = (self.exp_avg_sq.sqrt() / bias_correction2_sqrt).add_(self.eps)
-        self.param.addcdiv_(self.exp_avg, denom, value=-step_size)
-
-
 StepCallback = Callable[[int], None]
 
 
@@ -332,21 +265,23 @@ class LockstepPPO:
                                    for w in weights]).clone()
         self.policy = StackedPolicy(self.arch, activation=settings.activation,
                                     weights=list(weights), log_std=log_std)
-        # SB3's ActorCriticPolicy: Adam with eps 1e-5
-        self.optimizer = _Adam(self.policy.flat, lr=settings.learning_rate, eps=1e-5)
+        # SB3's ActorCriticPolicy: Adam with eps 1e-5; one (R, P) buffer (module docstring)
+        self.optimizer = StackedAdam(self.policy.ordered, lr=settings.learning_rate, eps=1e-5,
+                                     runs=self.R, flat=Flat.RUNS)
         self.timesteps = 0
         self.episode_starts = np.ones((self.R, n_envs), dtype=np.float32)
         self.env_seconds = 0.0
         self.update_seconds = 0.0
 
     def _init_weights(self, seed: int) -> dict[str, torch.Tensor]:
-        with torch.random.fork_rng(devices=[]):  # per-run init, global RNG untouched
-            torch.manual_seed(seed)
-            out = {}
-            for name, n_in, n_out, gain in _layer_names(self.arch):
-                out[f"{name}.weight"], out[f"{name}.bias"] = _init_linear(
-                    n_in, n_out, gain if self.s.ortho_init else None)
-            return out
+        """Run ``seed``'s layers as SB3 builds them (ortho init where the settings say)."""
+        layers = _layer_names(self.arch)
+        built = init_linears(seed, [(n_in, n_out) for _, n_in, n_out, _ in layers],
+                             [gain if self.s.ortho_init else None for *_, gain in layers])
+        out = {}
+        for (name, *_), (weight, bias) in zip(layers, built, strict=True):
+            out[f"{name}.weight"], out[f"{name}.bias"] = weight, bias
+        return out
 
     def _obs(self) -> np.ndarray:
         return np.stack([e.obs for e in self.envs]).astype(np.float32)  # (R, n_envs, obs_dim)
@@ -442,7 +377,7 @@ class LockstepPPO:
         s, R = self.s, self.R
         N = batch["obs"].shape[1]
         rows = torch.arange(R)[:, None]
-        policy, grad = self.policy, self.policy.flat_grad
+        policy, grad = self.policy, self.optimizer.grad
         last: dict[str, torch.Tensor] = {}
         for epoch in range(s.n_epochs):
             if permutations is None:
@@ -465,15 +400,13 @@ class LockstepPPO:
                 vloss = ((mb["returns"] - values) ** 2).mean(1)
                 ent_loss = -entropy.mean(1)
                 loss = pg + s.ent_coef * ent_loss + s.vf_coef * vloss  # (R,)
-                grad.zero_()
+                self.optimizer.zero_grad()
                 with warnings.catch_warnings():
-                    # The grads are strided views into flat_grad, by design (see StackedPolicy).
+                    # The grads are strided views into the optimizer's buffer, by design.
                     warnings.filterwarnings("ignore", message=".*gradient layout contract")
                     loss.sum().backward()
-                with torch.no_grad():  # per-run clip_grad_norm_: one norm per row
-                    norm = torch.linalg.vector_norm(grad, dim=1, keepdim=True)
-                    grad.mul_(torch.clamp(s.max_grad_norm / (norm + 1e-6), max=1.0))
-                self.optimizer.step(grad)
+                clip_grad_norm_per_run([grad], s.max_grad_norm, R)  # one norm per row
+                self.optimizer.step()
                 last = {"policy_loss": pg, "value_loss": vloss, "entropy_loss": ent_loss,
                         "loss": loss}
         return {key: value.detach().numpy() for key, value in last.items()}
