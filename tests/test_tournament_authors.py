@@ -26,7 +26,7 @@ def test_statistics_are_the_authors_and_ours(tmp_path: Path) -> None:
     means = [everything[4 * k : 4 * k + 4].mean() for k in range(3)]
     assert m.per_experiment == pytest.approx(means)
     assert m.se_over_experiments == pytest.approx(np.std(means, ddof=1) / math.sqrt(3))
-    summary = m.summary()
+    summary = m.summary().to_json()
     for key in ("mean", "paper_style_se", "se_over_experiments", "duplicate_mbb_per_hand",
                 "per_experiment"):  # fmt: skip
         assert key in summary
