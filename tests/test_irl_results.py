@@ -13,7 +13,8 @@ import torch
 
 from pokerirl.datasets.toy import toy_expert_table
 from pokerirl.irl import EpochMetrics, RunResult, RunsSummary, load_config
-from pokerirl.irl.run import CurveStats, MeanStd, summarize
+from pokerirl.irl.run import summarize
+from pokerirl.meanstd import Curve, MeanStd
 from pokerirl.poker import train_runs
 
 torch.set_num_threads(1)
@@ -78,7 +79,7 @@ def test_summarize_is_typed_and_writes_what_it_always_wrote() -> None:
         "baselines": {"bc": {"mean": 0.75, "std": summary.baselines["bc"].std}},
     }
     assert RunsSummary.from_json(summary.to_json()) == summary
-    assert CurveStats.from_json({"mean": [1.0], "std": [0.0]}).to_json() == {
+    assert Curve.from_json({"mean": [1.0], "std": [0.0]}).to_json() == {
         "mean": [1.0], "std": [0.0]
     }  # fmt: skip
 

@@ -31,7 +31,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from pokerirl.execution import Backend
-from pokerirl.meanstd import mean_std_curve
+from pokerirl.meanstd import Curve
 from pokerirl.store import Fate, Layout, LegacyRecord, Unit, check, digest, fingerprint, writing
 from pokerirl.studies.common import (
     BASELINES_JSON,
@@ -50,8 +50,6 @@ from pokerirl.studies.poker.config import (
 from pokerirl.studies.poker.report_types import CardSummary
 from pokerirl.studies.poker.results import (
     AgentsResult,
-    Curve,
-    HandsCurve,
     Ingested,
     IRLResult,
     IRLRuns,
@@ -382,14 +380,13 @@ def _final_vs_random(agent_set: Path, seeds: Sequence[int]) -> list[float]:
     return [read_metrics(agent_set / f"seed-{s}")[-1].eval["random"].mbb_per_hand for s in seeds]
 
 
-def _curve(agent_set: Path, seeds: Sequence[int]) -> HandsCurve:
+def _curve(agent_set: Path, seeds: Sequence[int]) -> Curve:
     from pokerirl.agents.train import read_metrics
 
     lines = [read_metrics(agent_set / f"seed-{s}") for s in seeds]
     points = min(len(line) for line in lines)
     values = [[line[i].eval["random"].mbb_per_hand for i in range(points)] for line in lines]
-    mean, std = mean_std_curve(values)
-    return HandsCurve(hands=[lines[0][i].hands for i in range(points)], mean=mean, std=std)
+    return Curve.of(values, timesteps=[lines[0][i].hands for i in range(points)])
 
 
 def _playing_vs_random(agent_set: Path, seeds: Sequence[int]) -> list[float]:

@@ -4,7 +4,6 @@
 from __future__ import annotations
 
 import json
-import math
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -28,10 +27,9 @@ from pokerirl.studies.poker.report_types import (
     DataPart,
     HandsResult,
     IRLAlgoPart,
+    IRLPaper,
     IRLPart,
-    IRLReplacedPart,
     PanelPart,
-    PaperLine,
     RLKindPart,
     RLPart,
     StudyReport,
@@ -44,6 +42,7 @@ from pokerirl.studies.poker.results import (
     IRLResult,
     IRLRuns,
     Panel,
+    Reference,
     Replaced,
     Table1Line,
 )
@@ -83,16 +82,16 @@ def build_report(
     reward cards' summaries per algorithm (``reward_cards``).
     """
     table1 = {
-        name: Table1Row(line=tournament[name], paper=PaperLine(**paper.TABLE1[name]))
+        name: Table1Row(line=tournament[name], paper=Reference(**paper.TABLE1[name]))
         for name in paper.TABLE1
     }
-    algos: dict[str, IRLAlgoPart | IRLReplacedPart] = {}
+    algos: dict[str, IRLAlgoPart | Replaced] = {}
     runs = {algo: found for algo, found in irl.items() if isinstance(found, IRLRuns)}
     trained = [algo for algo in IRL_ALGOS if algo in runs]
     for algo in IRL_ALGOS:
         found = irl[algo]
         if isinstance(found, Replaced):
-            algos[algo] = IRLReplacedPart(replaced_by=found.source)
+            algos[algo] = found
             continue
         final = found.final
         algos[algo] = IRLAlgoPart(
@@ -100,8 +99,10 @@ def build_report(
             final_disc_acc_expert=final["disc_acc_expert"].stats,
             final_disc_acc_policy=final["disc_acc_policy"].stats,
             per_run_val_alignment=final["val_alignment"].values,
-            paper_val_alignment=MeanStd(**paper.IRL_ALIGNMENT[algo]),
-            paper_disc_acc=paper.DISC_ACC_FINAL[algo],
+            paper=IRLPaper(
+                final_val_alignment=MeanStd(**paper.IRL_ALIGNMENT[algo]),
+                final_disc_acc=paper.DISC_ACC_FINAL[algo],
+            ),
         )
     # BC is trained inside every run on that run's split; H-AIRL's runs' BC is the one reported.
     irl_part = IRLPart(algos=algos, runs=config.runs)
@@ -120,10 +121,7 @@ def build_report(
     # The authors' preset plays its kept checkpoint: that one is measured against random.
     vs_random = agents.vs_random
     rl = RLPart(
-        kinds={
-            kind: _rl_kind(vs_random[kind], paper.RL_VS_RANDOM[kind])
-            for kind in AGENT_KINDS
-        },
+        kinds={kind: _rl_kind(vs_random[kind], paper.RL_VS_RANDOM[kind]) for kind in AGENT_KINDS},
         references=dict(agents.references),
         per_seed={kind: vs_random[kind] for kind in AGENT_KINDS},
         measured=(
@@ -138,7 +136,7 @@ def build_report(
     table1_authors = None
     if authors is not None:
         table1_authors = {
-            name: _authors_row(authors[name], PaperLine(**paper.TABLE1[name]))
+            name: AuthorsRow(**vars(authors[name].summary()), paper=Reference(**paper.TABLE1[name]))
             for name in paper.TABLE1
         }
         figures["authors_tournament"] = AUTHORS_FIGURE
@@ -162,29 +160,16 @@ def build_report(
             long=_hands_result(length.agent_hands, length.long),
             paper=paper.DQN_TRAINING,
         ),
-        panel=PanelPart(panel=panel, hands=config.panel_hands, lbr_hands=config.lbr_hands,
-                        lbr_check_until=LBR_CHECK_UNTIL),
+        panel=PanelPart(
+            panel=panel,
+            hands=config.panel_hands,
+            lbr_hands=config.lbr_hands,
+            lbr_check_until=LBR_CHECK_UNTIL,
+        ),
         figures=figures,
         paper=paper.paper_values(),
         reward_cards=cards,
         table1_authors=table1_authors,
-    )
-
-
-def _authors_row(matchup: AuthorsMatchup, theirs: PaperLine) -> AuthorsRow:
-    """``AuthorsMatchup.summary``'s numbers, typed, with the paper's line."""
-    se = matchup.se_over_experiments
-    return AuthorsRow(
-        mean=matchup.mean,
-        paper_style_se=matchup.paper_style_se,
-        se_over_experiments=None if math.isnan(se) else se,
-        duplicate_mbb_per_hand=matchup.duplicate_mbb_per_hand,
-        per_experiment=matchup.per_experiment,
-        repeats=matchup.repeats,
-        games=matchup.games,
-        agent_a=matchup.agent_a,
-        agent_b=matchup.agent_b,
-        paper=theirs,
     )
 
 
@@ -288,11 +273,11 @@ def render_markdown(report: StudyReport) -> str:
     trained: list[tuple[IRLAlgoPart, str]] = []
     for algo, label in (("airl", "AIRL"), ("hairl", "H-AIRL")):
         part = irl.algos[algo]
-        if isinstance(part, IRLReplacedPart):
-            lines.append(f"| {label} | replaced by `{part.replaced_by}` | |")
+        if isinstance(part, Replaced):
+            lines.append(f"| {label} | replaced by `{part.source}` | |")
             continue
         trained.append((part, label))
-        ours, published = part.final_val_alignment, part.paper_val_alignment
+        ours, published = part.final_val_alignment, part.paper.final_val_alignment
         lines.append(
             f"| {label} | {_pm(ours, 100, 1)}% | "
             f"{published.measured[0] * 100:.1f} ± {published.measured[1] * 100:.1f}% |"
@@ -314,7 +299,7 @@ def render_markdown(report: StudyReport) -> str:
         lines.append(
             f"| {label} | {_pm(part.final_disc_acc_expert, 100, 1)}% | "
             f"{_pm(part.final_disc_acc_policy, 100, 1)}% | "
-            f"{part.paper_disc_acc * 100:.0f}% |"
+            f"{part.paper.final_disc_acc * 100:.0f}% |"
         )
     figures = report.figures
     lines += [
