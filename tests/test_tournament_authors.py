@@ -62,3 +62,16 @@ def test_saved_experiments_are_reused(tmp_path: Path, monkeypatch: pytest.Monkey
     with pytest.raises(TournamentError, match="another configuration"):
         run_authors_tournament([("raise", "call")], experiments=[0], out=tmp_path, repeats=3,
                                games=100)  # fmt: skip
+
+
+def test_the_study_report_keeps_the_authors_summary_field_by_field() -> None:
+    # AuthorsRow repeats AuthorsSummary's fields (the report must load no tournament code):
+    # the same names and order, then the paper's line.
+    from dataclasses import fields
+
+    from pokerirl.studies.poker.report_types import AuthorsRow
+    from pokerirl.tournaments.authors import AuthorsSummary
+
+    row = [(f.name, f.type) for f in fields(AuthorsRow)]
+    assert row[:-1] == [(f.name, f.type) for f in fields(AuthorsSummary)]
+    assert row[-1][0] == "paper"

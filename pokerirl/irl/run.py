@@ -51,7 +51,7 @@ from pokerirl.irl.records import EpochMetrics
 from pokerirl.irl.transitions import Transitions
 from pokerirl.meanstd import Curve, MeanStd, mean_std
 from pokerirl.parquet import first_line
-from pokerirl.serial import Serializable
+from pokerirl.serial import Serializable, from_json
 from pokerirl.versions import package_versions
 
 FORMAT_VERSION = 2
@@ -330,6 +330,22 @@ def summarize(results: Sequence[RunResult]) -> RunsSummary:
 
 
 # --------------------------------------------------------------------------- loading
+
+
+def read_epochs(run_dir: str | os.PathLike[str]) -> list[EpochMetrics]:
+    """A run folder's epochs (its ``metrics.jsonl``), typed: what a study reads of the runs
+    it trained, instead of the file's keys; a bad line is named by file and line."""
+    path = Path(run_dir) / METRICS_FILE
+    lines = [line for line in path.read_text().splitlines() if line.strip()]
+    return [
+        EpochMetrics.from_json(json.loads(line), f"{path}:{k + 1}") for k, line in enumerate(lines)
+    ]
+
+
+def read_baselines(run_dir: str | os.PathLike[str]) -> dict[str, float]:
+    """A run folder's baselines (its ``baselines.json``): each one's validation alignment."""
+    path = Path(run_dir) / BASELINES_FILE
+    return from_json(dict[str, float], json.loads(path.read_text()), str(path))
 
 
 def load_run_config(run_dir: str | os.PathLike[str]) -> Mapping[str, Any]:

@@ -33,11 +33,6 @@ from typing import TYPE_CHECKING, Any
 from pokerirl.execution import Backend
 from pokerirl.meanstd import Curve
 from pokerirl.store import Fate, Layout, LegacyRecord, Unit, check, digest, fingerprint, writing
-from pokerirl.studies.common import (
-    BASELINES_JSON,
-    METRICS_JSONL,
-    read_jsonl,
-)
 from pokerirl.studies.poker.config import (
     AGENT_KINDS,
     BUILT_INS,
@@ -260,8 +255,10 @@ def run_paths(out: Path, runs: int) -> list[Path]:
 def summarize_irl(out: Path, runs: int) -> IRLRuns:
     """Per-epoch mean/std over runs of the curves the report draws, final values per run,
     mean action distributions and the baselines."""
-    metrics = [read_jsonl(p / METRICS_JSONL) for p in run_paths(out, runs)]
-    found_baselines = [json.loads((p / BASELINES_JSON).read_text()) for p in run_paths(out, runs)]
+    from pokerirl.irl.run import read_baselines, read_epochs
+
+    metrics = [read_epochs(p) for p in run_paths(out, runs)]
+    found_baselines = [read_baselines(p) for p in run_paths(out, runs)]
     epochs = min(len(m) for m in metrics)
     curves: dict[str, Curve] = {}
     for key in ("val_alignment", "disc_acc_expert", "disc_acc_policy", "val_reward_alignment"):
