@@ -37,7 +37,7 @@ import types
 import typing
 from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
-from typing import Any, TypeVar, cast
+from typing import Any, ClassVar, TypeVar, cast
 
 from pokerirl.errors import InputError
 
@@ -305,11 +305,20 @@ def _read_fields(cls: type, data: Any, path: str) -> Any:
 
 class Serializable:
     """``to_json()`` and ``from_json(data)`` for a dataclass, by :func:`to_json` and
-    :func:`from_json`."""
+    :func:`from_json`. ``FORMAT``: a file's format name, written first as ``"format"`` and
+    required on read."""
+
+    FORMAT: ClassVar[str | None] = None
 
     def to_json(self) -> Json:
-        return _dataclass_to_json(self)
+        found = _dataclass_to_json(self)
+        return found if self.FORMAT is None else {"format": self.FORMAT, **found}
 
     @classmethod
     def from_json(cls: type[S], data: Json, path: str = "") -> S:
+        if cls.FORMAT is not None:
+            kind = data.get("format") if isinstance(data, Mapping) else None
+            if kind != cls.FORMAT:
+                where = f"{path}: " if path else ""
+                raise SerialError(f"{where}not a {cls.FORMAT} report (format {kind!r})")
         return cast(S, _read_fields(cls, data, path))

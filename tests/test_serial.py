@@ -208,3 +208,19 @@ def test_meanstd_and_curve() -> None:
     band = Curve(timesteps=[5, 10], mean=[1.0, 2.0], std=[0.0, 0.0])
     assert list(band.to_json()) == ["timesteps", "mean", "std"]
     assert Curve.from_json(band.to_json()) == band
+
+
+@dataclass(frozen=True, kw_only=True)
+class Versioned(Serializable):
+    FORMAT = "x/1"
+
+    n: int
+
+
+def test_a_format_is_written_first_and_required_on_read() -> None:
+    assert list(Versioned(n=1).to_json().items()) == [("format", "x/1"), ("n", 1)]
+    assert Versioned.from_json({"format": "x/1", "n": 1}) == Versioned(n=1)
+    with pytest.raises(SerialError, match=r"^r: not a x/1 report \(format 'x/2'\)$"):
+        Versioned.from_json({"format": "x/2", "n": 1}, path="r")
+    with pytest.raises(SerialError, match=r"^not a x/1 report \(format None\)$"):
+        Versioned.from_json([])

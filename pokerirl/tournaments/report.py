@@ -121,22 +121,14 @@ class TournamentReport(Serializable):
     which :func:`load_report` reads back when it is there.
     """
 
+    FORMAT = REPORT_FORMAT
+
     config: TournamentSettings
     family: FamilySizes
     matchups: tuple[MatchupReport, ...]
     versions: Mapping[str, str | None]
     # timings.json, as read: never in report.json
     timing: Mapping[str, Any] = field(default_factory=dict, metadata=meta(skip=True))
-
-    def to_json(self) -> dict[str, Any]:
-        return {"format": REPORT_FORMAT, **super().to_json()}
-
-    @classmethod
-    def from_json(cls, data: Any, path: str = "") -> TournamentReport:
-        kind = data.get("format") if isinstance(data, Mapping) else None
-        if kind != REPORT_FORMAT:
-            raise TournamentError(f"not a {REPORT_FORMAT} report (format {kind!r})")
-        return super().from_json(data, path)
 
 
 # --- writing and reading -------------------------------------------------------------------

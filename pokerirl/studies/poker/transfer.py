@@ -142,6 +142,8 @@ class TransferRow(Serializable):
 
 @dataclass(frozen=True, kw_only=True)
 class TransferResult(Serializable):
+    FORMAT = "pokerirl-transfer/2"
+
     reward: str
     config: TransferConfig
     eval_seed: int = EVAL_SEED
@@ -149,9 +151,6 @@ class TransferResult(Serializable):
     rows: tuple[TransferRow, ...]
     best: str
     notes: list[str] = field(default_factory=list, metadata=meta(skip=True))  # transfer.md's
-
-    def to_json(self) -> dict[str, Any]:
-        return {"format": "pokerirl-transfer/2", **super().to_json()}
 
     def to_text(self) -> str:
         """``transfer.json``'s text."""
