@@ -13,7 +13,8 @@ import torch
 
 from pokerirl.datasets.toy import toy_expert_table
 from pokerirl.irl import EpochMetrics, RunResult, RunsSummary, load_config
-from pokerirl.irl.run import CurveStats, MeanStd, summarize
+from pokerirl.irl.run import summarize
+from pokerirl.meanstd import Curve, MeanStd
 from pokerirl.poker import train_runs
 
 torch.set_num_threads(1)
@@ -67,7 +68,7 @@ def test_summarize_is_typed_and_writes_what_it_always_wrote() -> None:
     summary = summarize([_result(0, [0.5, 0.75], 0.5), _result(1, [0.25, 0.25], 1.0)])
     assert summary.seeds == (0, 1) and summary.epochs == (1, 2)
     assert list(summary.metrics) == ["val_alignment"]  # lists are not averaged
-    assert summary.metrics["val_alignment"].mean == (0.375, 0.5)
+    assert summary.metrics["val_alignment"].mean == [0.375, 0.5]
     assert summary.baselines["bc"] == MeanStd(mean=0.75, std=pytest.approx(np.sqrt(0.125)))
     stds = list(summary.metrics["val_alignment"].std)
     assert summary.to_json() == {
@@ -78,7 +79,7 @@ def test_summarize_is_typed_and_writes_what_it_always_wrote() -> None:
         "baselines": {"bc": {"mean": 0.75, "std": summary.baselines["bc"].std}},
     }
     assert RunsSummary.from_json(summary.to_json()) == summary
-    assert CurveStats.from_json({"mean": [1.0], "std": [0.0]}).to_json() == {
+    assert Curve.from_json({"mean": [1.0], "std": [0.0]}).to_json() == {
         "mean": [1.0], "std": [0.0]
     }  # fmt: skip
 

@@ -26,7 +26,7 @@ def test_statistics_are_the_authors_and_ours(tmp_path: Path) -> None:
     means = [everything[4 * k : 4 * k + 4].mean() for k in range(3)]
     assert m.per_experiment == pytest.approx(means)
     assert m.se_over_experiments == pytest.approx(np.std(means, ddof=1) / math.sqrt(3))
-    summary = m.summary()
+    summary = m.summary().to_json()
     for key in ("mean", "paper_style_se", "se_over_experiments", "duplicate_mbb_per_hand",
                 "per_experiment"):  # fmt: skip
         assert key in summary
@@ -62,3 +62,16 @@ def test_saved_experiments_are_reused(tmp_path: Path, monkeypatch: pytest.Monkey
     with pytest.raises(TournamentError, match="another configuration"):
         run_authors_tournament([("raise", "call")], experiments=[0], out=tmp_path, repeats=3,
                                games=100)  # fmt: skip
+
+
+def test_the_study_report_keeps_the_authors_summary_field_by_field() -> None:
+    # AuthorsRow repeats AuthorsSummary's fields (the report must load no tournament code):
+    # the same names and order, then the paper's line.
+    from dataclasses import fields
+
+    from pokerirl.studies.poker.report_types import AuthorsRow
+    from pokerirl.tournaments.authors import AuthorsSummary
+
+    row = [(f.name, f.type) for f in fields(AuthorsRow)]
+    assert row[:-1] == [(f.name, f.type) for f in fields(AuthorsSummary)]
+    assert row[-1][0] == "paper"

@@ -31,7 +31,7 @@ import math
 import re
 import tempfile
 from collections.abc import Mapping, Sequence
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, cast
 
@@ -41,6 +41,7 @@ from pokerirl.agents import ShippedAgent, agent_fingerprint, land_agent, resolve
 from pokerirl.atomic import write_text
 from pokerirl.execution import Backend, unit_progress
 from pokerirl.game.match import play_match
+from pokerirl.serial import Serializable
 from pokerirl.store import Json, Layout, Unit, UnitConflict, UnitOutput, run_units
 from pokerirl.tournaments.lineup import (
     TournamentError,
@@ -59,7 +60,7 @@ RESULT_FORMAT = "pokerirl-authors-tournament/1"
 
 
 @dataclass(frozen=True, kw_only=True)
-class AuthorsExperiment:
+class AuthorsExperiment(Serializable):
     """One experiment's repeats: each repeat's mean mbb/h over its games."""
 
     experiment: int
@@ -73,7 +74,23 @@ class AuthorsExperiment:
 
 
 @dataclass(frozen=True, kw_only=True)
-class AuthorsMatchup:
+class AuthorsSummary(Serializable):
+    """A matchup's numbers under the authors' protocol (:meth:`AuthorsMatchup.summary`): what
+    ``authors.json`` and the study's ``report.json`` (``table1_authors``) keep of it."""
+
+    mean: float
+    paper_style_se: float
+    se_over_experiments: float | None  # None for one experiment (JSON has no NaN)
+    duplicate_mbb_per_hand: float | None
+    per_experiment: list[float]
+    repeats: int
+    games: int
+    agent_a: str
+    agent_b: str
+
+
+@dataclass(frozen=True, kw_only=True)
+class AuthorsMatchup(Serializable):
     """A matchup under the authors' protocol: A's result in mbb/h, both statistics.
 
     ``mean`` is over all repeats; ``paper_style_se`` is the authors' ``std / sqrt(games)``
@@ -113,32 +130,22 @@ class AuthorsMatchup:
             return float("nan")
         return float(means.std(ddof=1) / math.sqrt(means.size))
 
-    def summary(self) -> dict[str, object]:
-        """The names the study's ``report.json`` keeps (``table1_authors.<matchup>``)."""
+    def summary(self) -> AuthorsSummary:
         se = self.se_over_experiments
-        return {
-            "mean": self.mean,
-            "paper_style_se": self.paper_style_se,
-            "se_over_experiments": None if math.isnan(se) else se,
-            "duplicate_mbb_per_hand": self.duplicate_mbb_per_hand,
-            "per_experiment": self.per_experiment,
-            "repeats": self.repeats,
-            "games": self.games,
-            "agent_a": self.agent_a,
-            "agent_b": self.agent_b,
-        }
-
-    def to_json(self) -> dict[str, object]:
-        return {**asdict(self), "summary": self.summary()}
-
-    @classmethod
-    def from_json(cls, data: Mapping[str, Any]) -> AuthorsMatchup:
-        fields = {k: v for k, v in data.items() if k != "summary"}
-        fields["experiments"] = tuple(
-            AuthorsExperiment(**{**e, "repeats_mbb": tuple(e["repeats_mbb"])})
-            for e in data["experiments"]
+        return AuthorsSummary(
+            mean=self.mean,
+            paper_style_se=self.paper_style_se,
+            se_over_experiments=None if math.isnan(se) else se,
+            duplicate_mbb_per_hand=self.duplicate_mbb_per_hand,
+            per_experiment=self.per_experiment,
+            repeats=self.repeats,
+            games=self.games,
+            agent_a=self.agent_a,
+            agent_b=self.agent_b,
         )
-        return cls(**fields)
+
+    def to_json(self) -> dict[str, Any]:  # the summary: written for the reader, never read
+        return {**super().to_json(), "summary": self.summary().to_json()}
 
 
 def repeat_seed(experiment: int, repeat: int) -> int:

@@ -12,13 +12,12 @@ import numpy as np
 from pokerirl.atomic import write_bytes
 from pokerirl.encoding import ACTIONS
 from pokerirl.figures import finish
+from pokerirl.meanstd import Curve
 from pokerirl.studies.common import band
 from pokerirl.studies.poker.config import ALGO_LABELS, KIND_LABELS, TABLE1_ORDER, matchup_label
 from pokerirl.studies.poker.report_types import StudyReport
 from pokerirl.studies.poker.results import (
     AgentsResult,
-    Curve,
-    HandsCurve,
     IRLResult,
     IRLRuns,
     Panel,
@@ -57,7 +56,7 @@ def _trained(irl: IRLResult) -> dict[str, tuple[str, IRLRuns]]:
 
 def _band_figure(
     path: Path,
-    bands: Iterable[tuple[Any, Curve | HandsCurve, str]],
+    bands: Iterable[tuple[Any, Curve, str]],
     lines: Iterable[tuple[float, str, str]] = (),
     *,
     title: str,
@@ -151,7 +150,7 @@ def irl_actions(irl: IRLResult, path: Path) -> None:
 def rl_curves(agents: AgentsResult, path: Path) -> None:
     """Learning curves against random, mean ± std over seeds, with always-call and
     always-raise as reference lines (the paper's RL figure)."""
-    bands = [(agents.curves[kind].hands, agents.curves[kind], label)
+    bands = [(agents.curves[kind].timesteps, agents.curves[kind], label)
              for kind, label in KIND_LABELS.items() if kind in agents.curves]  # fmt: skip
     lines = []
     for name, style in (("call", ":"), ("raise", "--")):

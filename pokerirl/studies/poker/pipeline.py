@@ -31,13 +31,8 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from pokerirl.execution import Backend
-from pokerirl.meanstd import mean_std_curve
+from pokerirl.meanstd import Curve
 from pokerirl.store import Fate, Layout, LegacyRecord, Unit, check, digest, fingerprint, writing
-from pokerirl.studies.common import (
-    BASELINES_JSON,
-    METRICS_JSONL,
-    read_jsonl,
-)
 from pokerirl.studies.poker.config import (
     BUILT_INS,
     LBR_CHECK_UNTIL,
@@ -48,8 +43,6 @@ from pokerirl.studies.poker.config import (
 from pokerirl.studies.poker.report_types import CardSummary
 from pokerirl.studies.poker.results import (
     AgentsResult,
-    Curve,
-    HandsCurve,
     Ingested,
     IRLResult,
     IRLRuns,
@@ -260,8 +253,10 @@ def run_paths(out: Path, runs: int) -> list[Path]:
 def summarize_irl(out: Path, runs: int) -> IRLRuns:
     """Per-epoch mean/std over runs of the curves the report draws, final values per run,
     mean action distributions and the baselines."""
-    metrics = [read_jsonl(p / METRICS_JSONL) for p in run_paths(out, runs)]
-    found_baselines = [json.loads((p / BASELINES_JSON).read_text()) for p in run_paths(out, runs)]
+    from pokerirl.irl.run import read_baselines, read_epochs
+
+    metrics = [read_epochs(p) for p in run_paths(out, runs)]
+    found_baselines = [read_baselines(p) for p in run_paths(out, runs)]
     epochs = min(len(m) for m in metrics)
     curves: dict[str, Curve] = {}
     for key in ("val_alignment", "disc_acc_expert", "disc_acc_policy", "val_reward_alignment"):
@@ -380,14 +375,13 @@ def _final_vs_random(agent_set: Path, seeds: Sequence[int]) -> list[float]:
     return [read_metrics(agent_set / f"seed-{s}")[-1].eval["random"].mbb_per_hand for s in seeds]
 
 
-def _curve(agent_set: Path, seeds: Sequence[int]) -> HandsCurve:
+def _curve(agent_set: Path, seeds: Sequence[int]) -> Curve:
     from pokerirl.agents.train import read_metrics
 
     lines = [read_metrics(agent_set / f"seed-{s}") for s in seeds]
     points = min(len(line) for line in lines)
     values = [[line[i].eval["random"].mbb_per_hand for i in range(points)] for line in lines]
-    mean, std = mean_std_curve(values)
-    return HandsCurve(hands=[lines[0][i].hands for i in range(points)], mean=mean, std=std)
+    return Curve.of(values, timesteps=[lines[0][i].hands for i in range(points)])
 
 
 def _playing_vs_random(agent_set: Path, seeds: Sequence[int]) -> list[float]:

@@ -4,7 +4,6 @@
 from __future__ import annotations
 
 import json
-import math
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -30,10 +29,9 @@ from pokerirl.studies.poker.report_types import (
     DataPart,
     HandsResult,
     IRLAlgoPart,
+    IRLPaper,
     IRLPart,
-    IRLReplacedPart,
     PanelPart,
-    PaperLine,
     RLKindPart,
     RLPart,
     StudyReport,
@@ -46,6 +44,7 @@ from pokerirl.studies.poker.results import (
     IRLResult,
     IRLRuns,
     Panel,
+    Reference,
     Replaced,
     Table1Line,
 )
@@ -62,10 +61,10 @@ FIGURES = {
     "panel_heatmap": "figures/panel_heatmap.png",
 }
 PANEL_CSV = "panel.csv"
-def _paper_line(name: str) -> PaperLine | None:
+def _paper_line(name: str) -> Reference | None:
     """The paper's Table 1 line of matchup ``name`` (None: the paper has no such row)."""
     published = paper.TABLE1.get(name)
-    return None if published is None else PaperLine(**published)
+    return None if published is None else Reference(**published)
 
 
 AUTHORS_FIGURE = "figures/authors_tournament.png"
@@ -90,14 +89,14 @@ def build_report(
     table1 = {
         name: Table1Row(line=line, paper=_paper_line(name)) for name, line in tournament.items()
     }
-    algos: dict[str, IRLAlgoPart | IRLReplacedPart] = {}
+    algos: dict[str, IRLAlgoPart | Replaced] = {}
     runs = {algo: found for algo, found in irl.items() if isinstance(found, IRLRuns)}
     # BC is trained inside every run on that run's split; H-AIRL's runs' BC is the one reported.
     reported = next((algo for algo in TABLE1_ORDER if algo in runs), None)
     for algo in config.algos:
         found = irl[algo]
         if isinstance(found, Replaced):
-            algos[algo] = IRLReplacedPart(replaced_by=found.source)
+            algos[algo] = found
             continue
         final = found.final
         published = paper.IRL_ALIGNMENT.get(algo)  # GAIL is not in the paper
@@ -106,8 +105,10 @@ def build_report(
             final_disc_acc_expert=final["disc_acc_expert"].stats,
             final_disc_acc_policy=final["disc_acc_policy"].stats,
             per_run_val_alignment=final["val_alignment"].values,
-            paper_val_alignment=None if published is None else MeanStd(**published),
-            paper_disc_acc=paper.DISC_ACC_FINAL.get(algo),
+            paper=IRLPaper(
+                final_val_alignment=None if published is None else MeanStd(**published),
+                final_disc_acc=paper.DISC_ACC_FINAL.get(algo),
+            ),
         )
     irl_part = IRLPart(algos=algos, runs=config.runs)
     if reported is not None:
@@ -140,7 +141,10 @@ def build_report(
     figures = dict(FIGURES)
     table1_authors = None
     if authors is not None:
-        table1_authors = {name: _authors_row(authors[name], _paper_line(name)) for name in table1}
+        table1_authors = {
+            name: AuthorsRow(**vars(authors[name].summary()), paper=_paper_line(name))
+            for name in table1
+        }
         figures["authors_tournament"] = AUTHORS_FIGURE
     return StudyReport(
         format=REPORT_FORMAT,
@@ -162,29 +166,16 @@ def build_report(
             long=_hands_result(length.agent_hands, length.long),
             paper=paper.DQN_TRAINING,
         ),
-        panel=PanelPart(panel=panel, hands=config.panel_hands, lbr_hands=config.lbr_hands,
-                        lbr_check_until=LBR_CHECK_UNTIL),
+        panel=PanelPart(
+            panel=panel,
+            hands=config.panel_hands,
+            lbr_hands=config.lbr_hands,
+            lbr_check_until=LBR_CHECK_UNTIL,
+        ),
         figures=figures,
         paper=paper.paper_values(),
         reward_cards=cards,
         table1_authors=table1_authors,
-    )
-
-
-def _authors_row(matchup: AuthorsMatchup, theirs: PaperLine | None) -> AuthorsRow:
-    """``AuthorsMatchup.summary``'s numbers, typed, with the paper's line."""
-    se = matchup.se_over_experiments
-    return AuthorsRow(
-        mean=matchup.mean,
-        paper_style_se=matchup.paper_style_se,
-        se_over_experiments=None if math.isnan(se) else se,
-        duplicate_mbb_per_hand=matchup.duplicate_mbb_per_hand,
-        per_experiment=matchup.per_experiment,
-        repeats=matchup.repeats,
-        games=matchup.games,
-        agent_a=matchup.agent_a,
-        agent_b=matchup.agent_b,
-        paper=theirs,
     )
 
 
@@ -287,11 +278,11 @@ def render_markdown(report: StudyReport) -> str:
     trained: list[tuple[IRLAlgoPart, str]] = []
     for algo, part in irl.algos.items():
         label = ALGO_LABELS[algo]
-        if isinstance(part, IRLReplacedPart):
-            lines.append(f"| {label} | replaced by `{part.replaced_by}` | |")
+        if isinstance(part, Replaced):
+            lines.append(f"| {label} | replaced by `{part.source}` | |")
             continue
         trained.append((part, label))
-        ours, published = part.final_val_alignment, part.paper_val_alignment
+        ours, published = part.final_val_alignment, part.paper.final_val_alignment
         lines.append(
             f"| {label} | {_pm(ours, 100, 1)}% | "
             + ("not in the paper |" if published is None
@@ -314,8 +305,8 @@ def render_markdown(report: StudyReport) -> str:
         lines.append(
             f"| {label} | {_pm(part.final_disc_acc_expert, 100, 1)}% | "
             f"{_pm(part.final_disc_acc_policy, 100, 1)}% | "
-            + ("not in the paper |" if part.paper_disc_acc is None
-               else f"{part.paper_disc_acc * 100:.0f}% |")
+            + ("not in the paper |" if part.paper.final_disc_acc is None
+               else f"{part.paper.final_disc_acc * 100:.0f}% |")
         )  # fmt: skip
     figures = report.figures
     lines += [

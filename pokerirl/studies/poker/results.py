@@ -12,11 +12,12 @@ Spread(values=[2.0], mean=2.0, std=0.0)
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
-from dataclasses import asdict, dataclass, field
+from collections.abc import Sequence
+from dataclasses import dataclass, field
 from typing import Any
 
-from pokerirl.meanstd import MeanStd, mean_and_std, mean_std_curve
+from pokerirl.meanstd import Curve, MeanStd, mean_and_std
+from pokerirl.serial import Omit, Serializable, meta
 
 Json = dict[str, Any]
 
@@ -32,28 +33,7 @@ class Ingested:
 
 
 @dataclass(frozen=True, kw_only=True)
-class Curve:
-    """Mean and std per point (an epoch, an action) over runs or seeds."""
-
-    mean: list[float]
-    std: list[float]
-
-    @classmethod
-    def of(cls, values: Sequence[Sequence[float]]) -> Curve:
-        """Over the first axis of ``values`` (one row per run)."""
-        mean, std = mean_std_curve(values)
-        return cls(mean=mean, std=std)
-
-    def to_json(self) -> Json:
-        return {"mean": self.mean, "std": self.std}
-
-    @classmethod
-    def from_json(cls, data: Mapping[str, Any]) -> Curve:
-        return cls(mean=list(data["mean"]), std=list(data["std"]))
-
-
-@dataclass(frozen=True, kw_only=True)
-class Spread:
+class Spread(Serializable):
     """Values (one per run or seed) with their mean and sample std."""
 
     values: list[float]
@@ -69,16 +49,9 @@ class Spread:
     def stats(self) -> MeanStd:
         return MeanStd(mean=self.mean, std=self.std)
 
-    def to_json(self) -> Json:
-        return {"values": self.values, "mean": self.mean, "std": self.std}
-
-    @classmethod
-    def from_json(cls, data: Mapping[str, Any]) -> Spread:
-        return cls(values=list(data["values"]), mean=data["mean"], std=data["std"])
-
 
 @dataclass(frozen=True, kw_only=True)
-class IRLRuns:
+class IRLRuns(Serializable):
     """One algorithm's IRL runs: per-epoch curves, finals per run, the mean action
     distributions at the end, and the baselines trained beside them."""
 
@@ -89,66 +62,28 @@ class IRLRuns:
     action_dist: dict[str, Curve]  # val_expert_dist, val_policy_dist
     baselines: dict[str, Spread]  # majority, legal_majority, bc
 
-    def to_json(self) -> Json:
-        return {
-            "runs": self.runs,
-            "epochs": self.epochs,
-            "curves": {key: curve.to_json() for key, curve in self.curves.items()},
-            "final": {key: spread.to_json() for key, spread in self.final.items()},
-            "action_dist": {key: curve.to_json() for key, curve in self.action_dist.items()},
-            "baselines": {key: spread.to_json() for key, spread in self.baselines.items()},
-        }
-
-    @classmethod
-    def from_json(cls, data: Mapping[str, Any]) -> IRLRuns:
-        return cls(
-            runs=data["runs"],
-            epochs=data["epochs"],
-            curves={k: Curve.from_json(v) for k, v in data["curves"].items()},
-            final={k: Spread.from_json(v) for k, v in data["final"].items()},
-            action_dist={k: Curve.from_json(v) for k, v in data["action_dist"].items()},
-            baselines={k: Spread.from_json(v) for k, v in data["baselines"].items()},
-        )
-
 
 @dataclass(frozen=True, kw_only=True)
-class Replaced:
+class Replaced(Serializable):
     """An algorithm whose IRL runs a given reward replaced (``authors:FILE``)."""
 
-    source: str
-
-    def to_json(self) -> Json:
-        return {"replaced": self.source}
+    source: str = field(metadata=meta(key="replaced_by"))
 
 
 IRLResult = dict[str, IRLRuns | Replaced]  # by algorithm
 
 
 @dataclass(frozen=True, kw_only=True)
-class HandsCurve:
-    """Mbb/h against random at each evaluation, mean and std over seeds."""
-
-    hands: list[int]
-    mean: list[float]
-    std: list[float]
-
-    def to_json(self) -> Json:
-        return asdict(self)
-
-
-@dataclass(frozen=True, kw_only=True)
-class Reference:
-    """A fixed strategy against random."""
+class Reference(Serializable):
+    """A win rate in mbb/h and its standard error: a fixed strategy's against random, or a
+    Table 1 line as the paper gives it."""
 
     mbb_per_hand: float
     std_error: float
 
-    def to_json(self) -> Json:
-        return asdict(self)
-
 
 @dataclass(frozen=True, kw_only=True)
-class TrainingLength:
+class TrainingLength(Serializable):
     """The sparse DQN's final results at our training length and at the paper's."""
 
     agent_hands: int
@@ -156,43 +91,30 @@ class TrainingLength:
     long: list[float]
     short: list[float]
 
-    def to_json(self) -> Json:
-        return asdict(self)
-
 
 @dataclass(frozen=True, kw_only=True)
-class AgentsResult:
-    """Every agent kind over its seeds: its last evaluation against random, its curve, the
-    training-length comparison, the references; with the authors' preset, the playing
-    checkpoint measured against random."""
+class AgentsResult(Serializable):
+    """Every agent kind over its seeds: its last evaluation against random, its curve (at
+    the hands of each evaluation), the training-length comparison, the references; with the
+    authors' preset, the playing checkpoint measured against random."""
 
     final_vs_random: dict[str, list[float]]
-    curves: dict[str, HandsCurve]
+    curves: dict[str, Curve]
     training_length: TrainingLength
     references: dict[str, Reference]
-    playing_vs_random: dict[str, list[float]] | None = None
-    playing_hands: int | None = None
+    playing_vs_random: dict[str, list[float]] | None = field(
+        default=None, metadata=meta(omit=Omit.NONE)
+    )
+    playing_hands: int | None = field(default=None, metadata=meta(omit=Omit.NONE))
 
     @property
     def vs_random(self) -> dict[str, list[float]]:
         """What the report measures: the playing checkpoint where one is kept."""
         return self.final_vs_random if self.playing_vs_random is None else self.playing_vs_random
 
-    def to_json(self) -> Json:
-        found: Json = {
-            "final_vs_random": self.final_vs_random,
-            "curves": {kind: curve.to_json() for kind, curve in self.curves.items()},
-            "training_length": self.training_length.to_json(),
-            "references": {name: ref.to_json() for name, ref in self.references.items()},
-        }
-        if self.playing_vs_random is not None:
-            found["playing_vs_random"] = self.playing_vs_random
-            found["playing_hands"] = self.playing_hands
-        return found
-
 
 @dataclass(frozen=True, kw_only=True)
-class Table1Line:
+class Table1Line(Serializable):
     """One Table 1 matchup against the sparse DQN: the pooled line and its seeds."""
 
     mbb_per_hand: float
@@ -204,12 +126,9 @@ class Table1Line:
     per_seed: list[float] = field(default_factory=list)
     seeds_significant_bonferroni: int = 0
 
-    def to_json(self) -> Json:
-        return asdict(self)
-
 
 @dataclass(frozen=True, kw_only=True)
-class Panel:
+class Panel(Serializable):
     """Every panel member against every other: row agent's mbb/h and its SE (None on the
     diagonal); and LBR's win rate against each member with its SE, pooled over seeds (None:
     not measured)."""
@@ -219,6 +138,3 @@ class Panel:
     std_error: list[list[float | None]]
     lbr_mbb_per_hand: list[float | None] = field(default_factory=list)
     lbr_std_error: list[float | None] = field(default_factory=list)
-
-    def to_json(self) -> Json:
-        return asdict(self)

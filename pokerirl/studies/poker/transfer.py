@@ -42,6 +42,7 @@ from pokerirl.atomic import write_text
 from pokerirl.encoding import ACTIONS
 from pokerirl.errors import ConfigError
 from pokerirl.execution import Backend
+from pokerirl.serial import Serializable, meta
 from pokerirl.studies.common import markdown_table
 from pokerirl.studies.poker.config import AGENT_PRESETS
 
@@ -90,7 +91,7 @@ class TransferConfig:
 
 
 @dataclass(frozen=True, kw_only=True)
-class TransferRow:
+class TransferRow(Serializable):
     """One agent kind over its seeds (or one fixed agent: a single 'seed')."""
 
     label: str
@@ -127,9 +128,9 @@ class TransferRow:
         values = np.asarray(self.vs_experts[expert])
         return float(values.std(ddof=1) / math.sqrt(values.size)) if values.size > 1 else 0.0
 
-    def summary(self) -> dict[str, Any]:
+    def to_json(self) -> dict[str, Any]:  # with the means and SEs, for the file's reader
         return {
-            **dataclasses.asdict(self),
+            **super().to_json(),
             "mean_vs_random": self.mean_vs_random,
             "se_vs_random": self.se_vs_random,
             "mean_vs_experts": {e: self.mean_vs(e) for e in self.vs_experts},
@@ -140,26 +141,20 @@ class TransferRow:
 
 
 @dataclass(frozen=True, kw_only=True)
-class TransferResult:
+class TransferResult(Serializable):
+    FORMAT = "pokerirl-transfer/2"
+
     reward: str
     config: TransferConfig
+    eval_seed: int = EVAL_SEED
+    encoding: str = "rlcard"  # the DQNs'
     rows: tuple[TransferRow, ...]
     best: str
-    eval_seed: int = EVAL_SEED
-    notes: list[str] = field(default_factory=list)
-    encoding: str = "rlcard"  # the DQNs'
+    notes: list[str] = field(default_factory=list, metadata=meta(skip=True))  # transfer.md's
 
-    def to_json(self) -> str:
-        body = {
-            "format": "pokerirl-transfer/2",
-            "reward": self.reward,
-            "config": dataclasses.asdict(self.config),
-            "eval_seed": self.eval_seed,
-            "encoding": self.encoding,
-            "rows": [row.summary() for row in self.rows],
-            "best": self.best,
-        }
-        return json.dumps(body, indent=2) + "\n"
+    def to_text(self) -> str:
+        """``transfer.json``'s text."""
+        return json.dumps(self.to_json(), indent=2) + "\n"
 
     def markdown(self) -> str:
         experts = list(self.config.experts)
@@ -320,7 +315,7 @@ def run_transfer(
     result = TransferResult(reward=str(reward_run), config=config, rows=tuple(rows),
                             best=best.label, encoding=encoding)  # fmt: skip
     out.mkdir(parents=True, exist_ok=True)
-    write_text(out / TRANSFER_FILE, result.to_json())
+    write_text(out / TRANSFER_FILE, result.to_text())
     write_text(out / TRANSFER_MARKDOWN, result.markdown())
     return result
 
