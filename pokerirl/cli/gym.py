@@ -89,13 +89,6 @@ def _folder_out(out: Path) -> None:
         raise UsageError(f"--out {display(str(out))}: exists and is not a folder")
 
 
-def _gym_threads(threads: int) -> None:
-    # SB3's small MLPs run fastest on one thread; more only contend with other work.
-    import torch
-
-    torch.set_num_threads(threads)
-
-
 @gym_app.command("expert")
 @on_error(interrupted=INTERRUPTED, advice=RUN_ADVICE)
 def gym_expert(
@@ -119,11 +112,12 @@ def gym_expert(
 
     A rerun with the same settings keeps the expert; other settings are refused unless
     --overwrite (OUT/expert.job.json records them)."""
+    from pokerirl.execution import pin_threads
     from pokerirl.studies.gym_job import expert_folder
 
     _known_task(env)
     _folder_out(out)
-    _gym_threads(threads)
+    pin_threads(threads)  # SB3's small MLPs train fastest on one thread
     done = expert_folder(
         out,
         env,
@@ -241,6 +235,7 @@ def gym_rl(
     the same run either way it is grouped). Resumable: a rerun with the same settings keeps
     the finished runs; other settings (the backend too) are refused unless --overwrite
     (OUT/rl.job.json records them)."""
+    from pokerirl.execution import pin_threads
     from pokerirl.studies.gym_job import rl_runs
 
     if (reward_run is None) == (not env_reward):
@@ -248,7 +243,7 @@ def gym_rl(
     _rl_backend(rl_backend)
     _known_task(env)
     _folder_out(out)
-    _gym_threads(threads)
+    pin_threads(threads)  # SB3's small MLPs train fastest on one thread
     done = rl_runs(
         out,
         env,
@@ -299,6 +294,7 @@ def gym_irl(
     """AIRL, H-AIRL or GAIL on a task's expert data; each epoch's policy is evaluated in the env."""
     from dataclasses import replace
 
+    from pokerirl.execution import pin_threads
     from pokerirl.gym.irl import train_gym_irl
 
     if preset not in PRESETS:
@@ -314,7 +310,7 @@ def gym_irl(
     if epochs is not None:
         settings = replace(settings, epochs=epochs)
     settings = replace(settings, standardize_obs=not raw_obs)
-    _gym_threads(threads)
+    pin_threads(threads)  # SB3's small MLPs train fastest on one thread
     if data is None:
         from pokerirl.gym.collect import collect
         from pokerirl.gym.experts import load_expert, resolve_expert_dir

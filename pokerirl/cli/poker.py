@@ -10,6 +10,7 @@ from typing import TYPE_CHECKING
 
 import typer
 
+from pokerirl import execution
 from pokerirl.cli.app import (
     ENCODING_CHOICES,
     INTERRUPTED,
@@ -419,13 +420,11 @@ def train(
     baselines.json, split.json and plots; with --runs N, OUT/run-<k> and OUT/summary.json.
     A finished OUT is replaced only with --overwrite, and only once the new run is complete.
     """
-    import torch
-
     from pokerirl.irl import load_config
     from pokerirl.irl.airl import resolve_device
     from pokerirl.poker import train_runs
 
-    torch.set_num_threads(threads)
+    execution.pin_threads(threads)
     widths = None if hidden is None else _widths(hidden)
     overrides = {
         **given(ctx, epochs=epochs),  # else the --config file's, or the algorithm's
