@@ -73,7 +73,6 @@ from pokerirl.agents.dqn import (
 from pokerirl.agents.registry import agent_fingerprint, resolve_agent
 from pokerirl.atomic import atomic_path
 from pokerirl.errors import ConfigError, InputError
-from pokerirl.errors import report as error_report
 from pokerirl.execution import Backend, read_files
 from pokerirl.game import make_agent, play_match
 from pokerirl.game.agents import Agent
@@ -89,7 +88,7 @@ from pokerirl.poker.rewards import (
     TransformedReward,
     as_poker_reward,
 )
-from pokerirl.store import Unit, UnitConflict, UnitOutput, run_units
+from pokerirl.store import Unit, UnitOutput, run_units
 
 
 class RewardMode(StrEnum):
@@ -609,13 +608,10 @@ def _train_many(
                 args=(unit, reward_fn),
             )
         )
-    try:
-        done = run_units(
-            agents, backend, overwrite=overwrite, progress=progress and len(units) > 1,
-            desc=_set_name(folder for folder, _ in units.values()),
-        ).done  # fmt: skip
-    except UnitConflict as error:
-        raise UnitConflict(_advised(error)) from None
+    done = run_units(
+        agents, backend, overwrite=overwrite, progress=progress and len(units) > 1,
+        desc=_set_name(folder for folder, _ in units.values()),
+    ).done  # fmt: skip
     return {key: agent.extra for key, agent in zip(units, done, strict=True)}
 
 
@@ -623,13 +619,6 @@ def _set_name(folders: Iterable[Path]) -> str:
     """A set's bar label: its folder, ``agents hairl-dqn`` (a study trains four sets)."""
     parents = {Path(folder).parent.name for folder in folders}
     return f"agents {parents.pop()}" if len(parents) == 1 else "agents"
-
-
-def _advised(error: UnitConflict) -> str:
-    """The conflict's line with the command line's advice: ``pokerirl agent train`` prints
-    the message as it is (it adds no advice of its own yet)."""
-    found = error_report(error)
-    return str(error) if found is None else found[1]
 
 
 def _train_unit(unit: _TrainUnit, reward_fn: RewardFn | None = None) -> UnitOutput[MetricsLine]:

@@ -26,7 +26,6 @@ from typer.core import TyperGroup
 
 from pokerirl import execution  # light: tqdm only; ray loads when chosen
 from pokerirl.errors import (
-    ADVICE,
     DEBUG_VARIABLE,
     ConfigError,
     Remedy,
@@ -40,6 +39,14 @@ from pokerirl.studies.poker.config import (  # torch-free: the values help lists
 
 P = ParamSpec("P")
 T = TypeVar("T")
+
+# The command line's words for each remedy (every command that writes has --out and
+# --overwrite); the library's messages never hold them.
+ADVICE: Mapping[Remedy, str] = {
+    Remedy.RECOMPUTE: "use another --out, or --overwrite to recompute it",
+    Remedy.REPLACE: "use another --out, or --overwrite to replace it",
+    Remedy.ELSEWHERE: "use another --out",
+}
 
 
 def choices(values: Iterable[str]) -> str:
