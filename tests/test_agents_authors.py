@@ -14,8 +14,9 @@ import torch
 from torch import nn
 from torch.nn import functional
 
+from pokerirl.agents.config import AGENT_PRESETS, TrainConfig, agent_preset
 from pokerirl.agents.dqn import train_dqn
-from pokerirl.agents.train import AGENT_PRESETS, TrainConfig, agent_preset, train_agent
+from pokerirl.agents.train import train_agent
 from pokerirl.encoding import NUM_ACTIONS, RANKS, SUITS
 from pokerirl.game import make_agent, play_match
 from pokerirl.poker.authors_reward import AuthorsReward, authors_state, read_authors_file

@@ -28,6 +28,7 @@ from pokerirl.cli.app import (
 )
 from pokerirl.errors import InputError, UsageError
 from pokerirl.gym.presets import MAX_TRANSITIONS, PRESETS
+from pokerirl.irl.config import Algo  # torch-free: `gym irl` and `train` offer every one
 
 gym_app = typer.Typer(
     help="The paper's Gymnasium tasks: SB3 experts, expert data, RL on a learned reward.",
@@ -35,11 +36,6 @@ gym_app = typer.Typer(
 )
 app.add_typer(gym_app, name="gym")
 
-
-# pokerirl.irl.config.ALGOS, spelled out: pokerirl.irl imports torch, which the CLI imports
-# only when a command runs (tests/test_irl_gail.py checks that the two agree). `gym irl` and
-# `train` offer them; the studies keep their own (airl, hairl).
-IRL_TRAINERS = ("airl", "hairl", "gail")
 
 # Spelled out rather than imported: pokerirl.gym.rl pulls in SB3, and the CLI imports lazily
 # (tests/test_gym_lockstep_group.py checks it equals DEFAULT_RL_BACKEND).
@@ -272,7 +268,7 @@ def gym_irl(
         help="Expert Parquet (gym collect); default: collect the preset's from the "
         "shipped expert into OUT/expert.parquet.",
     ),
-    algo: str = typer.Option("hairl", metavar=choices(IRL_TRAINERS), help="airl, hairl or gail."),
+    algo: str = typer.Option("hairl", metavar=choices(Algo), help="airl, hairl or gail."),
     runs: int | None = typer.Option(
         None, min=1, max=MAX_SEEDS, help="Runs in lock-step (default: preset's)."
     ),
@@ -299,8 +295,8 @@ def gym_irl(
 
     if preset not in PRESETS:
         raise UsageError(f"--preset must be one of {', '.join(PRESETS)}, got {preset!r}")
-    if algo not in IRL_TRAINERS:
-        raise UsageError(f"--algo must be one of {', '.join(IRL_TRAINERS)}, got {algo!r}")
+    if algo not in tuple(Algo):
+        raise UsageError(f"--algo must be one of {', '.join(Algo)}, got {algo!r}")
     _known_task(env)
     if data is not None and not data.is_file():
         raise InputError(f"--data {display(str(data))}: no such file")

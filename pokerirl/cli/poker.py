@@ -30,8 +30,8 @@ from pokerirl.cli.app import (
     settings_from_options,
     write_logs,
 )
-from pokerirl.cli.gym import IRL_TRAINERS
 from pokerirl.errors import InputError, UsageError
+from pokerirl.irl.config import Algo
 from pokerirl.studies.poker.config import AGENT_PRESETS, FOLDS, TRANSFORMS
 
 if TYPE_CHECKING:
@@ -349,7 +349,7 @@ def train(
     algo: str = typer.Option(
         "hairl",
         "--algo",
-        metavar=choices(IRL_TRAINERS),
+        metavar=choices(Algo),
         help="hairl, airl or gail (picks the defaults; gail also GAIL's discriminator).",
     ),
     runs: int = typer.Option(
@@ -719,14 +719,9 @@ def agent_train(
     With --seeds, seeds run as units (--jobs or --ray); a rerun resumes the set.
     Every setting: --preset, then --config FILE, then the flags (docs/agents.md).
     """
+    from pokerirl.agents.config import AgentOverrides, load_agent_config
     from pokerirl.agents.registry import CONFIG_FILE, KEPT_FILE, MODEL_FILE
-    from pokerirl.agents.train import (
-        AgentOverrides,
-        MetricsLine,
-        load_agent_config,
-        train_agent,
-        train_seeds,
-    )
+    from pokerirl.agents.train import MetricsLine, train_agent, train_seeds
     from pokerirl.seeds import parse_seeds
 
     backend = _backend(jobs, ray, threads)

@@ -1,4 +1,5 @@
 """Hyperparameters of a run (:class:`AIRLConfig`), checked field by field, and TOML loading.
+Torch-free (the command line builds its options from these fields without loading torch).
 
 The TOML file is flat, with the field names as keys::
 
@@ -30,10 +31,28 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from enum import StrEnum
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from pokerirl.errors import ConfigError as ConfigError  # its old home: imports keep working
-from pokerirl.irl.nets import ACTIVATIONS, REWARD_FAMILIES, NetSpec, RewardFamily
+from pokerirl.errors import enum_value
+
+if TYPE_CHECKING:
+    from pokerirl.irl.nets import NetSpec
+
+
+class Activation(StrEnum):
+    """The hidden layers' activation (:data:`pokerirl.irl.nets.ACTIVATIONS`)."""
+
+    RELU = "relu"
+    TANH = "tanh"
+    LEAKY_RELU = "leaky_relu"
+
+
+class RewardFamily(StrEnum):
+    """What the reward net reads: f(s, a), or the shaped g(s, a) + γ h(s') - h(s)."""
+
+    STATE_ACTION = "state_action"
+    SHAPED = "shaped"
 
 
 class Algo(StrEnum):
@@ -87,13 +106,8 @@ class SupervisedForm(StrEnum):
     SUM_MSE = "sum_mse"
 
 
-# The names, for messages and choices (a StrEnum member is its value: "airl" in ALGOS).
+# The names, for messages (a StrEnum member is its value: "airl" in ALGOS).
 ALGOS: tuple[str, ...] = tuple(Algo)
-NOISE_SCHEDULES: tuple[str, ...] = tuple(NoiseSchedule)
-DISC_ACTIONS: tuple[str, ...] = tuple(DiscAction)
-NOISE_FORMS: tuple[str, ...] = tuple(NoiseForm)
-SUPERVISED_FORMS: tuple[str, ...] = tuple(SupervisedForm)
-DISCRIMINATOR_FORMS: tuple[str, ...] = tuple(DiscriminatorForm)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -103,7 +117,7 @@ class AIRLConfig:
     # the nets (see pokerirl.irl.nets.NetSpec)
     reward_hidden: tuple[int, ...] = (64,)
     policy_hidden: tuple[int, ...] = (64,)
-    activation: str = "relu"
+    activation: Activation = Activation.RELU
     layer_norm: bool = False
     reward_family: RewardFamily = RewardFamily.STATE_ACTION
     gamma: float = 0.99
@@ -155,16 +169,6 @@ class AIRLConfig:
             "reward_weight_decay >= 0": self.reward_weight_decay >= 0,
             "hidden widths >= 1": all(w >= 1 for w in self.reward_hidden + self.policy_hidden),
             "a reward hidden layer": len(self.reward_hidden) >= 1,
-            f"activation in {', '.join(ACTIVATIONS)}": self.activation in ACTIVATIONS,
-            f"reward_family in {', '.join(REWARD_FAMILIES)}": self.reward_family in REWARD_FAMILIES,
-            f"noise_schedule in {', '.join(NOISE_SCHEDULES)}": self.noise_schedule
-            in NOISE_SCHEDULES,
-            f"disc_action in {', '.join(DISC_ACTIONS)}": self.disc_action in DISC_ACTIONS,
-            f"noise_form in {', '.join(NOISE_FORMS)}": self.noise_form in NOISE_FORMS,
-            f"supervised_form in {', '.join(SUPERVISED_FORMS)}": self.supervised_form
-            in SUPERVISED_FORMS,
-            f"discriminator in {', '.join(DISCRIMINATOR_FORMS)}": self.discriminator
-            in DISCRIMINATOR_FORMS,
             "log_std_min < log_std_max": self.log_std_min < self.log_std_max,
         }
         broken = [name for name, ok in checks.items() if not ok]
@@ -196,6 +200,8 @@ class AIRLConfig:
         return cls(**{**base, "discriminator": form, **overrides})
 
     def net_spec(self) -> NetSpec:
+        from pokerirl.irl.nets import NetSpec  # torch: only where nets are built
+
         return NetSpec(
             reward_hidden=self.reward_hidden,
             policy_hidden=self.policy_hidden,
@@ -247,10 +253,7 @@ def _checked(name: str, hint: Any, value: Any) -> Any:
             return value
         raise ConfigError(f"{name} must be a string, got {value!r}")
     if isinstance(hint, type) and issubclass(hint, StrEnum):
-        if not isinstance(value, str):
-            raise ConfigError(f"{name} must be a string, got {value!r}")
-        # An unknown name stays a str: the field checks name the choices.
-        return hint(value) if value in hint.__members__.values() else value
+        return enum_value(name, hint, value)
     # tuple[int, ...]: hidden widths
     if isinstance(value, list | tuple) and all(
         isinstance(w, int) and not isinstance(w, bool) for w in value
