@@ -18,6 +18,7 @@ from typing import Any
 
 from pokerirl.errors import ConfigError, enum_value
 from pokerirl.game.encodings import EncodingName
+from pokerirl.irl.config import setting
 from pokerirl.poker.rewards import RaiseCounts, Transform
 
 
@@ -70,19 +71,21 @@ class DQNConfig:
     one forward pass with the same network and epsilon.
     """
 
-    hidden: tuple[int, ...] = (64, 64)
-    replay_size: int = 20_000
-    replay_init: int = 100  # transitions stored before the first update
-    batch_size: int = 32
-    learning_rate: float = 5e-5
-    gamma: float = 0.99
-    epsilon_start: float = 1.0
-    epsilon_end: float = 0.1
-    epsilon_decay_steps: int = 20_000  # in stored transitions, as RLCard's total_t
-    target_update_every: int = 1_000  # in updates
-    train_every: int = 16
-    concurrent_hands: int = 1024
-    self_play_every: int = 1_000  # in updates: refresh of the frozen copy with opponent "self"
+    hidden: tuple[int, ...] = setting((64, 64), help="Q-network widths, e.g. 64,64.")
+    replay_size: int = setting(20_000, help="Replay memory size.")
+    replay_init: int = setting(100, help="Transitions before the first update.")
+    batch_size: int = setting(32, help="Update minibatch size.")
+    learning_rate: float = setting(5e-5, help="Adam lr.", flags=("--lr", "--learning-rate"))
+    gamma: float = setting(0.99, help="Discount.")
+    epsilon_start: float = setting(1.0, help="Exploration at the start.")
+    epsilon_end: float = setting(0.1, help="Exploration after the decay.")
+    # in stored transitions, as RLCard's total_t
+    epsilon_decay_steps: int = setting(20_000, help="Transitions of the linear decay.")
+    target_update_every: int = setting(1_000, help="Updates between target copies.")
+    train_every: int = setting(16, help="Stored transitions per gradient update.")
+    concurrent_hands: int = setting(1024, help="Hands played in lock-step.")
+    # refreshes of the frozen copy with opponent "self"
+    self_play_every: int = setting(1_000, help="Updates between refreshes of 'self'.")
 
     def __post_init__(self) -> None:
         positive = (
@@ -121,22 +124,53 @@ class TrainConfig:
     docstring), and ``play`` says which checkpoint the agent plays.
     """
 
-    hands: int
+    hands: int = setting(help="Training hands.", flags=("--hands", "-n"))
     seed: int
     # A member after __post_init__; `| str`: callers may name it (the studies do).
-    reward: RewardMode | str = RewardMode.SPARSE
-    reward_run: str | None = None
-    payoff_weight: float = 0.0
-    opponent: str = "random"
-    eval_every: int = 10_000
-    eval_hands: int = 20_000
-    eval_seed: int = 1_000_003
+    reward: RewardMode | str = setting(
+        RewardMode.SPARSE, help="sparse (the payoff) or learned (--reward-run's f).",
+        show_default=True,
+    )  # fmt: skip
+    reward_run: str | None = setting(
+        None, help="AIRL / H-AIRL run folder, or authors:FILE (one of the authors' rewards).",
+        metavar="REWARD",
+    )  # fmt: skip
+    payoff_weight: float = setting(
+        0.0, help="w in r = w * payoff + (1 - w) * f(s, a); 0: the learned reward alone."
+    )
+    opponent: str = setting(
+        "random", metavar="AGENT|self",
+        help="random (default), raise, call, tightbot, loosebot, an agent folder, rlcard:CKPT "
+        "(unpickled: runs any code it holds; trusted files only), or self.",
+    )  # fmt: skip
+    eval_every: int = setting(10_000, help="Evaluate every N training hands.")
+    eval_hands: int = setting(20_000, help="Hands per evaluation (even, duplicate).")
+    eval_seed: int = setting(1_000_003, help="Deal seed of every evaluation.")
     dqn: DQNConfig = field(default_factory=DQNConfig)
-    reward_transform: Transform | str = Transform.RAW  # as reward
-    raise_counts: RaiseCounts = RaiseCounts.DECISION
-    protocol: TrainingProtocol = TrainingProtocol.POKERIRL
-    play: Plays = Plays.FINAL
-    encoding: EncodingName = EncodingName.RLCARD  # what the q-network reads (game.encodings)
+    reward_transform: Transform | str = setting(  # as reward
+        Transform.RAW, show_default=True,
+        help="raw (f), centered (f minus its mean over legal actions), log_softmax (f minus "
+        "its logsumexp over legal actions) or advantage (f minus its max over legal actions, "
+        "floored at -10; docs/rewards.md).",
+    )  # fmt: skip
+    raise_counts: RaiseCounts = setting(
+        RaiseCounts.DECISION, show_default=True,
+        help="decision (f reads the raise counts of the decision) or end-of-hand (those the "
+        "hand ended with, as the authors' agent read RLCard's live list).",
+    )  # fmt: skip
+    protocol: TrainingProtocol = setting(
+        TrainingProtocol.POKERIRL,
+        help="pokerirl (duplicate evaluations) or authors (their evaluation and kept model).",
+    )
+    play: Plays = setting(
+        Plays.FINAL,
+        help="final or kept (the authors' > 0.8 x best checkpoint; needs --protocol authors).",
+    )
+    encoding: EncodingName = setting(  # what the q-network reads (pokerirl.game.encodings)
+        EncodingName.RLCARD, show_default=True,
+        help="What the q-network reads: rlcard (RLCard's 72-d observation) or strength (hole "
+        "and board apart, with hand features). The reward reads its own run's encoding.",
+    )  # fmt: skip
 
     def __post_init__(self) -> None:
         for name, kind in _ENUM_FIELDS.items():  # a file's or a flag's string, as its member

@@ -33,9 +33,7 @@ from pokerirl.errors import (
     one_line_errors,
     sigterm_as_interrupt,
 )
-from pokerirl.studies.poker.config import (  # torch-free: the values help lists
-    ENCODINGS,
-)
+from pokerirl.game.encodings import EncodingName  # numpy only: the values help lists
 
 P = ParamSpec("P")
 T = TypeVar("T")
@@ -58,7 +56,7 @@ def choices(values: Iterable[str]) -> str:
     return f"[{'|'.join(values)}]"
 
 
-ENCODING_CHOICES = choices(ENCODINGS)
+ENCODING_CHOICES = choices(EncodingName)
 
 
 def _command_line_errors() -> tuple[type[Exception], ...]:

@@ -28,7 +28,7 @@ import os
 import tomllib
 import typing
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from enum import StrEnum
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -106,6 +106,14 @@ class SupervisedForm(StrEnum):
     SUM_MSE = "sum_mse"
 
 
+def setting(default: Any = dataclasses.MISSING, /, help: str = "", **more: Any) -> Any:
+    """A config dataclass's field that a command may offer as an option: its ``help`` and
+    ``more`` (``flags``, ``metavar``, ``min``, ``max``, ``show_default``) in the field's
+    metadata, which ``pokerirl.cli.options`` reads; the field's type and default give the rest.
+    """
+    return field(default=default, metadata={"help": help, **more})
+
+
 # The names, for messages (a StrEnum member is its value: "airl" in ALGOS).
 ALGOS: tuple[str, ...] = tuple(Algo)
 
@@ -122,20 +130,21 @@ class AIRLConfig:
     reward_family: RewardFamily = RewardFamily.STATE_ACTION
     gamma: float = 0.99
     # optimization
-    reward_lr: float = 1e-3
-    policy_lr: float = 1e-3
+    reward_lr: float = setting(1e-3, help="Adam lr of f.")
+    policy_lr: float = setting(1e-3, help="Adam lr of the policy.")
     # 0, not the authors' 5e-3: on poker tables their decay flattens f into one value per
     # action, whose legal argmax is "check, else call" (issue 31; their preset keeps it).
-    reward_weight_decay: float = 0.0
-    batch_size: int = 256
-    epochs: int = 50
+    reward_weight_decay: float = setting(0.0, help="Weight decay of f (default 0; authors 5e-3).")
+    batch_size: int = setting(256, help="Minibatch size.", min=1)
+    epochs: int = setting(50, help="Training epochs.", min=1, show_default=True)
     # the discriminator's form; set by the algorithm (GAIL's for gail), never on its own
     discriminator: DiscriminatorForm = DiscriminatorForm.AIRL
     # H-AIRL
-    alpha: float = 0.33  # weight of the supervised term in the policy loss
-    beta: float = 0.0  # weight of the (f - r_env)² term in the discriminator loss
-    sigma_start: float = 1.0  # noise σ on the first sample of a batch (in action ranges)
-    sigma_end: float = 0.1  # ... and on the last
+    alpha: float = setting(0.33, help="Supervised weight in policy loss.")
+    beta: float = setting(0.0, help="Env-reward weight in disc. loss.")  # on (f - r_env)²
+    # noise σ on the first and the last sample of a batch (in action ranges)
+    sigma_start: float = setting(1.0, help="Noise std on the batch's first policy action (H-AIRL).")
+    sigma_end: float = setting(0.1, help="Noise std on the batch's last policy action (H-AIRL).")
     noise_schedule: NoiseSchedule = NoiseSchedule.LINEAR
     noise_decay: float = 0.1  # k of the authors' schedule: 0.1 poker, 0.01 Gymnasium
     disc_action: DiscAction = DiscAction.SAMPLE
@@ -146,8 +155,8 @@ class AIRLConfig:
     log_std_min: float = -20.0
     log_std_max: float = 2.0
     # data
-    val_fraction: float = 0.1  # share of groups (hands, episodes) held out
-    seed: int = 0
+    val_fraction: float = setting(0.1, help="Share of hands.")  # of groups: hands, episodes
+    seed: int = setting(0, help="Seed for init, split, shuffle, noise.")
 
     def __post_init__(self) -> None:
         for item in dataclasses.fields(self):
