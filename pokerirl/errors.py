@@ -47,12 +47,11 @@ import traceback
 from collections.abc import Callable, Iterator, Mapping
 from enum import StrEnum
 from types import TracebackType
-from typing import ClassVar, Literal, TextIO, TypeVar
+from typing import ClassVar, Literal, TextIO
 
 DEBUG_VARIABLE = "POKERIRL_DEBUG"
 INTERRUPTED_CODE = 130  # 128 + SIGINT, what a shell reports for Ctrl-C
 TERMINATED_CODE = 143  # 128 + SIGTERM, what a shell reports for a process SIGTERM ended
-E = TypeVar("E", bound=StrEnum)
 
 
 class Remedy(StrEnum):
@@ -98,22 +97,6 @@ class ConfigError(PokerIRLError, ValueError):
 class InputError(PokerIRLError, ValueError):
     """A user's file or data that cannot be used (missing columns, a corrupt report, an
     unknown agent): one line naming it."""
-
-
-def enum_value(name: str, kind: type[E], value: object) -> E:
-    """``value`` as a member of ``kind`` (a setting read as a string from a file or a flag),
-    or a one-line :class:`ConfigError` naming the setting and its values.
-
-    >>> enum_value("remedy", Remedy, "replace")
-    <Remedy.REPLACE: 'replace'>
-    >>> enum_value("remedy", Remedy, "delete")
-    Traceback (most recent call last):
-    ...
-    pokerirl.errors.ConfigError: remedy must be one of recompute, replace, elsewhere, got 'delete'
-    """
-    if isinstance(value, str) and value in kind._value2member_map_:
-        return kind(value)
-    raise ConfigError(f"{name} must be one of {', '.join(kind)}, got {value!r}")
 
 
 class MissingExtra(PokerIRLError, ImportError):

@@ -16,10 +16,10 @@ from enum import StrEnum
 from pathlib import Path
 from typing import Any
 
-from pokerirl.errors import ConfigError, enum_value
+from pokerirl.errors import ConfigError
 from pokerirl.game.encodings import EncodingName
-from pokerirl.irl.config import setting
 from pokerirl.poker.rewards import RaiseCounts, Transform
+from pokerirl.settings import enum_value, setting, with_overrides
 
 
 class Plays(StrEnum):
@@ -209,35 +209,32 @@ AUTHORS_DQN = DQNConfig(
     epsilon_decay_steps=5_000,
     concurrent_hands=1,  # one hand at a time, as RLCard plays (evaluation points fall on it)
 )
-AGENT_PRESETS: dict[str, Mapping[str, Any]] = {
+AGENT_PRESETS: dict[str, TrainConfig] = {
     # Ours: 50,000 hands, RLCard's constructor defaults but train_every 16 (docs/agents.md).
-    "default": {"hands": 50_000},
+    "default": TrainConfig(hands=50_000, seed=0),
     # The authors' train_rl.py (silue-dev/hairl) with their DQNAgent subclass's settings:
     # lr 5e-4, train_every 1, epsilon 1 -> 0 over 5,000 steps; batch 32, replay 20,000,
     # target every 1,000 updates and MLP [64, 64] are RLCard's constructor defaults, as ours.
-    "authors": {
-        "hands": 5_000,
-        "eval_every": 100,
-        "eval_hands": 1_000,
-        "protocol": TrainingProtocol.AUTHORS,
-        "play": Plays.KEPT,
-        "dqn": AUTHORS_DQN,
-    },
+    "authors": TrainConfig(
+        hands=5_000,
+        seed=0,
+        eval_every=100,
+        eval_hands=1_000,
+        protocol=TrainingProtocol.AUTHORS,
+        play=Plays.KEPT,
+        dqn=AUTHORS_DQN,
+    ),
 }
 
 
 def agent_preset(name: str, **overrides: Any) -> TrainConfig:
     """The preset ``name`` (:data:`AGENT_PRESETS`), then ``overrides`` (None values ignored);
-    ``hands`` and ``seed`` may come from either. ``dqn`` overrides may be a dict of fields."""
-    if name not in AGENT_PRESETS:
-        raise ConfigError(f"unknown agent preset {name!r}; choose {', '.join(AGENT_PRESETS)}")
-    settings = {"seed": 0, **AGENT_PRESETS[name]}
-    changes = {k: v for k, v in overrides.items() if v is not None}
-    dqn = changes.pop("dqn", {})
-    settings.update(changes)
-    base = settings.get("dqn", DQNConfig())
-    settings["dqn"] = dataclasses.replace(base, **dqn) if isinstance(dqn, dict) else dqn
-    return TrainConfig(**settings)
+    ``dqn`` overrides may be a dict of fields (over the preset's)."""
+    dqn = overrides.pop("dqn", None)
+    if isinstance(dqn, Mapping):
+        base = with_overrides(AGENT_PRESETS, name, what="agent preset").dqn
+        dqn = dataclasses.replace(base, **dqn)
+    return with_overrides(AGENT_PRESETS, name, what="agent preset", dqn=dqn, **overrides)
 
 
 _TRAIN_KEYS = {f.name: f.type for f in dataclasses.fields(TrainConfig) if f.name != "dqn"}

@@ -28,13 +28,13 @@ import os
 import tomllib
 import typing
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from enum import StrEnum
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from pokerirl.errors import ConfigError as ConfigError  # its old home: imports keep working
-from pokerirl.errors import enum_value
+from pokerirl.settings import enum_value, setting, with_overrides
 
 if TYPE_CHECKING:
     from pokerirl.irl.nets import NetSpec
@@ -104,14 +104,6 @@ class SupervisedForm(StrEnum):
 
     MEAN_MSE = "mean_mse"
     SUM_MSE = "sum_mse"
-
-
-def setting(default: Any = dataclasses.MISSING, /, help: str = "", **more: Any) -> Any:
-    """A config dataclass's field that a command may offer as an option: its ``help`` and
-    ``more`` (``flags``, ``metavar``, ``min``, ``max``, ``show_default``) in the field's
-    metadata, which ``pokerirl.cli.options`` reads; the field's type and default give the rest.
-    """
-    return field(default=default, metadata={"help": help, **more})
 
 
 # The names, for messages (a StrEnum member is its value: "airl" in ALGOS).
@@ -187,26 +179,18 @@ class AIRLConfig:
     @classmethod
     def for_algo(cls, algo: str, **overrides: Any) -> AIRLConfig:
         """Defaults for ``"airl"`` and ``"gail"`` (α = β = 0, no noise; GAIL's discriminator
-        for gail) or ``"hairl"``, then ``overrides``.
+        for gail) or ``"hairl"`` (:data:`ALGO_PRESETS`), then ``overrides`` (None: not given).
 
         Unknown keys raise ``ConfigError`` naming them, and so does a ``discriminator`` that
         is not the algorithm's (the run records the algorithm; its D must be that one's).
         """
-        if algo not in ALGOS:
-            raise ConfigError(f"unknown algo {algo!r}; choose one of {', '.join(ALGOS)}")
-        unknown = sorted(set(overrides) - set(_HINTS))
-        if unknown:
-            raise ConfigError(f"unknown setting(s) {', '.join(unknown)}; known: {sorted(_HINTS)}")
         form = DiscriminatorForm.GAIL if algo == Algo.GAIL else DiscriminatorForm.AIRL
-        if overrides.get("discriminator", form) != form:
+        if overrides.get("discriminator", form) not in (form, None):
             raise ConfigError(
                 f"discriminator {overrides['discriminator']!r} is not {algo}'s ({form}); "
                 "the algorithm sets it: leave it out"
             )
-        base: dict[str, object] = {}
-        if algo in (Algo.AIRL, Algo.GAIL):
-            base = {"alpha": 0.0, "beta": 0.0, "sigma_start": 0.0, "sigma_end": 0.0}
-        return cls(**{**base, "discriminator": form, **overrides})
+        return with_overrides(ALGO_PRESETS, algo, what="algo", **overrides)
 
     def net_spec(self) -> NetSpec:
         from pokerirl.irl.nets import NetSpec  # torch: only where nets are built
@@ -269,6 +253,15 @@ def _checked(name: str, hint: Any, value: Any) -> Any:
     ):
         return tuple(value)
     raise ConfigError(f"{name} must be a list of integers, got {value!r}")
+
+
+_NO_NOISE: dict[str, Any] = {"alpha": 0.0, "beta": 0.0, "sigma_start": 0.0, "sigma_end": 0.0}
+# Each algorithm's defaults (AIRLConfig.for_algo).
+ALGO_PRESETS: dict[str, AIRLConfig] = {
+    Algo.AIRL: AIRLConfig(**_NO_NOISE),
+    Algo.HAIRL: AIRLConfig(),
+    Algo.GAIL: AIRLConfig(**_NO_NOISE, discriminator=DiscriminatorForm.GAIL),
+}
 
 
 def load_config(
