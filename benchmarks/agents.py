@@ -120,7 +120,7 @@ class RLCardLoop:
 
 def authors_comparison(seeds: list[int], eval_hands: int) -> None:
     """Our DQN and RLCard's at the authors' settings: learning curves, updates, speed."""
-    from pokerirl.agents.train import AUTHORS_DQN
+    from pokerirl.agents.config import AUTHORS_DQN
 
     rlcard_settings = {
         "learning_rate": AUTHORS_DQN.learning_rate,

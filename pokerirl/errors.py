@@ -6,7 +6,8 @@ data that cannot be used: :class:`InputError`; a missing optional dependency:
 and its message is one line that names the user's file or setting, never a command-line
 flag: the library does not know the command line. Where a command could get past it (another
 output folder, recomputing), the error says so as a :class:`Remedy`, and the command line
-adds the advice in terms of its own flags (:data:`ADVICE`).
+adds the advice in terms of its own flags (its mapping of remedies to words,
+``pokerirl.cli.app.ADVICE``, given to :func:`report` and :class:`one_line_errors`).
 
 :class:`one_line_errors` is the contract of every command, as a decorator or a ``with``
 block:
@@ -61,19 +62,10 @@ class Remedy(StrEnum):
     ELSEWHERE = "elsewhere"  # write elsewhere: what is there is never replaced
 
 
-# The command line's words for each remedy (every command that writes has --out and
-# --overwrite). Library messages never hold them; round 2 moves this to pokerirl/cli/errors.py.
-ADVICE: Mapping[Remedy, str] = {
-    Remedy.RECOMPUTE: "use another --out, or --overwrite to recompute it",
-    Remedy.REPLACE: "use another --out, or --overwrite to replace it",
-    Remedy.ELSEWHERE: "use another --out",
-}
-
-
 class PokerIRLError(Exception):
     """The base of every error pokerirl raises on purpose; its message is one line.
 
-    ``remedy``: how a command could get past it, if it can (see :data:`ADVICE`). It survives
+    ``remedy``: how a command could get past it, if it can (the command line words it). It survives
     pickling (an error raised in a worker process reaches the driver whole).
 
     >>> import pickle
@@ -168,14 +160,16 @@ def describe_os_error(error: OSError) -> str:
     return f"{' -> '.join(names)}: {reason}" if names else reason
 
 
-def report(error: BaseException, advice: Mapping[Remedy, str] = ADVICE) -> tuple[int, str] | None:
-    """The exit code and the one line for an error of the contract; None for a bug.
+def report(error: BaseException, advice: Mapping[Remedy, str]) -> tuple[int, str] | None:
+    """The exit code and the one line for an error of the contract, with ``advice``'s words
+    for its remedy (the caller's: the command line's name its flags); None for a bug.
 
-    >>> report(UsageError("--runs must be at least 1"))
+    >>> report(UsageError("--runs must be at least 1"), {})
     (2, '--runs must be at least 1')
-    >>> print(report(PokerIRLError("run-0 was made with other settings", remedy=Remedy.REPLACE)))
-    (1, 'run-0 was made with other settings; use another --out, or --overwrite to replace it')
-    >>> report(KeyError("epochs")) is None
+    >>> conflict = PokerIRLError("run-0 was made with other settings", remedy=Remedy.REPLACE)
+    >>> print(report(conflict, {Remedy.REPLACE: "pass overwrite=True"}))
+    (1, 'run-0 was made with other settings; pass overwrite=True')
+    >>> report(KeyError("epochs"), {}) is None
     True
     """
     if isinstance(error, PokerIRLError):
@@ -195,7 +189,8 @@ class one_line_errors(contextlib.ContextDecorator):  # lower case: a decorator
     Args:
         interrupted: the line Ctrl-C (and SIGTERM: :class:`Terminated`) prints (a
             resumable command says how to resume).
-        advice: the command line's words for each :class:`Remedy`.
+        advice: the words for each :class:`Remedy` (the command line's name its flags);
+            default: none, the message alone.
         debug: print tracebacks too; default: :func:`debug_enabled`, read when an error
             arrives (so a ``--debug`` handled after this object was made still counts).
         stream: where the lines go (default: stderr at the time of the error).
@@ -207,13 +202,13 @@ class one_line_errors(contextlib.ContextDecorator):  # lower case: a decorator
         self,
         *,
         interrupted: str = "interrupted",
-        advice: Mapping[Remedy, str] = ADVICE,
+        advice: Mapping[Remedy, str] | None = None,
         debug: bool | None = None,
         stream: TextIO | None = None,
         display: Callable[[str], str] | None = None,
     ) -> None:
         self.interrupted = interrupted
-        self.advice = advice
+        self.advice = advice or {}
         self.debug = debug
         self.stream = stream
         self.display = display

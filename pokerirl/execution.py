@@ -159,6 +159,15 @@ def pinned_threads(threads: int) -> Iterator[None]:
         torch.set_num_threads(before)
 
 
+def pin_threads(threads: int) -> None:
+    """torch on ``threads`` intra-op threads in this process from now on, loading torch: a
+    command's own work (small nets train fastest on one; the count is part of the result,
+    see :func:`pinned_threads`)."""
+    import torch
+
+    torch.set_num_threads(threads)
+
+
 def run_unit(fn: Callable[..., R], args: tuple[Any, ...], threads: int = 1) -> R:
     """``fn(*args)`` with torch pinned to ``threads`` threads: what every backend calls."""
     with pinned_threads(threads):

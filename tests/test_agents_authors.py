@@ -14,8 +14,9 @@ import torch
 from torch import nn
 from torch.nn import functional
 
+from pokerirl.agents.config import AGENT_PRESETS, TrainConfig, agent_preset
 from pokerirl.agents.dqn import train_dqn
-from pokerirl.agents.train import AGENT_PRESETS, TrainConfig, agent_preset, train_agent
+from pokerirl.agents.train import train_agent
 from pokerirl.encoding import NUM_ACTIONS, RANKS, SUITS
 from pokerirl.game import make_agent, play_match
 from pokerirl.poker.authors_reward import AuthorsReward, authors_state, read_authors_file
@@ -187,7 +188,7 @@ def test_authors_reward_trains_an_agent_with_end_of_hand_raises(
     config = TrainConfig(
         hands=96, seed=0, reward="learned", reward_run=spec, reward_transform="centered",
         raise_counts="end-of-hand", eval_every=96, eval_hands=50, protocol="authors",
-        dqn=dataclasses.replace(AGENT_PRESETS["authors"]["dqn"], concurrent_hands=32),
+        dqn=dataclasses.replace(AGENT_PRESETS["authors"].dqn, concurrent_hands=32),
     )  # fmt: skip
     train_agent(tmp_path / "agent", config)
     record = json.loads((tmp_path / "agent" / "config.json").read_text())
@@ -216,7 +217,7 @@ def test_end_of_hand_raise_counts_are_the_hands_final_ones() -> None:
     def run(raise_counts: str) -> tuple[np.ndarray, np.ndarray]:
         reward = RaisesSeen()
         learner = train_dqn(
-            dataclasses.replace(AGENT_PRESETS["authors"]["dqn"], concurrent_hands=64),
+            dataclasses.replace(AGENT_PRESETS["authors"].dqn, concurrent_hands=64),
             hands=256, seed=3, opponent=make_agent("raise"), reward_fn=reward,
             raise_counts=raise_counts,
         )  # fmt: skip

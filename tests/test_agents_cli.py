@@ -122,7 +122,7 @@ def test_same_seed_same_bytes_and_threads_are_explicit(tmp_path: Path) -> None:
     ("args", "code", "message"),
     [
         (["--reward", "learned"], 1, "reward 'learned' needs a reward_run"),
-        (["--reward", "shaped"], 2, "unknown reward mode"),
+        (["--reward", "shaped"], 2, "reward must be one of sparse, learned"),
         (["--reward-run", "."], 2, "reward_run needs reward 'learned'"),
         (["--reward", "learned", "--reward-run", "."], 1, "not a reward run"),
         (["--seeds", "5-2"], 2, "empty seed range"),

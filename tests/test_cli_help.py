@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import re
 from collections.abc import Iterator
+from typing import Any
 
 import pytest
 import typer
@@ -40,3 +41,60 @@ def test_help_fits_80_columns_and_names_every_options_values(path: tuple[str, ..
             if re.match(r"  -", line) and not re.search(r"\S {2,}\S", line)
             and not (k + 1 < len(options) and re.match(r" {3,}\S", options[k + 1]))]  # fmt: skip
     assert bare == [], f"options without a help line: {bare}"
+
+
+@pytest.mark.parametrize(
+    ("path", "configs"),
+    [(("train",), ("AIRLConfig",)), (("agent", "train"), ("TrainConfig", "DQNConfig"))],
+)
+def test_settings_options_are_the_config_fields_with_their_help(
+    path: tuple[str, ...], configs: tuple[str, ...]
+) -> None:
+    import dataclasses
+
+    from pokerirl.agents import config as agents
+    from pokerirl.irl import config as irl
+
+    command: Any = typer.main.get_command(app)
+    for name in path:
+        command = command.commands[name]
+    options = {p.name: p for p in command.params}
+    offered = [
+        item
+        for config in configs
+        for item in dataclasses.fields(getattr(agents, config, None) or getattr(irl, config))
+        if "help" in item.metadata
+    ]
+    assert len(offered) >= 11
+    for item in offered:  # declared once, in the dataclass: the flag's help is the field's
+        assert options[item.name].help == item.metadata["help"], item.name
+
+
+def test_settings_options_pass_only_what_the_command_line_gave() -> None:
+    import dataclasses
+
+    from pokerirl.cli.options import NO_SETTINGS, Settings, settings_options
+    from pokerirl.settings import setting
+
+    @dataclasses.dataclass(frozen=True, kw_only=True)
+    class Toy:
+        epochs: int = setting(5, help="Epochs.", show_default=True)
+        hidden: tuple[int, ...] = setting((8,), help="Widths.")
+        seed: int = setting(0, help="Seed.")
+        gamma: float = 0.9  # no help: not offered
+
+    toy = typer.Typer()
+    seen: list[dict[str, object]] = []
+
+    @toy.command()
+    @settings_options(toy=Toy)
+    def run(ctx: typer.Context, toy: Settings = NO_SETTINGS) -> None:
+        seen.append(dict(toy))
+
+    runner = CliRunner()
+    assert runner.invoke(toy, []).exit_code == 0
+    assert runner.invoke(toy, ["--epochs", "5", "--hidden", "4,2", "--seed", "3"]).exit_code == 0
+    assert seen == [{}, {"epochs": 5, "hidden": (4, 2), "seed": 3}]  # a default is not given
+    text = runner.invoke(toy, ["--help"], terminal_width=80).output
+    assert "[default: 5" in text and "WIDTHS" in text and "--gamma" not in text
+    assert runner.invoke(toy, ["--seed", "-1"]).exit_code == 2  # a seed's bounds

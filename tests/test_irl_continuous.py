@@ -89,9 +89,9 @@ def test_authors_noise_changes_what_the_discriminator_sees() -> None:
 
 
 def test_bad_option_values_are_one_line_config_errors() -> None:
-    with pytest.raises(ConfigError, match="noise_form in ours, authors"):
+    with pytest.raises(ConfigError, match="noise_form must be one of ours, authors"):
         AIRLConfig(noise_form="theirs")
-    with pytest.raises(ConfigError, match="supervised_form in mean_mse, sum_mse"):
+    with pytest.raises(ConfigError, match="supervised_form must be one of mean_mse, sum_mse"):
         AIRLConfig(supervised_form="sum")
     with pytest.raises(ConfigError, match="log_std_min < log_std_max"):
         AIRLConfig(log_std_min=3.0)

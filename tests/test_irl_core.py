@@ -184,7 +184,7 @@ def test_config_defaults_and_validation() -> None:
         ("alpha = false", "alpha must be a number"),
         ('reward_hidden = [64, "x"]', "reward_hidden must be a list of integers"),
         ('layer_norm = "yes"', "layer_norm must be true or false"),
-        ("reward_family = 3", "reward_family must be a string"),
+        ("reward_family = 3", "reward_family must be one of state_action, shaped, got 3"),
     ],
 )
 def test_toml_type_errors_are_one_line_naming_key_and_file(

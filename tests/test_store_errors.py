@@ -10,6 +10,7 @@ import pytest
 import typer
 from typer.testing import CliRunner
 
+from pokerirl.cli.app import ADVICE
 from pokerirl.errors import (
     PokerIRLError,
     Remedy,
@@ -40,7 +41,8 @@ def test_library_errors_are_one_line_with_the_command_lines_advice() -> None:
     )
     conflict = UnitConflict("runs/run-0 was made with another configuration (seed 1 -> 2)",
                             remedy=Remedy.RECOMPUTE)  # fmt: skip
-    assert run(conflict, debug=False) == (
+    assert run(conflict, debug=False) == (1, f"error: {conflict}\n")  # no words: the message
+    assert run(conflict, debug=False, advice=ADVICE) == (
         1,
         "error: runs/run-0 was made with another configuration (seed 1 -> 2); "
         "use another --out, or --overwrite to recompute it\n",

@@ -15,6 +15,7 @@ from pathlib import Path
 
 import pytest
 
+from pokerirl.cli.app import ADVICE
 from pokerirl.errors import Remedy, report
 from pokerirl.store import (
     Fate,
@@ -162,7 +163,7 @@ def test_another_configuration_is_refused_in_one_line_naming_the_folder(tmp_path
     message = str(refused.value)
     assert message == f"{folder} was made with another configuration (settings.epochs 2 -> 3)"
     assert "--" not in message  # the library names no flag; the command line adds the advice
-    assert report(refused.value) == (
+    assert report(refused.value, ADVICE) == (
         1,
         f"{message}; use another --out, or --overwrite to recompute it",
     )

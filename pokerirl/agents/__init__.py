@@ -104,14 +104,14 @@ def land_agent(shipped: ShippedAgent, folder: str | os.PathLike[str]) -> Agent:
 
 _LAZY = {
     "load_agent": "checkpoint",
-    "DQNConfig": "dqn",
+    "DQNConfig": "config",
     "GreedyQAgent": "dqn",
     "train_dqn": "dqn",
     "import_rlcard_dqn": "rlcard_import",
     "load_rlcard_dqn": "rlcard_import",
     "RLCardAgent": "rlcard_adapter",
     "rlcard_states": "rlcard_adapter",
-    "TrainConfig": "train",
+    "TrainConfig": "config",
     "train_agent": "train",
     "train_seeds": "train",
 }

@@ -23,27 +23,18 @@ import json
 import os
 import warnings
 from collections.abc import Mapping
-from enum import StrEnum
 from pathlib import Path
 from typing import Any
 
 import torch
 
+from pokerirl.agents.config import PLAYS, Plays
 from pokerirl.agents.dqn import GreedyQAgent, QNetwork, input_norm
 from pokerirl.agents.registry import CONFIG_FILE, KEPT_FILE, MODEL_FILE
 from pokerirl.atomic import write_bytes, write_torch
 from pokerirl.errors import InputError
 from pokerirl.game.encodings import ENCODINGS, Encoding, EncodingName
 
-
-class Plays(StrEnum):
-    """Which checkpoint an agent plays: the final model, or the authors' kept one."""
-
-    FINAL = "final"
-    KEPT = "kept"
-
-
-PLAYS: tuple[str, ...] = tuple(Plays)
 METRICS_FILE, CURVE_FILE = "metrics.jsonl", "learning_curve.png"
 FORMAT = "pokerirl-dqn"
 FORMAT_VERSION = 1

@@ -29,13 +29,13 @@ import functools
 import itertools
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from enum import StrEnum
 
 import numpy as np
 import torch
 from torch import nn
 from tqdm import tqdm
 
+from pokerirl.agents.config import SELF_PLAY, DQNConfig
 from pokerirl.encoding import NUM_ACTIONS, OBS_SIZE
 from pokerirl.errors import ConfigError
 from pokerirl.execution import unit_progress
@@ -52,66 +52,7 @@ RewardFn = Callable[[np.ndarray, np.ndarray], np.ndarray] | PokerReward
 
 
 
-class Opponent(StrEnum):
-    """Opponent specs that name no agent."""
-
-    SELF = "self"  # a frozen greedy copy of the learner
-
-
-SELF_PLAY = Opponent.SELF
 TRAIN_STREAM = 2  # spawn-key word of the trainer's randomness (deals use 0, match agents 1)
-
-
-@dataclass(frozen=True, kw_only=True)
-class DQNConfig:
-    """Hyper-parameters; RLCard's ``DQNAgent`` defaults except where noted.
-
-    ``train_every`` (RLCard: 1) is the number of stored transitions per gradient update. A
-    32-sample update (~0.8 ms on a CPU core) costs a hundred times more than playing a
-    decision on the engine, so with RLCard's one update per transition, training would run
-    at RLCard's speed. 16 still replays each transition twice on average (batch 32 / 16),
-    and 50,000 sparse-reward hands against random reach about +2,700 mbb/h, more than twice
-    always-call's +1,170 (the sweep over 1, 8, 16, 32, 128 is in ``docs/agents.md``).
-
-    ``concurrent_hands`` hands are played in lock-step: all decisions of one step are taken by
-    one forward pass with the same network and epsilon.
-    """
-
-    hidden: tuple[int, ...] = (64, 64)
-    replay_size: int = 20_000
-    replay_init: int = 100  # transitions stored before the first update
-    batch_size: int = 32
-    learning_rate: float = 5e-5
-    gamma: float = 0.99
-    epsilon_start: float = 1.0
-    epsilon_end: float = 0.1
-    epsilon_decay_steps: int = 20_000  # in stored transitions, as RLCard's total_t
-    target_update_every: int = 1_000  # in updates
-    train_every: int = 16
-    concurrent_hands: int = 1024
-    self_play_every: int = 1_000  # in updates: refresh of the frozen copy with opponent "self"
-
-    def __post_init__(self) -> None:
-        positive = (
-            "replay_size", "replay_init", "batch_size", "epsilon_decay_steps",
-            "target_update_every", "train_every", "concurrent_hands", "self_play_every",
-        )  # fmt: skip
-        for name in positive:
-            if getattr(self, name) < 1:
-                raise ConfigError(f"{name} must be at least 1, got {getattr(self, name)}")
-        if max(self.batch_size, self.replay_init, self.concurrent_hands) > self.replay_size:
-            raise ConfigError(
-                "batch_size, replay_init and concurrent_hands must not exceed replay_size"
-            )
-        if not self.learning_rate > 0 or not 0 <= self.gamma <= 1:
-            raise ConfigError("learning_rate must be positive and gamma in [0, 1]")
-        if not (0 <= self.epsilon_start <= 1 and 0 <= self.epsilon_end <= 1):
-            raise ConfigError(
-                f"epsilon_start and epsilon_end must lie in [0, 1], got {self.epsilon_start} "
-                f"and {self.epsilon_end}"
-            )
-        if not self.hidden or min(self.hidden) < 1:
-            raise ConfigError(f"hidden must be positive layer sizes, got {self.hidden}")
 
 
 class QNetwork(nn.Module):

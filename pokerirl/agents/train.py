@@ -43,9 +43,7 @@ import tempfile
 import time
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
-from enum import StrEnum
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 import torch
@@ -58,13 +56,18 @@ from pokerirl.agents.checkpoint import (
     KEPT_FILE,
     METRICS_FILE,
     MODEL_FILE,
-    PLAYS,
-    Plays,
     save_agent,
 )
-from pokerirl.agents.dqn import (
+from pokerirl.agents.config import (
     SELF_PLAY,
-    DQNConfig,
+    AgentOverrides,  # noqa: F401 - re-exported from its old home
+    RewardMode,
+    TrainConfig,
+    TrainingProtocol,
+    agent_preset,  # noqa: F401 - re-exported from its old home
+    load_agent_config,  # noqa: F401 - re-exported from its old home
+)
+from pokerirl.agents.dqn import (
     DQNLearner,
     RewardFn,
     epsilon_at,
@@ -73,139 +76,25 @@ from pokerirl.agents.dqn import (
 from pokerirl.agents.registry import agent_fingerprint, resolve_agent
 from pokerirl.atomic import atomic_path
 from pokerirl.errors import ConfigError, InputError
-from pokerirl.errors import report as error_report
 from pokerirl.execution import Backend, read_files
 from pokerirl.game import make_agent, play_match
 from pokerirl.game.agents import Agent
-from pokerirl.game.encodings import EncodingName, get_encoding
 from pokerirl.irl.run import REWARD_RUN_FILES  # noqa: F401 - re-exported: pokerirl.agents.train.REWARD_RUN_FILES
 from pokerirl.poker.rewards import (
-    RAISE_COUNTS,
-    TRANSFORMS,
     PokerReward,
-    RaiseCounts,
     RewardSource,
-    Transform,
     TransformedReward,
     as_poker_reward,
 )
 from pokerirl.serial import Omit, Serializable, meta
-from pokerirl.store import Unit, UnitConflict, UnitOutput, run_units
+from pokerirl.store import Unit, UnitOutput, run_units
 
-
-class RewardMode(StrEnum):
-    """What an agent learns from: the payoff at the end of a hand, or a learned reward."""
-
-    SPARSE = "sparse"
-    LEARNED = "learned"
-
-
-class TrainingProtocol(StrEnum):
-    """How an agent is evaluated and kept: ours (duplicate deals), or the authors'."""
-
-    POKERIRL = "pokerirl"
-    AUTHORS = "authors"
-
-
-REWARD_MODES: tuple[str, ...] = tuple(RewardMode)
-PROTOCOLS: tuple[str, ...] = tuple(TrainingProtocol)
 TIMINGS_FILE = "timings.json"
 AGENT_OUTPUTS = (MODEL_FILE, CONFIG_FILE, METRICS_FILE, CURVE_FILE)
 KEEP_RATIO = 0.8  # the authors' rule: keep a model whose payoff beats 0.8 x the best so far
 
 
-@dataclass(frozen=True, kw_only=True)
-class TrainConfig:
-    """One training run: what to learn from, against whom, for how long, how to evaluate.
-
-    ``reward``: ``sparse`` (the payoff at the end of a hand) or ``learned`` (f_θ of
-    ``reward_run``, a run folder or ``authors:FILE``, after ``reward_transform`` over the
-    legal actions, mixed with the payoff by ``payoff_weight``; ``raise_counts`` says which
-    raise counts f reads). ``opponent``: an agent spec
-    (:func:`pokerirl.agents.resolve_agent`) or ``self``. The evaluation plays ``eval_hands``
-    duplicate hands of seed ``eval_seed`` every ``eval_every`` training hands and at the end;
-    ``protocol="authors"`` evaluates and keeps a checkpoint as the authors do (see the module
-    docstring), and ``play`` says which checkpoint the agent plays.
-    """
-
-    hands: int
-    seed: int
-    reward: str = RewardMode.SPARSE
-    reward_run: str | None = None
-    payoff_weight: float = 0.0
-    opponent: str = "random"
-    eval_every: int = 10_000
-    eval_hands: int = 20_000
-    eval_seed: int = 1_000_003
-    dqn: DQNConfig = field(default_factory=DQNConfig)
-    reward_transform: str = Transform.RAW
-    raise_counts: str = RaiseCounts.DECISION
-    protocol: str = TrainingProtocol.POKERIRL
-    play: str = Plays.FINAL
-    encoding: str = EncodingName.RLCARD  # what the q-network reads (pokerirl.game.encodings)
-
-    def __post_init__(self) -> None:
-        get_encoding(self.encoding)  # one line naming the known ones
-        if self.reward not in REWARD_MODES:
-            raise ConfigError(f"unknown reward mode {self.reward!r} (sparse or learned)")
-        if self.reward == RewardMode.SPARSE and self.reward_run is not None:
-            raise ConfigError("reward_run needs reward 'learned'")
-        if self.reward == RewardMode.SPARSE and self.payoff_weight != 0.0:
-            raise ConfigError("payoff_weight needs reward 'learned'")
-        if not 0.0 <= self.payoff_weight <= 1.0:
-            raise ConfigError(f"payoff weight must be in [0, 1], got {self.payoff_weight}")
-        if self.hands < 1 or self.eval_every < 1:
-            raise ConfigError("hands and eval_every must be at least 1")
-        if self.seed < 0 or self.eval_seed < 0:
-            raise ConfigError("seeds must be non-negative")
-        if self.protocol not in PROTOCOLS:
-            raise ConfigError(f"unknown protocol {self.protocol!r} ({', '.join(PROTOCOLS)})")
-        duplicate = self.protocol == TrainingProtocol.POKERIRL
-        if self.eval_hands < 2 or (duplicate and self.eval_hands % 2):
-            raise ConfigError(f"eval_hands must be even and at least 2, got {self.eval_hands}")
-        if self.reward_transform not in TRANSFORMS:
-            raise ConfigError(
-                f"unknown reward transform {self.reward_transform!r} ({', '.join(TRANSFORMS)})"
-            )
-        if self.raise_counts not in RAISE_COUNTS:
-            raise ConfigError(
-                f"unknown raise_counts {self.raise_counts!r} ({', '.join(RAISE_COUNTS)})"
-            )
-        if self.reward == RewardMode.SPARSE and (
-            self.reward_transform != Transform.RAW or self.raise_counts != RaiseCounts.DECISION
-        ):
-            raise ConfigError("reward_transform and raise_counts need reward 'learned'")
-        if self.play not in PLAYS:
-            raise ConfigError(f"unknown play {self.play!r} ({', '.join(PLAYS)})")
-        if self.play == Plays.KEPT and self.protocol != TrainingProtocol.AUTHORS:
-            raise ConfigError("play 'kept' needs protocol 'authors' (its kept checkpoint)")
-
-
 _OURS = TrainConfig(hands=1, seed=0)
-AUTHORS_DQN = DQNConfig(
-    learning_rate=5e-4,
-    train_every=1,
-    epsilon_end=0.0,
-    epsilon_decay_steps=5_000,
-    concurrent_hands=1,  # one hand at a time, as RLCard plays (evaluation points fall on it)
-)
-AGENT_PRESETS: dict[str, Mapping[str, Any]] = {
-    # Ours: 50,000 hands, RLCard's constructor defaults but train_every 16 (docs/agents.md).
-    "default": {"hands": 50_000},
-    # The authors' train_rl.py (silue-dev/hairl) with their DQNAgent subclass's settings:
-    # lr 5e-4, train_every 1, epsilon 1 -> 0 over 5,000 steps; batch 32, replay 20,000,
-    # target every 1,000 updates and MLP [64, 64] are RLCard's constructor defaults, as ours.
-    "authors": {
-        "hands": 5_000,
-        "eval_every": 100,
-        "eval_hands": 1_000,
-        "protocol": TrainingProtocol.AUTHORS,
-        "play": Plays.KEPT,
-        "dqn": AUTHORS_DQN,
-    },
-}
-
-
 @dataclass(frozen=True, kw_only=True)
 class Score(Serializable):
     """The greedy policy's result against one opponent."""
@@ -256,97 +145,6 @@ class Timings(Serializable):
     seconds: float
     hands_per_second: float | None
     evaluations: tuple[Evaluation, ...]
-
-
-def agent_preset(name: str, **overrides: Any) -> TrainConfig:
-    """The preset ``name`` (:data:`AGENT_PRESETS`), then ``overrides`` (None values ignored);
-    ``hands`` and ``seed`` may come from either. ``dqn`` overrides may be a dict of fields."""
-    if name not in AGENT_PRESETS:
-        raise ConfigError(f"unknown agent preset {name!r}; choose {', '.join(AGENT_PRESETS)}")
-    settings = {"seed": 0, **AGENT_PRESETS[name]}
-    changes = {k: v for k, v in overrides.items() if v is not None}
-    dqn = changes.pop("dqn", {})
-    settings.update(changes)
-    base = settings.get("dqn", DQNConfig())
-    settings["dqn"] = dataclasses.replace(base, **dqn) if isinstance(dqn, dict) else dqn
-    return TrainConfig(**settings)
-
-
-_TRAIN_KEYS = {f.name: f.type for f in dataclasses.fields(TrainConfig) if f.name != "dqn"}
-_DQN_KEYS = {f.name: f.type for f in dataclasses.fields(DQNConfig)}
-
-
-def _typed(key: str, hint: str, value: Any) -> Any:
-    """``value`` if it fits the field's annotation (as a string: ``from __future__``)."""
-    number = isinstance(value, int | float) and not isinstance(value, bool)
-    if hint == "int" and isinstance(value, int) and not isinstance(value, bool):
-        return value
-    if hint == "float" and number:
-        return float(value)
-    if hint.startswith("str") and (isinstance(value, str) or (value is None and "None" in hint)):
-        return value
-    if hint.startswith("tuple") and isinstance(value, list) and value:
-        if all(isinstance(w, int) and not isinstance(w, bool) for w in value):
-            return tuple(value)
-    kind = {"int": "an integer", "float": "a number", "tuple[int, ...]": "a list of integers"}
-    raise ConfigError(f"{key} must be {kind.get(hint, 'a string')}")
-
-
-@dataclass(frozen=True, kw_only=True)
-class AgentOverrides:
-    """Training settings over an agent preset: fields of :class:`TrainConfig` (``train``) and of
-    :class:`~pokerirl.agents.dqn.DQNConfig` (``dqn``).
-
-    >>> file = AgentOverrides(train={"hands": 500}, dqn={"train_every": 2})
-    >>> config = file.with_flags(train={"hands": None}, dqn={"train_every": 4}).config("default")
-    >>> config.hands, config.dqn.train_every
-    (500, 4)
-    """
-
-    train: Mapping[str, Any] = field(default_factory=dict)
-    dqn: Mapping[str, Any] = field(default_factory=dict)
-
-    def with_flags(self, *, train: Mapping[str, Any], dqn: Mapping[str, Any]) -> AgentOverrides:
-        """These settings under ``train`` and ``dqn`` (command-line flags: None values unset)."""
-        return AgentOverrides(
-            train={**self.train, **{k: v for k, v in train.items() if v is not None}},
-            dqn={**self.dqn, **{k: v for k, v in dqn.items() if v is not None}},
-        )
-
-    def config(self, preset: str, *, seed: int | None = None) -> TrainConfig:
-        """:func:`agent_preset` ``preset`` with these settings."""
-        return agent_preset(preset, seed=seed, dqn=dict(self.dqn), **self.train)
-
-
-def load_agent_config(path: str | os.PathLike[str]) -> AgentOverrides:
-    """A TOML file of training settings as :func:`agent_preset` overrides: flat keys, any
-    field of :class:`TrainConfig` (``hands``, ``eval_every``, ...) or of
-    :class:`~pokerirl.agents.dqn.DQNConfig` (``learning_rate``, ``train_every``, ...).
-
-    Raises :class:`~pokerirl.errors.ConfigError` of one line naming the file and the key.
-    """
-    import tomllib
-
-    path = Path(path)
-    try:
-        settings = tomllib.loads(path.read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise ConfigError(f"config file not found: {path}") from None
-    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as error:
-        raise ConfigError(f"cannot read {path} as TOML: {error}") from None
-    train: dict[str, object] = {}
-    dqn: dict[str, object] = {}
-    for key, value in settings.items():
-        hint = _TRAIN_KEYS.get(key) or _DQN_KEYS.get(key)
-        if hint is None or key == "seed":
-            known = sorted({*_TRAIN_KEYS, *_DQN_KEYS} - {"seed"})
-            raise ConfigError(f"{path}: unknown setting {key!r} (known: {', '.join(known)})")
-        try:
-            checked = _typed(key, str(hint), value)
-        except ValueError as error:
-            raise ConfigError(f"{path}: {error}, got {value!r}") from None
-        (dqn if key in _DQN_KEYS else train)[key] = checked
-    return AgentOverrides(train=train, dqn=dqn)
 
 
 def reward_run_fingerprint(run_dir: str | os.PathLike[str]) -> str:
@@ -573,13 +371,10 @@ def _train_many(
                 args=(unit, reward_fn),
             )
         )
-    try:
-        done = run_units(
-            agents, backend, overwrite=overwrite, progress=progress and len(units) > 1,
-            desc=_set_name(folder for folder, _ in units.values()),
-        ).done  # fmt: skip
-    except UnitConflict as error:
-        raise UnitConflict(_advised(error)) from None
+    done = run_units(
+        agents, backend, overwrite=overwrite, progress=progress and len(units) > 1,
+        desc=_set_name(folder for folder, _ in units.values()),
+    ).done  # fmt: skip
     return {key: agent.extra for key, agent in zip(units, done, strict=True)}
 
 
@@ -587,13 +382,6 @@ def _set_name(folders: Iterable[Path]) -> str:
     """A set's bar label: its folder, ``agents hairl-dqn`` (a study trains four sets)."""
     parents = {Path(folder).parent.name for folder in folders}
     return f"agents {parents.pop()}" if len(parents) == 1 else "agents"
-
-
-def _advised(error: UnitConflict) -> str:
-    """The conflict's line with the command line's advice: ``pokerirl agent train`` prints
-    the message as it is (it adds no advice of its own yet)."""
-    found = error_report(error)
-    return str(error) if found is None else found[1]
 
 
 def _train_unit(unit: _TrainUnit, reward_fn: RewardFn | None = None) -> UnitOutput[MetricsLine]:

@@ -26,7 +26,6 @@ from typer.core import TyperGroup
 
 from pokerirl import execution  # light: tqdm only; ray loads when chosen
 from pokerirl.errors import (
-    ADVICE,
     DEBUG_VARIABLE,
     ConfigError,
     Remedy,
@@ -34,12 +33,18 @@ from pokerirl.errors import (
     one_line_errors,
     sigterm_as_interrupt,
 )
-from pokerirl.studies.poker.config import (  # torch-free: the values help lists
-    ENCODINGS,
-)
+from pokerirl.game.encodings import EncodingName  # numpy only: the values help lists
 
 P = ParamSpec("P")
 T = TypeVar("T")
+
+# The command line's words for each remedy (every command that writes has --out and
+# --overwrite); the library's messages never hold them.
+ADVICE: Mapping[Remedy, str] = {
+    Remedy.RECOMPUTE: "use another --out, or --overwrite to recompute it",
+    Remedy.REPLACE: "use another --out, or --overwrite to replace it",
+    Remedy.ELSEWHERE: "use another --out",
+}
 
 
 def choices(values: Iterable[str]) -> str:
@@ -51,7 +56,7 @@ def choices(values: Iterable[str]) -> str:
     return f"[{'|'.join(values)}]"
 
 
-ENCODING_CHOICES = choices(ENCODINGS)
+ENCODING_CHOICES = choices(EncodingName)
 
 
 def _command_line_errors() -> tuple[type[Exception], ...]:

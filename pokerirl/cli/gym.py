@@ -28,6 +28,7 @@ from pokerirl.cli.app import (
 )
 from pokerirl.errors import InputError, UsageError
 from pokerirl.gym.presets import MAX_TRANSITIONS, PRESETS
+from pokerirl.irl.config import Algo  # torch-free: `gym irl` and `train` offer every one
 
 gym_app = typer.Typer(
     help="The paper's Gymnasium tasks: SB3 experts, expert data, RL on a learned reward.",
@@ -35,11 +36,6 @@ gym_app = typer.Typer(
 )
 app.add_typer(gym_app, name="gym")
 
-
-# pokerirl.irl.config.ALGOS, spelled out: pokerirl.irl imports torch, which the CLI imports
-# only when a command runs (tests/test_irl_gail.py checks that the two agree). `gym irl` and
-# `train` offer them; the studies keep their own (airl, hairl).
-IRL_TRAINERS = ("airl", "hairl", "gail")
 
 # Spelled out rather than imported: pokerirl.gym.rl pulls in SB3, and the CLI imports lazily
 # (tests/test_gym_lockstep_group.py checks it equals DEFAULT_RL_BACKEND).
@@ -89,13 +85,6 @@ def _folder_out(out: Path) -> None:
         raise UsageError(f"--out {display(str(out))}: exists and is not a folder")
 
 
-def _gym_threads(threads: int) -> None:
-    # SB3's small MLPs run fastest on one thread; more only contend with other work.
-    import torch
-
-    torch.set_num_threads(threads)
-
-
 @gym_app.command("expert")
 @on_error(interrupted=INTERRUPTED, advice=RUN_ADVICE)
 def gym_expert(
@@ -119,11 +108,12 @@ def gym_expert(
 
     A rerun with the same settings keeps the expert; other settings are refused unless
     --overwrite (OUT/expert.job.json records them)."""
+    from pokerirl.execution import pin_threads
     from pokerirl.studies.gym_job import expert_folder
 
     _known_task(env)
     _folder_out(out)
-    _gym_threads(threads)
+    pin_threads(threads)  # SB3's small MLPs train fastest on one thread
     done = expert_folder(
         out,
         env,
@@ -241,6 +231,7 @@ def gym_rl(
     the same run either way it is grouped). Resumable: a rerun with the same settings keeps
     the finished runs; other settings (the backend too) are refused unless --overwrite
     (OUT/rl.job.json records them)."""
+    from pokerirl.execution import pin_threads
     from pokerirl.studies.gym_job import rl_runs
 
     if (reward_run is None) == (not env_reward):
@@ -248,7 +239,7 @@ def gym_rl(
     _rl_backend(rl_backend)
     _known_task(env)
     _folder_out(out)
-    _gym_threads(threads)
+    pin_threads(threads)  # SB3's small MLPs train fastest on one thread
     done = rl_runs(
         out,
         env,
@@ -277,7 +268,7 @@ def gym_irl(
         help="Expert Parquet (gym collect); default: collect the preset's from the "
         "shipped expert into OUT/expert.parquet.",
     ),
-    algo: str = typer.Option("hairl", metavar=choices(IRL_TRAINERS), help="airl, hairl or gail."),
+    algo: str = typer.Option("hairl", metavar=choices(Algo), help="airl, hairl or gail."),
     runs: int | None = typer.Option(
         None, min=1, max=MAX_SEEDS, help="Runs in lock-step (default: preset's)."
     ),
@@ -299,12 +290,13 @@ def gym_irl(
     """AIRL, H-AIRL or GAIL on a task's expert data; each epoch's policy is evaluated in the env."""
     from dataclasses import replace
 
+    from pokerirl.execution import pin_threads
     from pokerirl.gym.irl import train_gym_irl
 
     if preset not in PRESETS:
         raise UsageError(f"--preset must be one of {', '.join(PRESETS)}, got {preset!r}")
-    if algo not in IRL_TRAINERS:
-        raise UsageError(f"--algo must be one of {', '.join(IRL_TRAINERS)}, got {algo!r}")
+    if algo not in tuple(Algo):
+        raise UsageError(f"--algo must be one of {', '.join(Algo)}, got {algo!r}")
     _known_task(env)
     if data is not None and not data.is_file():
         raise InputError(f"--data {display(str(data))}: no such file")
@@ -314,7 +306,7 @@ def gym_irl(
     if epochs is not None:
         settings = replace(settings, epochs=epochs)
     settings = replace(settings, standardize_obs=not raw_obs)
-    _gym_threads(threads)
+    pin_threads(threads)  # SB3's small MLPs train fastest on one thread
     if data is None:
         from pokerirl.gym.collect import collect
         from pokerirl.gym.experts import load_expert, resolve_expert_dir

@@ -3,13 +3,14 @@
 from __future__ import annotations
 
 import json
-import re
 from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import typer
 
+from pokerirl import execution
+from pokerirl.agents.config import AGENT_PRESETS, DQNConfig, Plays, TrainConfig  # torch-free
 from pokerirl.cli.app import (
     ENCODING_CHOICES,
     INTERRUPTED,
@@ -29,12 +30,17 @@ from pokerirl.cli.app import (
     settings_from_options,
     write_logs,
 )
-from pokerirl.cli.gym import IRL_TRAINERS
+from pokerirl.cli.options import NO_SETTINGS, Settings, settings_options, widths
 from pokerirl.errors import InputError, UsageError
-from pokerirl.studies.poker.config import AGENT_PRESETS, FOLDS, TRANSFORMS
+from pokerirl.game.encodings import EncodingName
+from pokerirl.irl.config import AIRLConfig, Algo  # torch-free
+from pokerirl.poker.folds import FoldsMode
+from pokerirl.poker.rewards import Transform
 
 if TYPE_CHECKING:
+    from pokerirl.agents.train import MetricsLine
     from pokerirl.irl.records import EpochMetrics
+    from pokerirl.irl.run import RunSummary
 
 AGENTS_ENCODING_HELP = (
     "Check that every agent reads this encoding (rlcard or strength; the built-ins read what "
@@ -62,7 +68,7 @@ def ingest(
     folds: str = typer.Option(
         "drop",
         "--folds",
-        metavar=choices(FOLDS),
+        metavar=choices(FoldsMode),
         help="drop: leave out the hands that end in a fold with the cards hidden (the table "
         "of before, byte for byte); impute: keep them, each hidden player's cards drawn from "
         "a posterior over the 1,326 pairs under a behaviour model (docs/folds.md).",
@@ -332,74 +338,37 @@ def tournament(
 
 @app.command()
 @on_error(interrupted=INTERRUPTED, advice=RUN_ADVICE)
+@settings_options(irl=AIRLConfig)
 def train(
     ctx: typer.Context,
     table: str = typer.Argument(
-        ...,
-        metavar="TABLE",
-        help="Parquet decision table written by `pokerirl ingest`.",
+        ..., metavar="TABLE", help="Parquet decision table written by `pokerirl ingest`."
     ),
     out: str = typer.Option(
-        ...,
-        "--out",
-        metavar="DIR",
-        help="Run folder (with --runs > 1: a folder of runs).",
+        ..., "--out", metavar="DIR", help="Run folder (with --runs > 1: a folder of runs)."
     ),
     algo: str = typer.Option(
-        "hairl",
-        "--algo",
-        metavar=choices(IRL_TRAINERS),
+        Algo.HAIRL, "--algo", metavar=choices(Algo),
         help="hairl, airl or gail (picks the defaults; gail also GAIL's discriminator).",
     ),
     runs: int = typer.Option(
-        1, "--runs", min=1, max=MAX_SEEDS,
-        help="Runs with seeds seed..seed+runs-1, in OUT/run-<k>.",
+        1, "--runs", min=1, max=MAX_SEEDS, help="Runs with seeds seed..seed+runs-1, in OUT/run-<k>."
     ),
     overwrite: bool = typer.Option(
         False, "--overwrite", help="Replace a finished run (with --runs: runs of other settings)."
     ),
     jobs: int = typer.Option(1, "--jobs", "-j", min=1, help="Processes running --runs at once."),
     ray: str | None = typer.Option(None, "--ray", metavar="ADDRESS", help=RAY_HELP),
-    epochs: int = typer.Option(
-        Default("pokerirl.irl.config:AIRLConfig", "epochs"), "--epochs", min=1,
-        help="Training epochs.",
-    ),
-    seed: int | None = typer.Option(
-        None, "--seed", **SEED_OPTION, help="Seed for init, split, shuffle, noise."
-    ),
     device: str = typer.Option("cpu", "--device", metavar="DEVICE", help="cpu or cuda."),
     config: str | None = typer.Option(
-        None,
-        "--config",
-        metavar="FILE",
-        help="TOML file of hyperparameters.",
+        None, "--config", metavar="FILE", help="TOML file of hyperparameters."
     ),
-    batch_size: int | None = typer.Option(None, "--batch-size", min=1),
     hidden: str | None = typer.Option(
-        None,
-        "--hidden",
-        metavar="WIDTHS",
-        help="Widths for both nets, e.g. 64,64.",
+        None, "--hidden", metavar="WIDTHS", help="Widths for both nets, e.g. 64,64."
     ),
-    reward_lr: float | None = typer.Option(None, "--reward-lr", help="Adam lr of f."),
-    policy_lr: float | None = typer.Option(None, "--policy-lr", help="Adam lr of the policy."),
-    reward_weight_decay: float | None = typer.Option(
-        None, "--reward-weight-decay", help="Weight decay of f (default 0; authors 5e-3)."
-    ),
-    alpha: float | None = typer.Option(None, "--alpha", help="Supervised weight in policy loss."),
-    beta: float | None = typer.Option(None, "--beta", help="Env-reward weight in disc. loss."),
-    sigma_start: float | None = typer.Option(
-        None, "--sigma-start", help="Noise std on the batch's first policy action (H-AIRL)."
-    ),
-    sigma_end: float | None = typer.Option(
-        None, "--sigma-end", help="Noise std on the batch's last policy action (H-AIRL)."
-    ),
-    val_fraction: float | None = typer.Option(None, "--val-fraction", help="Share of hands."),
+    irl: Settings = NO_SETTINGS,  # AIRLConfig's options: --epochs, --seed, --alpha, ...
     encoding: str = typer.Option(
-        "rlcard",
-        "--encoding",
-        metavar=ENCODING_CHOICES,
-        help=ENCODING_HELP,
+        EncodingName.RLCARD, "--encoding", metavar=ENCODING_CHOICES, help=ENCODING_HELP
     ),
     threads: int = typer.Option(
         1, "--threads", min=1, help="CPU threads; small nets train best on 1."
@@ -419,62 +388,45 @@ def train(
     baselines.json, split.json and plots; with --runs N, OUT/run-<k> and OUT/summary.json.
     A finished OUT is replaced only with --overwrite, and only once the new run is complete.
     """
-    import torch
-
     from pokerirl.irl import load_config
     from pokerirl.irl.airl import resolve_device
-    from pokerirl.poker import train_runs
+    from pokerirl.poker.train import train_em, train_runs
 
-    torch.set_num_threads(threads)
-    widths = None if hidden is None else _widths(hidden)
-    overrides = {
-        **given(ctx, epochs=epochs),  # else the --config file's, or the algorithm's
-        "seed": seed,
-        "batch_size": batch_size,
-        "reward_hidden": widths,
-        "policy_hidden": widths,
-        "reward_lr": reward_lr,
-        "policy_lr": policy_lr,
-        "reward_weight_decay": reward_weight_decay,
-        "alpha": alpha,
-        "beta": beta,
-        "sigma_start": sigma_start,
-        "sigma_end": sigma_end,
-        "val_fraction": val_fraction,
-    }
-    settings = settings_from_options(load_config, algo, config_file=config, overrides=overrides)
+    both = () if hidden is None else ("reward_hidden", "policy_hidden")
+    nets = dict.fromkeys(both, widths(hidden or ""))
+    # the algorithm's defaults, then the --config file's, then the flags given
+    flags = {**irl, **nets}
+    settings = settings_from_options(load_config, algo, config_file=config, overrides=flags)
     settings_from_options(resolve_device, device)
     encoding = _encoding(encoding)
-    if em_rounds:
-        if runs > 1:
-            raise UsageError("--em-rounds re-imputes with one run's policy: give --runs 1")
-        from pokerirl.poker.train import train_em
-
-        report = train_em(table, out, rounds=em_rounds, algo=algo, config=settings,
-                          device=device, progress=not quiet, overwrite=overwrite,
-                          encoding=encoding)  # fmt: skip
-        for found in report["rounds"]:
-            change = found.get("policy_agree_imputed_change")
-            echo(f"round {found['round']}: policy argmax = imputed actions "
-                 f"{found['policy_agree_imputed']:.1%}"
-                 + ("" if change is None else f" ({change:+.1%} from the round before)")
-                 + f", = observed actions {found['policy_agree_observed']:.1%}; reward "
-                 f"argmax = imputed {found['reward_agree_imputed']:.1%}")  # fmt: skip
-        echo(f"wrote {out}/round-0..{em_rounds} and {out}/em.json")
-        write_logs(Path(out), log_dir)
-        return
-    summary = train_runs(
-        table,
-        out,
-        runs=runs,
-        algo=algo,
-        config=settings,
-        device=device,
-        progress=not quiet,
-        overwrite=overwrite,
-        backend=_backend(jobs, ray),
+    if em_rounds and runs > 1:
+        raise UsageError("--em-rounds re-imputes with one run's policy: give --runs 1")
+    execution.pin_threads(threads)
+    common: dict[str, Any] = dict(
+        algo=algo, config=settings, device=device, progress=not quiet, overwrite=overwrite,
         encoding=encoding,
     )
+    if em_rounds:
+        _echo_em(train_em(table, out, rounds=em_rounds, **common), out, em_rounds)
+    else:
+        _echo_runs(algo, train_runs(table, out, runs=runs, backend=_backend(jobs, ray), **common))
+    write_logs(Path(out), log_dir)
+
+
+def _echo_em(report: Mapping[str, Any], out: str, rounds: int) -> None:
+    """``train --em-rounds``: each round's agreement, as the command prints it."""
+    for found in report["rounds"]:
+        change = found.get("policy_agree_imputed_change")
+        echo(f"round {found['round']}: policy argmax = imputed actions "
+             f"{found['policy_agree_imputed']:.1%}"
+             + ("" if change is None else f" ({change:+.1%} from the round before)")
+             + f", = observed actions {found['policy_agree_observed']:.1%}; reward "
+             f"argmax = imputed {found['reward_agree_imputed']:.1%}")  # fmt: skip
+    echo(f"wrote {out}/round-0..{rounds} and {out}/em.json")
+
+
+def _echo_runs(algo: str, summary: RunSummary) -> None:
+    """``train``: each run's last epoch (one run, or every run of --runs), then the speed."""
     if summary.results:  # several runs: each one, named by its folder
         for run in summary.results:
             _echo_run(f"{algo} {Path(run.out).name}", Path(run.out), run.metrics,
@@ -483,7 +435,6 @@ def train(
         _echo_run(algo, summary.out_dir, summary.metrics, summary.baselines,
                   (summary.train_rows, summary.val_rows))  # fmt: skip
     echo(f"{summary.samples_per_second:,.0f} samples/s; wrote {summary.out_dir}")
-    write_logs(Path(out), log_dir)
 
 
 def _echo_run(
@@ -515,14 +466,6 @@ def _echo_run(
         )
 
 
-def _widths(hidden: str) -> list[int]:
-    """``--hidden 64,64`` as layer widths (a usage error when not integers)."""
-    widths = [w.strip() for w in hidden.split(",") if w.strip()]
-    if not all(re.fullmatch(r"[+-]?\d+", w) for w in widths):
-        raise UsageError(f"--hidden must be comma-separated integers, got {hidden!r}")
-    return [int(w) for w in widths]
-
-
 @app.command("reward-card")
 def reward_card_command(
     reward: str = typer.Argument(
@@ -546,7 +489,7 @@ def reward_card_command(
     transform: str = typer.Option(
         "raw",
         "--transform",
-        metavar=choices(TRANSFORMS),
+        metavar=choices(Transform),
         help="raw, centered, log_softmax or advantage (docs/rewards.md).",
     ),
     encoding: str | None = typer.Option(
@@ -602,18 +545,14 @@ agent_app = typer.Typer(help="Train DQN agents.", no_args_is_help=True)
 app.add_typer(agent_app, name="agent")
 
 
-TRAIN_CONFIG = "pokerirl.agents.train:TrainConfig"
-
-
 @agent_app.command("train")
 @on_error(interrupted=INTERRUPTED)
+@settings_options(train=TrainConfig, dqn=DQNConfig)
 def agent_train(
     ctx: typer.Context,
     out: Path = typer.Option(..., "--out", "-o", help="Agent folder (with --seeds: its parent)."),
     preset: str = typer.Option(
-        "default",
-        "--preset",
-        metavar=choices(AGENT_PRESETS),
+        "default", "--preset", metavar=choices(AGENT_PRESETS),
         help="default (ours: 50,000 hands, train_every 16) or authors (their train_rl.py: "
         "5,000 hands, lr 5e-4, train_every 1, epsilon 1 -> 0 over 5,000 steps, evaluation "
         "every 100 hands on 1,000 games, the > 0.8 x best checkpoint plays). Flags and "
@@ -622,38 +561,9 @@ def agent_train(
     config_file: Path | None = typer.Option(
         None, "--config", help="TOML file of settings (any TrainConfig or DQNConfig field)."
     ),
-    reward: str = typer.Option(
-        Default(TRAIN_CONFIG, "reward"),
-        metavar=choices(("sparse", "learned")),
-        help="sparse (the payoff) or learned (--reward-run's f).",
-    ),
-    reward_run: str | None = typer.Option(
-        None,
-        metavar="REWARD",
-        help="AIRL / H-AIRL run folder, or authors:FILE (one of the authors' rewards).",
-    ),
-    payoff_weight: float | None = typer.Option(
-        None, help="w in r = w * payoff + (1 - w) * f(s, a); 0: the learned reward alone."
-    ),
-    reward_transform: str = typer.Option(
-        Default(TRAIN_CONFIG, "reward_transform"),
-        metavar=choices(TRANSFORMS),
-        help="raw (f), centered (f minus its mean over legal actions), log_softmax (f minus "
-        "its logsumexp over legal actions) or advantage (f minus its max over legal actions, "
-        "floored at -10; docs/rewards.md).",
-    ),
-    raise_counts: str = typer.Option(
-        Default(TRAIN_CONFIG, "raise_counts"),
-        metavar=choices(("decision", "end-of-hand")),
-        help="decision (f reads the raise counts of the decision) or end-of-hand (those the "
-        "hand ended with, as the authors' agent read RLCard's live list).",
-    ),
-    hands: int | None = typer.Option(None, "--hands", "-n", help="Training hands."),
     seed: int = typer.Option(0, **SEED_OPTION, help="Seed of one agent."),
     seeds: str | None = typer.Option(
-        None,
-        callback=seed_list,
-        metavar="SEEDS",
+        None, callback=seed_list, metavar="SEEDS",
         help="e.g. 0-19: one agent per seed, in OUT/seed-<k>.",
     ),
     jobs: int = typer.Option(
@@ -661,54 +571,14 @@ def agent_train(
     ),
     ray: str | None = typer.Option(None, "--ray", metavar="ADDRESS", help=RAY_HELP),
     threads: int = typer.Option(
-        1,
-        "--threads",
-        min=1,
+        1, "--threads", min=1,
         help="torch threads per agent (part of the result: the weights change).",
     ),
     overwrite: bool = typer.Option(
         False, "--overwrite", help="Retrain finished agents of other settings (else refused)."
     ),
-    opponent: str | None = typer.Option(
-        None,
-        metavar="AGENT|self",
-        help="random (default), raise, call, tightbot, loosebot, an agent folder, rlcard:CKPT "
-        "(unpickled: runs any code it holds; trusted files only), or self.",
-    ),
-    protocol: str | None = typer.Option(
-        None,
-        metavar=choices(("pokerirl", "authors")),
-        help="pokerirl (duplicate evaluations) or authors (their evaluation and kept model).",
-    ),
-    play: str | None = typer.Option(
-        None,
-        metavar=choices(("final", "kept")),
-        help="final or kept (the authors' > 0.8 x best checkpoint; needs --protocol authors).",
-    ),
-    eval_every: int | None = typer.Option(None, help="Evaluate every N training hands."),
-    eval_hands: int | None = typer.Option(None, help="Hands per evaluation (even, duplicate)."),
-    eval_seed: int | None = typer.Option(
-        None, **SEED_OPTION, help="Deal seed of every evaluation."
-    ),
-    hidden: str | None = typer.Option(None, metavar="WIDTHS", help="Q-network widths, e.g. 64,64."),
-    replay_size: int | None = typer.Option(None, help="Replay memory size."),
-    replay_init: int | None = typer.Option(None, help="Transitions before the first update."),
-    batch_size: int | None = typer.Option(None, help="Update minibatch size."),
-    learning_rate: float | None = typer.Option(None, "--lr", "--learning-rate", help="Adam lr."),
-    gamma: float | None = typer.Option(None, help="Discount."),
-    epsilon_start: float | None = typer.Option(None, help="Exploration at the start."),
-    epsilon_end: float | None = typer.Option(None, help="Exploration after the decay."),
-    epsilon_decay_steps: int | None = typer.Option(None, help="Transitions of the linear decay."),
-    target_update_every: int | None = typer.Option(None, help="Updates between target copies."),
-    train_every: int | None = typer.Option(None, help="Stored transitions per gradient update."),
-    concurrent_hands: int | None = typer.Option(None, help="Hands played in lock-step."),
-    self_play_every: int | None = typer.Option(None, help="Updates between refreshes of 'self'."),
-    encoding: str = typer.Option(
-        Default(TRAIN_CONFIG, "encoding"),
-        metavar=ENCODING_CHOICES,
-        help="What the q-network reads: rlcard (RLCard's 72-d observation) or strength (hole "
-        "and board apart, with hand features). The reward reads its own run's encoding.",
-    ),
+    train: Settings = NO_SETTINGS,  # TrainConfig's options: --hands, --reward, --opponent, ...
+    dqn: Settings = NO_SETTINGS,  # DQNConfig's options: --hidden, --lr, --train-every, ...
     log_dir: Path | None = LOG_DIR,
     quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bar."),
 ) -> None:
@@ -720,85 +590,46 @@ def agent_train(
     With --seeds, seeds run as units (--jobs or --ray); a rerun resumes the set.
     Every setting: --preset, then --config FILE, then the flags (docs/agents.md).
     """
-    from pokerirl.agents.registry import CONFIG_FILE, KEPT_FILE, MODEL_FILE
-    from pokerirl.agents.train import (
-        AgentOverrides,
-        MetricsLine,
-        load_agent_config,
-        train_agent,
-        train_seeds,
-    )
+    from pokerirl.agents.config import AgentOverrides, load_agent_config
+    from pokerirl.agents.train import train_agent, train_seeds
     from pokerirl.seeds import parse_seeds
 
     backend = _backend(jobs, ray, threads)
-    widths = None if hidden is None else tuple(_widths(hidden))
-    flags = {
-        "hands": hands,
-        # else the preset's, or the --config file's
-        **given(ctx, reward=reward, reward_transform=reward_transform, raise_counts=raise_counts),
-        "reward_run": reward_run,
-        "payoff_weight": payoff_weight,
-        "opponent": opponent,
-        "protocol": protocol,
-        "play": play,
-        "eval_every": eval_every,
-        "eval_hands": eval_hands,
-        "eval_seed": eval_seed,
-        **{k: _encoding(v) for k, v in given(ctx, encoding=encoding).items()},
-    }
-    dqn_flags = {
-        "hidden": widths,
-        "replay_size": replay_size,
-        "replay_init": replay_init,
-        "batch_size": batch_size,
-        "learning_rate": learning_rate,
-        "gamma": gamma,
-        "epsilon_start": epsilon_start,
-        "epsilon_end": epsilon_end,
-        "epsilon_decay_steps": epsilon_decay_steps,
-        "target_update_every": target_update_every,
-        "train_every": train_every,
-        "concurrent_hands": concurrent_hands,
-        "self_play_every": self_play_every,
-    }
     from_file = AgentOverrides()
     if config_file is not None:
         from_file = settings_from_options(load_agent_config, config_file)
     config = settings_from_options(
-        from_file.with_flags(train=flags, dqn=dqn_flags).config, preset, seed=seed
+        from_file.with_flags(train=train, dqn=dqn).config, preset, seed=seed
     )
+    common: dict[str, Any] = dict(progress=not quiet, overwrite=overwrite, backend=backend)
     if seeds is None:
-        summary = train_agent(out, config, progress=not quiet, overwrite=overwrite, backend=backend)
-        lines = {seed: summary}
+        lines = {seed: train_agent(out, config, **common)}
     else:
-        lines = train_seeds(
-            out,
-            config,
-            list(parse_seeds(seeds)),
-            jobs=jobs,
-            progress=not quiet,
-            overwrite=overwrite,
-            backend=backend,
-        )
+        lines = train_seeds(out, config, list(parse_seeds(seeds)), jobs=jobs, **common)
     for agent_seed, line in lines.items():
-        folder = out if seeds is None else out / f"seed-{agent_seed}"
-        if line is None:
-            echo(f"{folder}: already finished with these settings, reused")
-            continue
-        scores = ", ".join(
-            f"vs {name} {e.mbb_per_hand:+.0f} +- {e.std_error:.0f} mbb/h"
-            for name, e in line.eval.items()
-        )
-        echo(f"{folder}: {line.hands:,} hands, {scores}")
-        if config.play == "kept":
-            kept = MetricsLine.from_json(json.loads((folder / CONFIG_FILE).read_text())["kept"])
-            echo(
-                f"{folder}: plays {KEPT_FILE} (after {kept.hands:,} hands, vs random "
-                f"{kept.eval['random'].mbb_per_hand:+.0f} mbb/h in its evaluation); "
-                f"{MODEL_FILE} is the final model"
-            )
+        _echo_agent(out if seeds is None else out / f"seed-{agent_seed}", line, config.play)
     write_logs(out, log_dir)
 
+
+def _echo_agent(folder: Path, line: MetricsLine | None, play: str) -> None:
+    """``agent train``: an agent's last evaluation (and the checkpoint it plays)."""
+    from pokerirl.agents.registry import CONFIG_FILE, KEPT_FILE, MODEL_FILE
+    from pokerirl.agents.train import MetricsLine
+
+    if line is None:
+        echo(f"{folder}: already finished with these settings, reused")
+        return
+    scores = ", ".join(
+        f"vs {n} {e.mbb_per_hand:+.0f} +- {e.std_error:.0f} mbb/h" for n, e in line.eval.items()
+    )
+    echo(f"{folder}: {line.hands:,} hands, {scores}")
+    if play == Plays.KEPT:
+        kept = MetricsLine.from_json(json.loads((folder / CONFIG_FILE).read_text())["kept"])
+        echo(
+            f"{folder}: plays {KEPT_FILE} (after {kept.hands:,} hands, vs random "
+            f"{kept.eval['random'].mbb_per_hand:+.0f} mbb/h in its evaluation); "
+            f"{MODEL_FILE} is the final model"
+        )
 
 
 def _encoding(name: str) -> str:

@@ -21,52 +21,131 @@ For example::
 
 from __future__ import annotations
 
-from pokerirl.irl.airl import (
-    AdversarialTrainer,
-    ManyResult,
-    TrainResult,
-    baselines,
-    default_nets,
-    discriminator_loss,
-    evaluate,
-    noise_schedule,
-    train,
-    train_many,
-)
-from pokerirl.irl.config import ALGOS, AIRLConfig, ConfigError, load_config
-from pokerirl.irl.discriminators import AIRLDiscriminator, Discriminator, GAILDiscriminator
-from pokerirl.irl.heads import DiscreteHead, GaussianHead, PolicyHead
-from pokerirl.irl.interop import (
-    ImitationTrajectory,
-    ImitationTransitions,
-    from_imitation_trajectories,
-    from_imitation_transitions,
-    to_imitation_trajectories,
-    to_imitation_transitions,
-)
-from pokerirl.irl.nets import (
-    DiscretePolicy,
-    GaussianPolicy,
-    NetSpec,
-    ShapedReward,
-    StateActionReward,
-    build_nets,
-    project_to_simplex,
-)
-from pokerirl.irl.records import Batch, EpochCallback, EpochMetrics, EpochRecord, StepLosses
-from pokerirl.irl.reward import PolicyNet, RewardFn, RewardNet
-from pokerirl.irl.run import (
-    RewardFunction,
-    RunError,
-    RunResult,
-    RunsSummary,
-    RunSummary,
-    load_policy,
-    load_reward,
-    load_run_config,
-    train_into,
-)
-from pokerirl.irl.transitions import Transitions
+import importlib
+import sys
+import types
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:  # what the names are, for type checkers
+    from pokerirl.irl.airl import (
+        ManyResult,
+        TrainResult,
+        baselines,
+        default_nets,
+        discriminator_loss,
+        evaluate,
+        noise_schedule,
+        train,
+        train_many,
+    )
+    from pokerirl.irl.config import ALGOS, AIRLConfig, ConfigError, load_config
+    from pokerirl.irl.discriminators import AIRLDiscriminator, Discriminator, GAILDiscriminator
+    from pokerirl.irl.heads import DiscreteHead, GaussianHead, PolicyHead
+    from pokerirl.irl.interop import (
+        ImitationTrajectory,
+        ImitationTransitions,
+        from_imitation_trajectories,
+        from_imitation_transitions,
+        to_imitation_trajectories,
+        to_imitation_transitions,
+    )
+    from pokerirl.irl.nets import (
+        DiscretePolicy,
+        GaussianPolicy,
+        NetSpec,
+        ShapedReward,
+        StateActionReward,
+        build_nets,
+        project_to_simplex,
+    )
+    from pokerirl.irl.records import Batch, EpochCallback, EpochMetrics, EpochRecord, StepLosses
+    from pokerirl.irl.reward import PolicyNet, RewardFn, RewardNet
+    from pokerirl.irl.run import (
+        RewardFunction,
+        RunError,
+        RunResult,
+        RunsSummary,
+        RunSummary,
+        load_policy,
+        load_reward,
+        load_run_config,
+        train_into,
+    )
+    from pokerirl.irl.trainer import AdversarialTrainer
+    from pokerirl.irl.transitions import Transitions
+
+# torch takes a second to import: the command line reads the settings (config.py, torch-free)
+# without it, so every name here loads its module when first used.
+_LAZY = {
+    "AdversarialTrainer": "trainer",
+    "ManyResult": "airl",
+    "TrainResult": "airl",
+    "baselines": "airl",
+    "default_nets": "airl",
+    "discriminator_loss": "airl",
+    "evaluate": "airl",
+    "noise_schedule": "airl",
+    "train": "airl",
+    "train_many": "airl",
+    "AIRLConfig": "config",
+    "ALGOS": "config",
+    "ConfigError": "config",
+    "load_config": "config",
+    "AIRLDiscriminator": "discriminators",
+    "Discriminator": "discriminators",
+    "GAILDiscriminator": "discriminators",
+    "DiscreteHead": "heads",
+    "GaussianHead": "heads",
+    "PolicyHead": "heads",
+    "ImitationTrajectory": "interop",
+    "ImitationTransitions": "interop",
+    "from_imitation_trajectories": "interop",
+    "from_imitation_transitions": "interop",
+    "to_imitation_trajectories": "interop",
+    "to_imitation_transitions": "interop",
+    "DiscretePolicy": "nets",
+    "GaussianPolicy": "nets",
+    "NetSpec": "nets",
+    "ShapedReward": "nets",
+    "StateActionReward": "nets",
+    "build_nets": "nets",
+    "project_to_simplex": "nets",
+    "Batch": "records",
+    "EpochCallback": "records",
+    "EpochMetrics": "records",
+    "EpochRecord": "records",
+    "StepLosses": "records",
+    "RewardFn": "reward",
+    "RewardNet": "reward",
+    "PolicyNet": "reward",
+    "RewardFunction": "run",
+    "RunError": "run",
+    "RunResult": "run",
+    "RunSummary": "run",
+    "RunsSummary": "run",
+    "load_policy": "run",
+    "load_reward": "run",
+    "load_run_config": "run",
+    "train_into": "run",
+    "Transitions": "transitions",
+}
+# Functions named as the submodules they live in: the package's name is the function.
+_FUNCTIONS = {"baselines", "evaluate"}
+
+
+class _Package(types.ModuleType):
+    def __getattribute__(self, name: str) -> Any:
+        if name in _FUNCTIONS:
+            return getattr(importlib.import_module("pokerirl.irl.airl"), name)
+        return super().__getattribute__(name)
+
+    def __getattr__(self, name: str) -> Any:
+        if name in _LAZY:
+            return getattr(importlib.import_module(f"pokerirl.irl.{_LAZY[name]}"), name)
+        raise AttributeError(f"module 'pokerirl.irl' has no attribute {name!r}")
+
+
+sys.modules[__name__].__class__ = _Package
 
 __all__ = [
     "ALGOS",

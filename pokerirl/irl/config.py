@@ -1,4 +1,5 @@
 """Hyperparameters of a run (:class:`AIRLConfig`), checked field by field, and TOML loading.
+Torch-free (the command line builds its options from these fields without loading torch).
 
 The TOML file is flat, with the field names as keys::
 
@@ -30,10 +31,28 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from enum import StrEnum
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from pokerirl.errors import ConfigError as ConfigError  # its old home: imports keep working
-from pokerirl.irl.nets import ACTIVATIONS, REWARD_FAMILIES, NetSpec, RewardFamily
+from pokerirl.settings import enum_value, setting, with_overrides
+
+if TYPE_CHECKING:
+    from pokerirl.irl.nets import NetSpec
+
+
+class Activation(StrEnum):
+    """The hidden layers' activation (:data:`pokerirl.irl.nets.ACTIVATIONS`)."""
+
+    RELU = "relu"
+    TANH = "tanh"
+    LEAKY_RELU = "leaky_relu"
+
+
+class RewardFamily(StrEnum):
+    """What the reward net reads: f(s, a), or the shaped g(s, a) + γ h(s') - h(s)."""
+
+    STATE_ACTION = "state_action"
+    SHAPED = "shaped"
 
 
 class Algo(StrEnum):
@@ -87,13 +106,8 @@ class SupervisedForm(StrEnum):
     SUM_MSE = "sum_mse"
 
 
-# The names, for messages and choices (a StrEnum member is its value: "airl" in ALGOS).
+# The names, for messages (a StrEnum member is its value: "airl" in ALGOS).
 ALGOS: tuple[str, ...] = tuple(Algo)
-NOISE_SCHEDULES: tuple[str, ...] = tuple(NoiseSchedule)
-DISC_ACTIONS: tuple[str, ...] = tuple(DiscAction)
-NOISE_FORMS: tuple[str, ...] = tuple(NoiseForm)
-SUPERVISED_FORMS: tuple[str, ...] = tuple(SupervisedForm)
-DISCRIMINATOR_FORMS: tuple[str, ...] = tuple(DiscriminatorForm)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -103,25 +117,26 @@ class AIRLConfig:
     # the nets (see pokerirl.irl.nets.NetSpec)
     reward_hidden: tuple[int, ...] = (64,)
     policy_hidden: tuple[int, ...] = (64,)
-    activation: str = "relu"
+    activation: Activation = Activation.RELU
     layer_norm: bool = False
     reward_family: RewardFamily = RewardFamily.STATE_ACTION
     gamma: float = 0.99
     # optimization
-    reward_lr: float = 1e-3
-    policy_lr: float = 1e-3
+    reward_lr: float = setting(1e-3, help="Adam lr of f.")
+    policy_lr: float = setting(1e-3, help="Adam lr of the policy.")
     # 0, not the authors' 5e-3: on poker tables their decay flattens f into one value per
     # action, whose legal argmax is "check, else call" (issue 31; their preset keeps it).
-    reward_weight_decay: float = 0.0
-    batch_size: int = 256
-    epochs: int = 50
+    reward_weight_decay: float = setting(0.0, help="Weight decay of f (default 0; authors 5e-3).")
+    batch_size: int = setting(256, help="Minibatch size.", min=1)
+    epochs: int = setting(50, help="Training epochs.", min=1, show_default=True)
     # the discriminator's form; set by the algorithm (GAIL's for gail), never on its own
     discriminator: DiscriminatorForm = DiscriminatorForm.AIRL
     # H-AIRL
-    alpha: float = 0.33  # weight of the supervised term in the policy loss
-    beta: float = 0.0  # weight of the (f - r_env)² term in the discriminator loss
-    sigma_start: float = 1.0  # noise σ on the first sample of a batch (in action ranges)
-    sigma_end: float = 0.1  # ... and on the last
+    alpha: float = setting(0.33, help="Supervised weight in policy loss.")
+    beta: float = setting(0.0, help="Env-reward weight in disc. loss.")  # on (f - r_env)²
+    # noise σ on the first and the last sample of a batch (in action ranges)
+    sigma_start: float = setting(1.0, help="Noise std on the batch's first policy action (H-AIRL).")
+    sigma_end: float = setting(0.1, help="Noise std on the batch's last policy action (H-AIRL).")
     noise_schedule: NoiseSchedule = NoiseSchedule.LINEAR
     noise_decay: float = 0.1  # k of the authors' schedule: 0.1 poker, 0.01 Gymnasium
     disc_action: DiscAction = DiscAction.SAMPLE
@@ -132,8 +147,8 @@ class AIRLConfig:
     log_std_min: float = -20.0
     log_std_max: float = 2.0
     # data
-    val_fraction: float = 0.1  # share of groups (hands, episodes) held out
-    seed: int = 0
+    val_fraction: float = setting(0.1, help="Share of hands.")  # of groups: hands, episodes
+    seed: int = setting(0, help="Seed for init, split, shuffle, noise.")
 
     def __post_init__(self) -> None:
         for item in dataclasses.fields(self):
@@ -155,16 +170,6 @@ class AIRLConfig:
             "reward_weight_decay >= 0": self.reward_weight_decay >= 0,
             "hidden widths >= 1": all(w >= 1 for w in self.reward_hidden + self.policy_hidden),
             "a reward hidden layer": len(self.reward_hidden) >= 1,
-            f"activation in {', '.join(ACTIVATIONS)}": self.activation in ACTIVATIONS,
-            f"reward_family in {', '.join(REWARD_FAMILIES)}": self.reward_family in REWARD_FAMILIES,
-            f"noise_schedule in {', '.join(NOISE_SCHEDULES)}": self.noise_schedule
-            in NOISE_SCHEDULES,
-            f"disc_action in {', '.join(DISC_ACTIONS)}": self.disc_action in DISC_ACTIONS,
-            f"noise_form in {', '.join(NOISE_FORMS)}": self.noise_form in NOISE_FORMS,
-            f"supervised_form in {', '.join(SUPERVISED_FORMS)}": self.supervised_form
-            in SUPERVISED_FORMS,
-            f"discriminator in {', '.join(DISCRIMINATOR_FORMS)}": self.discriminator
-            in DISCRIMINATOR_FORMS,
             "log_std_min < log_std_max": self.log_std_min < self.log_std_max,
         }
         broken = [name for name, ok in checks.items() if not ok]
@@ -174,28 +179,22 @@ class AIRLConfig:
     @classmethod
     def for_algo(cls, algo: str, **overrides: Any) -> AIRLConfig:
         """Defaults for ``"airl"`` and ``"gail"`` (α = β = 0, no noise; GAIL's discriminator
-        for gail) or ``"hairl"``, then ``overrides``.
+        for gail) or ``"hairl"`` (:data:`ALGO_PRESETS`), then ``overrides`` (None: not given).
 
         Unknown keys raise ``ConfigError`` naming them, and so does a ``discriminator`` that
         is not the algorithm's (the run records the algorithm; its D must be that one's).
         """
-        if algo not in ALGOS:
-            raise ConfigError(f"unknown algo {algo!r}; choose one of {', '.join(ALGOS)}")
-        unknown = sorted(set(overrides) - set(_HINTS))
-        if unknown:
-            raise ConfigError(f"unknown setting(s) {', '.join(unknown)}; known: {sorted(_HINTS)}")
         form = DiscriminatorForm.GAIL if algo == Algo.GAIL else DiscriminatorForm.AIRL
-        if overrides.get("discriminator", form) != form:
+        if overrides.get("discriminator", form) not in (form, None):
             raise ConfigError(
                 f"discriminator {overrides['discriminator']!r} is not {algo}'s ({form}); "
                 "the algorithm sets it: leave it out"
             )
-        base: dict[str, object] = {}
-        if algo in (Algo.AIRL, Algo.GAIL):
-            base = {"alpha": 0.0, "beta": 0.0, "sigma_start": 0.0, "sigma_end": 0.0}
-        return cls(**{**base, "discriminator": form, **overrides})
+        return with_overrides(ALGO_PRESETS, algo, what="algo", **overrides)
 
     def net_spec(self) -> NetSpec:
+        from pokerirl.irl.nets import NetSpec  # torch: only where nets are built
+
         return NetSpec(
             reward_hidden=self.reward_hidden,
             policy_hidden=self.policy_hidden,
@@ -247,16 +246,22 @@ def _checked(name: str, hint: Any, value: Any) -> Any:
             return value
         raise ConfigError(f"{name} must be a string, got {value!r}")
     if isinstance(hint, type) and issubclass(hint, StrEnum):
-        if not isinstance(value, str):
-            raise ConfigError(f"{name} must be a string, got {value!r}")
-        # An unknown name stays a str: the field checks name the choices.
-        return hint(value) if value in hint.__members__.values() else value
+        return enum_value(name, hint, value)
     # tuple[int, ...]: hidden widths
     if isinstance(value, list | tuple) and all(
         isinstance(w, int) and not isinstance(w, bool) for w in value
     ):
         return tuple(value)
     raise ConfigError(f"{name} must be a list of integers, got {value!r}")
+
+
+_NO_NOISE: dict[str, Any] = {"alpha": 0.0, "beta": 0.0, "sigma_start": 0.0, "sigma_end": 0.0}
+# Each algorithm's defaults (AIRLConfig.for_algo).
+ALGO_PRESETS: dict[str, AIRLConfig] = {
+    Algo.AIRL: AIRLConfig(**_NO_NOISE),
+    Algo.HAIRL: AIRLConfig(),
+    Algo.GAIL: AIRLConfig(**_NO_NOISE, discriminator=DiscriminatorForm.GAIL),
+}
 
 
 def load_config(

@@ -28,7 +28,6 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
-from enum import StrEnum
 from typing import Any
 
 import numpy as np
@@ -36,23 +35,15 @@ import torch
 from torch import Tensor, nn
 
 from pokerirl.errors import ConfigError
+from pokerirl.irl.config import Activation, RewardFamily
 
 # Finite stand-in for log(0) on illegal actions: 0 * MASKED_LOGIT is 0, 0 * -inf would be NaN.
 MASKED_LOGIT = -1e9
 ACTIVATIONS: dict[str, type[nn.Module]] = {
-    "relu": nn.ReLU,
-    "tanh": nn.Tanh,
-    "leaky_relu": nn.LeakyReLU,
+    Activation.RELU: nn.ReLU,
+    Activation.TANH: nn.Tanh,
+    Activation.LEAKY_RELU: nn.LeakyReLU,
 }
-
-
-class RewardFamily(StrEnum):
-    """What the reward net reads: f(s, a), or the shaped g(s, a) + γ h(s') - h(s)."""
-
-    STATE_ACTION = "state_action"
-    SHAPED = "shaped"
-
-
 REWARD_FAMILIES: tuple[str, ...] = tuple(RewardFamily)
 
 

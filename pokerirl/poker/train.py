@@ -43,7 +43,7 @@ import torch
 
 from pokerirl.atomic import write_text
 from pokerirl.errors import ConfigError, Remedy
-from pokerirl.execution import Backend
+from pokerirl.execution import Backend, pinned_threads
 from pokerirl.game.encodings import EncodingName
 from pokerirl.irl.airl import resolve_device
 from pokerirl.irl.config import AIRLConfig, Algo
@@ -194,27 +194,22 @@ def train_unit(
     ``timings.json`` unfingerprinted), so a worker needs no shared filesystem. Pins torch to
     one thread (restored after) and seeds from ``settings["seed"]``.
     """
-    threads = torch.get_num_threads()
-    torch.set_num_threads(1)
-    try:
-        with tempfile.TemporaryDirectory(prefix="pokerirl-run-") as scratch:
-            path = Path(scratch) / "table.parquet"
-            path.write_bytes(table)
-            torch.manual_seed(settings["seed"])
-            run = Path(scratch) / "run"
-            train_table_into(
-                read_table(path, encoding=encoding),
-                run,
-                algo=algo,
-                config=AIRLConfig(**settings),
-                device=device,
-                table=table_path,
-                table_file=path,
-                encoding=encoding,
-            )
-            files = {f.name: f.read_bytes() for f in sorted(run.iterdir()) if f.is_file()}
-    finally:
-        torch.set_num_threads(threads)
+    with pinned_threads(1), tempfile.TemporaryDirectory(prefix="pokerirl-run-") as scratch:
+        path = Path(scratch) / "table.parquet"
+        path.write_bytes(table)
+        torch.manual_seed(settings["seed"])
+        run = Path(scratch) / "run"
+        train_table_into(
+            read_table(path, encoding=encoding),
+            run,
+            algo=algo,
+            config=AIRLConfig(**settings),
+            device=device,
+            table=table_path,
+            table_file=path,
+            encoding=encoding,
+        )
+        files = {f.name: f.read_bytes() for f in sorted(run.iterdir()) if f.is_file()}
     timings = {TIMINGS_FILE: files.pop(TIMINGS_FILE)}
     return UnitOutput(files=files, unhashed=timings)
 

@@ -9,7 +9,6 @@ metrics, mean ± std bands and Markdown tables (``mean_std`` is :mod:`pokerirl.m
 
 from __future__ import annotations
 
-import dataclasses
 import json
 import os
 from collections.abc import Callable, Iterable, Mapping, Sequence
@@ -19,6 +18,7 @@ from typing import Any, TypeVar
 import numpy as np
 
 from pokerirl.errors import ConfigError, Remedy
+from pokerirl.settings import with_overrides as _with_overrides
 
 # The files the studies read in their units' folders and write in their own.
 METRICS_JSONL = "metrics.jsonl"  # an IRL run's epochs, an RL run's or agent's evaluations
@@ -34,16 +34,10 @@ class StudyError(ConfigError):
 
 
 def with_overrides(presets: Mapping[str, Preset], name: str, **overrides: Any) -> Preset:
-    """The preset ``name`` of ``presets`` (frozen dataclasses) with ``overrides`` (None values
-    ignored); one-line :class:`StudyError` for an unknown name or a bad value."""
-    if name not in presets:
-        raise StudyError(f"unknown preset {name!r}; choose one of {', '.join(presets)}")
-    changes = {key: value for key, value in overrides.items() if value is not None}
+    """:func:`pokerirl.settings.with_overrides`, its one-line errors as :class:`StudyError`."""
     try:
-        return dataclasses.replace(presets[name], **changes)  # type: ignore[type-var]
-    except TypeError as error:
-        raise StudyError(f"bad study setting: {error}") from None
-    except ValueError as error:  # the preset's own checks
+        return _with_overrides(presets, name, **overrides)
+    except ValueError as error:  # ConfigError, or the preset's own checks
         raise StudyError(str(error)) from None
 
 

@@ -49,7 +49,6 @@ from pokerirl.tournaments.lineup import (
     agent_spec_for_seed,
     check_specs,
 )
-from pokerirl.tournaments.runner import _advised
 
 REPEATS, GAMES = 50, 1_000  # the authors' 50 x run_tournament(num_games=1000)
 AUTHORS_SEED = 7_000_000  # deal seeds of the repeats: AUTHORS_SEED + 1000 k + r
@@ -266,7 +265,7 @@ def run_authors_tournament(
             desc="authors' tournament",
         )  # fmt: skip
     except UnitConflict as error:
-        raise TournamentError(_advised(error)) from None
+        raise TournamentError(str(error), remedy=error.remedy) from None
     done = {  # every result is a list: reused only then (_is_repeats), written as one
         cell: _experiment(config, cast("list[float]", item.record.result))
         for cell, config, item in zip(cells, configs, report.done, strict=True)

@@ -52,7 +52,6 @@ import numpy as np
 
 from pokerirl.agents import ShippedAgent, agent_fingerprint, land_agent, resolve_agent, ship_agent
 from pokerirl.errors import Remedy
-from pokerirl.errors import report as error_report
 from pokerirl.execution import Backend, pinned_threads
 from pokerirl.game.match import DEFAULT_BATCH_SIZE, check_match_size, play_match
 from pokerirl.store import Json, Layout, Unit, UnitConflict, UnitOutput, run_units
@@ -193,13 +192,6 @@ def _has_estimate(result: Json) -> bool:
     """Whether a saved seed can be reused: one without an estimate (a record no finished
     write leaves) is recomputed."""
     return _estimate(result) is not None
-
-
-def _advised(error: UnitConflict) -> str:
-    """The conflict's line with the command line's advice: ``pokerirl tournament`` prints the
-    message as it is (it adds no advice of its own yet)."""
-    found = error_report(error)
-    return str(error) if found is None else found[1]
 
 
 def _folder_names(matchups: Sequence[tuple[str, str]]) -> list[str]:
@@ -401,7 +393,7 @@ def run_tournament(
             units, backend, overwrite=overwrite, progress=progress, desc="tournament seeds"
         )
     except UnitConflict as error:
-        raise TournamentError(_advised(error)) from None
+        raise TournamentError(str(error), remedy=error.remedy) from None
     wall = time.perf_counter() - started
     done: dict[Cell, SeedResult] = {}
     played: list[Cell] = []

@@ -1,0 +1,71 @@
+"""Settings as the frozen config dataclasses declare them, once: a field a command may offer as
+an option (:func:`setting`), a categorical value read from a file or a flag
+(:func:`enum_value`), and a named preset with overrides (:func:`with_overrides`: the studies',
+the agents' and the IRL algorithms' presets).
+
+>>> @dataclasses.dataclass(frozen=True, kw_only=True)
+... class Budget:
+...     epochs: int = setting(10, help="Training epochs.", min=1)
+>>> dataclasses.fields(Budget)[0].metadata["help"]
+'Training epochs.'
+>>> with_overrides({"quick": Budget(epochs=2)}, "quick", epochs=None)
+Budget(epochs=2)
+>>> with_overrides({"quick": Budget(epochs=2)}, "slow")
+Traceback (most recent call last):
+...
+pokerirl.errors.ConfigError: unknown preset 'slow'; choose one of quick
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Mapping
+from enum import StrEnum
+from typing import Any, TypeVar
+
+from pokerirl.errors import ConfigError
+
+E = TypeVar("E", bound=StrEnum)
+C = TypeVar("C")
+
+
+def setting(default: Any = dataclasses.MISSING, /, help: str = "", **more: Any) -> Any:
+    """A config dataclass's field that a command may offer as an option: ``help`` and
+    ``more`` (``flags``, ``metavar``, ``min``, ``max``, ``show_default``) in the field's
+    metadata, read by ``pokerirl.cli.options``; the field's type and default give the rest."""
+    return dataclasses.field(default=default, metadata={"help": help, **more})
+
+
+def enum_value(name: str, kind: type[E], value: object) -> E:
+    """``value`` as a member of ``kind`` (a setting read as a string from a file or a flag),
+    or a one-line :class:`ConfigError` naming the setting and its values.
+
+    >>> from pokerirl.errors import Remedy
+    >>> enum_value("remedy", Remedy, "replace")
+    <Remedy.REPLACE: 'replace'>
+    >>> enum_value("remedy", Remedy, "delete")
+    Traceback (most recent call last):
+    ...
+    pokerirl.errors.ConfigError: remedy must be one of recompute, replace, elsewhere, got 'delete'
+    """
+    if isinstance(value, str) and value in kind._value2member_map_:
+        return kind(value)
+    raise ConfigError(f"{name} must be one of {', '.join(kind)}, got {value!r}")
+
+
+def with_overrides(
+    presets: Mapping[str, C], name: str, /, what: str = "preset", **overrides: Any
+) -> C:
+    """The preset ``name`` of ``presets`` (frozen dataclasses) with ``overrides`` (None values
+    ignored: not given). A one-line :class:`ConfigError` for an unknown ``what``, an unknown
+    setting, or a value the dataclass's own checks refuse (their error, as raised)."""
+    if name not in presets:
+        raise ConfigError(f"unknown {what} {name!r}; choose one of {', '.join(presets)}")
+    preset = presets[name]
+    changes = {key: value for key, value in overrides.items() if value is not None}
+    known = {item.name for item in dataclasses.fields(preset) if item.init}  # type: ignore[arg-type]
+    unknown = sorted(set(changes) - known)
+    if unknown:
+        known_names = ", ".join(sorted(known))
+        raise ConfigError(f"unknown setting(s) {', '.join(unknown)}; known: {known_names}")
+    return dataclasses.replace(preset, **changes)  # type: ignore[type-var]
