@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 from scipy import stats
 
+from pokerirl.errors import Remedy
 from pokerirl.game import make_agent, play_match
 from pokerirl.tournaments import (
     TournamentError,
@@ -130,8 +131,11 @@ def test_rerun_reuses_saved_seeds(tmp_path: Path) -> None:
 
 def test_rerun_with_another_config_refuses_unless_overwrite(tmp_path: Path) -> None:
     run_tournament([("call", "random")], hands=HANDS, seeds=[0], out=tmp_path)
-    with pytest.raises(TournamentError, match=r"hands 2000 -> 4000.*--overwrite"):
+    # The library names the change and how to get past it (a Remedy), never a flag: the
+    # command line adds its own words.
+    with pytest.raises(TournamentError, match=r"\(hands 2000 -> 4000\)$") as refused:
         run_tournament([("call", "random")], hands=2 * HANDS, seeds=[0], out=tmp_path)
+    assert refused.value.remedy is Remedy.RECOMPUTE
     with pytest.raises(TournamentError, match="duplicate True -> False"):
         run_tournament([("call", "random")], hands=HANDS, seeds=[0], out=tmp_path, duplicate=False)
     redone = run_tournament(
