@@ -26,8 +26,9 @@ from pokerirl.gym.irl import (
     policy_actions,
     train_gym_irl,
 )
-from pokerirl.gym.presets import PRESETS, TASKS
+from pokerirl.gym.presets import TASKS
 from pokerirl.irl import load_policy, load_reward
+from pokerirl.studies.gym.config import PRESETS
 
 CORE_BASELINES = {"majority", "legal_majority", "bc"}
 

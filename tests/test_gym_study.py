@@ -18,17 +18,12 @@ pytest.importorskip("stable_baselines3")
 from pokerirl.cli import app
 from pokerirl.execution import Backend
 from pokerirl.irl import load_reward
-from pokerirl.studies.gym import (
-    REWARDS,
-    StudyError,
-    authors_budget,
-    parse_tasks,
-    run_gym_study,
-    study_preset,
-)
-from pokerirl.studies.gym_results import TaskSummary
-from pokerirl.studies.gym_units import DATA_FILE
-from pokerirl.studies.sweep import CSV_COLUMNS, SweepRow, parse_param, sweep_points
+from pokerirl.studies.common import StudyError
+from pokerirl.studies.gym.config import REWARDS, authors_budget, parse_tasks, study_preset
+from pokerirl.studies.gym.pipeline import run_gym_study
+from pokerirl.studies.gym.results import TaskSummary
+from pokerirl.studies.gym.sweep import CSV_COLUMNS, SweepRow, parse_param, sweep_points
+from pokerirl.studies.gym.units import DATA_FILE
 
 TINY = ["--runs", "2", "--transitions", "1500", "--epochs", "2", "--eval-episodes", "2"]
 TINY += ["--timesteps", "2000", "--jobs", "2", "--quiet"]
@@ -252,8 +247,8 @@ SWEEP_WARNING = "warning: 'pokerirl sweep' is deprecated; use 'pokerirl gym swee
 def test_sweep_is_a_gym_command_and_the_old_name_a_hidden_alias_that_warns_once(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    import pokerirl.studies.sweep as sweep
-    from pokerirl.studies.sweep import SweepResult
+    import pokerirl.studies.gym.sweep as sweep
+    from pokerirl.studies.gym.sweep import SweepResult
 
     calls: list[tuple[tuple, dict]] = []
 

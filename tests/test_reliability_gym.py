@@ -171,7 +171,7 @@ def test_report_on_a_damaged_gym_summary_is_one_line_never_a_crash(
     study: Path, tmp_path: Path
 ) -> None:
     from pokerirl.studies.common import StudyError
-    from pokerirl.studies.gym_report import load_gym_study
+    from pokerirl.studies.gym.report import load_gym_study
 
     summary = json.loads((study / "summary.json").read_text())
     load_gym_study(study)  # the real one renders

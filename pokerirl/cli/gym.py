@@ -27,7 +27,8 @@ from pokerirl.cli.app import (
     write_logs,
 )
 from pokerirl.errors import InputError, UsageError
-from pokerirl.gym.presets import MAX_TRANSITIONS, PRESETS
+from pokerirl.gym.presets import MAX_TRANSITIONS
+from pokerirl.studies.gym.config import PRESETS
 
 gym_app = typer.Typer(
     help="The paper's Gymnasium tasks: SB3 experts, expert data, RL on a learned reward.",
@@ -413,7 +414,7 @@ GYM_QUIET = typer.Option(False, "--quiet", "-q", help="No progress bars.")
 
 def _gym_preset(name: str, task: str, **overrides: int | None) -> Any:
     """The study preset ``name`` for ``task`` (or all) with the command line's overrides."""
-    from pokerirl.studies.gym import parse_tasks, study_preset
+    from pokerirl.studies.gym.config import parse_tasks, study_preset
 
     preset = settings_from_options(study_preset, name, tasks=parse_tasks(task), **overrides)
     if preset.seed + preset.runs - 1 > MAX_SEED:  # run k uses seed + k
@@ -456,7 +457,7 @@ def gym_study(
     """The paper's Gymnasium study: shipped expert -> data -> IRL (AIRL and H-AIRL) -> RL (env
     reward, AIRL and H-AIRL rewards) -> summary.json, figures/ and report.md beside the
     authors' finals. Resumable: finished units are kept."""
-    from pokerirl.studies.gym import run_gym_study
+    from pokerirl.studies.gym.pipeline import run_gym_study
 
     _rl_backend(rl_backend)
     if expert is not None and task == "all":
@@ -510,7 +511,7 @@ def gym_sweep(
 ) -> None:
     """One-factor-at-a-time ablation of H-AIRL (the paper's Figure 5): each point runs the IRL
     phase, then RL on its learned rewards; writes sweep.csv, sweep.json and PARAM.png."""
-    from pokerirl.studies.sweep import parse_param, run_sweep
+    from pokerirl.studies.gym.sweep import parse_param, run_sweep
 
     _rl_backend(rl_backend)
     params: dict[str, tuple[float, ...]] = {}

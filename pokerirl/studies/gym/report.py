@@ -1,6 +1,6 @@
 """A gym study's report: its ``summary.json`` typed (:class:`GymStudySummary`), read back
 (:func:`load_gym_study`) and rendered as ``report.md``. Torch- and Gymnasium-free, so that
-``pokerirl report`` starts fast; :mod:`pokerirl.studies.gym` runs the study that writes it.
+``pokerirl report`` starts fast; :mod:`pokerirl.studies.gym.pipeline` runs the study that writes it.
 """
 
 from __future__ import annotations
@@ -15,7 +15,7 @@ from typing import Any
 from pokerirl.gym.presets import TASKS, RLBackend
 from pokerirl.meanstd import MeanStd
 from pokerirl.studies.common import SUMMARY_JSON, StudyError, markdown_table
-from pokerirl.studies.gym_results import PaperFinals, TaskSummary
+from pokerirl.studies.gym.results import PaperFinals, TaskSummary
 
 SUMMARY_FORMAT = "pokerirl-gym-study/1"
 FIGURES = {

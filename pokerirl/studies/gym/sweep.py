@@ -13,7 +13,7 @@ preset value) are computed once. ``out`` gets::
     sweep.json                           the same, with the settings and the curves' finals
     <parameter>.png                      the finals against the parameter's values
 
-Every unit is resumable as in the study (:mod:`pokerirl.studies.gym_units`).
+Every unit is resumable as in the study (:mod:`pokerirl.studies.gym.units`).
 """
 
 from __future__ import annotations
@@ -34,18 +34,19 @@ from pokerirl.atomic import atomic_path, write_text
 from pokerirl.errors import PokerIRLError
 from pokerirl.execution import Backend
 from pokerirl.gym.irl import GymIRLSummary, irl_config
-from pokerirl.gym.presets import TASKS, StudyPreset
+from pokerirl.gym.presets import TASKS
 from pokerirl.gym.rl import DEFAULT_RL_BACKEND
 from pokerirl.meanstd import mean_and_std
 from pokerirl.studies.common import StudyError, study_folder
-from pokerirl.studies.gym import (
+from pokerirl.studies.gym.config import StudyPreset
+from pokerirl.studies.gym.pipeline import (
     check_rl_backend,
     data_job,
     irl_job,
     rl_curves,
     rl_jobs,
 )
-from pokerirl.studies.gym_units import DATA_FILE, Say, run_data_jobs, run_irl_jobs, run_rl_jobs
+from pokerirl.studies.gym.units import DATA_FILE, Say, run_data_jobs, run_irl_jobs, run_rl_jobs
 
 SWEEP_FORMAT = "pokerirl-gym-sweep/1"
 PARAMS = ("alpha", "beta", "sigma_start", "sigma_end")

@@ -18,7 +18,7 @@ One task writes into ``out`` itself; several write ``out/<env>/`` each (the same
                                          2-d observations and discrete actions: MountainCar)
     summary.json, report.md
 
-Every unit (data, IRL, RL run) is resumable on its own (:mod:`pokerirl.studies.gym_units`): a rerun
+Every unit (data, IRL, RL run) is resumable on its own (:mod:`pokerirl.studies.gym.units`): a rerun
 keeps the finished ones and refuses, in one line, units made with other settings unless
 ``overwrite``.
 """
@@ -26,9 +26,7 @@ keeps the finished ones and refuses, in one line, units made with other settings
 from __future__ import annotations
 
 import json
-import math
 import os
-from collections.abc import Sequence
 from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 from typing import Any
@@ -36,11 +34,9 @@ from typing import Any
 import numpy as np
 
 from pokerirl.atomic import write_text
-from pokerirl.errors import ConfigError, PokerIRLError
+from pokerirl.errors import PokerIRLError
 from pokerirl.execution import Backend
-from pokerirl.figures import finish
 from pokerirl.gym.irl import GymIRLSummary
-from pokerirl.gym.presets import PRESETS, TASK_ORDER, TASKS, StudyPreset
 from pokerirl.gym.quality import has_true_reward
 from pokerirl.gym.rl import DEFAULT_RL_BACKEND, RLBackend, read_curve
 from pokerirl.gym.tasks import task
@@ -51,28 +47,26 @@ from pokerirl.studies.common import (
     REPORT_MD,
     SUMMARY_JSON,
     StudyError,
-    band,
     read_jsonl,
     study_folder,
-    with_overrides,
 )
-from pokerirl.studies.gym_report import (
-    FIGURES,
+from pokerirl.studies.gym.config import ALGOS, REWARDS, StudyPreset, authors_budget, task_root
+from pokerirl.studies.gym.figures import draw_figures, draw_reward_map
+from pokerirl.studies.gym.report import (
     SUMMARY_FORMAT,
     GymStudySummary,
     render_report,
 )
-from pokerirl.studies.gym_results import (
+from pokerirl.studies.gym.results import (
     QUALITY_KEYS,
     AlgoSummary,
     Band,
     EnvRewardSummary,
     PaperFinals,
-    RewardMapSummary,
     StudySettings,
     TaskSummary,
 )
-from pokerirl.studies.gym_units import (
+from pokerirl.studies.gym.units import (
     DATA_FILE,
     DataJob,
     IRLJob,
@@ -83,11 +77,6 @@ from pokerirl.studies.gym_units import (
     run_rl_jobs,
 )
 
-ALGOS = ("airl", "hairl")
-REWARDS = ("env", "airl", "hairl")  # RL-phase rewards: the env's, then each IRL algorithm's
-LABELS = {"airl": "AIRL", "hairl": "H-AIRL", "env": "env reward"}
-COLORS = {"airl": "C0", "hairl": "C1", "env": "C2"}  # the same in every figure
-MAP_GRID = 101  # cells per axis of the reward map
 STEPS = 4
 
 
@@ -98,36 +87,6 @@ class GymStudyResult:
     out: Path
     summaries: dict[str, TaskSummary]  # env -> the task's summary.json
     markdown: str
-
-
-def study_preset(name: str, **overrides: Any) -> StudyPreset:
-    """The preset ``name`` with ``overrides`` (None values ignored).
-
-    >>> study_preset("quick", runs=2).runs
-    2
-    """
-    return with_overrides(PRESETS, name, **overrides)
-
-
-def parse_tasks(text: str) -> tuple[str, ...]:
-    """``all`` (the six, cheapest first) or one task id.
-
-    >>> parse_tasks("MountainCar-v0")
-    ('MountainCar-v0',)
-    """
-    if text == "all":
-        return TASK_ORDER
-    if text not in TASKS:
-        try:
-            task(text)  # any other registered Gymnasium task, with generic settings
-        except ConfigError as error:
-            raise StudyError(f"{error}; or all") from None
-    return (text,)
-
-
-def task_root(out: Path, env: str, tasks: Sequence[str]) -> Path:
-    """Where a task's study lives: ``out`` for a single task, else ``out/<env>``."""
-    return out if len(tasks) == 1 else out / env
 
 
 # --------------------------------------------------------------------------- the jobs
@@ -440,113 +399,7 @@ def reward_quality(root: Path, env: str, algo: str, runs: int) -> dict[str, Any]
     }
 
 
-def authors_budget(env: str, preset: StudyPreset) -> bool:
-    """Whether ``preset`` trains ``env`` with the authors' budgets (data, epochs, evaluation
-    episodes, RL steps) and their 10 runs (never, for a task the paper does not have)."""
-    if env not in TASKS:
-        return False
-    paper = TASKS[env]
-    irl = replace(preset.irl(env), standardize_obs=paper.irl.standardize_obs)
-    return irl == paper.irl and preset.rl(env) == paper.rl and preset.runs == 10
-
-
 def _per_run_final(folder: Path, runs: int, key: str) -> list[float]:
     return [read_jsonl(folder / f"run-{k}" / METRICS_JSONL)[-1][key] for k in range(runs)]
 
 
-def draw_reward_map(root: Path, env: str) -> RewardMapSummary | None:
-    """Figure 4 for a task with a bounded 2-d observation and discrete actions (MountainCar):
-    the action each algorithm's mean f prefers over the state lattice, beside the shipped
-    expert's; returns the agreements (None for other tasks)."""
-    from pokerirl.gym.reward_map import plot_reward_map, reward_map, task_space
-
-    if env not in TASKS:  # its reference panel is the shipped expert's
-        return None
-    try:
-        task_space(env)
-    except ValueError:
-        return None
-    result = reward_map(env, [root / "irl" / algo for algo in ALGOS], grid=MAP_GRID)
-    path = root / FIGURES["reward_map"]
-    path.parent.mkdir(parents=True, exist_ok=True)
-    plot_reward_map(result, path)
-    constant = result.constant_agreement
-    assert constant is not None  # the shipped expert's panel is drawn
-    panels = dict(zip(ALGOS, result.panels, strict=True))
-    return RewardMapSummary(
-        grid=MAP_GRID,
-        agreement={algo: panel.agreement for algo, panel in panels.items()},
-        run_agreements={algo: list(panel.run_agreements) for algo, panel in panels.items()},
-        constant_action=constant[0],
-        constant_agreement=constant[1],
-    )
-
-
-# --------------------------------------------------------------------------- figures
-
-
-def draw_figures(root: Path, summary: TaskSummary) -> None:
-    """IRL-phase returns, alignment (discrete tasks) and RL-phase returns, mean ± std bands."""
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
-
-    from pokerirl.atomic import atomic_path
-
-    def figure() -> tuple[Figure, Any]:
-        fig = Figure(figsize=(6.4, 4), dpi=100)
-        FigureCanvasAgg(fig)
-        return fig, fig.add_subplot()
-
-    spread = f"lines: mean of {summary.runs} runs; bands: ± 1 std (sample) over runs"
-
-    def save(fig: Figure, axes: Any, name: str, title: str, xlabel: str, ylabel: str) -> None:
-        finish(axes, title=f"{summary.env}: {title}", xlabel=xlabel, ylabel=ylabel,
-               spread=spread, integer_x=xlabel == "epoch")  # fmt: skip
-        fig.tight_layout()
-        path = root / FIGURES[name]
-        path.parent.mkdir(parents=True, exist_ok=True)
-        with atomic_path(path) as temporary:
-            fig.savefig(temporary, format="png", metadata={"Software": None})
-
-    def lines(axes: Any) -> None:
-        for value, label, style in (
-            (summary.expert_return, "expert's demonstrations", "--"),
-            (summary.random_return, "random policy", ":"),
-        ):
-            if math.isfinite(value):
-                axes.axhline(value, color="grey", linestyle=style, linewidth=1, label=label)
-
-    episode = "return (sum of rewards per episode)"
-    fig, axes = figure()
-    for algo in ALGOS:
-        found = summary.algos[algo]
-        band(axes, found.irl_epochs, found.irl_return.to_json(), LABELS[algo],
-             color=COLORS[algo], alpha=0.2)  # fmt: skip
-    lines(axes)
-    save(fig, axes, "irl_returns", "IRL-phase return of the policy", "epoch", episode)
-
-    if summary.discrete:
-        fig, axes = figure()
-        for algo in ALGOS:
-            found = summary.algos[algo]
-            assert found.alignment is not None  # a discrete task's
-            band(axes, found.irl_epochs, found.alignment.to_json(), LABELS[algo],
-                 color=COLORS[algo], alpha=0.2)  # fmt: skip
-        baselines = summary.algos["hairl"].baselines
-        for name, style in (("bc", "-."), ("majority", ":")):
-            value = baselines[name].mean
-            axes.axhline(
-                value, color="grey", linestyle=style, linewidth=1, label=f"{name} {value:.3f}"
-            )
-        save(fig, axes, "alignment", "validation alignment", "epoch",
-             "share of validation states (policy = expert)")
-
-    fig, axes = figure()
-    for reward in REWARDS:
-        curve = summary.env_reward.rl_curve if reward == "env" else summary.algos[reward].rl_curve
-        assert curve.timesteps is not None  # an RL curve's
-        band(axes, curve.timesteps, curve.to_json(), LABELS[reward], color=COLORS[reward],
-             alpha=0.2)  # fmt: skip
-    lines(axes)
-    save(fig, axes, "rl_returns", "RL-phase true return", "timesteps",
-         f"true {episode}")
