@@ -412,7 +412,7 @@ GYM_OVERWRITE = typer.Option(False, "--overwrite", help="Recompute units whose s
 GYM_QUIET = typer.Option(False, "--quiet", "-q", help="No progress bars.")
 
 
-def _gym_preset(name: str, task: str, **overrides: int | None) -> Any:
+def _gym_preset(name: str, task: str, **overrides: Any) -> Any:
     """The study preset ``name`` for ``task`` (or all) with the command line's overrides."""
     from pokerirl.studies.gym.config import parse_tasks, study_preset
 
@@ -436,6 +436,12 @@ def gym_study(
     runs: int | None = typer.Option(
         None, "--runs", min=1, max=MAX_SEEDS, help="Runs per algorithm and reward."
     ),
+    algos: str | None = typer.Option(
+        None,
+        "--algos",
+        metavar="ALGO,...",
+        help="IRL algorithms: airl,hairl (the paper's; default), or airl,hairl,gail.",
+    ),
     seed: int | None = GYM_SEED,
     transitions: int | None = GYM_TRANSITIONS,
     epochs: int | None = GYM_EPOCHS,
@@ -454,9 +460,10 @@ def gym_study(
     ),
     log_dir: Path | None = LOG_DIR,
 ) -> None:
-    """The paper's Gymnasium study: shipped expert -> data -> IRL (AIRL and H-AIRL) -> RL (env
-    reward, AIRL and H-AIRL rewards) -> summary.json, figures/ and report.md beside the
-    authors' finals. Resumable: finished units are kept."""
+    """The paper's Gymnasium study: shipped expert -> data -> IRL (AIRL and H-AIRL, and GAIL
+    with --algos) -> RL (env reward and each algorithm's rewards) -> summary.json, figures/
+    and report.md beside the authors' finals. Resumable: finished units are kept."""
+    from pokerirl.studies.gym.config import parse_algos
     from pokerirl.studies.gym.pipeline import run_gym_study
 
     _rl_backend(rl_backend)
@@ -465,6 +472,7 @@ def gym_study(
     preset = _gym_preset(
         preset_name, task, runs=runs, seed=seed, transitions=transitions, epochs=epochs,
         eval_episodes=eval_episodes, rl_timesteps=timesteps,
+        algos=None if algos is None else parse_algos(algos),
     )  # fmt: skip
     if expert is None and task != "all":
         _no_shipped_expert(task, "pass --expert DIR")

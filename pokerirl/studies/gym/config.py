@@ -16,8 +16,10 @@ from pokerirl.errors import ConfigError
 from pokerirl.gym.presets import TASK_ORDER, TASKS, IRLSettings, RLSettings, Task
 from pokerirl.studies.common import StudyError, with_overrides
 
-ALGOS = ("airl", "hairl")
-REWARDS = ("env", "airl", "hairl")  # RL-phase rewards: the env's, then each IRL algorithm's
+# The IRL algorithms a study may train, in the order they are run and shown (the names of
+# pokerirl.irl.config.Algo, whose import would load torch): the paper's two, then GAIL (opt-in).
+STUDY_ALGOS = ("airl", "hairl", "gail")
+PAPER_ALGOS = ("airl", "hairl")
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -30,7 +32,7 @@ class StudyPreset:
     name: str
     tasks: tuple[str, ...]
     runs: int
-    algos: tuple[str, ...] = ("airl", "hairl")
+    algos: tuple[str, ...] = PAPER_ALGOS  # the paper's two always; GAIL beside them if named
     transitions: int | None = None
     epochs: int | None = None
     eval_episodes: int | None = None
@@ -52,10 +54,16 @@ class StudyPreset:
             "RL timesteps >= 1": self.rl_timesteps is None or self.rl_timesteps >= 1,
             "RL evaluations >= 1": self.rl_evaluations >= 1,
             "seed >= 0": self.seed >= 0,
+            "algos: airl, hairl, then optionally gail": self.algos in (
+                PAPER_ALGOS, STUDY_ALGOS),
         }
         broken = [name for name, ok in checks.items() if not ok]
         if broken:
             raise ConfigError(f"bad study settings: {', '.join(broken)}")
+
+    def rewards(self) -> tuple[str, ...]:
+        """The RL phase's rewards: the env's, then each IRL algorithm's."""
+        return ("env", *self.algos)
 
     def irl(self, env_id: str) -> IRLSettings:
         """The task's IRL settings with this preset's budget overrides applied."""
@@ -150,6 +158,22 @@ def parse_tasks(text: str) -> tuple[str, ...]:
         except ConfigError as error:
             raise StudyError(f"{error}; or all") from None
     return (text,)
+
+
+def parse_algos(text: str) -> tuple[str, ...]:
+    """``--algos``: comma-separated names, returned in the study's order.
+
+    >>> parse_algos("gail,airl,hairl")
+    ('airl', 'hairl', 'gail')
+    """
+    names = {name.strip() for name in text.split(",") if name.strip()}
+    unknown = sorted(names - set(STUDY_ALGOS))
+    if unknown or not set(PAPER_ALGOS) <= names:
+        raise StudyError(
+            f"algos {text!r}: the study trains airl and hairl (the paper's), and gail if named; "
+            f"choose from {', '.join(STUDY_ALGOS)}"
+        )
+    return tuple(algo for algo in STUDY_ALGOS if algo in names)
 
 
 def task_root(out: Path, env: str, tasks: Sequence[str]) -> Path:

@@ -4,22 +4,22 @@ returns (Figure 3), each a mean ± std band over runs, and the reward map (Figur
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
 from pokerirl.figures import finish
 from pokerirl.gym.presets import TASKS
 from pokerirl.studies.common import band
-from pokerirl.studies.gym.config import ALGOS, REWARDS
 from pokerirl.studies.gym.report import FIGURES
 from pokerirl.studies.gym.results import RewardMapSummary, TaskSummary
 
-LABELS = {"airl": "AIRL", "hairl": "H-AIRL", "env": "env reward"}
-COLORS = {"airl": "C0", "hairl": "C1", "env": "C2"}  # the same in every figure
+LABELS = {"airl": "AIRL", "hairl": "H-AIRL", "gail": "GAIL", "env": "env reward"}
+COLORS = {"airl": "C0", "hairl": "C1", "env": "C2", "gail": "C3"}  # the same in every figure
 MAP_GRID = 101  # cells per axis of the reward map
 
 
-def draw_reward_map(root: Path, env: str) -> RewardMapSummary | None:
+def draw_reward_map(root: Path, env: str, algos: Sequence[str]) -> RewardMapSummary | None:
     """Figure 4 for a task with a bounded 2-d observation and discrete actions (MountainCar):
     the action each algorithm's mean f prefers over the state lattice, beside the shipped
     expert's; returns the agreements (None for other tasks)."""
@@ -31,13 +31,13 @@ def draw_reward_map(root: Path, env: str) -> RewardMapSummary | None:
         task_space(env)
     except ValueError:
         return None
-    result = reward_map(env, [root / "irl" / algo for algo in ALGOS], grid=MAP_GRID)
+    result = reward_map(env, [root / "irl" / algo for algo in algos], grid=MAP_GRID)
     path = root / FIGURES["reward_map"]
     path.parent.mkdir(parents=True, exist_ok=True)
     plot_reward_map(result, path)
     constant = result.constant_agreement
     assert constant is not None  # the shipped expert's panel is drawn
-    panels = dict(zip(ALGOS, result.panels, strict=True))
+    panels = dict(zip(algos, result.panels, strict=True))
     return RewardMapSummary(
         grid=MAP_GRID,
         agreement={algo: panel.agreement for algo, panel in panels.items()},
@@ -80,8 +80,7 @@ def draw_figures(root: Path, summary: TaskSummary) -> None:
 
     episode = "return (sum of rewards per episode)"
     fig, axes = figure()
-    for algo in ALGOS:
-        found = summary.algos[algo]
+    for algo, found in summary.algos.items():
         band(axes, found.irl_epochs, found.irl_return.to_json(), LABELS[algo],
              color=COLORS[algo], alpha=0.2)  # fmt: skip
     lines(axes)
@@ -89,8 +88,7 @@ def draw_figures(root: Path, summary: TaskSummary) -> None:
 
     if summary.discrete:
         fig, axes = figure()
-        for algo in ALGOS:
-            found = summary.algos[algo]
+        for algo, found in summary.algos.items():
             assert found.alignment is not None  # a discrete task's
             band(axes, found.irl_epochs, found.alignment.to_json(), LABELS[algo],
                  color=COLORS[algo], alpha=0.2)  # fmt: skip
@@ -104,7 +102,7 @@ def draw_figures(root: Path, summary: TaskSummary) -> None:
              "share of validation states (policy = expert)")
 
     fig, axes = figure()
-    for reward in REWARDS:
+    for reward in ("env", *summary.algos):
         curve = summary.env_reward.rl_curve if reward == "env" else summary.algos[reward].rl_curve
         assert curve.timesteps is not None  # an RL curve's
         band(axes, curve.timesteps, curve.to_json(), LABELS[reward], color=COLORS[reward],

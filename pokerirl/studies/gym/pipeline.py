@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import json
 import os
+from collections.abc import Sequence
 from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 from typing import Any
@@ -50,8 +51,8 @@ from pokerirl.studies.common import (
     read_jsonl,
     study_folder,
 )
-from pokerirl.studies.gym.config import ALGOS, REWARDS, StudyPreset, authors_budget, task_root
-from pokerirl.studies.gym.figures import draw_figures, draw_reward_map
+from pokerirl.studies.gym.config import StudyPreset, authors_budget, task_root
+from pokerirl.studies.gym.figures import LABELS, draw_figures, draw_reward_map
 from pokerirl.studies.gym.report import (
     SUMMARY_FORMAT,
     GymStudySummary,
@@ -198,20 +199,20 @@ def run_gym_study(
         irl = {
             (env, algo): irl_job(roots[env], env, algo, preset, data=roots[env] / DATA_FILE)
             for env in tasks
-            for algo in ALGOS
+            for algo in preset.algos
         }
-        say(f"[2/{STEPS}] IRL: AIRL and H-AIRL, {preset.runs} runs each, on {names}")
+        say(f"[2/{STEPS}] IRL: {_and(preset.algos)}, {preset.runs} runs each, on {names}")
         reused = run_irl_jobs(list(irl.values()), **options)
         _said_reused(say, reused, len(irl))
 
         rl = [
             job
             for env in tasks
-            for reward in REWARDS
+            for reward in preset.rewards()
             for job in rl_jobs(roots[env], env, reward, irl.get((env, reward)), preset,
                                backend=rl_backend)
         ]
-        say(f"[3/{STEPS}] RL: env reward, AIRL and H-AIRL rewards, {preset.runs} runs each"
+        say(f"[3/{STEPS}] RL: env reward, {_and(preset.algos)} rewards, {preset.runs} runs each"
             + ("" if rl_backend == RLBackend.SB3 else f" ({rl_backend} backend)"))
         reused = run_rl_jobs(rl, **options)
         _said_reused(say, reused, len(rl))
@@ -248,6 +249,12 @@ def check_rl_backend(rl_backend: str) -> None:
         raise StudyError(
             f"unknown RL backend {rl_backend!r}; choose one of {', '.join(RL_BACKENDS)}"
         )
+
+
+def _and(algos: Sequence[str]) -> str:
+    """``AIRL and H-AIRL``, ``AIRL, H-AIRL and GAIL``."""
+    labels = [LABELS[algo] for algo in algos]
+    return ", ".join(labels[:-1]) + " and " + labels[-1]
 
 
 def _said_reused(say: Say, reused: int, total: int) -> None:
@@ -297,7 +304,7 @@ def task_summary(
     found_task = task(env)
     algos: dict[str, AlgoSummary] = {}
     irl_summaries = {}
-    for algo in ALGOS:
+    for algo in preset.algos:
         irl = GymIRLSummary.read(root / "irl" / algo)
         irl_summaries[algo] = irl
         metrics = irl.over_runs.metrics
@@ -363,7 +370,7 @@ def task_summary(
             else None,
             random_return=found_task.random_return,
         ),
-        reward_map=draw_reward_map(root, env),
+        reward_map=draw_reward_map(root, env, preset.algos),
     )
 
 

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import json
 import os
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -15,7 +15,7 @@ from typing import Any
 from pokerirl.gym.presets import TASKS, RLBackend
 from pokerirl.meanstd import MeanStd
 from pokerirl.studies.common import SUMMARY_JSON, StudyError, markdown_table
-from pokerirl.studies.gym.results import PaperFinals, TaskSummary
+from pokerirl.studies.gym.results import AlgoSummary, PaperFinals, TaskSummary
 
 SUMMARY_FORMAT = "pokerirl-gym-study/1"
 FIGURES = {
@@ -115,18 +115,25 @@ def _percent(share: float | None) -> float | None:
 def task_table(summary: TaskSummary) -> list[str]:
     """Our finals beside the authors', one row per figure of the paper."""
     airl, hairl = summary.algos["airl"], summary.algos["hairl"]
+    gail = summary.algos.get("gail")  # opt-in: the authors report none
     paper = summary.paper or NO_PAPER  # a task the paper does not have: "–" throughout
+
+    def of_gail(label: str, value: Callable[[AlgoSummary], str]) -> list[tuple[str, str, str]]:
+        return [] if gail is None else [(label, value(gail), "not reported")]
+
     rows = [
         ("IRL-phase return, AIRL", _value(airl.irl_final_return),
          _value(paper.irl_final_return["airl"])),
         ("IRL-phase return, H-AIRL", _value(hairl.irl_final_return),
          _value(paper.irl_final_return["hairl"])),
+        *of_gail("IRL-phase return, GAIL", lambda a: _value(a.irl_final_return)),
         ("expert (its data's episodes)", _value(MeanStd(mean=summary.expert_return)),
          _value(MeanStd(mean=paper.expert_return))),
         ("RL-phase return, AIRL reward", _value(airl.rl_final_return),
          _value(paper.rl_final_return["airl"])),
         ("RL-phase return, H-AIRL reward", _value(hairl.rl_final_return),
          _value(paper.rl_final_return["hairl"])),
+        *of_gail("RL-phase return, GAIL reward", lambda a: _value(a.rl_final_return)),
         ("RL-phase return, env reward", _value(summary.env_reward.rl_final_return),
          _value(paper.rl_final_return["env_reward"])),
     ]  # fmt: skip
@@ -137,11 +144,14 @@ def task_table(summary: TaskSummary) -> list[str]:
              _paper_percent(alignment.get("airl"))),
             ("alignment, H-AIRL policy", _value(hairl.final_alignment, percent=True),
              _paper_percent(alignment.get("hairl"))),
+            *of_gail("alignment, GAIL policy", lambda a: _value(a.final_alignment, percent=True)),
             ("alignment, behaviour cloning (same net and epochs)",
              _value(hairl.baselines["bc"], percent=True), "not reported"),
             ("alignment, reward argmax: AIRL / H-AIRL",
              f"{_value(airl.final_reward_alignment, percent=True)} / "
              f"{_value(hairl.final_reward_alignment, percent=True)}", "not reported"),
+            *of_gail("alignment, reward argmax: GAIL",
+                     lambda a: _value(a.final_reward_alignment, percent=True)),
         ]  # fmt: skip
     if "epic" in airl.quality:
         a, h = airl.quality, hairl.quality
@@ -164,6 +174,13 @@ def task_table(summary: TaskSummary) -> list[str]:
             ("Pearson of f and the true reward on expert / policy transitions: H-AIRL",
              f"{_value(h['pearson_expert'], digits=3)} / "
              f"{_value(h['pearson_policy'], digits=3)}", "not reported"),
+            *of_gail("EPIC distance to the true reward / on the expert's states and "
+                     "transitions only: GAIL",
+                     lambda a: f"{_value(a.quality['epic'], digits=3)} / "
+                     f"{_value(a.quality['epic_expert_coverage'], digits=3)}"),
+            *of_gail("Pearson of f and the true reward on expert / policy transitions: GAIL",
+                     lambda a: f"{_value(a.quality['pearson_expert'], digits=3)} / "
+                     f"{_value(a.quality['pearson_policy'], digits=3)}"),
         ]  # fmt: skip
     found = summary.reward_map
     if found is not None:
@@ -176,6 +193,9 @@ def task_table(summary: TaskSummary) -> list[str]:
              f"(a constant {found.constant_action!r}: {100 * found.constant_agreement:.1f}%)",
              "Figure 4: maps only"),
         )  # fmt: skip
+        if "gail" in agree:
+            rows.append(("reward map: cells where f prefers the expert's action, GAIL",
+                         _paper_percent(_percent(agree["gail"])), "not reported"))
     rows.append(
         ("random policy", _value(MeanStd(mean=summary.random_return)),
          _value(MeanStd(mean=paper.random_return)))
