@@ -1,5 +1,6 @@
 """Mean and sample std over runs or seeds: the one ``MeanStd`` that every summary and report
-writes, as ``{"mean": ..., "std": ...}``.
+writes, as ``{"mean": ..., "std": ...}``, and the one :class:`Curve` (a mean and a std at each
+point).
 
 The std is the sample one (ddof 1), and 0 for a single value.
 
@@ -11,36 +12,27 @@ MeanStd(mean=2.0, std=1.4142135623730951)
 {'mean': 1.5, 'std': None}
 >>> mean_std_curve([[1.0, 2.0], [3.0, 2.0]])
 ([2.0, 2.0], [1.4142135623730951, 0.0])
+>>> Curve.of([[1.0, 2.0], [3.0, 2.0]], timesteps=[10, 20]).to_json()
+{'timesteps': [10, 20], 'mean': [2.0, 2.0], 'std': [1.4142135623730951, 0.0]}
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
-from typing import Any
+from collections.abc import Sequence
+from dataclasses import dataclass, field
 
 import numpy as np
 
-from pokerirl.errors import InputError
+from pokerirl.serial import Omit, Serializable, meta
 
 
 @dataclass(frozen=True, kw_only=True)
-class MeanStd:
+class MeanStd(Serializable):
     """A value's mean and std over runs or seeds. None: not measured, or (a std) a value the
-    authors give as a single line."""
+    authors give as a single line (or a summary.json older than the field lacks)."""
 
     mean: float | None
     std: float | None = None
-
-    def to_json(self) -> dict[str, float | None]:
-        return {"mean": self.mean, "std": self.std}
-
-    @classmethod
-    def from_json(cls, data: Mapping[str, Any]) -> MeanStd:
-        # A summary.json older than a field may lack its std: .get, not [].
-        if not isinstance(data, Mapping):
-            raise InputError(f"must be an object with a mean and a std, got {data!r}"[:200])
-        return cls(mean=data.get("mean"), std=data.get("std"))
 
     @property
     def measured(self) -> tuple[float, float]:
@@ -70,3 +62,21 @@ def mean_std_curve(
     mean = array.mean(axis=0)
     std = array.std(axis=0, ddof=1) if array.shape[0] > 1 else np.zeros_like(mean)
     return mean.tolist(), std.tolist()
+
+
+@dataclass(frozen=True, kw_only=True)
+class Curve(Serializable):
+    """Mean and sample std over runs or seeds at each point: an epoch, an action, or (where
+    ``timesteps`` is given) the training steps or hands at which each run was evaluated."""
+
+    timesteps: list[int] | None = field(default=None, metadata=meta(omit=Omit.NONE))
+    mean: list[float]
+    std: list[float]
+
+    @classmethod
+    def of(
+        cls, rows: Sequence[Sequence[float]] | np.ndarray, *, timesteps: list[int] | None = None
+    ) -> Curve:
+        """Over the first axis of ``rows`` (one row per run or seed)."""
+        mean, std = mean_std_curve(rows)
+        return cls(timesteps=timesteps, mean=mean, std=std)

@@ -10,6 +10,7 @@ import torch
 
 from pokerirl.agents.dqn import DQNConfig
 from pokerirl.agents.train import (
+    Evaluation,
     MetricsLine,
     Score,
     Timings,
@@ -50,7 +51,7 @@ def test_timings_round_trip() -> None:
     evaluations = [{"hands": 1, "seconds": 0.5}]
     data = {"seconds": 3.5, "hands_per_second": 146.3, "evaluations": evaluations}
     assert Timings.from_json(data).to_json() == data
-    assert Timings.from_json(data).evaluations == ((1, 0.5),)
+    assert Timings.from_json(data).evaluations == (Evaluation(hands=1, seconds=0.5),)
 
 
 @pytest.mark.parametrize("protocol", ["pokerirl", "authors"])
@@ -74,6 +75,6 @@ def test_the_files_written_read_back_typed(tmp_path: Path, protocol: str) -> Non
         assert [line.keep_rule for line in lines] == [True, True, True, False]
     timings = json.loads((tmp_path / "agent" / "timings.json").read_text())
     assert Timings.from_json(timings).to_json() == timings
-    assert [h for h, _ in Timings.from_json(timings).evaluations] == [m.hands for m in lines]
+    assert [e.hands for e in Timings.from_json(timings).evaluations] == [m.hands for m in lines]
     # A rerun reuses the agent.
     assert train_agent(tmp_path / "agent", config) is None

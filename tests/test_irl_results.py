@@ -67,7 +67,7 @@ def test_summarize_is_typed_and_writes_what_it_always_wrote() -> None:
     summary = summarize([_result(0, [0.5, 0.75], 0.5), _result(1, [0.25, 0.25], 1.0)])
     assert summary.seeds == (0, 1) and summary.epochs == (1, 2)
     assert list(summary.metrics) == ["val_alignment"]  # lists are not averaged
-    assert summary.metrics["val_alignment"].mean == (0.375, 0.5)
+    assert summary.metrics["val_alignment"].mean == [0.375, 0.5]
     assert summary.baselines["bc"] == MeanStd(mean=0.75, std=pytest.approx(np.sqrt(0.125)))
     stds = list(summary.metrics["val_alignment"].std)
     assert summary.to_json() == {

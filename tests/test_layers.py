@@ -29,7 +29,7 @@ PACKAGE = Path(__file__).resolve().parents[1] / "pokerirl"
 # Lowest first. A component may import those of its own layer and of lower ones.
 LAYERS: tuple[tuple[str, ...], ...] = (
     ("encoding", "atomic", "seeds", "versions", "errors", "parquet", "meanstd", "figures",
-     "scalars"),
+     "scalars", "serial"),
     ("execution",),
     ("store",),
     ("parsers", "datasets", "game"),

@@ -98,7 +98,7 @@ def test_card_round_trips_and_a_train_run_writes_one(tmp_path: Path) -> None:
     split = json.loads((tmp_path / "run" / "split.json").read_text())
     assert card.states == sum(card.states_by_street) and card.states < 1_000
     assert len(split["validation_groups"]) > 0
-    assert RewardCard.from_json(card.to_json()) == card
+    assert RewardCard.from_text(card.to_text()) == card
     record = json.loads((tmp_path / "run" / CARD_FILE).read_text())
     for name in ("mean_f", "decision_bonus", "argmax_share", "argmax_share_by_street",
                  "argmax_share_by_strength", "agree_expert", "agree_legal_majority"):  # fmt: skip

@@ -225,4 +225,4 @@ def test_the_report_reads_back_typed_and_writes_the_same_bytes(tmp_path: Path) -
     assert FamilySizes.from_json(data["family"]).to_json() == data["family"]
     loaded = load_report(tmp_path)
     assert (loaded.config, loaded.family) == (report.config, report.family)
-    assert json.dumps(loaded.to_dict(), indent=2) + "\n" == text
+    assert json.dumps(loaded.to_json(), indent=2) + "\n" == text

@@ -89,6 +89,7 @@ from pokerirl.poker.rewards import (
     TransformedReward,
     as_poker_reward,
 )
+from pokerirl.serial import Omit, Serializable, meta
 from pokerirl.store import Unit, UnitConflict, UnitOutput, run_units
 
 
@@ -206,26 +207,19 @@ AGENT_PRESETS: dict[str, Mapping[str, Any]] = {
 
 
 @dataclass(frozen=True, kw_only=True)
-class Score:
+class Score(Serializable):
     """The greedy policy's result against one opponent."""
 
     mbb_per_hand: float
     std_error: float
 
-    def to_json(self) -> dict[str, float]:
-        return {"mbb_per_hand": self.mbb_per_hand, "std_error": self.std_error}
-
-    @classmethod
-    def from_json(cls, data: Mapping[str, Any]) -> Score:
-        return cls(mbb_per_hand=data["mbb_per_hand"], std_error=data["std_error"])
-
 
 @dataclass(frozen=True, kw_only=True)
-class MetricsLine:
+class MetricsLine(Serializable):
     """One evaluation during training: a line of ``metrics.jsonl``, and the ``final`` and
     ``kept`` of an agent's ``config.json``. ``eval`` maps each opponent's label (``random``
-    first) to its score; ``keep_rule`` (the authors' protocol only) says whether the line was
-    offered to their keep rule."""
+    first) to its score; ``keep_rule`` (the authors' protocol only, written only when set)
+    says whether the line was offered to their keep rule."""
 
     hands: int
     transitions: int
@@ -233,65 +227,35 @@ class MetricsLine:
     epsilon: float
     loss: float | None  # None before the first update (JSON has no NaN)
     eval: Mapping[str, Score]
-    keep_rule: bool | None = None
-
-    def to_json(self) -> dict[str, object]:
-        """The line as written, keys in this order (``keep_rule`` only when set)."""
-        found: dict[str, object] = {
-            "hands": self.hands,
-            "transitions": self.transitions,
-            "updates": self.updates,
-            "epsilon": self.epsilon,
-            "loss": self.loss,
-            "eval": {label: score.to_json() for label, score in self.eval.items()},
-        }
-        if self.keep_rule is not None:
-            found["keep_rule"] = self.keep_rule
-        return found
-
-    @classmethod
-    def from_json(cls, data: Mapping[str, Any]) -> MetricsLine:
-        return cls(
-            hands=data["hands"],
-            transitions=data["transitions"],
-            updates=data["updates"],
-            epsilon=data["epsilon"],
-            loss=data["loss"],
-            eval={label: Score.from_json(score) for label, score in data["eval"].items()},
-            keep_rule=data.get("keep_rule"),
-        )
+    keep_rule: bool | None = field(default=None, metadata=meta(omit=Omit.NONE))
 
 
 def read_metrics(folder: str | os.PathLike[str]) -> list[MetricsLine]:
     """An agent folder's evaluations during training (its ``metrics.jsonl``), typed: what a
     study reads of the agents it trained, instead of the file's keys."""
-    text = (Path(folder) / METRICS_FILE).read_text()
-    return [MetricsLine.from_json(json.loads(line)) for line in text.splitlines() if line.strip()]
+    path = Path(folder) / METRICS_FILE
+    lines = [line for line in path.read_text().splitlines() if line.strip()]
+    return [
+        MetricsLine.from_json(json.loads(line), f"{path}:{i + 1}") for i, line in enumerate(lines)
+    ]
 
 
 @dataclass(frozen=True, kw_only=True)
-class Timings:
+class Evaluation(Serializable):
+    """The seconds since the start of training at an evaluation."""
+
+    hands: int
+    seconds: float
+
+
+@dataclass(frozen=True, kw_only=True)
+class Timings(Serializable):
     """An agent's ``timings.json`` (never fingerprinted): the whole run, and the seconds
     since the start at each evaluation."""
 
     seconds: float
     hands_per_second: float | None
-    evaluations: tuple[tuple[int, float], ...]  # (hands, seconds)
-
-    def to_json(self) -> dict[str, object]:
-        return {
-            "seconds": self.seconds,
-            "hands_per_second": self.hands_per_second,
-            "evaluations": [{"hands": h, "seconds": s} for h, s in self.evaluations],
-        }
-
-    @classmethod
-    def from_json(cls, data: Mapping[str, Any]) -> Timings:
-        return cls(
-            seconds=data["seconds"],
-            hands_per_second=data["hands_per_second"],
-            evaluations=tuple((e["hands"], e["seconds"]) for e in data["evaluations"]),
-        )
+    evaluations: tuple[Evaluation, ...]
 
 
 def agent_preset(name: str, **overrides: Any) -> TrainConfig:
@@ -783,6 +747,8 @@ def _train_into(
     timings = Timings(
         seconds=round(total, 3),
         hands_per_second=round(config.hands / total, 1) if total > 0 else None,
-        evaluations=tuple((m.hands, t) for m, t in zip(metrics, seconds, strict=True)),
+        evaluations=tuple(
+            Evaluation(hands=m.hands, seconds=t) for m, t in zip(metrics, seconds, strict=True)
+        ),
     )
     return metrics[-1], timings

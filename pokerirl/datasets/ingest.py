@@ -17,7 +17,7 @@ import json
 import os
 import shutil
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Protocol
 
@@ -37,6 +37,7 @@ from pokerirl.parsers.irc import (
     iter_months,
     parse_month,
 )
+from pokerirl.serial import Omit, Serializable, meta
 from pokerirl.store import staged_files
 
 # Dictionary encoding and statistics only where they pay: the obs and mask lists are most of
@@ -54,7 +55,7 @@ UNEXPLAINED = "unexplained_by_behaviour"
 
 
 @dataclass(frozen=True, kw_only=True)
-class FoldsSummary:
+class FoldsSummary(Serializable):
     """What ``--folds impute`` did: the ``folds`` key of the summary, keys in this order.
 
     ``hidden_players``: (hand, player) pairs whose cards were concealed; each is imputed or
@@ -81,29 +82,6 @@ class FoldsSummary:
     uniform_bits: float  # mean entropy of the uniform posterior over the same players
     rounds: tuple[Mapping[str, Any], ...] = ()
 
-    def to_json(self) -> dict[str, object]:
-        return {
-            "behaviour": self.behaviour,
-            "behaviour_encoding": self.behaviour_encoding,
-            "imputations": self.imputations,
-            "seed": self.seed,
-            "hidden_players": self.hidden_players,
-            "imputed_players": self.imputed_players,
-            "dropped_players": self.dropped_players,
-            "imputed_hands": self.imputed_hands,
-            "dropped_hands": self.dropped_hands,
-            "imputed_decisions": self.imputed_decisions,
-            "imputed_rows": self.imputed_rows,
-            "imputed_decisions_per_action": dict(self.imputed_decisions_per_action),
-            "entropy_bits": dict(self.entropy_bits),
-            "uniform_bits": self.uniform_bits,
-            "rounds": [dict(r) for r in self.rounds],
-        }
-
-    @classmethod
-    def from_json(cls, data: Mapping[str, Any]) -> FoldsSummary:
-        return cls(**{**data, "rounds": tuple(data.get("rounds", ()))})
-
 
 @dataclass(frozen=True, kw_only=True, eq=False)
 class FoldsResult:
@@ -122,7 +100,7 @@ class FoldsStep(Protocol):
 
 
 @dataclass(frozen=True, kw_only=True)
-class IngestSummary:
+class IngestSummary(Serializable):
     """Where every hand went: ``TABLE.summary.json``, keys in this order."""
 
     table: str
@@ -147,45 +125,8 @@ class IngestSummary:
     orphan_pdb_lines: int
     kept_fold_hands: int = 0  # kept hands that ended in a fold (cards shown: synth --reveal-all)
     # --folds impute only (absent from the JSON otherwise): hands kept with imputed cards.
-    imputed_hands: int | None = None
-    folds: FoldsSummary | None = None
-
-    def to_json(self) -> dict[str, object]:
-        found: dict[str, object] = {
-            "table": self.table,
-            "sources": list(self.sources),
-            "months": list(self.months),
-            "hands_read": dict(self.hands_read),
-            "hands_read_total": self.hands_read_total,
-            "heads_up_hands": self.heads_up_hands,
-            "kept_hands": self.kept_hands,
-            "rows": self.rows,
-            "rows_per_action": dict(self.rows_per_action),
-            "dropped": dict(self.dropped),
-            "buckets_total": self.buckets_total,
-            "buckets_add_up": self.buckets_add_up,
-            "inconsistent_reasons": dict(self.inconsistent_reasons),
-            "skipped_channels": dict(self.skipped_channels),
-            "malformed_lines": self.malformed_lines,
-            "malformed_examples": list(self.malformed_examples),
-            "decisions_dropped_concealed": self.decisions_dropped_concealed,
-            "single_blind_hands": self.single_blind_hands,
-            "chips_mismatch_hands": self.chips_mismatch_hands,
-            "orphan_pdb_lines": self.orphan_pdb_lines,
-            "kept_fold_hands": self.kept_fold_hands,
-        }
-        if self.folds is not None:
-            found["imputed_hands"] = self.imputed_hands
-            found["folds"] = self.folds.to_json()
-        return found
-
-    @classmethod
-    def from_json(cls, data: Mapping[str, Any]) -> IngestSummary:
-        listed = ("sources", "months", "malformed_examples")
-        found: dict[str, Any] = {k: tuple(v) if k in listed else v for k, v in data.items()}
-        if found.get("folds") is not None:
-            found["folds"] = FoldsSummary.from_json(found["folds"])
-        return cls(**found)
+    imputed_hands: int | None = field(default=None, metadata=meta(omit=Omit.NONE))
+    folds: FoldsSummary | None = field(default=None, metadata=meta(omit=Omit.NONE))
 
 
 def summary_path(table_path: str | os.PathLike[str]) -> Path:

@@ -8,10 +8,12 @@ read back by position in a dict.
 from __future__ import annotations
 
 from collections.abc import Iterator, Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any, NamedTuple, Protocol
 
 from torch import Tensor, nn
+
+from pokerirl.serial import Serializable, meta
 
 
 @dataclass(frozen=True, slots=True)
@@ -94,7 +96,7 @@ DISCRIMINATOR_METRICS = (
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
-class EpochMetrics(Mapping[str, Any]):
+class EpochMetrics(Mapping[str, Any], Serializable):
     """One epoch of one run: a line of ``metrics.jsonl``.
 
     ``metrics`` are the trainer's metrics (losses, discriminator, validation: which ones
@@ -111,7 +113,7 @@ class EpochMetrics(Mapping[str, Any]):
     """
 
     epoch: int
-    metrics: Mapping[str, Any]
+    metrics: Mapping[str, Any] = field(metadata=meta(flatten=True))  # the line: epoch first
 
     def __post_init__(self) -> None:
         if "epoch" in self.metrics:
@@ -130,14 +132,6 @@ class EpochMetrics(Mapping[str, Any]):
     def scalars(self) -> dict[str, float]:
         """The numeric metrics (not ``epoch``), in order: what a summary averages."""
         return {k: v for k, v in self.metrics.items() if isinstance(v, int | float)}
-
-    def to_json(self) -> dict[str, object]:
-        """The line as written, ``epoch`` first."""
-        return {"epoch": self.epoch, **self.metrics}
-
-    @classmethod
-    def from_json(cls, data: Mapping[str, Any]) -> EpochMetrics:
-        return cls(epoch=data["epoch"], metrics={k: v for k, v in data.items() if k != "epoch"})
 
 
 @dataclass(frozen=True, kw_only=True)

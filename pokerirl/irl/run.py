@@ -49,8 +49,9 @@ from pokerirl.irl.nets import ACTIVATIONS, REWARD_FAMILIES, NetSpec, RewardFamil
 from pokerirl.irl.plots import plot_curves
 from pokerirl.irl.records import EpochMetrics
 from pokerirl.irl.transitions import Transitions
-from pokerirl.meanstd import MeanStd
+from pokerirl.meanstd import Curve, MeanStd, mean_std
 from pokerirl.parquet import first_line
+from pokerirl.serial import Serializable
 from pokerirl.versions import package_versions
 
 FORMAT_VERSION = 2
@@ -67,7 +68,7 @@ class RunError(PokerIRLError, ValueError):
 
 
 @dataclass(frozen=True, kw_only=True)
-class RunResult:
+class RunResult(Serializable):
     """One finished run of several: its folder, seed, metrics, baselines, speed and split."""
 
     out: str
@@ -77,29 +78,6 @@ class RunResult:
     samples_per_second: float
     train_rows: int
     val_rows: int
-
-    def to_json(self) -> dict[str, object]:
-        return {
-            "out": self.out,
-            "seed": self.seed,
-            "metrics": [m.to_json() for m in self.metrics],
-            "baselines": dict(self.baselines),
-            "samples_per_second": self.samples_per_second,
-            "train_rows": self.train_rows,
-            "val_rows": self.val_rows,
-        }
-
-    @classmethod
-    def from_json(cls, data: Mapping[str, Any]) -> RunResult:
-        return cls(
-            out=data["out"],
-            seed=data["seed"],
-            metrics=tuple(EpochMetrics.from_json(m) for m in data["metrics"]),
-            baselines=dict(data["baselines"]),
-            samples_per_second=data["samples_per_second"],
-            train_rows=data["train_rows"],
-            val_rows=data["val_rows"],
-        )
 
 
 @dataclass(frozen=True)
@@ -116,48 +94,21 @@ class RunSummary:
     results: tuple[RunResult, ...] = ()  # several runs: each run's result
 
 
-@dataclass(frozen=True, kw_only=True)
-class CurveStats:
-    """Mean and sample standard deviation over runs of one metric, epoch by epoch."""
-
-    mean: tuple[float, ...]
-    std: tuple[float, ...]
-
-    def to_json(self) -> dict[str, list[float]]:
-        return {"mean": list(self.mean), "std": list(self.std)}
-
-    @classmethod
-    def from_json(cls, data: Mapping[str, Any]) -> CurveStats:
-        return cls(mean=tuple(data["mean"]), std=tuple(data["std"]))
+CurveStats = Curve  # studies/gym.py's name for it, until the gym half moves to Curve
 
 
 @dataclass(frozen=True, kw_only=True)
-class RunsSummary:
+class RunsSummary(Serializable):
     """Several runs summarized (``summary.json``): each scalar metric per epoch and each
     baseline, as mean and sample std (ddof 1) over runs."""
 
     seeds: tuple[int, ...]
     epochs: tuple[int, ...]
-    metrics: Mapping[str, CurveStats]
+    metrics: Mapping[str, Curve]
     baselines: Mapping[str, MeanStd]
 
-    def to_json(self) -> dict[str, object]:
-        return {
-            "runs": len(self.seeds),
-            "seeds": list(self.seeds),
-            "epochs": list(self.epochs),
-            "metrics": {key: curve.to_json() for key, curve in self.metrics.items()},
-            "baselines": {key: stats.to_json() for key, stats in self.baselines.items()},
-        }
-
-    @classmethod
-    def from_json(cls, data: Mapping[str, Any]) -> RunsSummary:
-        return cls(
-            seeds=tuple(data["seeds"]),
-            epochs=tuple(data["epochs"]),
-            metrics={key: CurveStats.from_json(c) for key, c in data["metrics"].items()},
-            baselines={key: MeanStd.from_json(s) for key, s in data["baselines"].items()},
-        )
+    def to_json(self) -> dict[str, Any]:
+        return {"runs": len(self.seeds), **super().to_json()}  # runs: read, never stored
 
 
 # --------------------------------------------------------------------------- one run
@@ -364,26 +315,18 @@ def summarize(results: Sequence[RunResult]) -> RunsSummary:
     """Mean and sample std (ddof 1) over runs of each scalar metric per epoch and of each
     baseline."""
     metrics = [r.metrics for r in results]
-    by_metric = {}
-    for key in metrics[0][0].scalars():
-        values = np.array([[m[key] for m in run] for run in metrics], dtype=float)
-        by_metric[key] = CurveStats(
-            mean=tuple(values.mean(0).tolist()), std=tuple(_std(values).tolist())
-        )
-    by_baseline = {}
-    for key in results[0].baselines:
-        values = np.array([[r.baselines[key]] for r in results], dtype=float)
-        by_baseline[key] = MeanStd(mean=float(values.mean()), std=float(_std(values)[0]))
+    by_metric = {
+        key: Curve.of([[m[key] for m in run] for run in metrics]) for key in metrics[0][0].scalars()
+    }
+    by_baseline = {
+        key: mean_std([r.baselines[key] for r in results]) for key in results[0].baselines
+    }
     return RunsSummary(
         seeds=tuple(r.seed for r in results),
         epochs=tuple(m.epoch for m in metrics[0]),
         metrics=by_metric,
         baselines=by_baseline,
     )
-
-
-def _std(values: np.ndarray) -> np.ndarray:
-    return values.std(0, ddof=1) if len(values) > 1 else np.zeros(values.shape[1:])
 
 
 # --------------------------------------------------------------------------- loading

@@ -40,7 +40,7 @@ import io
 import json
 import os
 from collections.abc import Mapping
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -53,6 +53,7 @@ from pokerirl.errors import InputError
 from pokerirl.game.agents import street_of
 from pokerirl.game.evaluator import hand_strength
 from pokerirl.poker.rewards import Decisions, PokerReward
+from pokerirl.serial import Omit, Serializable, meta
 
 CARD_FILE, CARD_FIGURE = "reward_card.json", "reward_card.png"
 CARD_FORMAT = "pokerirl-reward-card/1"
@@ -206,7 +207,7 @@ def _shares(actions: np.ndarray, weights: np.ndarray | None = None) -> dict[str,
 
 
 @dataclass(frozen=True, kw_only=True)
-class RewardCard:
+class RewardCard(Serializable):
     """See the module docstring; the JSON names are the fields'."""
 
     reward: str
@@ -236,8 +237,8 @@ class RewardCard:
     format: str = CARD_FORMAT
     # Imputed tables only (left out of the JSON otherwise): the states' total weight, and
     # per part ("observed", "imputed"): weight, argmax_share, agree_expert, expert_share.
-    weighted_states: float | None = None
-    by_part: dict[str, dict[str, Any]] | None = None
+    weighted_states: float | None = field(default=None, metadata=meta(omit=Omit.NONE))
+    by_part: dict[str, dict[str, Any]] | None = field(default=None, metadata=meta(omit=Omit.NONE))
 
     @property
     def below_bc(self) -> bool:
@@ -245,19 +246,16 @@ class RewardCard:
         reward, bc = self.reward_alignment, self.bc_alignment
         return reward is not None and bc is not None and reward < bc
 
-    def to_json(self) -> str:
-        found = asdict(self)
-        for name in ("weighted_states", "by_part"):  # cards of plain tables keep their bytes
-            if found[name] is None:
-                del found[name]
-        return json.dumps(found, indent=2) + "\n"
+    def to_text(self) -> str:
+        """``reward_card.json``'s text."""
+        return json.dumps(self.to_json(), indent=2) + "\n"
 
     @classmethod
-    def from_json(cls, text: str) -> RewardCard:
+    def from_text(cls, text: str, where: str = "") -> RewardCard:
         data = json.loads(text)
         if not isinstance(data, dict) or data.get("format") != CARD_FORMAT:
-            raise InputError("not a pokerirl reward card")
-        return cls(**data)
+            raise InputError(f"{where or 'the text'}: not a pokerirl reward card")
+        return cls.from_json(data, where)
 
     def render(self) -> str:
         """A few lines for the terminal."""
@@ -515,7 +513,7 @@ def card_figure(card: RewardCard) -> bytes:
 
 def card_files(card: RewardCard) -> dict[str, bytes]:
     """``reward_card.json`` and ``reward_card.png``."""
-    return {CARD_FILE: card.to_json().encode(), CARD_FIGURE: card_figure(card)}
+    return {CARD_FILE: card.to_text().encode(), CARD_FIGURE: card_figure(card)}
 
 
 def write_card(card: RewardCard, out: str | os.PathLike[str]) -> Path:
@@ -532,7 +530,8 @@ def write_card(card: RewardCard, out: str | os.PathLike[str]) -> Path:
 def read_card(folder: str | os.PathLike[str]) -> RewardCard | None:
     """The card in ``folder``, or None when it has none (or an unreadable one)."""
     try:
-        return RewardCard.from_json((Path(folder) / CARD_FILE).read_text())
+        path = Path(folder) / CARD_FILE
+        return RewardCard.from_text(path.read_text(), str(path))
     except (OSError, ValueError, TypeError):
         return None
 

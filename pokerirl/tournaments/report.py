@@ -16,12 +16,13 @@ import csv
 import io
 import json
 from collections.abc import Mapping
-from dataclasses import asdict, dataclass, field, fields, replace
+from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import Any, Literal
 
 from pokerirl import atomic
 from pokerirl.seeds import format_seeds
+from pokerirl.serial import SerialError, Serializable, meta
 from pokerirl.tournaments.lineup import TournamentError
 from pokerirl.tournaments.stats import Estimate
 
@@ -62,7 +63,7 @@ class SeedLine(Line):
 
 
 @dataclass(frozen=True, kw_only=True)
-class MatchupReport:
+class MatchupReport(Serializable):
     """A against B over every seed; ``pooled_over`` says what the pooled line's units are."""
 
     agent_a: str
@@ -78,9 +79,15 @@ class MatchupReport:
     def seeds_significant_bonferroni(self) -> int:
         return sum(line.significant_bonferroni for line in self.seeds)
 
+    def to_json(self) -> dict[str, Any]:  # the count: written for the reader, never read
+        return {
+            **super().to_json(),
+            "seeds_significant_bonferroni": self.seeds_significant_bonferroni,
+        }
+
 
 @dataclass(frozen=True, kw_only=True)
-class TournamentSettings:
+class TournamentSettings(Serializable):
     """What every seed of a tournament played: hands per seed, the seeds, duplicate deals or
     not, the engine's batch, and the significance level."""
 
@@ -90,22 +97,9 @@ class TournamentSettings:
     batch_size: int
     alpha: float
 
-    def to_json(self) -> dict[str, object]:
-        return {
-            "hands": self.hands,
-            "seeds": list(self.seeds),
-            "duplicate": self.duplicate,
-            "batch_size": self.batch_size,
-            "alpha": self.alpha,
-        }
-
-    @classmethod
-    def from_json(cls, data: Mapping[str, Any]) -> TournamentSettings:
-        return cls(**{**_pick(cls, data), "seeds": tuple(data["seeds"])})
-
 
 @dataclass(frozen=True, kw_only=True)
-class FamilySizes:
+class FamilySizes(Serializable):
     """The two families of tests: per seed (seeds x matchups) and pooled (matchups), each
     with its Bonferroni threshold."""
 
@@ -114,23 +108,16 @@ class FamilySizes:
     pooled_tests: int
     pooled_threshold: float
 
-    def to_json(self) -> dict[str, object]:
-        return asdict(self)
-
-    @classmethod
-    def from_json(cls, data: Mapping[str, Any]) -> FamilySizes:
-        return cls(**_pick(cls, data))
-
 
 @dataclass(frozen=True, kw_only=True)
-class TournamentReport:
+class TournamentReport(Serializable):
     """Everything ``pokerirl tournament`` found, ready to write or print.
 
     ``config``: hands per seed, seeds, duplicate, batch_size, alpha. ``family``: the size and
     Bonferroni threshold of the per-seed family (seeds x matchups) and of the pooled family
     (matchups). ``timing``: this run's wall time, hands/s, backend and the seeds it played
     and reused; not part of the results (a rerun that reuses saved seeds is faster and
-    reports the same numbers), so not in :meth:`to_dict`: it is written to ``timings.json``,
+    reports the same numbers), so not in :meth:`to_json`: it is written to ``timings.json``,
     which :func:`load_report` reads back when it is there.
     """
 
@@ -138,54 +125,18 @@ class TournamentReport:
     family: FamilySizes
     matchups: tuple[MatchupReport, ...]
     versions: Mapping[str, str | None]
-    timing: Mapping[str, Any] = field(default_factory=dict)  # timings.json, as read
+    # timings.json, as read: never in report.json
+    timing: Mapping[str, Any] = field(default_factory=dict, metadata=meta(skip=True))
 
-    def to_dict(self) -> dict[str, object]:
-        """Plain JSON-ready data (tuples become lists), without the timings."""
-        data = asdict(self)
-        del data["timing"]
-        for matchup, original in zip(data["matchups"], self.matchups, strict=True):
-            matchup["seeds_significant_bonferroni"] = original.seeds_significant_bonferroni
-        return {"format": REPORT_FORMAT, **json.loads(json.dumps(data))}
+    def to_json(self) -> dict[str, Any]:
+        return {"format": REPORT_FORMAT, **super().to_json()}
 
     @classmethod
-    def from_dict(cls, data: Mapping[str, Any]) -> TournamentReport:
-        """The inverse of :meth:`to_dict`."""
-        if data.get("format") != REPORT_FORMAT:
-            raise TournamentError(f"not a {REPORT_FORMAT} report (format {data.get('format')!r})")
-        matchups = tuple(
-            MatchupReport(
-                **{
-                    **_pick(MatchupReport, m),
-                    "pooled": _line(Line, m["pooled"]),
-                    "seeds": tuple(_line(SeedLine, s) for s in m["seeds"]),
-                    "aivat": _aivat(m.get("aivat")),
-                }
-            )
-            for m in data["matchups"]
-        )
-        return cls(
-            **{
-                **_pick(cls, data),
-                "config": TournamentSettings.from_json(data["config"]),
-                "family": FamilySizes.from_json(data["family"]),
-                "matchups": matchups,
-                "timing": {},
-            }
-        )
-
-
-def _pick(kind: type, data: Mapping[str, Any]) -> dict[str, Any]:
-    return {f.name: data[f.name] for f in fields(kind) if f.name in data}
-
-
-def _line(kind: type[Line], data: Mapping[str, Any]) -> Line:
-    extra = {"aivat": _aivat(data.get("aivat"))} if kind is SeedLine else {}
-    return kind(**{**_pick(kind, data), "ci95": tuple(data["ci95"]), **extra})
-
-
-def _aivat(data: Mapping[str, Any] | None) -> Estimate | None:
-    return None if data is None else Estimate(**{**data, "ci95": tuple(data["ci95"])})
+    def from_json(cls, data: Any, path: str = "") -> TournamentReport:
+        kind = data.get("format") if isinstance(data, Mapping) else None
+        if kind != REPORT_FORMAT:
+            raise TournamentError(f"not a {REPORT_FORMAT} report (format {kind!r})")
+        return super().from_json(data, path)
 
 
 # --- writing and reading -------------------------------------------------------------------
@@ -220,9 +171,9 @@ def load_report(out: Path | str) -> TournamentReport:
     if not isinstance(data, dict):
         raise TournamentError(f"{path}: not a tournament report (a JSON object), got {_kind(data)}")
     try:
-        report = TournamentReport.from_dict(data)
+        report = TournamentReport.from_json(data)
         render_markdown(report)  # a report that loads can be printed: check every field once
-    except TournamentError as error:
+    except (TournamentError, SerialError) as error:
         raise TournamentError(f"{path}: {error}") from None
     except (KeyError, IndexError, TypeError, ValueError, AttributeError, ArithmeticError) as error:
         raise TournamentError(f"{path}: malformed report ({error!r})") from None
@@ -251,7 +202,7 @@ def render_report(report: TournamentReport, output_format: str = "markdown") -> 
 
 
 def render_json(report: TournamentReport) -> str:
-    return json.dumps(report.to_dict(), indent=2) + "\n"
+    return json.dumps(report.to_json(), indent=2) + "\n"
 
 
 def render_p(p: float) -> str:
