@@ -189,8 +189,9 @@ def test_report_on_a_damaged_gym_summary_is_one_line_never_a_crash(
     assert tried > 300
     for path, bad, needle in [
         (("algos", "airl", "irl_final_return", "mean"), "x", "irl_final_return.mean"),
-        (("seeds",), [], "seeds: must be a non-empty list"),
-        (("algos", "hairl"), None, "algos.hairl: must be an object"),
+        (("seeds",), [], "seeds: expected a non-empty list"),
+        (("algos", "hairl"), None, "algos.hairl: expected an object"),
+        (("settings", "irl", "epochs"), "x", "settings.irl.epochs: expected an integer"),
     ]:
         (folder / "summary.json").write_text(json.dumps(_set(summary, path, bad)))
         code, lines = run_cli("report", str(folder))

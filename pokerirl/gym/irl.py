@@ -27,7 +27,7 @@ import json
 import math
 import os
 from collections.abc import Callable, Iterator, Mapping
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -62,6 +62,7 @@ from pokerirl.irl.run import (
 )
 from pokerirl.irl.transitions import Transitions
 from pokerirl.meanstd import MeanStd
+from pokerirl.serial import Omit, Serializable, meta
 from pokerirl.store import staged_files, tidy
 
 RETURNS_FILE = "returns_bands.png"
@@ -70,36 +71,19 @@ ALIGNMENT_BASELINES = ("majority", "legal_majority", "bc")  # shares of states, 
 
 
 @dataclass(frozen=True, kw_only=True)
-class GymIRLSummary:
-    """A ``gym irl`` folder's ``summary.json``: the runs summarized (:class:`RunsSummary`),
-    the expert's return, and the last epoch's mean and std over runs of the evaluation return
-    and (discrete tasks) the validation alignment."""
+class GymIRLSummary(Serializable):
+    """A ``gym irl`` folder's ``summary.json``: the runs summarized (:class:`RunsSummary`, its
+    keys beside these), the expert's return, and the last epoch's mean and std over runs of
+    the evaluation return and (discrete tasks) the validation alignment."""
 
     env: str
     algo: str
     expert_return: float
     irl_final_return: MeanStd
-    final_alignment: MeanStd | None  # discrete tasks only
-    over_runs: RunsSummary
-
-    def to_json(self) -> dict[str, object]:
-        finals = {"irl_final_return": self.irl_final_return.to_json()}
-        if self.final_alignment is not None:
-            finals["final_alignment"] = self.final_alignment.to_json()
-        head = {"env": self.env, "algo": self.algo, "expert_return": self.expert_return}
-        return {**head, **finals, **self.over_runs.to_json()}
-
-    @classmethod
-    def from_json(cls, data: Mapping[str, Any]) -> GymIRLSummary:
-        alignment = data.get("final_alignment")
-        return cls(
-            env=data["env"],
-            algo=data["algo"],
-            expert_return=data["expert_return"],
-            irl_final_return=MeanStd.from_json(data["irl_final_return"]),
-            final_alignment=None if alignment is None else MeanStd.from_json(alignment),
-            over_runs=RunsSummary.from_json(data),
-        )
+    final_alignment: MeanStd | None = field(  # discrete tasks only
+        default=None, metadata=meta(omit=Omit.NONE)
+    )
+    over_runs: RunsSummary = field(metadata=meta(flatten=True))
 
     @classmethod
     def read(cls, folder: Path) -> GymIRLSummary:

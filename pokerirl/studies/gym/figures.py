@@ -12,7 +12,7 @@ from pokerirl.figures import finish
 from pokerirl.gym.presets import TASKS
 from pokerirl.studies.common import band
 from pokerirl.studies.gym.report import FIGURES
-from pokerirl.studies.gym.results import RewardMapSummary, TaskSummary
+from pokerirl.studies.gym.results import Agreement, RewardMapSummary, TaskSummary
 
 LABELS = {"airl": "AIRL", "hairl": "H-AIRL", "gail": "GAIL", "env": "env reward"}
 COLORS = {"airl": "C0", "hairl": "C1", "env": "C2", "gail": "C3"}  # the same in every figure
@@ -40,8 +40,10 @@ def draw_reward_map(root: Path, env: str, algos: Sequence[str]) -> RewardMapSumm
     panels = dict(zip(algos, result.panels, strict=True))
     return RewardMapSummary(
         grid=MAP_GRID,
-        agreement={algo: panel.agreement for algo, panel in panels.items()},
-        run_agreements={algo: list(panel.run_agreements) for algo, panel in panels.items()},
+        agreement={
+            algo: Agreement(mean_f=panel.agreement, runs=list(panel.run_agreements))
+            for algo, panel in panels.items()
+        },
         constant_action=constant[0],
         constant_agreement=constant[1],
     )
@@ -81,7 +83,7 @@ def draw_figures(root: Path, summary: TaskSummary) -> None:
     episode = "return (sum of rewards per episode)"
     fig, axes = figure()
     for algo, found in summary.algos.items():
-        band(axes, found.irl_epochs, found.irl_return.to_json(), LABELS[algo],
+        band(axes, found.curves.irl_epochs, found.curves.irl_return.to_json(), LABELS[algo],
              color=COLORS[algo], alpha=0.2)  # fmt: skip
     lines(axes)
     save(fig, axes, "irl_returns", "IRL-phase return of the policy", "epoch", episode)
@@ -89,8 +91,9 @@ def draw_figures(root: Path, summary: TaskSummary) -> None:
     if summary.discrete:
         fig, axes = figure()
         for algo, found in summary.algos.items():
-            assert found.alignment is not None  # a discrete task's
-            band(axes, found.irl_epochs, found.alignment.to_json(), LABELS[algo],
+            alignment = found.curves.alignment
+            assert alignment is not None  # a discrete task's
+            band(axes, found.curves.irl_epochs, alignment.to_json(), LABELS[algo],
                  color=COLORS[algo], alpha=0.2)  # fmt: skip
         baselines = summary.algos["hairl"].baselines
         for name, style in (("bc", "-."), ("majority", ":")):
@@ -103,7 +106,8 @@ def draw_figures(root: Path, summary: TaskSummary) -> None:
 
     fig, axes = figure()
     for reward in ("env", *summary.algos):
-        curve = summary.env_reward.rl_curve if reward == "env" else summary.algos[reward].rl_curve
+        source = summary.env_reward if reward == "env" else summary.algos[reward]
+        curve = source.curves.rl
         assert curve.timesteps is not None  # an RL curve's
         band(axes, curve.timesteps, curve.to_json(), LABELS[reward], color=COLORS[reward],
              alpha=0.2)  # fmt: skip

@@ -27,7 +27,7 @@ from __future__ import annotations
 
 import json
 import os
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 from typing import Any
@@ -42,7 +42,7 @@ from pokerirl.gym.quality import has_true_reward
 from pokerirl.gym.rl import DEFAULT_RL_BACKEND, RLBackend, read_curve
 from pokerirl.gym.tasks import task
 from pokerirl.irl.run import CurveStats
-from pokerirl.meanstd import MeanStd, mean_std, mean_std_curve
+from pokerirl.meanstd import Curve, MeanStd, mean_std
 from pokerirl.studies.common import (
     METRICS_JSONL,
     REPORT_MD,
@@ -59,11 +59,11 @@ from pokerirl.studies.gym.report import (
     render_report,
 )
 from pokerirl.studies.gym.results import (
-    QUALITY_KEYS,
+    AlgoCurves,
     AlgoSummary,
-    Band,
     EnvRewardSummary,
     PaperFinals,
+    RLCurve,
     StudySettings,
     TaskSummary,
 )
@@ -270,14 +270,8 @@ class RLCurves:
     """One reward kind's RL runs: the true return at each evaluation (mean and std over runs)
     and each run's last value."""
 
-    timesteps: list[int]
-    mean: list[float]
-    std: list[float]
+    curve: Curve  # as summary.json holds it (curves.rl)
     per_run_final: list[float]
-
-    def band(self) -> Band:
-        """The curve as ``summary.json`` holds it (``curves.rl``)."""
-        return Band(timesteps=self.timesteps, mean=self.mean, std=self.std)
 
 
 def rl_curves(root: Path, reward: str, runs: int) -> RLCurves:
@@ -285,11 +279,8 @@ def rl_curves(root: Path, reward: str, runs: int) -> RLCurves:
     curves = [read_curve(root / "rl" / reward / f"run-{k}") for k in range(runs)]
     points = min(len(curve) for curve in curves)
     values = np.array([[p.return_mean for p in curve[:points]] for curve in curves])
-    mean, std = mean_std_curve(values)
     return RLCurves(
-        timesteps=[p.timesteps for p in curves[0][:points]],
-        mean=mean,
-        std=std,
+        curve=Curve.of(values, timesteps=[p.timesteps for p in curves[0][:points]]),
         per_run_final=values[:, -1].tolist(),
     )
 
@@ -315,17 +306,20 @@ def task_summary(
             baselines=dict(irl.over_runs.baselines),
             irl_per_run_final=_per_run_final(root / "irl" / algo, preset.runs, "eval_return"),
             rl_per_run_final=rl.per_run_final,
-            irl_epochs=list(irl.over_runs.epochs),
-            irl_return=Band.from_json(metrics["eval_return"].to_json()),
-            rl_curve=rl.band(),
-            alignment=Band.from_json(metrics["val_alignment"].to_json())
-            if found_task.discrete
-            else None,
+            curves=AlgoCurves(
+                irl_epochs=list(irl.over_runs.epochs),
+                irl_return=Curve.from_json(metrics["eval_return"].to_json()),
+                rl=rl.curve,
+                alignment=Curve.from_json(metrics["val_alignment"].to_json())
+                if found_task.discrete
+                else None,
+            ),
             final_alignment=irl.final_alignment if found_task.discrete else None,
             final_reward_alignment=_last(metrics["val_reward_alignment"])
             if found_task.discrete
             else None,
-            final_disc_acc={key: _last(metrics[key]) for key in QUALITY_KEYS if key in metrics},
+            final_disc_acc_expert=_last_of(metrics, "disc_acc_expert"),
+            final_disc_acc_policy=_last_of(metrics, "disc_acc_policy"),
             **(reward_quality(root, env, algo, preset.runs) if has_true_reward(env) else {}),
         )
     env_rl = rl_curves(root, "env", preset.runs)
@@ -344,7 +338,7 @@ def task_summary(
         env_reward=EnvRewardSummary(
             rl_final_return=mean_std(env_rl.per_run_final),
             rl_per_run_final=env_rl.per_run_final,
-            rl_curve=env_rl.band(),
+            curves=RLCurve(rl=env_rl.curve),
         ),
         settings=StudySettings(  # through JSON: tuples become lists, as in summary.json
             irl=json.loads(json.dumps(asdict(preset.irl(env)))),
@@ -377,6 +371,11 @@ def task_summary(
 def _last(curve: CurveStats) -> MeanStd:
     """A per-epoch curve's last point."""
     return MeanStd(mean=curve.mean[-1], std=curve.std[-1])
+
+
+def _last_of(metrics: Mapping[str, CurveStats], key: str) -> MeanStd | None:
+    """The last point of the runs' ``key`` curve; None where they lack it (older runs)."""
+    return _last(metrics[key]) if key in metrics else None
 
 
 def reward_quality(root: Path, env: str, algo: str, runs: int) -> dict[str, Any]:

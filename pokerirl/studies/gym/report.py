@@ -8,12 +8,12 @@ from __future__ import annotations
 import json
 import os
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
 
 from pokerirl.gym.presets import TASKS, RLBackend
 from pokerirl.meanstd import MeanStd
+from pokerirl.serial import Json, SerialError, Serializable, meta
 from pokerirl.studies.common import SUMMARY_JSON, StudyError, markdown_table
 from pokerirl.studies.gym.results import AlgoSummary, PaperFinals, TaskSummary
 
@@ -27,33 +27,34 @@ FIGURES = {
 
 
 @dataclass(frozen=True, kw_only=True)
-class GymStudySummary:
+class GymStudySummary(Serializable):
     """A gym study's ``summary.json``: a single task's :class:`TaskSummary`, or (``all``)
     the tasks' under ``tasks`` with the preset and the runs."""
 
+    format: str = SUMMARY_FORMAT
     preset: str
     runs: int
     tasks: dict[str, TaskSummary]
-    several: bool  # the ``tasks`` form, even for one task
+    several: bool = field(default=True, metadata=meta(skip=True))  # the ``tasks`` form
 
-    def to_json(self) -> dict[str, object]:
-        if not self.several:
-            (only,) = self.tasks.values()
-            return only.to_json()
-        return {
-            "format": SUMMARY_FORMAT,
-            "preset": self.preset,
-            "runs": self.runs,
-            "tasks": {env: summary.to_json() for env, summary in self.tasks.items()},
-        }
+    def to_json(self) -> Json:
+        if self.several:
+            return super().to_json()
+        (only,) = self.tasks.values()
+        return only.to_json()
 
     @classmethod
-    def from_json(cls, data: Mapping[str, Any]) -> GymStudySummary:
-        if "tasks" in data:
-            tasks = {env: TaskSummary.from_json(task) for env, task in data["tasks"].items()}
-            return cls(preset=data["preset"], runs=data["runs"], tasks=tasks, several=True)
-        task = TaskSummary.from_json(data)
-        return cls(preset=task.preset, runs=task.runs, tasks={task.env: task}, several=False)
+    def from_json(cls, data: Json, path: str = "") -> GymStudySummary:
+        if not (isinstance(data, Mapping) and "tasks" in data):
+            task = TaskSummary.from_json(data, path)
+            return cls(preset=task.preset, runs=task.runs, tasks={task.env: task}, several=False)
+        found = super().from_json(data, path)
+        if not found.tasks:
+            raise SerialError("tasks: expected an object of task summaries, got {}")
+        for env, task in found.tasks.items():
+            if task.env != env:
+                raise SerialError(f"tasks.{env}.env: expected {env!r}, got {task.env!r}")
+        return found
 
     def render(self) -> str:
         """The study's ``report.md``."""
@@ -71,16 +72,14 @@ def is_gym_study(folder: str | os.PathLike[str]) -> bool:
 
 def load_gym_study(folder: str | os.PathLike[str]) -> tuple[GymStudySummary, str]:
     """A finished study's ``summary.json`` and its report rendered again (``pokerirl report``)."""
-    from pokerirl.studies.gym_summary_check import check_summary
-
     path = Path(folder) / SUMMARY_JSON
     try:
-        found = json.loads(path.read_text())
-        check_summary(found)  # once, on reading: the renderer trusts what passes
-        summary = GymStudySummary.from_json(found)
+        summary = GymStudySummary.from_json(json.loads(path.read_text()))
         return summary, summary.render()
     except (OSError, ValueError, KeyError, TypeError, AttributeError) as error:
-        # check_summary names the fields the report reads; the others fail here, one line too.
+        # Reading names a field of the wrong type by its path; what the types cannot say (a
+        # paper's algorithm missing, a settings value the report cannot format) fails in
+        # rendering, in one line too.
         raise StudyError(f"{path}: not a readable gym study summary ({error})") from None
 
 
@@ -184,7 +183,7 @@ def task_table(summary: TaskSummary) -> list[str]:
         ]  # fmt: skip
     found = summary.reward_map
     if found is not None:
-        agree = found.agreement
+        agree = {algo: agreement.mean_f for algo, agreement in found.agreement.items()}
         rows.append(
             (f"reward map: cells where f prefers the expert's action ({found.grid}² lattice), "
              "AIRL / H-AIRL",

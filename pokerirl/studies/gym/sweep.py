@@ -24,7 +24,7 @@ import json
 import math
 import os
 from collections.abc import Mapping, Sequence
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -37,6 +37,7 @@ from pokerirl.gym.irl import GymIRLSummary, irl_config
 from pokerirl.gym.presets import TASKS
 from pokerirl.gym.rl import DEFAULT_RL_BACKEND
 from pokerirl.meanstd import mean_and_std
+from pokerirl.serial import Serializable
 from pokerirl.studies.common import StudyError, study_folder
 from pokerirl.studies.gym.config import StudyPreset
 from pokerirl.studies.gym.pipeline import (
@@ -83,7 +84,7 @@ class SweepPoint:
 
 
 @dataclass(frozen=True, kw_only=True)
-class SweepRow:
+class SweepRow(Serializable):
     """One (parameter, value): its point and the finals over runs (alignment: discrete
     tasks only). The fields are ``sweep.csv``'s columns and ``sweep.json``'s row names."""
 
@@ -99,13 +100,6 @@ class SweepRow:
     final_alignment_std: float | None = None
     final_reward_alignment_mean: float | None = None
     final_reward_alignment_std: float | None = None
-
-    def to_json(self) -> dict[str, float | str | int | None]:
-        return asdict(self)
-
-    @classmethod
-    def from_json(cls, data: Mapping[str, Any]) -> SweepRow:
-        return cls(**{name: data[name] for name in CSV_COLUMNS})
 
 
 @dataclass(frozen=True, kw_only=True)
