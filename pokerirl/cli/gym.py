@@ -120,7 +120,7 @@ def gym_expert(
 
     A rerun with the same settings keeps the expert; other settings are refused unless
     --overwrite (OUT/expert.job.json records them)."""
-    from pokerirl.studies.gym_job import expert_folder
+    from pokerirl.gym.jobs import expert_folder
 
     _known_task(env)
     _folder_out(out)
@@ -242,7 +242,7 @@ def gym_rl(
     the same run either way it is grouped). Resumable: a rerun with the same settings keeps
     the finished runs; other settings (the backend too) are refused unless --overwrite
     (OUT/rl.job.json records them)."""
-    from pokerirl.studies.gym_job import rl_runs
+    from pokerirl.gym.jobs import rl_runs
 
     if (reward_run is None) == (not env_reward):
         raise UsageError("give exactly one of --reward-run DIR and --env-reward")
