@@ -53,6 +53,7 @@ from pokerirl.atomic import write_text
 from pokerirl.errors import PokerIRLError
 from pokerirl.execution import pinned_threads
 from pokerirl.gym.collect import read_transitions
+from pokerirl.gym.episodes import lockstep_steps, policy_actions
 from pokerirl.gym.experts import make_env
 from pokerirl.gym.presets import TASKS
 from pokerirl.irl.nets import RewardFamily, fold_obs_standardization
@@ -369,7 +370,6 @@ def roll_out(
     env_id: str, act: Callable[[np.ndarray], np.ndarray], *, episodes: int, seed: int
 ) -> Rollouts:
     """``episodes`` episodes in lock-step (episode k from ``reset(seed=seed + k)``)."""
-    from pokerirl.gym.irl import lockstep_steps  # same layer; imported late (heavy)
 
     steps = list(lockstep_steps(env_id, act, episodes=episodes, seed=seed))
     return Rollouts(
@@ -519,7 +519,6 @@ def write_reward_quality(
         episodes=episodes,
         seed=QUALITY_SEED,
     ).take(samples, rng)
-    from pokerirl.gym.irl import policy_actions  # same layer; imported late (heavy)
 
     try:
         policy = load_policy(run)
