@@ -41,7 +41,6 @@ from pokerirl.gym.irl import GymIRLSummary
 from pokerirl.gym.quality import has_true_reward
 from pokerirl.gym.rl import DEFAULT_RL_BACKEND, RLBackend, read_curve
 from pokerirl.gym.tasks import task
-from pokerirl.irl.run import CurveStats
 from pokerirl.meanstd import Curve, MeanStd, mean_std
 from pokerirl.studies.common import (
     METRICS_JSONL,
@@ -308,9 +307,9 @@ def task_summary(
             rl_per_run_final=rl.per_run_final,
             curves=AlgoCurves(
                 irl_epochs=list(irl.over_runs.epochs),
-                irl_return=Curve.from_json(metrics["eval_return"].to_json()),
+                irl_return=metrics["eval_return"],
                 rl=rl.curve,
-                alignment=Curve.from_json(metrics["val_alignment"].to_json())
+                alignment=metrics["val_alignment"]
                 if found_task.discrete
                 else None,
             ),
@@ -368,12 +367,12 @@ def task_summary(
     )
 
 
-def _last(curve: CurveStats) -> MeanStd:
+def _last(curve: Curve) -> MeanStd:
     """A per-epoch curve's last point."""
     return MeanStd(mean=curve.mean[-1], std=curve.std[-1])
 
 
-def _last_of(metrics: Mapping[str, CurveStats], key: str) -> MeanStd | None:
+def _last_of(metrics: Mapping[str, Curve], key: str) -> MeanStd | None:
     """The last point of the runs' ``key`` curve; None where they lack it (older runs)."""
     return _last(metrics[key]) if key in metrics else None
 
