@@ -35,7 +35,7 @@ def test_demo_is_the_study_on_synthetic_data(tmp_path: Path) -> None:
 
 
 def test_the_demo_defaults_are_the_demo_presets_smaller_than_quick() -> None:
-    from pokerirl.gym.presets import PRESETS as GYM_PRESETS
+    from pokerirl.studies.gym.config import PRESETS as GYM_PRESETS
     from pokerirl.studies.poker import PRESETS
 
     config = DemoConfig()

@@ -13,8 +13,9 @@ pytest.importorskip("stable_baselines3")
 
 from pokerirl.cli import app
 from pokerirl.errors import ConfigError
-from pokerirl.gym.presets import GENERIC_PPO, PRESETS, TASKS
+from pokerirl.gym.presets import GENERIC_PPO, TASKS
 from pokerirl.gym.tasks import task
+from pokerirl.studies.gym.config import PRESETS
 
 
 def invoke(*args: str):

@@ -18,16 +18,12 @@ pytest.importorskip("stable_baselines3")
 
 from pokerirl.cli import app
 from pokerirl.gym.collect import collect
+from pokerirl.gym.episodes import episode_returns, policy_actions
 from pokerirl.gym.experts import load_expert, resolve_expert_dir
-from pokerirl.gym.irl import (
-    episode_returns,
-    irl_config,
-    load_env_transitions,
-    policy_actions,
-    train_gym_irl,
-)
-from pokerirl.gym.presets import PRESETS, TASKS
+from pokerirl.gym.irl import irl_config, load_env_transitions, train_gym_irl
+from pokerirl.gym.presets import TASKS
 from pokerirl.irl import load_policy, load_reward
+from pokerirl.studies.gym.config import PRESETS
 
 CORE_BASELINES = {"majority", "legal_majority", "bc"}
 

@@ -24,7 +24,7 @@ from pokerirl.gym.lockstep import LockstepPPO
 from pokerirl.gym.lockstep.group import train_rl_group
 from pokerirl.gym.presets import TASKS, PPOSettings, RLSettings
 from pokerirl.gym.rl import EVAL_SEED, train_rl
-from pokerirl.studies.gym_units import RLJob
+from pokerirl.studies.gym.units import RLJob
 
 CARTPOLE = RLSettings(
     algo="ppo",
@@ -251,7 +251,8 @@ def test_gym_study_lockstep_reuses_every_unit(tmp_path: Path) -> None:
 
 def test_a_group_is_one_folder_of_runs() -> None:
     """Study: one group per task and reward kind; sweep: one per point (its own rl/ folder)."""
-    from pokerirl.studies.gym import rl_jobs, study_preset
+    from pokerirl.studies.gym.config import study_preset
+    from pokerirl.studies.gym.pipeline import rl_jobs
 
     preset = study_preset("quick", tasks=("Acrobot-v1",), runs=3)
     jobs = [job for root in ("points/a", "points/b")

@@ -6,7 +6,8 @@ from pathlib import Path
 
 import pytest
 
-from pokerirl.gym.presets import PRESETS, TASK_ORDER, TASKS, PPOSettings, RLSettings
+from pokerirl.gym.presets import TASK_ORDER, TASKS, PPOSettings, RLSettings
+from pokerirl.studies.gym.config import PRESETS
 
 
 def test_every_task_is_a_registered_environment_with_the_declared_action_space(

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import shutil
 from dataclasses import fields
 from pathlib import Path
 
@@ -18,17 +19,12 @@ pytest.importorskip("stable_baselines3")
 from pokerirl.cli import app
 from pokerirl.execution import Backend
 from pokerirl.irl import load_reward
-from pokerirl.studies.gym import (
-    REWARDS,
-    StudyError,
-    authors_budget,
-    parse_tasks,
-    run_gym_study,
-    study_preset,
-)
-from pokerirl.studies.gym_results import TaskSummary
-from pokerirl.studies.gym_units import DATA_FILE
-from pokerirl.studies.sweep import CSV_COLUMNS, SweepRow, parse_param, sweep_points
+from pokerirl.studies.common import StudyError
+from pokerirl.studies.gym.config import authors_budget, parse_algos, parse_tasks, study_preset
+from pokerirl.studies.gym.pipeline import run_gym_study
+from pokerirl.studies.gym.results import TaskSummary
+from pokerirl.studies.gym.sweep import CSV_COLUMNS, SweepRow, parse_param, sweep_points
+from pokerirl.studies.gym.units import DATA_FILE
 
 TINY = ["--runs", "2", "--transitions", "1500", "--epochs", "2", "--eval-episodes", "2"]
 TINY += ["--timesteps", "2000", "--jobs", "2", "--quiet"]
@@ -105,7 +101,8 @@ def test_rl_runs_learn_from_their_own_irl_runs_reward(mountaincar: Path) -> None
     env_record = json.loads((mountaincar / "rl" / "env" / "run-0" / "config.json").read_text())
     assert env_record["reward"] == "env"
     # Same seed, same settings: only the reward differs, and it changes what DQN learns.
-    models = {r: (mountaincar / "rl" / r / "run-0" / "model.pt").read_bytes() for r in REWARDS}
+    rewards = ("env", "airl", "hairl")
+    models = {r: (mountaincar / "rl" / r / "run-0" / "model.pt").read_bytes() for r in rewards}
     assert len(set(models.values())) == 3
     # The two H-AIRL runs learned different rewards (other seeds), and both are usable.
     obs = np.array([[-0.5, 0.0], [-0.9, 0.03]], dtype=np.float32)
@@ -124,6 +121,50 @@ def test_a_run_without_reward_quality_gets_it_at_the_report(mountaincar: Path) -
     assert result.exit_code == 0, result.output
     assert path.read_bytes() == before  # the same bytes again
     assert json.loads((mountaincar / "summary.json").read_text())["algos"] == summary["algos"]
+
+
+def test_gail_beside_airl_and_hairl_when_named_reusing_their_units(
+    mountaincar: Path, tmp_path: Path
+) -> None:
+    # A copy of the default study, rerun with GAIL: the paper's units are reused, GAIL's IRL
+    # and its RL runs are added, and GAIL gets its rows, curves and reward-map panel.
+    out = tmp_path / "mc"
+    shutil.copytree(mountaincar, out)
+    result = study(out, "--algos", "gail,airl,hairl")
+    assert result.exit_code == 0, result.output
+    assert "IRL: AIRL, H-AIRL and GAIL, 2 runs each" in result.output
+    assert "2 of 3 finished already, reused" in result.output  # the IRL units
+    assert "6 of 8 finished already, reused" in result.output  # the RL runs
+    summary = json.loads((out / "summary.json").read_text())
+    assert list(summary["algos"]) == ["airl", "hairl", "gail"]
+    gail = summary["algos"]["gail"]
+    assert len(gail["rl_per_run_final"]) == 2 and len(gail["curves"]["rl"]["mean"]) >= 2
+    assert set(summary["reward_map"]["agreement"]) == {"airl", "hairl", "gail"}
+    for k in (0, 1):
+        irl = json.loads((out / "irl" / "gail" / f"run-{k}" / "config.json").read_text())
+        assert irl["algo"] == "gail"
+        rl = json.loads((out / "rl" / "gail" / f"run-{k}" / "config.json").read_text())
+        assert rl["reward"] == f"gail:run-{k}"
+    report = (out / "report.md").read_text()
+    for row in ("IRL-phase return, GAIL", "RL-phase return, GAIL reward",
+                "alignment, GAIL policy", "EPIC distance to the true reward / on the expert's"):
+        assert f"| {row}" in report, row
+    assert CliRunner().invoke(app, ["report", str(out)]).output == report
+    # The paper's algorithms only: the default study's summary again, GAIL's folders ignored.
+    again = study(out)
+    assert again.exit_code == 0, again.output
+    assert (out / "summary.json").read_bytes() == (mountaincar / "summary.json").read_bytes()
+    assert (out / "report.md").read_bytes() == (mountaincar / "report.md").read_bytes()
+
+
+def test_parse_algos_keeps_the_paper_s_two_and_adds_gail_only_when_named() -> None:
+    assert study_preset("quick").algos == ("airl", "hairl") == parse_algos("hairl,airl")
+    assert parse_algos(" gail , hairl,airl") == ("airl", "hairl", "gail")
+    for bad in ("airl,gail", "airl,hairl,bc", ""):
+        with pytest.raises(StudyError, match="airl and hairl"):
+            parse_algos(bad)
+    with pytest.raises(StudyError, match="algos: airl, hairl, then optionally gail"):
+        study_preset("quick", algos=("hairl", "airl"))
 
 
 def test_figures_and_report_beside_the_authors(mountaincar: Path) -> None:
@@ -252,8 +293,8 @@ SWEEP_WARNING = "warning: 'pokerirl sweep' is deprecated; use 'pokerirl gym swee
 def test_sweep_is_a_gym_command_and_the_old_name_a_hidden_alias_that_warns_once(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    import pokerirl.studies.sweep as sweep
-    from pokerirl.studies.sweep import SweepResult
+    import pokerirl.studies.gym.sweep as sweep
+    from pokerirl.studies.gym.sweep import SweepResult
 
     calls: list[tuple[tuple, dict]] = []
 

@@ -171,7 +171,7 @@ def test_report_on_a_damaged_gym_summary_is_one_line_never_a_crash(
     study: Path, tmp_path: Path
 ) -> None:
     from pokerirl.studies.common import StudyError
-    from pokerirl.studies.gym_report import load_gym_study
+    from pokerirl.studies.gym.report import load_gym_study
 
     summary = json.loads((study / "summary.json").read_text())
     load_gym_study(study)  # the real one renders
@@ -189,8 +189,9 @@ def test_report_on_a_damaged_gym_summary_is_one_line_never_a_crash(
     assert tried > 300
     for path, bad, needle in [
         (("algos", "airl", "irl_final_return", "mean"), "x", "irl_final_return.mean"),
-        (("seeds",), [], "seeds: must be a non-empty list"),
-        (("algos", "hairl"), None, "algos.hairl: must be an object"),
+        (("seeds",), [], "seeds: expected a non-empty list"),
+        (("algos", "hairl"), None, "algos.hairl: expected an object"),
+        (("settings", "irl", "epochs"), "x", "settings.irl.epochs: expected an integer"),
     ]:
         (folder / "summary.json").write_text(json.dumps(_set(summary, path, bad)))
         code, lines = run_cli("report", str(folder))

@@ -153,8 +153,9 @@ def test_a_gym_study_folder_of_main_is_reused(tmp_path: Path) -> None:
     """Data, IRL and RL units (sb3 and lock-step) whose records main's gym/jobs.py wrote."""
     pytest.importorskip("gymnasium")
     pytest.importorskip("stable_baselines3")
-    from pokerirl.studies.gym import data_job, irl_job, rl_jobs, study_preset
-    from pokerirl.studies.gym_units import DATA_FILE, run_data_jobs, run_irl_jobs, run_rl_jobs
+    from pokerirl.studies.gym.config import study_preset
+    from pokerirl.studies.gym.pipeline import data_job, irl_job, rl_jobs
+    from pokerirl.studies.gym.units import DATA_FILE, run_data_jobs, run_irl_jobs, run_rl_jobs
 
     env = "MountainCar-v0"
     preset = study_preset("quick", tasks=(env,), runs=2, transitions=1_500, epochs=1,

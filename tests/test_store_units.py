@@ -17,6 +17,7 @@ import pytest
 from pokerirl.execution import Backend
 from pokerirl.store import (
     Fate,
+    Group,
     Layout,
     Unit,
     UnitConflict,
@@ -47,6 +48,12 @@ def square(n: int, seconds: float = 0.0, fail_if: str | None = None) -> UnitOutp
 
 def cube(n: int) -> UnitOutput[int]:
     return UnitOutput(files={"square.txt": f"{n**3}\n".encode()}, extra=n**3)
+
+
+def squares(ns: list[int]) -> list[UnitOutput[int]]:
+    """A group's function: every member's output in one call (the members in its timings)."""
+    timings = json.dumps({"members": ns}).encode()
+    return [UnitOutput(files=square(n).files, unhashed={"timings.json": timings}) for n in ns]
 
 
 def units(root: Path, count: int = 6, *, power: int = 2, **options: object) -> list[Unit[int]]:
@@ -229,3 +236,32 @@ def test_two_units_of_one_place_are_refused(tmp_path: Path) -> None:
     same = [Unit(key=k, target=tmp_path / "a", config={}, fn=cube, args=(1,)) for k in "xy"]
     with pytest.raises(ValueError, match="two units would write"):
         run_units(same)
+
+
+def test_a_group_computes_several_units_in_one_call_and_each_resumes_alone(
+    tmp_path: Path,
+) -> None:
+    # Units grouped by parity: one call per group (its members named in each timings), each
+    # member saved with its own record; a rerun reuses them, and a missing one is recomputed
+    # in a group of one.
+    by_parity = Group(
+        key=lambda unit: unit.config["n"] % 2,
+        fn=squares,
+        args=lambda members: ([unit.args[0] for unit in members],),
+        label=lambda members: f"{len(members)} squares",
+    )
+    work = units(tmp_path, 5)
+    report = run_units(work, TWO_JOBS, group=by_parity)
+    assert [done.fate for done in report.done] == [Fate.RUN] * 5
+    assert contents(tmp_path) == {f"n-{n}/square.txt": f"{n * n}\n".encode() for n in range(5)}
+    def members(n: int) -> list[int]:
+        return json.loads((tmp_path / f"n-{n}" / "timings.json").read_text())["members"]
+
+    assert [members(n) for n in range(5)] == [[0, 2, 4], [1, 3], [0, 2, 4], [1, 3], [0, 2, 4]]
+    assert all(check(unit).fate is Fate.REUSED for unit in work)  # each its own record
+
+    (tmp_path / "n-3" / "square.txt").unlink()
+    again = run_units(work, TWO_JOBS, group=by_parity)
+    assert [done.fate for done in again.done] == [Fate.REUSED] * 3 + [Fate.RECOMPUTED] + [
+        Fate.REUSED]
+    assert (tmp_path / "n-3" / "square.txt").read_bytes() == b"9\n" and members(3) == [3]

@@ -27,8 +27,9 @@ from pokerirl.cli.app import (
     write_logs,
 )
 from pokerirl.errors import InputError, UsageError
-from pokerirl.gym.presets import MAX_TRANSITIONS, PRESETS
+from pokerirl.gym.presets import MAX_TRANSITIONS
 from pokerirl.irl.config import Algo  # torch-free: `gym irl` and `train` offer every one
+from pokerirl.studies.gym.config import PRESETS
 
 gym_app = typer.Typer(
     help="The paper's Gymnasium tasks: SB3 experts, expert data, RL on a learned reward.",
@@ -109,7 +110,7 @@ def gym_expert(
     A rerun with the same settings keeps the expert; other settings are refused unless
     --overwrite (OUT/expert.job.json records them)."""
     from pokerirl.execution import pin_threads
-    from pokerirl.studies.gym_job import expert_folder
+    from pokerirl.gym.jobs import expert_folder
 
     _known_task(env)
     _folder_out(out)
@@ -232,7 +233,7 @@ def gym_rl(
     the finished runs; other settings (the backend too) are refused unless --overwrite
     (OUT/rl.job.json records them)."""
     from pokerirl.execution import pin_threads
-    from pokerirl.studies.gym_job import rl_runs
+    from pokerirl.gym.jobs import rl_runs
 
     if (reward_run is None) == (not env_reward):
         raise UsageError("give exactly one of --reward-run DIR and --env-reward")
@@ -403,9 +404,9 @@ GYM_OVERWRITE = typer.Option(False, "--overwrite", help="Recompute units whose s
 GYM_QUIET = typer.Option(False, "--quiet", "-q", help="No progress bars.")
 
 
-def _gym_preset(name: str, task: str, **overrides: int | None) -> Any:
+def _gym_preset(name: str, task: str, **overrides: Any) -> Any:
     """The study preset ``name`` for ``task`` (or all) with the command line's overrides."""
-    from pokerirl.studies.gym import parse_tasks, study_preset
+    from pokerirl.studies.gym.config import parse_tasks, study_preset
 
     preset = settings_from_options(study_preset, name, tasks=parse_tasks(task), **overrides)
     if preset.seed + preset.runs - 1 > MAX_SEED:  # run k uses seed + k
@@ -427,6 +428,12 @@ def gym_study(
     runs: int | None = typer.Option(
         None, "--runs", min=1, max=MAX_SEEDS, help="Runs per algorithm and reward."
     ),
+    algos: str | None = typer.Option(
+        None,
+        "--algos",
+        metavar="ALGO,...",
+        help="IRL algorithms: airl,hairl (the paper's; default), or airl,hairl,gail.",
+    ),
     seed: int | None = GYM_SEED,
     transitions: int | None = GYM_TRANSITIONS,
     epochs: int | None = GYM_EPOCHS,
@@ -445,10 +452,11 @@ def gym_study(
     ),
     log_dir: Path | None = LOG_DIR,
 ) -> None:
-    """The paper's Gymnasium study: shipped expert -> data -> IRL (AIRL and H-AIRL) -> RL (env
-    reward, AIRL and H-AIRL rewards) -> summary.json, figures/ and report.md beside the
-    authors' finals. Resumable: finished units are kept."""
-    from pokerirl.studies.gym import run_gym_study
+    """The paper's Gymnasium study: shipped expert -> data -> IRL (AIRL and H-AIRL, and GAIL
+    with --algos) -> RL (env reward and each algorithm's rewards) -> summary.json, figures/
+    and report.md beside the authors' finals. Resumable: finished units are kept."""
+    from pokerirl.studies.gym.config import parse_algos
+    from pokerirl.studies.gym.pipeline import run_gym_study
 
     _rl_backend(rl_backend)
     if expert is not None and task == "all":
@@ -456,6 +464,7 @@ def gym_study(
     preset = _gym_preset(
         preset_name, task, runs=runs, seed=seed, transitions=transitions, epochs=epochs,
         eval_episodes=eval_episodes, rl_timesteps=timesteps,
+        algos=None if algos is None else parse_algos(algos),
     )  # fmt: skip
     if expert is None and task != "all":
         _no_shipped_expert(task, "pass --expert DIR")
@@ -502,7 +511,7 @@ def gym_sweep(
 ) -> None:
     """One-factor-at-a-time ablation of H-AIRL (the paper's Figure 5): each point runs the IRL
     phase, then RL on its learned rewards; writes sweep.csv, sweep.json and PARAM.png."""
-    from pokerirl.studies.sweep import parse_param, run_sweep
+    from pokerirl.studies.gym.sweep import parse_param, run_sweep
 
     _rl_backend(rl_backend)
     params: dict[str, tuple[float, ...]] = {}

@@ -288,7 +288,7 @@ def report(
     ),
 ) -> None:
     """Print a study or tournament report (Markdown, or JSON for scripts)."""
-    from pokerirl.studies.gym_report import is_gym_study, load_gym_study
+    from pokerirl.studies.gym.report import is_gym_study, load_gym_study
     from pokerirl.studies.poker import is_study_report, load_study_report, render_markdown
     from pokerirl.tournaments import load_report, render_report
 

@@ -46,6 +46,7 @@ from pokerirl.gym.manifest import (  # noqa: F401
 )
 from pokerirl.gym.presets import PPOSettings, RLSettings
 from pokerirl.gym.tasks import task
+from pokerirl.serial import Serializable
 
 if TYPE_CHECKING:  # gymnasium and SB3 are imported lazily: a poker-only user never pays.
     import gymnasium
@@ -74,7 +75,7 @@ class Expert:
 
 
 @dataclass(frozen=True, kw_only=True)
-class ExpertEvaluation:
+class ExpertEvaluation(Serializable):
     """How an expert was chosen and scored: the periodic evaluations during training (the
     best state is kept), then deterministic episodes on fresh seeds."""
 
@@ -85,30 +86,9 @@ class ExpertEvaluation:
     deterministic: bool
     returns: tuple[float, ...]
 
-    def to_json(self) -> dict[str, object]:
-        return {
-            "periodic_every": self.periodic_every,
-            "periodic_episodes": self.periodic_episodes,
-            "best_periodic_return": self.best_periodic_return,
-            "final_seed": self.final_seed,
-            "deterministic": self.deterministic,
-            "returns": list(self.returns),
-        }
-
-    @classmethod
-    def from_json(cls, data: Mapping[str, Any]) -> ExpertEvaluation:
-        return cls(
-            periodic_every=data["periodic_every"],
-            periodic_episodes=data["periodic_episodes"],
-            best_periodic_return=data["best_periodic_return"],
-            final_seed=data["final_seed"],
-            deterministic=data["deterministic"],
-            returns=tuple(data["returns"]),
-        )
-
 
 @dataclass(frozen=True, kw_only=True)
-class ExpertRecord:
+class ExpertRecord(Serializable):
     """An expert folder's ``config.json``, as :func:`train_expert_record` writes it."""
 
     env: str
@@ -124,41 +104,6 @@ class ExpertRecord:
     policy_kwargs: Mapping[str, Any]
     evaluation: ExpertEvaluation
     versions: Mapping[str, str | None]
-
-    def to_json(self) -> dict[str, object]:
-        return {
-            "env": self.env,
-            "algo": self.algo,
-            "return_mean": self.return_mean,
-            "return_std": self.return_std,
-            "episodes": self.episodes,
-            "seed": self.seed,
-            "timesteps": self.timesteps,
-            "target": self.target,
-            "hyper": self.hyper,
-            "settings": dict(self.settings),
-            "policy_kwargs": dict(self.policy_kwargs),
-            "evaluation": self.evaluation.to_json(),
-            "versions": dict(self.versions),
-        }
-
-    @classmethod
-    def from_json(cls, data: Mapping[str, Any]) -> ExpertRecord:
-        return cls(
-            env=data["env"],
-            algo=data["algo"],
-            return_mean=data["return_mean"],
-            return_std=data["return_std"],
-            episodes=data["episodes"],
-            seed=data["seed"],
-            timesteps=data["timesteps"],
-            target=data["target"],
-            hyper=data["hyper"],
-            settings=data["settings"],
-            policy_kwargs=data["policy_kwargs"],
-            evaluation=ExpertEvaluation.from_json(data["evaluation"]),
-            versions=data["versions"],
-        )
 
 
 @dataclass(frozen=True, kw_only=True)

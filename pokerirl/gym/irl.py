@@ -26,8 +26,8 @@ import functools
 import json
 import math
 import os
-from collections.abc import Callable, Iterator, Mapping
-from dataclasses import dataclass, replace
+from collections.abc import Mapping
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -38,10 +38,10 @@ from torch import Tensor, nn
 from pokerirl.atomic import make_shareable, write_text
 from pokerirl.errors import ConfigError, InputError, Remedy
 from pokerirl.execution import progress_share
+from pokerirl.gym.episodes import episode_returns, policy_actions, random_return
 from pokerirl.gym.experts import make_env, shipped_experts
 from pokerirl.gym.presets import IRLSettings
 from pokerirl.gym.quality import has_true_reward, write_reward_quality
-from pokerirl.gym.rl import EVAL_SEED
 from pokerirl.gym.tasks import task
 from pokerirl.irl.airl import default_nets, train_many
 from pokerirl.irl.config import AIRLConfig, Algo, NoiseSchedule
@@ -62,6 +62,7 @@ from pokerirl.irl.run import (
 )
 from pokerirl.irl.transitions import Transitions
 from pokerirl.meanstd import MeanStd
+from pokerirl.serial import Omit, Serializable, meta
 from pokerirl.store import staged_files, tidy
 
 RETURNS_FILE = "returns_bands.png"
@@ -70,36 +71,19 @@ ALIGNMENT_BASELINES = ("majority", "legal_majority", "bc")  # shares of states, 
 
 
 @dataclass(frozen=True, kw_only=True)
-class GymIRLSummary:
-    """A ``gym irl`` folder's ``summary.json``: the runs summarized (:class:`RunsSummary`),
-    the expert's return, and the last epoch's mean and std over runs of the evaluation return
-    and (discrete tasks) the validation alignment."""
+class GymIRLSummary(Serializable):
+    """A ``gym irl`` folder's ``summary.json``: the runs summarized (:class:`RunsSummary`, its
+    keys beside these), the expert's return, and the last epoch's mean and std over runs of
+    the evaluation return and (discrete tasks) the validation alignment."""
 
     env: str
     algo: str
     expert_return: float
     irl_final_return: MeanStd
-    final_alignment: MeanStd | None  # discrete tasks only
-    over_runs: RunsSummary
-
-    def to_json(self) -> dict[str, object]:
-        finals = {"irl_final_return": self.irl_final_return.to_json()}
-        if self.final_alignment is not None:
-            finals["final_alignment"] = self.final_alignment.to_json()
-        head = {"env": self.env, "algo": self.algo, "expert_return": self.expert_return}
-        return {**head, **finals, **self.over_runs.to_json()}
-
-    @classmethod
-    def from_json(cls, data: Mapping[str, Any]) -> GymIRLSummary:
-        alignment = data.get("final_alignment")
-        return cls(
-            env=data["env"],
-            algo=data["algo"],
-            expert_return=data["expert_return"],
-            irl_final_return=MeanStd.from_json(data["irl_final_return"]),
-            final_alignment=None if alignment is None else MeanStd.from_json(alignment),
-            over_runs=RunsSummary.from_json(data),
-        )
+    final_alignment: MeanStd | None = field(  # discrete tasks only
+        default=None, metadata=meta(omit=Omit.NONE)
+    )
+    over_runs: RunsSummary = field(metadata=meta(flatten=True))
 
     @classmethod
     def read(cls, folder: Path) -> GymIRLSummary:
@@ -201,81 +185,11 @@ def standardized(data: Transitions, shift: Tensor, scale: Tensor) -> Transitions
 # --------------------------------------------------------------------------- evaluation
 
 
-def policy_actions(policy: nn.Module, obs: np.ndarray, *, discrete: bool) -> np.ndarray:
-    """The deterministic policy's actions for a batch: argmax, or the mean clipped to the box."""
-    with torch.no_grad():
-        obs_t = torch.as_tensor(obs, dtype=torch.float32)
-        if discrete:
-            return policy(obs_t, None).argmax(-1).numpy()
-        mean, _ = policy(obs_t)
-        low, high = policy.get_buffer("low"), policy.get_buffer("high")
-        return torch.minimum(torch.maximum(mean, low), high).numpy()
-
-
 def _standardized_actions(
     policy: nn.Module, shift: np.ndarray, scale: np.ndarray, discrete: bool, obs: np.ndarray
 ) -> np.ndarray:
     """:func:`policy_actions` of a policy trained on standardized observations."""
     return policy_actions(policy, (obs - shift) / scale, discrete=discrete)
-
-
-def lockstep_steps(
-    env_id: str,
-    act: Callable[[np.ndarray], np.ndarray],
-    *,
-    episodes: int,
-    seed: int = EVAL_SEED,
-) -> Iterator[tuple[int, np.ndarray, Any, float, np.ndarray]]:
-    """Every step ``(episode, obs, action, reward, next_obs)`` of ``episodes`` episodes played
-    in lock-step (episode k from ``reset(seed=seed + k)``); ``act`` maps a batch of
-    observations (the episodes still running) to actions."""
-    envs = [make_env(env_id) for _ in range(episodes)]
-    try:
-        obs = [env.reset(seed=seed + k)[0] for k, env in enumerate(envs)]
-        running = list(range(episodes))
-        while running:
-            actions = act(np.stack([obs[k] for k in running]).astype(np.float32))
-            still = []
-            for row, k in enumerate(running):
-                nxt, reward, terminated, truncated, _ = envs[k].step(actions[row])
-                yield k, obs[k], actions[row], float(reward), nxt
-                obs[k] = nxt
-                if not (terminated or truncated):
-                    still.append(k)
-            running = still
-    finally:
-        for env in envs:
-            env.close()
-
-
-def episode_returns(
-    env_id: str,
-    act: Callable[[np.ndarray], np.ndarray],
-    *,
-    episodes: int,
-    seed: int = EVAL_SEED,
-) -> np.ndarray:
-    """Returns of ``episodes`` episodes played in lock-step (see :func:`lockstep_steps`)."""
-    totals = np.zeros(episodes)
-    for k, _, _, reward, _ in lockstep_steps(env_id, act, episodes=episodes, seed=seed):
-        totals[k] += reward
-    return totals
-
-
-def random_return(env_id: str, *, episodes: int, seed: int = EVAL_SEED) -> float:
-    """A uniformly random policy's mean return on the evaluation episodes (seeded)."""
-    env = make_env(env_id)
-    space = env.action_space
-    env.close()
-    space.seed(seed)
-    return float(
-        episode_returns(
-            env_id,
-            lambda obs: np.stack([space.sample() for _ in obs]),
-            episodes=episodes,
-            seed=seed,
-        ).mean()
-    )
 
 
 def expert_return(env_id: str, data_path: str | os.PathLike[str]) -> float:

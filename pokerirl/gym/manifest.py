@@ -18,6 +18,7 @@ from typing import Any
 
 from pokerirl.atomic import write_text
 from pokerirl.errors import InputError
+from pokerirl.serial import Serializable
 
 MODEL_FILE, CONFIG_FILE, METRICS_FILE = "model.pt", "config.json", "metrics.jsonl"
 MANIFEST_FILE = "manifest.json"
@@ -25,7 +26,7 @@ MANIFEST_KEYS = ("env", "algo", "return_mean", "return_std", "episodes", "seed",
 
 
 @dataclass(frozen=True, kw_only=True)
-class ManifestEntry:
+class ManifestEntry(Serializable):
     """One shipped expert in ``manifest.json``: :data:`MANIFEST_KEYS`, then ``settings``
     (``hyper`` first, then the hyper-parameters it was trained with)."""
 
@@ -36,23 +37,7 @@ class ManifestEntry:
     episodes: int
     seed: int
     timesteps: int
-    settings: Mapping[str, Any]
-
-    def to_json(self) -> dict[str, object]:
-        return {
-            "env": self.env,
-            "algo": self.algo,
-            "return_mean": self.return_mean,
-            "return_std": self.return_std,
-            "episodes": self.episodes,
-            "seed": self.seed,
-            "timesteps": self.timesteps,
-            "settings": dict(self.settings),
-        }
-
-    @classmethod
-    def from_json(cls, data: Mapping[str, Any]) -> ManifestEntry:
-        return cls(**{key: data[key] for key in (*MANIFEST_KEYS, "settings")})
+    settings: dict[str, Any]
 
 
 def shipped_dir() -> Path:

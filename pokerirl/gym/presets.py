@@ -1,5 +1,5 @@
 """The paper's Gymnasium tasks as typed data: the authors' IRL and RL settings, their final
-values, random-policy scores, and this project's ``quick`` and ``paper`` study presets.
+values, random-policy scores (the study presets are :mod:`pokerirl.studies.gym.config`'s).
 
 The settings are facts from the authors' public code (issue 10's tables); nothing here runs
 anything or imports Gymnasium.
@@ -8,8 +8,6 @@ anything or imports Gymnasium.
 'dqn'
 >>> TASKS["LunarLander-v3"].irl.policy_hidden
 (64, 64)
->>> PRESETS["quick"].tasks
-('MountainCar-v0',)
 """
 
 from __future__ import annotations
@@ -480,110 +478,3 @@ TASK_ORDER: tuple[str, ...] = (
     "HalfCheetah-v4",
     "Ant-v4",
 )
-
-
-@dataclass(frozen=True, kw_only=True)
-class StudyPreset:
-    """A study's budgets: which tasks, how many runs, and overrides of the authors' budgets.
-
-    ``None`` keeps the task's own value (the paper's).
-    """
-
-    name: str
-    tasks: tuple[str, ...]
-    runs: int
-    algos: tuple[str, ...] = ("airl", "hairl")
-    transitions: int | None = None
-    epochs: int | None = None
-    eval_episodes: int | None = None
-    rl_timesteps: int | None = None
-    rl_evaluations: int = 10  # points on each RL run's true-return curve, the last at its end
-    seed: int = 0  # expert data from reset(seed + k); IRL run k and RL run k use seed + k
-    standardize_obs: bool = True  # IRL on standardized observations (see IRLSettings)
-    notes: str = ""
-
-    def __post_init__(self) -> None:
-        for env_id in self.tasks:
-            _task(env_id)  # one line for an id that is neither a paper task nor usable
-        checks = {
-            "runs >= 1": self.runs >= 1,
-            "at least one task": len(self.tasks) >= 1,
-            "transitions >= 2": self.transitions is None or self.transitions >= 2,
-            "epochs >= 1": self.epochs is None or self.epochs >= 1,
-            "eval episodes >= 1": self.eval_episodes is None or self.eval_episodes >= 1,
-            "RL timesteps >= 1": self.rl_timesteps is None or self.rl_timesteps >= 1,
-            "RL evaluations >= 1": self.rl_evaluations >= 1,
-            "seed >= 0": self.seed >= 0,
-        }
-        broken = [name for name, ok in checks.items() if not ok]
-        if broken:
-            raise ConfigError(f"bad study settings: {', '.join(broken)}")
-
-    def irl(self, env_id: str) -> IRLSettings:
-        """The task's IRL settings with this preset's budget overrides applied."""
-        base = _task(env_id).irl
-        return replace(
-            base,
-            transitions=self.transitions or base.transitions,
-            epochs=self.epochs or base.epochs,
-            eval_episodes=self.eval_episodes or base.eval_episodes,
-            standardize_obs=self.standardize_obs,
-        )
-
-    def rl(self, env_id: str) -> RLSettings:
-        """The task's RL settings with this preset's budget override applied."""
-        base = _task(env_id).rl
-        return replace(base, timesteps=self.rl_timesteps or base.timesteps)
-
-
-def _task(env_id: str) -> Task:
-    # A task the paper lacks is resolved by pokerirl.gym.tasks, which imports Gymnasium to
-    # read its spaces: only then, so that the paper's tasks cost nothing.
-    if env_id in TASKS:
-        return TASKS[env_id]
-    from pokerirl.gym.tasks import task
-
-    return task(env_id)
-
-
-PRESETS: dict[str, StudyPreset] = {
-    preset.name: preset
-    for preset in (
-        StudyPreset(
-            name="quick",
-            tasks=("MountainCar-v0",),
-            runs=3,
-            # Budgeted for < 10 minutes on 2 cores for the whole study (3 runs x AIRL, H-AIRL,
-            # then DQN on AIRL, H-AIRL and the env reward): 25k expert transitions (about 240
-            # episodes of the shipped expert), 20 IRL epochs, 5 evaluation episodes, 50k DQN
-            # steps (9 RL runs at about 600-1,000 steps/s per core: 4-6 core-minutes). On the
-            # env reward, the shipped expert's DQN run (seed 0) first beat -200 at 90k steps, so
-            # the quick env-reward baseline will likely stay at -200; the study measures it.
-            transitions=25_000,
-            epochs=20,
-            eval_episodes=5,
-            rl_timesteps=50_000,
-            notes="MountainCar only, 3 runs, short IRL and RL phases; the demo runs it.",
-        ),
-        StudyPreset(
-            name="demo",
-            tasks=("MountainCar-v0",),
-            runs=2,
-            # `pokerirl demo`'s Gymnasium half: the quick preset's data and IRL budgets on 2 runs,
-            # and 20k DQN steps. The quick study's learned-reward DQN runs reached the flag from
-            # their first evaluation (5k steps) while the env-reward runs mostly did not by 50k,
-            # so 20k steps still separate them.
-            transitions=25_000,
-            epochs=20,
-            eval_episodes=5,
-            rl_timesteps=20_000,
-            notes="MountainCar only, 2 runs, the quick preset's IRL, 20k DQN steps; the demo.",
-        ),
-        StudyPreset(
-            name="paper",
-            tasks=TASK_ORDER,
-            runs=10,
-            notes="The authors' budgets on all six tasks (about 70-80 CPU-hours here).",
-        ),
-    )
-}

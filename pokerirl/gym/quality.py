@@ -42,7 +42,7 @@ import json
 import math
 import os
 from collections.abc import Callable, Mapping
-from dataclasses import asdict, dataclass, fields
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -53,6 +53,7 @@ from pokerirl.atomic import write_text
 from pokerirl.errors import PokerIRLError
 from pokerirl.execution import pinned_threads
 from pokerirl.gym.collect import read_transitions
+from pokerirl.gym.episodes import lockstep_steps, policy_actions
 from pokerirl.gym.experts import make_env
 from pokerirl.gym.presets import TASKS
 from pokerirl.irl.nets import RewardFamily, fold_obs_standardization
@@ -65,6 +66,7 @@ from pokerirl.irl.run import (
     load_reward,
     load_run_config,
 )
+from pokerirl.serial import Json, Serializable
 
 QUALITY_FILE = "reward_quality.json"
 QUALITY_FORMAT = "pokerirl-reward-quality/1"
@@ -368,7 +370,6 @@ def roll_out(
     env_id: str, act: Callable[[np.ndarray], np.ndarray], *, episodes: int, seed: int
 ) -> Rollouts:
     """``episodes`` episodes in lock-step (episode k from ``reset(seed=seed + k)``)."""
-    from pokerirl.gym.irl import lockstep_steps  # same layer; imported late (heavy)
 
     steps = list(lockstep_steps(env_id, act, episodes=episodes, seed=seed))
     return Rollouts(
@@ -423,7 +424,7 @@ def initial_reward(record: Mapping[str, Any]) -> RewardFunction:
 
 
 @dataclass(frozen=True, kw_only=True)
-class RewardQuality:
+class RewardQuality(Serializable):
     """What ``reward_quality.json`` holds (NaN there is null: a constant reward)."""
 
     env: str
@@ -444,20 +445,18 @@ class RewardQuality:
     true_reward_check: Mapping[str, Any]
     reward_sha256: str  # of the run's reward.pt: a stale file is one whose digest differs
 
-    def to_json(self) -> dict[str, object]:
+    def to_json(self) -> Json:
         """The file's object: ``format`` first, the scores rounded (NaN: null)."""
-        record: dict[str, object] = {"format": QUALITY_FORMAT, **asdict(self)}
-        for key in SCORES:
-            record[key] = _number(getattr(self, key))
-        return record
+        record = {"format": QUALITY_FORMAT, **super().to_json()}
+        return record | {key: _number(getattr(self, key)) for key in SCORES}
 
     @classmethod
-    def from_json(cls, data: Mapping[str, Any]) -> RewardQuality:
+    def from_json(cls, data: Json, path: str = "") -> RewardQuality:
         """A file's object (null scores read as NaN)."""
-        found = {item.name: data[item.name] for item in fields(cls)}
-        for key in SCORES:
-            found[key] = math.nan if found[key] is None else found[key]
-        return cls(**found)
+        if isinstance(data, Mapping):
+            nulls = [key for key in SCORES if key in data and data[key] is None]
+            data = {**data, **dict.fromkeys(nulls, math.nan)}
+        return super().from_json(data, path)
 
 
 def _number(x: float) -> float | None:
@@ -520,7 +519,6 @@ def write_reward_quality(
         episodes=episodes,
         seed=QUALITY_SEED,
     ).take(samples, rng)
-    from pokerirl.gym.irl import policy_actions  # same layer; imported late (heavy)
 
     try:
         policy = load_policy(run)

@@ -38,7 +38,7 @@ ACTION_NAMES: dict[str, tuple[str, ...]] = {
     "MountainCar-v0": ("push left", "no push", "push right"),
 }
 AXIS_NAMES: dict[str, tuple[str, str]] = {"MountainCar-v0": ("position", "velocity")}
-ALGO_LABELS: dict[str, str] = {Algo.AIRL: "AIRL", Algo.HAIRL: "H-AIRL"}
+ALGO_LABELS: dict[str, str] = {Algo.AIRL: "AIRL", Algo.HAIRL: "H-AIRL", Algo.GAIL: "GAIL"}
 # One colour per action id (colour-blind safe: blue, grey, vermilion, then more).
 COLOURS = ("#0072B2", "#BBBBBB", "#D55E00", "#009E73", "#CC79A7", "#F0E442")
 RUN_FOLDER = re.compile(r"run-(\d+)")

@@ -29,6 +29,7 @@ from pokerirl.store.staged import RECORD_NAME, RECORD_SUFFIX, staged_files, stag
 from pokerirl.store.units import (
     Check,
     Fate,
+    Group,
     Layout,
     LegacyRecord,
     Unit,
@@ -47,6 +48,7 @@ __all__ = [
     "RECORD_SUFFIX",
     "Check",
     "Fate",
+    "Group",
     "Json",
     "Layout",
     "LegacyRecord",

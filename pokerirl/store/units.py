@@ -174,6 +174,20 @@ class UnitDone(Generic[E]):
     extra: E | None = None
 
 
+@dataclass(frozen=True, kw_only=True)
+class Group(Generic[E]):
+    """How :func:`run_units` computes several units in one call: the units to run with the
+    same ``key(unit)`` are one group, computed by ``fn(*args(members))``, which returns one
+    output per member, in order; each member is then saved with its own record, as alone.
+    ``fn`` is a module-level function (it runs on the backend); ``label`` names a group in
+    messages."""
+
+    key: Callable[[Unit[E]], Any]
+    fn: Callable[..., Sequence[UnitOutput[E]]]
+    args: Callable[[Sequence[Unit[E]]], tuple[Any, ...]]
+    label: Callable[[Sequence[Unit[E]]], str]
+
+
 @dataclass(frozen=True)
 class UnitsReport(Generic[E]):
     """Every unit of a :func:`run_units` call, in the order given."""
@@ -375,13 +389,16 @@ def run_units(
     progress: bool = False,
     desc: str = "units",
     on_saved: Callable[[UnitDone[E]], None] | None = None,
+    group: Group[E] | None = None,
 ) -> UnitsReport[E]:
     """Check every unit, run those not finished on ``backend`` (default: in this process)
     and save each as it finishes; return what became of each, in the order given.
 
     Every refusal comes before anything runs. A unit that raises stops the run with its
     exception (see :func:`pokerirl.execution.map_units`); the units saved before are kept,
-    so a rerun resumes. ``on_saved`` is called in this process after each save.
+    so a rerun resumes. ``on_saved`` is called in this process after each save. With
+    ``group``, the units to run are computed in groups (:class:`Group`), one call each, and
+    saved each on its own (so resuming is as without it: a group holds the unfinished only).
 
     Raises:
         UnitConflict: see :func:`check`.
@@ -399,15 +416,8 @@ def run_units(
         for unit, found in zip(units, checks, strict=True)
     ]
     todo = [i for i, item in enumerate(done) if item is None]
-    functions: list[Callable[..., UnitOutput[E]]] = []
-    for i in todo:
-        function = units[i].fn
-        if function is None:
-            raise ValueError(f"{units[i].key}: not finished, and the unit has no function")
-        functions.append(function)
 
-    def finished(index: int, output: UnitOutput[E]) -> None:
-        i = todo[index]
+    def finished_unit(i: int, output: UnitOutput[E]) -> None:
         unit = units[i]
         record = save(unit, output)
         item = UnitDone(
@@ -416,6 +426,20 @@ def run_units(
         done[i] = item
         if on_saved is not None:
             on_saved(item)
+
+    if group is not None:
+        _run_groups(units, todo, group, finished_unit, backend=backend, progress=progress,
+                    desc=desc)  # fmt: skip
+        return UnitsReport(done=tuple(item for item in done if item is not None))
+    functions: list[Callable[..., UnitOutput[E]]] = []
+    for i in todo:
+        function = units[i].fn
+        if function is None:
+            raise ValueError(f"{units[i].key}: not finished, and the unit has no function")
+        functions.append(function)
+
+    def finished(index: int, output: UnitOutput[E]) -> None:
+        finished_unit(todo[index], output)
 
     fn: Callable[..., UnitOutput[E]] = call
     arguments: list[tuple[Any, ...]] = [
@@ -435,6 +459,38 @@ def run_units(
         labels=[units[i].key for i in todo],
     )
     return UnitsReport(done=tuple(item for item in done if item is not None))
+
+
+def _run_groups(
+    units: Sequence[Unit[E]],
+    todo: Sequence[int],
+    group: Group[E],
+    finished: Callable[[int, UnitOutput[E]], None],
+    *,
+    backend: Backend | None,
+    progress: bool,
+    desc: str,
+) -> None:
+    """The units ``todo`` (indices) in groups, one :func:`map_units` unit per group."""
+    members: dict[Any, list[int]] = {}
+    for i in todo:
+        members.setdefault(group.key(units[i]), []).append(i)
+    groups = list(members.values())
+
+    def saved(index: int, outputs: Sequence[UnitOutput[E]]) -> None:
+        for i, output in zip(groups[index], outputs, strict=True):
+            finished(i, output)
+
+    map_units(
+        group.fn,
+        [group.args([units[i] for i in g]) for g in groups],
+        backend=backend or Backend(),
+        progress=progress,
+        desc=desc,
+        reused=len(units) - len(todo),
+        on_result=saved,
+        labels=[group.label([units[i] for i in g]) for g in groups],
+    )
 
 
 def call(fn: Callable[..., UnitOutput[E]], args: tuple[Any, ...]) -> UnitOutput[E]:

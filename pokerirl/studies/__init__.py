@@ -3,9 +3,8 @@ outputs back into a report.
 
 - :mod:`pokerirl.studies.poker`: the paper's poker study (``pokerirl study``) and the transfer
   test (``pokerirl transfer``);
-- :mod:`pokerirl.studies.gym`: the Gymnasium study (``pokerirl gym study``), its units in
-  :mod:`pokerirl.studies.gym_units`;
-- :mod:`pokerirl.studies.sweep`: the H-AIRL ablations (``pokerirl gym sweep``);
+- :mod:`pokerirl.studies.gym`: the Gymnasium study (``pokerirl gym study``) and the H-AIRL
+  ablations (``pokerirl gym sweep``);
 - :mod:`pokerirl.studies.demo`: both quick studies on built-in data (``pokerirl demo``).
 
 Nothing is imported here: ``pokerirl report`` reads a poker study without loading the gym.

@@ -27,12 +27,12 @@ from typing import TYPE_CHECKING
 
 from pokerirl.execution import Backend
 from pokerirl.game.synth import write_synthetic_month
-from pokerirl.gym.presets import PRESETS as GYM_PRESETS
-from pokerirl.gym.presets import StudyPreset
+from pokerirl.studies.gym.config import PRESETS as GYM_PRESETS
+from pokerirl.studies.gym.config import StudyPreset
 from pokerirl.studies.poker import PRESETS, StudyConfig, StudyResult, run_study
 
 if TYPE_CHECKING:  # the gym layer loads only when its demo runs
-    from pokerirl.studies.gym import GymStudyResult
+    from pokerirl.studies.gym.pipeline import GymStudyResult
 
 SYNTH_FOLDER = "irc"
 GYM_FOLDER = "gym"
@@ -86,7 +86,7 @@ def run_gym_demo(
 ) -> GymStudyResult:
     """The Gymnasium study of ``config.gym`` (the demo preset: MountainCar-v0, AIRL and
     H-AIRL, then DQN on each reward and on the env reward) into ``out/gym``."""
-    from pokerirl.studies.gym import run_gym_study
+    from pokerirl.studies.gym.pipeline import run_gym_study
 
     return run_gym_study(
         Path(out) / GYM_FOLDER,

@@ -1,21 +1,21 @@
 """A gym study's report: its ``summary.json`` typed (:class:`GymStudySummary`), read back
 (:func:`load_gym_study`) and rendered as ``report.md``. Torch- and Gymnasium-free, so that
-``pokerirl report`` starts fast; :mod:`pokerirl.studies.gym` runs the study that writes it.
+``pokerirl report`` starts fast; :mod:`pokerirl.studies.gym.pipeline` runs the study that writes it.
 """
 
 from __future__ import annotations
 
 import json
 import os
-from collections.abc import Mapping
-from dataclasses import dataclass
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
 
 from pokerirl.gym.presets import TASKS, RLBackend
 from pokerirl.meanstd import MeanStd
+from pokerirl.serial import Json, SerialError, Serializable, meta
 from pokerirl.studies.common import SUMMARY_JSON, StudyError, markdown_table
-from pokerirl.studies.gym_results import PaperFinals, TaskSummary
+from pokerirl.studies.gym.results import AlgoSummary, PaperFinals, TaskSummary
 
 SUMMARY_FORMAT = "pokerirl-gym-study/1"
 FIGURES = {
@@ -27,33 +27,34 @@ FIGURES = {
 
 
 @dataclass(frozen=True, kw_only=True)
-class GymStudySummary:
+class GymStudySummary(Serializable):
     """A gym study's ``summary.json``: a single task's :class:`TaskSummary`, or (``all``)
     the tasks' under ``tasks`` with the preset and the runs."""
 
+    format: str = SUMMARY_FORMAT
     preset: str
     runs: int
     tasks: dict[str, TaskSummary]
-    several: bool  # the ``tasks`` form, even for one task
+    several: bool = field(default=True, metadata=meta(skip=True))  # the ``tasks`` form
 
-    def to_json(self) -> dict[str, object]:
-        if not self.several:
-            (only,) = self.tasks.values()
-            return only.to_json()
-        return {
-            "format": SUMMARY_FORMAT,
-            "preset": self.preset,
-            "runs": self.runs,
-            "tasks": {env: summary.to_json() for env, summary in self.tasks.items()},
-        }
+    def to_json(self) -> Json:
+        if self.several:
+            return super().to_json()
+        (only,) = self.tasks.values()
+        return only.to_json()
 
     @classmethod
-    def from_json(cls, data: Mapping[str, Any]) -> GymStudySummary:
-        if "tasks" in data:
-            tasks = {env: TaskSummary.from_json(task) for env, task in data["tasks"].items()}
-            return cls(preset=data["preset"], runs=data["runs"], tasks=tasks, several=True)
-        task = TaskSummary.from_json(data)
-        return cls(preset=task.preset, runs=task.runs, tasks={task.env: task}, several=False)
+    def from_json(cls, data: Json, path: str = "") -> GymStudySummary:
+        if not (isinstance(data, Mapping) and "tasks" in data):
+            task = TaskSummary.from_json(data, path)
+            return cls(preset=task.preset, runs=task.runs, tasks={task.env: task}, several=False)
+        found = super().from_json(data, path)
+        if not found.tasks:
+            raise SerialError("tasks: expected an object of task summaries, got {}")
+        for env, task in found.tasks.items():
+            if task.env != env:
+                raise SerialError(f"tasks.{env}.env: expected {env!r}, got {task.env!r}")
+        return found
 
     def render(self) -> str:
         """The study's ``report.md``."""
@@ -71,16 +72,14 @@ def is_gym_study(folder: str | os.PathLike[str]) -> bool:
 
 def load_gym_study(folder: str | os.PathLike[str]) -> tuple[GymStudySummary, str]:
     """A finished study's ``summary.json`` and its report rendered again (``pokerirl report``)."""
-    from pokerirl.studies.gym_summary_check import check_summary
-
     path = Path(folder) / SUMMARY_JSON
     try:
-        found = json.loads(path.read_text())
-        check_summary(found)  # once, on reading: the renderer trusts what passes
-        summary = GymStudySummary.from_json(found)
+        summary = GymStudySummary.from_json(json.loads(path.read_text()))
         return summary, summary.render()
     except (OSError, ValueError, KeyError, TypeError, AttributeError) as error:
-        # check_summary names the fields the report reads; the others fail here, one line too.
+        # Reading names a field of the wrong type by its path; what the types cannot say (a
+        # paper's algorithm missing, a settings value the report cannot format) fails in
+        # rendering, in one line too.
         raise StudyError(f"{path}: not a readable gym study summary ({error})") from None
 
 
@@ -115,18 +114,25 @@ def _percent(share: float | None) -> float | None:
 def task_table(summary: TaskSummary) -> list[str]:
     """Our finals beside the authors', one row per figure of the paper."""
     airl, hairl = summary.algos["airl"], summary.algos["hairl"]
+    gail = summary.algos.get("gail")  # opt-in: the authors report none
     paper = summary.paper or NO_PAPER  # a task the paper does not have: "–" throughout
+
+    def of_gail(label: str, value: Callable[[AlgoSummary], str]) -> list[tuple[str, str, str]]:
+        return [] if gail is None else [(label, value(gail), "not reported")]
+
     rows = [
         ("IRL-phase return, AIRL", _value(airl.irl_final_return),
          _value(paper.irl_final_return["airl"])),
         ("IRL-phase return, H-AIRL", _value(hairl.irl_final_return),
          _value(paper.irl_final_return["hairl"])),
+        *of_gail("IRL-phase return, GAIL", lambda a: _value(a.irl_final_return)),
         ("expert (its data's episodes)", _value(MeanStd(mean=summary.expert_return)),
          _value(MeanStd(mean=paper.expert_return))),
         ("RL-phase return, AIRL reward", _value(airl.rl_final_return),
          _value(paper.rl_final_return["airl"])),
         ("RL-phase return, H-AIRL reward", _value(hairl.rl_final_return),
          _value(paper.rl_final_return["hairl"])),
+        *of_gail("RL-phase return, GAIL reward", lambda a: _value(a.rl_final_return)),
         ("RL-phase return, env reward", _value(summary.env_reward.rl_final_return),
          _value(paper.rl_final_return["env_reward"])),
     ]  # fmt: skip
@@ -137,11 +143,14 @@ def task_table(summary: TaskSummary) -> list[str]:
              _paper_percent(alignment.get("airl"))),
             ("alignment, H-AIRL policy", _value(hairl.final_alignment, percent=True),
              _paper_percent(alignment.get("hairl"))),
+            *of_gail("alignment, GAIL policy", lambda a: _value(a.final_alignment, percent=True)),
             ("alignment, behaviour cloning (same net and epochs)",
              _value(hairl.baselines["bc"], percent=True), "not reported"),
             ("alignment, reward argmax: AIRL / H-AIRL",
              f"{_value(airl.final_reward_alignment, percent=True)} / "
              f"{_value(hairl.final_reward_alignment, percent=True)}", "not reported"),
+            *of_gail("alignment, reward argmax: GAIL",
+                     lambda a: _value(a.final_reward_alignment, percent=True)),
         ]  # fmt: skip
     if "epic" in airl.quality:
         a, h = airl.quality, hairl.quality
@@ -164,10 +173,17 @@ def task_table(summary: TaskSummary) -> list[str]:
             ("Pearson of f and the true reward on expert / policy transitions: H-AIRL",
              f"{_value(h['pearson_expert'], digits=3)} / "
              f"{_value(h['pearson_policy'], digits=3)}", "not reported"),
+            *of_gail("EPIC distance to the true reward / on the expert's states and "
+                     "transitions only: GAIL",
+                     lambda a: f"{_value(a.quality['epic'], digits=3)} / "
+                     f"{_value(a.quality['epic_expert_coverage'], digits=3)}"),
+            *of_gail("Pearson of f and the true reward on expert / policy transitions: GAIL",
+                     lambda a: f"{_value(a.quality['pearson_expert'], digits=3)} / "
+                     f"{_value(a.quality['pearson_policy'], digits=3)}"),
         ]  # fmt: skip
     found = summary.reward_map
     if found is not None:
-        agree = found.agreement
+        agree = {algo: agreement.mean_f for algo, agreement in found.agreement.items()}
         rows.append(
             (f"reward map: cells where f prefers the expert's action ({found.grid}² lattice), "
              "AIRL / H-AIRL",
@@ -176,6 +192,9 @@ def task_table(summary: TaskSummary) -> list[str]:
              f"(a constant {found.constant_action!r}: {100 * found.constant_agreement:.1f}%)",
              "Figure 4: maps only"),
         )  # fmt: skip
+        if "gail" in agree:
+            rows.append(("reward map: cells where f prefers the expert's action, GAIL",
+                         _paper_percent(_percent(agree["gail"])), "not reported"))
     rows.append(
         ("random policy", _value(MeanStd(mean=summary.random_return)),
          _value(MeanStd(mean=paper.random_return)))

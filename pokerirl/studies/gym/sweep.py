@@ -13,7 +13,7 @@ preset value) are computed once. ``out`` gets::
     sweep.json                           the same, with the settings and the curves' finals
     <parameter>.png                      the finals against the parameter's values
 
-Every unit is resumable as in the study (:mod:`pokerirl.studies.gym_units`).
+Every unit is resumable as in the study (:mod:`pokerirl.studies.gym.units`).
 """
 
 from __future__ import annotations
@@ -24,7 +24,7 @@ import json
 import math
 import os
 from collections.abc import Mapping, Sequence
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -34,18 +34,20 @@ from pokerirl.atomic import atomic_path, write_text
 from pokerirl.errors import PokerIRLError
 from pokerirl.execution import Backend
 from pokerirl.gym.irl import GymIRLSummary, irl_config
-from pokerirl.gym.presets import TASKS, StudyPreset
+from pokerirl.gym.presets import TASKS
 from pokerirl.gym.rl import DEFAULT_RL_BACKEND
 from pokerirl.meanstd import mean_and_std
+from pokerirl.serial import Serializable
 from pokerirl.studies.common import StudyError, study_folder
-from pokerirl.studies.gym import (
+from pokerirl.studies.gym.config import StudyPreset
+from pokerirl.studies.gym.pipeline import (
     check_rl_backend,
     data_job,
     irl_job,
     rl_curves,
     rl_jobs,
 )
-from pokerirl.studies.gym_units import DATA_FILE, Say, run_data_jobs, run_irl_jobs, run_rl_jobs
+from pokerirl.studies.gym.units import DATA_FILE, Say, run_data_jobs, run_irl_jobs, run_rl_jobs
 
 SWEEP_FORMAT = "pokerirl-gym-sweep/1"
 PARAMS = ("alpha", "beta", "sigma_start", "sigma_end")
@@ -82,7 +84,7 @@ class SweepPoint:
 
 
 @dataclass(frozen=True, kw_only=True)
-class SweepRow:
+class SweepRow(Serializable):
     """One (parameter, value): its point and the finals over runs (alignment: discrete
     tasks only). The fields are ``sweep.csv``'s columns and ``sweep.json``'s row names."""
 
@@ -98,13 +100,6 @@ class SweepRow:
     final_alignment_std: float | None = None
     final_reward_alignment_mean: float | None = None
     final_reward_alignment_std: float | None = None
-
-    def to_json(self) -> dict[str, float | str | int | None]:
-        return asdict(self)
-
-    @classmethod
-    def from_json(cls, data: Mapping[str, Any]) -> SweepRow:
-        return cls(**{name: data[name] for name in CSV_COLUMNS})
 
 
 @dataclass(frozen=True, kw_only=True)

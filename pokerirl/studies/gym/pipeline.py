@@ -18,7 +18,7 @@ One task writes into ``out`` itself; several write ``out/<env>/`` each (the same
                                          2-d observations and discrete actions: MountainCar)
     summary.json, report.md
 
-Every unit (data, IRL, RL run) is resumable on its own (:mod:`pokerirl.studies.gym_units`): a rerun
+Every unit (data, IRL, RL run) is resumable on its own (:mod:`pokerirl.studies.gym.units`): a rerun
 keeps the finished ones and refuses, in one line, units made with other settings unless
 ``overwrite``.
 """
@@ -26,9 +26,8 @@ keeps the finished ones and refuses, in one line, units made with other settings
 from __future__ import annotations
 
 import json
-import math
 import os
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 from typing import Any
@@ -36,43 +35,38 @@ from typing import Any
 import numpy as np
 
 from pokerirl.atomic import write_text
-from pokerirl.errors import ConfigError, PokerIRLError
+from pokerirl.errors import PokerIRLError
 from pokerirl.execution import Backend
-from pokerirl.figures import finish
 from pokerirl.gym.irl import GymIRLSummary
-from pokerirl.gym.presets import PRESETS, TASK_ORDER, TASKS, StudyPreset
 from pokerirl.gym.quality import has_true_reward
 from pokerirl.gym.rl import DEFAULT_RL_BACKEND, RLBackend, read_curve
 from pokerirl.gym.tasks import task
-from pokerirl.irl.run import CurveStats
-from pokerirl.meanstd import MeanStd, mean_std, mean_std_curve
+from pokerirl.meanstd import Curve, MeanStd, mean_std
 from pokerirl.studies.common import (
     METRICS_JSONL,
     REPORT_MD,
     SUMMARY_JSON,
     StudyError,
-    band,
     read_jsonl,
     study_folder,
-    with_overrides,
 )
-from pokerirl.studies.gym_report import (
-    FIGURES,
+from pokerirl.studies.gym.config import StudyPreset, authors_budget, task_root
+from pokerirl.studies.gym.figures import LABELS, draw_figures, draw_reward_map
+from pokerirl.studies.gym.report import (
     SUMMARY_FORMAT,
     GymStudySummary,
     render_report,
 )
-from pokerirl.studies.gym_results import (
-    QUALITY_KEYS,
+from pokerirl.studies.gym.results import (
+    AlgoCurves,
     AlgoSummary,
-    Band,
     EnvRewardSummary,
     PaperFinals,
-    RewardMapSummary,
+    RLCurve,
     StudySettings,
     TaskSummary,
 )
-from pokerirl.studies.gym_units import (
+from pokerirl.studies.gym.units import (
     DATA_FILE,
     DataJob,
     IRLJob,
@@ -83,11 +77,6 @@ from pokerirl.studies.gym_units import (
     run_rl_jobs,
 )
 
-ALGOS = ("airl", "hairl")
-REWARDS = ("env", "airl", "hairl")  # RL-phase rewards: the env's, then each IRL algorithm's
-LABELS = {"airl": "AIRL", "hairl": "H-AIRL", "env": "env reward"}
-COLORS = {"airl": "C0", "hairl": "C1", "env": "C2"}  # the same in every figure
-MAP_GRID = 101  # cells per axis of the reward map
 STEPS = 4
 
 
@@ -98,36 +87,6 @@ class GymStudyResult:
     out: Path
     summaries: dict[str, TaskSummary]  # env -> the task's summary.json
     markdown: str
-
-
-def study_preset(name: str, **overrides: Any) -> StudyPreset:
-    """The preset ``name`` with ``overrides`` (None values ignored).
-
-    >>> study_preset("quick", runs=2).runs
-    2
-    """
-    return with_overrides(PRESETS, name, **overrides)
-
-
-def parse_tasks(text: str) -> tuple[str, ...]:
-    """``all`` (the six, cheapest first) or one task id.
-
-    >>> parse_tasks("MountainCar-v0")
-    ('MountainCar-v0',)
-    """
-    if text == "all":
-        return TASK_ORDER
-    if text not in TASKS:
-        try:
-            task(text)  # any other registered Gymnasium task, with generic settings
-        except ConfigError as error:
-            raise StudyError(f"{error}; or all") from None
-    return (text,)
-
-
-def task_root(out: Path, env: str, tasks: Sequence[str]) -> Path:
-    """Where a task's study lives: ``out`` for a single task, else ``out/<env>``."""
-    return out if len(tasks) == 1 else out / env
 
 
 # --------------------------------------------------------------------------- the jobs
@@ -239,20 +198,20 @@ def run_gym_study(
         irl = {
             (env, algo): irl_job(roots[env], env, algo, preset, data=roots[env] / DATA_FILE)
             for env in tasks
-            for algo in ALGOS
+            for algo in preset.algos
         }
-        say(f"[2/{STEPS}] IRL: AIRL and H-AIRL, {preset.runs} runs each, on {names}")
+        say(f"[2/{STEPS}] IRL: {_and(preset.algos)}, {preset.runs} runs each, on {names}")
         reused = run_irl_jobs(list(irl.values()), **options)
         _said_reused(say, reused, len(irl))
 
         rl = [
             job
             for env in tasks
-            for reward in REWARDS
+            for reward in preset.rewards()
             for job in rl_jobs(roots[env], env, reward, irl.get((env, reward)), preset,
                                backend=rl_backend)
         ]
-        say(f"[3/{STEPS}] RL: env reward, AIRL and H-AIRL rewards, {preset.runs} runs each"
+        say(f"[3/{STEPS}] RL: env reward, {_and(preset.algos)} rewards, {preset.runs} runs each"
             + ("" if rl_backend == RLBackend.SB3 else f" ({rl_backend} backend)"))
         reused = run_rl_jobs(rl, **options)
         _said_reused(say, reused, len(rl))
@@ -291,6 +250,12 @@ def check_rl_backend(rl_backend: str) -> None:
         )
 
 
+def _and(algos: Sequence[str]) -> str:
+    """``AIRL and H-AIRL``, ``AIRL, H-AIRL and GAIL``."""
+    labels = [LABELS[algo] for algo in algos]
+    return ", ".join(labels[:-1]) + " and " + labels[-1]
+
+
 def _said_reused(say: Say, reused: int, total: int) -> None:
     if reused:
         say(f"      {reused} of {total} finished already, reused")
@@ -304,14 +269,8 @@ class RLCurves:
     """One reward kind's RL runs: the true return at each evaluation (mean and std over runs)
     and each run's last value."""
 
-    timesteps: list[int]
-    mean: list[float]
-    std: list[float]
+    curve: Curve  # as summary.json holds it (curves.rl)
     per_run_final: list[float]
-
-    def band(self) -> Band:
-        """The curve as ``summary.json`` holds it (``curves.rl``)."""
-        return Band(timesteps=self.timesteps, mean=self.mean, std=self.std)
 
 
 def rl_curves(root: Path, reward: str, runs: int) -> RLCurves:
@@ -319,11 +278,8 @@ def rl_curves(root: Path, reward: str, runs: int) -> RLCurves:
     curves = [read_curve(root / "rl" / reward / f"run-{k}") for k in range(runs)]
     points = min(len(curve) for curve in curves)
     values = np.array([[p.return_mean for p in curve[:points]] for curve in curves])
-    mean, std = mean_std_curve(values)
     return RLCurves(
-        timesteps=[p.timesteps for p in curves[0][:points]],
-        mean=mean,
-        std=std,
+        curve=Curve.of(values, timesteps=[p.timesteps for p in curves[0][:points]]),
         per_run_final=values[:, -1].tolist(),
     )
 
@@ -338,7 +294,7 @@ def task_summary(
     found_task = task(env)
     algos: dict[str, AlgoSummary] = {}
     irl_summaries = {}
-    for algo in ALGOS:
+    for algo in preset.algos:
         irl = GymIRLSummary.read(root / "irl" / algo)
         irl_summaries[algo] = irl
         metrics = irl.over_runs.metrics
@@ -349,17 +305,20 @@ def task_summary(
             baselines=dict(irl.over_runs.baselines),
             irl_per_run_final=_per_run_final(root / "irl" / algo, preset.runs, "eval_return"),
             rl_per_run_final=rl.per_run_final,
-            irl_epochs=list(irl.over_runs.epochs),
-            irl_return=Band.from_json(metrics["eval_return"].to_json()),
-            rl_curve=rl.band(),
-            alignment=Band.from_json(metrics["val_alignment"].to_json())
-            if found_task.discrete
-            else None,
+            curves=AlgoCurves(
+                irl_epochs=list(irl.over_runs.epochs),
+                irl_return=metrics["eval_return"],
+                rl=rl.curve,
+                alignment=metrics["val_alignment"]
+                if found_task.discrete
+                else None,
+            ),
             final_alignment=irl.final_alignment if found_task.discrete else None,
             final_reward_alignment=_last(metrics["val_reward_alignment"])
             if found_task.discrete
             else None,
-            final_disc_acc={key: _last(metrics[key]) for key in QUALITY_KEYS if key in metrics},
+            final_disc_acc_expert=_last_of(metrics, "disc_acc_expert"),
+            final_disc_acc_policy=_last_of(metrics, "disc_acc_policy"),
             **(reward_quality(root, env, algo, preset.runs) if has_true_reward(env) else {}),
         )
     env_rl = rl_curves(root, "env", preset.runs)
@@ -378,7 +337,7 @@ def task_summary(
         env_reward=EnvRewardSummary(
             rl_final_return=mean_std(env_rl.per_run_final),
             rl_per_run_final=env_rl.per_run_final,
-            rl_curve=env_rl.band(),
+            curves=RLCurve(rl=env_rl.curve),
         ),
         settings=StudySettings(  # through JSON: tuples become lists, as in summary.json
             irl=json.loads(json.dumps(asdict(preset.irl(env)))),
@@ -404,13 +363,18 @@ def task_summary(
             else None,
             random_return=found_task.random_return,
         ),
-        reward_map=draw_reward_map(root, env),
+        reward_map=draw_reward_map(root, env, preset.algos),
     )
 
 
-def _last(curve: CurveStats) -> MeanStd:
+def _last(curve: Curve) -> MeanStd:
     """A per-epoch curve's last point."""
     return MeanStd(mean=curve.mean[-1], std=curve.std[-1])
+
+
+def _last_of(metrics: Mapping[str, Curve], key: str) -> MeanStd | None:
+    """The last point of the runs' ``key`` curve; None where they lack it (older runs)."""
+    return _last(metrics[key]) if key in metrics else None
 
 
 def reward_quality(root: Path, env: str, algo: str, runs: int) -> dict[str, Any]:
@@ -440,113 +404,7 @@ def reward_quality(root: Path, env: str, algo: str, runs: int) -> dict[str, Any]
     }
 
 
-def authors_budget(env: str, preset: StudyPreset) -> bool:
-    """Whether ``preset`` trains ``env`` with the authors' budgets (data, epochs, evaluation
-    episodes, RL steps) and their 10 runs (never, for a task the paper does not have)."""
-    if env not in TASKS:
-        return False
-    paper = TASKS[env]
-    irl = replace(preset.irl(env), standardize_obs=paper.irl.standardize_obs)
-    return irl == paper.irl and preset.rl(env) == paper.rl and preset.runs == 10
-
-
 def _per_run_final(folder: Path, runs: int, key: str) -> list[float]:
     return [read_jsonl(folder / f"run-{k}" / METRICS_JSONL)[-1][key] for k in range(runs)]
 
 
-def draw_reward_map(root: Path, env: str) -> RewardMapSummary | None:
-    """Figure 4 for a task with a bounded 2-d observation and discrete actions (MountainCar):
-    the action each algorithm's mean f prefers over the state lattice, beside the shipped
-    expert's; returns the agreements (None for other tasks)."""
-    from pokerirl.gym.reward_map import plot_reward_map, reward_map, task_space
-
-    if env not in TASKS:  # its reference panel is the shipped expert's
-        return None
-    try:
-        task_space(env)
-    except ValueError:
-        return None
-    result = reward_map(env, [root / "irl" / algo for algo in ALGOS], grid=MAP_GRID)
-    path = root / FIGURES["reward_map"]
-    path.parent.mkdir(parents=True, exist_ok=True)
-    plot_reward_map(result, path)
-    constant = result.constant_agreement
-    assert constant is not None  # the shipped expert's panel is drawn
-    panels = dict(zip(ALGOS, result.panels, strict=True))
-    return RewardMapSummary(
-        grid=MAP_GRID,
-        agreement={algo: panel.agreement for algo, panel in panels.items()},
-        run_agreements={algo: list(panel.run_agreements) for algo, panel in panels.items()},
-        constant_action=constant[0],
-        constant_agreement=constant[1],
-    )
-
-
-# --------------------------------------------------------------------------- figures
-
-
-def draw_figures(root: Path, summary: TaskSummary) -> None:
-    """IRL-phase returns, alignment (discrete tasks) and RL-phase returns, mean ± std bands."""
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
-
-    from pokerirl.atomic import atomic_path
-
-    def figure() -> tuple[Figure, Any]:
-        fig = Figure(figsize=(6.4, 4), dpi=100)
-        FigureCanvasAgg(fig)
-        return fig, fig.add_subplot()
-
-    spread = f"lines: mean of {summary.runs} runs; bands: ± 1 std (sample) over runs"
-
-    def save(fig: Figure, axes: Any, name: str, title: str, xlabel: str, ylabel: str) -> None:
-        finish(axes, title=f"{summary.env}: {title}", xlabel=xlabel, ylabel=ylabel,
-               spread=spread, integer_x=xlabel == "epoch")  # fmt: skip
-        fig.tight_layout()
-        path = root / FIGURES[name]
-        path.parent.mkdir(parents=True, exist_ok=True)
-        with atomic_path(path) as temporary:
-            fig.savefig(temporary, format="png", metadata={"Software": None})
-
-    def lines(axes: Any) -> None:
-        for value, label, style in (
-            (summary.expert_return, "expert's demonstrations", "--"),
-            (summary.random_return, "random policy", ":"),
-        ):
-            if math.isfinite(value):
-                axes.axhline(value, color="grey", linestyle=style, linewidth=1, label=label)
-
-    episode = "return (sum of rewards per episode)"
-    fig, axes = figure()
-    for algo in ALGOS:
-        found = summary.algos[algo]
-        band(axes, found.irl_epochs, found.irl_return.to_json(), LABELS[algo],
-             color=COLORS[algo], alpha=0.2)  # fmt: skip
-    lines(axes)
-    save(fig, axes, "irl_returns", "IRL-phase return of the policy", "epoch", episode)
-
-    if summary.discrete:
-        fig, axes = figure()
-        for algo in ALGOS:
-            found = summary.algos[algo]
-            assert found.alignment is not None  # a discrete task's
-            band(axes, found.irl_epochs, found.alignment.to_json(), LABELS[algo],
-                 color=COLORS[algo], alpha=0.2)  # fmt: skip
-        baselines = summary.algos["hairl"].baselines
-        for name, style in (("bc", "-."), ("majority", ":")):
-            value = baselines[name].mean
-            axes.axhline(
-                value, color="grey", linestyle=style, linewidth=1, label=f"{name} {value:.3f}"
-            )
-        save(fig, axes, "alignment", "validation alignment", "epoch",
-             "share of validation states (policy = expert)")
-
-    fig, axes = figure()
-    for reward in REWARDS:
-        curve = summary.env_reward.rl_curve if reward == "env" else summary.algos[reward].rl_curve
-        assert curve.timesteps is not None  # an RL curve's
-        band(axes, curve.timesteps, curve.to_json(), LABELS[reward], color=COLORS[reward],
-             alpha=0.2)  # fmt: skip
-    lines(axes)
-    save(fig, axes, "rl_returns", "RL-phase true return", "timesteps",
-         f"true {episode}")

@@ -27,20 +27,18 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
 
-from pokerirl.execution import Backend, map_units, read_files, write_files
+from pokerirl.execution import Backend, read_files, write_files
 from pokerirl.gym.presets import IRLSettings, RLSettings
 from pokerirl.gym.rl import RLBackend
 from pokerirl.irl.run import CONFIG_FILE, REWARD_FILE, TIMINGS_FILE
 from pokerirl.store import (
-    Fate,
+    Group,
     Json,
     Layout,
     Unit,
     UnitOutput,
-    check,
     digest,
     run_units,
-    save,
 )
 from pokerirl.studies.common import StudyError
 
@@ -193,9 +191,9 @@ def rl_group_unit(
     settings: RLSettings,
     evaluations: int,
     eval_episodes: int,
-) -> dict[str, bytes]:
+) -> list[UnitOutput[None]]:
     """R RL runs in lock-step (``pokerirl.gym.lockstep.group``), run r on ``reward_files[r]``
-    with seed ``seeds[r]``: the files of each run folder, as ``<r>/<name>``."""
+    with seed ``seeds[r]``: the files of each run folder, run r's output r-th."""
     from pokerirl.gym.lockstep.group import train_rl_group
     from pokerirl.irl import load_reward
 
@@ -216,7 +214,7 @@ def rl_group_unit(
             eval_episodes=eval_episodes,
             outs=outs,
         )
-        return _folder_files(Path(scratch) / "runs")
+        return [_output(_folder_files(out)) for out in outs]
 
 
 # --------------------------------------------------------------------------- jobs
@@ -412,55 +410,26 @@ def run_rl_jobs(
     inputs = [job.reward_files() for job in jobs]
     units = [job.unit(files) for job, files in zip(jobs, inputs, strict=True)]
     sb3 = [unit for job, unit in zip(jobs, units, strict=True) if job.backend == RLBackend.SB3]
-    runs = zip(jobs, inputs, units, strict=True)
-    lockstep = [run for run in runs if run[0].backend != RLBackend.SB3]
+    lockstep = [unit for job, unit in zip(jobs, units, strict=True) if job.backend != RLBackend.SB3]
+    runs = {unit.target: (job, files) for job, files, unit in zip(jobs, inputs, units, strict=True)}
+
+    def group_args(members: Sequence[Unit[None]]) -> tuple[Any, ...]:
+        found = [runs[unit.target] for unit in members]
+        first = found[0][0]
+        return (first.env, [files for _, files in found], [job.reward_name() for job, _ in found],
+                [job.seed for job, _ in found], first.settings, first.evaluations,
+                first.eval_episodes)  # fmt: skip
+
+    def group_label(members: Sequence[Unit[None]]) -> str:
+        first = runs[members[0].target][0]
+        return f"{first.env} {first.reward} lock-step x{len(members)}"
+
+    groups = Group(key=lambda unit: runs[unit.target][0].group_key(), fn=rl_group_unit,
+                   args=group_args, label=group_label)  # fmt: skip
     reused = 0
-    if sb3:
-        done = run_units(sb3, backend, overwrite=overwrite, progress=progress, desc="RL runs")
-        reused += len(done.reused)
-    if lockstep:
-        reused += _run_groups(lockstep, backend=backend, overwrite=overwrite, progress=progress)
+    for chosen, desc, grouped in ((sb3, "RL runs", None), (lockstep, "RL groups", groups)):
+        if chosen:
+            done = run_units(chosen, backend, overwrite=overwrite, progress=progress, desc=desc,
+                             group=grouped)  # fmt: skip
+            reused += len(done.reused)
     return reused
-
-
-GroupRun = tuple[RLJob, dict[str, bytes] | None, Unit[None]]  # a job, its reward files, its unit
-
-
-def _run_groups(
-    jobs: Sequence[GroupRun], *, backend: Backend, overwrite: bool, progress: bool
-) -> int:
-    """The unfinished runs of each group trained as one :func:`rl_group_unit`, each run saved
-    to its own folder with its own record (so resuming, and the folders, are as with sb3)."""
-    fates = [check(unit, overwrite=overwrite).fate for _, _, unit in jobs]  # every refusal first
-    groups: dict[tuple[Any, ...], list[int]] = {}
-    for i, ((job, _, _), fate) in enumerate(zip(jobs, fates, strict=True)):
-        if fate is not Fate.REUSED:
-            groups.setdefault(job.group_key(), []).append(i)
-    members = list(groups.values())
-
-    def unit_args(group: list[int]) -> tuple[Any, ...]:
-        first = jobs[group[0]][0]
-        return (first.env, [jobs[i][1] for i in group],
-                [jobs[i][0].reward_name() for i in group], [jobs[i][0].seed for i in group],
-                first.settings, first.evaluations, first.eval_episodes)  # fmt: skip
-
-    def saved(index: int, files: dict[str, bytes]) -> None:
-        for r, i in enumerate(members[index]):
-            prefix = f"{r}/"
-            run = {name[len(prefix):]: data for name, data in files.items()
-                   if name.startswith(prefix)}  # fmt: skip
-            save(jobs[i][2], _output(run))
-
-    todo = sum(len(m) for m in members)
-    map_units(
-        rl_group_unit,
-        [unit_args(group) for group in members],
-        backend=backend,
-        progress=progress,
-        desc="RL groups",
-        reused=len(jobs) - todo,
-        on_result=saved,
-        labels=[f"{jobs[g[0]][0].env} {jobs[g[0]][0].reward} lock-step x{len(g)}"
-                for g in members],
-    )
-    return len(jobs) - todo
