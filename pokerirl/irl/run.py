@@ -94,7 +94,6 @@ class RunSummary:
     results: tuple[RunResult, ...] = ()  # several runs: each run's result
 
 
-CurveStats = Curve  # studies/gym.py's name for it, until the gym half moves to Curve
 
 
 @dataclass(frozen=True, kw_only=True)

@@ -14,11 +14,12 @@ from typing import Any
 
 from pokerirl.errors import ConfigError
 from pokerirl.gym.presets import TASK_ORDER, TASKS, IRLSettings, RLSettings, Task
+from pokerirl.irl.config import Algo  # torch-free
 from pokerirl.studies.common import StudyError, with_overrides
 
-# The IRL algorithms a study may train, in the order they are run and shown (the names of
-# pokerirl.irl.config.Algo, whose import would load torch): the paper's two, then GAIL (opt-in).
-STUDY_ALGOS = ("airl", "hairl", "gail")
+# The IRL algorithms a study may train, in the order they are run and shown: the paper's two,
+# then GAIL (opt-in).
+STUDY_ALGOS: tuple[str, ...] = tuple(algo.value for algo in Algo)
 PAPER_ALGOS = ("airl", "hairl")
 
 

@@ -16,11 +16,12 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
+from pokerirl.irl.config import Algo  # torch-free
 from pokerirl.studies.common import StudyError, with_overrides
 
-# The IRL algorithms a study can train (pokerirl.irl.config.Algo, torch-free here); a study
-# trains the paper's two unless told otherwise (GAIL: `--algos airl,hairl,gail`).
-IRL_ALGOS = ("airl", "hairl", "gail")
+# The IRL algorithms a study can train; a study trains the paper's two unless told otherwise
+# (GAIL: `--algos airl,hairl,gail`).
+IRL_ALGOS: tuple[str, ...] = tuple(algo.value for algo in Algo)
 PAPER_ALGOS = ("airl", "hairl")
 TABLE1_ORDER = ("hairl", "airl", "gail")  # Table 1's rows, the paper's first
 ALGO_LABELS = {"airl": "AIRL", "hairl": "H-AIRL", "gail": "GAIL"}
