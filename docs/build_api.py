@@ -13,6 +13,7 @@ from __future__ import annotations
 import importlib
 import sys
 from pathlib import Path
+from types import ModuleType
 
 API_MODULES = (
     "pokerirl",
@@ -31,7 +32,9 @@ def resolve_lazy(modules: tuple[str, ...] = API_MODULES) -> None:
     for name in modules:
         module = importlib.import_module(name)
         for export in getattr(module, "__all__", ()):
-            if export not in vars(module):
+            # Not bound yet, or bound to a submodule of the same name (pokerirl.irl.baselines
+            # the module, imported by another, hides baselines the function).
+            if isinstance(vars(module).get(export, ModuleType("unbound")), ModuleType):
                 setattr(module, export, getattr(module, export))
 
 

@@ -344,7 +344,7 @@ def test_reward_cards_weigh_rows_and_report_the_parts(month: Path, tmp_path: Pat
     assert RewardCard.from_json(card.to_json()) == card
     ingest_table([month], tmp_path / "drop.parquet")
     plain = reward_card(fold_first, CardStates.from_table(tmp_path / "drop.parquet"))
-    assert "by_part" not in json.loads(plain.to_json())  # cards of plain tables as before
+    assert "by_part" not in plain.to_json()  # cards of plain tables as before
 
 
 def test_study_settings_name_folds_only_when_imputing() -> None:

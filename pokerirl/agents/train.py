@@ -24,6 +24,7 @@ folder of an older pokerirl too), retrains one whose files are corrupt, and refu
 trained with other settings unless ``overwrite``.
 
 >>> import tempfile
+>>> from pokerirl.agents.config import DQNConfig
 >>> out = Path(tempfile.mkdtemp()) / "dqn"
 >>> config = TrainConfig(hands=512, seed=0, eval_every=512, eval_hands=200,
 ...                      dqn=DQNConfig(concurrent_hands=128))
