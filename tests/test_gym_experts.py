@@ -13,6 +13,7 @@ pytest.importorskip("gymnasium")
 pytest.importorskip("stable_baselines3")
 
 from pokerirl.cli import app
+from pokerirl.gym.episodes import sb3_evaluation
 from pokerirl.gym.experts import (
     CONFIG_FILE,
     FINAL_EVAL_SEED,
@@ -21,7 +22,6 @@ from pokerirl.gym.experts import (
     MODEL_FILE,
     ExpertRecord,
     ManifestEntry,
-    evaluate,
     load_expert,
     manifest_entry,
     shipped_dir,
@@ -67,12 +67,12 @@ def test_expert_folder_records_its_training_and_reloads_to_the_same_returns(acro
     state = torch.load(acrobot / MODEL_FILE, weights_only=True)
     assert all(isinstance(v, torch.Tensor) for v in state.values())
     expert = load_expert(acrobot)
-    replay = evaluate(expert.policy, "Acrobot-v1", episodes=2, seed=FINAL_EVAL_SEED)
+    replay = sb3_evaluation(expert.policy, "Acrobot-v1", episodes=2, seed=FINAL_EVAL_SEED)
     assert list(replay.returns) == record["evaluation"]["returns"]
     assert record["return_mean"] == pytest.approx(replay.mean)
     # The saved weights are the best periodic ones (with seed 0, the middle one, so keeping the
     # last state would fail here): they replay that evaluation's score.
-    periodic = evaluate(expert.policy, "Acrobot-v1", episodes=1, seed=0 + 10_000)
+    periodic = sb3_evaluation(expert.policy, "Acrobot-v1", episodes=1, seed=0 + 10_000)
     assert periodic.mean == record["evaluation"]["best_periodic_return"]
 
 
@@ -146,7 +146,7 @@ def test_each_shipped_expert_replays_its_recorded_first_episode(
     # to land near the recorded return; wrong weights score near random (-234 and -16).
     for entry in shipped_manifest():
         expert = load_expert(shipped_dir() / entry["env"])
-        replay = evaluate(expert.policy, entry["env"], episodes=1, seed=FINAL_EVAL_SEED)
+        replay = sb3_evaluation(expert.policy, entry["env"], episodes=1, seed=FINAL_EVAL_SEED)
         recorded = expert.record["evaluation"]["returns"][0]
         rel = 0.15 if entry["env"] in ("Ant-v4", "HalfCheetah-v4") else 1e-6
         assert replay.returns[0] == pytest.approx(recorded, rel=rel), entry["env"]

@@ -18,7 +18,7 @@ pytest.importorskip("stable_baselines3")
 
 from pokerirl.cli import app
 from pokerirl.gym.collect import collect
-from pokerirl.gym.episodes import episode_returns, policy_actions
+from pokerirl.gym.episodes import play_episodes, policy_actions
 from pokerirl.gym.experts import load_expert, resolve_expert_dir
 from pokerirl.gym.irl import irl_config, load_env_transitions, train_gym_irl
 from pokerirl.gym.presets import TASKS
@@ -70,12 +70,12 @@ def test_mountaincar_irl_runs_evaluate_in_the_env_and_feed_the_rl_phase(tmp_path
         assert baselines["expert"] == pytest.approx(expert_mean)  # measured once, from the data
         # eval_return is the saved policy's real return on the evaluation episodes
         policy = load_policy(run)
-        replay = episode_returns(
+        (replay,) = play_episodes(
             "MountainCar-v0",
             lambda obs, p=policy: policy_actions(p, obs, discrete=True),
             episodes=PRESETS["quick"].irl("MountainCar-v0").eval_episodes,
         )
-        assert replay.mean() == pytest.approx(metrics[-1]["eval_return"])
+        assert replay.mean == pytest.approx(metrics[-1]["eval_return"])
         lasts.append(metrics[-1]["eval_return"])
     assert summary["env"] == "MountainCar-v0" and summary["algo"] == "hairl"
     assert summary["runs"] == 2 and summary["seeds"] == [0, 1]
@@ -120,11 +120,11 @@ def test_pendulum_box_actions_train_and_load(tmp_path: Path) -> None:
     assert config["architecture"]["action_space"] == {"type": "box", "low": [-2.0], "high": [2.0]}
     # eval_return is the saved policy's real return (the mean action, clipped to the box)
     policy = load_policy(tmp_path / "irl" / "run-1")
-    replay = episode_returns(
+    (replay,) = play_episodes(
         "Pendulum-v1", lambda obs: policy_actions(policy, obs, discrete=False), episodes=2
     )
     last = json.loads((tmp_path / "irl" / "run-1" / "metrics.jsonl").read_text().splitlines()[-1])
-    assert replay.mean() == pytest.approx(last["eval_return"])
+    assert replay.mean == pytest.approx(last["eval_return"])
     reward = load_reward(tmp_path / "irl" / "run-1")
     assert reward(np.zeros((4, 3), np.float32), np.ones((4, 1), np.float32)).shape == (4,)
 

@@ -19,11 +19,12 @@ pytest.importorskip("stable_baselines3")
 
 from pokerirl.cli import app
 from pokerirl.execution import pinned_threads
-from pokerirl.gym.experts import build_policy, evaluate, policy_kwargs
+from pokerirl.gym.episodes import EVAL_SEED, sb3_evaluation
+from pokerirl.gym.experts import build_policy, policy_kwargs
 from pokerirl.gym.lockstep import LockstepPPO
 from pokerirl.gym.lockstep.group import train_rl_group
 from pokerirl.gym.presets import TASKS, PPOSettings, RLSettings
-from pokerirl.gym.rl import EVAL_SEED, train_rl
+from pokerirl.gym.rl import train_rl
 from pokerirl.studies.gym.units import RLJob
 
 CARTPOLE = RLSettings(
@@ -107,7 +108,7 @@ def test_run_folder_loads_into_sb3_and_replays_the_last_point(
         assert [json.loads(line)["timesteps"] for line in lines] == [512]
         policy = build_policy(env, "ppo", config["policy_kwargs"])
         policy.load_state_dict(torch.load(out / "model.pt", weights_only=True), strict=True)
-        replay = evaluate(policy, env, episodes=3, seed=EVAL_SEED)
+        replay = sb3_evaluation(policy, env, episodes=3, seed=EVAL_SEED)
         assert replay.mean == pytest.approx(result.curve[-1].return_mean, rel=1e-4)
         assert replay.std == pytest.approx(result.curve[-1].return_std, rel=1e-3, abs=1e-3)
     assert config["policy_kwargs"] == policy_kwargs(settings)
@@ -156,7 +157,7 @@ def test_mountaincar_dqn_runs_in_lock_step_and_sb3_loads_the_folders(tmp_path: P
         policy = build_policy("MountainCar-v0", "dqn", config["policy_kwargs"])
         policy.load_state_dict(torch.load(out / f"run-{k}" / "model.pt", weights_only=True),
                                strict=True)  # fmt: skip
-        replay = evaluate(policy, "MountainCar-v0", episodes=1, seed=EVAL_SEED)
+        replay = sb3_evaluation(policy, "MountainCar-v0", episodes=1, seed=EVAL_SEED)
         assert replay.mean == pytest.approx(config["final_return"])
     group("MountainCar-v0", TASKS["MountainCar-v0"].rl, [1], [tmp_path / "alone"],
           timesteps=1200, evaluations=1, episodes=1)  # fmt: skip

@@ -29,6 +29,7 @@ import torch
 
 from pokerirl.atomic import write_text, write_torch
 from pokerirl.errors import ConfigError, InputError, MissingExtra
+from pokerirl.gym.episodes import sb3_evaluation
 
 # Re-exported: the manifest's names lived here before pokerirl.gym.manifest (issue 34).
 from pokerirl.gym.manifest import (  # noqa: F401
@@ -104,21 +105,6 @@ class ExpertRecord(Serializable):
     policy_kwargs: Mapping[str, Any]
     evaluation: ExpertEvaluation
     versions: Mapping[str, str | None]
-
-
-@dataclass(frozen=True, kw_only=True)
-class Evaluation:
-    """Returns of a policy over whole episodes."""
-
-    returns: tuple[float, ...]
-
-    @property
-    def mean(self) -> float:
-        return float(np.mean(self.returns))
-
-    @property
-    def std(self) -> float:
-        return float(np.std(self.returns))
 
 
 def require_gym() -> None:
@@ -217,30 +203,6 @@ def make_model(env_id: str, settings: RLSettings, *, seed: int, env: Any = None)
     return model
 
 
-# --------------------------------------------------------------------------- evaluation
-
-
-def evaluate(
-    policy: BasePolicy, env_id: str, *, episodes: int, seed: int, deterministic: bool = True
-) -> Evaluation:
-    """Run ``episodes`` whole episodes (seeds ``seed``, ``seed + 1``, ...) and return them."""
-    env = make_env(env_id)
-    returns = []
-    try:
-        for episode in range(episodes):
-            obs, _ = env.reset(seed=seed + episode)
-            total, done = 0.0, False
-            while not done:
-                action, _ = policy.predict(obs, deterministic=deterministic)
-                obs, reward, terminated, truncated, _ = env.step(action)
-                total += float(reward)
-                done = terminated or truncated
-            returns.append(total)
-    finally:
-        env.close()
-    return Evaluation(returns=tuple(returns))
-
-
 # --------------------------------------------------------------------------- training
 
 
@@ -313,7 +275,7 @@ def train_expert_record(
 
     def evaluate_and_keep() -> None:
         # The same episode seeds every time, so checkpoints are compared on the same starts.
-        result = evaluate(model.policy, env_id, episodes=eval_episodes, seed=seed + 10_000)
+        result = sb3_evaluation(model.policy, env_id, episodes=eval_episodes, seed=seed + 10_000)
         if not history or result.mean > max(h["return_mean"] for h in history):
             best.clear()
             best.update({k: v.detach().clone() for k, v in model.policy.state_dict().items()})
@@ -332,7 +294,7 @@ def train_expert_record(
         evaluate_and_keep()  # the final state competes too
     model.policy.load_state_dict(best)
     model.policy.set_training_mode(False)
-    final = evaluate(model.policy, env_id, episodes=final_episodes, seed=FINAL_EVAL_SEED)
+    final = sb3_evaluation(model.policy, env_id, episodes=final_episodes, seed=FINAL_EVAL_SEED)
 
     record = ExpertRecord(
         env=env_id,

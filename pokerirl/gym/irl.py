@@ -38,7 +38,7 @@ from torch import Tensor, nn
 from pokerirl.atomic import make_shareable, write_text
 from pokerirl.errors import ConfigError, InputError, Remedy
 from pokerirl.execution import progress_share
-from pokerirl.gym.episodes import episode_returns, policy_actions, random_return
+from pokerirl.gym.episodes import play_episodes, policy_actions, random_return
 from pokerirl.gym.experts import make_env, shipped_experts
 from pokerirl.gym.presets import IRLSettings
 from pokerirl.gym.quality import has_true_reward, write_reward_quality
@@ -289,15 +289,13 @@ def train_gym_irl(
             for policy in record.policies:
                 was_training = policy.training
                 policy.eval()
-                returns = episode_returns(
+                (evaluation,) = play_episodes(
                     env_id,
                     functools.partial(_standardized_actions, policy, shift_np, scale_np, discrete),
                     episodes=settings.eval_episodes,
                 )
                 policy.train(was_training)
-                extras.append(
-                    {"eval_return": float(returns.mean()), "eval_return_std": float(returns.std())}
-                )
+                extras.append({"eval_return": evaluation.mean, "eval_return_std": evaluation.std})
             return extras
 
         def on_epoch(all_metrics: list[EpochMetrics]) -> None:

@@ -53,7 +53,7 @@ from pokerirl.atomic import write_text
 from pokerirl.errors import PokerIRLError
 from pokerirl.execution import pinned_threads
 from pokerirl.gym.collect import read_transitions
-from pokerirl.gym.episodes import lockstep_steps, policy_actions
+from pokerirl.gym.episodes import episode_steps, policy_actions
 from pokerirl.gym.experts import make_env
 from pokerirl.gym.presets import TASKS
 from pokerirl.irl.nets import RewardFamily, fold_obs_standardization
@@ -371,12 +371,12 @@ def roll_out(
 ) -> Rollouts:
     """``episodes`` episodes in lock-step (episode k from ``reset(seed=seed + k)``)."""
 
-    steps = list(lockstep_steps(env_id, act, episodes=episodes, seed=seed))
+    steps = list(episode_steps(env_id, act, episodes=episodes, seed=seed))
     return Rollouts(
-        obs=np.asarray([s[1] for s in steps], np.float32),
-        actions=np.asarray([s[2] for s in steps]),
-        rewards=np.asarray([s[3] for s in steps], np.float64),
-        next_obs=np.asarray([s[4] for s in steps], np.float32),
+        obs=np.asarray([s.obs for s in steps], np.float32),
+        actions=np.asarray([s.action for s in steps]),
+        rewards=np.asarray([s.reward for s in steps], np.float64),
+        next_obs=np.asarray([s.next_obs for s in steps], np.float32),
     )
 
 

@@ -20,6 +20,7 @@ import numpy as np
 from pokerirl.atomic import write_text, write_torch
 from pokerirl.errors import ConfigError, InputError
 from pokerirl.execution import unit_progress
+from pokerirl.gym.episodes import EVAL_SEED, sb3_evaluation
 from pokerirl.gym.experts import (
     CONFIG_FILE,
     METRICS_FILE,
@@ -35,7 +36,6 @@ from pokerirl.gym.rewards import RewardCallable, learned_reward_env
 from pokerirl.gym.tasks import task
 from pokerirl.meanstd import mean_and_std
 
-EVAL_SEED = 2_000_000  # evaluation episodes' seeds, apart from the experts' and the data's
 # How the RL phase trains: SB3, one run per call (train_rl), or R runs of one task in one
 # process (pokerirl.gym.lockstep.group.train_rl_group). lockstep is the default since its
 # equivalence table with SB3 (docs/lockstep.md) holds on Acrobot, Pendulum and MountainCar.
@@ -103,8 +103,6 @@ def train_rl(
     from stable_baselines3.common.monitor import Monitor
     from stable_baselines3.common.vec_env import DummyVecEnv
 
-    from pokerirl.gym.experts import evaluate
-
     settings = settings or task(env_id).rl
     budget: int = timesteps or settings.timesteps
     if budget < 1 or evaluations < 1 or eval_episodes < 1:
@@ -120,7 +118,7 @@ def train_rl(
 
     def evaluate_now() -> None:
         model.policy.set_training_mode(False)
-        result = evaluate(model.policy, env_id, episodes=eval_episodes, seed=EVAL_SEED)
+        result = sb3_evaluation(model.policy, env_id, episodes=eval_episodes, seed=EVAL_SEED)
         curve.append(CurvePoint(timesteps=model.num_timesteps, return_mean=result.mean,
                                 return_std=result.std))  # fmt: skip
 

@@ -5,8 +5,9 @@ Per run it produces what :func:`pokerirl.gym.rl.train_rl` produces: the true-ret
 timesteps as ``train_rl``'s callback, ``num_timesteps % every == 0`` before the budget, and one
 at the end), the training episodes' env returns, and, given ``outs``, a run folder laid out as
 ``train_rl`` writes it (``config.json`` with ``"backend": "lockstep"``, an SB3-loadable
-``model.pt``, ``metrics.jsonl``). The R runs' evaluation episodes are played together too: one
-batched ``predict`` per step for every run and episode still going.
+``model.pt``, ``metrics.jsonl``). The R runs' evaluation episodes are played together too, by
+:func:`pokerirl.gym.episodes.play_episodes` with ``Batching.ALL``: one batched ``predict`` per
+step for every run and episode.
 
 Run r of a group equals a group of one with seed r (each run has its own random streams), which
 is what lets a resumed study train only its unfinished runs as a group.
@@ -23,9 +24,10 @@ import numpy as np
 
 from pokerirl.errors import ConfigError
 from pokerirl.execution import unit_progress
+from pokerirl.gym.episodes import EVAL_SEED, Batching, play_episodes
 from pokerirl.gym.presets import RLSettings
 from pokerirl.gym.rewards import RewardCallable
-from pokerirl.gym.rl import EVAL_SEED, CurvePoint, RLBackend, RLResult, check_reward, save_run
+from pokerirl.gym.rl import CurvePoint, RLBackend, RLResult, check_reward, save_run
 from pokerirl.gym.tasks import task
 
 BACKEND = RLBackend.LOCKSTEP
@@ -62,42 +64,6 @@ def make_group(
     return lockstep_class(settings.algo)(env_id, algo_settings, seeds=seeds, rewards=rewards)
 
 
-class GroupEvaluator:
-    """Deterministic episodes of every run at once: run r's episode i from
-    ``reset(seed=seed + i)``, as :func:`pokerirl.gym.experts.evaluate` plays them one by one."""
-
-    def __init__(self, env_id: str, runs: int, *, episodes: int, seed: int) -> None:
-        from pokerirl.gym.experts import make_env
-
-        self.runs, self.episodes, self.seed = runs, episodes, seed
-        self.envs = [[make_env(env_id) for _ in range(episodes)] for _ in range(runs)]
-
-    def __call__(self, algo: LockstepAlgo) -> np.ndarray:
-        """Returns (runs, episodes) of ``algo``'s deterministic actions."""
-        R, E = self.runs, self.episodes
-        obs = np.stack([
-            np.stack([np.asarray(env.reset(seed=self.seed + i)[0], dtype=np.float32)
-                      for i, env in enumerate(row)])
-            for row in self.envs
-        ])  # fmt: skip
-        totals = np.zeros((R, E))
-        running = np.ones((R, E), dtype=bool)
-        while running.any():
-            # Finished episodes keep their last observation: acted on, never stepped.
-            actions = algo.predict(obs)
-            for r, i in zip(*np.nonzero(running), strict=True):
-                nxt, reward, terminated, truncated, _ = self.envs[r][i].step(actions[r, i])
-                totals[r, i] += float(reward)
-                obs[r, i] = nxt
-                running[r, i] = not (terminated or truncated)
-        return totals
-
-    def close(self) -> None:
-        for row in self.envs:
-            for env in row:
-                env.close()
-
-
 def train_rl_group(
     env_id: str,
     *,
@@ -131,24 +97,22 @@ def train_rl_group(
     algo = make_group(env_id, settings, seeds=seeds, rewards=rewards)
     every = max(timesteps // evaluations, 1)
     curves: list[list[CurvePoint]] = [[] for _ in range(R)]
-    evaluator = GroupEvaluator(env_id, R, episodes=eval_episodes, seed=EVAL_SEED)
 
     def evaluate_now(steps: int) -> None:
-        returns = evaluator(algo)
-        for r in range(R):  # Evaluation's mean and (population) std, as train_rl records
-            curves[r].append(CurvePoint(timesteps=steps, return_mean=float(np.mean(returns[r])),
-                                        return_std=float(np.std(returns[r]))))
+        # Every run's episodes each step, finished ones included: the batch shape never changes.
+        evaluations = play_episodes(env_id, algo.predict, episodes=eval_episodes, seed=EVAL_SEED,
+                                    runs=R, batching=Batching.ALL)  # fmt: skip
+        for r, evaluation in enumerate(evaluations):
+            curves[r].append(CurvePoint(timesteps=steps, return_mean=evaluation.mean,
+                                        return_std=evaluation.std))  # fmt: skip
 
     def on_step(steps: int) -> None:
         unit_progress(steps, timesteps)  # the driver's bar, when this group is a unit
         if steps % every == 0 and steps < timesteps:
             evaluate_now(steps)
 
-    try:
-        group = algo.learn(timesteps, callback=on_step)
-        evaluate_now(group.timesteps)
-    finally:
-        evaluator.close()
+    group = algo.learn(timesteps, callback=on_step)
+    evaluate_now(group.timesteps)
     results = [
         RLResult(
             env=env_id,
