@@ -7,6 +7,7 @@ from __future__ import annotations
 import copy
 import json
 import os
+import shutil
 import signal
 import subprocess
 import sys
@@ -285,6 +286,71 @@ def test_gym_expert_rerun_with_another_seed_is_refused(tmp_path: Path) -> None:
     assert _files(out) == before
     assert run_cli(*base, "--seed", "3", "--overwrite")[0] == 0
     assert json.loads((out / "config.json").read_text())["seed"] == 3
+
+
+# --- gym rl and gym expert folders written before the store --------------------------------
+
+
+def _snapshot(folder: Path) -> dict[str, tuple[bytes, int]]:
+    """Every file's bytes and inode: a file rewritten, even to the same bytes, shows."""
+    return {str(p.relative_to(folder)): (p.read_bytes(), p.stat().st_ino)
+            for p in folder.rglob("*") if p.is_file()}  # fmt: skip
+
+
+def _before_the_store(out: Path, name: str, identity: dict[str, Any]) -> None:
+    """Make ``out`` a folder as the claim-era code left it: one ``pokerirl-gym-job/1`` record
+    for the folder (its bytes as that code wrote them), no ``unit.json``."""
+    for record in out.rglob("unit.json"):
+        record.unlink()
+    document = {"format": "pokerirl-gym-job/1", "identity": identity}
+    (out / name).write_text(json.dumps(document, indent=2) + "\n")
+
+
+def test_a_gym_rl_folder_made_before_the_store_is_reused_refused_and_replaced(
+    tmp_path: Path,
+) -> None:
+    out = tmp_path / "rl"
+    base = ["gym", "rl", "MountainCar-v0", "--env-reward", "--runs", "2", "--out", str(out)]
+    assert run_cli(*base, *RL_FAST)[0] == 0
+    identity = {"env": "MountainCar-v0", "reward": "env", "timesteps": 300, "evaluations": 1,
+                "eval_episodes": 1, "backend": "lockstep"}  # fmt: skip
+    _before_the_store(out, "rl.job.json", identity)
+    shutil.rmtree(out / "run-1")  # killed after its first run landed
+    before = _snapshot(out)
+    assert run_cli(*base, *RL_FAST)[0] == 0
+    after = _snapshot(out)
+    assert {k: v for k, v in after.items() if not k.startswith("run-1")} == before  # reused
+    assert (out / "run-1" / "unit.json").is_file()  # the missing run, as a unit
+    code, lines = run_cli(*base, "--timesteps", "400", *RL_FAST[2:])
+    assert code == 1
+    assert one_error_line(lines) == (
+        f"error: {out / 'rl.job.json'} was made with another configuration "
+        "(timesteps 300 -> 400); use another --out, or --overwrite to recompute it"
+    )
+    assert _snapshot(out) == after
+    assert run_cli(*base, "--timesteps", "400", *RL_FAST[2:], "--overwrite")[0] == 0
+    assert _timesteps(out) == {"run-0": 400, "run-1": 400}
+    assert not (out / "rl.job.json").exists()  # it vouches for nothing any more
+
+
+def test_a_gym_expert_folder_made_before_the_store_is_reused_and_refused(
+    tmp_path: Path,
+) -> None:
+    out = tmp_path / "expert"
+    base = ["gym", "expert", "MountainCar-v0", "--out", str(out), *EXPERT_FAST]
+    assert run_cli(*base)[0] == 0
+    identity = {"env": "MountainCar-v0", "seed": 0, "hyper": "paper", "timesteps": 300,
+                "eval_every": None, "eval_episodes": 1, "final_episodes": 1}  # fmt: skip
+    _before_the_store(out, "expert.job.json", identity)
+    before = _snapshot(out)
+    code, lines = run_cli(*base)
+    assert code == 0 and any("reusing the expert" in line for line in lines)
+    assert _snapshot(out) == before
+    code, lines = run_cli(*base, "--seed", "3")
+    assert code == 1
+    assert f"{out / 'expert.job.json'} was made with another configuration (seed 0 -> 3)" in (
+        one_error_line(lines))  # fmt: skip
+    assert _snapshot(out) == before
 
 
 # --- a killed gym irl ------------------------------------------------------------------------
