@@ -192,6 +192,7 @@ def expert_folder(
         args=(env, seed, hyper, timesteps, eval_every, eval_episodes, final_episodes),
         legacy=(legacy,),
     )
+    out.mkdir(parents=True, exist_ok=True)  # an unwritable place fails here, before training
     done = run_units([unit], Backend(threads=threads), overwrite=overwrite).done[0]
     return ExpertFolder(record=_expert_record(out / CONFIG_FILE), reused=done.fate is Fate.REUSED)
 
@@ -270,6 +271,7 @@ def rl_runs(
     units = [unit(k) for k in range(runs)]
     _clear_other_settings([*units, *(unit(k) for k in _seeds(out) if k >= runs)], overwrite)
     _drop_unused(legacy, vouches=bool(_legacy_runs(out)))
+    out.mkdir(parents=True, exist_ok=True)  # an unwritable place fails here, before training
     group = None
     if rl_backend != "sb3":
         group = Group(
