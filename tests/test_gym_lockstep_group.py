@@ -194,7 +194,9 @@ def test_gym_rl_lockstep_resumes_the_missing_run_only(tmp_path: Path) -> None:
     first = CliRunner().invoke(app, args)
     assert first.exit_code == 0, first.output
     before = _snapshot(out)
-    assert json.loads((out / "rl.job.json").read_text())["identity"]["backend"] == "lockstep"
+    for k in range(3):  # each run its own unit
+        record = json.loads((out / f"run-{k}" / "unit.json").read_text())
+        assert record["config"]["backend"] == "lockstep"
     lost = {name: (out / "run-1" / name).read_bytes() for name in FILES}
     for path in (out / "run-1").iterdir():
         path.unlink()
@@ -211,7 +213,7 @@ def test_gym_rl_lockstep_resumes_the_missing_run_only(tmp_path: Path) -> None:
         refused = CliRunner().invoke(app, [*args, *changed])
         assert refused.exit_code == 1
         lines = refused.output.strip().splitlines()
-        assert len(lines) == 1 and "other settings" in lines[0] and "--overwrite" in lines[0]
+        assert len(lines) == 1 and "another configuration" in lines[0] and "--overwrite" in lines[0]
         assert _snapshot(out) == kept
 
 

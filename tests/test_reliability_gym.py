@@ -7,10 +7,12 @@ from __future__ import annotations
 import copy
 import json
 import os
+import shutil
 import signal
 import subprocess
 import sys
 import time
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -206,37 +208,70 @@ def test_gym_rl_rerun_resumes_refuses_other_settings_and_overwrites_whole(tmp_pa
     base = ["gym", "rl", "MountainCar-v0", "--env-reward", "--runs", "2", "--out", str(out)]
     assert run_cli(*base, *RL_FAST)[0] == 0
     before = _files(out)
+    assert {json.loads((out / f"run-{k}" / "unit.json").read_text())["config"]["seed"]
+            for k in (0, 1)} == {0, 1}  # fmt: skip
     assert run_cli(*base, *RL_FAST)[0] == 0  # same settings: the runs are kept
     assert _files(out) == before
     other = ["--timesteps", "400", *RL_FAST[2:]]
     code, lines = run_cli(*base, *other)
     assert code == 1
-    assert "other settings (timesteps 300 -> 400); pass --overwrite" in one_error_line(lines)
+    assert one_error_line(lines) == (
+        f"error: {out / 'run-0'} was made with another configuration (timesteps 300 -> 400); "
+        "use another --out, or --overwrite to recompute it"
+    )
     assert _files(out) == before  # nothing replaced
     assert run_cli(*base, *other, "--overwrite")[0] == 0
     for k in (0, 1):
         assert json.loads((out / f"run-{k}" / "config.json").read_text())["timesteps"] == 400
 
 
-def test_a_killed_gym_rl_overwrite_never_leaves_runs_of_two_settings(tmp_path: Path) -> None:
-    out = tmp_path / "rl"
-    base = ["gym", "rl", "MountainCar-v0", "--env-reward", "--out", str(out)]
-    assert run_cli(*base, "--runs", "2", *RL_FAST)[0] == 0
-    argv = [sys.executable, "-m", "pokerirl", *base, "--runs", "2", "--overwrite"]
-    argv += ["--timesteps", "20000", *RL_FAST[2:]]
-    process = subprocess.Popen(argv, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+def _timesteps(out: Path) -> dict[str, int]:
+    """Each run folder's budget, from its config (what it was trained with)."""
+    return {p.parent.name: json.loads(p.read_text())["timesteps"]
+            for p in out.glob("run-*/config.json")}  # fmt: skip
+
+
+def _killed(argv: list[str], ready: Callable[[], bool]) -> None:
+    """Run the CLI in a subprocess and SIGKILL it as soon as ``ready()``."""
+    process = subprocess.Popen(
+        [sys.executable, "-m", "pokerirl", *argv], stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )  # fmt: skip
     try:
-        deadline = time.monotonic() + 60
-        while time.monotonic() < deadline and not any(out.glob(".run-0.new-*")):
-            time.sleep(0.05)  # the first new run is under way
-        assert any(out.glob(".run-0.new-*"))
+        deadline = time.monotonic() + 120
+        while time.monotonic() < deadline and not ready() and process.poll() is None:
+            time.sleep(0.02)
+        assert ready() and process.poll() is None  # killed in the middle
     finally:
         process.send_signal(signal.SIGKILL)
         process.wait()
-    steps = {json.loads(p.read_text())["timesteps"] for p in out.glob("run-*/config.json")}
-    assert steps <= {20000}  # the old runs went before the new ones started
-    record = json.loads((out / "rl.job.json").read_text())
-    assert record["identity"]["timesteps"] == 20000
+
+
+def test_a_killed_gym_rl_overwrite_never_leaves_runs_of_two_settings(tmp_path: Path) -> None:
+    """Runs are units, each saved on its own: an --overwrite first removes every run of other
+    settings (run-4 beyond --runs too), so a kill after the first new run leaves no old one."""
+    out = tmp_path / "rl"
+    base = ["gym", "rl", "MountainCar-v0", "--env-reward", "--out", str(out), "-q"]
+    assert run_cli(*base, "--runs", "5", *RL_FAST, "--rl-backend", "sb3")[0] == 0
+    new = [*base, "--runs", "3", "--timesteps", "600", *RL_FAST[2:], "--rl-backend", "sb3"]
+    _killed([*new, "--overwrite"], lambda: _timesteps(out).get("run-0") == 600)
+    assert _timesteps(out) == {"run-0": 600}  # the old runs went before the new ones started
+    # The next run resumes from the new run: no --overwrite needed, run-0 kept.
+    kept = (out / "run-0" / "model.pt").read_bytes(), (out / "run-0" / "model.pt").stat().st_ino
+    assert run_cli(*new)[0] == 0
+    assert _timesteps(out) == {f"run-{k}": 600 for k in range(3)}
+    assert ((out / "run-0" / "model.pt").read_bytes(),
+            (out / "run-0" / "model.pt").stat().st_ino) == kept  # fmt: skip
+
+
+def test_a_gym_rl_overwrite_killed_in_a_lockstep_group_leaves_no_old_run(tmp_path: Path) -> None:
+    out = tmp_path / "rl"
+    base = ["gym", "rl", "MountainCar-v0", "--env-reward", "--out", str(out), "--runs", "2"]
+    assert run_cli(*base, *RL_FAST)[0] == 0
+    _killed([*base, "--overwrite", "--timesteps", "20000", *RL_FAST[2:]],
+            lambda: not any(out.glob("run-*")))  # fmt: skip
+    assert _timesteps(out) == {}
+    assert not list(out.glob("*.json"))  # no record of either settings
 
 
 def test_gym_expert_rerun_with_another_seed_is_refused(tmp_path: Path) -> None:
@@ -247,10 +282,75 @@ def test_gym_expert_rerun_with_another_seed_is_refused(tmp_path: Path) -> None:
     code, lines = run_cli(*base)
     assert code == 0 and any("reusing the expert" in line for line in lines)
     code, lines = run_cli(*base, "--seed", "3")
-    assert code == 1 and "(seed 0 -> 3); pass --overwrite" in one_error_line(lines)
+    assert code == 1 and "(seed 0 -> 3); use another --out, or --overwrite" in one_error_line(lines)
     assert _files(out) == before
     assert run_cli(*base, "--seed", "3", "--overwrite")[0] == 0
     assert json.loads((out / "config.json").read_text())["seed"] == 3
+
+
+# --- gym rl and gym expert folders written before the store --------------------------------
+
+
+def _snapshot(folder: Path) -> dict[str, tuple[bytes, int]]:
+    """Every file's bytes and inode: a file rewritten, even to the same bytes, shows."""
+    return {str(p.relative_to(folder)): (p.read_bytes(), p.stat().st_ino)
+            for p in folder.rglob("*") if p.is_file()}  # fmt: skip
+
+
+def _before_the_store(out: Path, name: str, identity: dict[str, Any]) -> None:
+    """Make ``out`` a folder as the claim-era code left it: one ``pokerirl-gym-job/1`` record
+    for the folder (its bytes as that code wrote them), no ``unit.json``."""
+    for record in out.rglob("unit.json"):
+        record.unlink()
+    document = {"format": "pokerirl-gym-job/1", "identity": identity}
+    (out / name).write_text(json.dumps(document, indent=2) + "\n")
+
+
+def test_a_gym_rl_folder_made_before_the_store_is_reused_refused_and_replaced(
+    tmp_path: Path,
+) -> None:
+    out = tmp_path / "rl"
+    base = ["gym", "rl", "MountainCar-v0", "--env-reward", "--runs", "2", "--out", str(out)]
+    assert run_cli(*base, *RL_FAST)[0] == 0
+    identity = {"env": "MountainCar-v0", "reward": "env", "timesteps": 300, "evaluations": 1,
+                "eval_episodes": 1, "backend": "lockstep"}  # fmt: skip
+    _before_the_store(out, "rl.job.json", identity)
+    shutil.rmtree(out / "run-1")  # killed after its first run landed
+    before = _snapshot(out)
+    assert run_cli(*base, *RL_FAST)[0] == 0
+    after = _snapshot(out)
+    assert {k: v for k, v in after.items() if not k.startswith("run-1")} == before  # reused
+    assert (out / "run-1" / "unit.json").is_file()  # the missing run, as a unit
+    code, lines = run_cli(*base, "--timesteps", "400", *RL_FAST[2:])
+    assert code == 1
+    assert one_error_line(lines) == (
+        f"error: {out / 'rl.job.json'} was made with another configuration "
+        "(timesteps 300 -> 400); use another --out, or --overwrite to recompute it"
+    )
+    assert _snapshot(out) == after
+    assert run_cli(*base, "--timesteps", "400", *RL_FAST[2:], "--overwrite")[0] == 0
+    assert _timesteps(out) == {"run-0": 400, "run-1": 400}
+    assert not (out / "rl.job.json").exists()  # it vouches for nothing any more
+
+
+def test_a_gym_expert_folder_made_before_the_store_is_reused_and_refused(
+    tmp_path: Path,
+) -> None:
+    out = tmp_path / "expert"
+    base = ["gym", "expert", "MountainCar-v0", "--out", str(out), *EXPERT_FAST]
+    assert run_cli(*base)[0] == 0
+    identity = {"env": "MountainCar-v0", "seed": 0, "hyper": "paper", "timesteps": 300,
+                "eval_every": None, "eval_episodes": 1, "final_episodes": 1}  # fmt: skip
+    _before_the_store(out, "expert.job.json", identity)
+    before = _snapshot(out)
+    code, lines = run_cli(*base)
+    assert code == 0 and any("reusing the expert" in line for line in lines)
+    assert _snapshot(out) == before
+    code, lines = run_cli(*base, "--seed", "3")
+    assert code == 1
+    assert f"{out / 'expert.job.json'} was made with another configuration (seed 0 -> 3)" in (
+        one_error_line(lines))  # fmt: skip
+    assert _snapshot(out) == before
 
 
 # --- a killed gym irl ------------------------------------------------------------------------

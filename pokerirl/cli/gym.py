@@ -108,7 +108,7 @@ def gym_expert(
     """Train an SB3 expert (PPO; DQN for MountainCar), keeping the best evaluated checkpoint.
 
     A rerun with the same settings keeps the expert; other settings are refused unless
-    --overwrite (OUT/expert.job.json records them)."""
+    --overwrite (OUT/unit.json records them)."""
     from pokerirl.execution import pin_threads
     from pokerirl.gym.jobs import expert_folder
 
@@ -125,6 +125,7 @@ def gym_expert(
         eval_episodes=eval_episodes,
         final_episodes=final_episodes,
         overwrite=overwrite,
+        threads=threads,
     )
     record = done.record
     if done.reused:
@@ -230,8 +231,9 @@ def gym_rl(
 
     With --rl-backend lockstep the unfinished runs train together in one process (run k is
     the same run either way it is grouped). Resumable: a rerun with the same settings keeps
-    the finished runs; other settings (the backend too) are refused unless --overwrite
-    (OUT/rl.job.json records them)."""
+    the finished runs; other settings (the backend too) are refused unless --overwrite, which
+    removes every run of other settings before the first new one starts (OUT/run-<k>/unit.json
+    records a run's)."""
     from pokerirl.execution import pin_threads
     from pokerirl.gym.jobs import rl_runs
 
@@ -252,6 +254,7 @@ def gym_rl(
         rl_backend=rl_backend,
         overwrite=overwrite,
         progress=not quiet,
+        threads=threads,
     )
     echo(
         f"{env}: final true return {done.final.mean:.1f} +- {done.final.std:.1f} over {runs} "

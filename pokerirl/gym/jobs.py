@@ -1,94 +1,152 @@
-"""The ``gym expert`` and ``gym rl`` folders: their work (:func:`expert_folder`,
-:func:`rl_runs`) and their record, what their outputs were trained with (:func:`claim`).
+"""The ``gym expert`` and ``gym rl`` folders, as units of :mod:`pokerirl.store`.
 
-A rerun into the same folder with the same settings resumes (finished runs are kept); with
-other settings it is refused in one line before anything is touched, unless ``overwrite``,
-which removes every earlier output first, so that a rerun killed midway can never leave runs
-of two settings side by side.
+``gym expert``: the expert folder is one folder unit (``OUT/unit.json``). ``gym rl``: each
+run ``OUT/run-<k>`` (seed k) is a folder unit with its own record; on the lock-step backend
+the unfinished runs train as one group (``run_units(..., group=...)``: run k is the same run
+either way it is grouped), each saved on its own.
 
->>> import tempfile
->>> folder = Path(tempfile.mkdtemp())
->>> claim(folder, "rl.job.json", {"reward": "env"}, outputs=["run-*"], overwrite=False)
->>> (folder / "run-0").mkdir()
->>> claim(folder, "rl.job.json", {"reward": "a.pt"}, outputs=["run-*"], overwrite=False)
-... # doctest: +ELLIPSIS
-Traceback (most recent call last):
-...
-pokerirl.store.record.UnitConflict: ...: its outputs were trained with other settings (...)...
+A rerun with the same settings keeps what is finished; one with other settings is refused in
+one line before anything is touched, unless ``overwrite``. For ``gym rl`` both hold for the
+whole folder: every ``run-<k>`` of other settings (those beyond ``runs`` too) is checked, and
+with ``overwrite`` removed before the first new run starts, so that a rerun killed midway
+never leaves runs of two settings side by side.
+
+Folders written before the store kept one record for the folder, ``expert.job.json`` or
+``rl.job.json`` (``pokerirl-gym-job/1``): it is read as a legacy record
+(:class:`~pokerirl.store.LegacyRecord`) of the outputs without their own record, so they are
+reused when its settings match and refused (or replaced) when not; it goes once nothing of
+its own is left.
 """
 
 from __future__ import annotations
 
 import json
-import shutil
-from collections.abc import Mapping, Sequence
-from contextlib import ExitStack
+import re
+import tempfile
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from pokerirl.atomic import write_text
-from pokerirl.errors import InputError, Remedy
-from pokerirl.execution import watched
+from pokerirl.errors import InputError
+from pokerirl.execution import Backend
 from pokerirl.gym.experts import CONFIG_FILE, METRICS_FILE, MODEL_FILE, ExpertRecord, require_gym
 from pokerirl.gym.tasks import task
+from pokerirl.irl.reward import RewardFn
 from pokerirl.meanstd import MeanStd, mean_std
-from pokerirl.store import UnitConflict, describe_changes, digest, staged_files, staged_folder, tidy
+from pokerirl.store import (
+    RECORD_NAME,
+    Fate,
+    Group,
+    LegacyRecord,
+    Unit,
+    UnitOutput,
+    check,
+    digest,
+    run_units,
+    staged_folder,
+    tidy,
+)
 
-JOB_FORMAT = "pokerirl-gym-job/1"
-
-
-def claim(
-    folder: Path,
-    name: str,
-    identity: Mapping[str, Any],
-    *,
-    outputs: Sequence[str],
-    overwrite: bool,
-) -> None:
-    """Make ``folder/name`` record ``identity``, refusing (``UnitConflict``) when the
-    folder's outputs (glob patterns) were made with another identity, unless ``overwrite``:
-    then they are removed first."""
-    identity = json.loads(json.dumps(identity))  # as it reads back: tuples become lists
-    path = folder / name
-    found = _outputs(folder, outputs)
-    old: Any = None
-    if path.is_file():
-        try:
-            record = json.loads(path.read_text())
-            old = record["identity"] if record.get("format") == JOB_FORMAT else None
-        except (ValueError, KeyError, TypeError, AttributeError):
-            old = None
-        if old == identity:
-            return
-    if found and not overwrite:
-        if old is None:
-            raise UnitConflict(
-                f"{folder} holds outputs without a readable {name} (another version's, or "
-                "its record is corrupt)",
-                remedy=Remedy.REPLACE,
-            )
-        raise UnitConflict(
-            f"{folder}: its outputs were trained with other settings "
-            f"({describe_changes(old, identity)})",
-            remedy=Remedy.REPLACE,
-        )
-    for output in found:  # the record goes first: a kill from here leaves no stale record
-        if output.is_dir() and not output.is_symlink():
-            shutil.rmtree(output)
-        else:
-            output.unlink()
-    folder.mkdir(parents=True, exist_ok=True)
-    write_text(path, json.dumps({"format": JOB_FORMAT, "identity": identity}, indent=2) + "\n")
-
-
-def _outputs(folder: Path, patterns: Sequence[str]) -> list[Path]:
-    if not folder.is_dir():
-        return []
-    return sorted({p for pattern in patterns for p in folder.glob(pattern)})
-
-
+LEGACY_EXPERT, LEGACY_RL = "expert.job.json", "rl.job.json"  # pokerirl-gym-job/1, pre-store
 RUN_FILES = (CONFIG_FILE, METRICS_FILE, MODEL_FILE)  # an expert's, and an RL run's
+_RUN = re.compile(r"run-(\d+)")
+
+
+def _files(folder: Path) -> dict[str, bytes]:
+    return {
+        path.relative_to(folder).as_posix(): path.read_bytes()
+        for path in sorted(folder.rglob("*"))
+        if path.is_file()
+    }
+
+
+# --------------------------------------------------------------------------- the units
+
+
+def expert_unit(
+    env: str,
+    seed: int,
+    hyper: str,
+    timesteps: int | None,
+    eval_every: int | None,
+    eval_episodes: int,
+    final_episodes: int,
+) -> UnitOutput[None]:
+    """An SB3 expert's files (see :func:`pokerirl.gym.experts.train_expert_record`)."""
+    from pokerirl.gym.experts import train_expert_record
+
+    with tempfile.TemporaryDirectory(prefix="pokerirl-gym-expert-") as scratch:
+        train_expert_record(
+            scratch,
+            env,
+            seed=seed,
+            timesteps=timesteps,
+            hyper=hyper,
+            eval_every=eval_every,
+            eval_episodes=eval_episodes,
+            final_episodes=final_episodes,
+        )
+        return UnitOutput(files=_files(Path(scratch)))
+
+
+def rl_unit(
+    env: str,
+    reward: RewardFn | None,
+    reward_name: str,
+    seed: int,
+    timesteps: int | None,
+    evaluations: int,
+    eval_episodes: int,
+) -> UnitOutput[None]:
+    """One RL run's files, on the env reward (``reward`` None) or a learned one. In this
+    process only: a reward does not travel."""
+    from pokerirl.gym.rl import train_rl
+
+    with tempfile.TemporaryDirectory(prefix="pokerirl-gym-rl-") as scratch:
+        train_rl(
+            env,
+            reward=reward,
+            reward_name=reward_name,
+            seed=seed,
+            timesteps=timesteps,
+            evaluations=evaluations,
+            eval_episodes=eval_episodes,
+            out=scratch,
+        )
+        return UnitOutput(files=_files(Path(scratch)))
+
+
+def rl_group_unit(
+    env: str,
+    reward: RewardFn | None,
+    reward_name: str,
+    seeds: Sequence[int],
+    timesteps: int | None,
+    evaluations: int,
+    eval_episodes: int,
+) -> list[UnitOutput[None]]:
+    """The runs of ``seeds`` in lock-step on one reward: each run's files, in order."""
+    from pokerirl.gym.lockstep.group import train_rl_group
+
+    with tempfile.TemporaryDirectory(prefix="pokerirl-gym-rl-group-") as scratch:
+        outs = [Path(scratch) / f"run-{seed}" for seed in seeds]
+        for out in outs:
+            out.mkdir()
+        train_rl_group(
+            env,
+            rewards=[reward] * len(seeds),
+            reward_names=[reward_name] * len(seeds),
+            seeds=seeds,
+            timesteps=timesteps,
+            evaluations=evaluations,
+            eval_episodes=eval_episodes,
+            outs=outs,
+        )
+        return [UnitOutput(files=_files(out)) for out in outs]
+
+
+# --------------------------------------------------------------------------- gym expert
 
 
 @dataclass(frozen=True)
@@ -110,34 +168,36 @@ def expert_folder(
     eval_episodes: int,
     final_episodes: int,
     overwrite: bool,
+    threads: int = 1,
 ) -> ExpertFolder:
-    """Train an SB3 expert into ``out``, or keep the one there if it was trained with the same
-    settings (others are refused, unless ``overwrite``: ``out/expert.job.json`` records them).
-    Its three files land together, or not at all."""
-    from pokerirl.gym.experts import expert_settings, train_expert_record
+    """Train an SB3 expert into the unit folder ``out``, or keep the one there if it was
+    trained with the same settings (others are refused, unless ``overwrite``). Its files
+    land together, or not at all."""
+    from pokerirl.gym.experts import expert_settings
 
-    identity = {
+    settings = {
         "env": env, "seed": seed, "hyper": hyper,
         "timesteps": timesteps or expert_settings(env, hyper=hyper).timesteps,
         "eval_every": eval_every, "eval_episodes": eval_episodes,
         "final_episodes": final_episodes,
     }  # fmt: skip
-    claim(out, "expert.job.json", identity, outputs=list(RUN_FILES), overwrite=overwrite)
-    tidy(out, key="expert")  # what a killed rerun left
-    if all((out / name).is_file() for name in RUN_FILES):
-        return ExpertFolder(record=_expert_record(out / CONFIG_FILE), reused=True)
-    with staged_files(out, key="expert") as new:
-        record = train_expert_record(
-            new,
-            env,
-            seed=seed,
-            timesteps=timesteps,
-            hyper=hyper,
-            eval_every=eval_every,
-            eval_episodes=eval_episodes,
-            final_episodes=final_episodes,
-        )
-    return ExpertFolder(record=record, reused=False)
+    legacy = LegacyRecord(path=out / LEGACY_EXPERT, identity=settings)
+    tidy(out, key="expert")  # what a killed pre-store run left: its files, swapped in or not
+    _drop_unused(legacy, vouches=(out / CONFIG_FILE).is_file())
+    unit: Unit[None] = Unit(
+        key=f"{env} expert",
+        target=out,
+        config={"unit": "gym-expert", **settings},
+        fn=expert_unit,
+        args=(env, seed, hyper, timesteps, eval_every, eval_episodes, final_episodes),
+        legacy=(legacy,),
+    )
+    out.mkdir(parents=True, exist_ok=True)  # an unwritable place fails here, before training
+    done = run_units([unit], Backend(threads=threads), overwrite=overwrite).done[0]
+    return ExpertFolder(record=_expert_record(out / CONFIG_FILE), reused=done.fate is Fate.REUSED)
+
+
+# --------------------------------------------------------------------------- gym rl
 
 
 @dataclass(frozen=True)
@@ -163,16 +223,14 @@ def rl_runs(
     rl_backend: str,
     overwrite: bool,
     progress: bool = False,
+    threads: int = 1,
 ) -> RLRuns:
     """RL runs ``out/run-<k>`` (seed k) on the env reward or ``reward_run``'s learned reward;
     ``progress``: a bar that moves with the runs' timesteps.
 
-    Resumable: the finished runs of a folder trained with the same settings are kept; other
-    settings (the backend too) are refused, unless ``overwrite`` (``out/rl.job.json`` records
-    them). Each run lands whole; on the lock-step backend the unfinished runs train as one
-    group (run k is the same run either way it is grouped), and land together."""
-    from pokerirl.gym.rl import train_rl
-
+    Resumable: the finished runs of the same settings are kept; other settings (the backend
+    too) are refused, unless ``overwrite`` (see the module's docstring). Each run lands
+    whole; on the lock-step backend the unfinished runs train as one group."""
     reward = None
     reward_identity: Any = "env"
     if reward_run is not None:
@@ -185,7 +243,7 @@ def rl_runs(
             "run": str(reward_run),
             "sha256": digest(weights.read_bytes()) if weights.is_file() else None,
         }
-    identity = {
+    settings = {
         "env": env,
         "reward": reward_identity,
         "timesteps": timesteps or task(env).rl.timesteps,
@@ -196,51 +254,66 @@ def rl_runs(
     }
     if rl_backend != "sb3":
         require_gym()  # the lock-step trainers import gymnasium: say so before any change
-    claim(out, "rl.job.json", identity, outputs=["run-*"], overwrite=overwrite)
+    legacy = LegacyRecord(path=out / LEGACY_RL, identity=settings)
     reward_name = "env" if reward is None else str(reward_run)
-    found: dict[int, float] = {}
-    todo = []
-    for k in range(runs):
-        run = out / f"run-{k}"
-        tidy(out, key=run.name)  # what a killed rerun left
-        if all((run / name).is_file() for name in RUN_FILES):
-            found[k] = _final_return(run / CONFIG_FILE)
-        else:
-            todo.append(k)
-    if rl_backend == "sb3":
-        with watched("RL runs", total=len(todo), enabled=progress and bool(todo)) as run_done:
-            for k in todo:
-                with staged_folder(out / f"run-{k}") as stage:  # a run is whole, or not at all
-                    result = train_rl(
-                        env,
-                        reward=reward,
-                        reward_name=reward_name,
-                        seed=k,
-                        timesteps=timesteps,
-                        evaluations=evaluations,
-                        eval_episodes=eval_episodes,
-                        out=stage,
-                    )
-                found[k] = result.final_return
-                run_done()
-    elif todo:
-        from pokerirl.gym.lockstep.group import train_rl_group
 
-        with ExitStack() as stack:  # every run of the group lands whole, or none does
-            stages = [stack.enter_context(staged_folder(out / f"run-{k}")) for k in todo]
-            stack.enter_context(watched(f"RL, {len(todo)} runs in lock-step", enabled=progress))
-            results = train_rl_group(
-                env,
-                rewards=[reward] * len(todo),
-                reward_names=[reward_name] * len(todo),
-                seeds=todo,
-                timesteps=timesteps,
-                evaluations=evaluations,
-                eval_episodes=eval_episodes,
-                outs=stages,
-            )
-        found.update({k: result.final_return for k, result in zip(todo, results, strict=True)})
-    return RLRuns(finals=tuple(found[k] for k in range(runs)))
+    def unit(k: int) -> Unit[None]:
+        return Unit(
+            key=f"run-{k}",
+            target=out / f"run-{k}",
+            config={"unit": "gym-rl-run", **settings, "seed": k},
+            fn=rl_unit,
+            args=(env, reward, reward_name, k, timesteps, evaluations, eval_episodes),
+            legacy=(legacy,),
+        )
+
+    _drop_unused(legacy, vouches=bool(_legacy_runs(out)))
+    units = [unit(k) for k in range(runs)]
+    _clear_other_settings([*units, *(unit(k) for k in _seeds(out) if k >= runs)], overwrite)
+    _drop_unused(legacy, vouches=bool(_legacy_runs(out)))
+    out.mkdir(parents=True, exist_ok=True)  # an unwritable place fails here, before training
+    group = None
+    if rl_backend != "sb3":
+        group = Group(
+            key=lambda _: None,  # one group: every unfinished run
+            fn=rl_group_unit,
+            args=lambda members: (env, reward, reward_name, [m.config["seed"] for m in members],
+                                  timesteps, evaluations, eval_episodes),
+            label=lambda members: f"RL, {len(members)} runs in lock-step",
+        )  # fmt: skip
+    run_units(units, Backend(threads=threads), overwrite=overwrite, progress=progress,
+              desc="RL runs", group=group)  # fmt: skip
+    return RLRuns(finals=tuple(_final_return(u.target / CONFIG_FILE) for u in units))
+
+
+def _seeds(out: Path) -> list[int]:
+    """The seeds of the ``run-<k>`` folders in ``out``."""
+    if not out.is_dir():
+        return []
+    return sorted(int(m[1]) for p in out.iterdir() if (m := _RUN.fullmatch(p.name)))
+
+
+def _legacy_runs(out: Path) -> list[int]:
+    """The runs only the folder's legacy record vouches for (those without a ``unit.json``)."""
+    return [k for k in _seeds(out) if not (out / f"run-{k}" / RECORD_NAME).is_file()]
+
+
+def _clear_other_settings(units: Sequence[Unit[None]], overwrite: bool) -> None:
+    """Check every unit first (a refusal comes before any change); then, with ``overwrite``,
+    empty the place of each to be recomputed, so that no run of other settings outlives
+    the start of the new ones."""
+    stale = [u.target for u in units if check(u, overwrite=overwrite).fate is Fate.RECOMPUTED]
+    for target in filter(Path.is_dir, stale):
+        with staged_folder(target):  # swapped for an empty folder: a kill leaves all or none
+            pass
+        target.rmdir()
+
+
+def _drop_unused(legacy: LegacyRecord, *, vouches: bool) -> None:
+    """Remove a legacy record that vouches for nothing (its outputs never landed, or were
+    replaced): of other settings, it would refuse the new outputs."""
+    if not vouches:
+        legacy.path.unlink(missing_ok=True)
 
 
 def _expert_record(config: Path) -> ExpertRecord:

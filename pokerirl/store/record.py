@@ -6,14 +6,16 @@ configuration and the inputs themselves (so a conflict can say what changed), th
 every output file it vouches for (timings are written beside it, never hashed), and, for a
 unit that is only a record, its result.
 
-One format is written, ``pokerirl-unit/2``. Two older ones are read, so a folder written
+One format is written, ``pokerirl-unit/2``. Three older ones are read, so a folder written
 before the store is recognised:
 
 * ``pokerirl-unit/1`` (``execution.make_record``: ``unit.json`` in unit folders,
   ``*.unit.json`` beside a file, tournament ``seed-<k>.json``): the configuration held the
   input digests, so its identity is its configuration and its fingerprint is unchanged;
 * ``pokerirl-study-stage/1`` (``stages/<stage>.json`` of a poker study): identity
-  ``{"stage": name, "settings": settings}``, no file digests, and a ``finished`` flag.
+  ``{"stage": name, "settings": settings}``, no file digests, and a ``finished`` flag;
+* ``pokerirl-gym-job/1`` (``expert.job.json`` / ``rl.job.json`` of a ``gym expert`` or
+  ``gym rl`` folder): identity its ``identity``, no file digests, finished.
 
 A unit's identity is ``{**config, **inputs}``: a configuration that named its inputs'
 digests inline (all of today's) keeps its fingerprint when they move to ``inputs``.
@@ -47,7 +49,8 @@ Json = None | bool | int | float | str | list[Any] | dict[str, Any]
 RECORD_FORMAT = "pokerirl-unit/2"
 UNIT_FORMAT_1 = "pokerirl-unit/1"
 STAGE_FORMAT_1 = "pokerirl-study-stage/1"
-READABLE_FORMATS = (RECORD_FORMAT, UNIT_FORMAT_1, STAGE_FORMAT_1)
+GYM_JOB_FORMAT_1 = "pokerirl-gym-job/1"
+READABLE_FORMATS = (RECORD_FORMAT, UNIT_FORMAT_1, STAGE_FORMAT_1, GYM_JOB_FORMAT_1)
 _OURS = re.compile(r"pokerirl-(unit|study-stage)/(\d+)")
 
 
@@ -170,6 +173,8 @@ class UnitRecord:
             raise NotARecord(f"format {kind!r}")
         if kind == STAGE_FORMAT_1:
             return _stage_record(data)
+        if kind == GYM_JOB_FORMAT_1:
+            return _gym_job_record(data)
         try:
             record = cls(
                 fingerprint=_text(data["fingerprint"]),
@@ -226,6 +231,16 @@ def _stage_record(data: Mapping[str, Any]) -> UnitRecord:
         )
     except (KeyError, TypeError) as error:
         raise NotARecord(f"stage record without a usable {error}") from None
+
+
+def _gym_job_record(data: Mapping[str, Any]) -> UnitRecord:
+    try:
+        identity = _object(data["identity"])
+        return UnitRecord(
+            fingerprint=fingerprint(identity), config=identity, format=GYM_JOB_FORMAT_1
+        )
+    except (KeyError, TypeError, ValueError) as error:  # ValueError: a NaN in it
+        raise NotARecord(f"gym job record without a usable {error}") from None
 
 
 def read_record(path: str | os.PathLike[str]) -> UnitRecord | None:

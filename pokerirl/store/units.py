@@ -21,7 +21,8 @@ Layouts (:class:`Layout`), with the record and the files it vouches for:
 * ``record``: ``target`` is the record; the unit's output is its ``result``.
 
 A unit whose own record is missing may be vouched for by a record an older pokerirl kept
-elsewhere (:class:`LegacyRecord`: a poker study's ``stages/<stage>.json``).
+elsewhere (:class:`LegacyRecord`: a poker study's ``stages/<stage>.json``, a ``gym rl`` folder's
+``rl.job.json``).
 
 >>> import tempfile
 >>> root = Path(tempfile.mkdtemp())
