@@ -16,7 +16,11 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
-from pokerirl.irl.config import Algo  # torch-free
+from pokerirl.agents.config import AGENT_PRESETS as AGENT_TRAIN_PRESETS
+from pokerirl.game.encodings import EncodingName
+from pokerirl.irl.config import Algo
+from pokerirl.poker.folds import FoldsMode
+from pokerirl.poker.rewards import Transform
 from pokerirl.studies.common import StudyError, with_overrides
 
 # The IRL algorithms a study can train; a study trains the paper's two unless told otherwise
@@ -28,10 +32,11 @@ ALGO_LABELS = {"airl": "AIRL", "hairl": "H-AIRL", "gail": "GAIL"}
 KIND_LABELS = {"dqn": "DQN", **{f"{algo}_dqn": f"{name}-DQN" for algo, name in ALGO_LABELS.items()}}
 BUILT_INS = ("random", "call", "raise")
 IRL_SETTINGS = ("ours", "authors")
-AGENT_PRESETS = ("default", "authors")  # pokerirl.agents.train.AGENT_PRESETS
-TRANSFORMS = ("raw", "centered", "log_softmax", "advantage")  # pokerirl.poker.rewards
-ENCODINGS = ("rlcard", "strength")  # pokerirl.game.encodings.ENCODINGS (torch-free here)
-FOLDS = ("drop", "impute")  # pokerirl.poker.folds.FoldsMode: ingest's fold hands
+# The choices of the settings below, from where each is declared (all torch-free modules).
+AGENT_PRESETS: tuple[str, ...] = tuple(AGENT_TRAIN_PRESETS)
+TRANSFORMS: tuple[str, ...] = tuple(t.value for t in Transform)
+ENCODINGS: tuple[str, ...] = tuple(e.value for e in EncodingName)
+FOLDS: tuple[str, ...] = tuple(f.value for f in FoldsMode)  # ingest's fold hands
 LBR_CHECK_UNTIL = "turn"  # a study's LBR checks or calls before the turn: faster (exploit.md)
 
 # The authors' poker IRL settings (silue-dev/hairl, src/utils/training.py, LimitHoldem-v0):
