@@ -27,7 +27,8 @@ from pokerirl.studies.common import StudyError, with_overrides
 # (GAIL: `--algos airl,hairl,gail`).
 IRL_ALGOS: tuple[str, ...] = tuple(algo.value for algo in Algo)
 PAPER_ALGOS = ("airl", "hairl")
-TABLE1_ORDER = ("hairl", "airl", "gail")  # Table 1's rows, the paper's first
+# Table 1's rows: the paper's two first, then the others in the order of Algo.
+TABLE1_ORDER = ("hairl", "airl", *(algo for algo in IRL_ALGOS if algo not in ("hairl", "airl")))
 ALGO_LABELS = {"airl": "AIRL", "hairl": "H-AIRL", "gail": "GAIL"}
 KIND_LABELS = {"dqn": "DQN", **{f"{algo}_dqn": f"{name}-DQN" for algo, name in ALGO_LABELS.items()}}
 BUILT_INS = ("random", "call", "raise")

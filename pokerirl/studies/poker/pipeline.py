@@ -35,6 +35,7 @@ from pokerirl.meanstd import Curve
 from pokerirl.store import Fate, Layout, LegacyRecord, Unit, check, digest, fingerprint, writing
 from pokerirl.studies.poker.config import (
     BUILT_INS,
+    IRL_ALGOS,
     LBR_CHECK_UNTIL,
     StudyConfig,
     StudyError,
@@ -64,8 +65,7 @@ AUTHORS_STAGES = ("ingest", "irl", "agents", "tournament", "authors", "panel", "
 PLAYING_HANDS = 20_000  # duplicate hands of the playing checkpoint against random (authors)
 STAGES_FOLDER = "stages"  # where an older pokerirl kept its stage records
 TABLE = "expert.parquet"
-AGENT_FOLDERS = {"dqn": "dqn", "airl_dqn": "airl-dqn", "hairl_dqn": "hairl-dqn",
-                 "gail_dqn": "gail-dqn"}
+AGENT_FOLDERS = {"dqn": "dqn", **{f"{algo}_dqn": f"{algo}-dqn" for algo in IRL_ALGOS}}
 SHORT_DQN = "dqn-short"  # sparse DQN at the paper's training length
 
 Say = Callable[[str], None]
