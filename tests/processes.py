@@ -45,3 +45,13 @@ def alive(pid: int) -> bool:
     except (OSError, IndexError):
         return False
     return state != "Z"
+
+
+def as_from_a_shell() -> None:
+    """A ``preexec_fn``: the child starts with Ctrl-C at its default, as a shell starts a
+    command, whatever an earlier test left in this process (a SIGINT ignored here would be
+    inherited, and Python would then never raise KeyboardInterrupt in the child)."""
+    import signal
+
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+    signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})

@@ -13,7 +13,7 @@ import time
 from pathlib import Path
 
 import pytest
-from processes import alive, command, descendants, environment
+from processes import alive, as_from_a_shell, command, descendants, environment
 from typer.testing import CliRunner
 
 from pokerirl.cli import app
@@ -128,12 +128,14 @@ def test_ctrl_c_stops_cleanly_and_keeps_finished_seeds(tmp_path: Path) -> None:
     out = tmp_path / "set"
     # Enough seeds that, under load, the set cannot finish between the first seed and the signal.
     args = ["agent", "train", "--out", str(out), "--seeds", "0-31", "--jobs", "2", *SET]
+    inherited = signal.getsignal(signal.SIGINT)  # said if the command ignores Ctrl-C
     driver = subprocess.Popen(
         command(*args),
         env=environment(),
         stdout=subprocess.DEVNULL,
         stderr=subprocess.PIPE,
         text=True,
+        preexec_fn=as_from_a_shell,
     )
     workers: set[int] = set()
 
@@ -144,7 +146,7 @@ def test_ctrl_c_stops_cleanly_and_keeps_finished_seeds(tmp_path: Path) -> None:
     _wait_for(first_seed_done, driver)
     driver.send_signal(signal.SIGINT)
     _, stderr = driver.communicate(timeout=60)
-    assert driver.returncode == 130
+    assert driver.returncode == 130, f"SIGINT here: {inherited}; stderr: {stderr[-2000:]}"
     assert stderr.strip().splitlines()[-1].startswith("error: interrupted: finished units")
     deadline = time.monotonic() + 5  # the fork server and resource tracker leave on EOF
     while any(alive(pid) for pid in workers) and time.monotonic() < deadline:
