@@ -1017,6 +1017,17 @@ def read_files(folder: str | os.PathLike[str], names: Sequence[str]) -> dict[str
     return {name: (Path(folder) / name).read_bytes() for name in names}
 
 
+def folder_files(folder: str | os.PathLike[str]) -> dict[str, bytes]:
+    """Every file under ``folder`` by its relative path (``run-0/reward.pt``), sorted: how a
+    unit computed in a scratch folder returns its outputs."""
+    root = Path(folder)
+    return {
+        path.relative_to(root).as_posix(): path.read_bytes()
+        for path in sorted(root.rglob("*"))
+        if path.is_file()
+    }
+
+
 def write_files(folder: str | os.PathLike[str], files: Mapping[str, bytes]) -> Path:
     """Write ``files`` into ``folder`` (created, as are subfolders named in ``files``): how a
     worker lands its inputs."""

@@ -29,7 +29,7 @@ from pathlib import Path
 from typing import Any
 
 from pokerirl.errors import InputError
-from pokerirl.execution import Backend
+from pokerirl.execution import Backend, folder_files
 from pokerirl.gym.experts import CONFIG_FILE, METRICS_FILE, MODEL_FILE, ExpertRecord, require_gym
 from pokerirl.gym.tasks import task
 from pokerirl.irl.reward import RewardFn
@@ -51,14 +51,6 @@ from pokerirl.store import (
 LEGACY_EXPERT, LEGACY_RL = "expert.job.json", "rl.job.json"  # pokerirl-gym-job/1, pre-store
 RUN_FILES = (CONFIG_FILE, METRICS_FILE, MODEL_FILE)  # an expert's, and an RL run's
 _RUN = re.compile(r"run-(\d+)")
-
-
-def _files(folder: Path) -> dict[str, bytes]:
-    return {
-        path.relative_to(folder).as_posix(): path.read_bytes()
-        for path in sorted(folder.rglob("*"))
-        if path.is_file()
-    }
 
 
 # --------------------------------------------------------------------------- the units
@@ -87,7 +79,7 @@ def expert_unit(
             eval_episodes=eval_episodes,
             final_episodes=final_episodes,
         )
-        return UnitOutput(files=_files(Path(scratch)))
+        return UnitOutput(files=folder_files(Path(scratch)))
 
 
 def rl_unit(
@@ -114,7 +106,7 @@ def rl_unit(
             eval_episodes=eval_episodes,
             out=scratch,
         )
-        return UnitOutput(files=_files(Path(scratch)))
+        return UnitOutput(files=folder_files(Path(scratch)))
 
 
 def rl_group_unit(
@@ -143,7 +135,7 @@ def rl_group_unit(
             eval_episodes=eval_episodes,
             outs=outs,
         )
-        return [UnitOutput(files=_files(out)) for out in outs]
+        return [UnitOutput(files=folder_files(out)) for out in outs]
 
 
 # --------------------------------------------------------------------------- gym expert

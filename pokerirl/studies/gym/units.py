@@ -27,7 +27,7 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
 
-from pokerirl.execution import Backend, read_files, write_files
+from pokerirl.execution import Backend, folder_files, read_files, write_files
 from pokerirl.gym.presets import IRLSettings, RLSettings
 from pokerirl.gym.rl import RLBackend
 from pokerirl.irl.run import CONFIG_FILE, REWARD_FILE, TIMINGS_FILE
@@ -49,15 +49,6 @@ REWARD_INPUTS = (CONFIG_FILE, REWARD_FILE)  # what load_reward reads of a run fo
 
 class JobError(StudyError):
     """An input a unit cannot read, or an unknown RL backend; the message is one line."""
-
-
-def _folder_files(root: Path) -> dict[str, bytes]:
-    """Every file under ``root`` by its relative path (``run-0/reward.pt``)."""
-    return {
-        str(path.relative_to(root)): path.read_bytes()
-        for path in sorted(root.rglob("*"))
-        if path.is_file()
-    }
 
 
 def _output(files: dict[str, bytes]) -> UnitOutput[None]:
@@ -148,7 +139,7 @@ def irl_unit(
             progress=False,
             data_label=data_label,
         )
-        return _output(_folder_files(out))
+        return _output(folder_files(out))
 
 
 def rl_unit(
@@ -180,7 +171,7 @@ def rl_unit(
             eval_episodes=eval_episodes,
             out=out,
         )
-        return _output(_folder_files(out))
+        return _output(folder_files(out))
 
 
 def rl_group_unit(
@@ -214,7 +205,7 @@ def rl_group_unit(
             eval_episodes=eval_episodes,
             outs=outs,
         )
-        return [_output(_folder_files(out)) for out in outs]
+        return [_output(folder_files(out)) for out in outs]
 
 
 # --------------------------------------------------------------------------- jobs
