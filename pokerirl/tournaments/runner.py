@@ -57,22 +57,25 @@ from pokerirl.game.match import DEFAULT_BATCH_SIZE, check_match_size, play_match
 from pokerirl.store import Json, Layout, Unit, UnitConflict, UnitOutput, run_units
 from pokerirl.tournaments.aivat import CorrectedMatch, play_corrected_match
 from pokerirl.tournaments.lineup import (
+    Group,
+    Side,
     TournamentError,
-    agent_label,
     agent_spec_for_seed,
     check_specs,
+    expand_sides,
 )
 from pokerirl.tournaments.report import (
     REPORT_FILE,
     FamilySizes,
-    Line,
     MatchupReport,
     SeedLine,
     TournamentReport,
     TournamentSettings,
+    compare,
+    corrected_lines,
     write_report,
 )
-from pokerirl.tournaments.stats import Estimate, bonferroni, estimate, holm
+from pokerirl.tournaments.stats import Estimate, estimate
 from pokerirl.versions import package_versions
 
 SEED_KIND = "pokerirl-tournament-seed"
@@ -194,9 +197,10 @@ def _has_estimate(result: Json) -> bool:
     return _estimate(result) is not None
 
 
-def _folder_names(matchups: Sequence[tuple[str, str]]) -> list[str]:
-    """``<A>-vs-<B>`` per matchup, file-safe, numbered when two labels collide."""
-    return _label_names([(agent_label(a), agent_label(b)) for a, b in matchups])
+def _folder_names(labels: Sequence[tuple[str, str]]) -> list[str]:
+    """``<A>-vs-<B>`` per matchup (by its agents' labels), file-safe, numbered when two
+    labels collide."""
+    return _label_names(labels)
 
 
 def _label_names(labels: Sequence[tuple[str, str]]) -> list[str]:
@@ -298,25 +302,8 @@ def _validate(
 Cell = tuple[int, int]  # (matchup index, seed)
 
 
-def _corrected(estimates: list[Estimate], alpha: float) -> list[Line]:
-    """Each estimate with Bonferroni and Holm over the whole list (one family)."""
-    p = np.array([e.p_value for e in estimates])
-    p_bonferroni, p_holm = bonferroni(p), holm(p)
-    threshold = alpha / len(estimates)
-    return [
-        Line(
-            **asdict(e),
-            p_value_bonferroni=float(p_bonferroni[i]),
-            p_value_holm=float(p_holm[i]),
-            significant_bonferroni=bool(e.p_value < threshold),
-            significant_holm=bool(p_holm[i] < alpha),
-        )
-        for i, e in enumerate(estimates)
-    ]
-
-
 def run_tournament(
-    matchups: Sequence[tuple[str, str]],
+    matchups: Sequence[tuple[Side, Side]],
     *,
     hands: int,
     seeds: Sequence[int],
@@ -333,8 +320,12 @@ def run_tournament(
     """Play every (A, B) matchup on every seed, write the report files to ``out``, return it.
 
     Args:
-        matchups: (A, B) agent specs; results are A's. Each spec is a built-in name, an agent
-            folder, or an agent set (a folder of ``seed-<k>`` agent folders).
+        matchups: (A, B) sides; results are A's; one comparison each. A side is an agent spec
+            (a built-in name, an agent folder, or an agent set: a folder of ``seed-<k>``
+            agent folders, whose seed-k agent plays seed k) or a list of agent specs, several
+            agents trained with different seeds: every agent of one side then plays every
+            agent of the other (one matchup per pair) on the same deals, and the comparison
+            is tested across them (:func:`~pokerirl.tournaments.report.compare`).
         hands: hands per seed (even with duplicate deals).
         seeds: the seeds; seed k plays deals of seed k between each set's seed-k agents.
         out: the report folder; saved seeds found there are reused when they match.
@@ -362,10 +353,14 @@ def run_tournament(
     [0.0, 0.0]
     """
     seeds = sorted(set(seeds))
+    if not matchups:
+        raise TournamentError("no matchups: give at least one (agent, base) pair")
+    expanded = expand_sides(matchups)
+    contests, matchups = expanded.groups, expanded.pairs
     _validate(matchups, hands, seeds, duplicate, alpha, jobs, batch_size)
     check_specs(sorted({spec for pair in matchups for spec in pair}), seeds)
     out = Path(out)
-    folders = _folder_names(matchups)
+    folders = _folder_names(expanded.labels)
     if not overwrite:
         _check_same_matchups(out, folders)
     prints = {spec: _fingerprints(spec, seeds) for spec in {s for pair in matchups for s in pair}}
@@ -414,6 +409,8 @@ def run_tournament(
 
     report = _build_report(
         matchups,
+        expanded.labels,
+        contests,
         seeds,
         done,
         hands=hands,
@@ -455,6 +452,8 @@ def _pooled_aivat(per_seed: list[Estimate | None]) -> Estimate | None:
 
 def _build_report(
     matchups: Sequence[tuple[str, str]],
+    labels: Sequence[tuple[str, str]],
+    contests: list[Group],
     seeds: Sequence[int],
     done: dict[Cell, SeedResult],
     *,
@@ -465,7 +464,8 @@ def _build_report(
     timing: Mapping[str, Any],
 ) -> TournamentReport:
     cells = [(m, seed) for m in range(len(matchups)) for seed in seeds]
-    per_seed = dict(zip(cells, _corrected([done[c].estimate for c in cells], alpha), strict=True))
+    tested = corrected_lines([done[c].estimate for c in cells], alpha)
+    per_seed = dict(zip(cells, tested, strict=True))
     if len(seeds) > 1:
         pooled_estimates = [
             estimate(np.array([done[m, seed].estimate.mbb_per_hand for seed in seeds]))
@@ -473,7 +473,7 @@ def _build_report(
         ]
     else:
         pooled_estimates = [done[m, seeds[0]].estimate for m in range(len(matchups))]
-    pooled = _corrected(pooled_estimates, alpha)
+    pooled = corrected_lines(pooled_estimates, alpha)
 
     reports = []
     for m, (a, b) in enumerate(matchups):
@@ -490,8 +490,8 @@ def _build_report(
         )
         reports.append(
             MatchupReport(
-                agent_a=agent_label(a),
-                agent_b=agent_label(b),
+                agent_a=labels[m][0],
+                agent_b=labels[m][1],
                 spec_a=a,
                 spec_b=b,
                 pooled=pooled[m],
@@ -500,6 +500,7 @@ def _build_report(
                 aivat=_pooled_aivat([done[m, seed].aivat for seed in seeds]),
             )
         )
+    comparisons = compare(tuple(reports), contests, alpha)
     return TournamentReport(
         config=TournamentSettings(
             hands=hands, seeds=tuple(seeds), duplicate=duplicate, batch_size=batch_size,
@@ -510,8 +511,11 @@ def _build_report(
             per_seed_threshold=alpha / len(cells),
             pooled_tests=len(matchups),
             pooled_threshold=alpha / len(matchups),
+            comparison_tests=len(comparisons),
+            comparison_threshold=alpha / len(comparisons),
         ),
         matchups=tuple(reports),
+        comparisons=comparisons,
         versions=package_versions(),
         timing=timing,
     )
