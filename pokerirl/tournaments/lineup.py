@@ -131,6 +131,22 @@ def side_label(members: Sequence[str]) -> str:
     return "+".join(member_label(spec) for spec in members)
 
 
+def parse_side(text: str, *, cross: bool = False) -> Side:
+    """A side as the command line gives it: one spec, or several joined by commas (a path
+    that exists is never split); with ``cross`` an agent set stands for all its
+    ``seed-<k>`` agents, each one of the side's agents, instead of pairing by seed.
+
+    >>> parse_side("a/seed-0,a/seed-1"), parse_side("raise", cross=True)
+    (['a/seed-0', 'a/seed-1'], 'raise')
+    """
+    specs = [text] if "," not in text or Path(text).exists() else text.split(",")
+    if cross:  # a spec that is no set is its own one member
+        specs = [member for spec in specs
+                 for member in ([str(Path(spec) / f"seed-{k}") for k in _set_seeds(spec)]
+                                or [spec])]  # fmt: skip
+    return specs[0] if len(specs) == 1 else specs
+
+
 def expand_sides(matchups: Sequence[tuple[Side, Side]]) -> Lineup:
     """Every (A, B) agent pair of every pair of sides, in order (A's agents outer), with its
     labels and the comparison each belongs to.
