@@ -31,8 +31,9 @@ def agents(tmp_path_factory: pytest.TempPathFactory) -> Path:
     against random, one against always-call, so the sides differ and so do their seeds."""
     root = tmp_path_factory.mktemp("agents")
     for name, opponent in (("dqn", "random"), ("hairl", "call")):
+        dqn = DQNConfig(concurrent_hands=128, hidden=(16,))
         config = TrainConfig(hands=512, seed=0, opponent=opponent, eval_every=512,
-                             eval_hands=100, dqn=DQNConfig(concurrent_hands=128, hidden=(16,)))  # fmt: skip
+                             eval_hands=100, dqn=dqn)  # fmt: skip
         train_seeds(root / name, config, [0, 1, 2])
     return root
 
@@ -153,11 +154,28 @@ def test_the_crossed_variance_is_unbiased_and_its_ci_covers() -> None:
     truth = sd_a**2 / rows + sd_b**2 / cols + (sd_ab**2 + sd_deal**2) / (rows * cols)
     variances, covered = [], 0
     for _ in range(reps):
-        table = (rng.normal(0, sd_a, (rows, 1)) + rng.normal(0, sd_b, (1, cols))
-                 + rng.normal(0, sd_ab, (rows, cols)) + rng.normal(0, sd_deal, (rows, cols)))  # fmt: skip
+        noise = rng.normal(0, sd_ab, (rows, cols)) + rng.normal(0, sd_deal, (rows, cols))
+        table = rng.normal(0, sd_a, (rows, 1)) + rng.normal(0, sd_b, (1, cols)) + noise
         found = across_agents(table, np.full((rows, cols), sd_deal**2))
         variances.append(found.between_std_error**2)
         low, high = found.estimate.ci95
         covered += low <= 0.0 <= high
     assert np.mean(variances) == pytest.approx(truth, rel=0.08)
     assert 0.92 <= covered / reps <= 0.99
+
+
+def test_a_shipped_report_of_format_1_reads_as_agent_sets_paired_by_seed() -> None:
+    """docs/results' quick study wrote its Table 1 tournament in the /1 format: agent sets of
+    4 seeds each, seed k against seed k, so training seeds in independent pairs."""
+    folder = Path(__file__).resolve().parents[1] / "docs/results/study-quick-strength/tournament"
+    data = json.loads((folder / REPORT_FILE).read_text())
+    assert data["format"] == "pokerirl-tournament/1" and "comparisons" not in data
+    report = load_report(folder)
+    assert len(report.comparisons) == len(report.matchups) == report.family.comparison_tests
+    for comparison, matchup in zip(report.comparisons, report.matchups, strict=True):
+        assert comparison.replication is Replication.TRAINING_SEEDS
+        assert comparison.design is Design.PAIRS
+        assert comparison.pairs == comparison.agents_a == len(matchup.seeds)
+        assert comparison.line.mbb_per_hand == pytest.approx(matchup.pooled.mbb_per_hand)
+        assert comparison.line.std_error >= max(matchup.pooled.std_error,
+                                                comparison.deal_std_error)  # fmt: skip
