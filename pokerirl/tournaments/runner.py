@@ -11,9 +11,15 @@ Statistics (see :mod:`pokerirl.tournaments.stats`):
 * pooled, per matchup: the same over the per-seed means (n = seeds, df = seeds - 1), so seeds
   are the replicates, which with agent sets includes the spread between training runs. With one
   seed the pooled line is that seed's own test;
-* Bonferroni and Holm over the family of all per-seed tests (seeds x matchups), and separately
-  over the pooled tests (one per matchup). The paper's threshold p < 0.05/20 (one matchup, 20
-  seeds) is the per-seed family's; its payoff ± SE is the pooled line.
+* per comparison (one per pair of sides, the verdict): with one agent per side, the pooled
+  line, a claim about these two agents only (deal seeds only); with several agents on a side
+  (an agent set's seeds, or a list of agents: every pair on the same deals), the test across
+  training seeds (:func:`~pokerirl.tournaments.stats.across_agents`), agents told apart by
+  fingerprint;
+* Bonferroni and Holm over the family of all per-seed tests (seeds x matchups), separately
+  over the pooled tests (one per matchup), and over the comparisons. The paper's threshold
+  p < 0.05/20 (one matchup, 20 seeds) is the per-seed family's; its payoff ± SE is the pooled
+  line.
 
 Execution: each (matchup, seed) is a unit of :func:`pokerirl.store.run_units`, on local
 processes or Ray; the units get the agents' bytes (read here once), so workers need no shared
