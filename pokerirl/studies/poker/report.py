@@ -239,7 +239,7 @@ def render_markdown(report: StudyReport) -> str:
         )
     lines += [
         "",
-        "## Table 1: against the sparse-reward DQN (mbb/hand, pooled over seeds)",
+        "## Table 1: against the sparse-reward DQN (mbb/hand, across training seeds)",
         "",
         "| matchup | ours | SE | p | p (Bonferroni) | seeds with p < 0.05/m | the paper |",
         "|---|---|---|---|---|---|---|",
@@ -354,7 +354,7 @@ def render_markdown(report: StudyReport) -> str:
     lines += authors_markdown(report)
     lines += cards_markdown(report)
     lines += [
-        "## Panel: row agent against column agent (mbb/hand ± SE, pooled over seeds)",
+        "## Panel: row agent against column agent (mbb/hand ± SE over seeds)",
         "",
     ]
     panel = report.panel.panel
