@@ -239,7 +239,8 @@ def render_markdown(report: StudyReport) -> str:
         )
     lines += [
         "",
-        "## Table 1: against the sparse-reward DQN (mbb/hand, across training seeds)",
+        "## Table 1: against the sparse-reward DQN (mbb/hand, "
+        f"{'across training seeds' if n_seeds > 1 else 'one agent per side'})",
         "",
         "| matchup | ours | SE | p | p (Bonferroni) | seeds with p < 0.05/m | the paper |",
         "|---|---|---|---|---|---|---|",
