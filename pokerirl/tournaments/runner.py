@@ -204,13 +204,8 @@ def _has_estimate(result: Json) -> bool:
 
 
 def _folder_names(labels: Sequence[tuple[str, str]]) -> list[str]:
-    """``<A>-vs-<B>`` per matchup (by its agents' labels), file-safe, numbered when two
+    """``<A>-vs-<B>`` per matchup, by its agents' labels, file-safe, numbered when two
     labels collide."""
-    return _label_names(labels)
-
-
-def _label_names(labels: Sequence[tuple[str, str]]) -> list[str]:
-    """:func:`_folder_names` of matchups given by their agents' labels."""
     names: list[str] = []
     for a, b in labels:
         base = re.sub(r"[^A-Za-z0-9._-]+", "_", f"{a}-vs-{b}")
@@ -231,7 +226,7 @@ def _held_matchups(out: Path) -> tuple[str, list[str]]:
     except (OSError, ValueError, KeyError, TypeError):  # none, or damaged: the run rewrites it
         labels = []
     if labels:
-        return "report", _label_names(labels)
+        return "report", _folder_names(labels)
     with contextlib.suppress(OSError):
         return "saved seeds", sorted(p.name for p in (out / "seeds").iterdir() if p.is_dir())
     return "", []
