@@ -426,15 +426,18 @@ def render_markdown(report: TournamentReport) -> str:
             f"{render_p(p.p_value_holm)} | {c.deal_std_error:.2f} | "
             f"{significant}/{len(seed_lines)} |"
         )
+    kinds = {c.replication for c in report.comparisons}
     out += [
         "",
-        f"One agent per side: the pooled line over the deal seeds, {pooled_how}. Several "
-        "agents per side (training seeds): the test across them (a t-test over independent "
-        "pairs' means, or the two-way random-effects model when every agent met every agent: "
-        "docs/cli.md), its standard error never below the deal-only one. Deal-only SE: what "
-        "the deals' noise alone gives on the same games, as if the agents were fixed. "
-        f"Bonferroni and Holm over the {family.comparison_tests} comparison(s).",
-    ]
+        *([f"One agent per side: the pooled line over the deal seeds, {pooled_how}."]
+          if Replication.DEAL_SEEDS in kinds else []),
+        *(["Several agents per side (training seeds): the test across them (a t-test over "
+           "independent pairs' means, or the two-way random-effects model when every agent "
+           "met every agent: docs/cli.md), its standard error never below the deal-only one."]
+          if Replication.TRAINING_SEEDS in kinds else []),
+        "Deal-only SE: what the deals' noise alone gives on the same games, as if the agents "
+        f"were fixed. Bonferroni and Holm over the {family.comparison_tests} comparison(s).",
+    ]  # fmt: skip
     if any(len(c.matchups) > 1 for c in report.comparisons):
         out += _pairs_section(report, pooled_rule)
     out += _aivat_section(report)
