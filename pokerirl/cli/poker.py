@@ -289,8 +289,8 @@ def tournament(
     One matchup:      pokerirl tournament A B --hands N --seeds 0-19 --out DIR
     Several matchups: pokerirl tournament --vs dqn hairl-dqn airl-dqn --out DIR
                       (hairl-dqn vs dqn and airl-dqn vs dqn, corrected together)
-    Training seeds:   pokerirl tournament --cross --vs agents/dqn agents/hairl --out DIR
-                      (agent sets of `agent train --seeds 0-2`: 3 x 3 pairs)
+    Training seeds:   pokerirl tournament --cross --vs agents/dqn agents/hairl
+                        --out DIR (sets of `agent train --seeds 0-2`: 3 x 3 pairs)
 
     With one agent per side the p-value is about these two agents only (the seeds
     re-deal the cards); several agents per side, trained with different seeds, make
