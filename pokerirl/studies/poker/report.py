@@ -558,8 +558,10 @@ def authors_markdown(report: StudyReport) -> list[str]:
         f"{n} experiments: IRL run k, then a sparse DQN, an AIRL-DQN and an H-AIRL-DQN with "
         "their DQN settings (5,000 hands against random; the > 0.8 x best checkpoint plays), "
         f"then {first.repeats} x {first.games:,} non-duplicate games per pair, the small "
-        "blind drawn per game. Their ± is std(repeats)/√1000 over all repeats; the SE over "
-        "experiments carries the variance between training runs.",
+        "blind drawn per game. Their ± is std(repeats)/√1000 over all repeats: deal seeds "
+        "only, whose replicates re-deal the cards for the same agents; the SE over "
+        "experiments replicates training seeds (each experiment its own IRL run and DQNs), "
+        "the one a claim about the methods needs.",
         "",
         "| matchup | mean | their ± | SE over experiments | ours: duplicate deals | the paper |",
         "|---|---|---|---|---|---|",
