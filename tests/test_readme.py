@@ -6,6 +6,7 @@ line the table does not know fails the test, so a new README command must be add
 
 from __future__ import annotations
 
+import json
 import re
 import shlex
 from pathlib import Path
@@ -84,7 +85,12 @@ def test_the_readme_command_block_runs_top_to_bottom(
         ran.append(name)
     assert len(ran) == len(command_block()) - len(ELSEWHERE)
     # What the block promises exists: the agents its tournament line plays, the reports.
-    assert (tmp_path / "agents" / "dqn" / "model.pt").is_file()
+    assert (tmp_path / "agents" / "dqn" / "seed-2" / "model.pt").is_file()
+    # The tournament is the several-agents form: 3 x 3 agents, tested across training seeds.
+    report = json.loads((tmp_path / "report" / "report.json").read_text())
+    (comparison,) = report["comparisons"]
+    assert comparison["replication"] == "training seeds"
+    assert (comparison["agents_a"], comparison["agents_b"]) == (3, 3)
     assert (tmp_path / "runs" / "hairl" / "reward_card.json").is_file()
     assert (tmp_path / "report" / "report.md").is_file()
     assert (tmp_path / "study" / "report.md").is_file()

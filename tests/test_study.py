@@ -53,18 +53,22 @@ def test_report_json_has_the_issue_names_and_the_tournaments_numbers(
         [0, 1],
         400,
     )
-    # Table 1 is the pooled line of the tournament stage's own report, with the paper beside.
+    # Table 1 is the tournament stage's own test across training seeds (seed k against seed
+    # k: 2 agents per side, independent pairs), with the paper beside.
     tournament = load_report(out / "tournament")
     names = [(Path(m.agent_a).name, Path(m.agent_b).name) for m in tournament.matchups]
     assert names == [("hairl-dqn", "dqn"), ("airl-dqn", "dqn")]
-    for key, matchup in zip(
-        ("hairl_dqn_vs_dqn", "airl_dqn_vs_dqn"), tournament.matchups, strict=True
+    for key, comparison in zip(
+        ("hairl_dqn_vs_dqn", "airl_dqn_vs_dqn"), tournament.comparisons, strict=True
     ):
-        row = report["table1"][key]
-        assert row["mbb_per_hand"] == matchup.pooled.mbb_per_hand
-        assert row["std_error"] == matchup.pooled.std_error
-        assert row["p_value"] == matchup.pooled.p_value
-        assert row["p_bonferroni"] == matchup.pooled.p_value_bonferroni
+        row, line = report["table1"][key], comparison.line
+        assert row["mbb_per_hand"] == line.mbb_per_hand
+        assert row["std_error"] == line.std_error >= comparison.deal_std_error
+        assert row["p_value"] == line.p_value
+        assert row["p_bonferroni"] == line.p_value_bonferroni
+        assert (row["replicated_over"], row["agents_a"], row["agents_b"]) == (
+            "training seeds", 2, 2)  # fmt: skip
+        assert row["deal_std_error"] == comparison.deal_std_error and row["df"] == 1.0
     assert report["table1"]["hairl_dqn_vs_dqn"]["paper"] == {"mbb_per_hand": 96, "std_error": 14}
     assert report["table1"]["airl_dqn_vs_dqn"]["paper"] == {"mbb_per_hand": -693, "std_error": 34}
     # IRL: mean and std over the runs' own metrics files.
@@ -107,12 +111,19 @@ def test_report_json_has_the_issue_names_and_the_tournaments_numbers(
             assert matrix[i][j] == -matrix[j][i]
             assert panel["std_error"][i][j] == panel["std_error"][j][i] >= 0
     assert matrix[4][5] == 0.0  # call vs raise on duplicate deals: exactly even
+    # DQN cells across training seeds; those between two fixed strategies over deals only.
+    units = panel["replicated_over"]
+    assert units[0][1] == units[1][0] == units[2][5] == "training seeds"
+    assert units[3][4] == units[4][5] == "deal seeds only" and units[0][0] is None
     assert matrix[5][3] > 0  # raise beats random
     csv = (out / "panel.csv").read_text().splitlines()
     assert csv[0] == "agent,dqn,airl_dqn,hairl_dqn,random,call,raise" and len(csv) == 7
     for figure in FIGURES.values():
         assert (out / figure).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     markdown = (out / "report.md").read_text()
+    head = markdown.split("## Table 1")[0]
+    assert "**Unit of replication: training seeds** (2 agents per DQN kind" in head
+    assert "for the 12 pairs with a DQN kind" in markdown and "for the 3 between" in markdown
     assert "+96 ± 14" in markdown and "-693 ± 34" in markdown and "Reduced sizes" in markdown
     assert "duplicate" in markdown and "5,000 episodes" in markdown
     # LBR against every member: the mean of its per-seed reports, beside the result vs random.

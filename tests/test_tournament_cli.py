@@ -108,14 +108,16 @@ def test_markdown_json_and_csv_agree(two_matchups: Path) -> None:
         assert mean == pytest.approx(s["mbb_per_hand"], abs=0.005)
         assert se == pytest.approx(s["std_error"], abs=0.005)
         assert cells[8] == ("yes" if s["significant_bonferroni"] else "no")
-    pooled_md = _markdown_rows(markdown, 8)
+    # Results: one comparison per matchup (one agent per side: its pooled line, deal seeds).
+    pooled_md = _markdown_rows(markdown, 12)
     assert len(pooled_md) == 2
     for cells, m in zip(pooled_md, data["matchups"], strict=True):
-        mean, se = _payoff(cells[2])
+        assert cells[2:4] == ["1, 1", "deal seeds only"]
+        mean, se = _payoff(cells[4])
         assert mean == pytest.approx(m["pooled"]["mbb_per_hand"], abs=0.005)
         assert se == pytest.approx(m["pooled"]["std_error"], abs=0.005)
-        assert float(cells[4]) == pytest.approx(m["pooled"]["p_value"], rel=5e-3)
-        assert cells[7] == f"{m['seeds_significant_bonferroni']}/3"
+        assert float(cells[7]) == pytest.approx(m["pooled"]["p_value"], rel=5e-3)
+        assert cells[11] == f"{m['seeds_significant_bonferroni']}/3"
     assert "p < 0.05/6 = 0.008333" in markdown and "p < 0.05/2 = 0.025" in markdown
 
 
@@ -204,7 +206,7 @@ def test_report_errors(tmp_path: Path) -> None:
     assert missing.exit_code == 1 and "no report.json" in missing.output
     (tmp_path / "report.json").write_text('{"format": "something else"}')
     other = runner.invoke(app, ["report", str(tmp_path)])
-    assert other.exit_code == 1 and "not a pokerirl-tournament/1 report" in other.output
+    assert other.exit_code == 1 and "not a pokerirl-tournament/2 report" in other.output
 
 
 def _files(folder: Path) -> dict[str, bytes]:

@@ -220,8 +220,9 @@ def test_the_report_reads_back_typed_and_writes_the_same_bytes(tmp_path: Path) -
         hands=200, seeds=(1, 2), duplicate=True, batch_size=report.config.batch_size, alpha=0.05
     )
     assert report.family == FamilySizes(
-        per_seed_tests=2, per_seed_threshold=0.025, pooled_tests=1, pooled_threshold=0.05
-    )
+        per_seed_tests=2, per_seed_threshold=0.025, pooled_tests=1, pooled_threshold=0.05,
+        comparison_tests=1, comparison_threshold=0.05,
+    )  # fmt: skip
     text = (tmp_path / "report.json").read_text()
     data = json.loads(text)
     assert list(data["config"]) == ["hands", "seeds", "duplicate", "batch_size", "alpha"]

@@ -233,13 +233,21 @@ def tournament(
     agents: list[str] = typer.Argument(
         None,
         help="A B (one matchup, A's payoff), or with --vs the agents to play against BASE. "
-        "Each: a built-in (random, raise, call), an agent folder, or an agent set (a folder "
-        "of seed-<k> agent folders: seed k plays seed-k). An rlcard:CKPT agent is unpickled, "
-        "which runs any code it holds (trusted files only).",
+        "Each: a built-in (random, raise, call), an agent folder, an agent set (a folder "
+        "of seed-<k> agent folders: seed k plays seed-k), or several agent folders joined "
+        "by commas (agents trained with different seeds: every one meets every agent of the "
+        "other side, and the test is across training seeds). An rlcard:CKPT agent is "
+        "unpickled, which runs any code it holds (trusted files only).",
         show_default=False,
     ),
     vs: str | None = typer.Option(
         None, "--vs", metavar="BASE", help="Play every AGENT against BASE (several matchups)."
+    ),
+    cross: bool = typer.Option(
+        False,
+        "--cross",
+        help="An agent set is all its seed-<k> agents: every one meets every agent of the "
+        "other side on the same deals of every seed (instead of seed k against seed k).",
     ),
     hands: int = typer.Option(1_000_000, "--hands", "-n", min=2, help="Hands per seed."),
     seeds: str = typer.Option(
@@ -281,6 +289,13 @@ def tournament(
     One matchup:      pokerirl tournament A B --hands N --seeds 0-19 --out DIR
     Several matchups: pokerirl tournament --vs dqn hairl-dqn airl-dqn --out DIR
                       (hairl-dqn vs dqn and airl-dqn vs dqn, corrected together)
+    Training seeds:   pokerirl tournament --cross --vs agents/dqn agents/hairl
+                        --out DIR (sets of `agent train --seeds 0-2`: 3 x 3 pairs)
+
+    With one agent per side the p-value is about these two agents only (the seeds
+    re-deal the cards); several agents per side, trained with different seeds, make
+    it a test across training seeds: a claim about the training. The report's first
+    lines say which.
 
     Writes DIR/report.md, report.json, per_seed.csv, per_seed.png (and timings.json:
     the wall-clock figures, kept apart so the rest is the same bytes for the same seeds);
@@ -296,14 +311,17 @@ def tournament(
     from pokerirl.game import check_match_size
     from pokerirl.seeds import parse_seeds
     from pokerirl.tournaments import render_report, run_tournament
+    from pokerirl.tournaments.lineup import Side, parse_side
 
     agents = agents or []
+    matchups: list[tuple[Side, Side]]
     if vs is not None:
         if not agents:
             raise UsageError("--vs BASE needs at least one agent to play against it")
-        matchups = [(agent, vs) for agent in agents]
+        base = parse_side(vs, cross=cross)
+        matchups = [(parse_side(agent, cross=cross), base) for agent in agents]
     elif len(agents) == 2:
-        matchups = [(agents[0], agents[1])]
+        matchups = [(parse_side(agents[0], cross=cross), parse_side(agents[1], cross=cross))]
     else:
         raise UsageError(
             f"give two agents (A B) or --vs BASE and agents; got {len(agents)} agent(s)"
@@ -316,8 +334,9 @@ def tournament(
         )
     settings_from_options(check_match_size, hands, duplicate=duplicate, batch_size=batch_size)
     if encoding is not None:
-        _check_agents_encoding(_resolve_lineup([a for pair in matchups for a in pair]),
-                               _encoding(encoding))  # fmt: skip
+        specs = [spec for pair in matchups for side in pair
+                 for spec in ([side] if isinstance(side, str) else side)]  # fmt: skip
+        _check_agents_encoding(_resolve_lineup(specs), _encoding(encoding))
     report = run_tournament(
         matchups,
         hands=hands,

@@ -23,10 +23,13 @@ from pokerirl.tournaments.authors import (
 )
 from pokerirl.tournaments.exploit import ExploitConfig, LBRReport, lbr_of, run_lbr
 from pokerirl.tournaments.lbr import LBRSettings, Street
-from pokerirl.tournaments.lineup import TournamentError
+from pokerirl.tournaments.lineup import Side, TournamentError
 from pokerirl.tournaments.report import (
+    Comparison,
+    Design,
     Line,
     MatchupReport,
+    Replication,
     SeedLine,
     TournamentReport,
     load_report,
@@ -34,21 +37,34 @@ from pokerirl.tournaments.report import (
     write_report,
 )
 from pokerirl.tournaments.runner import run_tournament
-from pokerirl.tournaments.stats import Estimate, bonferroni, estimate, holm
+from pokerirl.tournaments.stats import (
+    AcrossAgents,
+    Estimate,
+    across_agents,
+    bonferroni,
+    estimate,
+    holm,
+)
 
 __all__ = [
+    "AcrossAgents",
     "AuthorsMatchup",
+    "Comparison",
     "CorrectedMatch",
+    "Design",
     "Estimate",
     "ExploitConfig",
     "LBRReport",
     "LBRSettings",
     "Line",
     "MatchupReport",
+    "Replication",
     "SeedLine",
+    "Side",
     "Street",
     "TournamentError",
     "TournamentReport",
+    "across_agents",
     "bonferroni",
     "estimate",
     "format_seeds",

@@ -13,6 +13,7 @@ in all four: the run's wall-clock figures are in ``timings.json`` alone.
 from __future__ import annotations
 
 import csv
+import enum
 import io
 import json
 from collections.abc import Mapping
@@ -20,13 +21,17 @@ from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import Any, Literal
 
+import numpy as np
+
 from pokerirl import atomic
 from pokerirl.seeds import format_seeds
 from pokerirl.serial import SerialError, Serializable, meta
-from pokerirl.tournaments.lineup import TournamentError
-from pokerirl.tournaments.stats import Estimate
+from pokerirl.tournaments.lineup import Group, TournamentError
+from pokerirl.tournaments.stats import Estimate, across_agents, bonferroni, holm
 
-REPORT_FORMAT = "pokerirl-tournament/1"
+REPORT_FORMAT = "pokerirl-tournament/2"
+# /1 had no comparisons: each matchup was its own, and they are derived when one is read
+OLD_FORMATS = ("pokerirl-tournament/1",)
 TIMINGS_FILE = "timings.json"
 REPORT_FILE, MARKDOWN_FILE = "report.json", "report.md"
 SEEDS_TABLE, SEEDS_FIGURE = "per_seed.csv", "per_seed.png"
@@ -86,6 +91,50 @@ class MatchupReport(Serializable):
         }
 
 
+class Replication(enum.StrEnum):
+    """What a comparison's test replicates, so what it can support a claim about."""
+
+    TRAINING_SEEDS = "training seeds"  # several independently trained agents on a side
+    DEAL_SEEDS = "deal seeds only"  # one agent per side: a claim about these two agents
+
+
+class Design(enum.StrEnum):
+    """How the agents of a comparison's two sides met."""
+
+    ONE_PAIR = "one pair"  # one agent per side
+    PAIRS = "independent pairs"  # each agent in one pair (seed k against seed k), or one side fixed
+    CROSSED = "crossed"  # every A agent against every B agent, on the same deals
+
+
+@dataclass(frozen=True, kw_only=True)
+class Comparison(Serializable):
+    """One side against the other, over every agent each side has: the test the verdict is.
+
+    ``agents_a``/``agents_b``: the distinct agents (fingerprints) on each side, so the
+    training seeds; ``pairs``: the distinct agent pairs that met. With one agent per side
+    (``Replication.DEAL_SEEDS``) ``line`` is the matchup's pooled line: a test about these two
+    agents only. With more, ``line`` is the test across training seeds
+    (:func:`~pokerirl.tournaments.stats.across_agents`: its standard error never below
+    ``deal_std_error``, ``df`` its degrees of freedom), Bonferroni and Holm over every
+    comparison. ``deal_std_error``: the standard error the deals' noise alone gives on the same
+    games; ``between_std_error``: the one from the spread between the pairs alone (None with
+    one pair). ``matchups``: the indices of the matchups (agent pairs) it is made of.
+    """
+
+    agent_a: str
+    agent_b: str
+    replication: Replication
+    design: Design
+    agents_a: int
+    agents_b: int
+    pairs: int
+    line: Line
+    df: float
+    deal_std_error: float
+    between_std_error: float | None
+    matchups: tuple[int, ...]
+
+
 @dataclass(frozen=True, kw_only=True)
 class TournamentSettings(Serializable):
     """What every seed of a tournament played: hands per seed, the seeds, duplicate deals or
@@ -100,13 +149,15 @@ class TournamentSettings(Serializable):
 
 @dataclass(frozen=True, kw_only=True)
 class FamilySizes(Serializable):
-    """The two families of tests: per seed (seeds x matchups) and pooled (matchups), each
-    with its Bonferroni threshold."""
+    """The families of tests: per seed (seeds x matchups), pooled (matchups: agent pairs) and
+    the comparisons (one per side against side), each with its Bonferroni threshold."""
 
     per_seed_tests: int
     per_seed_threshold: float
     pooled_tests: int
     pooled_threshold: float
+    comparison_tests: int = 0  # the comparisons, whose tests are the verdicts (0: a /1 file)
+    comparison_threshold: float = 0.0
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -114,8 +165,10 @@ class TournamentReport(Serializable):
     """Everything ``pokerirl tournament`` found, ready to write or print.
 
     ``config``: hands per seed, seeds, duplicate, batch_size, alpha. ``family``: the size and
-    Bonferroni threshold of the per-seed family (seeds x matchups) and of the pooled family
-    (matchups). ``timing``: this run's wall time, hands/s, backend and the seeds it played
+    Bonferroni threshold of the per-seed family (seeds x matchups), of the pooled family
+    (matchups) and of the comparisons. ``comparisons``: each side against the other over all
+    its agents, with what its test replicates; their lines are the verdicts. ``timing``: this
+    run's wall time, hands/s, backend and the seeds it played
     and reused; not part of the results (a rerun that reuses saved seeds is faster and
     reports the same numbers), so not in :meth:`to_json`: it is written to ``timings.json``,
     which :func:`load_report` reads back when it is there.
@@ -127,8 +180,82 @@ class TournamentReport(Serializable):
     family: FamilySizes
     matchups: tuple[MatchupReport, ...]
     versions: Mapping[str, str | None]
+    comparisons: tuple[Comparison, ...] = ()  # () only while a /1 file is read
     # timings.json, as read: never in report.json
     timing: Mapping[str, Any] = field(default_factory=dict, metadata=meta(skip=True))
+
+
+def corrected_lines(estimates: list[Estimate], alpha: float) -> list[Line]:
+    """Each estimate with Bonferroni and Holm over the whole list (one family)."""
+    p = np.array([e.p_value for e in estimates])
+    p_bonferroni, p_holm = bonferroni(p), holm(p)
+    threshold = alpha / len(estimates)
+    return [
+        Line(
+            **asdict(e),
+            p_value_bonferroni=float(p_bonferroni[i]),
+            p_value_holm=float(p_holm[i]),
+            significant_bonferroni=bool(e.p_value < threshold),
+            significant_holm=bool(p_holm[i] < alpha),
+        )
+        for i, e in enumerate(estimates)
+    ]
+
+
+def compare(
+    matchups: tuple[MatchupReport, ...], groups: list[Group], alpha: float
+) -> tuple[Comparison, ...]:
+    """Each group's comparison, its test chosen by how many agents each side has (told apart
+    by fingerprint, seed by seed), then corrected over all groups."""
+    found: list[dict[str, Any]] = []  # each comparison's fields but its corrected line
+    estimates: list[Estimate] = []
+    for group in groups:
+        lines = [line for k in group.matchups for line in matchups[k].seeds]
+        rows = sorted({line.fingerprint_a for line in lines})
+        cols = sorted({line.fingerprint_b for line in lines})
+        cells: dict[tuple[int, int], list[SeedLine]] = {}
+        for line in lines:
+            cell = rows.index(line.fingerprint_a), cols.index(line.fingerprint_b)
+            cells.setdefault(cell, []).append(line)
+        means = np.full((len(rows), len(cols)), np.nan)
+        deal_variances = np.zeros_like(means)
+        for (i, j), played in cells.items():
+            means[i, j] = float(np.mean([line.mbb_per_hand for line in played]))
+            deal_variances[i, j] = sum(line.std_error**2 for line in played) / len(played) ** 2
+        fields: dict[str, Any] = dict(agent_a=group.agent_a, agent_b=group.agent_b,
+                                      agents_a=len(rows), agents_b=len(cols), pairs=len(cells),
+                                      matchups=group.matchups)  # fmt: skip
+        if len(cells) == 1:  # these two agents only: the pooled line over the deal seeds
+            only = matchups[group.matchups[0]].pooled
+            estimates.append(Estimate(mbb_per_hand=only.mbb_per_hand, std_error=only.std_error,
+                                      ci95=only.ci95, p_value=only.p_value, n=only.n))  # fmt: skip
+            fields.update(replication=Replication.DEAL_SEEDS, design=Design.ONE_PAIR,
+                          df=float(max(only.n - 1, 1)), between_std_error=None,
+                          deal_std_error=float(np.sqrt(deal_variances.sum())))  # fmt: skip
+        else:
+            across = across_agents(means, deal_variances)
+            estimates.append(across.estimate)
+            fields.update(replication=Replication.TRAINING_SEEDS,
+                          design=Design.CROSSED if across.crossed else Design.PAIRS,
+                          df=across.df, between_std_error=across.between_std_error,
+                          deal_std_error=across.deal_std_error)  # fmt: skip
+        found.append(fields)
+    tested = corrected_lines(estimates, alpha)
+    return tuple(
+        Comparison(**fields, line=line) for fields, line in zip(found, tested, strict=True)
+    )
+
+
+def with_comparisons(report: TournamentReport) -> TournamentReport:
+    """A report of the /1 format, which had none, with its comparisons: one per matchup."""
+    if report.comparisons:
+        return report
+    groups = [Group(agent_a=m.agent_a, agent_b=m.agent_b, matchups=(k,))
+              for k, m in enumerate(report.matchups)]  # fmt: skip
+    comparisons = compare(report.matchups, groups, report.config.alpha)
+    family = replace(report.family, comparison_tests=len(comparisons),
+                     comparison_threshold=report.config.alpha / len(comparisons))  # fmt: skip
+    return replace(report, comparisons=comparisons, family=family)
 
 
 # --- writing and reading -------------------------------------------------------------------
@@ -163,7 +290,9 @@ def load_report(out: Path | str) -> TournamentReport:
     if not isinstance(data, dict):
         raise TournamentError(f"{path}: not a tournament report (a JSON object), got {_kind(data)}")
     try:
-        report = TournamentReport.from_json(data)
+        if data.get("format") in OLD_FORMATS:  # the same fields, less the comparisons
+            data = {**data, "format": REPORT_FORMAT}
+        report = with_comparisons(TournamentReport.from_json(data))
         render_markdown(report)  # a report that loads can be printed: check every field once
     except (TournamentError, SerialError) as error:
         raise TournamentError(f"{path}: {error}") from None
@@ -218,44 +347,101 @@ def _threshold(alpha: float, tests: int) -> str:
     return f"p < {alpha:g}/{tests} = {alpha / tests:.4g}"
 
 
+def _agents(count: int) -> str:
+    return "1 agent" if count == 1 else f"{count} agents"
+
+
+def replication_lines(report: TournamentReport) -> list[str]:
+    """What each comparison's test replicates, so which claim it supports: the report's
+    first lines."""
+    seeds = len(report.config.seeds)
+    out = ["Unit of replication (what the p-values and verdicts below generalize over):", ""]
+    for c in report.comparisons:
+        sides = f"{c.agent_a} {_agents(c.agents_a)}, {c.agent_b} {_agents(c.agents_b)}"
+        if c.replication is Replication.DEAL_SEEDS:
+            out.append(
+                f"- {c.agent_a} vs {c.agent_b}: **deal seeds only** ({sides}). The p-value "
+                f"and the verdict are about these two agents only: the {seeds} seed(s) "
+                "re-deal the cards for the same two agents and never sample the variance "
+                "of training; a claim about the method that trained them needs at "
+                "least 2 agents per side, trained with different seeds."
+            )
+            continue
+        how = (
+            "every pair on the same deals, two-way random-effects test"
+            if c.design is Design.CROSSED
+            else "each agent in one pair, t-test over the pairs' means"
+        )
+        fixed = [name for name, n in ((c.agent_a, c.agents_a), (c.agent_b, c.agents_b)) if n == 1]
+        scope = (
+            f"a claim about the training that made them, against this one {fixed[0]} agent"
+            if fixed
+            else "a claim about the training that made them, not about one pair of agents"
+        )
+        out.append(
+            f"- {c.agent_a} vs {c.agent_b}: **training seeds** ({sides}; {c.pairs} pairs, "
+            f"{how}, df {c.df:.3g}): {scope}."
+        )
+    return out
+
+
 def render_markdown(report: TournamentReport) -> str:
     config, family = report.config, report.family
     alpha, seeds = config.alpha, config.seeds
     per_seed_rule = _threshold(alpha, family.per_seed_tests)
     pooled_rule = _threshold(alpha, family.pooled_tests)
-    names = ", ".join(f"{m.agent_a} vs {m.agent_b}" for m in report.matchups)
+    verdict_rule = _threshold(alpha, family.comparison_tests)
+    names = ", ".join(f"{c.agent_a} vs {c.agent_b}" for c in report.comparisons)
     unit = "duplicate pair (a deal played from both seats)" if config.duplicate else "hand"
     seating = "duplicate deals" if config.duplicate else "seats alternating, no duplicate"
     pooled_how = (
         f"the mean of the {len(seeds)} per-seed means, with its standard error and a t-test "
-        f"over those {len(seeds)} values (df {len(seeds) - 1}): seeds are the replicates"
+        f"over those {len(seeds)} values (df {len(seeds) - 1})"
         if len(seeds) > 1
-        else "with a single seed, the pooled line is that seed's own test"
+        else "with a single seed, that seed's own test over its units"
     )
     out = [
         f"# Tournament: {names}",
+        "",
+        *replication_lines(report),
         "",
         f"{config.hands:,} hands per seed, seeds {format_seeds(seeds)} ({len(seeds)}), "
         f"{seating}. Payoffs are the first agent's, in milli-big-blinds per hand (mbb/h).",
         "",
         "## Results",
         "",
-        f"| Model | Opponent | Payoff (mbb/h) ± SE | 95% CI | p-value | Significant after "
-        f"Bonferroni ({pooled_rule}) | Holm p | Seeds significant ({per_seed_rule}) |",
-        "|---|---|---|---|---|---|---|---|",
+        f"| Model | Opponent | Agents (A, B) | Replicated over | Payoff (mbb/h) ± SE | 95% CI "
+        f"| df | p-value | Significant after Bonferroni ({verdict_rule}) | Holm p | Deal-only SE "
+        f"| Seeds significant ({per_seed_rule}) |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
-    for m in report.matchups:
-        p = m.pooled
+    for c in report.comparisons:
+        p = c.line
+        seed_lines = [s for k in c.matchups for s in report.matchups[k].seeds]
+        significant = sum(s.significant_bonferroni for s in seed_lines)
         out.append(
-            f"| {m.agent_a} | {m.agent_b} | {_mbb(p.mbb_per_hand)} ± {p.std_error:.2f} | "
-            f"{_ci(p.ci95)} | {render_p(p.p_value)} | {_yes(p.significant_bonferroni)} | "
-            f"{render_p(p.p_value_holm)} | {m.seeds_significant_bonferroni}/{len(m.seeds)} |"
+            f"| {c.agent_a} | {c.agent_b} | {c.agents_a}, {c.agents_b} | {c.replication} | "
+            f"{_mbb(p.mbb_per_hand)} ± {p.std_error:.2f} | {_ci(p.ci95)} | {c.df:.3g} | "
+            f"{render_p(p.p_value)} | {_yes(p.significant_bonferroni)} | "
+            f"{render_p(p.p_value_holm)} | {c.deal_std_error:.2f} | "
+            f"{significant}/{len(seed_lines)} |"
         )
+    kinds = {c.replication for c in report.comparisons}
     out += [
         "",
-        f"Pooled: {pooled_how}. Bonferroni and Holm over the {family.pooled_tests} pooled "
-        f"test(s), one per matchup.",
-        *_aivat_section(report),
+        *([f"One agent per side: the pooled line over the deal seeds, {pooled_how}."]
+          if Replication.DEAL_SEEDS in kinds else []),
+        *(["Several agents per side (training seeds): the test across them (a t-test over "
+           "independent pairs' means, or the two-way random-effects model when every agent "
+           "met every agent: docs/cli.md), its standard error never below the deal-only one."]
+          if Replication.TRAINING_SEEDS in kinds else []),
+        "Deal-only SE: what the deals' noise alone gives on the same games, as if the agents "
+        f"were fixed. Bonferroni and Holm over the {family.comparison_tests} comparison(s).",
+    ]  # fmt: skip
+    if any(len(c.matchups) > 1 for c in report.comparisons):
+        out += _pairs_section(report, pooled_rule)
+    out += _aivat_section(report)
+    out += [
         "",
         "## Per seed",
         "",
@@ -294,6 +480,29 @@ def render_markdown(report: TournamentReport) -> str:
         "",
     ]
     return "\n".join(out)
+
+
+def _pairs_section(report: TournamentReport, pooled_rule: str) -> list[str]:
+    """Each agent pair's own result over the deal seeds (about that pair only)."""
+    out = [
+        "",
+        "## Per agent pair (deal seeds only)",
+        "",
+        "Each pair of agents over the deal seeds: about that pair only. Bonferroni and Holm over "
+        f"the {report.family.pooled_tests} pairs.",
+        "",
+        f"| Model | Opponent | Payoff (mbb/h) ± SE | 95% CI | p-value | Significant after "
+        f"Bonferroni ({pooled_rule}) | Holm p |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    for m in report.matchups:
+        p = m.pooled
+        out.append(
+            f"| {m.agent_a} | {m.agent_b} | {_mbb(p.mbb_per_hand)} ± {p.std_error:.2f} | "
+            f"{_ci(p.ci95)} | {render_p(p.p_value)} | {_yes(p.significant_bonferroni)} | "
+            f"{render_p(p.p_value_holm)} |"
+        )
+    return out
 
 
 def _aivat_section(report: TournamentReport) -> list[str]:

@@ -11,9 +11,15 @@ Statistics (see :mod:`pokerirl.tournaments.stats`):
 * pooled, per matchup: the same over the per-seed means (n = seeds, df = seeds - 1), so seeds
   are the replicates, which with agent sets includes the spread between training runs. With one
   seed the pooled line is that seed's own test;
-* Bonferroni and Holm over the family of all per-seed tests (seeds x matchups), and separately
-  over the pooled tests (one per matchup). The paper's threshold p < 0.05/20 (one matchup, 20
-  seeds) is the per-seed family's; its payoff ± SE is the pooled line.
+* per comparison (one per pair of sides, the verdict): with one agent per side, the pooled
+  line, a claim about these two agents only (deal seeds only); with several agents on a side
+  (an agent set's seeds, or a list of agents: every pair on the same deals), the test across
+  training seeds (:func:`~pokerirl.tournaments.stats.across_agents`), agents told apart by
+  fingerprint;
+* Bonferroni and Holm over the family of all per-seed tests (seeds x matchups), separately
+  over the pooled tests (one per matchup), and over the comparisons. The paper's threshold
+  p < 0.05/20 (one matchup, 20 seeds) is the per-seed family's; its payoff ± SE is the pooled
+  line.
 
 Execution: each (matchup, seed) is a unit of :func:`pokerirl.store.run_units`, on local
 processes or Ray; the units get the agents' bytes (read here once), so workers need no shared
@@ -57,22 +63,25 @@ from pokerirl.game.match import DEFAULT_BATCH_SIZE, check_match_size, play_match
 from pokerirl.store import Json, Layout, Unit, UnitConflict, UnitOutput, run_units
 from pokerirl.tournaments.aivat import CorrectedMatch, play_corrected_match
 from pokerirl.tournaments.lineup import (
+    Group,
+    Side,
     TournamentError,
-    agent_label,
     agent_spec_for_seed,
     check_specs,
+    expand_sides,
 )
 from pokerirl.tournaments.report import (
     REPORT_FILE,
     FamilySizes,
-    Line,
     MatchupReport,
     SeedLine,
     TournamentReport,
     TournamentSettings,
+    compare,
+    corrected_lines,
     write_report,
 )
-from pokerirl.tournaments.stats import Estimate, bonferroni, estimate, holm
+from pokerirl.tournaments.stats import Estimate, estimate
 from pokerirl.versions import package_versions
 
 SEED_KIND = "pokerirl-tournament-seed"
@@ -194,13 +203,9 @@ def _has_estimate(result: Json) -> bool:
     return _estimate(result) is not None
 
 
-def _folder_names(matchups: Sequence[tuple[str, str]]) -> list[str]:
-    """``<A>-vs-<B>`` per matchup, file-safe, numbered when two labels collide."""
-    return _label_names([(agent_label(a), agent_label(b)) for a, b in matchups])
-
-
-def _label_names(labels: Sequence[tuple[str, str]]) -> list[str]:
-    """:func:`_folder_names` of matchups given by their agents' labels."""
+def _folder_names(labels: Sequence[tuple[str, str]]) -> list[str]:
+    """``<A>-vs-<B>`` per matchup, by its agents' labels, file-safe, numbered when two
+    labels collide."""
     names: list[str] = []
     for a, b in labels:
         base = re.sub(r"[^A-Za-z0-9._-]+", "_", f"{a}-vs-{b}")
@@ -221,7 +226,7 @@ def _held_matchups(out: Path) -> tuple[str, list[str]]:
     except (OSError, ValueError, KeyError, TypeError):  # none, or damaged: the run rewrites it
         labels = []
     if labels:
-        return "report", _label_names(labels)
+        return "report", _folder_names(labels)
     with contextlib.suppress(OSError):
         return "saved seeds", sorted(p.name for p in (out / "seeds").iterdir() if p.is_dir())
     return "", []
@@ -298,25 +303,8 @@ def _validate(
 Cell = tuple[int, int]  # (matchup index, seed)
 
 
-def _corrected(estimates: list[Estimate], alpha: float) -> list[Line]:
-    """Each estimate with Bonferroni and Holm over the whole list (one family)."""
-    p = np.array([e.p_value for e in estimates])
-    p_bonferroni, p_holm = bonferroni(p), holm(p)
-    threshold = alpha / len(estimates)
-    return [
-        Line(
-            **asdict(e),
-            p_value_bonferroni=float(p_bonferroni[i]),
-            p_value_holm=float(p_holm[i]),
-            significant_bonferroni=bool(e.p_value < threshold),
-            significant_holm=bool(p_holm[i] < alpha),
-        )
-        for i, e in enumerate(estimates)
-    ]
-
-
 def run_tournament(
-    matchups: Sequence[tuple[str, str]],
+    matchups: Sequence[tuple[Side, Side]],
     *,
     hands: int,
     seeds: Sequence[int],
@@ -333,8 +321,12 @@ def run_tournament(
     """Play every (A, B) matchup on every seed, write the report files to ``out``, return it.
 
     Args:
-        matchups: (A, B) agent specs; results are A's. Each spec is a built-in name, an agent
-            folder, or an agent set (a folder of ``seed-<k>`` agent folders).
+        matchups: (A, B) sides; results are A's; one comparison each. A side is an agent spec
+            (a built-in name, an agent folder, or an agent set: a folder of ``seed-<k>``
+            agent folders, whose seed-k agent plays seed k) or a list of agent specs, several
+            agents trained with different seeds: every agent of one side then plays every
+            agent of the other (one matchup per pair) on the same deals, and the comparison
+            is tested across them (:func:`~pokerirl.tournaments.report.compare`).
         hands: hands per seed (even with duplicate deals).
         seeds: the seeds; seed k plays deals of seed k between each set's seed-k agents.
         out: the report folder; saved seeds found there are reused when they match.
@@ -362,10 +354,14 @@ def run_tournament(
     [0.0, 0.0]
     """
     seeds = sorted(set(seeds))
+    if not matchups:
+        raise TournamentError("no matchups: give at least one (agent, base) pair")
+    expanded = expand_sides(matchups)
+    contests, matchups = expanded.groups, expanded.pairs
     _validate(matchups, hands, seeds, duplicate, alpha, jobs, batch_size)
     check_specs(sorted({spec for pair in matchups for spec in pair}), seeds)
     out = Path(out)
-    folders = _folder_names(matchups)
+    folders = _folder_names(expanded.labels)
     if not overwrite:
         _check_same_matchups(out, folders)
     prints = {spec: _fingerprints(spec, seeds) for spec in {s for pair in matchups for s in pair}}
@@ -414,6 +410,8 @@ def run_tournament(
 
     report = _build_report(
         matchups,
+        expanded.labels,
+        contests,
         seeds,
         done,
         hands=hands,
@@ -455,6 +453,8 @@ def _pooled_aivat(per_seed: list[Estimate | None]) -> Estimate | None:
 
 def _build_report(
     matchups: Sequence[tuple[str, str]],
+    labels: Sequence[tuple[str, str]],
+    contests: list[Group],
     seeds: Sequence[int],
     done: dict[Cell, SeedResult],
     *,
@@ -465,7 +465,8 @@ def _build_report(
     timing: Mapping[str, Any],
 ) -> TournamentReport:
     cells = [(m, seed) for m in range(len(matchups)) for seed in seeds]
-    per_seed = dict(zip(cells, _corrected([done[c].estimate for c in cells], alpha), strict=True))
+    tested = corrected_lines([done[c].estimate for c in cells], alpha)
+    per_seed = dict(zip(cells, tested, strict=True))
     if len(seeds) > 1:
         pooled_estimates = [
             estimate(np.array([done[m, seed].estimate.mbb_per_hand for seed in seeds]))
@@ -473,7 +474,7 @@ def _build_report(
         ]
     else:
         pooled_estimates = [done[m, seeds[0]].estimate for m in range(len(matchups))]
-    pooled = _corrected(pooled_estimates, alpha)
+    pooled = corrected_lines(pooled_estimates, alpha)
 
     reports = []
     for m, (a, b) in enumerate(matchups):
@@ -490,8 +491,8 @@ def _build_report(
         )
         reports.append(
             MatchupReport(
-                agent_a=agent_label(a),
-                agent_b=agent_label(b),
+                agent_a=labels[m][0],
+                agent_b=labels[m][1],
                 spec_a=a,
                 spec_b=b,
                 pooled=pooled[m],
@@ -500,6 +501,7 @@ def _build_report(
                 aivat=_pooled_aivat([done[m, seed].aivat for seed in seeds]),
             )
         )
+    comparisons = compare(tuple(reports), contests, alpha)
     return TournamentReport(
         config=TournamentSettings(
             hands=hands, seeds=tuple(seeds), duplicate=duplicate, batch_size=batch_size,
@@ -510,8 +512,11 @@ def _build_report(
             per_seed_threshold=alpha / len(cells),
             pooled_tests=len(matchups),
             pooled_threshold=alpha / len(matchups),
+            comparison_tests=len(comparisons),
+            comparison_threshold=alpha / len(comparisons),
         ),
         matchups=tuple(reports),
+        comparisons=comparisons,
         versions=package_versions(),
         timing=timing,
     )

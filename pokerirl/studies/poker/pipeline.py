@@ -475,8 +475,15 @@ def agents_stage(study: Study, irl: IRLResult) -> AgentsResult:
     )  # fmt: skip
 
 
-def _table1_line(matchup: Any) -> Table1Line:
-    line = matchup.pooled
+def _comparisons(report: TournamentReport) -> list[tuple[Any, Any]]:
+    """Each matchup with its comparison: the study gives one spec per side (an agent set or a
+    built-in), so each matchup is one comparison, whose test is the verdict (across training
+    seeds where a side has several agents)."""
+    return [(report.matchups[c.matchups[0]], c) for c in report.comparisons]
+
+
+def _table1_line(matchup: Any, comparison: Any) -> Table1Line:
+    line = comparison.line
     return Table1Line(
         mbb_per_hand=line.mbb_per_hand,
         std_error=line.std_error,
@@ -486,6 +493,11 @@ def _table1_line(matchup: Any) -> Table1Line:
         n=line.n,
         per_seed=[s.mbb_per_hand for s in matchup.seeds],
         seeds_significant_bonferroni=matchup.seeds_significant_bonferroni,
+        replicated_over=str(comparison.replication),
+        agents_a=comparison.agents_a,
+        agents_b=comparison.agents_b,
+        df=comparison.df,
+        deal_std_error=comparison.deal_std_error,
     )
 
 
@@ -505,8 +517,8 @@ def tournament_stage(study: Study, agents: AgentsResult) -> dict[str, Table1Line
         duplicate=config.duplicate,
     )
     return {
-        f"{name}_vs_dqn": _table1_line(matchup)
-        for name, matchup in zip(kinds, report.matchups, strict=True)
+        f"{name}_vs_dqn": _table1_line(matchup, comparison)
+        for name, (matchup, comparison) in zip(kinds, _comparisons(report), strict=True)
     }
 
 
@@ -573,13 +585,16 @@ def panel_stage(study: Study, agents: AgentsResult) -> Panel:
     size = len(members)
     mbb: list[list[float | None]] = [[None] * size for _ in range(size)]
     se: list[list[float | None]] = [[None] * size for _ in range(size)]
-    for (i, j), matchup in zip(pairs, report.matchups, strict=True):
-        mbb[i][j], mbb[j][i] = matchup.pooled.mbb_per_hand, -matchup.pooled.mbb_per_hand
-        se[i][j] = se[j][i] = matchup.pooled.std_error
+    unit: list[list[str | None]] = [[None] * size for _ in range(size)]
+    for (i, j), (_, comparison) in zip(pairs, _comparisons(report), strict=True):
+        line = comparison.line  # across training seeds where a side has several agents
+        mbb[i][j], mbb[j][i] = line.mbb_per_hand, -line.mbb_per_hand
+        se[i][j] = se[j][i] = line.std_error
+        unit[i][j] = unit[j][i] = str(comparison.replication)
     lbr = [lbr_pooled(study, name, spec) for name, spec in members]
     return Panel(agents=[name for name, _ in members], mbb_per_hand=mbb, std_error=se,
                  lbr_mbb_per_hand=[m for m, _ in lbr],
-                 lbr_std_error=[e for _, e in lbr])  # fmt: skip
+                 lbr_std_error=[e for _, e in lbr], replicated_over=unit)  # fmt: skip
 
 
 def lbr_pooled(study: Study, name: str, spec: str) -> tuple[float | None, float | None]:

@@ -224,6 +224,7 @@ def render_markdown(report: StudyReport) -> str:
         f"{settings['agent_hands']:,} training hands, {report.hands:,} tournament hands per "
         f"seed ({'duplicate deals' if settings['duplicate'] else 'no duplicate deals'}), "
         f"{settings['panel_hands']:,} per seed for each panel pair.",
+        replication_line(report),
     ]
     if report.preset == "authors":
         if report.runs < 20:
@@ -238,7 +239,8 @@ def render_markdown(report: StudyReport) -> str:
         )
     lines += [
         "",
-        "## Table 1: against the sparse-reward DQN (mbb/hand, pooled over seeds)",
+        "## Table 1: against the sparse-reward DQN (mbb/hand, "
+        f"{'across training seeds' if n_seeds > 1 else 'one agent per side'})",
         "",
         "| matchup | ours | SE | p | p (Bonferroni) | seeds with p < 0.05/m | the paper |",
         "|---|---|---|---|---|---|---|",
@@ -260,7 +262,7 @@ def render_markdown(report: StudyReport) -> str:
         "",
         "Per-seed range: "
         + "; ".join(f"{name} {low:+,.0f} to {high:+,.0f}" for name, (low, high) in spread.items())
-        + ". Seeds are the replicates (SE over per-seed means, df = seeds - 1).",
+        + f". {_table1_test(report)}",
         "",
         "**Where the paper is silent.** The paper does not say whether its tournament used "
         "duplicate deals. We do (each deal from both seats), which removes the luck of the cards "
@@ -353,7 +355,7 @@ def render_markdown(report: StudyReport) -> str:
     lines += authors_markdown(report)
     lines += cards_markdown(report)
     lines += [
-        "## Panel: row agent against column agent (mbb/hand ± SE, pooled over seeds)",
+        "## Panel: row agent against column agent (mbb/hand ± SE over seeds)",
         "",
     ]
     panel = report.panel.panel
@@ -370,13 +372,69 @@ def render_markdown(report: StudyReport) -> str:
     lines += [
         "",
         f"{report.panel.hands:,} hands per seed per pair, {n_seeds} seeds; cross-table in "
-        f"`{PANEL_CSV}`.",
+        f"`{PANEL_CSV}`. {_panel_replication(panel)}",
         "",
         f"![panel]({figures['panel_heatmap']})",
         "",
     ]
     lines += lbr_markdown(report.panel, n_seeds)
     return "\n".join(lines)
+
+
+TRAINING_SEEDS = "training seeds"  # the tournament's Replication values, as written
+DEAL_SEEDS = "deal seeds only"
+
+
+def replication_line(report: StudyReport) -> str:
+    """The report's first word on what its tests replicate (the study trains one agent per
+    seed and kind, and plays seed k against seed k on the deals of seed k)."""
+    n = len(report.seeds)
+    if n < 2:
+        return (
+            "**Unit of replication: deal seeds only** (1 agent per kind): Table 1's and the "
+            "panel's p-values are about these agents only, not about the methods that "
+            "trained them."
+        )
+    return (
+        f"**Unit of replication: training seeds** ({n} agents per DQN kind, one per seed; "
+        "seed k plays seed k on the deals of seed k): Table 1 and the panel's DQN cells test "
+        f"across the {n} independent pairs of agents (df {n - 1}), a claim about the training "
+        "methods; cells between two fixed strategies (random, raise, call) replicate deal "
+        "seeds only."
+    )
+
+
+def _table1_test(report: StudyReport) -> str:
+    """How Table 1's SE and p were computed, from its lines (reports before it said: the
+    seeds were the replicates, as now)."""
+    lines = [row.line for row in report.table1.values()]
+    said = [line for line in lines if line.replicated_over is not None]
+    if not said:
+        return "Seeds are the replicates (SE over per-seed means, df = seeds - 1)."
+    if all(line.replicated_over == DEAL_SEEDS for line in said):
+        return ("One agent per side: SE over the deal seeds, about these agents only, not "
+                "about their training.")  # fmt: skip
+    floors = ", ".join(f"{line.deal_std_error:,.0f}" for line in said
+                       if line.deal_std_error is not None)  # fmt: skip
+    return (
+        "Training seeds are the replicates: SE over the per-pair means (seed k against seed "
+        f"k; df = seeds - 1), never below the deals' own noise on the same games (deal-only "
+        f"SE: {floors})."
+    )
+
+
+def _panel_replication(panel: Panel) -> str:
+    """Which panel cells are tested across training seeds and which over deal seeds only."""
+    units = panel.replicated_over
+    if units is None:
+        return "SE over per-seed means."
+    cells = [unit for row in units for unit in row if unit is not None]
+    trained = sum(unit == TRAINING_SEEDS for unit in cells) // 2
+    dealt = sum(unit == DEAL_SEEDS for unit in cells) // 2
+    return (
+        f"SE across training seeds for the {trained} pairs with a DQN kind (one agent per "
+        f"seed); over deal seeds only for the {dealt} between fixed strategies."
+    )
 
 
 def lbr_markdown(part: PanelPart, n_seeds: int) -> list[str]:
@@ -500,8 +558,10 @@ def authors_markdown(report: StudyReport) -> list[str]:
         f"{n} experiments: IRL run k, then a sparse DQN, an AIRL-DQN and an H-AIRL-DQN with "
         "their DQN settings (5,000 hands against random; the > 0.8 x best checkpoint plays), "
         f"then {first.repeats} x {first.games:,} non-duplicate games per pair, the small "
-        "blind drawn per game. Their ± is std(repeats)/√1000 over all repeats; the SE over "
-        "experiments carries the variance between training runs.",
+        "blind drawn per game. Their ± is std(repeats)/√1000 over all repeats: deal seeds "
+        "only, whose replicates re-deal the cards for the same agents; the SE over "
+        "experiments replicates training seeds (each experiment its own IRL run and DQNs), "
+        "the one a claim about the methods needs.",
         "",
         "| matchup | mean | their ± | SE over experiments | ours: duplicate deals | the paper |",
         "|---|---|---|---|---|---|",

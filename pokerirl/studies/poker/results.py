@@ -115,7 +115,12 @@ class AgentsResult(Serializable):
 
 @dataclass(frozen=True, kw_only=True)
 class Table1Line(Serializable):
-    """One Table 1 matchup against the sparse DQN: the pooled line and its seeds."""
+    """One Table 1 matchup against the sparse DQN: the tournament comparison's test (across
+    training seeds: seed k against seed k) and its seeds.
+
+    ``replicated_over`` (the tournament's ``Replication``: ``training seeds`` or ``deal seeds
+    only``), the agents per side, ``df`` and the deal-only standard error are None in reports
+    written before they were said; those tested over the seeds as the replicates too."""
 
     mbb_per_hand: float
     std_error: float
@@ -125,16 +130,26 @@ class Table1Line(Serializable):
     n: int
     per_seed: list[float] = field(default_factory=list)
     seeds_significant_bonferroni: int = 0
+    replicated_over: str | None = field(default=None, metadata=meta(omit=Omit.NONE))
+    agents_a: int | None = field(default=None, metadata=meta(omit=Omit.NONE))
+    agents_b: int | None = field(default=None, metadata=meta(omit=Omit.NONE))
+    df: float | None = field(default=None, metadata=meta(omit=Omit.NONE))
+    deal_std_error: float | None = field(default=None, metadata=meta(omit=Omit.NONE))
 
 
 @dataclass(frozen=True, kw_only=True)
 class Panel(Serializable):
     """Every panel member against every other: row agent's mbb/h and its SE (None on the
-    diagonal); and LBR's win rate against each member with its SE, pooled over seeds (None:
-    not measured)."""
+    diagonal), from the tournament's comparison of the pair (across training seeds where a
+    side has several agents); and LBR's win rate against each member with its SE, pooled over
+    seeds (None: not measured). ``replicated_over``: each cell's unit of replication (the
+    tournament's ``Replication``), None in reports written before it was said."""
 
     agents: list[str]
     mbb_per_hand: list[list[float | None]]
     std_error: list[list[float | None]]
     lbr_mbb_per_hand: list[float | None] = field(default_factory=list)
     lbr_std_error: list[float | None] = field(default_factory=list)
+    replicated_over: list[list[str | None]] | None = field(
+        default=None, metadata=meta(omit=Omit.NONE)
+    )
