@@ -87,7 +87,9 @@ def _parameter(item: dataclasses.Field[Any], hint: Any) -> tuple[_Option, inspec
         typed, more["metavar"] = str, "WIDTHS"
     if item.name == "seed" or item.name.endswith("_seed"):
         more.update(SEED_OPTION)
-    more.update({key: meta[key] for key in ("metavar", "min", "max") if key in meta})
+    # a tuple's bounds are each width's, checked by the config (settings.check_bounds)
+    passed = ("metavar",) if typing.get_origin(kind) is tuple else ("metavar", "min", "max")
+    more.update({key: meta[key] for key in passed if key in meta})
     flags = tuple(meta.get("flags", (f"--{item.name.replace('_', '-')}",)))
     default = item.default if meta.get("show_default") else None
     option = typer.Option(default, *flags, help=meta["help"], **more)
