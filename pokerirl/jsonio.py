@@ -14,6 +14,7 @@ Every refusal is an :class:`~pokerirl.errors.InputError` (or the caller's own ki
 ``PATH: reason``.
 
 >>> import tempfile
+>>> from pathlib import Path
 >>> folder = Path(tempfile.mkdtemp())
 >>> _ = (folder / "a.json").write_text('{"hidden": [64, 64]}')
 >>> read_json(folder / "a.json")
@@ -22,7 +23,7 @@ Every refusal is an :class:`~pokerirl.errors.InputError` (or the caller's own ki
 >>> read_json(folder / "b.json")  # doctest: +ELLIPSIS
 Traceback (most recent call last):
 ...
-pokerirl.errors.InputError: .../b.json: not readable JSON (an integer of 5000 digits; at most 40)
+pokerirl.errors.InputError: .../b.json: not JSON (an integer of 5000 digits; at most 40)
 >>> read_json("/dev/zero")
 Traceback (most recent call last):
 ...
@@ -35,7 +36,6 @@ import json
 import os
 import stat
 from collections.abc import Callable, Collection, Mapping
-from pathlib import Path
 from typing import Any
 
 from pokerirl.errors import InputError, PokerIRLError
@@ -64,51 +64,65 @@ def _first_line(error: BaseException) -> str:
     return text.splitlines()[0] if text else type(error).__name__
 
 
-def parse_json(data: bytes | str, *, where: str | os.PathLike[str], error: ErrorKind = InputError) -> Any:
-    """``data`` parsed as JSON with integers bounded; ``error`` ``WHERE: not readable JSON
-    (...)`` for anything else."""
+def parse_json(
+    data: bytes | str,
+    *,
+    where: str | os.PathLike[str],
+    error: ErrorKind = InputError,
+    what: str = "",
+) -> Any:
+    """``data`` parsed as JSON with integers bounded; ``error`` ``WHERE: WHAT not JSON
+    (...)`` for anything else (``what``: the caller's words, e.g. ``corrupt: ``)."""
     try:
         text = data.decode("utf-8") if isinstance(data, bytes) else data
         return json.loads(text, parse_int=_bounded_int)
+    except UnicodeDecodeError:
+        raise error(f"{os.fspath(where)}: {what}not JSON (not UTF-8 text)") from None
     except _Refused as refused:
-        raise error(f"{os.fspath(where)}: not readable JSON ({refused})") from None
-    except (UnicodeDecodeError, json.JSONDecodeError, ValueError, RecursionError) as bad:
-        raise error(f"{os.fspath(where)}: not readable JSON ({_first_line(bad)})") from None
+        raise error(f"{os.fspath(where)}: {what}not JSON ({refused})") from None
+    except (ValueError, RecursionError) as bad:  # JSONDecodeError, Python's 4300 digits
+        raise error(f"{os.fspath(where)}: {what}not JSON ({_first_line(bad)})") from None
 
 
 def read_bytes(
-    path: str | os.PathLike[str], *, max_bytes: int = MAX_JSON_BYTES, error: ErrorKind = InputError
+    path: str | os.PathLike[str],
+    *,
+    max_bytes: int = MAX_JSON_BYTES,
+    error: ErrorKind = InputError,
+    what: str = "",
 ) -> bytes:
     """The bytes of ``path``, a regular file of at most ``max_bytes``; ``error`` naming it
-    otherwise (a missing or unreadable file too). Never blocks on a FIFO."""
-    where = os.fspath(path)
-    try:
-        fd = os.open(where, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0))
-    except OSError as failed:
-        raise error(f"{where}: cannot read ({failed.strerror or failed})") from None
+    otherwise. A missing or unreadable file raises its ``OSError`` (which names it; the
+    command line prints it as one line). Never blocks on a FIFO."""
+    where = f"{os.fspath(path)}: {what}"
+    # a missing or unreadable file stays an OSError (it names the file): callers tell it apart
+    fd = os.open(os.fspath(path), os.O_RDONLY | getattr(os, "O_NONBLOCK", 0))
     try:
         found = os.fstat(fd)
         if not stat.S_ISREG(found.st_mode):
-            raise error(f"{where}: not a regular file")
+            raise error(f"{where}not a regular file")
         if found.st_size > max_bytes:
-            raise error(f"{where}: {found.st_size} bytes; at most {max_bytes} are read")
+            raise error(f"{where}{found.st_size} bytes; at most {max_bytes} are read")
         with os.fdopen(fd, "rb", closefd=False) as stream:
             data = stream.read(max_bytes + 1)
-    except OSError as failed:
-        raise error(f"{where}: cannot read ({failed.strerror or failed})") from None
     finally:
         os.close(fd)
     if len(data) > max_bytes:
-        raise error(f"{where}: more than {max_bytes} bytes; at most {max_bytes} are read")
+        raise error(f"{where}more than {max_bytes} bytes; at most {max_bytes} are read")
     return data
 
 
 def read_json(
-    path: str | os.PathLike[str], *, max_bytes: int = MAX_JSON_BYTES, error: ErrorKind = InputError
+    path: str | os.PathLike[str],
+    *,
+    max_bytes: int = MAX_JSON_BYTES,
+    error: ErrorKind = InputError,
+    what: str = "",
 ) -> Any:
     """The JSON value in ``path`` (see the module: bounded, regular files only); ``error``
-    ``PATH: reason`` if it cannot be read."""
-    return parse_json(read_bytes(path, max_bytes=max_bytes, error=error), where=path, error=error)
+    ``PATH: WHAT reason`` if it cannot be read (``what``: the caller's words, or none)."""
+    data = read_bytes(path, max_bytes=max_bytes, error=error, what=what)
+    return parse_json(data, where=path, error=error, what=what)
 
 
 def read_json_object(
@@ -129,8 +143,8 @@ def read_json_lines(
     data = read_bytes(path, max_bytes=max_bytes, error=error)
     try:
         text = data.decode("utf-8")
-    except UnicodeDecodeError as bad:
-        raise error(f"{os.fspath(path)}: not readable JSON ({_first_line(bad)})") from None
+    except UnicodeDecodeError:
+        raise error(f"{os.fspath(path)}: not JSON (not UTF-8 text)") from None
     return [
         parse_json(line, where=f"{os.fspath(path)}:{number}", error=error)
         for number, line in enumerate(text.splitlines(), start=1)
@@ -145,6 +159,7 @@ def check_format(
     kind: tuple[str, str] | None = None,
     version: tuple[str, Collection[object]] | None = None,
     error: ErrorKind = InputError,
+    what: str = "",
 ) -> None:
     """Refuse a record of another kind or of a version this pokerirl cannot read.
 
@@ -153,21 +168,22 @@ def check_format(
 
     >>> check_format({"format": "pokerirl-dqn", "version": 99}, where="a/config.json",
     ...              kind=("format", "pokerirl-dqn"), version=("version", (1,)))
+    ... # doctest: +ELLIPSIS
     Traceback (most recent call last):
     ...
-    pokerirl.errors.InputError: a/config.json: version is 99; this pokerirl reads version 1 (a newer pokerirl wrote it?)
+    pokerirl.errors.InputError: a/config.json: version is 99; this pokerirl reads version 1 ...
     """
-    path = os.fspath(where)
+    path = f"{os.fspath(where)}: {what}"
     if kind is not None and record.get(kind[0]) != kind[1]:
         found = str(record.get(kind[0]))[:60]
-        raise error(f"{path}: {kind[0]} is {found!r}, not {kind[1]!r}")
+        raise error(f"{path}{kind[0]} is {found!r}, not {kind[1]!r}")
     if version is not None:
         key, known = version
         found_version = record.get(key, next(iter(known)))
         if isinstance(found_version, bool) or found_version not in known:
             names = ", ".join(str(v) for v in known)
             raise error(
-                f"{path}: {key} is {str(found_version)[:40]}; this pokerirl reads {key} {names}"
+                f"{path}{key} is {str(found_version)[:40]}; this pokerirl reads {key} {names}"
                 " (a newer pokerirl wrote it?)"
             )
 

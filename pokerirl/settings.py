@@ -73,7 +73,9 @@ def check_bounds(config: Any) -> None:
             numbers, what = list(value), " (each width)"
             longest = item.metadata.get("max_len")
             if longest is not None and len(value) > longest:
-                raise ConfigError(f"{item.name} must have at most {longest} entries, got {len(value)}")
+                raise ConfigError(
+                    f"{item.name} must have at most {longest} entries, got {len(value)}"
+                )
         for number in numbers:
             if isinstance(number, bool) or not isinstance(number, int | float):
                 continue

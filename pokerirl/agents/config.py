@@ -84,31 +84,31 @@ class DQNConfig:
     hidden: tuple[int, ...] = setting(
         (64, 64), help="Q-network widths, e.g. 64,64.", min=1, max=MAX_WIDTH, max_len=MAX_LAYERS
     )
-    replay_size: int = setting(20_000, help="Replay memory size.", min=1, max=MAX_REPLAY)
+    replay_size: int = setting(20_000, help="Replay memory size.", max=MAX_REPLAY)
     replay_init: int = setting(
-        100, help="Transitions before the first update.", min=1, max=MAX_REPLAY
+        100, help="Transitions before the first update.", max=MAX_REPLAY
     )
-    batch_size: int = setting(32, help="Update minibatch size.", min=1, max=MAX_BATCH)
+    batch_size: int = setting(32, help="Update minibatch size.", max=MAX_BATCH)
     learning_rate: float = setting(5e-5, help="Adam lr.", flags=("--lr", "--learning-rate"))
     gamma: float = setting(0.99, help="Discount.")
     epsilon_start: float = setting(1.0, help="Exploration at the start.")
     epsilon_end: float = setting(0.1, help="Exploration after the decay.")
     # in stored transitions, as RLCard's total_t
     epsilon_decay_steps: int = setting(
-        20_000, help="Transitions of the linear decay.", min=1, max=MAX_STEPS
+        20_000, help="Transitions of the linear decay.", max=MAX_STEPS
     )
     target_update_every: int = setting(
-        1_000, help="Updates between target copies.", min=1, max=MAX_STEPS
+        1_000, help="Updates between target copies.", max=MAX_STEPS
     )
     train_every: int = setting(
-        16, help="Stored transitions per gradient update.", min=1, max=MAX_STEPS
+        16, help="Stored transitions per gradient update.", max=MAX_STEPS
     )
     concurrent_hands: int = setting(
-        1024, help="Hands played in lock-step.", min=1, max=MAX_BATCH
+        1024, help="Hands played in lock-step.", max=MAX_BATCH
     )
     # refreshes of the frozen copy with opponent "self"
     self_play_every: int = setting(
-        1_000, help="Updates between refreshes of 'self'.", min=1, max=MAX_STEPS
+        1_000, help="Updates between refreshes of 'self'.", max=MAX_STEPS
     )
 
     def __post_init__(self) -> None:
@@ -149,7 +149,7 @@ class TrainConfig:
     docstring), and ``play`` says which checkpoint the agent plays.
     """
 
-    hands: int = setting(help="Training hands.", flags=("--hands", "-n"), min=1, max=MAX_STEPS)
+    hands: int = setting(help="Training hands.", flags=("--hands", "-n"), max=MAX_STEPS)
     seed: int
     # A member after __post_init__; `| str`: callers may name it (the studies do).
     reward: RewardMode | str = setting(
@@ -169,10 +169,10 @@ class TrainConfig:
         "(unpickled: runs any code it holds; trusted files only), or self.",
     )  # fmt: skip
     eval_every: int = setting(
-        10_000, help="Evaluate every N training hands.", min=1, max=MAX_STEPS
+        10_000, help="Evaluate every N training hands.", max=MAX_STEPS
     )
     eval_hands: int = setting(
-        20_000, help="Hands per evaluation (even, duplicate).", min=2, max=MAX_STEPS
+        20_000, help="Hands per evaluation (even, duplicate).", max=MAX_STEPS
     )
     eval_seed: int = setting(1_000_003, help="Deal seed of every evaluation.")
     dqn: DQNConfig = field(default_factory=DQNConfig)

@@ -34,6 +34,7 @@ from pokerirl.cli.options import NO_SETTINGS, Settings, settings_options, widths
 from pokerirl.errors import InputError, UsageError
 from pokerirl.game.encodings import EncodingName
 from pokerirl.irl.config import AIRLConfig, Algo  # torch-free
+from pokerirl.jsonio import read_json
 from pokerirl.poker.folds import FoldsMode
 from pokerirl.poker.rewards import Transform
 
@@ -536,7 +537,7 @@ def reward_card_command(
 def _validation_groups(split: Path) -> set[str]:
     """The validation hands a run's ``split.json`` names."""
     try:
-        return {str(g) for g in json.loads(split.read_text())["validation_groups"]}
+        return {str(g) for g in read_json(split)["validation_groups"]}
     except (ValueError, KeyError, TypeError) as error:  # corrupt: JSON, or not a split's
         raise InputError(f"{split}: not a run's split ({error!r})") from None
 
@@ -624,7 +625,7 @@ def _echo_agent(folder: Path, line: MetricsLine | None, play: str) -> None:
     )
     echo(f"{folder}: {line.hands:,} hands, {scores}")
     if play == Plays.KEPT:
-        kept = MetricsLine.from_json(json.loads((folder / CONFIG_FILE).read_text())["kept"])
+        kept = MetricsLine.from_json(read_json(folder / CONFIG_FILE)["kept"])
         echo(
             f"{folder}: plays {KEPT_FILE} (after {kept.hands:,} hands, vs random "
             f"{kept.eval['random'].mbb_per_hand:+.0f} mbb/h in its evaluation); "

@@ -25,7 +25,8 @@ from pokerirl.cli.app import (
     settings_from_options,
     write_logs,
 )
-from pokerirl.errors import InputError, MissingExtra, UsageError
+from pokerirl.errors import MissingExtra, UsageError
+from pokerirl.jsonio import read_json
 from pokerirl.studies.poker.config import AGENT_PRESETS, FOLDS, IRL_ALGOS, TRANSFORMS
 from pokerirl.studies.poker.config import PRESETS as STUDY_PRESETS
 
@@ -316,10 +317,5 @@ def report(
 def _refuse_corrupt(path: Path) -> None:
     """Fail on a report's file (gym study's summary.json, a study's or tournament's
     report.json) that is there but cannot be read as JSON: truncated or damaged."""
-    try:
-        json.loads(path.read_bytes())
-    except FileNotFoundError:
-        return
-    except ValueError as error:  # JSONDecodeError, UnicodeDecodeError
-        reason = error.msg if isinstance(error, json.JSONDecodeError) else "not UTF-8 text"
-        raise InputError(f"{path}: corrupt: not JSON ({reason})") from None
+    if path.exists() or path.is_symlink():
+        read_json(path, what="corrupt: ")

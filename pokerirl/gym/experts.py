@@ -47,6 +47,7 @@ from pokerirl.gym.manifest import (  # noqa: F401
 )
 from pokerirl.gym.presets import PPOSettings, RLSettings
 from pokerirl.gym.tasks import task
+from pokerirl.jsonio import read_json
 from pokerirl.serial import Serializable
 
 if TYPE_CHECKING:  # gymnasium and SB3 are imported lazily: a poker-only user never pays.
@@ -362,7 +363,7 @@ def load_expert(folder: str | os.PathLike[str]) -> Expert:
     """
     folder = Path(folder)
     try:
-        record = json.loads((folder / CONFIG_FILE).read_text())
+        record = read_json(folder / CONFIG_FILE)
         policy = build_policy(record["env"], record["algo"], record["policy_kwargs"])
         with warnings.catch_warnings():  # torch warns about a pickle it then refuses
             warnings.simplefilter("ignore")

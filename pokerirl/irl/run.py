@@ -49,6 +49,7 @@ from pokerirl.irl.nets import ACTIVATIONS, REWARD_FAMILIES, NetSpec, RewardFamil
 from pokerirl.irl.plots import plot_curves
 from pokerirl.irl.records import EpochMetrics
 from pokerirl.irl.transitions import Transitions
+from pokerirl.jsonio import parse_json, read_bytes, read_json, read_json_lines
 from pokerirl.meanstd import Curve, MeanStd, mean_std
 from pokerirl.parquet import first_line
 from pokerirl.serial import Serializable, from_json
@@ -335,16 +336,14 @@ def read_epochs(run_dir: str | os.PathLike[str]) -> list[EpochMetrics]:
     """A run folder's epochs (its ``metrics.jsonl``), typed: what a study reads of the runs
     it trained, instead of the file's keys; a bad line is named by file and line."""
     path = Path(run_dir) / METRICS_FILE
-    lines = [line for line in path.read_text().splitlines() if line.strip()]
-    return [
-        EpochMetrics.from_json(json.loads(line), f"{path}:{k + 1}") for k, line in enumerate(lines)
-    ]
+    lines = read_json_lines(path)
+    return [EpochMetrics.from_json(line, f"{path}:{k + 1}") for k, line in enumerate(lines)]
 
 
 def read_baselines(run_dir: str | os.PathLike[str]) -> dict[str, float]:
     """A run folder's baselines (its ``baselines.json``): each one's validation alignment."""
     path = Path(run_dir) / BASELINES_FILE
-    return from_json(dict[str, float], json.loads(path.read_text()), str(path))
+    return from_json(dict[str, float], read_json(path), str(path))
 
 
 def load_run_config(run_dir: str | os.PathLike[str]) -> Mapping[str, Any]:
@@ -355,7 +354,7 @@ def load_run_config(run_dir: str | os.PathLike[str]) -> Mapping[str, Any]:
     if not path.is_file():
         raise RunError(f"no {CONFIG_FILE} in {run_dir}: not a training run folder")
     try:
-        data = path.read_bytes()
+        data = read_bytes(path, error=RunError)
     except OSError as error:
         raise RunError(f"{path}: not readable JSON ({first_line(error)})") from None
     return parse_run_config(data, where=path)
@@ -363,10 +362,7 @@ def load_run_config(run_dir: str | os.PathLike[str]) -> Mapping[str, Any]:
 
 def parse_run_config(data: bytes, *, where: str | os.PathLike[str]) -> Mapping[str, Any]:
     """A run's ``config.json`` from its bytes, checked; ``RunError`` naming ``where``."""
-    try:
-        record = json.loads(data.decode("utf-8"))
-    except (UnicodeDecodeError, json.JSONDecodeError) as error:
-        raise RunError(f"{where}: not readable JSON ({first_line(error)})") from None
+    record = parse_json(data, where=where, error=RunError)
     if not isinstance(record, dict):
         raise RunError(f"{where}: must hold a JSON object, got {type(record).__name__}")
     version = record.get("format_version")

@@ -52,6 +52,7 @@ from pokerirl.encoding import ACTIONS, CALL, CHECK, FOLD, NUM_ACTIONS
 from pokerirl.errors import InputError
 from pokerirl.game.agents import street_of
 from pokerirl.game.evaluator import hand_strength
+from pokerirl.jsonio import parse_json, read_json
 from pokerirl.poker.rewards import Decisions, PokerReward
 from pokerirl.serial import Omit, Serializable, meta
 
@@ -252,7 +253,7 @@ class RewardCard(Serializable):
 
     @classmethod
     def from_text(cls, text: str, where: str = "") -> RewardCard:
-        data = json.loads(text)
+        data = parse_json(text, where=where or "the text")
         if not isinstance(data, dict) or data.get("format") != CARD_FORMAT:
             raise InputError(f"{where or 'the text'}: not a pokerirl reward card")
         return cls.from_json(data, where)
@@ -545,10 +546,10 @@ def run_card(
     from pokerirl.irl.run import CONFIG_FILE, SPLIT_FILE
     from pokerirl.poker.rewards import load_reward_source
 
-    split = json.loads((Path(run_dir) / SPLIT_FILE).read_text())
+    split = read_json(Path(run_dir) / SPLIT_FILE)
     groups = {str(g) for g in split["validation_groups"]}
     states = CardStates.from_table(table, groups=groups, label=label)
-    record = json.loads((Path(run_dir) / CONFIG_FILE).read_text())
+    record = read_json(Path(run_dir) / CONFIG_FILE)
     reward = load_reward_source(run_dir)
     reward.name = f"{record['algo']} reward (seed {record['hyperparameters']['seed']})"
     return with_run_alignments(reward_card(reward, states), record)
