@@ -36,6 +36,9 @@ MAX_LAYERS = 16  # hidden layers of a net
 MAX_BATCH = 1 << 20  # a minibatch, or hands played in lock-step
 MAX_REPLAY = 2_000_000  # DQN replay transitions (about 1.4 GB on the 174-d encoding)
 MAX_STEPS = 10**12  # counts of hands, epochs, steps: time, never memory, bounds them
+MAX_OBS_DIM = 65_536  # an observation's width (an 84 x 84 x 4 image is 28,224)
+MAX_ACTIONS = 65_536  # a discrete action space's size
+MAX_LBR_HANDS = 10_000_000  # LBR hands per seed (its exact equity makes each one costly)
 
 
 def setting(default: Any = dataclasses.MISSING, /, help: str = "", **more: Any) -> Any:

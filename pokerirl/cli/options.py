@@ -36,6 +36,7 @@ import typer
 
 from pokerirl.cli.app import SEED_OPTION, choices, given
 from pokerirl.errors import UsageError
+from pokerirl.settings import MAX_LAYERS, MAX_WIDTH
 
 T = TypeVar("T")
 Settings = Mapping[str, Any]
@@ -47,10 +48,19 @@ def widths(text: str, flag: str = "--hidden") -> tuple[int, ...]:
 
     >>> widths("64, 32")
     (64, 32)
+    >>> widths("1000000000")
+    Traceback (most recent call last):
+    ...
+    pokerirl.errors.UsageError: --hidden takes at most 16 widths of at most 4096, got '1000000000'
+
     """
     found = [w.strip() for w in text.split(",") if w.strip()]
-    if not all(re.fullmatch(r"[+-]?\d+", w) for w in found):
-        raise UsageError(f"{flag} must be comma-separated integers, got {text!r}")
+    if not all(re.fullmatch(r"[+-]?\d{1,20}", w) for w in found):
+        raise UsageError(f"{flag} must be comma-separated integers, got {text[:60]!r}")
+    if len(found) > MAX_LAYERS or any(int(w) > MAX_WIDTH for w in found):
+        raise UsageError(
+            f"{flag} takes at most {MAX_LAYERS} widths of at most {MAX_WIDTH}, got {text[:60]!r}"
+        )
     return tuple(int(w) for w in found)
 
 

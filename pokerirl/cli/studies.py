@@ -27,7 +27,13 @@ from pokerirl.cli.app import (
 )
 from pokerirl.errors import MissingExtra, UsageError
 from pokerirl.jsonio import read_json
-from pokerirl.studies.poker.config import AGENT_PRESETS, FOLDS, IRL_ALGOS, TRANSFORMS
+from pokerirl.studies.poker.config import (
+    AGENT_PRESETS,
+    FOLDS,
+    IRL_ALGOS,
+    STAGE_BOUNDS,
+    TRANSFORMS,
+)
 from pokerirl.studies.poker.config import PRESETS as STUDY_PRESETS
 
 DEMO_CONFIG = "pokerirl.studies.demo:DemoConfig"
@@ -105,9 +111,11 @@ def study(
     seeds: str | None = typer.Option(
         None, "--seeds", callback=seed_list, metavar="SEEDS", help="Agent seeds, e.g. 0-19."
     ),
-    hands: int | None = typer.Option(None, "--hands", min=2, help="Tournament hands per seed."),
+    hands: int | None = typer.Option(
+        None, "--hands", min=2, max=STAGE_BOUNDS["hands"], help="Tournament hands per seed."
+    ),
     lbr_hands: int | None = typer.Option(
-        None, "--lbr-hands", min=0,
+        None, "--lbr-hands", min=0, max=STAGE_BOUNDS["lbr_hands"],
         help="LBR's hands per seed against each panel agent (even; 0: no LBR); default: the "
         "preset's (quick 500, paper 10,000).",
     ),
@@ -145,7 +153,9 @@ def study(
         help="drop (default: the hands that end in a fold hide the cards and are left out) "
         "or impute (kept, the hidden cards drawn from a posterior; docs/folds.md).",
     ),
-    jobs: int = typer.Option(2, "--jobs", min=1, help="Processes for training and play."),
+    jobs: int = typer.Option(
+        2, "--jobs", min=1, max=STAGE_BOUNDS["jobs"], help="Processes for training and play."
+    ),
     ray: str | None = typer.Option(None, "--ray", metavar="ADDRESS", help=RAY_HELP),
     overwrite: bool = typer.Option(
         False, "--overwrite", help="Recompute changed units, and the units that read them."

@@ -53,6 +53,7 @@ from pokerirl.jsonio import parse_json, read_bytes, read_json, read_json_lines
 from pokerirl.meanstd import Curve, MeanStd, mean_std
 from pokerirl.parquet import first_line
 from pokerirl.serial import Serializable, from_json
+from pokerirl.settings import MAX_ACTIONS, MAX_LAYERS, MAX_OBS_DIM, MAX_WIDTH
 from pokerirl.versions import package_versions
 
 FORMAT_VERSION = 2
@@ -381,23 +382,28 @@ def _architecture_problem(arch: Mapping[str, Any]) -> str | None:
     def is_int(x: Any) -> bool:
         return isinstance(x, int) and not isinstance(x, bool)
 
-    def widths(x: Any) -> bool:
-        return isinstance(x, list) and bool(x) and all(is_int(w) and w >= 1 for w in x)
+    def widths(x: Any) -> bool:  # bounded before any net is built: 10^9 asked for 288 GB
+        return (
+            isinstance(x, list)
+            and 0 < len(x) <= MAX_LAYERS
+            and all(is_int(w) and 1 <= w <= MAX_WIDTH for w in x)
+        )
 
     space = arch.get("action_space")
-    if not is_int(arch.get("obs_dim")) or arch["obs_dim"] < 1:
-        return "'obs_dim' must be a positive integer"
+    if not is_int(arch.get("obs_dim")) or not 1 <= arch["obs_dim"] <= MAX_OBS_DIM:
+        return f"'obs_dim' must be an integer in 1..{MAX_OBS_DIM}"
     if not isinstance(space, dict) or space.get("type") not in ("discrete", "box"):
         return "'action_space' must be {type: discrete|box, ...}"
-    if space["type"] == "discrete" and not (is_int(space.get("num_actions"))):
-        return "'action_space.num_actions' must be an integer"
+    actions = space.get("num_actions")
+    if space["type"] == "discrete" and not (is_int(actions) and 1 <= actions <= MAX_ACTIONS):
+        return f"'action_space.num_actions' must be an integer in 1..{MAX_ACTIONS}"
     if space["type"] == "box":
         low, high = space.get("low"), space.get("high")
         if not (_numbers(low) and _numbers(high) and len(low or ()) == len(high or ())):
             return "'action_space.low' and 'high' must be equal-length lists of numbers"
     for key in ("reward_hidden", "policy_hidden"):
         if not widths(arch.get(key)):
-            return f"{key!r} must be a non-empty list of positive integers"
+            return f"{key!r} must be a list of 1 to {MAX_LAYERS} integers in 1..{MAX_WIDTH}"
     if arch.get("activation", "relu") not in ACTIVATIONS:
         return f"'activation' must be one of {', '.join(ACTIVATIONS)}"
     if not isinstance(arch.get("layer_norm", False), bool):
