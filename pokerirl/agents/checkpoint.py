@@ -32,7 +32,7 @@ from pokerirl.agents.config import PLAYS, Plays
 from pokerirl.agents.dqn import GreedyQAgent, QNetwork, input_norm
 from pokerirl.agents.registry import CONFIG_FILE, KEPT_FILE, MODEL_FILE
 from pokerirl.atomic import write_bytes, write_torch
-from pokerirl.errors import InputError
+from pokerirl.errors import InputError, check_argument
 from pokerirl.game.encodings import ENCODINGS, Encoding, EncodingName
 from pokerirl.jsonio import check_format, read_json
 from pokerirl.settings import MAX_LAYERS, MAX_WIDTH
@@ -98,6 +98,7 @@ def load_agent(folder: str | os.PathLike[str]) -> GreedyQAgent:
         ValueError: one line naming the bad file, if the folder is not a finished agent or
             its files are bad.
     """
+    check_argument("folder", folder, (str, os.PathLike), "an agent folder (a path)")
     folder = Path(folder)
     if not is_finished(folder):
         raise InputError(f"{folder}: not an agent folder (needs {MODEL_FILE} and {CONFIG_FILE})")

@@ -28,7 +28,7 @@ import numpy as np
 import torch
 
 from pokerirl.atomic import write_text, write_torch
-from pokerirl.errors import ConfigError, InputError, MissingExtra
+from pokerirl.errors import ConfigError, InputError, MissingExtra, check_argument
 from pokerirl.gym.episodes import sb3_evaluation
 
 # Re-exported: the manifest's names lived here before pokerirl.gym.manifest (issue 34).
@@ -361,6 +361,7 @@ def load_expert(folder: str | os.PathLike[str]) -> Expert:
     Raises:
         ValueError: one line, if the folder is not an expert folder or its files are bad.
     """
+    check_argument("folder", folder, (str, os.PathLike), "an expert folder (a path)")
     folder = Path(folder)
     try:
         record = read_json(folder / CONFIG_FILE)

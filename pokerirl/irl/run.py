@@ -41,10 +41,10 @@ import torch
 from torch import Tensor, nn
 
 from pokerirl.atomic import write_text, write_torch
-from pokerirl.errors import PokerIRLError
+from pokerirl.errors import PokerIRLError, check_argument
 from pokerirl.execution import progress_share
 from pokerirl.irl.airl import TrainResult, baselines, default_nets, train
-from pokerirl.irl.config import AIRLConfig
+from pokerirl.irl.config import AIRLConfig, Algo
 from pokerirl.irl.nets import ACTIVATIONS, REWARD_FAMILIES, NetSpec, RewardFamily, build_nets
 from pokerirl.irl.plots import plot_curves
 from pokerirl.irl.records import EpochMetrics
@@ -53,7 +53,7 @@ from pokerirl.jsonio import parse_json, read_bytes, read_json, read_json_lines
 from pokerirl.meanstd import Curve, MeanStd, mean_std
 from pokerirl.parquet import first_line
 from pokerirl.serial import Serializable, from_json
-from pokerirl.settings import MAX_ACTIONS, MAX_LAYERS, MAX_OBS_DIM, MAX_WIDTH
+from pokerirl.settings import MAX_ACTIONS, MAX_LAYERS, MAX_OBS_DIM, MAX_WIDTH, enum_value
 from pokerirl.versions import package_versions
 
 FORMAT_VERSION = 2
@@ -158,6 +158,11 @@ def train_into(
     ``data_path`` is where the data came from, for the record (``config.json``'s
     ``data.path``); ``data_notes`` are the caller's own keys of ``data`` (the poker layer's
     ``encoding``), which this layer records without reading."""
+    check_argument("data", data, Transitions, "Transitions")
+    check_argument("folder", folder, (str, os.PathLike), "a folder (a path)")
+    algo = enum_value("algo", Algo, algo)  # the run records it: "nope" wrote a run of nope
+    check_argument("config", config, AIRLConfig, "an AIRLConfig (AIRLConfig.for_algo gives one)")
+    folder = Path(folder)
     train_data, val_data, val_groups = data.split(
         val_fraction=config.val_fraction, seed=config.seed
     )
@@ -394,7 +399,7 @@ def _architecture_problem(arch: Mapping[str, Any]) -> str | None:
         return f"'obs_dim' must be an integer in 1..{MAX_OBS_DIM}"
     if not isinstance(space, dict) or space.get("type") not in ("discrete", "box"):
         return "'action_space' must be {type: discrete|box, ...}"
-    actions = space.get("num_actions")
+    actions: Any = space.get("num_actions")
     if space["type"] == "discrete" and not (is_int(actions) and 1 <= actions <= MAX_ACTIONS):
         return f"'action_space.num_actions' must be an integer in 1..{MAX_ACTIONS}"
     if space["type"] == "box":
@@ -481,6 +486,7 @@ def _load_state_bytes(module: nn.Module, data: bytes, *, where: str | os.PathLik
 
 def load_policy(run_dir: str | os.PathLike[str]) -> nn.Module:
     """The trained policy of a run (on CPU, in eval mode)."""
+    check_argument("run_dir", run_dir, (str, os.PathLike), "a run folder (a path)")
     _, policy = build_from_record(load_run_config(run_dir))
     _load_state(policy, Path(run_dir) / POLICY_FILE)
     return policy
@@ -545,6 +551,7 @@ def load_reward(run_dir: str | os.PathLike[str], *, full: bool = False) -> Rewar
     g(s, a) by default (see :class:`RewardFunction`); every problem with the folder is a
     :class:`RunError` (a ``ValueError``) of one line naming the file.
     """
+    check_argument("run_dir", run_dir, (str, os.PathLike), "a run folder (a path)")
     record = load_run_config(run_dir)
     path = Path(run_dir) / REWARD_FILE
     if not path.is_file():
