@@ -445,8 +445,8 @@ def _iter_tar_stream(fileobj: IO[bytes], origin: str, archive_name: str) -> Iter
         ) from None
     except (tarfile.TarError, EOFError, OSError, zlib.error) as error:
         damaged = unzipped is not None and not isinstance(error, tarfile.TarError)
-        what = "damaged gzip archive" if damaged else "not a readable tar archive"
-        raise IngestError(f"{origin}: {what} ({error})") from None
+        reason = f"damaged gzip: {error}" if damaged else str(error)
+        raise IngestError(f"{origin}: not a readable tar archive ({reason})") from None
 
 
 def _is_gzip(fileobj: IO[bytes]) -> bool:
