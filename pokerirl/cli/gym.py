@@ -467,7 +467,7 @@ def gym_study(
     preset = _gym_preset(
         preset_name, task, runs=runs, seed=seed, transitions=transitions, epochs=epochs,
         eval_episodes=eval_episodes, rl_timesteps=timesteps,
-        algos=None if algos is None else parse_algos(algos),
+        algos=None if algos is None else settings_from_options(parse_algos, algos),
     )  # fmt: skip
     if expert is None and task != "all":
         _no_shipped_expert(task, "pass --expert DIR")

@@ -346,6 +346,24 @@ def read_epochs(run_dir: str | os.PathLike[str]) -> list[EpochMetrics]:
     return [EpochMetrics.from_json(line, f"{path}:{k + 1}") for k, line in enumerate(lines)]
 
 
+def read_split(run_dir: str | os.PathLike[str]) -> set[str]:
+    """A run folder's validation groups (its ``split.json``), as strings (the tables' hand
+    ids); ``RunError`` naming the file and its field when it is not a split (a string of
+    ids was read as its characters: "none of the table's rows" blamed the table)."""
+    path = Path(run_dir) / SPLIT_FILE
+    found = read_json(path, error=RunError)
+    groups = found.get("validation_groups") if isinstance(found, dict) else None
+    if not isinstance(groups, list) or not groups or not all(
+        isinstance(g, str | int) and not isinstance(g, bool) for g in groups
+    ):  # fmt: skip
+        shown = str(groups)[:60]
+        raise RunError(
+            f"{path}: validation_groups must be a non-empty list of hand or episode ids, "
+            f"got {shown}"
+        )
+    return {str(g) for g in groups}
+
+
 def read_baselines(run_dir: str | os.PathLike[str]) -> dict[str, float]:
     """A run folder's baselines (its ``baselines.json``): each one's validation alignment."""
     path = Path(run_dir) / BASELINES_FILE
@@ -377,6 +395,10 @@ def parse_run_config(data: bytes, *, where: str | os.PathLike[str]) -> Mapping[s
     arch = record.get("architecture")
     if not isinstance(arch, dict):
         raise RunError(f"{where}: lacks an 'architecture' object")
+    for key in ("data", "hyperparameters"):  # read with .get by many: a string crashed them
+        if record.get(key) is not None and not isinstance(record[key], dict):
+            found = type(record[key]).__name__
+            raise RunError(f"{where}: {key!r} must be a JSON object, got {found}")
     problem = _architecture_problem(arch)
     if problem:
         raise RunError(f"{where}: architecture: {problem}")

@@ -543,11 +543,10 @@ def run_card(
     """The card of a run folder's reward over its validation hands (``split.json``) of
     ``table``, the decision table it was trained on; ``label`` names the table in the card
     (default: ``table``'s path; a worker's scratch copy passes the real table's path)."""
-    from pokerirl.irl.run import CONFIG_FILE, SPLIT_FILE
+    from pokerirl.irl.run import CONFIG_FILE, read_split
     from pokerirl.poker.rewards import load_reward_source
 
-    split = read_json(Path(run_dir) / SPLIT_FILE)
-    groups = {str(g) for g in split["validation_groups"]}
+    groups = read_split(run_dir)
     states = CardStates.from_table(table, groups=groups, label=label)
     record = read_json(Path(run_dir) / CONFIG_FILE)
     reward = load_reward_source(run_dir)
