@@ -264,6 +264,8 @@ def test_split_json_of_wrong_types_names_the_file_not_the_table(run_copy: Path) 
         (["agent", "train", "--hands", str(10**13)], "'--hands'"),
         (["study", "{root}", "--lbr-hands", str(10**15)], "'--lbr-hands'"),
         (["study", "{root}", "--hands", str(10**12)], "'--hands'"),
+        (["gym", "study", "MountainCar-v0", "--epochs", str(10**12)], "'--epochs'"),
+        (["gym", "study", "MountainCar-v0", "--timesteps", str(10**15)], "'--timesteps'"),
     ],
 )
 def test_sizes_beyond_their_bound_are_usage_errors_naming_the_option(
@@ -279,6 +281,7 @@ def test_sizes_beyond_their_bound_are_usage_errors_naming_the_option(
 
 
 def test_configs_check_every_bound_before_anything_is_built() -> None:
+    from pokerirl.studies.gym.config import study_preset as gym_preset
     from pokerirl.studies.poker import preset
 
     for make, needle in [
@@ -292,6 +295,7 @@ def test_configs_check_every_bound_before_anything_is_built() -> None:
         (lambda: preset("quick", lbr_hands=10**15), f"lbr_hands <= {MAX_LBR_HANDS:,}"),
         (lambda: preset("quick", hands=10**12), "hands <= 100,000,000"),
         (lambda: preset("quick", agent_hands=10**13), "agent_hands <="),
+        (lambda: gym_preset("quick", tasks=("MountainCar-v0",), epochs=10**12), "epochs <="),
     ]:
         with pytest.raises(ConfigError) as error:
             make()
