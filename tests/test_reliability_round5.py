@@ -510,3 +510,20 @@ def test_gym_study_names_the_users_expert_folder_and_algos_are_usage_errors(
         assert code == 2, (algos, lines)
         assert "algos" in one_error_line(lines)
     assert not (tmp_path / "s2").exists()
+
+
+def test_shipping_an_agent_and_a_damaged_study_json_read_bounded(
+    agent: Path, tmp_path: Path
+) -> None:
+    from pokerirl.agents import ship_agent
+    from pokerirl.studies.common import claim_folder
+
+    _sparse(agent / "config.json")
+    with pytest.raises(InputError) as error:
+        ship_agent(str(agent))  # a tournament ships its agents' bytes to the workers
+    _one_line(error.value, str(agent / "config.json"), "at most")
+    study = tmp_path / "study"
+    study.mkdir()
+    _dev_zero(study / "study.json")  # damage: the units' records still guard the outputs
+    claim_folder(study, {"runs": 1}, overwrite=False)
+    assert json.loads((study / "study.json").read_text())["settings"] == {"runs": 1}

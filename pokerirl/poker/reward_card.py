@@ -52,7 +52,7 @@ from pokerirl.encoding import ACTIONS, CALL, CHECK, FOLD, NUM_ACTIONS
 from pokerirl.errors import InputError
 from pokerirl.game.agents import street_of
 from pokerirl.game.evaluator import hand_strength
-from pokerirl.jsonio import parse_json, read_json
+from pokerirl.jsonio import parse_json, read_bytes, read_json
 from pokerirl.poker.rewards import Decisions, PokerReward
 from pokerirl.serial import Omit, Serializable, meta
 
@@ -532,7 +532,7 @@ def read_card(folder: str | os.PathLike[str]) -> RewardCard | None:
     """The card in ``folder``, or None when it has none (or an unreadable one)."""
     try:
         path = Path(folder) / CARD_FILE
-        return RewardCard.from_text(path.read_text(), str(path))
+        return RewardCard.from_text(read_bytes(path).decode("utf-8"), str(path))
     except (OSError, ValueError, TypeError):
         return None
 

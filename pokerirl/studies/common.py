@@ -18,7 +18,7 @@ from typing import Any, TypeVar
 import numpy as np
 
 from pokerirl.errors import ConfigError, Remedy
-from pokerirl.jsonio import parse_json, read_json_lines
+from pokerirl.jsonio import parse_json, read_bytes, read_json_lines
 from pokerirl.settings import with_overrides as _with_overrides
 
 # The files the studies read in their units' folders and write in their own.
@@ -76,7 +76,7 @@ def claim_folder(
     """
     path = root / STUDY_JSON
     try:
-        recorded: str | None = path.read_text()
+        recorded: str | None = read_bytes(path).decode("utf-8")  # bounded: /dev/zero is damage
     except FileNotFoundError:
         recorded = None
     except (OSError, ValueError):  # unreadable, or not text: damaged
