@@ -39,6 +39,7 @@ exit 1
 from __future__ import annotations
 
 import contextlib
+import numbers
 import os
 import signal
 import sys
@@ -241,3 +242,50 @@ class one_line_errors(contextlib.ContextDecorator):  # lower case: a decorator
         stream.write(f"\x1b[31merror: {line}\x1b[0m\n" if colour else f"error: {line}\n")
         stream.flush()
         raise SystemExit(code) from None
+
+
+def _shown(value: object) -> str:
+    text = repr(value)
+    return text if len(text) <= 60 else text[:57] + "..."
+
+
+def check_argument(name: str, value: object, kinds: type | tuple[type, ...], what: str) -> None:
+    """The check at the boundary of a public function: ``TypeError`` naming the argument,
+    what it takes and what it got, unless ``value`` is one of ``kinds`` (a bool is never a
+    number: ``hands=True`` is a mistake).
+
+    >>> check_argument("hands", "10", int, "an integer")
+    Traceback (most recent call last):
+    ...
+    TypeError: hands must be an integer, got str '10'
+    """
+    kinds_tuple = kinds if isinstance(kinds, tuple) else (kinds,)
+    numeric = any(issubclass(k, numbers.Number) for k in kinds_tuple) and bool not in kinds_tuple
+    if isinstance(value, kinds_tuple) and not (numeric and isinstance(value, bool)):
+        return
+    raise TypeError(f"{name} must be {what}, got {type(value).__name__} {_shown(value)}")
+
+
+def check_count(name: str, value: object, *, low: int, high: int) -> int:
+    """``value`` as an int in ``low..high`` (numpy's integers too): ``TypeError`` for another
+    type, :class:`ConfigError` (a ``ValueError``) out of range, each naming the argument.
+
+    >>> check_count("hands", 0, low=1, high=10)
+    Traceback (most recent call last):
+    ...
+    pokerirl.errors.ConfigError: hands must be in 1..10, got 0
+    """
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral):
+        raise TypeError(f"{name} must be an integer, got {type(value).__name__} {_shown(value)}")
+    number = int(value)
+    if not low <= number <= high:
+        raise ConfigError(f"{name} must be in {low:,}..{high:,}, got {number:,}")
+    return number
+
+
+def check_protocol(name: str, value: object, methods: tuple[str, ...], what: str) -> None:
+    """``TypeError`` naming the argument unless ``value`` has each of ``methods`` (callable):
+    a string where an object was meant (``play_match("raise", ...)``) is named at the door,
+    not as an ``AttributeError`` from inside."""
+    if not all(callable(getattr(value, method, None)) for method in methods):
+        raise TypeError(f"{name} must be {what}, got {type(value).__name__} {_shown(value)}")

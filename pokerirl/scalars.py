@@ -17,7 +17,6 @@ from __future__ import annotations
 
 import csv
 import io
-import json
 import math
 import os
 import shutil
@@ -27,6 +26,7 @@ from typing import Any
 
 from pokerirl.atomic import write_text
 from pokerirl.errors import InputError, MissingExtra
+from pokerirl.jsonio import read_json_lines
 
 METRICS = "metrics.jsonl"
 CSV_FILE = "progress.csv"  # SB3's name for the same table
@@ -88,7 +88,7 @@ def export_scalars(out: str | os.PathLike[str], log_dir: str | os.PathLike[str])
     writer_class = _summary_writer()
     written = []
     for run in runs:
-        lines = [json.loads(t) for t in (run / METRICS).read_text().splitlines() if t.strip()]
+        lines = read_json_lines(run / METRICS)
         target = log_dir / run.relative_to(out)
         shutil.rmtree(target, ignore_errors=True)
         target.mkdir(parents=True)

@@ -29,11 +29,63 @@ E = TypeVar("E", bound=StrEnum)
 C = TypeVar("C")
 
 
+# The documented upper bounds of sizes a user or a file gives (checked by check_bounds before
+# anything is built: a width of 10^9 would ask torch for hundreds of GB).
+MAX_WIDTH = 4096  # a hidden layer's width
+MAX_LAYERS = 16  # hidden layers of a net
+MAX_BATCH = 1 << 20  # a minibatch, or hands played in lock-step
+MAX_REPLAY = 2_000_000  # DQN replay transitions (about 1.4 GB on the 174-d encoding)
+MAX_STEPS = 10**12  # counts of hands, epochs, steps: time, never memory, bounds them
+MAX_OBS_DIM = 65_536  # an observation's width (an 84 x 84 x 4 image is 28,224)
+MAX_ACTIONS = 65_536  # a discrete action space's size
+MAX_LBR_HANDS = 10_000_000  # LBR hands per seed (its exact equity makes each one costly)
+
+
 def setting(default: Any = dataclasses.MISSING, /, help: str = "", **more: Any) -> Any:
     """A config dataclass's field that a command may offer as an option: ``help`` and
     ``more`` (``flags``, ``metavar``, ``min``, ``max``, ``show_default``) in the field's
-    metadata, read by ``pokerirl.cli.options``; the field's type and default give the rest."""
+    metadata, read by ``pokerirl.cli.options``; the field's type and default give the rest.
+    ``min`` and ``max`` bound a number, or each width of a ``tuple[int, ...]`` (whose length
+    ``max_len`` bounds); :func:`check_bounds` checks them."""
     return dataclasses.field(default=default, metadata={"help": help, **more})
+
+
+def bounded(default: Any, /, **bounds: Any) -> Any:
+    """A field with ``min``/``max``/``max_len`` bounds that no command offers as an option."""
+    return dataclasses.field(default=default, metadata=bounds)
+
+
+def check_bounds(config: Any) -> None:
+    """Refuse a field of the dataclass ``config`` outside its metadata's ``min``/``max`` (each
+    width of a tuple, and ``max_len`` its length): one :class:`ConfigError` naming the field
+    and the bound. Values of another type are left to the class's own type checks.
+
+    >>> @dataclasses.dataclass(frozen=True)
+    ... class Net:
+    ...     hidden: tuple[int, ...] = bounded((64,), min=1, max=MAX_WIDTH, max_len=MAX_LAYERS)
+    >>> check_bounds(Net(hidden=(64, 10**9)))
+    Traceback (most recent call last):
+    ...
+    pokerirl.errors.ConfigError: hidden must be at most 4096 (each width), got 1000000000
+    """
+    for item in dataclasses.fields(config):
+        low, high = item.metadata.get("min"), item.metadata.get("max")
+        value = getattr(config, item.name)
+        numbers, what = [value], ""
+        if isinstance(value, tuple):
+            numbers, what = list(value), " (each width)"
+            longest = item.metadata.get("max_len")
+            if longest is not None and len(value) > longest:
+                raise ConfigError(
+                    f"{item.name} must have at most {longest} entries, got {len(value)}"
+                )
+        for number in numbers:
+            if isinstance(number, bool) or not isinstance(number, int | float):
+                continue
+            if low is not None and number < low:
+                raise ConfigError(f"{item.name} must be at least {low}{what}, got {number}")
+            if high is not None and number > high:
+                raise ConfigError(f"{item.name} must be at most {high}{what}, got {number}")
 
 
 def enum_value(name: str, kind: type[E], value: object) -> E:

@@ -28,7 +28,7 @@ PACKAGE = Path(__file__).resolve().parents[1] / "pokerirl"
 
 # Lowest first. A component may import those of its own layer and of lower ones.
 LAYERS: tuple[tuple[str, ...], ...] = (
-    ("encoding", "atomic", "seeds", "versions", "errors", "parquet", "meanstd", "figures",
+    ("encoding", "atomic", "seeds", "versions", "errors", "jsonio", "parquet", "meanstd", "figures",
      "scalars", "serial", "stacking", "settings"),
     ("execution",),
     ("store",),

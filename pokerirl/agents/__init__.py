@@ -36,6 +36,7 @@ from pokerirl.agents.registry import (
     resolve_agent,
 )
 from pokerirl.game.agents import BUILT_IN_AGENTS, Agent
+from pokerirl.jsonio import read_bytes
 
 AGENT_FILES = (MODEL_FILE, CONFIG_FILE)  # what an agent folder's agent is made of (and
 # KEPT_FILE, the authors' kept checkpoint, when there is one)
@@ -68,9 +69,13 @@ def ship_agent(spec: str) -> ShippedAgent:
         return ShippedAgent(spec=spec, files=(("checkpoint.pt", path.read_bytes()),))
     kept = (KEPT_FILE,) if (Path(spec) / KEPT_FILE).is_file() else ()
     names = (*AGENT_FILES, *kept)
-    return ShippedAgent(
-        spec=spec, files=tuple((name, (Path(spec) / name).read_bytes()) for name in names)
-    )
+
+    def read(name: str) -> bytes:  # config.json bounded: a 2 GiB sparse one was read whole
+        path = Path(spec) / name
+        return read_bytes(path, what="cannot load agent: ") if name == CONFIG_FILE else (
+            path.read_bytes())  # fmt: skip
+
+    return ShippedAgent(spec=spec, files=tuple((name, read(name)) for name in names))
 
 
 def land_agent(shipped: ShippedAgent, folder: str | os.PathLike[str]) -> Agent:

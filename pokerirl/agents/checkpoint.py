@@ -32,8 +32,10 @@ from pokerirl.agents.config import PLAYS, Plays
 from pokerirl.agents.dqn import GreedyQAgent, QNetwork, input_norm
 from pokerirl.agents.registry import CONFIG_FILE, KEPT_FILE, MODEL_FILE
 from pokerirl.atomic import write_bytes, write_torch
-from pokerirl.errors import InputError
+from pokerirl.errors import InputError, check_argument
 from pokerirl.game.encodings import ENCODINGS, Encoding, EncodingName
+from pokerirl.jsonio import check_format, read_json
+from pokerirl.settings import MAX_LAYERS, MAX_WIDTH
 
 METRICS_FILE, CURVE_FILE = "metrics.jsonl", "learning_curve.png"
 FORMAT = "pokerirl-dqn"
@@ -96,6 +98,7 @@ def load_agent(folder: str | os.PathLike[str]) -> GreedyQAgent:
         ValueError: one line naming the bad file, if the folder is not a finished agent or
             its files are bad.
     """
+    check_argument("folder", folder, (str, os.PathLike), "an agent folder (a path)")
     folder = Path(folder)
     if not is_finished(folder):
         raise InputError(f"{folder}: not an agent folder (needs {MODEL_FILE} and {CONFIG_FILE})")
@@ -119,8 +122,11 @@ def load_agent(folder: str | os.PathLike[str]) -> GreedyQAgent:
     )
 
 
+_CANNOT_LOAD = "cannot load agent: "
+
+
 def _bad(path: Path, reason: str) -> InputError:
-    return InputError(f"{path}: cannot load agent: {reason}")
+    return InputError(f"{path}: {_CANNOT_LOAD}{reason}")
 
 
 def _first_line(error: BaseException) -> str:
@@ -133,22 +139,26 @@ def _read_config(path: Path) -> tuple[tuple[int, ...], str, Encoding]:
     encoding it reads (``rlcard`` for agents made before encodings); ValueError naming
     ``path`` if bad."""
     try:
-        config = json.loads(path.read_text(encoding="utf-8"))
+        config = read_json(path, what=_CANNOT_LOAD)
     except OSError as error:
         raise _bad(path, f"cannot read ({error.strerror or error})") from None
-    except (UnicodeDecodeError, json.JSONDecodeError) as error:
-        raise _bad(path, f"not JSON ({_first_line(error)})") from None
     if not isinstance(config, dict):
         raise _bad(path, f"not an agent config (a JSON object), got {type(config).__name__}")
-    if config.get("format") != FORMAT:
-        raise _bad(path, f"format is {config.get('format')!r}, not {FORMAT!r}")
+    check_format(
+        config, where=path, kind=("format", FORMAT), version=("version", (FORMAT_VERSION,)),
+        what=_CANNOT_LOAD,
+    )  # fmt: skip
     hidden = config.get("hidden")
     if (
         not isinstance(hidden, list)
-        or not hidden
-        or not all(type(width) is int and width > 0 for width in hidden)
+        or not 0 < len(hidden) <= MAX_LAYERS
+        or not all(type(width) is int and 0 < width <= MAX_WIDTH for width in hidden)
     ):
-        raise _bad(path, f"hidden must be a list of positive integers, got {str(hidden)[:60]}")
+        raise _bad(
+            path,
+            f"hidden must be a list of at most {MAX_LAYERS} integers in 1..{MAX_WIDTH}, "
+            f"got {str(hidden)[:60]}",
+        )
     plays = config.get("plays", Plays.FINAL)
     if plays not in PLAYS:
         raise _bad(path, f"plays must be final or kept, got {str(plays)[:40]!r}")

@@ -19,7 +19,17 @@ from typing import Any
 from pokerirl.errors import ConfigError
 from pokerirl.game.encodings import EncodingName
 from pokerirl.poker.rewards import RaiseCounts, Transform
-from pokerirl.settings import enum_value, setting, with_overrides
+from pokerirl.settings import (
+    MAX_BATCH,
+    MAX_LAYERS,
+    MAX_REPLAY,
+    MAX_STEPS,
+    MAX_WIDTH,
+    check_bounds,
+    enum_value,
+    setting,
+    with_overrides,
+)
 
 
 class Plays(StrEnum):
@@ -71,23 +81,38 @@ class DQNConfig:
     one forward pass with the same network and epsilon.
     """
 
-    hidden: tuple[int, ...] = setting((64, 64), help="Q-network widths, e.g. 64,64.")
-    replay_size: int = setting(20_000, help="Replay memory size.")
-    replay_init: int = setting(100, help="Transitions before the first update.")
-    batch_size: int = setting(32, help="Update minibatch size.")
+    hidden: tuple[int, ...] = setting(
+        (64, 64), help="Q-network widths, e.g. 64,64.", min=1, max=MAX_WIDTH, max_len=MAX_LAYERS
+    )
+    replay_size: int = setting(20_000, help="Replay memory size.", max=MAX_REPLAY)
+    replay_init: int = setting(
+        100, help="Transitions before the first update.", max=MAX_REPLAY
+    )
+    batch_size: int = setting(32, help="Update minibatch size.", max=MAX_BATCH)
     learning_rate: float = setting(5e-5, help="Adam lr.", flags=("--lr", "--learning-rate"))
     gamma: float = setting(0.99, help="Discount.")
     epsilon_start: float = setting(1.0, help="Exploration at the start.")
     epsilon_end: float = setting(0.1, help="Exploration after the decay.")
     # in stored transitions, as RLCard's total_t
-    epsilon_decay_steps: int = setting(20_000, help="Transitions of the linear decay.")
-    target_update_every: int = setting(1_000, help="Updates between target copies.")
-    train_every: int = setting(16, help="Stored transitions per gradient update.")
-    concurrent_hands: int = setting(1024, help="Hands played in lock-step.")
+    epsilon_decay_steps: int = setting(
+        20_000, help="Transitions of the linear decay.", max=MAX_STEPS
+    )
+    target_update_every: int = setting(
+        1_000, help="Updates between target copies.", max=MAX_STEPS
+    )
+    train_every: int = setting(
+        16, help="Stored transitions per gradient update.", max=MAX_STEPS
+    )
+    concurrent_hands: int = setting(
+        1024, help="Hands played in lock-step.", max=MAX_BATCH
+    )
     # refreshes of the frozen copy with opponent "self"
-    self_play_every: int = setting(1_000, help="Updates between refreshes of 'self'.")
+    self_play_every: int = setting(
+        1_000, help="Updates between refreshes of 'self'.", max=MAX_STEPS
+    )
 
     def __post_init__(self) -> None:
+        check_bounds(self)  # before anything is built: a width of 10^9, a replay of 10^12
         positive = (
             "replay_size", "replay_init", "batch_size", "epsilon_decay_steps",
             "target_update_every", "train_every", "concurrent_hands", "self_play_every",
@@ -124,7 +149,7 @@ class TrainConfig:
     docstring), and ``play`` says which checkpoint the agent plays.
     """
 
-    hands: int = setting(help="Training hands.", flags=("--hands", "-n"))
+    hands: int = setting(help="Training hands.", flags=("--hands", "-n"), max=MAX_STEPS)
     seed: int
     # A member after __post_init__; `| str`: callers may name it (the studies do).
     reward: RewardMode | str = setting(
@@ -143,8 +168,12 @@ class TrainConfig:
         help="random (default), raise, call, tightbot, loosebot, an agent folder, rlcard:CKPT "
         "(unpickled: runs any code it holds; trusted files only), or self.",
     )  # fmt: skip
-    eval_every: int = setting(10_000, help="Evaluate every N training hands.")
-    eval_hands: int = setting(20_000, help="Hands per evaluation (even, duplicate).")
+    eval_every: int = setting(
+        10_000, help="Evaluate every N training hands.", max=MAX_STEPS
+    )
+    eval_hands: int = setting(
+        20_000, help="Hands per evaluation (even, duplicate).", max=MAX_STEPS
+    )
     eval_seed: int = setting(1_000_003, help="Deal seed of every evaluation.")
     dqn: DQNConfig = field(default_factory=DQNConfig)
     reward_transform: Transform | str = setting(  # as reward
@@ -175,6 +204,7 @@ class TrainConfig:
     def __post_init__(self) -> None:
         for name, kind in _ENUM_FIELDS.items():  # a file's or a flag's string, as its member
             object.__setattr__(self, name, enum_value(name, kind, getattr(self, name)))
+        check_bounds(self)
         if self.reward == RewardMode.SPARSE and self.reward_run is not None:
             raise ConfigError("reward_run needs reward 'learned'")
         if self.reward == RewardMode.SPARSE and self.payoff_weight != 0.0:

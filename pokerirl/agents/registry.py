@@ -6,9 +6,10 @@
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
-from pokerirl.errors import InputError
+from pokerirl.errors import InputError, check_argument
 from pokerirl.game.agents import BUILT_IN_AGENTS, Agent, make_agent
 from pokerirl.poker.agent_specs import POLICY_PREFIX, REWARD_PREFIX
 
@@ -23,8 +24,11 @@ def resolve_agent(spec: str) -> Agent:
     policy, greedy), or, for ``rlcard:PATH``, the greedy policy of an RLCard ``DQNAgent``
     checkpoint file (which is unpickled: trusted files only).
 
-    Raises ``ValueError`` with a one-line message when ``spec`` is none of these.
+    Raises ``ValueError`` with a one-line message when ``spec`` is none of these, and
+    ``TypeError`` when it is not a string or a path.
     """
+    check_argument("spec", spec, (str, os.PathLike), "an agent spec (a string) or a folder")
+    spec = os.fspath(spec)
     if spec in BUILT_IN_AGENTS:
         return make_agent(spec)
     if spec.startswith(REWARD_PREFIX):

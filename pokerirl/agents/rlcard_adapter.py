@@ -37,7 +37,7 @@ from typing import Any
 import numpy as np
 
 from pokerirl.encoding import ACTIONS, NUM_ACTIONS, NUM_CARDS, NUM_ROUNDS, rlcard_card_str
-from pokerirl.errors import InputError
+from pokerirl.errors import InputError, check_count
 from pokerirl.game.agents import Agent, agent_action_probs, agent_actions
 from pokerirl.game.encodings import States
 from pokerirl.game.engine import SMALL_BLIND
@@ -95,6 +95,11 @@ class RLCardAgent:
     use_raw: bool = field(default=False, init=False)  # RLCard: step returns action ids
 
     def __post_init__(self) -> None:
+        if not (callable(getattr(self.agent, "act", None)) and hasattr(self.agent, "name")):
+            raise TypeError(
+                f"agent must be a pokerirl Agent (resolve_agent gives one), got {self.agent!r:.60}"
+            )
+        check_count("seed", self.seed, low=0, high=2**32 - 1)
         object.__setattr__(self, "rng", np.random.default_rng(self.seed))
 
     @property

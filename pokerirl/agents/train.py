@@ -81,6 +81,7 @@ from pokerirl.execution import Backend, read_files
 from pokerirl.game import make_agent, play_match
 from pokerirl.game.agents import Agent
 from pokerirl.irl.run import REWARD_RUN_FILES  # noqa: F401 - re-exported: pokerirl.agents.train.REWARD_RUN_FILES
+from pokerirl.jsonio import read_json_lines
 from pokerirl.poker.rewards import (
     PokerReward,
     RewardSource,
@@ -124,10 +125,8 @@ def read_metrics(folder: str | os.PathLike[str]) -> list[MetricsLine]:
     """An agent folder's evaluations during training (its ``metrics.jsonl``), typed: what a
     study reads of the agents it trained, instead of the file's keys."""
     path = Path(folder) / METRICS_FILE
-    lines = [line for line in path.read_text().splitlines() if line.strip()]
-    return [
-        MetricsLine.from_json(json.loads(line), f"{path}:{i + 1}") for i, line in enumerate(lines)
-    ]
+    lines = read_json_lines(path)
+    return [MetricsLine.from_json(line, f"{path}:{i + 1}") for i, line in enumerate(lines)]
 
 
 @dataclass(frozen=True, kw_only=True)

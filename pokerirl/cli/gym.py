@@ -28,8 +28,9 @@ from pokerirl.cli.app import (
 )
 from pokerirl.errors import InputError, UsageError
 from pokerirl.gym.presets import MAX_TRANSITIONS
-from pokerirl.irl.config import Algo  # torch-free: `gym irl` and `train` offer every one
-from pokerirl.studies.gym.config import PRESETS
+from pokerirl.irl.config import MAX_EPOCHS, Algo  # torch-free: `gym irl`, `train` offer each
+from pokerirl.settings import MAX_STEPS
+from pokerirl.studies.gym.config import MAX_EPISODES, PRESETS
 
 gym_app = typer.Typer(
     help="The paper's Gymnasium tasks: SB3 experts, expert data, RL on a learned reward.",
@@ -398,9 +399,11 @@ GYM_SEED = typer.Option(None, "--seed", **SEED_OPTION, help="Data seed; run k us
 GYM_TRANSITIONS = typer.Option(
     None, min=2, max=MAX_TRANSITIONS, help="Override the expert transitions."
 )
-GYM_EPOCHS = typer.Option(None, min=1, help="Override the IRL epochs.")
-GYM_EVAL_EPISODES = typer.Option(None, min=1, help="Override episodes per evaluation.")
-GYM_TIMESTEPS = typer.Option(None, min=1, help="Override the RL steps per run.")
+GYM_EPOCHS = typer.Option(None, min=1, max=MAX_EPOCHS, help="Override the IRL epochs.")
+GYM_EVAL_EPISODES = typer.Option(
+    None, min=1, max=MAX_EPISODES, help="Override episodes per evaluation."
+)
+GYM_TIMESTEPS = typer.Option(None, min=1, max=MAX_STEPS, help="Override the RL steps per run.")
 GYM_JOBS = typer.Option(2, "--jobs", min=1, help="Processes for the units.")
 GYM_RAY = typer.Option(None, "--ray", metavar="ADDRESS", help=RAY_HELP)
 GYM_OVERWRITE = typer.Option(False, "--overwrite", help="Recompute units whose settings changed.")
@@ -467,7 +470,7 @@ def gym_study(
     preset = _gym_preset(
         preset_name, task, runs=runs, seed=seed, transitions=transitions, epochs=epochs,
         eval_episodes=eval_episodes, rl_timesteps=timesteps,
-        algos=None if algos is None else parse_algos(algos),
+        algos=None if algos is None else settings_from_options(parse_algos, algos),
     )  # fmt: skip
     if expert is None and task != "all":
         _no_shipped_expert(task, "pass --expert DIR")

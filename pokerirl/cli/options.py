@@ -36,6 +36,7 @@ import typer
 
 from pokerirl.cli.app import SEED_OPTION, choices, given
 from pokerirl.errors import UsageError
+from pokerirl.settings import MAX_LAYERS, MAX_WIDTH
 
 T = TypeVar("T")
 Settings = Mapping[str, Any]
@@ -47,10 +48,19 @@ def widths(text: str, flag: str = "--hidden") -> tuple[int, ...]:
 
     >>> widths("64, 32")
     (64, 32)
+    >>> widths("1000000000")
+    Traceback (most recent call last):
+    ...
+    pokerirl.errors.UsageError: --hidden takes at most 16 widths of at most 4096, got '1000000000'
+
     """
     found = [w.strip() for w in text.split(",") if w.strip()]
-    if not all(re.fullmatch(r"[+-]?\d+", w) for w in found):
-        raise UsageError(f"{flag} must be comma-separated integers, got {text!r}")
+    if not all(re.fullmatch(r"[+-]?\d{1,20}", w) for w in found):
+        raise UsageError(f"{flag} must be comma-separated integers, got {text[:60]!r}")
+    if len(found) > MAX_LAYERS or any(int(w) > MAX_WIDTH for w in found):
+        raise UsageError(
+            f"{flag} takes at most {MAX_LAYERS} widths of at most {MAX_WIDTH}, got {text[:60]!r}"
+        )
     return tuple(int(w) for w in found)
 
 
@@ -87,7 +97,9 @@ def _parameter(item: dataclasses.Field[Any], hint: Any) -> tuple[_Option, inspec
         typed, more["metavar"] = str, "WIDTHS"
     if item.name == "seed" or item.name.endswith("_seed"):
         more.update(SEED_OPTION)
-    more.update({key: meta[key] for key in ("metavar", "min", "max") if key in meta})
+    # a tuple's bounds are each width's, checked by the config (settings.check_bounds)
+    passed = ("metavar",) if typing.get_origin(kind) is tuple else ("metavar", "min", "max")
+    more.update({key: meta[key] for key in passed if key in meta})
     flags = tuple(meta.get("flags", (f"--{item.name.replace('_', '-')}",)))
     default = item.default if meta.get("show_default") else None
     option = typer.Option(default, *flags, help=meta["help"], **more)

@@ -34,6 +34,7 @@ from pokerirl.cli.options import NO_SETTINGS, Settings, settings_options, widths
 from pokerirl.errors import InputError, UsageError
 from pokerirl.game.encodings import EncodingName
 from pokerirl.irl.config import AIRLConfig, Algo  # torch-free
+from pokerirl.jsonio import read_json
 from pokerirl.poker.folds import FoldsMode
 from pokerirl.poker.rewards import Transform
 
@@ -120,6 +121,10 @@ def ingest(
 
         summary = ingest_table(sources, out, strict=strict, progress=not quiet)
     else:
+        fitted_only = [n for n in ("behaviour_encoding", "behaviour_rounds") if n in imputing]
+        if behaviour is not None and fitted_only:  # ignored without a word before
+            flags = ", ".join("--" + name.replace("_", "-") for name in fitted_only)
+            raise UsageError(f"{flags} apply only without --behaviour (to the fitted model)")
         config = settings_from_options(
             ImputeConfig, imputations=imputations,
             behaviour=None if behaviour is None else str(behaviour),
@@ -536,10 +541,11 @@ def reward_card_command(
     source = resolved.load()
     groups = None
     if validation:
-        split = Path(reward) / "split.json"
-        if not split.is_file():
+        from pokerirl.irl.run import SPLIT_FILE, read_split
+
+        if not (Path(reward) / SPLIT_FILE).is_file():
             raise InputError(f"--validation needs a run folder with split.json; {reward} has none")
-        groups = _validation_groups(split)
+        groups = read_split(reward)
     states = CardStates.from_table(table, groups=groups, progress=True)
     card = reward_card(TransformedReward(source, transform), states)
     if not resolved.is_authors and transform == "raw":  # the run's own numbers, to flag below-BC
@@ -550,14 +556,6 @@ def reward_card_command(
     write_card(card, out)
     echo(card.render())
     echo(f"wrote {out / 'reward_card.json'} and reward_card.png")
-
-
-def _validation_groups(split: Path) -> set[str]:
-    """The validation hands a run's ``split.json`` names."""
-    try:
-        return {str(g) for g in json.loads(split.read_text())["validation_groups"]}
-    except (ValueError, KeyError, TypeError) as error:  # corrupt: JSON, or not a split's
-        raise InputError(f"{split}: not a run's split ({error!r})") from None
 
 
 agent_app = typer.Typer(help="Train DQN agents.", no_args_is_help=True)
@@ -643,7 +641,7 @@ def _echo_agent(folder: Path, line: MetricsLine | None, play: str) -> None:
     )
     echo(f"{folder}: {line.hands:,} hands, {scores}")
     if play == Plays.KEPT:
-        kept = MetricsLine.from_json(json.loads((folder / CONFIG_FILE).read_text())["kept"])
+        kept = MetricsLine.from_json(read_json(folder / CONFIG_FILE)["kept"])
         echo(
             f"{folder}: plays {KEPT_FILE} (after {kept.hands:,} hands, vs random "
             f"{kept.eval['random'].mbb_per_hand:+.0f} mbb/h in its evaluation); "

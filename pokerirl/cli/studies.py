@@ -25,8 +25,15 @@ from pokerirl.cli.app import (
     settings_from_options,
     write_logs,
 )
-from pokerirl.errors import InputError, MissingExtra, UsageError
-from pokerirl.studies.poker.config import AGENT_PRESETS, FOLDS, IRL_ALGOS, TRANSFORMS
+from pokerirl.errors import MissingExtra, UsageError
+from pokerirl.jsonio import read_json
+from pokerirl.studies.poker.config import (
+    AGENT_PRESETS,
+    FOLDS,
+    IRL_ALGOS,
+    STAGE_BOUNDS,
+    TRANSFORMS,
+)
 from pokerirl.studies.poker.config import PRESETS as STUDY_PRESETS
 
 DEMO_CONFIG = "pokerirl.studies.demo:DemoConfig"
@@ -104,9 +111,11 @@ def study(
     seeds: str | None = typer.Option(
         None, "--seeds", callback=seed_list, metavar="SEEDS", help="Agent seeds, e.g. 0-19."
     ),
-    hands: int | None = typer.Option(None, "--hands", min=2, help="Tournament hands per seed."),
+    hands: int | None = typer.Option(
+        None, "--hands", min=2, max=STAGE_BOUNDS["hands"], help="Tournament hands per seed."
+    ),
     lbr_hands: int | None = typer.Option(
-        None, "--lbr-hands", min=0,
+        None, "--lbr-hands", min=0, max=STAGE_BOUNDS["lbr_hands"],
         help="LBR's hands per seed against each panel agent (even; 0: no LBR); default: the "
         "preset's (quick 500, paper 10,000).",
     ),
@@ -144,7 +153,9 @@ def study(
         help="drop (default: the hands that end in a fold hide the cards and are left out) "
         "or impute (kept, the hidden cards drawn from a posterior; docs/folds.md).",
     ),
-    jobs: int = typer.Option(2, "--jobs", min=1, help="Processes for training and play."),
+    jobs: int = typer.Option(
+        2, "--jobs", min=1, max=STAGE_BOUNDS["jobs"], help="Processes for training and play."
+    ),
     ray: str | None = typer.Option(None, "--ray", metavar="ADDRESS", help=RAY_HELP),
     overwrite: bool = typer.Option(
         False, "--overwrite", help="Recompute changed units, and the units that read them."
@@ -316,10 +327,5 @@ def report(
 def _refuse_corrupt(path: Path) -> None:
     """Fail on a report's file (gym study's summary.json, a study's or tournament's
     report.json) that is there but cannot be read as JSON: truncated or damaged."""
-    try:
-        json.loads(path.read_bytes())
-    except FileNotFoundError:
-        return
-    except ValueError as error:  # JSONDecodeError, UnicodeDecodeError
-        reason = error.msg if isinstance(error, json.JSONDecodeError) else "not UTF-8 text"
-        raise InputError(f"{path}: corrupt: not JSON ({reason})") from None
+    if path.exists() or path.is_symlink():
+        read_json(path, what="corrupt: ")

@@ -14,6 +14,7 @@ hands ``2j`` and ``2j + 1`` both use deal ``j``, so each agent plays each deal f
 from __future__ import annotations
 
 import functools
+import numbers
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -21,7 +22,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from tqdm import tqdm
 
-from pokerirl.errors import ConfigError
+from pokerirl.errors import ConfigError, check_argument, check_protocol
 from pokerirl.execution import unit_progress
 from pokerirl.game.agents import Agent, agent_actions, seat_cards
 from pokerirl.game.deals import deal_cards
@@ -224,6 +225,7 @@ def play_match(
     Raises:
         ValueError: as :func:`check_match_size`, or on a negative seed.
     """
+    _check_arguments(agent_a, agent_b, hands=hands, seed=seed, batch_size=batch_size)
     check_match_size(hands, duplicate=duplicate, batch_size=batch_size)
     if seed < 0:
         raise ConfigError(f"seed must be non-negative, got {seed}")
@@ -271,3 +273,13 @@ def play_match(
         hands_per_second=hands / seconds if seconds > 0 else float("inf"),
         results_bb=results,
     )
+
+
+def _check_arguments(agent_a: object, agent_b: object, **counts: object) -> None:
+    """play_match's arguments at the door (issue 46): specs where agents were meant, a count
+    given as a string or None, each named."""
+    agent = "an Agent (pokerirl.resolve_agent(spec) makes one)"
+    check_protocol("agent_a", agent_a, ("act",), agent)
+    check_protocol("agent_b", agent_b, ("act",), agent)
+    for name, value in counts.items():
+        check_argument(name, value, numbers.Integral, "an integer")

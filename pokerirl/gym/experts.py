@@ -28,7 +28,7 @@ import numpy as np
 import torch
 
 from pokerirl.atomic import write_text, write_torch
-from pokerirl.errors import ConfigError, InputError, MissingExtra
+from pokerirl.errors import ConfigError, InputError, MissingExtra, check_argument
 from pokerirl.gym.episodes import sb3_evaluation
 
 # Re-exported: the manifest's names lived here before pokerirl.gym.manifest (issue 34).
@@ -47,6 +47,7 @@ from pokerirl.gym.manifest import (  # noqa: F401
 )
 from pokerirl.gym.presets import PPOSettings, RLSettings
 from pokerirl.gym.tasks import task
+from pokerirl.jsonio import read_json
 from pokerirl.serial import Serializable
 
 if TYPE_CHECKING:  # gymnasium and SB3 are imported lazily: a poker-only user never pays.
@@ -354,15 +355,34 @@ def resolve_expert_dir(expert: str | os.PathLike[str], env_id: str) -> Path:
     return Path(expert)
 
 
+EXPERT_KEYS = ("env", "algo", "policy_kwargs")
+
+
+def read_expert_record(folder: str | os.PathLike[str]) -> dict[str, Any]:
+    """The ``config.json`` of the expert folder ``folder``, checked to be an expert's (a poker
+    agent's folder also holds a config.json): InputError naming the file otherwise."""
+    path = Path(folder) / CONFIG_FILE
+    if not path.is_file():
+        raise InputError(f"{folder}: not an expert folder ({CONFIG_FILE} missing)")
+    record = read_json(path)
+    missing = [key for key in EXPERT_KEYS if not isinstance(record, dict) or key not in record]
+    if missing:
+        raise InputError(
+            f"{path}: not a gym expert's config (no {missing[0]!r}; `gym expert` writes one)"
+        )
+    return record
+
+
 def load_expert(folder: str | os.PathLike[str]) -> Expert:
     """The expert saved in ``folder``, rebuilt from its JSON architecture and weights only.
 
     Raises:
         ValueError: one line, if the folder is not an expert folder or its files are bad.
     """
+    check_argument("folder", folder, (str, os.PathLike), "an expert folder (a path)")
     folder = Path(folder)
     try:
-        record = json.loads((folder / CONFIG_FILE).read_text())
+        record = read_expert_record(folder)
         policy = build_policy(record["env"], record["algo"], record["policy_kwargs"])
         with warnings.catch_warnings():  # torch warns about a pickle it then refuses
             warnings.simplefilter("ignore")

@@ -61,6 +61,7 @@ from pokerirl.irl.run import (
     summarize,
 )
 from pokerirl.irl.transitions import Transitions
+from pokerirl.jsonio import read_json
 from pokerirl.meanstd import MeanStd
 from pokerirl.serial import Omit, Serializable, meta
 from pokerirl.store import staged_files, tidy
@@ -88,7 +89,7 @@ class GymIRLSummary(Serializable):
     @classmethod
     def read(cls, folder: Path) -> GymIRLSummary:
         """The ``summary.json`` of the ``gym irl`` folder ``folder``."""
-        return cls.from_json(json.loads((folder / SUMMARY_FILE).read_text()))
+        return cls.from_json(read_json(folder / SUMMARY_FILE))
 
 
 @dataclass(frozen=True, kw_only=True)

@@ -20,7 +20,6 @@ its own is left.
 
 from __future__ import annotations
 
-import json
 import re
 import tempfile
 from collections.abc import Sequence
@@ -33,6 +32,7 @@ from pokerirl.execution import Backend, folder_files
 from pokerirl.gym.experts import CONFIG_FILE, METRICS_FILE, MODEL_FILE, ExpertRecord, require_gym
 from pokerirl.gym.tasks import task
 from pokerirl.irl.reward import RewardFn
+from pokerirl.jsonio import read_json
 from pokerirl.meanstd import MeanStd, mean_std
 from pokerirl.store import (
     RECORD_NAME,
@@ -311,7 +311,7 @@ def _drop_unused(legacy: LegacyRecord, *, vouches: bool) -> None:
 def _expert_record(config: Path) -> ExpertRecord:
     """A finished expert's record, from its config file (corrupt: one line naming it)."""
     try:
-        return ExpertRecord.from_json(json.loads(config.read_text()))
+        return ExpertRecord.from_json(read_json(config))
     except (ValueError, KeyError, TypeError) as error:  # not JSON, or not an expert's record
         raise InputError(f"{config}: corrupt: not an expert's record ({error!r})") from None
 
@@ -319,6 +319,6 @@ def _expert_record(config: Path) -> ExpertRecord:
 def _final_return(config: Path) -> float:
     """A finished RL run's final return, from its config file (corrupt: one line naming it)."""
     try:
-        return float(json.loads(config.read_text())["final_return"])
+        return float(read_json(config)["final_return"])
     except (ValueError, KeyError, TypeError) as error:  # not JSON, or not a run's record
         raise InputError(f"{config}: corrupt: no final return ({error!r})") from None

@@ -18,6 +18,7 @@ from typing import Any
 
 from pokerirl.atomic import write_text
 from pokerirl.errors import InputError
+from pokerirl.jsonio import read_json
 from pokerirl.serial import Serializable
 
 MODEL_FILE, CONFIG_FILE, METRICS_FILE = "model.pt", "config.json", "metrics.jsonl"
@@ -52,7 +53,7 @@ def shipped_manifest() -> list[Mapping[str, Any]]:
     path = shipped_dir() / MANIFEST_FILE
     if not path.is_file():
         raise InputError(f"{path}: no shipped experts in this installation")
-    manifest: list[Mapping[str, Any]] = json.loads(path.read_text())
+    manifest: list[Mapping[str, Any]] = read_json(path)
     return manifest
 
 
@@ -74,7 +75,7 @@ def write_manifest(folder: str | os.PathLike[str]) -> list[dict[str, object]]:
 
     folder = Path(folder)
     records = [
-        json.loads((folder / env_id / CONFIG_FILE).read_text())
+        read_json(folder / env_id / CONFIG_FILE)
         for env_id in TASK_ORDER
         if (folder / env_id / CONFIG_FILE).is_file()
     ]

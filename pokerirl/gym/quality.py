@@ -66,6 +66,7 @@ from pokerirl.irl.run import (
     load_reward,
     load_run_config,
 )
+from pokerirl.jsonio import read_json
 from pokerirl.serial import Json, Serializable
 
 QUALITY_FILE = "reward_quality.json"
@@ -648,7 +649,7 @@ def read_reward_quality(run_dir: str | os.PathLike[str]) -> Mapping[str, Any] | 
     missing, unreadable, made for another ``reward.pt`` than the folder's, or lacking a score
     (an older file)."""
     try:
-        found = json.loads((Path(run_dir) / QUALITY_FILE).read_text(encoding="utf-8"))
+        found = read_json(Path(run_dir) / QUALITY_FILE)
         if not isinstance(found, dict) or found.get("format") != QUALITY_FORMAT:
             return None
         current = found.get("reward_sha256") == reward_digest(run_dir)

@@ -13,6 +13,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 import torch
 
+from pokerirl.errors import check_protocol
 from pokerirl.irl.reward import RewardFn
 
 if TYPE_CHECKING:
@@ -51,6 +52,9 @@ def learned_reward_env(venv: VecEnv, reward: RewardCallable) -> VecEnv:
     ``reward`` sees raw observations and Monitor's ``info["episode"]`` still holds the true
     environment return for the learning curve. One batched call of ``reward`` per vector step.
     """
+    check_protocol("venv", venv, ("reset", "step_async", "step_wait"),
+                   "a stable-baselines3 VecEnv (make_vec_env gives one)")  # fmt: skip
+    check_protocol("reward", reward, ("__call__",), "a callable reward(obs, actions)")
     from stable_baselines3.common.vec_env import VecEnvWrapper
 
     class LearnedRewardVecEnv(VecEnvWrapper):

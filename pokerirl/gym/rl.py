@@ -34,6 +34,7 @@ from pokerirl.gym.experts import (
 from pokerirl.gym.presets import RLBackend, RLSettings
 from pokerirl.gym.rewards import RewardCallable, learned_reward_env
 from pokerirl.gym.tasks import task
+from pokerirl.jsonio import read_json_lines
 from pokerirl.meanstd import mean_and_std
 
 # How the RL phase trains: SB3, one run per call (train_rl), or R runs of one task in one
@@ -61,8 +62,7 @@ class CurvePoint:
 
 def read_curve(run: Path) -> list[CurvePoint]:
     """The true-return curve of the RL run folder ``run`` (its ``metrics.jsonl``)."""
-    lines = (run / METRICS_FILE).read_text().splitlines()
-    return [CurvePoint.from_json(json.loads(line)) for line in lines if line.strip()]
+    return [CurvePoint.from_json(line) for line in read_json_lines(run / METRICS_FILE)]
 
 
 @dataclass(frozen=True, kw_only=True)

@@ -52,6 +52,7 @@ from typing import cast
 import torch
 from torch import nn
 
+from pokerirl.errors import check_argument
 from pokerirl.irl.baselines import baselines
 from pokerirl.irl.config import AIRLConfig
 from pokerirl.irl.evaluate import evaluate
@@ -145,6 +146,9 @@ def train(
     ``on_epoch`` gets each epoch's metrics as soon as they are ready; ``callback`` (an
     :class:`EpochCallback`) may add metrics to it first.
     """
+    check_argument("train_data", train_data, Transitions, "Transitions")
+    check_argument("val_data", val_data, Transitions, "Transitions")
+    check_argument("config", config, AIRLConfig, "an AIRLConfig (AIRLConfig.for_algo gives one)")
     if reward is None or policy is None:
         default_reward, default_policy = default_nets(train_data, config)
         reward = default_reward if reward is None else reward

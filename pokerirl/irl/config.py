@@ -24,6 +24,7 @@ pokerirl.errors.ConfigError: epochs must be an integer, got True
 from __future__ import annotations
 
 import dataclasses
+import math
 import os
 import tomllib
 import typing
@@ -34,7 +35,16 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from pokerirl.errors import ConfigError as ConfigError  # its old home: imports keep working
-from pokerirl.settings import enum_value, setting, with_overrides
+from pokerirl.settings import (
+    MAX_BATCH,
+    MAX_LAYERS,
+    MAX_WIDTH,
+    bounded,
+    check_bounds,
+    enum_value,
+    setting,
+    with_overrides,
+)
 
 if TYPE_CHECKING:
     from pokerirl.irl.nets import NetSpec
@@ -106,6 +116,9 @@ class SupervisedForm(StrEnum):
     SUM_MSE = "sum_mse"
 
 
+MAX_EPOCHS = 1_000_000  # an epoch is a pass over the data: more is a typo
+MAX_SEED = 2**32 - 1  # numpy's seeds; the command line offers the same range
+
 # The names, for messages (a StrEnum member is its value: "airl" in ALGOS).
 ALGOS: tuple[str, ...] = tuple(Algo)
 
@@ -115,8 +128,8 @@ class AIRLConfig:
     """Hyperparameters. The defaults are the H-AIRL paper's reference poker settings."""
 
     # the nets (see pokerirl.irl.nets.NetSpec)
-    reward_hidden: tuple[int, ...] = (64,)
-    policy_hidden: tuple[int, ...] = (64,)
+    reward_hidden: tuple[int, ...] = bounded((64,), min=1, max=MAX_WIDTH, max_len=MAX_LAYERS)
+    policy_hidden: tuple[int, ...] = bounded((64,), min=1, max=MAX_WIDTH, max_len=MAX_LAYERS)
     activation: Activation = Activation.RELU
     layer_norm: bool = False
     reward_family: RewardFamily = RewardFamily.STATE_ACTION
@@ -127,8 +140,8 @@ class AIRLConfig:
     # 0, not the authors' 5e-3: on poker tables their decay flattens f into one value per
     # action, whose legal argmax is "check, else call" (issue 31; their preset keeps it).
     reward_weight_decay: float = setting(0.0, help="Weight decay of f (default 0; authors 5e-3).")
-    batch_size: int = setting(256, help="Minibatch size.", min=1)
-    epochs: int = setting(50, help="Training epochs.", min=1, show_default=True)
+    batch_size: int = setting(256, help="Minibatch size.", min=1, max=MAX_BATCH)
+    epochs: int = setting(50, help="Training epochs.", min=1, max=MAX_EPOCHS, show_default=True)
     # the discriminator's form; set by the algorithm (GAIL's for gail), never on its own
     discriminator: DiscriminatorForm = DiscriminatorForm.AIRL
     # H-AIRL
@@ -148,12 +161,13 @@ class AIRLConfig:
     log_std_max: float = 2.0
     # data
     val_fraction: float = setting(0.1, help="Share of hands.")  # of groups: hands, episodes
-    seed: int = setting(0, help="Seed for init, split, shuffle, noise.")
+    seed: int = setting(0, help="Seed for init, split, shuffle, noise.", min=0, max=MAX_SEED)
 
     def __post_init__(self) -> None:
         for item in dataclasses.fields(self):
             value = _checked(item.name, _HINTS[item.name], getattr(self, item.name))
             object.__setattr__(self, item.name, value)
+        check_bounds(self)  # before any net is built: a width of 10^9 is refused here
         checks = {
             "batch_size >= 1": self.batch_size >= 1,
             "epochs >= 1": self.epochs >= 1,
@@ -239,7 +253,9 @@ def _checked(name: str, hint: Any, value: Any) -> Any:
         raise ConfigError(f"{name} must be an integer, got {value!r}")
     if hint is float:
         if isinstance(value, int | float) and not isinstance(value, bool):
-            return float(value)
+            if math.isfinite(value):  # an inf learning rate trains NaN nets without a word
+                return float(value)
+            raise ConfigError(f"{name} must be a finite number, got {value!r}")
         raise ConfigError(f"{name} must be a number, got {value!r}")
     if hint is str:
         if isinstance(value, str):

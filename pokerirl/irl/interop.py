@@ -31,7 +31,7 @@ from typing import Any
 
 import numpy as np
 
-from pokerirl.errors import InputError
+from pokerirl.errors import InputError, check_argument
 from pokerirl.irl.transitions import Transitions
 
 
@@ -153,6 +153,7 @@ def to_imitation_transitions(transitions: Transitions) -> ImitationTransitions:
     Raises:
         InputError: ``transitions`` has no ``next_obs`` and ``dones``, which imitation needs.
     """
+    check_argument("transitions", transitions, Transitions, "Transitions")
     if transitions.next_obs is None or transitions.dones is None:
         raise InputError("Transitions without next_obs and dones have no imitation layout")
     rewards = transitions.rewards
@@ -185,6 +186,7 @@ def from_imitation_trajectories(
     """
     parts: dict[str, list[np.ndarray]] = {"obs": [], "acts": [], "next_obs": [], "dones": [],
                                           "rews": [], "groups": []}  # fmt: skip
+    check_argument("trajectories", trajectories, Iterable, "an iterable of trajectories")
     count = 0
     for index, trajectory in enumerate(trajectories):
         what = f"imitation trajectory {index}"
@@ -229,6 +231,7 @@ def to_imitation_trajectories(transitions: Transitions) -> list[ImitationTraject
         InputError: no ``next_obs`` and ``dones``; a group whose rows are not contiguous; or
             a group whose ``next_obs`` is not the following row's ``obs`` (not a trajectory).
     """
+    check_argument("transitions", transitions, Transitions, "Transitions")
     if transitions.next_obs is None or transitions.dones is None:
         raise InputError("Transitions without next_obs and dones have no imitation layout")
     flat = to_imitation_transitions(transitions)

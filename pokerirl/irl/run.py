@@ -41,17 +41,19 @@ import torch
 from torch import Tensor, nn
 
 from pokerirl.atomic import write_text, write_torch
-from pokerirl.errors import PokerIRLError
+from pokerirl.errors import PokerIRLError, check_argument
 from pokerirl.execution import progress_share
 from pokerirl.irl.airl import TrainResult, baselines, default_nets, train
-from pokerirl.irl.config import AIRLConfig
+from pokerirl.irl.config import AIRLConfig, Algo
 from pokerirl.irl.nets import ACTIVATIONS, REWARD_FAMILIES, NetSpec, RewardFamily, build_nets
 from pokerirl.irl.plots import plot_curves
 from pokerirl.irl.records import EpochMetrics
 from pokerirl.irl.transitions import Transitions
+from pokerirl.jsonio import parse_json, read_bytes, read_json, read_json_lines
 from pokerirl.meanstd import Curve, MeanStd, mean_std
 from pokerirl.parquet import first_line
 from pokerirl.serial import Serializable, from_json
+from pokerirl.settings import MAX_ACTIONS, MAX_LAYERS, MAX_OBS_DIM, MAX_WIDTH, enum_value
 from pokerirl.versions import package_versions
 
 FORMAT_VERSION = 2
@@ -156,6 +158,11 @@ def train_into(
     ``data_path`` is where the data came from, for the record (``config.json``'s
     ``data.path``); ``data_notes`` are the caller's own keys of ``data`` (the poker layer's
     ``encoding``), which this layer records without reading."""
+    check_argument("data", data, Transitions, "Transitions")
+    check_argument("folder", folder, (str, os.PathLike), "a folder (a path)")
+    algo = enum_value("algo", Algo, algo)  # the run records it: "nope" wrote a run of nope
+    check_argument("config", config, AIRLConfig, "an AIRLConfig (AIRLConfig.for_algo gives one)")
+    folder = Path(folder)
     train_data, val_data, val_groups = data.split(
         val_fraction=config.val_fraction, seed=config.seed
     )
@@ -335,16 +342,32 @@ def read_epochs(run_dir: str | os.PathLike[str]) -> list[EpochMetrics]:
     """A run folder's epochs (its ``metrics.jsonl``), typed: what a study reads of the runs
     it trained, instead of the file's keys; a bad line is named by file and line."""
     path = Path(run_dir) / METRICS_FILE
-    lines = [line for line in path.read_text().splitlines() if line.strip()]
-    return [
-        EpochMetrics.from_json(json.loads(line), f"{path}:{k + 1}") for k, line in enumerate(lines)
-    ]
+    lines = read_json_lines(path)
+    return [EpochMetrics.from_json(line, f"{path}:{k + 1}") for k, line in enumerate(lines)]
+
+
+def read_split(run_dir: str | os.PathLike[str]) -> set[str]:
+    """A run folder's validation groups (its ``split.json``), as strings (the tables' hand
+    ids); ``RunError`` naming the file and its field when it is not a split (a string of
+    ids was read as its characters: "none of the table's rows" blamed the table)."""
+    path = Path(run_dir) / SPLIT_FILE
+    found = read_json(path, error=RunError)
+    groups = found.get("validation_groups") if isinstance(found, dict) else None
+    if not isinstance(groups, list) or not groups or not all(
+        isinstance(g, str | int) and not isinstance(g, bool) for g in groups
+    ):  # fmt: skip
+        shown = str(groups)[:60]
+        raise RunError(
+            f"{path}: validation_groups must be a non-empty list of hand or episode ids, "
+            f"got {shown}"
+        )
+    return {str(g) for g in groups}
 
 
 def read_baselines(run_dir: str | os.PathLike[str]) -> dict[str, float]:
     """A run folder's baselines (its ``baselines.json``): each one's validation alignment."""
     path = Path(run_dir) / BASELINES_FILE
-    return from_json(dict[str, float], json.loads(path.read_text()), str(path))
+    return from_json(dict[str, float], read_json(path), str(path))
 
 
 def load_run_config(run_dir: str | os.PathLike[str]) -> Mapping[str, Any]:
@@ -355,7 +378,7 @@ def load_run_config(run_dir: str | os.PathLike[str]) -> Mapping[str, Any]:
     if not path.is_file():
         raise RunError(f"no {CONFIG_FILE} in {run_dir}: not a training run folder")
     try:
-        data = path.read_bytes()
+        data = read_bytes(path, error=RunError)
     except OSError as error:
         raise RunError(f"{path}: not readable JSON ({first_line(error)})") from None
     return parse_run_config(data, where=path)
@@ -363,10 +386,7 @@ def load_run_config(run_dir: str | os.PathLike[str]) -> Mapping[str, Any]:
 
 def parse_run_config(data: bytes, *, where: str | os.PathLike[str]) -> Mapping[str, Any]:
     """A run's ``config.json`` from its bytes, checked; ``RunError`` naming ``where``."""
-    try:
-        record = json.loads(data.decode("utf-8"))
-    except (UnicodeDecodeError, json.JSONDecodeError) as error:
-        raise RunError(f"{where}: not readable JSON ({first_line(error)})") from None
+    record = parse_json(data, where=where, error=RunError)
     if not isinstance(record, dict):
         raise RunError(f"{where}: must hold a JSON object, got {type(record).__name__}")
     version = record.get("format_version")
@@ -375,6 +395,10 @@ def parse_run_config(data: bytes, *, where: str | os.PathLike[str]) -> Mapping[s
     arch = record.get("architecture")
     if not isinstance(arch, dict):
         raise RunError(f"{where}: lacks an 'architecture' object")
+    for key in ("data", "hyperparameters"):  # read with .get by many: a string crashed them
+        if record.get(key) is not None and not isinstance(record[key], dict):
+            found = type(record[key]).__name__
+            raise RunError(f"{where}: {key!r} must be a JSON object, got {found}")
     problem = _architecture_problem(arch)
     if problem:
         raise RunError(f"{where}: architecture: {problem}")
@@ -385,23 +409,28 @@ def _architecture_problem(arch: Mapping[str, Any]) -> str | None:
     def is_int(x: Any) -> bool:
         return isinstance(x, int) and not isinstance(x, bool)
 
-    def widths(x: Any) -> bool:
-        return isinstance(x, list) and bool(x) and all(is_int(w) and w >= 1 for w in x)
+    def widths(x: Any) -> bool:  # bounded before any net is built: 10^9 asked for 288 GB
+        return (
+            isinstance(x, list)
+            and 0 < len(x) <= MAX_LAYERS
+            and all(is_int(w) and 1 <= w <= MAX_WIDTH for w in x)
+        )
 
     space = arch.get("action_space")
-    if not is_int(arch.get("obs_dim")) or arch["obs_dim"] < 1:
-        return "'obs_dim' must be a positive integer"
+    if not is_int(arch.get("obs_dim")) or not 1 <= arch["obs_dim"] <= MAX_OBS_DIM:
+        return f"'obs_dim' must be an integer in 1..{MAX_OBS_DIM}"
     if not isinstance(space, dict) or space.get("type") not in ("discrete", "box"):
         return "'action_space' must be {type: discrete|box, ...}"
-    if space["type"] == "discrete" and not (is_int(space.get("num_actions"))):
-        return "'action_space.num_actions' must be an integer"
+    actions: Any = space.get("num_actions")
+    if space["type"] == "discrete" and not (is_int(actions) and 1 <= actions <= MAX_ACTIONS):
+        return f"'action_space.num_actions' must be an integer in 1..{MAX_ACTIONS}"
     if space["type"] == "box":
         low, high = space.get("low"), space.get("high")
         if not (_numbers(low) and _numbers(high) and len(low or ()) == len(high or ())):
             return "'action_space.low' and 'high' must be equal-length lists of numbers"
     for key in ("reward_hidden", "policy_hidden"):
         if not widths(arch.get(key)):
-            return f"{key!r} must be a non-empty list of positive integers"
+            return f"{key!r} must be a list of 1 to {MAX_LAYERS} integers in 1..{MAX_WIDTH}"
     if arch.get("activation", "relu") not in ACTIVATIONS:
         return f"'activation' must be one of {', '.join(ACTIVATIONS)}"
     if not isinstance(arch.get("layer_norm", False), bool):
@@ -479,6 +508,7 @@ def _load_state_bytes(module: nn.Module, data: bytes, *, where: str | os.PathLik
 
 def load_policy(run_dir: str | os.PathLike[str]) -> nn.Module:
     """The trained policy of a run (on CPU, in eval mode)."""
+    check_argument("run_dir", run_dir, (str, os.PathLike), "a run folder (a path)")
     _, policy = build_from_record(load_run_config(run_dir))
     _load_state(policy, Path(run_dir) / POLICY_FILE)
     return policy
@@ -543,6 +573,7 @@ def load_reward(run_dir: str | os.PathLike[str], *, full: bool = False) -> Rewar
     g(s, a) by default (see :class:`RewardFunction`); every problem with the folder is a
     :class:`RunError` (a ``ValueError``) of one line naming the file.
     """
+    check_argument("run_dir", run_dir, (str, os.PathLike), "a run folder (a path)")
     record = load_run_config(run_dir)
     path = Path(run_dir) / REWARD_FILE
     if not path.is_file():

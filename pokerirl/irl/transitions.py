@@ -27,6 +27,8 @@ from __future__ import annotations
 
 import dataclasses
 import hashlib
+import math
+import numbers
 import os
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -38,8 +40,40 @@ import torch
 from torch import Tensor
 
 from pokerirl.errors import InputError
+from pokerirl.settings import MAX_ACTIONS
 
 ENV_COLUMNS = ("obs", "action", "reward", "next_obs", "done", "episode")
+
+
+def _described(value: object) -> str:
+    shape = getattr(value, "shape", None)
+    return type(value).__name__ + ("" if shape is None else f" of shape {tuple(shape)}")
+
+
+def _check_tensor(
+    name: str, value: object, *, ndim: int, floating: bool = False, boolean: bool = False
+) -> None:
+    """``value`` is a tensor of ``ndim`` dimensions (floating and finite, or bool, or an
+    integer or float tensor for actions); TypeError or InputError naming ``name``."""
+    if not isinstance(value, Tensor):
+        hint = " (Transitions.from_arrays takes numpy)" if isinstance(value, np.ndarray) else ""
+        raise TypeError(f"Transitions.{name} must be a torch.Tensor{hint}, got {_described(value)}")
+    if value.ndim != ndim:
+        raise InputError(
+            f"Transitions.{name} must have {ndim} dimension(s), got shape {tuple(value.shape)}"
+        )
+    if boolean and value.dtype != torch.bool:
+        raise TypeError(f"Transitions.{name} must be a bool tensor, got {value.dtype}")
+    if floating and not value.is_floating_point():
+        raise TypeError(f"Transitions.{name} must be a float tensor, got {value.dtype}")
+    if value.dtype == torch.bool and not boolean:
+        raise TypeError(f"Transitions.{name} must be numbers, got a bool tensor")
+    if value.is_floating_point() and not bool(torch.isfinite(value).all()):
+        rows = (~torch.isfinite(value.reshape(len(value), -1))).any(dim=1)
+        raise InputError(
+            f"Transitions.{name} holds NaN or infinity ({int(rows.sum())} row(s), the first "
+            f"row {int(rows.nonzero()[0])})"
+        )
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -60,26 +94,78 @@ class Transitions:
     imputed: Tensor | None = None  # (N,) bool: the row's inputs are imputed, not observed
 
     def __post_init__(self) -> None:
-        n = len(self.obs)
-        if self.obs.ndim != 2:
-            raise ValueError(f"Transitions.obs must be (N, d), got {tuple(self.obs.shape)}")
+        # Checked whole here, so that every later step (split, the trainer, the metrics) can
+        # trust it: a NaN observation trained to a NaN reward without a word.
+        _check_tensor("obs", self.obs, ndim=2, floating=True)
+        n, width = self.obs.shape
+        _check_tensor("actions", self.actions, ndim=1 if self.discrete else 2)
+        if not isinstance(self.groups, np.ndarray) or self.groups.ndim != 1:
+            raise TypeError(
+                f"Transitions.groups must be a 1-d numpy array, got {_described(self.groups)}"
+            )
         if self.discrete:
-            if self.actions.ndim != 1 or self.num_actions is None:
-                raise ValueError("discrete Transitions need action ids (N,) and num_actions")
-        elif self.actions.ndim != 2 or self.action_low is None or self.action_high is None:
-            raise ValueError("continuous Transitions need actions (N, k) and the box bounds")
+            self._check_discrete()
+        else:
+            self._check_continuous()
         for name in ("actions", "groups", "next_obs", "dones", "rewards", "legal_mask",
                      "weights", "imputed"):  # fmt: skip
             value = getattr(self, name)
             if value is not None and len(value) != n:
-                raise ValueError(f"Transitions.{name} has {len(value)} rows, obs has {n}")
+                raise InputError(f"Transitions.{name} has {len(value)} rows, obs has {n}")
         if (self.next_obs is None) != (self.dones is None):
-            raise ValueError("Transitions need next_obs and dones together")
-        if self.weights is not None and (
-            self.weights.ndim != 1 or not bool(torch.isfinite(self.weights).all())
-            or bool((self.weights <= 0).any())
-        ):  # fmt: skip
-            raise InputError("row weights must be finite and positive")
+            raise InputError("Transitions need next_obs and dones together")
+        if self.next_obs is not None:
+            _check_tensor("next_obs", self.next_obs, ndim=2, floating=True)
+            if self.next_obs.shape[1] != width:
+                raise InputError(
+                    f"Transitions.next_obs is {self.next_obs.shape[1]} wide, obs {width}"
+                )
+        for name in ("dones", "imputed"):
+            if getattr(self, name) is not None:
+                _check_tensor(name, getattr(self, name), ndim=1, boolean=True)
+        if self.rewards is not None:
+            _check_tensor("rewards", self.rewards, ndim=1, floating=True)
+        if self.weights is not None:
+            _check_tensor("weights", self.weights, ndim=1, floating=True)
+            if bool((self.weights <= 0).any()):
+                raise InputError("row weights must be finite and positive")
+
+    def _check_discrete(self) -> None:
+        k = self.num_actions
+        if isinstance(k, numbers.Integral) and not isinstance(k, bool):
+            k = int(k)  # numpy's integers too
+            object.__setattr__(self, "num_actions", k)
+        if isinstance(k, bool) or not isinstance(k, int) or not 1 <= k <= MAX_ACTIONS:
+            raise InputError(
+                f"discrete Transitions need num_actions, an integer in 1..{MAX_ACTIONS}, got {k!r}"
+            )
+        if len(self.actions) and not (0 <= int(self.actions.min()) <= int(self.actions.max()) < k):
+            raise InputError(
+                f"Transitions.actions must lie in 0..{k - 1} (num_actions {k}), got "
+                f"{int(self.actions.min())}..{int(self.actions.max())}"
+            )
+        if self.legal_mask is not None:
+            _check_tensor("legal_mask", self.legal_mask, ndim=2, boolean=True)
+            if self.legal_mask.shape[1] != k:
+                raise InputError(
+                    f"Transitions.legal_mask is {self.legal_mask.shape[1]} wide, num_actions {k}"
+                )
+
+    def _check_continuous(self) -> None:
+        if self.legal_mask is not None or self.num_actions is not None:
+            raise InputError("continuous Transitions take no legal_mask or num_actions")
+        k = self.actions.shape[1]
+        for name in ("action_low", "action_high"):
+            bound = getattr(self, name)
+            if not isinstance(bound, tuple) or len(bound) != k or not all(
+                isinstance(b, int | float) and not isinstance(b, bool) and math.isfinite(b)
+                for b in bound
+            ):  # fmt: skip
+                raise InputError(
+                    f"continuous Transitions need {name}, {k} finite numbers, got {bound!r}"
+                )
+        if not all(lo <= hi for lo, hi in zip(self.action_low, self.action_high, strict=True)):  # type: ignore[arg-type]
+            raise InputError("Transitions.action_low must not lie above action_high")
 
     @classmethod
     def from_arrays(

@@ -19,9 +19,11 @@ from __future__ import annotations
 
 import bisect
 import gc
+import gzip
 import os
 import stat
 import tarfile
+import zlib
 from collections import Counter, defaultdict
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
@@ -394,9 +396,14 @@ def _iter_tar_stream(fileobj: IO[bytes], origin: str, archive_name: str) -> Iter
                 dict(sorted(pdb.items())),
             )
 
+    # gzip is opened here, not by tarfile: tarfile stops at the tar end block and never reads
+    # the gzip trailer, so a flipped byte was ingested as fewer hands with exit 0. GzipFile
+    # checks the CRC and the length when the stream is drained to its end (_drain).
+    unzipped = gzip.GzipFile(fileobj=fileobj, mode="rb") if _is_gzip(fileobj) else None
     try:
-        # "r|*" streams: each member is read once, in order, with no seeking back.
-        with tarfile.open(fileobj=fileobj, mode="r|*", tarinfo=_BoundedTarInfo) as tar:
+        # "r|" / "r|*" stream: each member is read once, in order, with no seeking back.
+        with tarfile.open(fileobj=unzipped or fileobj, mode="r|" if unzipped else "r|*",
+                          tarinfo=_BoundedTarInfo) as tar:  # fmt: skip
             for member in tar:
                 if not member.isfile():
                     if not member.isdir() and _member_key(member.name, hint) is not None:
@@ -429,14 +436,34 @@ def _iter_tar_stream(fileobj: IO[bytes], origin: str, archive_name: str) -> Iter
                 extracted = tar.extractfile(member)
                 if extracted is not None:
                     files[leaf] = extracted.read()
+            _drain(unzipped, origin)  # before the last month: a damaged archive gives none
             yield from flush()
     except _HeaderTooLarge as error:
         raise IngestError(
             f"{origin}: a tar header of {error.size:,} bytes, more than the "
             f"{MAX_TAR_HEADER_BYTES:,} an IRC archive's names need (not IRC data?)"
         ) from None
-    except (tarfile.TarError, EOFError, OSError) as error:
-        raise IngestError(f"{origin}: not a readable tar archive ({error})") from error
+    except (tarfile.TarError, EOFError, OSError, zlib.error) as error:
+        damaged = unzipped is not None and not isinstance(error, tarfile.TarError)
+        reason = f"damaged gzip: {error}" if damaged else str(error)
+        raise IngestError(f"{origin}: not a readable tar archive ({reason})") from None
+
+
+def _is_gzip(fileobj: IO[bytes]) -> bool:
+    peek = getattr(fileobj, "peek", None)
+    return peek is not None and bytes(peek(2)[:2]) == b"\x1f\x8b"
+
+
+def _drain(unzipped: gzip.GzipFile | None, origin: str) -> None:
+    """Read what follows the tar end block (zero padding) to the end of the gzip stream, where
+    GzipFile checks each member's CRC and length; IngestError naming ``origin`` otherwise."""
+    if unzipped is None:
+        return
+    left = MAX_FILE_BYTES  # padding is at most a record; a stream that goes on is not IRC's
+    while chunk := unzipped.read(min(left, 1 << 20) + 1):
+        left -= len(chunk)
+        if left < 0:
+            raise IngestError(f"{origin}: more than {MAX_FILE_BYTES:,} bytes after the tar's end")
 
 
 _MEMBER_KINDS = {

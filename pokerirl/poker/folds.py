@@ -41,10 +41,10 @@ class ImputeConfig:
     def __post_init__(self) -> None:
         if not 1 <= self.imputations <= 1000:
             raise ConfigError(f"imputations must be between 1 and 1000, got {self.imputations}")
-        if self.behaviour_rounds < 0:
-            raise ConfigError(f"behaviour rounds must be >= 0, got {self.behaviour_rounds}")
-        if self.behaviour_epochs < 1:
-            raise ConfigError(f"behaviour epochs must be >= 1, got {self.behaviour_epochs}")
+        if not 0 <= self.behaviour_rounds <= 1000:
+            raise ConfigError(f"behaviour rounds must be in 0..1000, got {self.behaviour_rounds}")
+        if not 1 <= self.behaviour_epochs <= 1_000_000:
+            raise ConfigError(f"behaviour epochs must be in 1..10^6, got {self.behaviour_epochs}")
         if self.seed < 0:
             raise ConfigError(f"seed must be non-negative, got {self.seed}")
         if self.behaviour_encoding not in ENCODINGS:

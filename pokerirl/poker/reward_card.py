@@ -52,6 +52,7 @@ from pokerirl.encoding import ACTIONS, CALL, CHECK, FOLD, NUM_ACTIONS
 from pokerirl.errors import InputError
 from pokerirl.game.agents import street_of
 from pokerirl.game.evaluator import hand_strength
+from pokerirl.jsonio import parse_json, read_bytes, read_json
 from pokerirl.poker.rewards import Decisions, PokerReward
 from pokerirl.serial import Omit, Serializable, meta
 
@@ -252,7 +253,7 @@ class RewardCard(Serializable):
 
     @classmethod
     def from_text(cls, text: str, where: str = "") -> RewardCard:
-        data = json.loads(text)
+        data = parse_json(text, where=where or "the text")
         if not isinstance(data, dict) or data.get("format") != CARD_FORMAT:
             raise InputError(f"{where or 'the text'}: not a pokerirl reward card")
         return cls.from_json(data, where)
@@ -531,7 +532,7 @@ def read_card(folder: str | os.PathLike[str]) -> RewardCard | None:
     """The card in ``folder``, or None when it has none (or an unreadable one)."""
     try:
         path = Path(folder) / CARD_FILE
-        return RewardCard.from_text(path.read_text(), str(path))
+        return RewardCard.from_text(read_bytes(path).decode("utf-8"), str(path))
     except (OSError, ValueError, TypeError):
         return None
 
@@ -542,13 +543,12 @@ def run_card(
     """The card of a run folder's reward over its validation hands (``split.json``) of
     ``table``, the decision table it was trained on; ``label`` names the table in the card
     (default: ``table``'s path; a worker's scratch copy passes the real table's path)."""
-    from pokerirl.irl.run import CONFIG_FILE, SPLIT_FILE
+    from pokerirl.irl.run import CONFIG_FILE, read_split
     from pokerirl.poker.rewards import load_reward_source
 
-    split = json.loads((Path(run_dir) / SPLIT_FILE).read_text())
-    groups = {str(g) for g in split["validation_groups"]}
+    groups = read_split(run_dir)
     states = CardStates.from_table(table, groups=groups, label=label)
-    record = json.loads((Path(run_dir) / CONFIG_FILE).read_text())
+    record = read_json(Path(run_dir) / CONFIG_FILE)
     reward = load_reward_source(run_dir)
     reward.name = f"{record['algo']} reward (seed {record['hyperparameters']['seed']})"
     return with_run_alignments(reward_card(reward, states), record)

@@ -62,6 +62,7 @@ from pokerirl.irl.run import (
     train_into,
 )
 from pokerirl.irl.transitions import Transitions
+from pokerirl.jsonio import read_json, read_json_lines
 from pokerirl.poker.data import read_table
 from pokerirl.poker.reward_card import CARD_FILE
 from pokerirl.store import Unit, UnitConflict, UnitOutput, digest, run_units, staged_folder
@@ -216,15 +217,14 @@ def train_unit(
 
 def _run_result(folder: Path) -> RunResult:
     """A finished run folder, as :func:`~pokerirl.irl.run.summarize` reads it."""
-    record = json.loads((folder / CONFIG_FILE).read_text(encoding="utf-8"))
+    record = read_json(folder / CONFIG_FILE)
     timings_path = folder / TIMINGS_FILE
-    timings = json.loads(timings_path.read_text()) if timings_path.is_file() else {}
-    lines = (folder / METRICS_FILE).read_text().splitlines()
+    timings = read_json(timings_path) if timings_path.is_file() else {}
     return RunResult(
         out=str(folder),
         seed=record["hyperparameters"]["seed"],
-        metrics=tuple(EpochMetrics.from_json(json.loads(line)) for line in lines if line),
-        baselines=json.loads((folder / BASELINES_FILE).read_text()),
+        metrics=tuple(map(EpochMetrics.from_json, read_json_lines(folder / METRICS_FILE))),
+        baselines=read_json(folder / BASELINES_FILE),
         samples_per_second=timings.get("samples_per_second", float("nan")),
         train_rows=record["data"]["train_rows"],
         val_rows=record["data"]["val_rows"],
@@ -367,7 +367,7 @@ def train_em(
     impute_config = ImputeConfig(seed=config.seed)
     summary_file = summary_path(table)
     if summary_file.is_file():
-        folds = IngestSummary.from_json(json.loads(summary_file.read_text())).folds
+        folds = IngestSummary.from_json(read_json(summary_file)).folds
         if folds is not None:
             impute_config = ImputeConfig(imputations=folds.imputations, seed=folds.seed)
     out.mkdir(parents=True, exist_ok=True)

@@ -42,6 +42,7 @@ from pathlib import Path
 from typing import Any
 
 from pokerirl.errors import PokerIRLError, Remedy
+from pokerirl.jsonio import read_json
 
 # JSON values as json.loads gives them (what configs, inputs and results are made of).
 Json = None | bool | int | float | str | list[Any] | dict[str, Any]
@@ -251,7 +252,7 @@ def read_record(path: str | os.PathLike[str]) -> UnitRecord | None:
         UnitConflict: a record of a newer pokerirl.
     """
     try:
-        data = json.loads(Path(path).read_text(encoding="utf-8"))
+        data = read_json(Path(path))
     except (OSError, UnicodeDecodeError, ValueError):
         return None
     try:

@@ -18,6 +18,7 @@ from typing import Any, TypeVar
 import numpy as np
 
 from pokerirl.errors import ConfigError, Remedy
+from pokerirl.jsonio import parse_json, read_bytes, read_json_lines
 from pokerirl.settings import with_overrides as _with_overrides
 
 # The files the studies read in their units' folders and write in their own.
@@ -75,7 +76,7 @@ def claim_folder(
     """
     path = root / STUDY_JSON
     try:
-        recorded: str | None = path.read_text()
+        recorded: str | None = read_bytes(path).decode("utf-8")  # bounded: /dev/zero is damage
     except FileNotFoundError:
         recorded = None
     except (OSError, ValueError):  # unreadable, or not text: damaged
@@ -111,7 +112,7 @@ def _recorded_settings(text: str) -> Any:
     """The settings a ``study.json`` holds; None when it is damaged (the units' own records
     still guard every output)."""
     try:
-        found = json.loads(text)
+        found = parse_json(text, where="study.json")
         return found["settings"] if found.get("format") == STUDY_FORMAT else None
     except (ValueError, TypeError, KeyError, AttributeError):
         return None
@@ -120,7 +121,7 @@ def _recorded_settings(text: str) -> Any:
 def read_jsonl(path: Path) -> list[dict[str, Any]]:
     """The JSON objects of a ``metrics.jsonl`` (blank lines skipped): a study reading the
     lines of its own units (RL curves are :func:`pokerirl.gym.rl.read_curve`'s)."""
-    return [json.loads(line) for line in path.read_text().splitlines() if line.strip()]
+    return read_json_lines(path)
 
 
 def band(

@@ -41,6 +41,7 @@ from pokerirl.agents import ShippedAgent, agent_fingerprint, land_agent, resolve
 from pokerirl.atomic import write_text
 from pokerirl.execution import Backend, unit_progress
 from pokerirl.game.match import play_match
+from pokerirl.jsonio import read_json
 from pokerirl.serial import Serializable
 from pokerirl.store import Json, Layout, Unit, UnitConflict, UnitOutput, run_units
 from pokerirl.tournaments.lineup import (
@@ -290,7 +291,7 @@ def load_authors_tournament(folder: str | Path) -> dict[str, AuthorsMatchup]:
     """The matchups of ``<folder>/authors.json``; :class:`TournamentError` if it is not one."""
     path = Path(folder) / RESULT_FILE
     try:
-        data = json.loads(path.read_text())
+        data = read_json(path)
         if data.get("format") != RESULT_FORMAT:
             raise ValueError("format")
         return {n: AuthorsMatchup.from_json(v) for n, v in data["matchups"].items()}

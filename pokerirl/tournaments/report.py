@@ -24,6 +24,7 @@ from typing import Any, Literal
 import numpy as np
 
 from pokerirl import atomic
+from pokerirl.jsonio import read_json
 from pokerirl.seeds import format_seeds
 from pokerirl.serial import SerialError, Serializable, meta
 from pokerirl.tournaments.lineup import Group, TournamentError
@@ -282,7 +283,7 @@ def load_report(out: Path | str) -> TournamentReport:
     """
     path = Path(out) / REPORT_FILE
     try:
-        data = json.loads(path.read_text())
+        data = read_json(path)
     except FileNotFoundError:
         raise TournamentError(f"{out}: no {REPORT_FILE} (run pokerirl tournament first)") from None
     except (OSError, json.JSONDecodeError) as error:
@@ -299,7 +300,7 @@ def load_report(out: Path | str) -> TournamentReport:
     except (KeyError, IndexError, TypeError, ValueError, AttributeError, ArithmeticError) as error:
         raise TournamentError(f"{path}: malformed report ({error!r})") from None
     try:  # wall-clock figures, not results: a missing or damaged file is no timings
-        timing = json.loads((Path(out) / TIMINGS_FILE).read_text())
+        timing = read_json(Path(out) / TIMINGS_FILE)
     except (OSError, ValueError):
         timing = {}
     return replace(report, timing=timing if isinstance(timing, dict) else {})

@@ -44,7 +44,6 @@ from __future__ import annotations
 
 import contextlib
 import functools
-import json
 import re
 import sys
 import tempfile
@@ -60,6 +59,7 @@ from pokerirl.agents import ShippedAgent, agent_fingerprint, land_agent, resolve
 from pokerirl.errors import Remedy
 from pokerirl.execution import Backend, pinned_threads
 from pokerirl.game.match import DEFAULT_BATCH_SIZE, check_match_size, play_match
+from pokerirl.jsonio import read_json
 from pokerirl.store import Json, Layout, Unit, UnitConflict, UnitOutput, run_units
 from pokerirl.tournaments.aivat import CorrectedMatch, play_corrected_match
 from pokerirl.tournaments.lineup import (
@@ -221,7 +221,7 @@ def _held_matchups(out: Path) -> tuple[str, list[str]]:
     ``("saved seeds", names)`` from its seed folders (a run stopped before its report);
     names as :func:`_folder_names` gives them. Nothing readable: ``("", [])``."""
     try:
-        data = json.loads((out / REPORT_FILE).read_text())
+        data = read_json(out / REPORT_FILE)
         labels = [(str(m["agent_a"]), str(m["agent_b"])) for m in data["matchups"]]
     except (OSError, ValueError, KeyError, TypeError):  # none, or damaged: the run rewrites it
         labels = []

@@ -14,8 +14,11 @@ from typing import Any
 
 from pokerirl.errors import ConfigError
 from pokerirl.gym.presets import TASK_ORDER, TASKS, IRLSettings, RLSettings, Task
-from pokerirl.irl.config import Algo  # torch-free
+from pokerirl.irl.config import MAX_EPOCHS, Algo  # torch-free
+from pokerirl.settings import MAX_STEPS
 from pokerirl.studies.common import StudyError, with_overrides
+
+MAX_EPISODES = 1_000_000  # evaluation episodes: each is played whole
 
 # The IRL algorithms a study may train, in the order they are run and shown: the paper's two,
 # then GAIL (opt-in).
@@ -50,9 +53,12 @@ class StudyPreset:
             "runs >= 1": self.runs >= 1,
             "at least one task": len(self.tasks) >= 1,
             "transitions >= 2": self.transitions is None or self.transitions >= 2,
-            "epochs >= 1": self.epochs is None or self.epochs >= 1,
-            "eval episodes >= 1": self.eval_episodes is None or self.eval_episodes >= 1,
-            "RL timesteps >= 1": self.rl_timesteps is None or self.rl_timesteps >= 1,
+            f"1 <= epochs <= {MAX_EPOCHS:,}": self.epochs is None
+            or 1 <= self.epochs <= MAX_EPOCHS,
+            f"1 <= eval episodes <= {MAX_EPISODES:,}": self.eval_episodes is None
+            or 1 <= self.eval_episodes <= MAX_EPISODES,
+            f"1 <= RL timesteps <= {MAX_STEPS:,}": self.rl_timesteps is None
+            or 1 <= self.rl_timesteps <= MAX_STEPS,
             "RL evaluations >= 1": self.rl_evaluations >= 1,
             "seed >= 0": self.seed >= 0,
             "algos: airl, hairl, then optionally gail": self.algos in (

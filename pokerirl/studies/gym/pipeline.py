@@ -170,7 +170,7 @@ def run_gym_study(
         StudyError: ``out`` is a file, or a unit was made with other settings or inputs
             (without ``overwrite``); the message names it.
     """
-    from pokerirl.gym.experts import require_gym
+    from pokerirl.gym.experts import read_expert_record, require_gym
 
     require_gym()
     check_rl_backend(rl_backend)
@@ -178,6 +178,10 @@ def run_gym_study(
     expert_dir = None if expert is None else Path(expert)
     if expert_dir is not None and len(tasks) > 1:
         raise StudyError("an expert folder is for one task; give one task, not several")
+    if expert_dir is not None:  # the user's folder, named here: the unit reads a scratch copy
+        trained_for = read_expert_record(expert_dir)["env"]
+        if trained_for != tasks[0]:
+            raise StudyError(f"{expert_dir}: the expert is for {trained_for}, not {tasks[0]}")
     generic = [env for env in tasks if task(env).generic]
     if generic and expert_dir is None:
         raise StudyError(

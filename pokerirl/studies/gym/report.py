@@ -5,13 +5,13 @@
 
 from __future__ import annotations
 
-import json
 import os
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 
 from pokerirl.gym.presets import TASKS, RLBackend
+from pokerirl.jsonio import read_json
 from pokerirl.meanstd import MeanStd
 from pokerirl.serial import Json, SerialError, Serializable, meta
 from pokerirl.studies.common import SUMMARY_JSON, StudyError, markdown_table
@@ -64,7 +64,7 @@ class GymStudySummary(Serializable):
 def is_gym_study(folder: str | os.PathLike[str]) -> bool:
     """Whether ``folder`` holds a gym study's ``summary.json``."""
     try:
-        found = json.loads((Path(folder) / SUMMARY_JSON).read_text())
+        found = read_json(Path(folder) / SUMMARY_JSON)
     except (OSError, ValueError):
         return False
     return isinstance(found, dict) and found.get("format") == SUMMARY_FORMAT
@@ -74,7 +74,7 @@ def load_gym_study(folder: str | os.PathLike[str]) -> tuple[GymStudySummary, str
     """A finished study's ``summary.json`` and its report rendered again (``pokerirl report``)."""
     path = Path(folder) / SUMMARY_JSON
     try:
-        summary = GymStudySummary.from_json(json.loads(path.read_text()))
+        summary = GymStudySummary.from_json(read_json(path))
         return summary, summary.render()
     except (OSError, ValueError, KeyError, TypeError, AttributeError) as error:
         # Reading names a field of the wrong type by its path; what the types cannot say (a

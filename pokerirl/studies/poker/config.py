@@ -18,9 +18,11 @@ from typing import Any
 
 from pokerirl.agents.config import AGENT_PRESETS as AGENT_TRAIN_PRESETS
 from pokerirl.game.encodings import EncodingName
-from pokerirl.irl.config import Algo
+from pokerirl.game.match import MAX_HANDS
+from pokerirl.irl.config import MAX_EPOCHS, Algo
 from pokerirl.poker.folds import FoldsMode
 from pokerirl.poker.rewards import Transform
+from pokerirl.settings import MAX_LBR_HANDS, MAX_STEPS
 from pokerirl.studies.common import StudyError, with_overrides
 
 # The IRL algorithms a study can train; a study trains the paper's two unless told otherwise
@@ -90,6 +92,25 @@ def matchup_label(name: str) -> str:
 def one_of(name: str, value: str, allowed: Sequence[str]) -> dict[str, bool]:
     """A settings check that names the value given: ``folds in drop, impute (got 'x')``."""
     return {f"{name} in {', '.join(allowed)} (got {value!r})": value in allowed}
+
+
+MAX_RUNS = 10_000  # IRL runs per algorithm, as many as --seeds takes seeds
+# Each count's upper bound: the bound of the stage that uses it (a match's hands, LBR's, the
+# DQN's and the IRL trainer's), checked by StudyConfig before any stage runs.
+STAGE_BOUNDS: dict[str, int] = {
+    "runs": MAX_RUNS,
+    "hands": MAX_HANDS,
+    "panel_hands": MAX_HANDS,
+    "lbr_hands": MAX_LBR_HANDS,
+    "agent_hands": MAX_STEPS,
+    "short_agent_hands": MAX_STEPS,
+    "eval_every": MAX_STEPS,
+    "eval_hands": MAX_HANDS,
+    "irl_epochs": MAX_EPOCHS,
+    "authors_repeats": MAX_RUNS,
+    "authors_games": MAX_HANDS,
+    "jobs": 1024,
+}
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -165,6 +186,13 @@ class StudyConfig:
             **one_of("folds", self.folds, FOLDS),
         }
         broken = [name for name, ok in checks.items() if not ok]
+        # every stage's bounds, before the first stage starts (an LBR of 10^15 hands was
+        # refused only after ingest, IRL, the agents and the tournament had run)
+        broken += [
+            f"{name} <= {high:,} (got {getattr(self, name):,})"
+            for name, high in STAGE_BOUNDS.items()
+            if isinstance(getattr(self, name), int) and getattr(self, name) > high
+        ]
         if broken:
             raise StudyError(f"bad study settings: {', '.join(broken)}")
 

@@ -22,7 +22,6 @@ where units run (processes now; the execution layer's backends later).
 
 from __future__ import annotations
 
-import json
 import math
 import os
 from collections.abc import Callable, Sequence
@@ -31,6 +30,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from pokerirl.execution import Backend
+from pokerirl.jsonio import read_json
 from pokerirl.meanstd import Curve
 from pokerirl.store import Fate, Layout, LegacyRecord, Unit, check, digest, fingerprint, writing
 from pokerirl.studies.poker.config import (
@@ -241,7 +241,7 @@ def ingest_stage(study: Study, sources: Sequence[str | os.PathLike[str]]) -> Ing
                 # not the unit's staging path, and the same bytes in any study folder.
                 ingest_table(sources, folder / TABLE, progress=study.execution.progress,
                              recorded_as=TABLE)  # fmt: skip
-    summary = json.loads(summary_path(study.root / TABLE).read_text())
+    summary = read_json(summary_path(study.root / TABLE))
     return Ingested(summary=summary, fingerprint=fingerprint(legacy.identity))
 
 

@@ -10,6 +10,7 @@ from typing import TYPE_CHECKING
 
 from pokerirl import atomic
 from pokerirl.encoding import ACTIONS
+from pokerirl.jsonio import read_json
 from pokerirl.meanstd import MeanStd, mean_and_std
 from pokerirl.studies.common import REPORT_JSON, REPORT_MD, markdown_table
 from pokerirl.studies.poker import paper
@@ -593,7 +594,7 @@ def write_study_report(root: Path, report: StudyReport, panel: Panel) -> None:
 def is_study_report(folder: Path | str) -> bool:
     """Whether ``folder/report.json`` is a study report (not a tournament's)."""
     try:
-        data = json.loads((Path(folder) / REPORT_JSON).read_text())
+        data = read_json(Path(folder) / REPORT_JSON)
     except (OSError, json.JSONDecodeError):
         return False
     return isinstance(data, dict) and data.get("format") == REPORT_FORMAT
@@ -603,7 +604,7 @@ def load_study_report(folder: Path | str) -> StudyReport:
     """The study report in ``folder``; one-line :class:`StudyError` when it is not one."""
     path = Path(folder) / REPORT_JSON
     try:
-        data = json.loads(path.read_text())
+        data = read_json(path)
     except FileNotFoundError:
         raise StudyError(f"{folder}: no report.json (run pokerirl study first)") from None
     except (OSError, json.JSONDecodeError) as error:
