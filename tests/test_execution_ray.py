@@ -20,6 +20,7 @@ from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
+from shared import Cli
 from typer.testing import CliRunner
 
 from pokerirl.cli import app
@@ -45,10 +46,7 @@ def cluster(tmp_path_factory: pytest.TempPathFactory) -> Iterator[str]:
         yield address
 
 
-def invoke(*args: str) -> str:
-    result = CliRunner().invoke(app, list(args))
-    assert result.exit_code == 0, result.output
-    return result.output
+invoke = Cli().ok  # pokerirl ARGS in this process: its output, exit code 0 asserted
 
 
 def weights(folder: Path) -> dict[str, bytes]:

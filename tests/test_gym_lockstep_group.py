@@ -6,12 +6,12 @@ from __future__ import annotations
 
 import dataclasses
 import json
-import os
 from pathlib import Path
 
 import numpy as np
 import pytest
 import torch
+from shared import folder_snapshot
 from typer.testing import CliRunner
 
 pytest.importorskip("gymnasium")
@@ -179,11 +179,6 @@ def test_sb3_rl_records_are_as_before() -> None:
     assert lockstep == {**identity, "backend": "lockstep"}
 
 
-def _snapshot(folder: Path) -> dict[str, tuple[bytes, int]]:
-    return {str(p.relative_to(folder)): (p.read_bytes(), os.stat(p).st_ino)
-            for p in sorted(folder.rglob("*")) if p.is_file()}  # fmt: skip
-
-
 RL_ARGS = ["gym", "rl", "Acrobot-v1", "--env-reward", "--runs", "3", "--timesteps", "1024",
            "--evaluations", "2", "--eval-episodes", "1", "--rl-backend", "lockstep"]
 
@@ -193,7 +188,7 @@ def test_gym_rl_lockstep_resumes_the_missing_run_only(tmp_path: Path) -> None:
     args = [*RL_ARGS, "--out", str(out)]
     first = CliRunner().invoke(app, args)
     assert first.exit_code == 0, first.output
-    before = _snapshot(out)
+    before = folder_snapshot(out)
     for k in range(3):  # each run its own unit
         record = json.loads((out / f"run-{k}" / "unit.json").read_text())
         assert record["config"]["backend"] == "lockstep"
@@ -203,18 +198,18 @@ def test_gym_rl_lockstep_resumes_the_missing_run_only(tmp_path: Path) -> None:
     (out / "run-1").rmdir()
     again = CliRunner().invoke(app, args)
     assert again.exit_code == 0, again.output
-    after = _snapshot(out)
+    after = folder_snapshot(out)
     # run-0 and run-2 untouched (same bytes, same files); run-1 trained alone, as in the group
     assert {k: v for k, v in after.items() if not k.startswith("run-1")} == {
         k: v for k, v in before.items() if not k.startswith("run-1")}
     assert {name: (out / "run-1" / name).read_bytes() for name in FILES} == lost
-    kept = _snapshot(out)
+    kept = folder_snapshot(out)
     for changed in (["--timesteps", "2048"], ["--rl-backend", "sb3"]):
         refused = CliRunner().invoke(app, [*args, *changed])
         assert refused.exit_code == 1
         lines = refused.output.strip().splitlines()
         assert len(lines) == 1 and "another configuration" in lines[0] and "--overwrite" in lines[0]
-        assert _snapshot(out) == kept
+        assert folder_snapshot(out) == kept
 
 
 STUDY = ["gym", "study", "Acrobot-v1", "--runs", "2", "--transitions", "1200", "--epochs", "1",

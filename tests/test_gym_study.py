@@ -11,6 +11,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from click.testing import Result
+from shared import TINY_GYM_STUDY, Cli
 from typer.testing import CliRunner
 
 pytest.importorskip("gymnasium")
@@ -26,8 +28,7 @@ from pokerirl.studies.gym.results import TaskSummary
 from pokerirl.studies.gym.sweep import CSV_COLUMNS, SweepRow, parse_param, sweep_points
 from pokerirl.studies.gym.units import DATA_FILE
 
-TINY = ["--runs", "2", "--transitions", "1500", "--epochs", "2", "--eval-episodes", "2"]
-TINY += ["--timesteps", "2000", "--jobs", "2", "--quiet"]
+TINY = TINY_GYM_STUDY  # the session's MountainCar study (conftest) has these settings
 MEAN_STD = {"mean", "std"}
 
 
@@ -35,17 +36,14 @@ def jsonl(path: Path) -> list[dict]:
     return [json.loads(line) for line in path.read_text().splitlines() if line]
 
 
-def study(out: Path, *extra: str, task: str = "MountainCar-v0") -> object:
-    return CliRunner().invoke(app, ["gym", "study", task, "--out", str(out), *TINY, *extra])
+def study(out: Path, *extra: str, task: str = "MountainCar-v0") -> Result:
+    return Cli()("gym", "study", task, "--out", out, *TINY, *extra)
 
 
-@pytest.fixture(scope="module")
-def mountaincar(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    out = tmp_path_factory.mktemp("study") / "mc"
-    result = study(out)
-    assert result.exit_code == 0, result.output
-    assert "# pokerirl gym study (quick preset)" in result.output
-    return out
+@pytest.fixture
+def mountaincar(mountaincar_study: Path) -> Path:
+    """The session's MountainCar study (conftest), built with ``TINY``."""
+    return mountaincar_study
 
 
 def test_summary_has_the_issue_names_and_the_runs_numbers(mountaincar: Path) -> None:
