@@ -5,6 +5,7 @@ snapshots, and the tiny gym study budget."""
 from __future__ import annotations
 
 import os
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -30,6 +31,10 @@ class Cli:
         from pokerirl.cli import app  # the CLI's imports: only for the tests that run it
 
         return self.runner.invoke(app, [os.fspath(a) for a in args], **kwargs)
+
+    def invoke(self, args: Sequence[str | os.PathLike[str]], **kwargs: object) -> Result:
+        """``cli.invoke([...])``: :meth:`CliRunner.invoke`'s form, the app given."""
+        return self(*args, **kwargs)
 
     def ok(self, *args: str | os.PathLike[str]) -> str:
         result = self(*args)

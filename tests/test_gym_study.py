@@ -13,12 +13,10 @@ import numpy as np
 import pytest
 from click.testing import Result
 from shared import TINY_GYM_STUDY, Cli
-from typer.testing import CliRunner
 
 pytest.importorskip("gymnasium")
 pytest.importorskip("stable_baselines3")
 
-from pokerirl.cli import app
 from pokerirl.execution import Backend
 from pokerirl.irl import load_reward
 from pokerirl.studies.common import StudyError
@@ -31,13 +29,15 @@ from pokerirl.studies.gym.units import DATA_FILE
 TINY = TINY_GYM_STUDY  # the session's MountainCar study (conftest) has these settings
 MEAN_STD = {"mean", "std"}
 
+CLI = Cli()  # pokerirl run in this process (tests/shared.py)
+
 
 def jsonl(path: Path) -> list[dict]:
     return [json.loads(line) for line in path.read_text().splitlines() if line]
 
 
 def study(out: Path, *extra: str, task: str = "MountainCar-v0") -> Result:
-    return Cli()("gym", "study", task, "--out", out, *TINY, *extra)
+    return CLI("gym", "study", task, "--out", out, *TINY, *extra)
 
 
 @pytest.fixture
@@ -147,7 +147,7 @@ def test_gail_beside_airl_and_hairl_when_named_reusing_their_units(
     for row in ("IRL-phase return, GAIL", "RL-phase return, GAIL reward",
                 "alignment, GAIL policy", "EPIC distance to the true reward / on the expert's"):
         assert f"| {row}" in report, row
-    assert CliRunner().invoke(app, ["report", str(out)]).output == report
+    assert CLI.invoke(["report", str(out)]).output == report
     # The paper's algorithms only: the default study's summary again, GAIL's folders ignored.
     again = study(out)
     assert again.exit_code == 0, again.output
@@ -185,9 +185,9 @@ def test_figures_and_report_beside_the_authors(mountaincar: Path) -> None:
     assert f"{epic['mean']:,.3f} ± {epic['std']:,.3f} |" in report
     assert "EPIC of a random reward net" in report and "γ 0.98" in report
     # pokerirl report renders the same report again, or prints summary.json
-    again = CliRunner().invoke(app, ["report", str(mountaincar)])
+    again = CLI.invoke(["report", str(mountaincar)])
     assert again.exit_code == 0 and again.output == report
-    as_json = CliRunner().invoke(app, ["report", str(mountaincar), "--format", "json"])
+    as_json = CLI.invoke(["report", str(mountaincar), "--format", "json"])
     assert json.loads(as_json.output) == summary
     # The typed summary reads it and writes it back to the same bytes (names and their order).
     text = (mountaincar / "summary.json").read_text()
@@ -249,13 +249,13 @@ def test_two_tasks_acrobot_and_mountaincar_each_get_a_folder(tmp_path: Path) -> 
     assert -500 <= acrobot["algos"]["hairl"]["irl_final_return"]["mean"] <= 0
     assert acrobot["random_return"] == pytest.approx(-500, abs=50)
     report = (tmp_path / "report.md").read_text()
-    assert CliRunner().invoke(app, ["report", str(tmp_path)]).output == report
+    assert CLI.invoke(["report", str(tmp_path)]).output == report
     assert "## Acrobot-v1" in report and "## MountainCar-v0" in report
     assert "(Acrobot-v1/figures/irl_returns.png)" in report
 
 
 def test_bad_inputs_are_one_line(tmp_path: Path) -> None:
-    runner = CliRunner()
+    runner = CLI
     cases = [
         (["gym", "study", "Pong-v5", "--out", str(tmp_path / "a")], "unknown task 'Pong-v5'"),
         (["gym", "study", "MountainCar-v0", "--preset", "huge", "--out", str(tmp_path / "b")],
@@ -271,7 +271,7 @@ def test_bad_inputs_are_one_line(tmp_path: Path) -> None:
          "point alpha=0.1_beta=0.25_sigma_start=1_sigma_end=2: invalid AIRL config"),
     ]  # fmt: skip
     for args, message in cases:
-        result = runner.invoke(app, args)
+        result = runner.invoke(args)
         usage = "--preset" in args  # the preset's settings: a usage error
         assert result.exit_code == (2 if usage else 1), (args, result.output)
         lines = result.output.strip().splitlines()
@@ -280,7 +280,7 @@ def test_bad_inputs_are_one_line(tmp_path: Path) -> None:
     assert not (tmp_path / "f").exists()  # refused before anything was written
     afile = tmp_path / "file"
     afile.write_text("x")
-    result = runner.invoke(app, ["gym", "study", "MountainCar-v0", "--out", str(afile)])
+    result = runner.invoke(["gym", "study", "MountainCar-v0", "--out", str(afile)])
     assert result.exit_code == 1 and "is not a folder" in result.output
     assert afile.read_text() == "x"
 
@@ -301,13 +301,13 @@ def test_sweep_is_a_gym_command_and_the_old_name_a_hidden_alias_that_warns_once(
         return SweepResult(out=tmp_path, env="MountainCar-v0", rows=(), figures=())
 
     monkeypatch.setattr(sweep, "run_sweep", fake_sweep)
-    runner = CliRunner()
+    runner = CLI
     args = ["MountainCar-v0", "--param", "alpha=0,1", "--out", str(tmp_path), "--runs", "3",
             "--seed", "7", "--epochs", "2", "--jobs", "1", "-q", "--rl-backend", "sb3"]  # fmt: skip
-    new = runner.invoke(app, ["gym", "sweep", *args])
+    new = runner.invoke(["gym", "sweep", *args])
     assert new.exit_code == 0, new.output
     assert new.stderr == ""
-    old = runner.invoke(app, ["sweep", *args])
+    old = runner.invoke(["sweep", *args])
     assert old.exit_code == 0, old.output
     assert old.stderr == SWEEP_WARNING + "\n"  # exactly one line
     assert old.stdout == new.stdout
@@ -317,14 +317,14 @@ def test_sweep_is_a_gym_command_and_the_old_name_a_hidden_alias_that_warns_once(
     new_kwargs.pop("backend"), old_kwargs.pop("backend")
     assert (old_args, old_kwargs) == (new_args, new_kwargs)  # every option passed through
     # The alias refuses as gym sweep does, after its warning line.
-    bad = runner.invoke(app, ["sweep", "MountainCar-v0", "--param", "gamma=1", "--out",
+    bad = runner.invoke(["sweep", "MountainCar-v0", "--param", "gamma=1", "--out",
                               str(tmp_path)])  # fmt: skip
     assert bad.exit_code == 1
     assert bad.stderr.splitlines()[0] == SWEEP_WARNING
     assert bad.stderr.splitlines()[1].startswith("error: bad sweep parameter 'gamma=1'")
     # Listed under gym only.
-    assert " sweep " not in runner.invoke(app, ["--help"]).output
-    assert " sweep " in runner.invoke(app, ["gym", "--help"]).output
+    assert " sweep " not in runner.invoke(["--help"]).output
+    assert " sweep " in runner.invoke(["gym", "--help"]).output
 
 
 def test_parse_tasks_and_points() -> None:
@@ -353,7 +353,7 @@ def test_sweep_runs_irl_then_rl_per_point_and_shares_the_preset_point(tmp_path: 
     args += ["--param", "sigma_end=0.04,0.5"]
     args += ["--out", str(out), "--runs", "2", "--transitions", "1500", "--epochs", "2"]
     args += ["--eval-episodes", "2", "--timesteps", "1000", "--jobs", "2", "-q"]
-    result = CliRunner().invoke(app, args)
+    result = CLI.invoke(args)
     assert result.exit_code == 0, result.output
     assert "alpha=1: IRL return" in result.output
     # alpha=0.1 and sigma_end=0.04 are both the preset's point: three points, not four.
@@ -375,7 +375,7 @@ def test_sweep_runs_irl_then_rl_per_point_and_shares_the_preset_point(tmp_path: 
     assert rl_record["reward"] == "hairl:run-1" and rl_record["timesteps"] == 1000
     for name in ("alpha.png", "sigma_end.png"):
         assert (out / name).read_bytes().startswith(b"\x89PNG")
-    again = CliRunner().invoke(app, args)
+    again = CLI.invoke(args)
     assert again.exit_code == 0 and (out / "sweep.csv").read_text().splitlines() == rows
 
 
