@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
+import pyarrow as pa
 import pytest
 import torch
 
-from pokerirl.datasets.toy import toy_expert_table
 from pokerirl.irl import (
     AdversarialTrainer,
     AIRLConfig,
@@ -98,8 +100,8 @@ def test_every_other_architecture_is_refused() -> None:
     fast.check(*build_nets(NetSpec(), obs_dim=5, action_dim=4, discrete=True))
 
 
-def test_a_fast_run_follows_the_autograd_run() -> None:
-    data = transitions_from_arrow(toy_expert_table(num_hands=300, seed=3))
+def test_a_fast_run_follows_the_autograd_run(small_table: Callable[..., pa.Table]) -> None:
+    data = transitions_from_arrow(small_table(num_hands=300, seed=3))
     train_data, val_data, _ = data.split(val_fraction=0.25, seed=0)
     config = AIRLConfig.for_algo("hairl", epochs=2, batch_size=32, beta=0.3)
     runs = [train(train_data, val_data, config=config, fast_path=f, progress=False)
@@ -138,8 +140,8 @@ ALGOS = {
 
 
 @pytest.fixture(scope="module")
-def toy_poker() -> Transitions:
-    return transitions_from_arrow(toy_expert_table(num_hands=120, seed=3))
+def toy_poker(small_table: Callable[..., pa.Table]) -> Transitions:
+    return transitions_from_arrow(small_table(num_hands=120, seed=3))
 
 
 def _trained(
