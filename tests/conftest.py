@@ -24,15 +24,31 @@ from shared import TINY_GYM_STUDY, Cli, folder_bytes, folder_snapshot
 if TYPE_CHECKING:
     import pyarrow as pa
 
-# Session fixtures and the xdist group of their users: one worker builds each once.
+# Costly session fixtures and the xdist group of their users: one worker builds each once.
 SESSION_GROUPS = {"mountaincar_study": "mountaincar-study"}
+
+
+def _group(item: pytest.Item) -> str | None:
+    """The xdist group of a test that uses a fixture built once: a costly session fixture's
+    group, or its module's when it uses a module-scoped fixture (run or table built for the
+    module): without a group, xdist would build it on each worker that runs one of them."""
+    names = getattr(item, "fixturenames", ())
+    for fixture, group in SESSION_GROUPS.items():
+        if fixture in names:
+            return group
+    # pytest gives no public view of a test's fixture definitions at collection time.
+    info = getattr(item, "_fixtureinfo", None)
+    definitions = getattr(info, "name2fixturedefs", {})
+    if any(defs and defs[-1].scope == "module" for defs in definitions.values()):
+        return item.nodeid.split("::")[0]
+    return None
 
 
 def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
     for item in items:
-        for fixture, group in SESSION_GROUPS.items():
-            if fixture in getattr(item, "fixturenames", ()):
-                item.add_marker(pytest.mark.xdist_group(group))
+        group = _group(item)
+        if group is not None and not item.get_closest_marker("xdist_group"):
+            item.add_marker(pytest.mark.xdist_group(group))
 
 
 @pytest.fixture

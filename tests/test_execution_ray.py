@@ -26,7 +26,8 @@ from typer.testing import CliRunner
 from pokerirl.cli import app
 from pokerirl.execution import _descendants, ray_head
 
-pytestmark = pytest.mark.slow
+# slow; one worker: two Ray clusters side by side would crowd two cores
+pytestmark = [pytest.mark.slow, pytest.mark.xdist_group("ray")]
 
 SET = ["--hands", "1024", "--eval-every", "1024", "--eval-hands", "100"]
 SET += ["--concurrent-hands", "64", "-q"]
