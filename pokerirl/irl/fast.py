@@ -30,7 +30,7 @@ from torch import Tensor, nn
 from pokerirl.errors import ConfigError
 from pokerirl.irl.config import SupervisedForm
 from pokerirl.irl.discriminators import AIRL, AIRLDiscriminator, Discriminator, GAILDiscriminator
-from pokerirl.irl.heads import DiscreteHead, StepDraw
+from pokerirl.irl.heads import DiscreteHead, PolicyHead, StepDraw
 from pokerirl.irl.losses import weighted_mean
 from pokerirl.irl.nets import MASKED_LOGIT, DiscretePolicy, StateActionReward
 from pokerirl.irl.optim import FlatAdam
@@ -60,7 +60,7 @@ DERIVED_FOR: frozenset[type[Discriminator]] = frozenset({AIRLDiscriminator, GAIL
 
 
 def covers(
-    *, reward: nn.Module, policy: nn.Module, head: object, discriminator: Discriminator
+    *, reward: nn.Module, policy: nn.Module, head: PolicyHead, discriminator: Discriminator
 ) -> bool:
     """True when :class:`HandDerivedStep` computes what the trainer's autograd step does for
     these nets and strategies: :func:`supports` the nets, the built-in
