@@ -44,6 +44,7 @@ def _tree(folder: Path) -> dict[str, bytes]:
     return {str(p.relative_to(folder)): p.read_bytes() for p in folder.rglob("*") if p.is_file()}
 
 
+@pytest.mark.slow
 def test_seeds_resume_reuse_retrain_corrupt_and_refuse_other_settings(tmp_path: Path) -> None:
     out = tmp_path / "many"
     code, output = invoke("agent", "train", "--out", str(out), "--seeds", "0-1", "-q", *FAST)

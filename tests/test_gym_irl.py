@@ -208,6 +208,7 @@ train_gym_irl("MountainCar-v0", sys.argv[1], algo="airl", runs=1, settings=setti
 """
 
 
+@pytest.mark.slow
 def test_a_killed_run_leaves_nothing_once_the_next_run_finishes(tmp_path: Path) -> None:
     # Issue 21: a killed `gym irl --overwrite` used to leave OUT/.irl.*.tmp forever.
     import os

@@ -183,6 +183,7 @@ RL_ARGS = ["gym", "rl", "Acrobot-v1", "--env-reward", "--runs", "3", "--timestep
            "--evaluations", "2", "--eval-episodes", "1", "--rl-backend", "lockstep"]
 
 
+@pytest.mark.slow
 def test_gym_rl_lockstep_resumes_the_missing_run_only(tmp_path: Path) -> None:
     out = tmp_path / "rl"
     args = [*RL_ARGS, "--out", str(out)]
@@ -217,6 +218,7 @@ STUDY = ["gym", "study", "Acrobot-v1", "--runs", "2", "--transitions", "1200", "
          "--rl-backend", "lockstep"]
 
 
+@pytest.mark.slow
 def test_gym_study_lockstep_reuses_every_unit(tmp_path: Path) -> None:
     out = tmp_path / "study"
     first = CLI.invoke([*STUDY, "--out", str(out)])

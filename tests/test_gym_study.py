@@ -46,6 +46,7 @@ def mountaincar(mountaincar_study: Path) -> Path:
     return mountaincar_study
 
 
+@pytest.mark.slow
 def test_summary_has_the_issue_names_and_the_runs_numbers(mountaincar: Path) -> None:
     summary = json.loads((mountaincar / "summary.json").read_text())
     assert summary["env"] == "MountainCar-v0" and summary["runs"] == 2
@@ -88,6 +89,7 @@ def test_summary_has_the_issue_names_and_the_runs_numbers(mountaincar: Path) -> 
     assert summary["paper"]["irl_final_return"]["hairl"] == {"mean": -123.3, "std": 8.0}
 
 
+@pytest.mark.slow
 def test_rl_runs_learn_from_their_own_irl_runs_reward(mountaincar: Path) -> None:
     for k in (0, 1):
         record = json.loads((mountaincar / "rl" / "hairl" / f"run-{k}" / "config.json").read_text())
@@ -109,6 +111,7 @@ def test_rl_runs_learn_from_their_own_irl_runs_reward(mountaincar: Path) -> None
     assert f0.shape == (2,) and not np.allclose(f0, f1)
 
 
+@pytest.mark.slow
 def test_a_run_without_reward_quality_gets_it_at_the_report(mountaincar: Path) -> None:
     # An IRL run folder from before reward_quality.json: the study computes it there.
     path = mountaincar / "irl" / "airl" / "run-1" / "reward_quality.json"
@@ -121,6 +124,7 @@ def test_a_run_without_reward_quality_gets_it_at_the_report(mountaincar: Path) -
     assert json.loads((mountaincar / "summary.json").read_text())["algos"] == summary["algos"]
 
 
+@pytest.mark.slow
 def test_gail_beside_airl_and_hairl_when_named_reusing_their_units(
     mountaincar: Path, tmp_path: Path
 ) -> None:
@@ -165,6 +169,7 @@ def test_parse_algos_keeps_the_paper_s_two_and_adds_gail_only_when_named() -> No
         study_preset("quick", algos=("hairl", "airl"))
 
 
+@pytest.mark.slow
 def test_figures_and_report_beside_the_authors(mountaincar: Path) -> None:
     for name in ("irl_returns", "alignment", "rl_returns", "reward_map"):
         data = (mountaincar / "figures" / f"{name}.png").read_bytes()
@@ -194,6 +199,7 @@ def test_figures_and_report_beside_the_authors(mountaincar: Path) -> None:
     assert json.dumps(TaskSummary.from_json(summary).to_json(), indent=2) + "\n" == text
 
 
+@pytest.mark.slow
 def test_rerun_reuses_every_unit_and_changed_settings_are_refused(mountaincar: Path) -> None:
     before = {p: p.read_bytes() for p in mountaincar.rglob("*") if p.is_file()}
     result = study(mountaincar)
@@ -210,6 +216,7 @@ def test_rerun_reuses_every_unit_and_changed_settings_are_refused(mountaincar: P
     assert {p: p.read_bytes() for p in mountaincar.rglob("*") if p.is_file()} == before
 
 
+@pytest.mark.slow
 def test_a_corrupt_rl_run_is_recomputed_to_the_same_bytes(mountaincar: Path) -> None:
     run = mountaincar / "rl" / "airl" / "run-1"
     model = (run / "model.pt").read_bytes()
@@ -379,6 +386,7 @@ def test_sweep_runs_irl_then_rl_per_point_and_shares_the_preset_point(tmp_path: 
     assert again.exit_code == 0 and (out / "sweep.csv").read_text().splitlines() == rows
 
 
+@pytest.mark.slow
 def test_every_json_file_of_a_gym_study_is_strict_json(mountaincar: Path) -> None:
     from test_study import strict_json_files
 

@@ -202,6 +202,7 @@ def test_bad_input_gives_one_line_errors(
         assert (tmp_path / "run").read_text() == "precious"
 
 
+@pytest.mark.slow
 def test_bad_input_in_a_real_process(tmp_path: Path) -> None:
     env = {**os.environ, "PYTHONPATH": str(REPO)}
     command = [sys.executable, "-m", "pokerirl", "train", str(tmp_path / "none.parquet")]
@@ -293,6 +294,7 @@ def test_format_version_1_runs_still_load(run_dir: Path, tmp_path: Path) -> None
     assert np.array_equal(load_reward(old)(obs, actions), load_reward(run_dir)(obs, actions))
 
 
+@pytest.mark.slow
 def test_same_seed_same_bytes(table_path: Path, tmp_path: Path) -> None:
     for name in ("a", "b"):
         args = ["train", str(table_path), "--out", str(tmp_path / name), "--epochs", "1"]
@@ -302,6 +304,7 @@ def test_same_seed_same_bytes(table_path: Path, tmp_path: Path) -> None:
         assert (tmp_path / "a" / file).read_bytes() == (tmp_path / "b" / file).read_bytes(), file
 
 
+@pytest.mark.slow
 def test_several_runs_write_run_folders_a_summary_and_a_band_plot(
     table_path: Path, tmp_path: Path
 ) -> None:

@@ -113,6 +113,7 @@ def test_gails_fast_path_follows_autograd_and_differs_from_airl() -> None:
                                                           abs=1e-3)  # fmt: skip
 
 
+@pytest.mark.slow
 def test_gail_trains_on_a_tiny_gym_table(tmp_path: Path) -> None:
     from pokerirl.gym.collect import collect
     from pokerirl.gym.experts import load_expert, resolve_expert_dir

@@ -160,6 +160,7 @@ def _set(document: Any, path: tuple[Any, ...], value: Any) -> Any:
     return changed
 
 
+@pytest.mark.slow
 def test_report_on_a_damaged_gym_summary_is_one_line_never_a_crash(
     study: Path, tmp_path: Path
 ) -> None:
@@ -238,6 +239,7 @@ def _killed(argv: list[str], ready: Callable[[], bool]) -> None:
         process.wait()
 
 
+@pytest.mark.slow
 def test_a_killed_gym_rl_overwrite_never_leaves_runs_of_two_settings(tmp_path: Path) -> None:
     """Runs are units, each saved on its own: an --overwrite first removes every run of other
     settings (run-4 beyond --runs too), so a kill after the first new run leaves no old one."""
@@ -255,6 +257,7 @@ def test_a_killed_gym_rl_overwrite_never_leaves_runs_of_two_settings(tmp_path: P
             (out / "run-0" / "model.pt").stat().st_ino) == kept  # fmt: skip
 
 
+@pytest.mark.slow
 def test_a_gym_rl_overwrite_killed_in_a_lockstep_group_leaves_no_old_run(tmp_path: Path) -> None:
     out = tmp_path / "rl"
     base = ["gym", "rl", "MountainCar-v0", "--env-reward", "--out", str(out), "--runs", "2"]
@@ -265,6 +268,7 @@ def test_a_gym_rl_overwrite_killed_in_a_lockstep_group_leaves_no_old_run(tmp_pat
     assert not list(out.glob("*.json"))  # no record of either settings
 
 
+@pytest.mark.slow
 def test_gym_expert_rerun_with_another_seed_is_refused(tmp_path: Path) -> None:
     out = tmp_path / "expert"
     base = ["gym", "expert", "MountainCar-v0", "--out", str(out), *EXPERT_FAST]
@@ -345,6 +349,7 @@ def _writing(out: Path) -> bool:
     return any("abcd1234" not in str(p) for p in out.glob(".irl.*/**/run-0"))
 
 
+@pytest.mark.slow
 def test_a_killed_gym_irl_leaves_nothing_the_next_run_does_not_remove(tmp_path: Path) -> None:
     out = tmp_path / "irl"
     args = ["gym", "irl", "MountainCar-v0", "--out", str(out), "--preset", "quick", "--runs", "1"]
