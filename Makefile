@@ -1,9 +1,9 @@
-# Two entry points on a fresh machine: `make demo` and `make test`.
+# Two entry points on a fresh machine: `make demo` and `make test` (`make test-fast` while editing).
 PYTHON ?= python3
 VENV := .venv
 BIN := $(VENV)/bin
 
-.PHONY: demo test install install-dev lint bench docs
+.PHONY: demo test test-fast install install-dev lint bench docs
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -18,10 +18,19 @@ install-dev: $(BIN)/python
 demo: install
 	$(BIN)/pokerirl demo
 
+# pytest-xdist workers; tests that share a session fixture run on one (--dist loadgroup).
+TEST_WORKERS ?= 2
+PYTEST := $(BIN)/python -m pytest -q -n $(TEST_WORKERS) --dist loadgroup
+
+# Everything, slow tests included (CI: .ci/run).
 test: install-dev
 	$(BIN)/ruff check pokerirl tests benchmarks
 	$(BIN)/mypy pokerirl
-	$(BIN)/python -m pytest -q
+	$(PYTEST)
+
+# The edit-test loop: the tests not marked slow (and the doctests).
+test-fast: install-dev
+	$(PYTEST) -m "not slow"
 
 lint: install-dev
 	$(BIN)/ruff check pokerirl tests benchmarks

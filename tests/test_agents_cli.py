@@ -44,6 +44,7 @@ def _tree(folder: Path) -> dict[str, bytes]:
     return {str(p.relative_to(folder)): p.read_bytes() for p in folder.rglob("*") if p.is_file()}
 
 
+@pytest.mark.slow
 def test_seeds_resume_reuse_retrain_corrupt_and_refuse_other_settings(tmp_path: Path) -> None:
     out = tmp_path / "many"
     code, output = invoke("agent", "train", "--out", str(out), "--seeds", "0-1", "-q", *FAST)
@@ -180,16 +181,14 @@ def test_learned_reward_training_records_the_run(tmp_path: Path) -> None:
     assert sum(calls) == record["final"]["transitions"]
 
 
-def test_learned_reward_from_a_real_irl_run_end_to_end(tmp_path: Path) -> None:
-    import pyarrow.parquet as pq
-
-    from pokerirl.datasets.toy import toy_expert_table
+def test_learned_reward_from_a_real_irl_run_end_to_end(
+    tmp_path: Path, small_table_path: Path
+) -> None:
     from pokerirl.irl import load_config, load_reward
     from pokerirl.poker import train_table
 
-    pq.write_table(toy_expert_table(num_hands=200), tmp_path / "table.parquet")
     settings = load_config("hairl", overrides={"epochs": 1, "batch_size": 64})
-    train_table(tmp_path / "table.parquet", tmp_path / "run", algo="hairl", config=settings)
+    train_table(small_table_path, tmp_path / "run", algo="hairl", config=settings)
     out = tmp_path / "agent"
     code, output = invoke(
         "agent", "train", "--reward", "learned", "--reward-run", str(tmp_path / "run"),

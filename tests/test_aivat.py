@@ -94,6 +94,7 @@ def test_a_mirror_match_stays_exactly_even() -> None:
     assert np.isfinite(found.corrected_mbb_per_hand)
 
 
+@pytest.mark.slow
 def test_the_corrections_have_mean_zero_where_betting_follows_the_cards() -> None:
     # tightbot and loosebot raise with strong hands: the chips committed before a card are
     # correlated with the equity, so a correction that used chips known only after the card
@@ -110,6 +111,7 @@ def test_the_corrections_have_mean_zero_where_betting_follows_the_cards() -> Non
     ("a", "b", "tighter"),
     [("tightbot", "tightbot", True), ("call", "raise", True), ("random", "random", False)],
 )
+@pytest.mark.slow
 def test_unbiased_over_seeds_where_the_truth_is_known(a: str, b: str, tighter: bool) -> None:
     # Each matchup is even in expectation (a mirror; raise vs call plays the same pot for
     # both). Without duplicate deals the raw means are noisy; over 16 seeds both estimates

@@ -45,6 +45,7 @@ def built(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, tuple[str, ..
     return module.build(tmp_path_factory.mktemp("api")), module.API_MODULES
 
 
+@pytest.mark.slow
 def test_the_reference_covers_every_exported_name(built: tuple[Path, tuple[str, ...]]) -> None:
     out, modules = built
     assert {"pokerirl", "pokerirl.irl", "pokerirl.game", "pokerirl.agents",

@@ -168,6 +168,7 @@ def strength_run(tmp_path_factory: pytest.TempPathFactory) -> Path:
     return root / "run"
 
 
+@pytest.mark.slow
 def test_a_strength_run_records_its_encoding_and_its_reward_reads_it(strength_run: Path) -> None:
     from pokerirl.poker.rewards import RewardSource
 
@@ -178,6 +179,7 @@ def test_a_strength_run_records_its_encoding_and_its_reward_reads_it(strength_ru
     assert source.encoding == "strength" and source.load().needs_cards
 
 
+@pytest.mark.slow
 def test_a_run_and_a_table_or_flag_of_another_encoding_are_refused(
     strength_run: Path, tmp_path: Path
 ) -> None:
@@ -230,6 +232,7 @@ def test_an_agent_folder_of_an_unknown_encoding_is_refused(tmp_path: Path) -> No
         load_agent(tmp_path / "c")
 
 
+@pytest.mark.slow
 def test_agents_of_different_encodings_meet_in_one_match(strength_run: Path) -> None:
     """A policy reading strength plays a bot and an RLCard-encoded DQN on the engine."""
     from pokerirl.agents import land_agent, resolve_agent, ship_agent
@@ -251,6 +254,7 @@ def test_agents_of_different_encodings_meet_in_one_match(strength_run: Path) -> 
     assert landed.fingerprint == policy.fingerprint  # type: ignore[attr-defined]
 
 
+@pytest.mark.slow
 def test_match_and_tournament_check_the_agents_encoding(strength_run: Path, tmp_path: Path) -> None:
     runner = CliRunner()
     policy = f"policy:{strength_run}"

@@ -39,7 +39,16 @@ def test_every_example_is_listed() -> None:
     assert sorted(p.name for p in EXAMPLES_DIR.glob("*.py")) == sorted(EXAMPLES)
 
 
-@pytest.mark.parametrize("name", sorted(EXAMPLES))
+SLOW_EXAMPLES = {"learned_reward_sb3.py"}  # trains PPO: `make test-fast` leaves it out
+
+
+@pytest.mark.parametrize(
+    "name",
+    [
+        pytest.param(n, marks=pytest.mark.slow) if n in SLOW_EXAMPLES else n
+        for n in sorted(EXAMPLES)
+    ],
+)
 def test_example_runs_and_prints_its_result(name: str, tmp_path: Path) -> None:
     arguments, result = EXAMPLES[name]
     # This checkout's pokerirl, whatever is installed; run from elsewhere, as a reader would.

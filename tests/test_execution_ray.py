@@ -20,12 +20,14 @@ from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
+from shared import Cli
 from typer.testing import CliRunner
 
 from pokerirl.cli import app
 from pokerirl.execution import _descendants, ray_head
 
-pytestmark = pytest.mark.slow
+# slow; one worker: two Ray clusters side by side would crowd two cores
+pytestmark = [pytest.mark.slow, pytest.mark.xdist_group("ray")]
 
 SET = ["--hands", "1024", "--eval-every", "1024", "--eval-hands", "100"]
 SET += ["--concurrent-hands", "64", "-q"]
@@ -45,10 +47,7 @@ def cluster(tmp_path_factory: pytest.TempPathFactory) -> Iterator[str]:
         yield address
 
 
-def invoke(*args: str) -> str:
-    result = CliRunner().invoke(app, list(args))
-    assert result.exit_code == 0, result.output
-    return result.output
+invoke = Cli().ok  # pokerirl ARGS in this process: its output, exit code 0 asserted
 
 
 def weights(folder: Path) -> dict[str, bytes]:

@@ -111,6 +111,7 @@ def brute_force(split, player: int, chosen: Behaviour) -> np.ndarray:  # type: i
 
 
 @pytest.mark.parametrize("encoding", ["rlcard", "strength"])
+@pytest.mark.slow
 def test_posterior_is_bayes_rule(month: Path, encoding: str) -> None:
     """The batched posterior (one forward pass per chunk of decisions over all pairs, the
     strength equities computed once per board) against Bayes' rule computed pair by pair,
@@ -266,6 +267,7 @@ def test_an_imputed_table_reads_with_weights_and_draws(month: Path, tmp_path: Pa
     assert all(bool(data.dones[row]) for row in last.values())
 
 
+@pytest.mark.slow
 def test_a_run_policy_is_a_behaviour(month: Path, tmp_path: Path) -> None:
     """``--behaviour RUN``: a run's policy, in the run's encoding, imputes a table."""
     from pokerirl.irl import load_config
@@ -284,6 +286,7 @@ def test_a_run_policy_is_a_behaviour(month: Path, tmp_path: Path) -> None:
     assert CARD_INDEX  # the module's card names are the tables'
 
 
+@pytest.mark.slow
 def test_em_rounds_reimpute_with_the_run_policy(month: Path, tmp_path: Path) -> None:
     from typer.testing import CliRunner
 

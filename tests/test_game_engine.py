@@ -89,6 +89,7 @@ def _policies(n: int, rng: np.random.Generator) -> list[str]:
     return rng.choice(list(POLICIES), size=n).tolist()
 
 
+@pytest.mark.slow
 def test_matches_rlcard_on_2000_deals() -> None:
     deals = deal_cards(seed=11, start=0, count=2_000)
     _play_both(deals, _policies(2_000, np.random.default_rng(0)), seed=0)

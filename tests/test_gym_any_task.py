@@ -6,20 +6,17 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
-from typer.testing import CliRunner
+from shared import Cli
 
 pytest.importorskip("gymnasium")
 pytest.importorskip("stable_baselines3")
 
-from pokerirl.cli import app
 from pokerirl.errors import ConfigError
 from pokerirl.gym.presets import GENERIC_PPO, TASKS
 from pokerirl.gym.tasks import task
 from pokerirl.studies.gym.config import PRESETS
 
-
-def invoke(*args: str):
-    return CliRunner().invoke(app, list(args))
+invoke = Cli()  # the shared in-process command line (tests/shared.py)
 
 
 def test_a_task_the_paper_lacks_gets_generic_settings_by_its_action_space() -> None:

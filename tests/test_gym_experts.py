@@ -7,12 +7,11 @@ from pathlib import Path
 
 import pytest
 import torch
-from typer.testing import CliRunner
+from shared import Cli
 
 pytest.importorskip("gymnasium")
 pytest.importorskip("stable_baselines3")
 
-from pokerirl.cli import app
 from pokerirl.gym.episodes import sb3_evaluation
 from pokerirl.gym.experts import (
     CONFIG_FILE,
@@ -34,8 +33,7 @@ from pokerirl.gym.presets import TASKS
 torch.set_num_threads(1)
 
 
-def invoke(*args: str):
-    return CliRunner().invoke(app, list(args))
+invoke = Cli()  # the shared in-process command line (tests/shared.py)
 
 
 @pytest.fixture(scope="module")

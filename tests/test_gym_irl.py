@@ -11,12 +11,11 @@ import numpy as np
 import pyarrow as pa
 import pyarrow.parquet as pq
 import pytest
-from typer.testing import CliRunner
+from shared import Cli
 
 pytest.importorskip("gymnasium")
 pytest.importorskip("stable_baselines3")
 
-from pokerirl.cli import app
 from pokerirl.gym.collect import collect
 from pokerirl.gym.episodes import play_episodes, policy_actions
 from pokerirl.gym.experts import load_expert, resolve_expert_dir
@@ -26,6 +25,8 @@ from pokerirl.irl import load_policy, load_reward
 from pokerirl.studies.gym.config import PRESETS
 
 CORE_BASELINES = {"majority", "legal_majority", "bc"}
+
+CLI = Cli()  # pokerirl run in this process (tests/shared.py)
 
 
 def shipped_data(env_id: str, path: Path, transitions: int) -> float:
@@ -43,7 +44,7 @@ def test_mountaincar_irl_runs_evaluate_in_the_env_and_feed_the_rl_phase(tmp_path
     out = tmp_path / "irl"
     args = ["gym", "irl", "MountainCar-v0", "--data", str(data), "--algo", "hairl"]
     args += ["--runs", "2", "--epochs", "2", "--preset", "quick", "--out", str(out)]
-    result = CliRunner().invoke(app, args)
+    result = CLI.invoke(args)
     assert result.exit_code == 0, result.output
     assert "final return" in result.output
 
@@ -90,13 +91,13 @@ def test_mountaincar_irl_runs_evaluate_in_the_env_and_feed_the_rl_phase(tmp_path
     assert values.shape == (5,) and values.dtype == np.float32
     rl_args = ["gym", "rl", "MountainCar-v0", "--reward-run", str(out / "run-0"), "--runs", "1"]
     rl_args += ["--timesteps", "300", "--evaluations", "1", "--eval-episodes", "1"]
-    rl = CliRunner().invoke(app, [*rl_args, "--out", str(tmp_path / "rl")])
+    rl = CLI.invoke([*rl_args, "--out", str(tmp_path / "rl")])
     assert rl.exit_code == 0, rl.output
     assert (tmp_path / "rl" / "run-0" / "metrics.jsonl").is_file()
 
     # finished runs are not replaced without --overwrite
     before = (out / "run-0" / "reward.pt").read_bytes()
-    again = CliRunner().invoke(app, args)
+    again = CLI.invoke(args)
     assert again.exit_code != 0 and "already holds" in again.output
     assert (out / "run-0" / "reward.pt").read_bytes() == before
 
@@ -150,7 +151,7 @@ def test_bad_inputs_fail_in_one_line(tmp_path: Path) -> None:
         "continuous actions": (1, ["--data", str(_pendulum(tmp_path))]),
     }
     for message, (code, extra) in cases.items():
-        result = CliRunner().invoke(app, [*base, *extra])
+        result = CLI.invoke([*base, *extra])
         assert result.exit_code == code and message in result.output, (extra, result.output)
         assert len(result.output.strip().splitlines()) == 1
     assert not list((tmp_path / "irl").glob("run-*"))
@@ -207,6 +208,7 @@ train_gym_irl("MountainCar-v0", sys.argv[1], algo="airl", runs=1, settings=setti
 """
 
 
+@pytest.mark.slow
 def test_a_killed_run_leaves_nothing_once_the_next_run_finishes(tmp_path: Path) -> None:
     # Issue 21: a killed `gym irl --overwrite` used to leave OUT/.irl.*.tmp forever.
     import os

@@ -107,6 +107,7 @@ def test_state_dict_loads_into_sb3(env_id: str, settings: PPOSettings) -> None:
     torch.testing.assert_close(values[0], sb3_values, atol=1e-5, rtol=0)
 
 
+@pytest.mark.slow
 def test_learns_cartpole() -> None:
     """A tiny budget lifts CartPole well above random (about 22)."""
     s = PPOSettings(n_steps=512, batch_size=64, gamma=0.99, gae_lambda=0.95, clip_range=0.2,

@@ -129,6 +129,7 @@ def test_trajectory_matches_sb3_same_seed() -> None:
     _assert_params(result.state_dicts[0], model.policy.state_dict(), atol=1e-4)
 
 
+@pytest.mark.slow
 def test_run_of_group_equals_group_of_one() -> None:
     s = dataclasses.replace(MOUNTAIN, learning_starts=500)
 
@@ -168,6 +169,7 @@ def test_state_dict_loads_into_sb3() -> None:
         group.predict(obs[0])
 
 
+@pytest.mark.slow
 def test_learns_cartpole() -> None:
     """12k steps lift CartPole well above random (about 22)."""
     result = LockstepDQN("CartPole-v1", CARTPOLE, seeds=[0, 1]).learn(12_000)

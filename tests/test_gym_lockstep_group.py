@@ -6,18 +6,16 @@ from __future__ import annotations
 
 import dataclasses
 import json
-import os
 from pathlib import Path
 
 import numpy as np
 import pytest
 import torch
-from typer.testing import CliRunner
+from shared import Cli, folder_snapshot
 
 pytest.importorskip("gymnasium")
 pytest.importorskip("stable_baselines3")
 
-from pokerirl.cli import app
 from pokerirl.execution import pinned_threads
 from pokerirl.gym.episodes import EVAL_SEED, sb3_evaluation
 from pokerirl.gym.experts import build_policy, policy_kwargs
@@ -39,6 +37,8 @@ PENDULUM = dataclasses.replace(
     _PENDULUM, ppo=dataclasses.replace(_PENDULUM.ppo, n_steps=128, n_epochs=2)
 )
 FILES = ("config.json", "metrics.jsonl", "model.pt")
+
+CLI = Cli()  # pokerirl run in this process (tests/shared.py)
 
 
 @pytest.fixture(autouse=True)
@@ -149,7 +149,7 @@ def test_mountaincar_dqn_runs_in_lock_step_and_sb3_loads_the_folders(tmp_path: P
     out = tmp_path / "mc"  # 1,200 steps: 200 after learning_starts, 100 gradient steps
     args = ["gym", "rl", "MountainCar-v0", "--env-reward", "--runs", "2", "--timesteps", "1200",
             "--evaluations", "1", "--eval-episodes", "1", "--rl-backend", "lockstep"]
-    result = CliRunner().invoke(app, [*args, "--out", str(out)])
+    result = CLI.invoke([*args, "--out", str(out)])
     assert result.exit_code == 0, result.output
     for k in range(2):
         config = json.loads((out / f"run-{k}" / "config.json").read_text())
@@ -179,21 +179,17 @@ def test_sb3_rl_records_are_as_before() -> None:
     assert lockstep == {**identity, "backend": "lockstep"}
 
 
-def _snapshot(folder: Path) -> dict[str, tuple[bytes, int]]:
-    return {str(p.relative_to(folder)): (p.read_bytes(), os.stat(p).st_ino)
-            for p in sorted(folder.rglob("*")) if p.is_file()}  # fmt: skip
-
-
 RL_ARGS = ["gym", "rl", "Acrobot-v1", "--env-reward", "--runs", "3", "--timesteps", "1024",
            "--evaluations", "2", "--eval-episodes", "1", "--rl-backend", "lockstep"]
 
 
+@pytest.mark.slow
 def test_gym_rl_lockstep_resumes_the_missing_run_only(tmp_path: Path) -> None:
     out = tmp_path / "rl"
     args = [*RL_ARGS, "--out", str(out)]
-    first = CliRunner().invoke(app, args)
+    first = CLI.invoke(args)
     assert first.exit_code == 0, first.output
-    before = _snapshot(out)
+    before = folder_snapshot(out)
     for k in range(3):  # each run its own unit
         record = json.loads((out / f"run-{k}" / "unit.json").read_text())
         assert record["config"]["backend"] == "lockstep"
@@ -201,20 +197,20 @@ def test_gym_rl_lockstep_resumes_the_missing_run_only(tmp_path: Path) -> None:
     for path in (out / "run-1").iterdir():
         path.unlink()
     (out / "run-1").rmdir()
-    again = CliRunner().invoke(app, args)
+    again = CLI.invoke(args)
     assert again.exit_code == 0, again.output
-    after = _snapshot(out)
+    after = folder_snapshot(out)
     # run-0 and run-2 untouched (same bytes, same files); run-1 trained alone, as in the group
     assert {k: v for k, v in after.items() if not k.startswith("run-1")} == {
         k: v for k, v in before.items() if not k.startswith("run-1")}
     assert {name: (out / "run-1" / name).read_bytes() for name in FILES} == lost
-    kept = _snapshot(out)
+    kept = folder_snapshot(out)
     for changed in (["--timesteps", "2048"], ["--rl-backend", "sb3"]):
-        refused = CliRunner().invoke(app, [*args, *changed])
+        refused = CLI.invoke([*args, *changed])
         assert refused.exit_code == 1
         lines = refused.output.strip().splitlines()
         assert len(lines) == 1 and "another configuration" in lines[0] and "--overwrite" in lines[0]
-        assert _snapshot(out) == kept
+        assert folder_snapshot(out) == kept
 
 
 STUDY = ["gym", "study", "Acrobot-v1", "--runs", "2", "--transitions", "1200", "--epochs", "1",
@@ -222,9 +218,10 @@ STUDY = ["gym", "study", "Acrobot-v1", "--runs", "2", "--transitions", "1200", "
          "--rl-backend", "lockstep"]
 
 
+@pytest.mark.slow
 def test_gym_study_lockstep_reuses_every_unit(tmp_path: Path) -> None:
     out = tmp_path / "study"
-    first = CliRunner().invoke(app, [*STUDY, "--out", str(out)])
+    first = CLI.invoke([*STUDY, "--out", str(out)])
     assert first.exit_code == 0, first.output
     for reward in ("env", "airl", "hairl"):
         for k in range(2):
@@ -234,7 +231,7 @@ def test_gym_study_lockstep_reuses_every_unit(tmp_path: Path) -> None:
     summary = json.loads((out / "summary.json").read_text())
     assert summary["settings"]["rl_backend"] == "lockstep"
     before = {p: p.read_bytes() for p in out.rglob("*") if p.is_file()}
-    again = CliRunner().invoke(app, [*STUDY, "--out", str(out)])
+    again = CLI.invoke([*STUDY, "--out", str(out)])
     assert again.exit_code == 0, again.output
     assert "6 of 6 finished already, reused" in again.output
     assert {p: p.read_bytes() for p in out.rglob("*") if p.is_file()} == before
@@ -242,12 +239,12 @@ def test_gym_study_lockstep_reuses_every_unit(tmp_path: Path) -> None:
     lost = out / "rl" / "airl" / "run-1"
     for path in lost.iterdir():
         path.unlink()
-    resumed = CliRunner().invoke(app, [*STUDY, "--out", str(out)])
+    resumed = CLI.invoke([*STUDY, "--out", str(out)])
     assert resumed.exit_code == 0, resumed.output
     assert "5 of 6 finished already, reused" in resumed.output
     assert {p: p.read_bytes() for p in out.rglob("*") if p.is_file()} == before
     # sb3 runs never pass for lock-step ones
-    refused = CliRunner().invoke(app, [*STUDY[:-2], "--rl-backend", "sb3", "--out", str(out)])
+    refused = CLI.invoke([*STUDY[:-2], "--rl-backend", "sb3", "--out", str(out)])
     assert refused.exit_code == 1
     assert "backend 'lockstep' -> None" in refused.output.strip().splitlines()[-1]
 

@@ -49,6 +49,7 @@ def test_quick_preset_shrinks_budgets_and_keeps_the_authors_method_settings() ->
         assert paper.irl(env_id) == TASKS[env_id].irl and paper.rl(env_id) == TASKS[env_id].rl
 
 
+@pytest.mark.slow
 def test_importing_the_gym_package_and_the_cli_does_not_import_gymnasium_or_sb3() -> None:
     # A poker-only user must not pay for the gym extra (nor need it installed).
     import subprocess

@@ -11,12 +11,12 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from typer.testing import CliRunner
+from click.testing import Result
+from shared import TINY_GYM_STUDY, Cli
 
 pytest.importorskip("gymnasium")
 pytest.importorskip("stable_baselines3")
 
-from pokerirl.cli import app
 from pokerirl.execution import Backend
 from pokerirl.irl import load_reward
 from pokerirl.studies.common import StudyError
@@ -26,28 +26,27 @@ from pokerirl.studies.gym.results import TaskSummary
 from pokerirl.studies.gym.sweep import CSV_COLUMNS, SweepRow, parse_param, sweep_points
 from pokerirl.studies.gym.units import DATA_FILE
 
-TINY = ["--runs", "2", "--transitions", "1500", "--epochs", "2", "--eval-episodes", "2"]
-TINY += ["--timesteps", "2000", "--jobs", "2", "--quiet"]
+TINY = TINY_GYM_STUDY  # the session's MountainCar study (conftest) has these settings
 MEAN_STD = {"mean", "std"}
+
+CLI = Cli()  # pokerirl run in this process (tests/shared.py)
 
 
 def jsonl(path: Path) -> list[dict]:
     return [json.loads(line) for line in path.read_text().splitlines() if line]
 
 
-def study(out: Path, *extra: str, task: str = "MountainCar-v0") -> object:
-    return CliRunner().invoke(app, ["gym", "study", task, "--out", str(out), *TINY, *extra])
+def study(out: Path, *extra: str, task: str = "MountainCar-v0") -> Result:
+    return CLI("gym", "study", task, "--out", out, *TINY, *extra)
 
 
-@pytest.fixture(scope="module")
-def mountaincar(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    out = tmp_path_factory.mktemp("study") / "mc"
-    result = study(out)
-    assert result.exit_code == 0, result.output
-    assert "# pokerirl gym study (quick preset)" in result.output
-    return out
+@pytest.fixture
+def mountaincar(mountaincar_study: Path) -> Path:
+    """The session's MountainCar study (conftest), built with ``TINY``."""
+    return mountaincar_study
 
 
+@pytest.mark.slow
 def test_summary_has_the_issue_names_and_the_runs_numbers(mountaincar: Path) -> None:
     summary = json.loads((mountaincar / "summary.json").read_text())
     assert summary["env"] == "MountainCar-v0" and summary["runs"] == 2
@@ -90,6 +89,7 @@ def test_summary_has_the_issue_names_and_the_runs_numbers(mountaincar: Path) -> 
     assert summary["paper"]["irl_final_return"]["hairl"] == {"mean": -123.3, "std": 8.0}
 
 
+@pytest.mark.slow
 def test_rl_runs_learn_from_their_own_irl_runs_reward(mountaincar: Path) -> None:
     for k in (0, 1):
         record = json.loads((mountaincar / "rl" / "hairl" / f"run-{k}" / "config.json").read_text())
@@ -111,6 +111,7 @@ def test_rl_runs_learn_from_their_own_irl_runs_reward(mountaincar: Path) -> None
     assert f0.shape == (2,) and not np.allclose(f0, f1)
 
 
+@pytest.mark.slow
 def test_a_run_without_reward_quality_gets_it_at_the_report(mountaincar: Path) -> None:
     # An IRL run folder from before reward_quality.json: the study computes it there.
     path = mountaincar / "irl" / "airl" / "run-1" / "reward_quality.json"
@@ -123,6 +124,7 @@ def test_a_run_without_reward_quality_gets_it_at_the_report(mountaincar: Path) -
     assert json.loads((mountaincar / "summary.json").read_text())["algos"] == summary["algos"]
 
 
+@pytest.mark.slow
 def test_gail_beside_airl_and_hairl_when_named_reusing_their_units(
     mountaincar: Path, tmp_path: Path
 ) -> None:
@@ -149,7 +151,7 @@ def test_gail_beside_airl_and_hairl_when_named_reusing_their_units(
     for row in ("IRL-phase return, GAIL", "RL-phase return, GAIL reward",
                 "alignment, GAIL policy", "EPIC distance to the true reward / on the expert's"):
         assert f"| {row}" in report, row
-    assert CliRunner().invoke(app, ["report", str(out)]).output == report
+    assert CLI.invoke(["report", str(out)]).output == report
     # The paper's algorithms only: the default study's summary again, GAIL's folders ignored.
     again = study(out)
     assert again.exit_code == 0, again.output
@@ -167,6 +169,7 @@ def test_parse_algos_keeps_the_paper_s_two_and_adds_gail_only_when_named() -> No
         study_preset("quick", algos=("hairl", "airl"))
 
 
+@pytest.mark.slow
 def test_figures_and_report_beside_the_authors(mountaincar: Path) -> None:
     for name in ("irl_returns", "alignment", "rl_returns", "reward_map"):
         data = (mountaincar / "figures" / f"{name}.png").read_bytes()
@@ -187,15 +190,16 @@ def test_figures_and_report_beside_the_authors(mountaincar: Path) -> None:
     assert f"{epic['mean']:,.3f} ± {epic['std']:,.3f} |" in report
     assert "EPIC of a random reward net" in report and "γ 0.98" in report
     # pokerirl report renders the same report again, or prints summary.json
-    again = CliRunner().invoke(app, ["report", str(mountaincar)])
+    again = CLI.invoke(["report", str(mountaincar)])
     assert again.exit_code == 0 and again.output == report
-    as_json = CliRunner().invoke(app, ["report", str(mountaincar), "--format", "json"])
+    as_json = CLI.invoke(["report", str(mountaincar), "--format", "json"])
     assert json.loads(as_json.output) == summary
     # The typed summary reads it and writes it back to the same bytes (names and their order).
     text = (mountaincar / "summary.json").read_text()
     assert json.dumps(TaskSummary.from_json(summary).to_json(), indent=2) + "\n" == text
 
 
+@pytest.mark.slow
 def test_rerun_reuses_every_unit_and_changed_settings_are_refused(mountaincar: Path) -> None:
     before = {p: p.read_bytes() for p in mountaincar.rglob("*") if p.is_file()}
     result = study(mountaincar)
@@ -212,6 +216,7 @@ def test_rerun_reuses_every_unit_and_changed_settings_are_refused(mountaincar: P
     assert {p: p.read_bytes() for p in mountaincar.rglob("*") if p.is_file()} == before
 
 
+@pytest.mark.slow
 def test_a_corrupt_rl_run_is_recomputed_to_the_same_bytes(mountaincar: Path) -> None:
     run = mountaincar / "rl" / "airl" / "run-1"
     model = (run / "model.pt").read_bytes()
@@ -251,13 +256,13 @@ def test_two_tasks_acrobot_and_mountaincar_each_get_a_folder(tmp_path: Path) -> 
     assert -500 <= acrobot["algos"]["hairl"]["irl_final_return"]["mean"] <= 0
     assert acrobot["random_return"] == pytest.approx(-500, abs=50)
     report = (tmp_path / "report.md").read_text()
-    assert CliRunner().invoke(app, ["report", str(tmp_path)]).output == report
+    assert CLI.invoke(["report", str(tmp_path)]).output == report
     assert "## Acrobot-v1" in report and "## MountainCar-v0" in report
     assert "(Acrobot-v1/figures/irl_returns.png)" in report
 
 
 def test_bad_inputs_are_one_line(tmp_path: Path) -> None:
-    runner = CliRunner()
+    runner = CLI
     cases = [
         (["gym", "study", "Pong-v5", "--out", str(tmp_path / "a")], "unknown task 'Pong-v5'"),
         (["gym", "study", "MountainCar-v0", "--preset", "huge", "--out", str(tmp_path / "b")],
@@ -273,7 +278,7 @@ def test_bad_inputs_are_one_line(tmp_path: Path) -> None:
          "point alpha=0.1_beta=0.25_sigma_start=1_sigma_end=2: invalid AIRL config"),
     ]  # fmt: skip
     for args, message in cases:
-        result = runner.invoke(app, args)
+        result = runner.invoke(args)
         usage = "--preset" in args  # the preset's settings: a usage error
         assert result.exit_code == (2 if usage else 1), (args, result.output)
         lines = result.output.strip().splitlines()
@@ -282,7 +287,7 @@ def test_bad_inputs_are_one_line(tmp_path: Path) -> None:
     assert not (tmp_path / "f").exists()  # refused before anything was written
     afile = tmp_path / "file"
     afile.write_text("x")
-    result = runner.invoke(app, ["gym", "study", "MountainCar-v0", "--out", str(afile)])
+    result = runner.invoke(["gym", "study", "MountainCar-v0", "--out", str(afile)])
     assert result.exit_code == 1 and "is not a folder" in result.output
     assert afile.read_text() == "x"
 
@@ -303,13 +308,13 @@ def test_sweep_is_a_gym_command_and_the_old_name_a_hidden_alias_that_warns_once(
         return SweepResult(out=tmp_path, env="MountainCar-v0", rows=(), figures=())
 
     monkeypatch.setattr(sweep, "run_sweep", fake_sweep)
-    runner = CliRunner()
+    runner = CLI
     args = ["MountainCar-v0", "--param", "alpha=0,1", "--out", str(tmp_path), "--runs", "3",
             "--seed", "7", "--epochs", "2", "--jobs", "1", "-q", "--rl-backend", "sb3"]  # fmt: skip
-    new = runner.invoke(app, ["gym", "sweep", *args])
+    new = runner.invoke(["gym", "sweep", *args])
     assert new.exit_code == 0, new.output
     assert new.stderr == ""
-    old = runner.invoke(app, ["sweep", *args])
+    old = runner.invoke(["sweep", *args])
     assert old.exit_code == 0, old.output
     assert old.stderr == SWEEP_WARNING + "\n"  # exactly one line
     assert old.stdout == new.stdout
@@ -319,14 +324,14 @@ def test_sweep_is_a_gym_command_and_the_old_name_a_hidden_alias_that_warns_once(
     new_kwargs.pop("backend"), old_kwargs.pop("backend")
     assert (old_args, old_kwargs) == (new_args, new_kwargs)  # every option passed through
     # The alias refuses as gym sweep does, after its warning line.
-    bad = runner.invoke(app, ["sweep", "MountainCar-v0", "--param", "gamma=1", "--out",
+    bad = runner.invoke(["sweep", "MountainCar-v0", "--param", "gamma=1", "--out",
                               str(tmp_path)])  # fmt: skip
     assert bad.exit_code == 1
     assert bad.stderr.splitlines()[0] == SWEEP_WARNING
     assert bad.stderr.splitlines()[1].startswith("error: bad sweep parameter 'gamma=1'")
     # Listed under gym only.
-    assert " sweep " not in runner.invoke(app, ["--help"]).output
-    assert " sweep " in runner.invoke(app, ["gym", "--help"]).output
+    assert " sweep " not in runner.invoke(["--help"]).output
+    assert " sweep " in runner.invoke(["gym", "--help"]).output
 
 
 def test_parse_tasks_and_points() -> None:
@@ -355,7 +360,7 @@ def test_sweep_runs_irl_then_rl_per_point_and_shares_the_preset_point(tmp_path: 
     args += ["--param", "sigma_end=0.04,0.5"]
     args += ["--out", str(out), "--runs", "2", "--transitions", "1500", "--epochs", "2"]
     args += ["--eval-episodes", "2", "--timesteps", "1000", "--jobs", "2", "-q"]
-    result = CliRunner().invoke(app, args)
+    result = CLI.invoke(args)
     assert result.exit_code == 0, result.output
     assert "alpha=1: IRL return" in result.output
     # alpha=0.1 and sigma_end=0.04 are both the preset's point: three points, not four.
@@ -377,10 +382,11 @@ def test_sweep_runs_irl_then_rl_per_point_and_shares_the_preset_point(tmp_path: 
     assert rl_record["reward"] == "hairl:run-1" and rl_record["timesteps"] == 1000
     for name in ("alpha.png", "sigma_end.png"):
         assert (out / name).read_bytes().startswith(b"\x89PNG")
-    again = CliRunner().invoke(app, args)
+    again = CLI.invoke(args)
     assert again.exit_code == 0 and (out / "sweep.csv").read_text().splitlines() == rows
 
 
+@pytest.mark.slow
 def test_every_json_file_of_a_gym_study_is_strict_json(mountaincar: Path) -> None:
     from test_study import strict_json_files
 

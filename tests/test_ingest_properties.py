@@ -5,6 +5,7 @@ from __future__ import annotations
 import tempfile
 from pathlib import Path
 
+import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -47,6 +48,7 @@ def corrupted_month(draw: st.DrawFn) -> tuple[list[str], list[str], dict[str, li
     return corrupt(HDB), corrupt(HROSTER), {name: corrupt(lines) for name, lines in PDB.items()}
 
 
+@pytest.mark.slow
 @settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(corrupted_month())
 def test_corrupted_lines_never_crash_and_every_hand_is_counted(

@@ -12,9 +12,8 @@ import numpy as np
 import pyarrow.parquet as pq
 import pytest
 import torch
-from typer.testing import CliRunner
+from shared import Cli
 
-from pokerirl.cli import app
 from pokerirl.datasets.toy import toy_expert_table
 from pokerirl.irl import RunError, load_config, load_policy, load_reward, load_run_config
 from pokerirl.irl.airl import LOSS_KEYS
@@ -22,6 +21,8 @@ from pokerirl.poker import read_table
 
 torch.set_num_threads(1)
 REPO = Path(__file__).resolve().parents[1]
+
+CLI = Cli()  # pokerirl run in this process (tests/shared.py)
 
 
 @pytest.fixture(scope="module")
@@ -37,7 +38,7 @@ def run_dir(table_path: Path, tmp_path_factory: pytest.TempPathFactory) -> Path:
     config = tmp_path_factory.mktemp("cfg") / "train.toml"
     config.write_text("batch_size = 64\nepochs = 9\nsigma_end = 0.2\n")
     args = ["train", str(table_path), "--out", str(out), "--algo", "hairl", "--epochs", "3"]
-    result = CliRunner().invoke(app, [*args, "--config", str(config), "--seed", "11", "--quiet"])
+    result = CLI.invoke([*args, "--config", str(config), "--seed", "11", "--quiet"])
     assert result.exit_code == 0, result.output
     assert "validation alignment" in result.output
     return out
@@ -195,12 +196,13 @@ def test_bad_input_gives_one_line_errors(
         args["extra"] = ["--config", str(tmp_path / "c.toml")]
     command = ["train", args["table"], "--out", str(tmp_path / "run"), "--algo", args["algo"]]
     epochs = [] if case == "toml_float_epochs" else ["--epochs", "1"]
-    result = CliRunner().invoke(app, [*command, *epochs, *args["extra"]])
+    result = CLI.invoke([*command, *epochs, *args["extra"]])
     _assert_one_line_error(result.exit_code, result.stderr, needle)
     if case == "out_is_file":
         assert (tmp_path / "run").read_text() == "precious"
 
 
+@pytest.mark.slow
 def test_bad_input_in_a_real_process(tmp_path: Path) -> None:
     env = {**os.environ, "PYTHONPATH": str(REPO)}
     command = [sys.executable, "-m", "pokerirl", "train", str(tmp_path / "none.parquet")]
@@ -272,7 +274,7 @@ def test_bad_reward_runs_give_one_line_errors_naming_the_file(
     assert named in text and "weights_only" not in text
     # Through the agent trainer's command line, which calls load_reward.
     command = ["agent", "train", "--reward", "learned", "--reward-run", str(bad)]
-    result = CliRunner().invoke(app, [*command, "--out", str(tmp_path / "agent"), "-q"])
+    result = CLI.invoke([*command, "--out", str(tmp_path / "agent"), "-q"])
     _assert_one_line_error(result.exit_code, result.stderr, named)
     assert "weights_only" not in result.output + result.stderr
 
@@ -292,21 +294,23 @@ def test_format_version_1_runs_still_load(run_dir: Path, tmp_path: Path) -> None
     assert np.array_equal(load_reward(old)(obs, actions), load_reward(run_dir)(obs, actions))
 
 
+@pytest.mark.slow
 def test_same_seed_same_bytes(table_path: Path, tmp_path: Path) -> None:
     for name in ("a", "b"):
         args = ["train", str(table_path), "--out", str(tmp_path / name), "--epochs", "1"]
-        result = CliRunner().invoke(app, [*args, "--batch-size", "64", "--quiet"])
+        result = CLI.invoke([*args, "--batch-size", "64", "--quiet"])
         assert result.exit_code == 0, result.output
     for file in ("reward.pt", "policy.pt", "config.json", "metrics.jsonl", "split.json"):
         assert (tmp_path / "a" / file).read_bytes() == (tmp_path / "b" / file).read_bytes(), file
 
 
+@pytest.mark.slow
 def test_several_runs_write_run_folders_a_summary_and_a_band_plot(
     table_path: Path, tmp_path: Path
 ) -> None:
     out = tmp_path / "runs"
     args = ["train", str(table_path), "--out", str(out), "--runs", "2", "--epochs", "2"]
-    result = CliRunner().invoke(app, [*args, "--batch-size", "64", "--seed", "5", "--quiet"])
+    result = CLI.invoke([*args, "--batch-size", "64", "--seed", "5", "--quiet"])
     assert result.exit_code == 0, result.output
     assert "run-0" in result.output and "run-1" in result.output
     configs = [load_run_config(out / f"run-{k}") for k in (0, 1)]
@@ -335,7 +339,7 @@ def test_several_runs_are_resumable_units_whatever_the_job_count(
     weights = ("reward.pt", "policy.pt", "config.json", "metrics.jsonl", "split.json")
     for jobs in ("1", "2"):
         out = tmp_path / f"jobs{jobs}"
-        result = CliRunner().invoke(app, [*base, "--out", str(out), "--runs", "2", "-j", jobs])
+        result = CLI.invoke([*base, "--out", str(out), "--runs", "2", "-j", jobs])
         assert result.exit_code == 0, result.output
     for k in (0, 1):
         for name in weights:
@@ -344,13 +348,13 @@ def test_several_runs_are_resumable_units_whatever_the_job_count(
     out = tmp_path / "jobs1"
     finished = (out / "run-0" / "reward.pt").stat().st_mtime_ns
     (out / "run-1" / "reward.pt").write_bytes(b"corrupt")  # recomputed, not trusted
-    result = CliRunner().invoke(app, [*base, "--out", str(out), "--runs", "2"])
+    result = CLI.invoke([*base, "--out", str(out), "--runs", "2"])
     assert result.exit_code == 0, result.output
     assert (out / "run-0" / "reward.pt").stat().st_mtime_ns == finished  # reused
     twin = tmp_path / "jobs2" / "run-1" / "reward.pt"
     assert (out / "run-1" / "reward.pt").read_bytes() == twin.read_bytes()
     changed = [*base[:3], "2", *base[4:], "--out", str(out), "--runs", "2"]
-    result = CliRunner().invoke(app, changed)
+    result = CLI.invoke(changed)
     assert result.exit_code == 1 and "another configuration" in result.output
     assert (out / "run-0" / "reward.pt").stat().st_mtime_ns == finished
 

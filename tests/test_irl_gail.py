@@ -10,9 +10,8 @@ from pathlib import Path
 import pyarrow.parquet as pq
 import pytest
 import torch
-from typer.testing import CliRunner
+from shared import Cli
 
-from pokerirl.cli import app
 from pokerirl.datasets.toy import toy_expert_table
 from pokerirl.errors import ConfigError
 from pokerirl.irl import AIRLConfig, discriminator_loss, fast, load_config, train
@@ -21,6 +20,8 @@ from pokerirl.irl.discriminators import AIRL, GAIL, discriminator_for
 from pokerirl.poker import transitions_from_arrow
 
 torch.set_num_threads(1)
+
+CLI = Cli()  # pokerirl run in this process (tests/shared.py)
 
 
 def test_the_discriminators_give_their_logits_on_known_numbers() -> None:
@@ -72,7 +73,7 @@ def test_gail_has_no_supervision_nor_noise_and_its_own_discriminator() -> None:
 
 def test_the_commands_offer_the_irl_configs_algorithms() -> None:
     # read from the config (torch-free), never spelled out again
-    help_text = CliRunner().invoke(app, ["gym", "irl", "--help"], terminal_width=100).output
+    help_text = CLI.invoke(["gym", "irl", "--help"], terminal_width=100).output
     assert "[airl|hairl|gail]" in help_text and ALGOS == ("airl", "hairl", "gail")
 
 
@@ -81,7 +82,7 @@ def test_gail_trains_on_the_toy_table_through_pokerirl_train(tmp_path: Path) -> 
     pq.write_table(toy_expert_table(num_hands=200, seed=5, slip=0.1), table)
     out = tmp_path / "gail"
     args = ["train", str(table), "--out", str(out), "--algo", "gail", "--epochs", "8"]
-    result = CliRunner().invoke(app, [*args, "--batch-size", "64", "--quiet"])
+    result = CLI.invoke([*args, "--batch-size", "64", "--quiet"])
     assert result.exit_code == 0, result.output
     assert result.output.startswith("gail:")
     config = json.loads((out / "config.json").read_text())
@@ -112,6 +113,7 @@ def test_gails_fast_path_follows_autograd_and_differs_from_airl() -> None:
                                                           abs=1e-3)  # fmt: skip
 
 
+@pytest.mark.slow
 def test_gail_trains_on_a_tiny_gym_table(tmp_path: Path) -> None:
     from pokerirl.gym.collect import collect
     from pokerirl.gym.experts import load_expert, resolve_expert_dir
@@ -122,7 +124,7 @@ def test_gail_trains_on_a_tiny_gym_table(tmp_path: Path) -> None:
     out = tmp_path / "irl"
     args = ["gym", "irl", "MountainCar-v0", "--data", str(data), "--algo", "gail", "--runs", "1"]
     args += ["--epochs", "3", "--preset", "quick", "--out", str(out)]
-    result = CliRunner().invoke(app, args)
+    result = CLI.invoke(args)
     assert result.exit_code == 0, result.output
     assert "MountainCar-v0 gail: final return" in result.output
     run = out / "run-0"

@@ -25,6 +25,7 @@ def synthetic_tables(tmp_path_factory: pytest.TempPathFactory) -> list[Path]:
     return tables
 
 
+@pytest.mark.slow
 def test_hairl_beats_majority_and_airl_on_synthetic_demo_data(
     synthetic_tables: list[Path], tmp_path: Path
 ) -> None:

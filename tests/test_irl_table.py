@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -20,8 +21,10 @@ def write(table: pa.Table, path: Path, **kwargs: object) -> Path:
     return path
 
 
-def test_round_trip_through_parquet_with_many_row_groups(tmp_path: Path) -> None:
-    table = toy_expert_table(num_hands=300, seed=3)
+def test_round_trip_through_parquet_with_many_row_groups(
+    tmp_path: Path, small_table: Callable[..., pa.Table]
+) -> None:
+    table = small_table(num_hands=300, seed=3)
     path = write(table, tmp_path / "t.parquet", row_group_size=97)  # several chunks
     expert = read_table(path)
     obs = np.array(table.column("obs").to_pylist(), dtype=np.float32)

@@ -356,6 +356,7 @@ def test_lbr_against_call_is_the_exact_best_response() -> None:
 # --- the run ---------------------------------------------------------------------------------
 
 
+@pytest.mark.slow
 def test_same_bytes_on_any_backend_and_a_rerun_reuses_the_units(tmp_path: Path) -> None:
     config = ExploitConfig(hands=120, seed=2, lbr=LBRSettings(check_until="turn"), unit_hands=40)
     one = run_lbr("loosebot", config, tmp_path / "one")

@@ -51,6 +51,7 @@ def test_reveal_all_shows_every_hand_without_changing_the_deals_or_the_play(
     assert np.array_equal(np.stack(same.obs), np.stack(kept.obs))
 
 
+@pytest.mark.slow
 def test_the_default_reward_decay_does_not_flatten_f_into_the_legal_majority_rule() -> None:
     """A learning test at a tiny budget: on a toy table whose expert raises strong hands, f's
     argmax must raise on most of the states where the expert raises. With the authors' decay
@@ -103,6 +104,7 @@ def test_a_reward_below_its_behaviour_cloning_is_flagged(weak_run: Path) -> None
     assert "warning: on its validation hands the run's reward argmax" in again.output
 
 
+@pytest.mark.slow
 def test_a_dqn_on_the_strength_encoding_follows_a_strength_dependent_reward() -> None:
     """Cause 4 of issue 31: a reward that pays raising only with strong hands. On the
     strength encoding (no input batch norm) and its advantage transform, the DQN raises

@@ -72,6 +72,7 @@ def test_subpackages_list_what_they_export() -> None:
     )
 
 
+@pytest.mark.slow
 def test_import_pokerirl_does_not_import_torch() -> None:
     script = (
         "import sys\n"

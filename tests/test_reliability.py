@@ -499,6 +499,7 @@ def test_usage_errors_are_one_line(args: list[str], line: str) -> None:
     assert result.output.count("\n") == 1 and result.output.startswith(line), result.output
 
 
+@pytest.mark.slow
 def test_python_m_gives_the_same_one_line_and_help_still_works() -> None:
     env = {
         **os.environ,

@@ -171,6 +171,7 @@ def _bad_values(i: Inputs, out: Path) -> list[tuple[list[str], str]]:
     ]
 
 
+@pytest.mark.slow
 def test_bad_option_values_are_usage_errors_before_any_work(inputs: Inputs, tmp_path: Path) -> None:
     out = tmp_path / "out"
     before = _files(inputs.month.parents[2])

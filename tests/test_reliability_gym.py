@@ -17,6 +17,7 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from shared import folder_bytes, folder_snapshot
 from test_reliability import one_error_line, run_cli
 
 from pokerirl.cli.app import MAX_SEED
@@ -27,10 +28,6 @@ pytest.importorskip("stable_baselines3")
 ODD = os.fsdecode(b"\xff")
 RL_FAST = ["--timesteps", "300", "--evaluations", "1", "--eval-episodes", "1"]
 EXPERT_FAST = ["--timesteps", "300", "--eval-episodes", "1", "--final-episodes", "1"]
-
-
-def _files(folder: Path) -> dict[str, bytes]:
-    return {str(p.relative_to(folder)): p.read_bytes() for p in folder.rglob("*") if p.is_file()}
 
 
 # --- usage errors: exit 2, one line, before any work -------------------------------------------
@@ -141,15 +138,9 @@ def test_gym_irl_reads_data_at_a_path_that_is_not_utf8(tmp_path: Path) -> None:
 # --- the report checks a gym summary once, on reading ---------------------------------------
 
 
-@pytest.fixture(scope="module")
-def study(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    out = tmp_path_factory.mktemp("gym-study") / "study"
-    code, lines = run_cli(
-        "gym", "study", "MountainCar-v0", "--out", str(out), "-q", "--jobs", "1", "--runs", "2",
-        "--transitions", "600", "--epochs", "1", "--eval-episodes", "1", "--timesteps", "300",
-    )  # fmt: skip
-    assert code == 0, lines
-    return out
+@pytest.fixture
+def study(mountaincar_study: Path) -> Path:
+    return mountaincar_study  # the session's (conftest): read only here
 
 
 def _leaves(value: Any, path: tuple[Any, ...] = ()) -> list[tuple[Any, ...]]:
@@ -169,6 +160,7 @@ def _set(document: Any, path: tuple[Any, ...], value: Any) -> Any:
     return changed
 
 
+@pytest.mark.slow
 def test_report_on_a_damaged_gym_summary_is_one_line_never_a_crash(
     study: Path, tmp_path: Path
 ) -> None:
@@ -207,11 +199,11 @@ def test_gym_rl_rerun_resumes_refuses_other_settings_and_overwrites_whole(tmp_pa
     out = tmp_path / "rl"
     base = ["gym", "rl", "MountainCar-v0", "--env-reward", "--runs", "2", "--out", str(out)]
     assert run_cli(*base, *RL_FAST)[0] == 0
-    before = _files(out)
+    before = folder_bytes(out)
     assert {json.loads((out / f"run-{k}" / "unit.json").read_text())["config"]["seed"]
             for k in (0, 1)} == {0, 1}  # fmt: skip
     assert run_cli(*base, *RL_FAST)[0] == 0  # same settings: the runs are kept
-    assert _files(out) == before
+    assert folder_bytes(out) == before
     other = ["--timesteps", "400", *RL_FAST[2:]]
     code, lines = run_cli(*base, *other)
     assert code == 1
@@ -219,7 +211,7 @@ def test_gym_rl_rerun_resumes_refuses_other_settings_and_overwrites_whole(tmp_pa
         f"error: {out / 'run-0'} was made with another configuration (timesteps 300 -> 400); "
         "use another --out, or --overwrite to recompute it"
     )
-    assert _files(out) == before  # nothing replaced
+    assert folder_bytes(out) == before  # nothing replaced
     assert run_cli(*base, *other, "--overwrite")[0] == 0
     for k in (0, 1):
         assert json.loads((out / f"run-{k}" / "config.json").read_text())["timesteps"] == 400
@@ -247,6 +239,7 @@ def _killed(argv: list[str], ready: Callable[[], bool]) -> None:
         process.wait()
 
 
+@pytest.mark.slow
 def test_a_killed_gym_rl_overwrite_never_leaves_runs_of_two_settings(tmp_path: Path) -> None:
     """Runs are units, each saved on its own: an --overwrite first removes every run of other
     settings (run-4 beyond --runs too), so a kill after the first new run leaves no old one."""
@@ -264,6 +257,7 @@ def test_a_killed_gym_rl_overwrite_never_leaves_runs_of_two_settings(tmp_path: P
             (out / "run-0" / "model.pt").stat().st_ino) == kept  # fmt: skip
 
 
+@pytest.mark.slow
 def test_a_gym_rl_overwrite_killed_in_a_lockstep_group_leaves_no_old_run(tmp_path: Path) -> None:
     out = tmp_path / "rl"
     base = ["gym", "rl", "MountainCar-v0", "--env-reward", "--out", str(out), "--runs", "2"]
@@ -274,27 +268,22 @@ def test_a_gym_rl_overwrite_killed_in_a_lockstep_group_leaves_no_old_run(tmp_pat
     assert not list(out.glob("*.json"))  # no record of either settings
 
 
+@pytest.mark.slow
 def test_gym_expert_rerun_with_another_seed_is_refused(tmp_path: Path) -> None:
     out = tmp_path / "expert"
     base = ["gym", "expert", "MountainCar-v0", "--out", str(out), *EXPERT_FAST]
     assert run_cli(*base)[0] == 0
-    before = _files(out)
+    before = folder_bytes(out)
     code, lines = run_cli(*base)
     assert code == 0 and any("reusing the expert" in line for line in lines)
     code, lines = run_cli(*base, "--seed", "3")
     assert code == 1 and "(seed 0 -> 3); use another --out, or --overwrite" in one_error_line(lines)
-    assert _files(out) == before
+    assert folder_bytes(out) == before
     assert run_cli(*base, "--seed", "3", "--overwrite")[0] == 0
     assert json.loads((out / "config.json").read_text())["seed"] == 3
 
 
 # --- gym rl and gym expert folders written before the store --------------------------------
-
-
-def _snapshot(folder: Path) -> dict[str, tuple[bytes, int]]:
-    """Every file's bytes and inode: a file rewritten, even to the same bytes, shows."""
-    return {str(p.relative_to(folder)): (p.read_bytes(), p.stat().st_ino)
-            for p in folder.rglob("*") if p.is_file()}  # fmt: skip
 
 
 def _before_the_store(out: Path, name: str, identity: dict[str, Any]) -> None:
@@ -316,9 +305,9 @@ def test_a_gym_rl_folder_made_before_the_store_is_reused_refused_and_replaced(
                 "eval_episodes": 1, "backend": "lockstep"}  # fmt: skip
     _before_the_store(out, "rl.job.json", identity)
     shutil.rmtree(out / "run-1")  # killed after its first run landed
-    before = _snapshot(out)
+    before = folder_snapshot(out)
     assert run_cli(*base, *RL_FAST)[0] == 0
-    after = _snapshot(out)
+    after = folder_snapshot(out)
     assert {k: v for k, v in after.items() if not k.startswith("run-1")} == before  # reused
     assert (out / "run-1" / "unit.json").is_file()  # the missing run, as a unit
     code, lines = run_cli(*base, "--timesteps", "400", *RL_FAST[2:])
@@ -327,7 +316,7 @@ def test_a_gym_rl_folder_made_before_the_store_is_reused_refused_and_replaced(
         f"error: {out / 'rl.job.json'} was made with another configuration "
         "(timesteps 300 -> 400); use another --out, or --overwrite to recompute it"
     )
-    assert _snapshot(out) == after
+    assert folder_snapshot(out) == after
     assert run_cli(*base, "--timesteps", "400", *RL_FAST[2:], "--overwrite")[0] == 0
     assert _timesteps(out) == {"run-0": 400, "run-1": 400}
     assert not (out / "rl.job.json").exists()  # it vouches for nothing any more
@@ -342,15 +331,15 @@ def test_a_gym_expert_folder_made_before_the_store_is_reused_and_refused(
     identity = {"env": "MountainCar-v0", "seed": 0, "hyper": "paper", "timesteps": 300,
                 "eval_every": None, "eval_episodes": 1, "final_episodes": 1}  # fmt: skip
     _before_the_store(out, "expert.job.json", identity)
-    before = _snapshot(out)
+    before = folder_snapshot(out)
     code, lines = run_cli(*base)
     assert code == 0 and any("reusing the expert" in line for line in lines)
-    assert _snapshot(out) == before
+    assert folder_snapshot(out) == before
     code, lines = run_cli(*base, "--seed", "3")
     assert code == 1
     assert f"{out / 'expert.job.json'} was made with another configuration (seed 0 -> 3)" in (
         one_error_line(lines))  # fmt: skip
-    assert _snapshot(out) == before
+    assert folder_snapshot(out) == before
 
 
 # --- a killed gym irl ------------------------------------------------------------------------
@@ -360,11 +349,12 @@ def _writing(out: Path) -> bool:
     return any("abcd1234" not in str(p) for p in out.glob(".irl.*/**/run-0"))
 
 
+@pytest.mark.slow
 def test_a_killed_gym_irl_leaves_nothing_the_next_run_does_not_remove(tmp_path: Path) -> None:
     out = tmp_path / "irl"
     args = ["gym", "irl", "MountainCar-v0", "--out", str(out), "--preset", "quick", "--runs", "1"]
     assert run_cli(*args, "--epochs", "1")[0] == 0
-    before = _files(out)
+    before = folder_bytes(out)
     legacy = out / ".irl.abcd1234.tmp" / "run-0"  # what an earlier version's kill left
     legacy.mkdir(parents=True)
     argv = [sys.executable, "-m", "pokerirl", *args, "--epochs", "200", "--overwrite"]
@@ -377,7 +367,8 @@ def test_a_killed_gym_irl_leaves_nothing_the_next_run_does_not_remove(tmp_path: 
     finally:
         process.send_signal(signal.SIGKILL)
         process.wait()
-    assert _files(out) == before | {k: v for k, v in _files(out).items() if k.startswith(".")}
+    after = folder_bytes(out)
+    assert after == before | {k: v for k, v in after.items() if k.startswith(".")}
     assert run_cli(*args, "--epochs", "1", "--overwrite")[0] == 0
     assert not [p.name for p in out.iterdir() if p.name.startswith(".")]
-    assert _files(out).keys() == before.keys()
+    assert folder_bytes(out).keys() == before.keys()

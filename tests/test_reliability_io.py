@@ -24,6 +24,7 @@ from pathlib import Path
 import pyarrow as pa
 import pyarrow.parquet as pq
 import pytest
+from shared import folder_bytes
 from test_reliability import MINIMAL, one_error_line, run_cli, write_minimal
 
 from pokerirl.datasets.ingest import ingest_table, summary_path
@@ -345,16 +346,12 @@ def test_only_the_hand_of_a_corrupt_line_is_malformed_in_a_real_month(tmp_path: 
 # --- tournaments: the same seeds, the same bytes ----------------------------------------------
 
 
-def _files(folder: Path) -> dict[str, bytes]:
-    return {str(p.relative_to(folder)): p.read_bytes() for p in folder.rglob("*") if p.is_file()}
-
-
 def test_tournament_same_seeds_same_bytes_with_timings_apart(tmp_path: Path) -> None:
     games = ["tournament", "--vs", "random", "call", "raise", "--hands", "2000", "--seeds", "0-2"]
     for out, jobs in (("a", "1"), ("b", "2")):
         code, lines = run_cli(*games, "--out", str(tmp_path / out), "--jobs", jobs, "-q")
         assert code == 0, lines
-    first, second = _files(tmp_path / "a"), _files(tmp_path / "b")
+    first, second = folder_bytes(tmp_path / "a"), folder_bytes(tmp_path / "b")
     timings = [json.loads(files.pop("timings.json", b"{}")) for files in (first, second)]
     assert sorted(first) == [
         "per_seed.csv",

@@ -120,6 +120,7 @@ def test_card_round_trips_and_a_train_run_writes_one(tmp_path: Path) -> None:
     assert bad.exit_code == 1 and "not a reward run" in bad.output
 
 
+@pytest.mark.slow
 def test_fan_out_runs_write_the_same_card_bytes_naming_the_real_table(tmp_path: Path) -> None:
     # A fan-out run trains on a worker's scratch copy of the table; its card must name the
     # table given, not the copy, so the same inputs give the same bytes.

@@ -149,6 +149,7 @@ def test_experiment_files_of_main_are_reused(
     assert found["raise-vs-call"].experiments[0].repeats_mbb == (7.5, -2.5)
 
 
+@pytest.mark.slow
 def test_a_gym_study_folder_of_main_is_reused(tmp_path: Path) -> None:
     """Data, IRL and RL units (sb3 and lock-step) whose records main's gym/jobs.py wrote."""
     pytest.importorskip("gymnasium")

@@ -30,6 +30,7 @@ TINY = dict(
 )
 
 
+@pytest.mark.slow
 def test_a_study_with_gail_reports_it_beside_hairl(tmp_path: Path) -> None:
     month = write_synthetic_month(tmp_path / "irc", hands=400, seed=0)
     out = tmp_path / "out"

@@ -11,6 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from matplotlib.image import imread
+from shared import folder_bytes
 from typer.testing import CliRunner
 
 from pokerirl.cli import app
@@ -209,10 +210,6 @@ def test_report_errors(tmp_path: Path) -> None:
     assert other.exit_code == 1 and "not a pokerirl-tournament/2 report" in other.output
 
 
-def _files(folder: Path) -> dict[str, bytes]:
-    return {str(p.relative_to(folder)): p.read_bytes() for p in folder.rglob("*") if p.is_file()}
-
-
 SMALL = ["--hands", "4", "--seeds", "0-1", "--jobs", "1", "-q"]
 
 
@@ -220,7 +217,7 @@ def test_other_matchups_into_a_report_folder_are_refused_unless_overwrite(tmp_pa
     out = tmp_path / "t"
     first = runner.invoke(app, ["tournament", "random", "call", "--out", str(out), *SMALL])
     assert first.exit_code == 0, first.output
-    before = _files(out)
+    before = folder_bytes(out)
     assert {"report.md", "report.json", "per_seed.csv", "per_seed.png"} <= before.keys()
 
     for other, theirs in [  # another matchup, or more of them
@@ -233,7 +230,7 @@ def test_other_matchups_into_a_report_folder_are_refused_unless_overwrite(tmp_pa
             f"error: {out}: holds the report of random-vs-call, not {theirs}; "
             "use another --out, or --overwrite to replace it\n"
         )
-        assert _files(out) == before  # every file of the first, byte for byte; nothing new
+        assert folder_bytes(out) == before  # every file of the first, byte for byte; nothing new
 
     again = runner.invoke(app, ["tournament", "random", "call", "--out", str(out), *SMALL])
     assert again.exit_code == 0, again.output  # the same matchup resumes as before
@@ -251,11 +248,11 @@ def test_saved_seeds_of_other_matchups_are_refused_too(tmp_path: Path) -> None:
     assert first.exit_code == 0, first.output
     for name in ("report.json", "report.md", "per_seed.csv", "per_seed.png", "timings.json"):
         (out / name).unlink()  # as a run stopped before its report leaves it
-    before = _files(out)
+    before = folder_bytes(out)
     second = runner.invoke(app, ["tournament", "raise", "call", "--out", str(out), *SMALL])
     assert second.exit_code == 1
     assert second.stderr == (
         f"error: {out}: holds the saved seeds of random-vs-call, not raise-vs-call; "
         "use another --out, or --overwrite to replace it\n"
     )
-    assert _files(out) == before
+    assert folder_bytes(out) == before

@@ -190,6 +190,7 @@ def test_agent_set_missing_a_seed_is_refused_before_anything_loads(tmp_path: Pat
         run_tournament([(str(a_file), "call")], hands=100, seeds=[0], out=tmp_path / "r")
 
 
+@pytest.mark.slow
 def test_a_killed_run_leaves_whole_seed_files_and_resumes(tmp_path: Path) -> None:
     args = ["call", "random", "--hands", "100000", "--seeds", "0-39", "--jobs", "1"]
     command = [sys.executable, "-m", "pokerirl", "tournament", *args, "--out", str(tmp_path), "-q"]

@@ -26,6 +26,7 @@ def run_dir(tmp_path_factory: pytest.TempPathFactory) -> Path:
     return root / "run"
 
 
+@pytest.mark.slow
 def test_transfer_table_has_every_row_and_the_expert_baselines(
     run_dir: Path, tmp_path: Path
 ) -> None:

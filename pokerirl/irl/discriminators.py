@@ -39,7 +39,8 @@ class Discriminator(ABC):
     def logits(self, f: Tensor, log_pi: Tensor) -> Tensor:
         """The logits of rows with rewards ``f`` and log-probabilities ``log_pi`` (one shape).
 
-        The trainer's hand-derived gradient assumes d logit / d f = 1.
+        The trainer differentiates it with autograd; its hand-derived step
+        (:mod:`~pokerirl.irl.fast`) runs only for the built-in discriminators, by exact type.
         """
 
 

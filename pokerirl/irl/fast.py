@@ -8,7 +8,15 @@ activation), one run, discrete actions. :func:`supports` says whether a pair is 
 the functions below raise ``ValueError`` for anything else. ``tests/test_irl_fast.py``
 compares every gradient here with autograd on the documented losses.
 :class:`HandDerivedStep` is the trainer's step made of them, which
-:class:`~pokerirl.irl.trainer.AdversarialTrainer` uses in place of its own where they apply.
+:class:`~pokerirl.irl.trainer.AdversarialTrainer` uses in place of its own where
+:func:`covers` says it computes the same thing.
+
+The gradients are written for the built-in strategies only, by exact type: the two
+discriminators (:data:`DERIVED_FOR`, whose logit has d logit / d f = 1) and the
+:class:`~pokerirl.irl.heads.DiscreteHead` with its mean cross-entropy term. A user's
+discriminator or head, even a subclass of a built-in, runs on autograd, which differentiates
+whatever it defines: the losses are written once, in :mod:`~pokerirl.irl.losses` and the
+heads, and this path cannot silently disagree with them.
 """
 
 from __future__ import annotations
@@ -20,8 +28,9 @@ import torch
 from torch import Tensor, nn
 
 from pokerirl.errors import ConfigError
-from pokerirl.irl.discriminators import AIRL, Discriminator
-from pokerirl.irl.heads import DiscreteHead, StepDraw
+from pokerirl.irl.config import SupervisedForm
+from pokerirl.irl.discriminators import AIRL, AIRLDiscriminator, Discriminator, GAILDiscriminator
+from pokerirl.irl.heads import DiscreteHead, PolicyHead, StepDraw
 from pokerirl.irl.losses import weighted_mean
 from pokerirl.irl.nets import MASKED_LOGIT, DiscretePolicy, StateActionReward
 from pokerirl.irl.optim import FlatAdam
@@ -42,6 +51,37 @@ def supports(reward: nn.Module, policy: nn.Module) -> bool:
         and type(reward.first_activation) is nn.ReLU
         and _plain_relu_mlp(reward.head)
         and _plain_relu_mlp(policy.mlp)
+    )
+
+
+# The discriminators whose gradient :func:`discriminator_grad` writes out: their logits are
+# f − log π and f. Exact types: a subclass may override ``logits``.
+DERIVED_FOR: frozenset[type[Discriminator]] = frozenset({AIRLDiscriminator, GAILDiscriminator})
+
+
+def covers(
+    *, reward: nn.Module, policy: nn.Module, head: PolicyHead, discriminator: Discriminator
+) -> bool:
+    """True when :class:`HandDerivedStep` computes what the trainer's autograd step does for
+    these nets and strategies: :func:`supports` the nets, the built-in
+    :class:`~pokerirl.irl.heads.DiscreteHead` with its mean cross-entropy supervised term,
+    and a discriminator in :data:`DERIVED_FOR`.
+
+    >>> from pokerirl.irl import NetSpec, build_nets
+    >>> nets = build_nets(NetSpec(), obs_dim=5, action_dim=4, discrete=True)
+    >>> head = DiscreteHead(action_dim=4, device=torch.device("cpu"))
+    >>> covers(reward=nets[0], policy=nets[1], head=head, discriminator=AIRL)
+    True
+    >>> class Mine(AIRLDiscriminator):  # a user's logit: autograd differentiates it
+    ...     def logits(self, f, log_pi): return 3 * torch.tanh(f) - log_pi
+    >>> covers(reward=nets[0], policy=nets[1], head=head, discriminator=Mine())
+    False
+    """
+    return (
+        supports(reward, policy)
+        and type(head) is DiscreteHead
+        and head.supervised_form == SupervisedForm.MEAN_MSE  # the term policy_backward writes
+        and type(discriminator) in DERIVED_FOR
     )
 
 
@@ -133,8 +173,13 @@ def discriminator_grad(
     With D = σ(logit), the logit's derivative in f being 1 (AIRL's f − log π, GAIL's f):
     d/df of −log D is D − 1, of −log(1 − D) is D. With row ``weights`` (B,) each mean is
     Σ w·(...) / Σ w, so row i's terms scale by w_i / Σ w (its policy row is drawn at the
-    same state and shares its weight).
+    same state and shares its weight). Any other ``discriminator`` raises ``ConfigError``.
     """
+    if type(discriminator) not in DERIVED_FOR:
+        raise ConfigError(
+            f"the hand-derived discriminator gradient is written for AIRL's and GAIL's logits "
+            f"only, not {type(discriminator).__name__}'s; train it with autograd"
+        )
     batch = len(f) // 2
     grad = torch.sigmoid(discriminator.logits(f, log_pi))
     grad[:batch] -= 1
@@ -186,8 +231,9 @@ def policy_backward(
 @dataclass(frozen=True, kw_only=True)
 class HandDerivedStep:
     """:meth:`AdversarialTrainer.step <pokerirl.irl.trainer.AdversarialTrainer.step>` for
-    one run of the covered nets (:func:`supports`), with the gradients above: the same
-    draws, the same discriminator and policy updates, the same (1, 4B + 3) row."""
+    one run of the covered nets and strategies (:func:`covers`, checked here too), with the
+    gradients above: the same draws, the same discriminator and policy updates, the same
+    (1, 4B + 3) row."""
 
     reward: StateActionReward
     policy: DiscretePolicy
@@ -198,6 +244,14 @@ class HandDerivedStep:
     adversarial: bool
     alpha: float
     beta: float
+
+    def __post_init__(self) -> None:
+        if not covers(reward=self.reward, policy=self.policy, head=self.head,
+                      discriminator=self.discriminator):  # fmt: skip
+            raise ConfigError(
+                "the hand-derived step covers only the built-in discrete head and the AIRL or "
+                "GAIL discriminator on plain ReLU nets; use the trainer's autograd step"
+            )
 
     @torch.no_grad()
     def __call__(self, batch: Batch, draw: StepDraw) -> Tensor:

@@ -10,10 +10,11 @@
 
 Its :meth:`~AdversarialTrainer.step` is the algorithm of :mod:`pokerirl.irl.airl`, top to
 bottom: the policy acts, the discriminator is updated on the logits of expert and policy
-rows, then the policy. On the one architecture :mod:`pokerirl.irl.fast` covers, a
+rows, then the policy. Where :func:`pokerirl.irl.fast.covers` the nets and strategies (the
+default poker nets, one run, the built-in head and discriminators, by exact type), a
 :class:`~pokerirl.irl.fast.HandDerivedStep` (the same step with hand-derived gradients) takes
-its place. :func:`~pokerirl.irl.airl.train` and :func:`~pokerirl.irl.airl.train_many` build
-one with the config's strategies.
+its place; a user's strategy always runs on autograd. :func:`~pokerirl.irl.airl.train` and
+:func:`~pokerirl.irl.airl.train_many` build one with the config's strategies.
 
 >>> import numpy as np
 >>> from pokerirl.irl import AIRLConfig, GAILDiscriminator, Transitions, default_nets
@@ -48,10 +49,10 @@ from tqdm.auto import tqdm
 from pokerirl.errors import ConfigError, InputError
 from pokerirl.execution import unit_progress
 from pokerirl.irl import fast
-from pokerirl.irl.config import AIRLConfig, NoiseSchedule, SupervisedForm
+from pokerirl.irl.config import AIRLConfig, NoiseSchedule
 from pokerirl.irl.discriminators import Discriminator, discriminator_for
 from pokerirl.irl.evaluate import evaluate
-from pokerirl.irl.heads import DiscreteHead, EpochDraw, PolicyHead, StepDraw, head_for
+from pokerirl.irl.heads import EpochDraw, PolicyHead, StepDraw, head_for
 from pokerirl.irl.losses import discriminator_loss, noise_schedule
 from pokerirl.irl.nets import RewardFamily
 from pokerirl.irl.optim import FlatAdam
@@ -221,14 +222,17 @@ class AdversarialTrainer:
             and self.runs == 1
             and device.type == "cpu"
             and not self.shaped
-            and type(self.head) is DiscreteHead
-            and self.head.supervised_form == SupervisedForm.MEAN_MSE  # the hand-derived term
-            and fast.supports(self.rewards.modules[0], self.policies.modules[0])
+            and fast.covers(
+                reward=self.rewards.modules[0],
+                policy=self.policies.modules[0],
+                head=self.head,
+                discriminator=self.discriminator,
+            )
         ):
             self.update = fast.HandDerivedStep(
-                reward=self.rewards.modules[0],  # type: ignore[arg-type]  # supports() checked
+                reward=self.rewards.modules[0],  # type: ignore[arg-type]  # covers() checked
                 policy=self.policies.modules[0],  # type: ignore[arg-type]
-                head=self.head,
+                head=self.head,  # type: ignore[arg-type]  # covers() checked
                 discriminator=self.discriminator,
                 reward_opt=self.reward_opt,
                 policy_opt=self.policy_opt,

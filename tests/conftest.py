@@ -1,0 +1,110 @@
+"""Fixtures shared by the test files: the command line (``cli``), folder snapshots
+(``folder_bytes``, ``folder_snapshot``), small tables (``small_table``, ``small_table_path``)
+and the MountainCar gym study (``mountaincar_study``, built once per session). The helpers
+behind them are in :mod:`shared`, for module-scoped fixtures and module-level code.
+
+The suite runs in two tiers: ``make test-fast`` (``-m "not slow"``, the edit-test loop) and
+``make test`` (everything, over ``pytest-xdist`` workers with ``--dist loadgroup``). Tests
+stay isolated side by side: each writes in its own ``tmp_path``, starts its own processes on
+free ports, stops only those (by pid), and changes its folder or environment only through
+``monkeypatch`` (each xdist worker is a process of its own). The tests that share a session
+fixture carry its ``xdist_group``, so that one worker builds it once.
+"""
+
+from __future__ import annotations
+
+import functools
+from collections.abc import Callable
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import pytest
+from shared import TINY_GYM_STUDY, Cli, folder_bytes, folder_snapshot
+
+if TYPE_CHECKING:
+    import pyarrow as pa
+
+# Costly session fixtures and the xdist group of their users: one worker builds each once.
+SESSION_GROUPS = {"mountaincar_study": "mountaincar-study"}
+
+
+def _group(item: pytest.Item) -> str | None:
+    """The xdist group of a test that uses a fixture built once: a costly session fixture's
+    group, or its module's when it uses a module-scoped fixture (run or table built for the
+    module): without a group, xdist would build it on each worker that runs one of them."""
+    names = getattr(item, "fixturenames", ())
+    for fixture, group in SESSION_GROUPS.items():
+        if fixture in names:
+            return group
+    # pytest gives no public view of a test's fixture definitions at collection time.
+    info = getattr(item, "_fixtureinfo", None)
+    definitions = getattr(info, "name2fixturedefs", {})
+    if any(defs and defs[-1].scope == "module" for defs in definitions.values()):
+        return item.nodeid.split("::")[0]
+    return None
+
+
+def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
+    for item in items:
+        group = _group(item)
+        if group is not None and not item.get_closest_marker("xdist_group"):
+            item.add_marker(pytest.mark.xdist_group(group))
+
+
+@pytest.fixture
+def cli() -> Cli:
+    """``cli(*args)``: click's result of ``pokerirl ARGS``; ``cli.ok(*args)``: its output,
+    asserting exit code 0."""
+    return Cli()
+
+
+@pytest.fixture(name="folder_bytes")
+def folder_bytes_fixture() -> Callable[[Path], dict[str, bytes]]:
+    """``folder_bytes(folder)``: every file's bytes by relative path."""
+    return folder_bytes
+
+
+@pytest.fixture(name="folder_snapshot")
+def folder_snapshot_fixture() -> Callable[[Path], dict[str, tuple[bytes, int]]]:
+    """``folder_snapshot(folder)``: every file's bytes and inode (a rewrite shows)."""
+    return folder_snapshot
+
+
+@functools.cache
+def _toy_table(num_hands: int, seed: int) -> pa.Table:
+    from pokerirl.datasets.toy import toy_expert_table
+
+    return toy_expert_table(num_hands=num_hands, seed=seed)
+
+
+@pytest.fixture(scope="session")
+def small_table() -> Callable[..., pa.Table]:
+    """``small_table(num_hands=200, seed=0)``: the toy expert table, built once per session
+    and size (an Arrow table is immutable: sharing it is safe)."""
+
+    def build(num_hands: int = 200, seed: int = 0) -> pa.Table:
+        return _toy_table(num_hands, seed)
+
+    return build
+
+
+@pytest.fixture
+def small_table_path(tmp_path: Path, small_table: Callable[..., pa.Table]) -> Path:
+    """The 200-hand toy table as ``table.parquet`` in the test's own folder."""
+    import pyarrow.parquet as pq
+
+    path = tmp_path / "table.parquet"
+    pq.write_table(small_table(), path)
+    return path
+
+
+@pytest.fixture(scope="session")
+def mountaincar_study(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """``pokerirl gym study MountainCar-v0`` at ``TINY_GYM_STUDY``, built once per session.
+    A test may change it only to put it back as it was."""
+    pytest.importorskip("gymnasium")
+    pytest.importorskip("stable_baselines3")
+    out = tmp_path_factory.mktemp("study") / "mc"
+    output = Cli().ok("gym", "study", "MountainCar-v0", "--out", out, *TINY_GYM_STUDY)
+    assert "# pokerirl gym study (quick preset)" in output
+    return out
