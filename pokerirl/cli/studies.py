@@ -25,6 +25,7 @@ from pokerirl.cli.app import (
     settings_from_options,
     write_logs,
 )
+from pokerirl.cli.data import MONTHS_HELP, months
 from pokerirl.errors import InputError, MissingExtra, UsageError
 from pokerirl.studies.poker.config import AGENT_PRESETS, FOLDS, IRL_ALGOS, TRANSFORMS
 from pokerirl.studies.poker.config import PRESETS as STUDY_PRESETS
@@ -87,7 +88,7 @@ def demo(
 @app.command()
 @on_error(interrupted=INTERRUPTED)
 def study(
-    sources: list[Path] = typer.Argument(..., help="IRC month folders or archives."),
+    sources: list[Path] = typer.Argument(..., callback=months, help=MONTHS_HELP),
     out: Path = typer.Option(..., "--out", "-o", help="The study folder."),
     preset_name: str = typer.Option(
         "quick",
