@@ -4,9 +4,15 @@ sample by name wherever a month is taken, and ``data fetch`` against a local HTT
 from __future__ import annotations
 
 import hashlib
+import http.server
 import io
+import json
+import socket
 import tarfile
+import threading
+from collections.abc import Iterator
 from pathlib import Path
+from typing import ClassVar
 
 import pyarrow.parquet as pq
 import pytest
@@ -110,3 +116,150 @@ def test_data_list_names_the_shipped_sample_and_the_archive(fresh: Path) -> None
     archive = next(line for line in lines if line.startswith("irc "))
     assert "17 channels" in archive and archive.endswith("not fetched")
     assert str(fresh.parent.parent / "cache") in lines[-1]
+
+
+# --------------------------------------------------------------------------- data fetch
+
+
+def _ircdata() -> bytes:
+    """An IRCdata.tgz as the University of Alberta lays it out: month archives in a folder;
+    the month is the shipped sample's archive (1.1 MB, so a download takes many reads)."""
+    out = io.BytesIO()
+    with tarfile.open(fileobj=out, mode="w:gz") as tar:
+        for name, data in [("IRCdata/README.TXT", b"IRC Poker Logs\n"),
+                           ("IRCdata/holdem.199504.tgz", catalog.SAMPLE.path().read_bytes())]:
+            info = tarfile.TarInfo(name)
+            info.size = len(data)
+            tar.addfile(info, io.BytesIO(data))  # fmt: skip
+    return out.getvalue()
+
+
+IRCDATA = _ircdata()
+GOOD = hashlib.sha256(IRCDATA).hexdigest()
+
+
+class Archive(http.server.BaseHTTPRequestHandler):
+    """Serves :data:`IRCDATA` with HTTP Range; ``cut`` closes the first response halfway."""
+
+    cut = False
+    ranges: ClassVar[list[str | None]] = []
+    served: ClassVar[list[int]] = []
+
+    def do_GET(self) -> None:
+        asked = self.headers.get("Range")
+        type(self).ranges.append(asked)
+        start = int(asked.removeprefix("bytes=").rstrip("-")) if asked else 0
+        body = IRCDATA[start:]
+        self.send_response(206 if start else 200)
+        if start:
+            self.send_header("Content-Range", f"bytes {start}-{len(IRCDATA) - 1}/{len(IRCDATA)}")
+        self.send_header("Content-Length", str(len(body)))
+        self.end_headers()
+        if type(self).cut:
+            type(self).cut = False
+            body = body[: len(body) // 2]
+            self.close_connection = True
+        self.wfile.write(body)
+        self.wfile.flush()
+        type(self).served.append(len(body))
+
+    def log_message(self, *_: object) -> None:  # quiet
+        pass
+
+
+@pytest.fixture
+def server() -> Iterator[str]:
+    """The URL of IRCdata.tgz on a server on 127.0.0.1, started and stopped by the test."""
+    Archive.cut, Archive.ranges, Archive.served = False, [], []
+    httpd = http.server.ThreadingHTTPServer(("127.0.0.1", 0), Archive)
+    thread = threading.Thread(target=httpd.serve_forever, kwargs={"poll_interval": 0.05})
+    thread.start()
+    try:
+        yield f"http://127.0.0.1:{httpd.server_address[1]}/IRCdata.tgz"
+    finally:
+        httpd.shutdown()
+        httpd.server_close()
+        thread.join(timeout=10)
+
+
+def _files(folder: Path) -> list[str]:
+    return sorted(p.name for p in folder.rglob("*")) if folder.exists() else []
+
+
+@pytest.mark.slow
+def test_fetch_checks_the_sum_then_a_month_out_of_it_is_a_month_everywhere(
+    fresh: Path, server: str
+) -> None:
+    cache = fresh.parent.parent / "cache"
+    code, out, err = invoke("data", "fetch", "irc", "--url", server, "--sha256", GOOD.upper())
+    assert code == 0, err
+    assert f"SHA-256 {GOOD} matches --sha256" in out and "%" in err  # the progress bar
+    assert (cache / "IRCdata.tgz").read_bytes() == IRCDATA
+    code, out, err = invoke("data", "fetch", "irc-holdem-199504", "-q")
+    assert code == 0, err
+    month = cache / "holdem.199504.tgz"
+    assert month.read_bytes() == catalog.SAMPLE.path().read_bytes()
+    assert Archive.ranges == [None]  # the month came out of the cached archive: no download
+    code, _, err = invoke("ingest", "irc-holdem-199504", "--out", "t.parquet", "-q")
+    assert code == 0, err
+    ingest_table([real_month()], fresh / "folder.parquet", progress=False)
+    assert pq.read_table("t.parquet").equals(pq.read_table(fresh / "folder.parquet"))
+    code, out, _ = invoke("data", "list")
+    listed = {line.split()[0]: line for line in out.splitlines()[1:-1]}
+    assert listed["irc"].endswith(str(cache / "IRCdata.tgz"))
+    assert listed["irc-holdem-199504"].endswith(str(month))
+    # Where nobody publishes a sum, the first fetch records one and later fetches keep to it.
+    recorded = json.loads((cache / catalog.RECORDED_SUMS).read_text())
+    assert recorded["IRCdata.tgz"]["sha256"] == GOOD
+    (cache / "IRCdata.tgz").write_bytes(IRCDATA[:-1] + b"!")  # a cached file gone bad
+    code, _, err = invoke("data", "fetch", "irc")
+    assert code == 1 and f"not the recorded {GOOD}" in err and err.count("\n") == 1
+
+
+def test_a_wrong_sum_is_one_line_and_leaves_nothing_in_the_cache(
+    fresh: Path, server: str
+) -> None:
+    cache = fresh.parent.parent / "cache"
+    code, out, err = invoke("data", "fetch", "irc", "--url", server, "--sha256", "0" * 64, "-q")
+    assert code == 1 and out == ""
+    assert err.count("\n") == 1 and f"SHA-256 is {GOOD}, not the given {'0' * 64}" in err
+    assert _files(cache) == []
+    assert Archive.served == [len(IRCDATA)]  # it was downloaded whole, then refused
+
+
+def test_a_fetch_cut_halfway_resumes_where_it_stopped(fresh: Path, server: str) -> None:
+    cache = fresh.parent.parent / "cache"
+    Archive.cut = True
+    code, _, err = invoke("data", "fetch", "irc", "--url", server, "-q")
+    half = len(IRCDATA) // 2
+    assert code == 1 and f"cut after {half:,} of {len(IRCDATA):,} bytes" in err
+    assert (cache / ".IRCdata.tgz.part").stat().st_size == half
+    assert not (cache / "IRCdata.tgz").exists()
+    code, out, err = invoke("data", "fetch", "irc", "--url", server, "-q")
+    assert code == 0, err
+    assert Archive.ranges == [None, f"bytes={half}-"]
+    assert Archive.served == [half, len(IRCDATA) - half]  # the rest only
+    assert (cache / "IRCdata.tgz").read_bytes() == IRCDATA
+    assert "not verified (no sum is published)" in out
+    assert _files(cache) == ["IRCdata.tgz", catalog.RECORDED_SUMS]
+
+
+def test_offline_is_one_line_with_the_url_to_download_by_hand(fresh: Path) -> None:
+    with socket.socket() as probe:  # a port nothing listens on
+        probe.bind(("127.0.0.1", 0))
+        url = f"http://127.0.0.1:{probe.getsockname()[1]}/IRCdata.tgz"
+    code, _, err = invoke("data", "fetch", "irc", "--url", url)
+    assert code == 1 and err.count("\n") == 1
+    assert f"download {url} by hand, then: pokerirl data fetch irc --url FILE" in err
+    assert _files(fresh.parent.parent / "cache") == []
+
+
+def test_a_file_downloaded_by_hand_is_fetched_from_its_path(fresh: Path) -> None:
+    (fresh / "IRCdata.tgz").write_bytes(IRCDATA)
+    code, out, err = invoke("data", "fetch", "irc", "--url", "IRCdata.tgz", "--sha256", GOOD)
+    assert code == 0 and "matches --sha256" in out, err
+    assert (fresh.parent.parent / "cache" / "IRCdata.tgz").read_bytes() == IRCDATA
+    code, out, err = invoke("data", "fetch", "irc")  # there already: checked, not fetched
+    assert code == 0 and "matches the sum recorded at its first fetch" in out, err
+    code, _, err = invoke("data", "fetch", "irc", "--url", "missing.tgz")
+    assert code == 1 and err == "error: missing.tgz: no such file\n"
