@@ -13,7 +13,8 @@ from pokerirl.datasets.catalog import unpack_sample
 
 # The CI checkout's copy of the real sample, beside the repository (or beside a folder of
 # worktrees): only the test that the shipped archive is these bytes reads it.
-_SHARED = [p / "shared" / "irc-sample" / "holdem" / "199504" for p in Path(__file__).resolve().parents[1:4]]
+_ABOVE = Path(__file__).resolve().parents[1:4]
+_SHARED = [p / "shared" / "irc-sample" / "holdem" / "199504" for p in _ABOVE]
 SHARED_SAMPLE = next((p for p in _SHARED if p.is_dir()), _SHARED[0])
 
 
