@@ -13,7 +13,8 @@ $(BIN)/python:
 # Not --quiet: on a fresh machine this is minutes of downloads, and pip's lines are the progress.
 install: $(BIN)/python
 	@echo "make: installing pokerirl (editable) with torch, RLCard, Gymnasium (Box2D, MuJoCo), SB3 and Ray into $(VENV)/"
-	@echo "make: torch alone is about 2.6 GB with its CUDA libraries: the first install takes minutes, later ones seconds"
+	@echo "make: torch alone is about 2.6 GB with its CUDA libraries: the first install takes minutes, later ones seconds;"
+	@echo "make: pip's last step, 'Installing collected packages', unpacks them and prints nothing for minutes: it is working"
 	$(BIN)/python -m pip install -e ".[gym,ray]"
 	@echo "make: installed; 'source $(VENV)/bin/activate' puts pokerirl on your PATH (or call $(BIN)/pokerirl)"
 
