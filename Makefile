@@ -6,17 +6,26 @@ BIN := $(VENV)/bin
 .PHONY: demo test test-fast install install-dev lint bench docs
 
 $(BIN)/python:
+	@echo "make: creating the virtual environment $(VENV)/ (pokerirl and its libraries go there, not into your Python)"
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
 
+# Not --quiet: on a fresh machine this is minutes of downloads, and pip's lines are the progress.
 install: $(BIN)/python
-	$(BIN)/python -m pip install --quiet -e ".[gym,ray]"
+	@echo "make: installing pokerirl (editable) with torch, RLCard, Gymnasium (Box2D, MuJoCo), SB3 and Ray into $(VENV)/"
+	@echo "make: torch alone is about 2.6 GB with its CUDA libraries: the first install takes minutes, later ones seconds;"
+	@echo "make: pip's last step, 'Installing collected packages', unpacks them and prints nothing for minutes: it is working"
+	$(BIN)/python -m pip install -e ".[gym,ray]"
+	@echo "make: installed; 'source $(VENV)/bin/activate' puts pokerirl on your PATH (or call $(BIN)/pokerirl)"
 
 install-dev: $(BIN)/python
 	$(BIN)/python -m pip install --quiet -e ".[dev,gym,ray]"
 
 demo: install
 	$(BIN)/pokerirl demo
+	@echo ""
+	@echo "make: pokerirl is installed in $(VENV)/: run 'source $(VENV)/bin/activate' to put it on your PATH"
+	@echo "make: then, on real hands shipped with pokerirl: pokerirl study irc-199504 --preset quick --out study-real/"
 
 # pytest-xdist workers; tests that share a session fixture run on one (--dist loadgroup).
 TEST_WORKERS ?= 2

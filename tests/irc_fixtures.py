@@ -1,8 +1,32 @@
-"""Hand-written IRC months, one hand per quirk of the format (10-20 limit, blinds 5/10)."""
+"""Hand-written IRC months, one hand per quirk of the format (10-20 limit, blinds 5/10), and
+the real April 1995 sample that pokerirl ships (:func:`real_month`)."""
 
 from __future__ import annotations
 
+import atexit
+import functools
+import shutil
+import tempfile
 from pathlib import Path
+
+from pokerirl.datasets.catalog import unpack_sample
+
+# The CI checkout's copy of the real sample, beside the repository (or beside a folder of
+# worktrees): only the test that the shipped archive is these bytes reads it.
+_ABOVE = Path(__file__).resolve().parents[1:4]
+_SHARED = [p / "shared" / "irc-sample" / "holdem" / "199504" for p in _ABOVE]
+SHARED_SAMPLE = next((p for p in _SHARED if p.is_dir()), _SHARED[0])
+
+
+@functools.cache
+def real_month() -> Path:
+    """The shipped sample (``irc-199504``) as a month folder ``.../holdem/199504``, unpacked
+    once per process into a temporary folder removed at exit: the real hands the tests read,
+    with nothing beside the clone."""
+    root = Path(tempfile.mkdtemp(prefix="pokerirl-irc-199504-"))
+    atexit.register(shutil.rmtree, root, ignore_errors=True)
+    return unpack_sample(root)
+
 
 ZED_FIRST = 800000001  # standard showdown; roster in name order (Amy before Zed), Zed sits 1
 NO_CAP = 800000002  # five raises preflop: past RLCard's cap of four

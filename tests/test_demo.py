@@ -70,7 +70,9 @@ def test_the_demo_command_prints_the_poker_report_before_the_gym_half_starts(
 
     def poker(out: Path, config: DemoConfig, **options: object) -> SimpleNamespace:
         seen.append(config)
-        return SimpleNamespace(markdown="# THE POKER REPORT")
+        below = SimpleNamespace(below_bc=2)  # the reward cards of a demo that saw the warning
+        report = SimpleNamespace(reward_cards={"airl": below, "hairl": None})
+        return SimpleNamespace(markdown="# THE POKER REPORT", report=report)
 
     def gym(out: Path, config: DemoConfig, **options: object) -> SimpleNamespace:
         seen.append(config)
@@ -83,6 +85,38 @@ def test_the_demo_command_prints_the_poker_report_before_the_gym_half_starts(
     assert result.exit_code == 0, result.output
     text = result.output
     order = ["# THE POKER REPORT", "gym: the demo study on MountainCar-v0",
-             "THE GYM HALF STARTS", "# THE GYM REPORT"]  # fmt: skip
+             "THE GYM HALF STARTS", "# THE GYM REPORT", "demo: done"]  # fmt: skip
     assert [text.index(line) for line in order] == sorted(text.index(line) for line in order)
+    # The closing lines: both reports, the expected warning explained, real hands next.
+    last = text.rstrip().splitlines()[-3:]
+    assert last[0] == f"demo: done; the reports are {tmp_path / 'report.md'} and " + str(
+        tmp_path / "gym" / "report.md")
+    assert last[1].startswith("note: 2 learned rewards agree with the expert less than "
+                              "behaviour cloning: expected on the demo's synthetic month")
+    assert "irc-199504" in last[2]
     assert seen == [DemoConfig(), DemoConfig()]  # the command's defaults are the demo presets
+
+
+def test_the_demo_explains_the_warning_it_expects_and_keeps_the_others(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    import warnings
+    from types import SimpleNamespace
+
+    from pokerirl.poker.train import RewardBelowBC
+    from pokerirl.studies import demo
+
+    def study(*args: object, **options: object) -> SimpleNamespace:
+        for run in ("run-0", "run-1"):
+            warnings.warn(RewardBelowBC(f"{run}: below BC"), stacklevel=1)
+        warnings.warn("something else", UserWarning, stacklevel=1)
+        return SimpleNamespace(markdown="# R")
+
+    monkeypatch.setattr(demo, "run_study", study)
+    said: list[str] = []
+    with warnings.catch_warnings(record=True) as shown:
+        warnings.simplefilter("always")
+        demo.run_demo(tmp_path, DemoConfig(synthetic_hands=50), say=said.append)
+    assert [str(w.message) for w in shown] == ["something else"]  # not the expected ones
+    assert said[-1] == f"note: {demo.below_bc_line(2, tmp_path)}"
+    assert "2 learned rewards agree with the expert less than behaviour cloning" in said[-1]

@@ -44,6 +44,8 @@ COMMANDS = sorted(_tree(typer.main.get_command(app)))
 # {R} a folder whose report.json is corrupt.
 USAGE: dict[str, str] = {  # a command line that cannot be run: exit 2
     "version": "version --bogus",
+    "data list": "data list --bogus",
+    "data fetch": "data fetch irc --sha256 nope",
     "ingest": "ingest {G}",  # no --out
     "synth": "synth --out {O} --hands lots",
     "match": "match random call --hands lots",
@@ -68,6 +70,8 @@ USAGE: dict[str, str] = {  # a command line that cannot be run: exit 2
 }
 MISSING: dict[str, str | None] = {  # an input that is not there: exit 1, naming it
     "version": None,  # reads nothing
+    "data list": None,  # reads the catalog and the cache's listing
+    "data fetch": "data fetch irc --url {F}",
     "ingest": "ingest {F} --out {O}/t.parquet",
     "synth": None,
     "match": "match {F} random --hands 10",
@@ -92,6 +96,8 @@ MISSING: dict[str, str | None] = {  # an input that is not there: exit 1, naming
 }
 REFUSED: dict[str, str | None] = {  # a setting or a file the library refuses: exit 1
     "version": None,
+    "data list": None,
+    "data fetch": "data fetch irc --url {E}",  # a folder: nothing to copy
     "ingest": "ingest {G} --out {O}/t.parquet",
     "synth": "synth --out {A}/x",  # an OSError: the path, and why
     "match": "match random nope --hands 10",

@@ -15,6 +15,7 @@ import pyarrow.parquet as pq
 import pytest
 import torch
 
+from irc_fixtures import real_month
 from pokerirl.datasets.ingest import UNEXPLAINED, IngestSummary, ingest_table
 from pokerirl.datasets.table import IMPUTED_SCHEMA, SCHEMA, month_table
 from pokerirl.encoding import CARD_INDEX, FOLD, cards_from_text, encode_obs
@@ -36,7 +37,7 @@ from pokerirl.poker.impute import (
 )
 
 torch.set_num_threads(1)
-SAMPLE = Path(__file__).resolve().parents[2] / "shared" / "irc-sample" / "holdem" / "199504"
+SAMPLE = real_month()
 # ``ingest`` of main at 0ccf3f9 (before folds could be kept), pyarrow 26.0.1: the table's and
 # the summary's sha256 (the summary's folder written as TMP).
 PINNED_PYARROW = "26.0.1"
@@ -235,15 +236,14 @@ def _sha(path: Path, folder: Path | None = None) -> str:
                     f"{PINNED_PYARROW} (Parquet bytes carry the writer's version)")  # fmt: skip
 def test_folds_drop_keeps_the_table_of_before(tmp_path: Path) -> None:
     """``--folds drop`` (the default) writes the bytes main wrote before folds could be kept:
-    a synthetic month, and the real sample when present."""
+    a synthetic month, and the real sample."""
     month = write_synthetic_month(tmp_path / "m", hands=300, seed=5)
     ingest_table([month], tmp_path / "t.parquet")
     assert _sha(tmp_path / "t.parquet") == SYNTH_TABLE
     assert _sha(tmp_path / "t.summary.json", tmp_path) == SYNTH_SUMMARY
-    if SAMPLE.is_dir():
-        ingest_table([SAMPLE], tmp_path / "r.parquet")
-        assert _sha(tmp_path / "r.parquet") == REAL_TABLE
-        assert _sha(tmp_path / "r.summary.json", tmp_path) == REAL_SUMMARY
+    ingest_table([SAMPLE], tmp_path / "r.parquet")
+    assert _sha(tmp_path / "r.parquet") == REAL_TABLE
+    assert _sha(tmp_path / "r.summary.json", tmp_path) == REAL_SUMMARY
 
 
 def test_an_imputed_table_reads_with_weights_and_draws(month: Path, tmp_path: Path) -> None:

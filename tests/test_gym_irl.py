@@ -239,3 +239,23 @@ def test_a_killed_run_leaves_nothing_once_the_next_run_finishes(tmp_path: Path) 
                   progress=False, overwrite=True)  # fmt: skip
     assert not [p.name for p in out.iterdir() if p.name.startswith(".")]
     assert (out / "run-0" / "reward.pt").is_file() and (out / "summary.json").is_file()
+
+
+@pytest.mark.slow
+def test_the_bar_moves_after_the_last_epoch_while_runs_are_saved(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Saving, figures and EPIC come after training: the unit's progress covers them run by
+    run (issue 47: the demo's bar sat at 100% for 39 s at load 13 before the RL stage)."""
+    from pokerirl import execution
+    from pokerirl.gym.irl import TRAINED_SHARE
+
+    data = tmp_path / "expert.parquet"
+    shipped_data("MountainCar-v0", data, 300)
+    fractions: list[float] = []
+    monkeypatch.setattr(execution, "_report", fractions.append)  # as inside a unit
+    settings = replace(TASKS["MountainCar-v0"].irl, epochs=1, eval_episodes=1)
+    train_gym_irl("MountainCar-v0", data, algo="airl", runs=2, settings=settings,
+                  out=tmp_path / "irl", progress=False)  # fmt: skip
+    assert fractions == sorted(fractions)
+    assert [round(f, 9) for f in fractions if f > TRAINED_SHARE + 1e-9] == [0.95, 1.0]

@@ -1,4 +1,5 @@
-"""Ingest of the real IRC slice in ../shared/irc-sample, checked against the logs and RLCard."""
+"""Ingest of the real IRC sample (the shipped ``irc-199504``), checked against the logs and
+RLCard."""
 
 from __future__ import annotations
 
@@ -12,11 +13,11 @@ from rlcard.envs.limitholdem import LimitholdemEnv
 from rlcard.games.base import Card
 from rlcard.games.limitholdem.game import LimitHoldemGame
 
+from irc_fixtures import real_month
 from pokerirl.datasets.ingest import ingest_table
 from pokerirl.encoding import ACTIONS, MAX_RAISES, parse_card, rlcard_card_str
 
-SAMPLE = Path(__file__).resolve().parents[2] / "shared" / "irc-sample" / "holdem" / "199504"
-pytestmark = pytest.mark.skipif(not SAMPLE.is_dir(), reason="real IRC sample not present")
+SAMPLE = real_month()
 
 
 @pytest.fixture(scope="module")

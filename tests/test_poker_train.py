@@ -101,3 +101,24 @@ def test_library_messages_name_no_flag(tmp_path: Path) -> None:
         train_runs(tmp_path / "t.parquet", tmp_path / "out", runs=0)
     code, stderr = _train(tmp_path / "t.parquet", tmp_path / "out", "--runs", "2", "--ray", " ")
     assert (code, stderr) == (2, "error: --ray needs an address (HOST:PORT) or 'local'\n")  # usage
+
+
+def test_the_bar_moves_after_the_last_epoch_while_the_card_is_drawn(
+    table_path: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A run unit's progress ends at TRAINED_SHARE with training and saving; the reward card
+    (issue 47: the demo's bar sat at 100% for 26 s at load 12 while cards were drawn) brings
+    it to 1."""
+    from pokerirl import execution
+    from pokerirl.irl import AIRLConfig
+    from pokerirl.poker.reward_card import CARD_FILE
+    from pokerirl.poker.train import TRAINED_SHARE, train_table_into
+
+    fractions: list[float] = []
+    monkeypatch.setattr(execution, "_report", fractions.append)  # as inside a unit
+    train_table_into(read_table(table_path), tmp_path / "run", algo="airl",
+                     config=AIRLConfig(epochs=2),
+                     table=table_path)  # fmt: skip
+    assert (tmp_path / "run" / CARD_FILE).is_file()
+    assert fractions == sorted(fractions) and fractions[-1] == 1.0
+    assert fractions[-2] == pytest.approx(TRAINED_SHARE)  # training and saving done, not more

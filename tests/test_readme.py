@@ -23,6 +23,7 @@ AGENT = ["--hands", "256", "--eval-every", "256", "--eval-hands", "50", "--repla
 
 # Command prefix -> (replacements in the line, flags added): tiny sizes, nothing else.
 TINY: dict[str, tuple[dict[str, str], list[str]]] = {
+    "data list": ({}, []),
     "synth": ({"--hands 10000": "--hands 300"}, []),
     "ingest": ({}, []),
     "train": ({}, ["--epochs", "1"]),
@@ -65,13 +66,10 @@ def test_the_block_is_the_papers_pipeline_with_every_command_known() -> None:
         assert f"def {test}(" in (README.parent / path).read_text(), where
 
 
-@pytest.mark.slow
-def test_the_readme_command_block_runs_top_to_bottom(
-    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
-) -> None:
-    monkeypatch.chdir(tmp_path)
+def _run(lines: list[str]) -> list[str]:
+    """Run each line at its tiny size (:data:`TINY`); the commands run, in order."""
     ran = []
-    for line in command_block():
+    for line in lines:
         words = shlex.split(line)[1:]
         name = _command(words)
         if name in ELSEWHERE:
@@ -83,6 +81,15 @@ def test_the_readme_command_block_runs_top_to_bottom(
         result = CliRunner().invoke(app, [*shlex.split(line)[1:], *added])
         assert result.exit_code == 0, f"{line}\n{result.output}"
         ran.append(name)
+    return ran
+
+
+@pytest.mark.slow
+def test_the_readme_command_block_runs_top_to_bottom(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.chdir(tmp_path)
+    ran = _run(command_block())
     assert len(ran) == len(command_block()) - len(ELSEWHERE)
     # What the block promises exists: the agents its tournament line plays, the reports.
     assert (tmp_path / "agents" / "dqn" / "seed-2" / "model.pt").is_file()
@@ -95,3 +102,32 @@ def test_the_readme_command_block_runs_top_to_bottom(
     assert (tmp_path / "report" / "report.md").is_file()
     assert (tmp_path / "study" / "report.md").is_file()
     assert (tmp_path / "gym" / "report.md").is_file()
+
+
+def test_the_readme_names_no_path_beside_the_clone() -> None:
+    text = README.read_text()
+    assert "../shared" not in text and "irc-sample" not in text
+    # The first screen says how to reach pokerirl after make demo.
+    quick_start = text.split("## Quick start", 1)[1].split("\n## ", 1)[0]
+    assert "source .venv/bin/activate" in quick_start and "irc-199504" in quick_start
+
+
+@pytest.mark.slow
+def test_the_real_data_block_runs_with_nothing_beside_the_clone(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The README's real-hands block, from a folder with no ../shared, an empty home and an
+    empty data cache: the shipped irc-199504 is all it reads."""
+    work = tmp_path / "fresh" / "clone"
+    work.mkdir(parents=True)
+    monkeypatch.chdir(work)
+    monkeypatch.setenv("HOME", str(tmp_path / "home"))
+    monkeypatch.delenv("XDG_CACHE_HOME", raising=False)
+    monkeypatch.setenv("POKERIRL_DATA", str(tmp_path / "cache"))
+    assert not any((parent / "shared").exists() for parent in work.parents[:3])
+    lines = command_block(after="## Real hands")
+    assert any("irc-199504" in line for line in lines)
+    assert _run(lines) == ["data list", "ingest", "train", "study"]
+    assert (work / "hands.parquet").is_file()
+    assert (work / "runs" / "real" / "reward.pt").is_file()
+    assert (work / "study-real" / "report.md").is_file()

@@ -26,7 +26,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from typer.testing import CliRunner
 
-from irc_fixtures import write_month
+from irc_fixtures import real_month, write_month
 from pokerirl.agents.checkpoint import save_agent
 from pokerirl.agents.dqn import QNetwork
 from pokerirl.agents.rlcard_import import UntrustedCheckpointWarning, load_rlcard_dqn
@@ -40,7 +40,7 @@ from pokerirl.parsers.irc import IngestError
 from pokerirl.store import tidy
 
 REPO = Path(__file__).resolve().parents[1]
-SAMPLE = REPO.parent / "shared" / "irc-sample" / "holdem" / "199504"
+SAMPLE = real_month()
 
 MINIMAL: dict[str, bytes] = {
     "hdb": b"797241924 1 600 2 2/60 2/80 2/120 2/160 5c 9h 4h 6c 6s",
@@ -315,7 +315,7 @@ def _sample_month(hands: int = 120) -> dict[str, bytes]:
     return files
 
 
-_SAMPLE_FILES = _sample_month() if SAMPLE.is_dir() else {}
+_SAMPLE_FILES = _sample_month()
 
 
 @st.composite
@@ -352,7 +352,6 @@ def byte_flips(draw: st.DrawFn, files: dict[str, bytes]) -> dict[str, bytes]:
     return out
 
 
-@pytest.mark.skipif(not SAMPLE.is_dir(), reason="real IRC sample not present")
 @settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(data=st.data())
 def test_byte_flips_of_the_real_sample_never_crash_and_every_line_is_counted(

@@ -27,11 +27,12 @@ import pytest
 from shared import folder_bytes
 from test_reliability import MINIMAL, one_error_line, run_cli, write_minimal
 
+from irc_fixtures import real_month
 from pokerirl.datasets.ingest import ingest_table, summary_path
 from pokerirl.parsers import irc
 
 REPO = Path(__file__).resolve().parents[1]
-SAMPLE = REPO.parent / "shared" / "irc-sample" / "holdem" / "199504"
+SAMPLE = real_month()
 
 
 @contextlib.contextmanager
@@ -311,7 +312,6 @@ def test_a_corrupt_line_in_any_file_is_a_malformed_line(
     assert summary["malformed_examples"][0].startswith(f"{month}/{file}:1: not a")
 
 
-@pytest.mark.skipif(not SAMPLE.is_dir(), reason="real IRC sample not present")
 def test_only_the_hand_of_a_corrupt_line_is_malformed_in_a_real_month(tmp_path: Path) -> None:
     # Hand A loses player X's pdb timestamp to corruption; hand B of other players loses a pdb
     # line outright. A is malformed, B is missing a line, every other hand is as it was.

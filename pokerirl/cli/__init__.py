@@ -7,6 +7,7 @@ from __future__ import annotations
 
 # isort: off  (the order of registration is the order of `pokerirl --help`)
 from pokerirl.cli import (
+    data,  # noqa: F401  (pokerirl data: the named IRC data)
     exploit,  # noqa: F401  (pokerirl exploit: local best response)
     gym,  # noqa: F401
     poker,  # noqa: F401

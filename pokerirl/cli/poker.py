@@ -30,6 +30,7 @@ from pokerirl.cli.app import (
     settings_from_options,
     write_logs,
 )
+from pokerirl.cli.data import MONTHS_HELP, months
 from pokerirl.cli.options import NO_SETTINGS, Settings, settings_options, widths
 from pokerirl.errors import InputError, UsageError
 from pokerirl.game.encodings import EncodingName
@@ -60,9 +61,7 @@ IMPUTE_CONFIG = "pokerirl.poker.folds:ImputeConfig"
 @app.command()
 def ingest(
     ctx: typer.Context,
-    sources: list[Path] = typer.Argument(
-        ..., help="Month folders, folders of months, month .tgz archives or IRCdata.tgz."
-    ),
+    sources: list[Path] = typer.Argument(..., callback=months, help=MONTHS_HELP),
     out: Path = typer.Option(..., "--out", "-o", help="The Parquet table to write."),
     strict: bool = typer.Option(False, "--strict", help="Stop at the first malformed line."),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bar, no summary."),

@@ -25,6 +25,7 @@ from pokerirl.cli.app import (
     settings_from_options,
     write_logs,
 )
+from pokerirl.cli.data import MONTHS_HELP, months
 from pokerirl.errors import MissingExtra, UsageError
 from pokerirl.jsonio import read_json
 from pokerirl.studies.poker.config import (
@@ -66,35 +67,38 @@ def demo(
     AIRL and H-AIRL -> DQN on each reward and on the env reward -> OUT/gym/report.md. A rerun
     skips finished work.
     """
-    from pokerirl.studies.demo import DemoConfig, run_demo, run_gym_demo
+    from pokerirl.studies.demo import DemoConfig, closing_lines, run_demo, run_gym_demo
 
     config = settings_from_options(DemoConfig, seed=seed, jobs=jobs)
     result = run_demo(out, config, say=echo, progress=not quiet, overwrite=overwrite)
     echo("")
     echo(result.markdown)
     echo(f"report: {out / 'report.md'} (pokerirl report {out})")
-    if not gym:
-        return
-    from pokerirl.gym.experts import require_gym
+    if gym:
+        from pokerirl.gym.experts import require_gym
 
-    try:
-        require_gym()
-    except MissingExtra as error:  # not an error here: the poker demo is done
-        warnings.warn(f"the Gymnasium demo is skipped: {error}", stacklevel=1)
-        return
+        try:
+            require_gym()
+        except MissingExtra as error:  # not an error here: the poker demo is done
+            warnings.warn(f"the Gymnasium demo is skipped: {error}", stacklevel=1)
+            gym = False
+    if gym:
+        echo("")
+        tasks = ", ".join(config.gym.tasks)
+        echo(f"gym: the {config.gym.name} study on {tasks} -> {out / 'gym'}")
+        gym_result = run_gym_demo(out, config, say=echo, progress=not quiet, overwrite=overwrite)
+        echo("")
+        echo(gym_result.markdown)
+        echo(f"report: {out / 'gym' / 'report.md'}")
     echo("")
-    tasks = ", ".join(config.gym.tasks)
-    echo(f"gym: the {config.gym.name} study on {tasks} -> {out / 'gym'}")
-    gym_result = run_gym_demo(out, config, say=echo, progress=not quiet, overwrite=overwrite)
-    echo("")
-    echo(gym_result.markdown)
-    echo(f"report: {out / 'gym' / 'report.md'}")
+    for line in closing_lines(result, out, gym=gym):
+        echo(line)
 
 
 @app.command()
 @on_error(interrupted=INTERRUPTED)
 def study(
-    sources: list[Path] = typer.Argument(..., help="IRC month folders or archives."),
+    sources: list[Path] = typer.Argument(..., callback=months, help=MONTHS_HELP),
     out: Path = typer.Option(..., "--out", "-o", help="The study folder."),
     preset_name: str = typer.Option(
         "quick",

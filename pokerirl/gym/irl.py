@@ -37,7 +37,7 @@ from torch import Tensor, nn
 
 from pokerirl.atomic import make_shareable, write_text
 from pokerirl.errors import ConfigError, InputError, Remedy
-from pokerirl.execution import progress_share
+from pokerirl.execution import progress_share, unit_progress
 from pokerirl.gym.episodes import play_episodes, policy_actions, random_return
 from pokerirl.gym.experts import make_env, shipped_experts
 from pokerirl.gym.presets import IRLSettings
@@ -69,6 +69,9 @@ from pokerirl.store import staged_files, tidy
 RETURNS_FILE = "returns_bands.png"
 STAGE_KEY = "irl"  # the staged write's hidden folders in OUT: .irl.new-*, .irl.swap-*
 ALIGNMENT_BASELINES = ("majority", "legal_majority", "bc")  # shares of states, not returns
+# Of a unit's progress, where training ends: saving each run, its figures and its reward
+# quality (EPIC: rollouts) take the rest, so the bar moves after the last epoch too.
+TRAINED_SHARE = 0.9
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -303,7 +306,7 @@ def train_gym_irl(
             for log, metrics in zip(logs, all_metrics, strict=False):
                 log.write(metrics)
 
-        with progress_share(BASELINE_SHARE, 1.0):
+        with progress_share(BASELINE_SHARE, TRAINED_SHARE):
             many = train_many(
                 train_data,
                 val_data,
@@ -346,6 +349,8 @@ def train_gym_irl(
                     val_rows=len(val_data),
                 )
             )
+            with progress_share(TRAINED_SHARE, 1.0):  # the bar moves while runs are saved
+                unit_progress(k + 1, len(many.runs))
         over_runs = summarize(results)
 
         def last(key: str) -> MeanStd:

@@ -43,7 +43,7 @@ import torch
 
 from pokerirl.atomic import write_text
 from pokerirl.errors import ConfigError, Remedy
-from pokerirl.execution import Backend, pinned_threads
+from pokerirl.execution import Backend, pinned_threads, progress_share, unit_progress
 from pokerirl.game.encodings import EncodingName
 from pokerirl.irl.airl import resolve_device
 from pokerirl.irl.config import AIRLConfig, Algo
@@ -150,12 +150,19 @@ def train_table_into(
     ``data`` holds the table's states in ``encoding`` (recorded in ``config.json``'s
     ``data.encoding``); ``table`` is the table's path for the record; ``table_file`` the
     file to read the reward card's states from (default ``table``)."""
-    summary = train_into(
-        data, folder, algo=algo, config=config, device=device, progress=progress,
-        data_path=table, data_notes={"encoding": str(encoding)},
-    )  # fmt: skip
+    with progress_share(0.0, TRAINED_SHARE):
+        summary = train_into(
+            data, folder, algo=algo, config=config, device=device, progress=progress,
+            data_path=table, data_notes={"encoding": str(encoding)},
+        )  # fmt: skip
     write_reward_card(folder, table_file or table, label=None if table is None else str(table))
+    unit_progress(1, 1)  # the card is done: the bar moves after the last epoch too
     return summary
+
+
+# Of a run unit's progress, where train_into ends; its reward card (the validation hands'
+# f, a figure) takes the rest, so the bar does not sit at 100% while it is drawn.
+TRAINED_SHARE = 0.9
 
 
 def write_reward_card(

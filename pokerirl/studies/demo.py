@@ -12,6 +12,10 @@ One code path: ``pokerirl demo`` is ``pokerirl study --preset demo`` on the synt
 then ``pokerirl gym study MountainCar-v0 --preset demo``; both presets are sized so that the
 poker report prints within about 2 minutes and the whole demo takes about 5 on 2 cores.
 
+The demo is expected to see a learned reward agree with the expert less than behaviour
+cloning (the study's :class:`~pokerirl.poker.train.RewardBelowBC` warning): it says so as a
+``note:`` that explains it, and again in :func:`closing_lines`, instead of a bare warning.
+
 >>> DemoConfig().study.preset, DemoConfig().gym.name
 ('demo', 'demo')
 """
@@ -20,6 +24,7 @@ from __future__ import annotations
 
 import dataclasses
 import os
+import warnings
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -73,7 +78,49 @@ def run_demo(
     month = synthetic_month(root, hands=config.synthetic_hands, seed=config.seed)
     say(f"synth: {config.synthetic_hands:,} heads-up hands, seed {config.seed} -> {month}")
     study = dataclasses.replace(config.study, jobs=config.jobs)
-    return run_study([month], root, study, overwrite=overwrite, progress=progress, say=say)
+    from pokerirl.poker.train import RewardBelowBC
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", RewardBelowBC)  # every run's, to count them
+        result = run_study([month], root, study, overwrite=overwrite, progress=progress, say=say)
+    below = [w for w in caught if issubclass(w.category, RewardBelowBC)]
+    for other in caught:  # every other warning as it would have been shown
+        if other not in below:
+            warnings.warn_explicit(other.message, other.category, other.filename, other.lineno)
+    if below:
+        say(f"note: {below_bc_line(len(below), root)}")
+    return result
+
+
+def below_bc_line(runs: int, out: Path) -> str:
+    """The demo's words for its expected :class:`~pokerirl.poker.train.RewardBelowBC`."""
+    return (
+        f"{runs} learned reward{'s' if runs != 1 else ''} agree{'s' if runs == 1 else ''} with "
+        "the expert less than behaviour cloning: expected on the demo's synthetic month "
+        f"(BC is trained to predict the expert's action, the reward is not), not a broken "
+        f"install; {out / 'report.md'} says why, under 'Reward cards'"
+    )
+
+
+def below_bc_runs(result: StudyResult) -> int:
+    """How many of the study's IRL runs have a reward below their BC baseline."""
+    cards = result.report.reward_cards or {}
+    return sum(card.below_bc or 0 for card in cards.values() if card is not None)
+
+
+def closing_lines(result: StudyResult, out: Path, *, gym: bool) -> list[str]:
+    """What ``pokerirl demo`` says last: where the reports are, the expected note again, and
+    what to run next on real hands."""
+    reports = f"{out / 'report.md'}" + (f" and {out / GYM_FOLDER / 'report.md'}" if gym else "")
+    lines = [f"demo: done; the reports are {reports}"]
+    below = below_bc_runs(result)
+    if below:
+        lines.append(f"note: {below_bc_line(below, out)}")
+    lines.append(
+        "next: real hands ship with pokerirl: pokerirl study irc-199504 --preset quick "
+        "--out study-real/"
+    )
+    return lines
 
 
 def run_gym_demo(
