@@ -216,13 +216,15 @@ def match(
             "std_error": result.std_error,
             "hands": result.hands,
             "hands_per_second": result.hands_per_second,
+            "aivat_seconds": result.on_batch_seconds,
         }
         echo(json.dumps(summary))
     else:
         echo(
             f"{result.agent_a} vs {result.agent_b}: {result.mbb_per_hand:+.1f} "
             f"+- {result.std_error:.1f} mbb/h over {result.hands:,} hands "
-            f"({result.hands_per_second:,.0f} hands/s); AIVAT-corrected "
+            f"({result.hands_per_second:,.0f} hands/s of play, "
+            f"{result.on_batch_seconds:.1f} s of AIVAT); AIVAT-corrected "
             f"{found.corrected_mbb_per_hand:+.1f} +- {found.corrected_std_error:.1f} mbb/h"
         )
 

@@ -50,10 +50,12 @@ class MatchResult:
     duplicate: bool
     mbb_per_hand: float  # 1000 x A's mean net big blinds per hand
     std_error: float  # of mbb_per_hand: over duplicate pairs, or over hands
-    seconds: float
+    seconds: float  # of play: the deals, the agents and the engine
     hands_per_second: float
     # A's net big blinds in every hand, in hand order (duplicate pairs are adjacent).
     results_bb: np.ndarray = field(repr=False, compare=False)
+    # Time in ``on_batch`` (e.g. the AIVAT corrections), apart from ``seconds``.
+    on_batch_seconds: float = 0.0
 
     @property
     def units_bb(self) -> np.ndarray:
@@ -223,7 +225,8 @@ def play_match(
     seat for every hand, as RLCard draws the small blind for every game; the default
     alternates it. ``on_batch(start, game, seat_of_a)`` is called with each finished batch
     (hands ``start`` ..), for what a caller reads beyond the result (the chance corrections
-    of :mod:`pokerirl.tournaments.aivat`). ``report_progress``: the match is a unit of its
+    of :mod:`pokerirl.tournaments.aivat`); its time is ``on_batch_seconds``, not part of
+    ``seconds`` and ``hands_per_second`` (the play's). ``report_progress``: the match is a unit of its
     own (a tournament seed), whose hands move the driver's bar
     (:func:`pokerirl.execution.unit_progress`).
 
@@ -241,6 +244,7 @@ def play_match(
     results = np.empty(hands, dtype=np.float64)
     prepare_tables()  # one-time setup, kept out of hands_per_second
     started = time.perf_counter()
+    on_batch_seconds = 0.0
     with tqdm(total=hands, unit="hand", unit_scale=True, disable=not progress) as bar:
         for start in range(0, hands, batch_size):
             count = min(batch_size, hands - start)
@@ -257,11 +261,13 @@ def play_match(
             game = play_game((agent_a, agent_b), deals, seat_of_a, rngs, log=log)
             results[start : start + count] = game.payoffs[np.arange(count), seat_of_a]
             if on_batch is not None:
+                before = time.perf_counter()
                 on_batch(start, game, seat_of_a)
+                on_batch_seconds += time.perf_counter() - before
             bar.update(count)
             if report_progress:
                 unit_progress(start + count, hands)
-    seconds = time.perf_counter() - started
+    seconds = time.perf_counter() - started - on_batch_seconds
 
     units = independent_units(results, duplicate=duplicate)
     std_error = float(units.std(ddof=1) / np.sqrt(units.size)) if units.size > 1 else float("nan")
@@ -276,4 +282,5 @@ def play_match(
         seconds=seconds,
         hands_per_second=hands / seconds if seconds > 0 else float("inf"),
         results_bb=results,
+        on_batch_seconds=on_batch_seconds,
     )
