@@ -226,8 +226,8 @@ def play_match(
     alternates it. ``on_batch(start, game, seat_of_a)`` is called with each finished batch
     (hands ``start`` ..), for what a caller reads beyond the result (the chance corrections
     of :mod:`pokerirl.tournaments.aivat`); its time is ``on_batch_seconds``, not part of
-    ``seconds`` and ``hands_per_second`` (the play's). ``report_progress``: the match is a unit of its
-    own (a tournament seed), whose hands move the driver's bar
+    ``seconds`` and ``hands_per_second`` (the play's). ``report_progress``: the match is a
+    unit of its own (a tournament seed), whose hands move the driver's bar
     (:func:`pokerirl.execution.unit_progress`).
 
     Raises:
