@@ -645,8 +645,10 @@ def _encoding(name: str) -> str:
 
 def _check_encoding(source: object, expected: str) -> None:
     """Refuse, in one line naming the run, a reward run of another encoding."""
-    found = getattr(source, "encoding", None)
-    if found is not None and found != expected:
+    from pokerirl.game.encodings import get_encoding
+
+    found = getattr(source, "encoding", None)  # its spec: strength-v1 is still strength
+    if found is not None and get_encoding(found).name != get_encoding(expected).name:
         raise InputError(
             f"{getattr(source, 'spec', source)}: a reward on the {found} encoding, not "
             f"{expected} (its config.json's data.encoding)"

@@ -58,12 +58,12 @@ _HOLE_COLUMNS = np.array([[0, 1], [2, 3]])  # deal columns of each seat's hole c
 # (round, card) -> visible, for a seat's 2 hole cards then the board; round 4 is after the river.
 _VISIBLE = np.arange(7) < 2 + np.array((*BOARD_SIZE_BY_ROUND, 5))[:, None]
 # _LEGAL[4 * situation + action], situation = behind the opponent + 2 x (a raise is left).
-_LEGAL = np.zeros((4, NUM_ACTIONS), dtype=bool)
-_LEGAL[:, FOLD] = True
-_LEGAL[[1, 3], CALL] = True
-_LEGAL[[0, 2], CHECK] = True
-_LEGAL[[2, 3], RAISE] = True
-_LEGAL = _LEGAL.reshape(-1)
+_LEGAL_BY_SITUATION = np.zeros((4, NUM_ACTIONS), dtype=bool)
+_LEGAL_BY_SITUATION[:, FOLD] = True
+_LEGAL_BY_SITUATION[[1, 3], CALL] = True
+_LEGAL_BY_SITUATION[[0, 2], CHECK] = True
+_LEGAL_BY_SITUATION[[2, 3], RAISE] = True
+_LEGAL = _LEGAL_BY_SITUATION.reshape(-1)
 _MATCHES = np.zeros(NUM_ACTIONS, dtype=np.int16)  # actions that first match the opponent
 _MATCHES[[CALL, RAISE]] = 1
 
