@@ -46,17 +46,37 @@ def eval7_count(hole: np.ndarray, board: np.ndarray, deck: list | None = None) -
 
 def engine_flop_count(hole: np.ndarray, flop: np.ndarray) -> int:
     """``2 x wins + ties`` of ``hole`` over the 1,081 runouts and 990 opponents of a flop,
-    every seven-card hand ranked by :func:`hand_strength` (vectorized, 2.1 million rows)."""
+    every seven-card hand ranked by :func:`hand_strength` (one call, 1.07 million rows)."""
     known = {int(c) for c in hole} | {int(c) for c in flop}
     unseen = np.array([c for c in range(NUM_CARDS) if c not in known])
-    runouts = np.array(list(itertools.combinations(unseen, 2)))  # (1081, 2)
-    boards = np.concatenate([np.broadcast_to(flop, (len(runouts), 3)), runouts], axis=1)
+    runouts = np.array(list(itertools.combinations(range(len(unseen)), 2)))  # (1081, 2)
+    boards = np.concatenate([np.broadcast_to(flop, (len(runouts), 3)), unseen[runouts]], 1)
     ours = hand_strength(np.concatenate([np.broadcast_to(hole, (len(boards), 2)), boards], 1))
+    keep = np.ones((len(runouts), len(unseen)), dtype=bool)
+    keep[np.arange(len(runouts))[:, None], runouts] = False
+    rest = np.broadcast_to(unseen, keep.shape)[keep].reshape(len(runouts), -1)  # (1081, 45)
+    pairs = np.array(list(itertools.combinations(range(rest.shape[1]), 2)))  # (990, 2)
+    opponents = rest[:, pairs]  # (1081, 990, 2)
+    full = np.broadcast_to(boards[:, None, :], (len(boards), len(pairs), 5))
+    theirs = hand_strength(np.concatenate([opponents, full], axis=2).reshape(-1, 7))
+    theirs = theirs.reshape(len(boards), len(pairs))
+    return int(2 * (ours[:, None] > theirs).sum() + (ours[:, None] == theirs).sum())
+
+
+def engine_turn_count(hole: np.ndarray, board: np.ndarray) -> int:
+    """``2 x wins + ties`` of ``hole`` over the 46 rivers and 990 opponents of a four-card
+    board: all 45,540 opponent hands and 46 own ranked by :func:`hand_strength` at once."""
+    known = {int(c) for c in hole} | {int(c) for c in board}
+    unseen = np.array([c for c in range(NUM_CARDS) if c not in known])
+    pairs = np.array(list(itertools.combinations(range(len(unseen) - 1), 2)))  # of 45 cards
     total = 0
-    for k, board in enumerate(boards):
-        rest = np.setdiff1d(unseen, runouts[k])
-        opponents = np.array(list(itertools.combinations(rest, 2)))  # (990, 2)
-        theirs = hand_strength(np.concatenate(
-            [opponents, np.broadcast_to(board, (len(opponents), 5))], axis=1))  # fmt: skip
-        total += int(2 * (ours[k] > theirs).sum() + (ours[k] == theirs).sum())
+    rivers = unseen
+    boards = np.concatenate([np.broadcast_to(board, (len(rivers), 4)), rivers[:, None]], 1)
+    ours = hand_strength(np.concatenate([np.broadcast_to(hole, (len(boards), 2)), boards], 1))
+    rest = np.array([np.delete(unseen, k) for k in range(len(unseen))])  # (46, 45)
+    opponents = rest[:, pairs]  # (46, 990, 2)
+    full = np.broadcast_to(boards[:, None, :], (len(boards), len(pairs), 5))
+    theirs = hand_strength(np.concatenate([opponents, full], axis=2).reshape(-1, 7))
+    theirs = theirs.reshape(len(boards), len(pairs))
+    total = int(2 * (ours[:, None] > theirs).sum() + (ours[:, None] == theirs).sum())
     return total
