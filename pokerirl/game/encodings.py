@@ -318,25 +318,38 @@ def pot_and_call(
     return 2 * before + top + mine, top - mine
 
 
+# Rank masks: bit r for rank r (2 .. A as 0 .. 12). A straight is one of ten windows (the
+# wheel: A 2 3 4 5); tables over the 8,192 masks give popcounts and made straights.
+_POPCOUNT = np.array([bin(mask).count("1") for mask in range(1 << NUM_RANKS)], dtype=np.int8)
+_WINDOWS = np.array([(1 << 12) | 0b1111] + [0b11111 << low for low in range(9)], np.int64)
+_STRAIGHT = ((np.arange(1 << NUM_RANKS)[:, None] & _WINDOWS) == _WINDOWS).any(axis=1)
+
+
+def _rank_masks(cards: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(suit masks (N, 4), ranks (N, 7) 2 .. A as 0 .. 12 (0 where not shown), shown (N, 7))
+    of cards (N, 7) with ``-1`` pads."""
+    shown = cards >= 0
+    rank = np.where(shown, (cards % NUM_RANKS + NUM_RANKS - 1) % NUM_RANKS, 0)
+    bit = np.where(shown, np.int64(1) << rank, 0)
+    suit = cards // NUM_RANKS
+    masks = np.stack([np.where(suit == s, bit, 0).sum(axis=1) for s in range(4)], axis=1)
+    return masks, rank, shown
+
+
 def visible_category(cards: np.ndarray) -> np.ndarray:
     """(N,) made-hand category (1 high card .. 9 straight flush, as
     :func:`pokerirl.game.evaluator.category`) of the visible cards, 2 to 7 of them
     (``-1`` pads)."""
     cards = np.asarray(cards, dtype=np.int64)
     n = len(cards)
-    shown = cards >= 0
-    rank = np.where(shown, (cards % NUM_RANKS + NUM_RANKS - 1) % NUM_RANKS, 0)
-    suit = np.where(shown, cards // NUM_RANKS, 0)
-    rows = np.repeat(np.arange(n), 7)[shown.reshape(-1)]
-    by_suit = np.zeros((n, 4, NUM_RANKS), dtype=bool)
-    by_suit[rows, suit[shown], rank[shown]] = True
-    counts = by_suit.sum(axis=1)  # (N, 13) cards of each rank
-    present = counts > 0
+    masks, rank, shown = _rank_masks(cards)
+    where = (np.arange(n)[:, None] * NUM_RANKS + rank)[shown]
+    counts = np.bincount(where, minlength=n * NUM_RANKS).reshape(n, NUM_RANKS)
     largest = counts.max(axis=1)
     pairs_or_more = (counts >= 2).sum(axis=1)
-    flush_suits = by_suit.sum(axis=2) >= 5
-    straight = _has_straight(present)
-    straight_flush = (flush_suits & _has_straight(by_suit.reshape(n * 4, -1)).reshape(n, 4)).any(1)
+    flush_suits = _POPCOUNT[masks] >= 5
+    straight = _STRAIGHT[np.bitwise_or.reduce(masks, axis=1)]
+    straight_flush = (flush_suits & _STRAIGHT[masks]).any(axis=1)
     category = np.ones(n, dtype=np.int64)
     for applies, value in (
         (largest == 2, 2),
@@ -352,35 +365,24 @@ def visible_category(cards: np.ndarray) -> np.ndarray:
     return category
 
 
-def _has_straight(present: np.ndarray) -> np.ndarray:
-    """(M,) whether a (M, 13) rank-presence matrix (2 .. A) holds five ranks in a row."""
-    with_wheel = np.concatenate([present[:, 12:], present], axis=1)  # the ace plays low too
-    windows = np.lib.stride_tricks.sliding_window_view(with_wheel, 5, axis=1)
-    return np.any(np.all(windows, axis=2), axis=1)
-
-
 def _draws(cards: np.ndarray, rank: np.ndarray, street: np.ndarray) -> tuple[np.ndarray, ...]:
     """(flush draw, straight draw) flags: four cards to a flush (or to five ranks in a row)
     among the visible cards, a hole card among them, no such hand made yet, and cards to come
     (the flop or the turn)."""
-    n = len(cards)
-    shown = cards >= 0
-    suit = np.where(shown, cards // NUM_RANKS, -1)
-    suit_counts = (suit[:, :, None] == np.arange(4)).sum(axis=1)  # (N, 4)
-    hole_suits = (suit[:, :2, None] == np.arange(4)).any(axis=1)
+    masks, _, _ = _rank_masks(cards)
+    suit_counts = _POPCOUNT[masks]  # (N, 4)
+    hole_suits = (cards[:, :2, None] // NUM_RANKS == np.arange(4)).any(axis=1)
     to_come = (street >= 1) & (street <= 2)
     flush_draw = ((suit_counts == 4) & hole_suits).any(axis=1) & ~(suit_counts >= 5).any(axis=1)
-
-    present = np.zeros((n, NUM_RANKS), dtype=bool)
-    rows = np.repeat(np.arange(n), 7)[shown.reshape(-1)]
-    present[rows, rank[shown]] = True
-    hole = np.zeros((n, NUM_RANKS), dtype=bool)
-    hole[np.repeat(np.arange(n), 2), rank[:, :2].reshape(-1)] = True
-    wheel = lambda m: np.concatenate([m[:, 12:], m], axis=1)  # noqa: E731
-    windows = np.lib.stride_tricks.sliding_window_view(wheel(present), 5, axis=1).sum(axis=2)
-    with_hole = np.lib.stride_tricks.sliding_window_view(wheel(hole), 5, axis=1).any(axis=2)
-    straight_draw = ((windows == 4) & with_hole).any(axis=1) & ~(windows == 5).any(axis=1)
-    return flush_draw & to_come, straight_draw & to_come
+    present = np.bitwise_or.reduce(masks, axis=1)
+    hole = (np.int64(1) << rank[:, 0]) | (np.int64(1) << rank[:, 1])
+    draw = np.zeros(len(cards), dtype=bool)
+    made = np.zeros(len(cards), dtype=bool)
+    for window in _WINDOWS:
+        held = _POPCOUNT[present & window]
+        draw |= (held == 4) & ((hole & window) != 0)
+        made |= held == 5
+    return flush_draw & to_come, draw & ~made & to_come
 
 
 def _one_hot(index: np.ndarray, width: int) -> np.ndarray:

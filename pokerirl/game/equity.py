@@ -232,7 +232,8 @@ def _pairwise_counts(holes: np.ndarray, boards: np.ndarray) -> np.ndarray:
 
 def river_equity(holes: np.ndarray, boards: np.ndarray) -> np.ndarray:
     """(N,) exact equity of hole cards (N, 2) on five-card boards (N, 5)."""
-    return _by_board(hole_counts, _all_pairs_river_counts, holes, boards) / RIVER_DENOMINATOR
+    shared = _by_board(hole_counts, _all_pairs_river_counts, holes, boards, ALL_PAIRS_RIVER_ROWS)
+    return shared / RIVER_DENOMINATOR
 
 
 def _unseen(known: np.ndarray) -> np.ndarray:
@@ -258,7 +259,8 @@ def turn_counts(holes: np.ndarray, boards: np.ndarray) -> np.ndarray:
 def turn_equity(holes: np.ndarray, boards: np.ndarray) -> np.ndarray:
     """(N,) exact equity of hole cards (N, 2) on four-card boards (N, 4)."""
     every = lambda board: _cached_turn_counts(tuple(board.tolist()))  # noqa: E731
-    return _by_board(turn_counts, every, holes, boards) / TURN_DENOMINATOR
+    shared = _by_board(turn_counts, every, holes, boards, ALL_PAIRS_TURN_ROWS)
+    return shared / TURN_DENOMINATOR
 
 
 def all_pairs_turn_counts(board: np.ndarray) -> np.ndarray:
@@ -285,8 +287,11 @@ def _all_pairs_river_counts(board: np.ndarray) -> np.ndarray:
 
 
 # Rows sharing a board from which every pair's count is computed at once, not row by row
-# (local best response encodes all 1,326 pairs of one state).
-ALL_PAIRS_ROWS = 64
+# (local best response encodes the live pairs of one state, and again at its next decision:
+# a turn board's counts are cached). Row by row a turn state costs about 1/60 of a board's
+# all pairs, a river state 1/50.
+ALL_PAIRS_TURN_ROWS = 16
+ALL_PAIRS_RIVER_ROWS = 64
 
 
 def _by_board(
@@ -294,16 +299,17 @@ def _by_board(
     all_pairs: Callable[[np.ndarray], np.ndarray],
     holes: np.ndarray,
     boards: np.ndarray,
+    least: int,
 ) -> np.ndarray:
-    """``per_row(holes, boards)``, with the boards shared by at least :data:`ALL_PAIRS_ROWS`
-    rows done by ``all_pairs(board)`` once: the same integers either way."""
+    """``per_row(holes, boards)``, with the boards shared by at least ``least`` rows done by
+    ``all_pairs(board)`` once: the same integers either way."""
     holes = np.asarray(holes, dtype=np.int64)
     boards = np.sort(np.asarray(boards, dtype=np.int64), axis=1)  # a board is a set
     found = np.empty(len(holes), dtype=np.int64)
     unique, group, sizes = np.unique(boards, axis=0, return_inverse=True, return_counts=True)
     group = group.reshape(-1)
-    shared = sizes[group] >= ALL_PAIRS_ROWS
-    for k in np.flatnonzero(sizes >= ALL_PAIRS_ROWS):
+    shared = sizes[group] >= least
+    for k in np.flatnonzero(sizes >= least):
         rows = np.flatnonzero(group == k)
         found[rows] = all_pairs(unique[k])[pair_index(holes[rows, 0], holes[rows, 1])]
     rows = np.flatnonzero(~shared)
