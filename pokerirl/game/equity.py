@@ -306,12 +306,14 @@ def _by_board(
     holes = np.asarray(holes, dtype=np.int64)
     boards = np.sort(np.asarray(boards, dtype=np.int64), axis=1)  # a board is a set
     found = np.empty(len(holes), dtype=np.int64)
-    unique, group, sizes = np.unique(boards, axis=0, return_inverse=True, return_counts=True)
+    code = boards @ (NUM_CARDS ** np.arange(boards.shape[1], dtype=np.int64))  # one int a set
+    _, first, group, sizes = np.unique(code, return_index=True, return_inverse=True,
+                                       return_counts=True)  # fmt: skip
     group = group.reshape(-1)
     shared = sizes[group] >= least
     for k in np.flatnonzero(sizes >= least):
         rows = np.flatnonzero(group == k)
-        found[rows] = all_pairs(unique[k])[pair_index(holes[rows, 0], holes[rows, 1])]
+        found[rows] = all_pairs(boards[first[k]])[pair_index(holes[rows, 0], holes[rows, 1])]
     rows = np.flatnonzero(~shared)
     if rows.size:
         found[rows] = per_row(holes[rows], boards[rows])
