@@ -7,9 +7,10 @@ Prints hands per second of random vs random in :mod:`pokerirl.game` and in
 vs random in both: mbb/h with its standard error, and the engine's wall time. Only ratios
 measured in one run are comparable; the machine may be shared.
 
-The gate (issue 41): the engine's raise vs random (alternating seats) must play at least
-:data:`MIN_RATIO` times RLCard's random-vs-random hands/s measured in the same run; below
-it the script says so and exits 1 (it was 158x, then 37x when `pokerirl match` began
+The gate (issue 41): the engine's raise vs random (alternating seats, best of three) must
+play at least :data:`MIN_RATIO` times RLCard's random-vs-random hands/s (best of two, one
+before and one after the engine's runs) measured in the same run; below it the script says
+so and exits 1 (it was 158x, then 37x when `pokerirl match` began
 timing the AIVAT corrections and a match built observations no built-in agent reads).
 """
 
@@ -105,8 +106,8 @@ def main() -> int:
     print(f"random vs random, RLCard tournament ({args.rlcard_hands:,}): {theirs:12,.0f} hands/s")
     print(f"ratio engine / RLCard: {ours.hands_per_second / theirs:.0f}x")
 
-    raise_rate = 0.0
-    for duplicate in (False, True):
+    raise_rates = []
+    for duplicate in (False, True, False, False):  # alternating seats three times: the best
         match = play_match(
             always_raise, random, hands=args.hands, seed=args.seed, duplicate=duplicate
         )
@@ -117,14 +118,18 @@ def main() -> int:
             f" ({match.hands_per_second:,.0f} hands/s)"
         )
         if not duplicate:
-            raise_rate = match.hands_per_second
+            raise_rates.append(match.hands_per_second)
     mbb, se, speed = rlcard_raise_vs_random(args.rlcard_hands, args.seed)
     print(
         f"raise vs random, RLCard env.run ({args.rlcard_hands:,} hands): "
         f"{mbb:.1f} +- {se:.1f} mbb/h ({speed:,.0f} hands/s)"
     )
     encodings(args)
-    ratio = raise_rate / theirs
+    # RLCard again after the engine's runs: on a shared machine each side gets its best of
+    # two windows of load, so that a burst of load on one side does not decide the gate.
+    again = rlcard_random_vs_random(args.rlcard_hands, args.seed)
+    print(f"random vs random, RLCard tournament again: {again:12,.0f} hands/s")
+    ratio = max(raise_rates) / max(theirs, again)
     print(f"ratio engine raise vs random / RLCard random vs random: {ratio:.0f}x "
           f"(gate {MIN_RATIO:.0f}x; load {os.getloadavg()[0]:.2f})")  # fmt: skip
     if ratio < MIN_RATIO:
