@@ -109,8 +109,8 @@ def _ranks(values: np.ndarray, *, bits: int) -> tuple[np.ndarray, np.ndarray]:
     n = values.shape[-1]
     shift = int(n - 1).bit_length()
     dtype = np.int32 if bits + shift < 31 else np.int64
-    widened: np.ndarray = values.astype(dtype)
-    keys = np.sort((widened << shift) | np.arange(n, dtype=dtype), axis=-1)
+    widened = np.left_shift(values.astype(dtype), shift)
+    keys = np.sort(np.bitwise_or(widened, np.arange(n).astype(dtype)), axis=-1)
     ordered, order = keys >> shift, keys & ((1 << shift) - 1)
     place = np.arange(n, dtype=np.int32)
     starts = np.ones(values.shape, dtype=bool)
