@@ -244,16 +244,29 @@ def _unseen(known: np.ndarray) -> np.ndarray:
 
 
 def turn_counts(holes: np.ndarray, boards: np.ndarray) -> np.ndarray:
-    """(N,) int64 ``2 x wins + ties`` summed over the 46 rivers of four-card boards (N, 4)."""
+    """(N,) int64 ``2 x wins + ties`` summed over the 46 rivers of four-card boards (N, 4).
+
+    A river whose suit leaves every suit at two board cards or fewer makes no flush for
+    anyone: its count depends on its rank alone, so one river of each such rank is counted
+    and weighted by how many there are (about half the rivers); the others one by one."""
     holes = np.asarray(holes, dtype=np.int64)
     boards = np.asarray(boards, dtype=np.int64)
     n = len(holes)
     rivers = _unseen(np.concatenate([holes, boards], axis=1))  # (N, 46)
-    full = np.concatenate(
-        [np.repeat(boards, TURN_RIVERS, axis=0), rivers.reshape(-1, 1)], axis=1
+    on_board = (_SUIT[boards][:, :, None] == np.arange(4)).sum(axis=1)  # (N, 4)
+    plain = (on_board.max(axis=1) <= 2)[:, None] & (
+        np.take_along_axis(on_board, _SUIT[rivers], axis=1) <= 1
     )
-    counts = hole_counts(np.repeat(holes, TURN_RIVERS, axis=0), full)
-    return counts.reshape(n, TURN_RIVERS).sum(axis=1)
+    state = np.broadcast_to(np.arange(n)[:, None], rivers.shape)
+    group = (state * NUM_RANKS + _RANK[rivers])[plain]
+    _, first, weight = np.unique(group, return_index=True, return_counts=True)
+    picked_state, picked_river = state[plain][first], rivers[plain][first]
+    alone_state, alone_river = state[~plain], rivers[~plain]
+    which = np.concatenate([picked_state, alone_state])
+    river = np.concatenate([picked_river, alone_river])
+    counts = hole_counts(holes[which], np.concatenate([boards[which], river[:, None]], axis=1))
+    counts[: len(weight)] *= weight
+    return np.bincount(which, weights=counts, minlength=n).astype(np.int64)
 
 
 def turn_equity(holes: np.ndarray, boards: np.ndarray) -> np.ndarray:
