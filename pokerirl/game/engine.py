@@ -48,7 +48,7 @@ from pokerirl.encoding import (
 )
 from pokerirl.errors import PokerIRLError
 from pokerirl.game.deals import DEAL_SIZE, deal_cards
-from pokerirl.game.evaluator import hand_strength
+from pokerirl.game.evaluator import seven_card_strengths
 
 SMALL_BLIND = 1
 BIG_BLIND = 2
@@ -64,6 +64,7 @@ _LEGAL_BY_SITUATION[[1, 3], CALL] = True
 _LEGAL_BY_SITUATION[[0, 2], CHECK] = True
 _LEGAL_BY_SITUATION[[2, 3], RAISE] = True
 _LEGAL = _LEGAL_BY_SITUATION.reshape(-1)
+_BOTH_SEATS = np.array([0, 1])
 _MATCHES = np.zeros(NUM_ACTIONS, dtype=np.int16)  # actions that first match the opponent
 _MATCHES[[CALL, RAISE]] = 1
 
@@ -230,9 +231,14 @@ class LimitHoldemBatch:
             self.payoffs[folds, loser] = -lost
             self.payoffs[folds, 1 - loser] = lost
         if showdowns.size:
-            strength = [hand_strength(self._views[2 * showdowns + s]) for s in (0, 1)]
+            # Both seats' seven cards in one pass of the evaluator (the engine's own cards:
+            # no checks); (n, 2) strengths.
+            seen = self._views[(2 * showdowns)[:, None] + _BOTH_SEATS].reshape(-1, 7)
+            strength = seven_card_strengths(seen).reshape(-1, 2).astype(np.int64)
             # Both seats have equal chips in at a showdown; a tie returns them.
-            won = np.sign(strength[0] - strength[1]) * (self.chips[showdowns, 0] / BIG_BLIND)
+            won = np.sign(strength[:, 0] - strength[:, 1]) * (
+                self.chips[showdowns, 0] / BIG_BLIND
+            )
             self.payoffs[showdowns, 0] = won
             self.payoffs[showdowns, 1] = 0.0 - won  # not -won: no -0.0 for split pots
         if folds.size or showdowns.size:
