@@ -158,6 +158,24 @@ def test_posterior_is_bayes_rule(month: Path, encoding: str) -> None:
         assert post.explained[index]
 
 
+def test_em_rounds_reuse_the_encoded_states(month: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """An expansion keeps its encoded chunks for the next round: the same likelihoods as
+    encoding them again (and as an expansion that keeps none)."""
+    import pokerirl.poker.impute as impute_module
+
+    hidden = split_table(every_row(month)).hidden
+    chosen = behaviour("rlcard")
+    kept = impute_module.Expansion(hidden, chosen.encoding)
+    first = log_likelihoods(hidden, chosen, expansion=kept)
+    assert kept._encoded and kept._encoded_bytes > 0
+    again = log_likelihoods(hidden, chosen, expansion=kept)
+    monkeypatch.setattr(impute_module, "ENCODED_CACHE_BYTES", 0)
+    fresh = impute_module.Expansion(hidden, chosen.encoding)
+    none_kept = log_likelihoods(hidden, chosen, expansion=fresh)
+    assert not fresh._encoded
+    assert np.array_equal(first, again) and np.array_equal(first, none_kept)
+
+
 def test_imputed_table(month: Path, tmp_path: Path) -> None:
     config = ImputeConfig(imputations=5, behaviour_rounds=1, behaviour_epochs=2, seed=1)
     out = tmp_path / "t.parquet"
@@ -281,7 +299,7 @@ def test_a_run_policy_is_a_behaviour(month: Path, tmp_path: Path) -> None:
                 progress=False, encoding="strength")  # fmt: skip
     summary = ingest_imputed([month], tmp_path / "t.parquet", ImputeConfig(behaviour=str(run)))
     assert summary.folds is not None
-    assert summary.folds.behaviour == str(run) and summary.folds.behaviour_encoding == "strength"
+    assert summary.folds.behaviour == str(run) and summary.folds.behaviour_encoding == "strength-v2"
     assert summary.folds.rounds == ()
     assert CARD_INDEX  # the module's card names are the tables'
 

@@ -120,6 +120,9 @@ def test_illegal_actions_raise_and_change_nothing() -> None:
         game.step(np.array([CALL, CHECK, RAISE]))  # the small blind cannot check preflop
     with pytest.raises(IllegalActionError):
         game.step(np.array([CALL, 7, CALL]))
+    for bad in ([CALL, -1, CALL], [1.0, 1.5, 1.0]):  # out of range, not a whole number
+        with pytest.raises(IllegalActionError, match="hand 1"):
+            game.step(np.array(bad))
     np.testing.assert_array_equal(game.chips, before[0])
     np.testing.assert_array_equal(game.to_act, before[1])
     np.testing.assert_array_equal(game.raises, before[2])
@@ -136,3 +139,24 @@ def test_raise_cap_excludes_the_big_blind() -> None:
     assert game.chips[0].tolist() == [8, 10]  # the BB made the 4th raise; the SB is to call
     game.step(np.array([CALL]))
     assert int(game.round[0]) == 1 and int(game.to_act[0]) == 1  # the SB closed: BB acts first
+
+
+def test_the_legality_table_in_every_situation() -> None:
+    """Behind or level, with or without a raise left: each of the four actions is refused or
+    applied as the rules say (the step's table against the legal mask)."""
+    for raises_first in range(5):
+        game = LimitHoldemBatch(deals=deal_cards(seed=5, start=0, count=1))
+        for _ in range(raises_first):
+            game.step(np.array([RAISE]))
+        mask = game.legal_mask()[0]
+        behind = bool(mask[CALL])
+        assert mask.tolist() == [behind, raises_first < 4, True, not behind]
+        for action in (CALL, RAISE, FOLD, CHECK):
+            trial = LimitHoldemBatch(deals=deal_cards(seed=5, start=0, count=1))
+            for _ in range(raises_first):
+                trial.step(np.array([RAISE]))
+            if mask[action]:
+                trial.step(np.array([action]))
+            else:
+                with pytest.raises(IllegalActionError):
+                    trial.step(np.array([action]))

@@ -12,8 +12,12 @@ batch of them into one row of features each. Two exist:
   vectorized evaluator (:data:`STRENGTH_FEATURES` lists them; ``docs/encodings.md`` says why
   each). None is a synthetic bot's own score.
 
-Every table row, run and agent records the name of its encoding; a mismatch is refused in
-one line where it is loaded (:func:`get_encoding`).
+An encoding has a version, and what runs and agents record is its ``spec``: ``rlcard``,
+``strength-v2`` (equity exact on every street, :mod:`pokerirl.game.equity`), or
+``strength-v1`` (equity after the flop from 64 fixed Monte Carlo runouts), which is what a
+bare ``strength`` in a record made before versions means (:func:`recorded_encoding`). A user
+asking for ``strength`` gets the current version (:func:`get_encoding`); a run of the old one
+still loads, and says ``strength-v1``. A mismatch is refused in one line where it is loaded.
 
 >>> from pokerirl.encoding import parse_card
 >>> cards = np.array([[parse_card(c) for c in "As Ah Ad Kc 7h".split()] + [-1, -1]], np.int8)
@@ -24,6 +28,8 @@ one line where it is loaded (:func:`get_encoding`).
 >>> row = STRENGTH.features(states)
 >>> int(row["category"].argmax()) + 1, bool(row["equity"][0, 0] > 0.85)  # trips, far ahead
 (4, True)
+>>> STRENGTH.spec, recorded_encoding("strength").spec  # a bare name in a record: version 1
+('strength-v2', 'strength-v1')
 """
 
 from __future__ import annotations
@@ -45,16 +51,18 @@ from pokerirl.encoding import (
     encode_obs,
 )
 from pokerirl.errors import ConfigError
+from pokerirl.game.equity import exact_equity
 from pokerirl.game.evaluator import hand_strength
-from pokerirl.game.preflop import preflop_equity
+from pokerirl.game.preflop import sampled_preflop_equity
 
 NUM_RANKS = 13
 BOARD_CARDS_BY_STREET = (0, 3, 4, 5)
 # Chips in this game: blinds 1 and 2, bets 2 preflop and on the flop, 4 on the turn and river.
 BET_BY_STREET = np.array([2, 2, 4, 4])
 MAX_POT = 100  # 50 chips a player: 2 + 2·4 preflop, + 2·4 flop, + 4·4 turn, + 4·4 river
-EQUITY_SAMPLES = 64  # Monte Carlo runouts per state after the flop (preflop: a table)
-_SAMPLE_SEED = 20_261_204  # the fixed sample bank: the same state, the same features
+EQUITY_SAMPLES = 64  # version 1: Monte Carlo runouts per state after the flop
+_SAMPLE_SEED = 20_261_204  # version 1's fixed sample bank: the same state, the same features
+STRENGTH_VERSION = 2  # the current version: exact equity on every street
 
 
 class EncodingName(StrEnum):
@@ -110,12 +118,19 @@ class Encoding:
     width: ClassVar[int]
     dtype: ClassVar[type[np.generic]]
     needs_cards: ClassVar[bool]
+    version: int = 1
+
+    @property
+    def spec(self) -> str:
+        """What runs and agents record: the name, with ``-v<version>`` for an encoding that
+        has had more than one."""
+        return str(self.name)
 
     def encode(self, states: States) -> np.ndarray:
         raise NotImplementedError
 
     def __repr__(self) -> str:
-        return f"Encoding({self.name!r}, width={self.width})"
+        return f"Encoding({self.spec!r}, width={self.width})"
 
 
 class RLCardEncoding(Encoding):
@@ -146,7 +161,7 @@ STRENGTH_FEATURES: Mapping[str, int] = {
     "overpair": 1,  # a pocket pair above every board card
     "flush_draw": 1,  # four of a suit with a hole card among them, cards to come
     "straight_draw": 1,  # four of five consecutive ranks with a hole card, cards to come
-    "equity": 1,  # P(win) + P(tie)/2 against a random hand, the board rolled out
+    "equity": 1,  # P(win) + P(tie)/2 against a random hand, the board rolled out (exact)
     "facing_bet": 1,
     "pot": 1,  # chips in the pot / MAX_POT
     "pot_odds": 1,  # to call / (pot + to call); 0 when not facing a bet
@@ -154,15 +169,29 @@ STRENGTH_FEATURES: Mapping[str, int] = {
 
 
 class StrengthEncoding(Encoding):
-    """Hole and board apart, plus generic hand features (float32; see the module docstring)."""
+    """Hole and board apart, plus generic hand features (float32; see the module docstring).
+
+    ``version`` 2 (the current one) computes the equity exactly; version 1, kept so that runs
+    made with it load and play as they were trained, estimates it after the flop from
+    ``equity_samples`` fixed runouts (preflop from a 200,000-runout table).
+    """
 
     name = EncodingName.STRENGTH
     width = sum(STRENGTH_FEATURES.values())
     dtype = np.float32
     needs_cards = True
 
-    def __init__(self, *, equity_samples: int = EQUITY_SAMPLES) -> None:
+    def __init__(
+        self, *, version: int = STRENGTH_VERSION, equity_samples: int = EQUITY_SAMPLES
+    ) -> None:
+        if version not in (1, 2):
+            raise ConfigError(f"the strength encoding has versions 1 and 2, not {version}")
+        self.version = version
         self.equity_samples = equity_samples
+
+    @property
+    def spec(self) -> str:
+        return f"{self.name}-v{self.version}"
 
     def encode(self, states: States) -> np.ndarray:
         blocks = self.features(states)
@@ -206,14 +235,16 @@ class StrengthEncoding(Encoding):
         return {k: v.astype(np.float32) for k, v in found.items()}
 
     def equity(self, cards: np.ndarray) -> np.ndarray:
-        """(N,) equity against a uniformly random hand, the board rolled out: preflop from the
-        169-class table (:func:`pokerirl.game.preflop.preflop_equity`), after the flop by
-        ``equity_samples`` runouts of a fixed sample bank (so a state's equity is a function
-        of its cards alone: the same state, the same bytes)."""
+        """(N,) equity against a uniformly random hand, the board rolled out. Version 2:
+        exact (:func:`pokerirl.game.equity.exact_equity`). Version 1: preflop from its
+        169-class Monte Carlo table, after the flop by ``equity_samples`` runouts of a fixed
+        sample bank (a function of the cards alone: the same state, the same bytes)."""
         cards = np.asarray(cards, dtype=np.int64)
+        if self.version >= 2:
+            return exact_equity(cards)
         found = np.empty(len(cards))
         preflop = cards[:, 2] < 0
-        found[preflop] = preflop_equity(cards[preflop, :2])
+        found[preflop] = sampled_preflop_equity(cards[preflop, :2])
         later = np.flatnonzero(~preflop)
         for first in range(0, later.size, 4096):  # bounded memory: 4096 x samples x 7 cards
             rows = later[first : first + 4096]
@@ -287,25 +318,38 @@ def pot_and_call(
     return 2 * before + top + mine, top - mine
 
 
+# Rank masks: bit r for rank r (2 .. A as 0 .. 12). A straight is one of ten windows (the
+# wheel: A 2 3 4 5); tables over the 8,192 masks give popcounts and made straights.
+_POPCOUNT = np.array([bin(mask).count("1") for mask in range(1 << NUM_RANKS)], dtype=np.int8)
+_WINDOWS = np.array([(1 << 12) | 0b1111] + [0b11111 << low for low in range(9)], np.int64)
+_STRAIGHT = ((np.arange(1 << NUM_RANKS)[:, None] & _WINDOWS) == _WINDOWS).any(axis=1)
+
+
+def _rank_masks(cards: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(suit masks (N, 4), ranks (N, 7) 2 .. A as 0 .. 12 (0 where not shown), shown (N, 7))
+    of cards (N, 7) with ``-1`` pads."""
+    shown = cards >= 0
+    rank = np.where(shown, (cards % NUM_RANKS + NUM_RANKS - 1) % NUM_RANKS, 0)
+    bit = np.where(shown, np.int64(1) << rank, 0)
+    suit = cards // NUM_RANKS
+    masks = np.stack([np.where(suit == s, bit, 0).sum(axis=1) for s in range(4)], axis=1)
+    return masks, rank, shown
+
+
 def visible_category(cards: np.ndarray) -> np.ndarray:
     """(N,) made-hand category (1 high card .. 9 straight flush, as
     :func:`pokerirl.game.evaluator.category`) of the visible cards, 2 to 7 of them
     (``-1`` pads)."""
     cards = np.asarray(cards, dtype=np.int64)
     n = len(cards)
-    shown = cards >= 0
-    rank = np.where(shown, (cards % NUM_RANKS + NUM_RANKS - 1) % NUM_RANKS, 0)
-    suit = np.where(shown, cards // NUM_RANKS, 0)
-    rows = np.repeat(np.arange(n), 7)[shown.reshape(-1)]
-    by_suit = np.zeros((n, 4, NUM_RANKS), dtype=bool)
-    by_suit[rows, suit[shown], rank[shown]] = True
-    counts = by_suit.sum(axis=1)  # (N, 13) cards of each rank
-    present = counts > 0
+    masks, rank, shown = _rank_masks(cards)
+    where = (np.arange(n)[:, None] * NUM_RANKS + rank)[shown]
+    counts = np.bincount(where, minlength=n * NUM_RANKS).reshape(n, NUM_RANKS)
     largest = counts.max(axis=1)
     pairs_or_more = (counts >= 2).sum(axis=1)
-    flush_suits = by_suit.sum(axis=2) >= 5
-    straight = _has_straight(present)
-    straight_flush = (flush_suits & _has_straight(by_suit.reshape(n * 4, -1)).reshape(n, 4)).any(1)
+    flush_suits = _POPCOUNT[masks] >= 5
+    straight = _STRAIGHT[np.bitwise_or.reduce(masks, axis=1)]
+    straight_flush = (flush_suits & _STRAIGHT[masks]).any(axis=1)
     category = np.ones(n, dtype=np.int64)
     for applies, value in (
         (largest == 2, 2),
@@ -321,35 +365,24 @@ def visible_category(cards: np.ndarray) -> np.ndarray:
     return category
 
 
-def _has_straight(present: np.ndarray) -> np.ndarray:
-    """(M,) whether a (M, 13) rank-presence matrix (2 .. A) holds five ranks in a row."""
-    with_wheel = np.concatenate([present[:, 12:], present], axis=1)  # the ace plays low too
-    windows = np.lib.stride_tricks.sliding_window_view(with_wheel, 5, axis=1)
-    return np.any(np.all(windows, axis=2), axis=1)
-
-
 def _draws(cards: np.ndarray, rank: np.ndarray, street: np.ndarray) -> tuple[np.ndarray, ...]:
     """(flush draw, straight draw) flags: four cards to a flush (or to five ranks in a row)
     among the visible cards, a hole card among them, no such hand made yet, and cards to come
     (the flop or the turn)."""
-    n = len(cards)
-    shown = cards >= 0
-    suit = np.where(shown, cards // NUM_RANKS, -1)
-    suit_counts = (suit[:, :, None] == np.arange(4)).sum(axis=1)  # (N, 4)
-    hole_suits = (suit[:, :2, None] == np.arange(4)).any(axis=1)
+    masks, _, _ = _rank_masks(cards)
+    suit_counts = _POPCOUNT[masks]  # (N, 4)
+    hole_suits = (cards[:, :2, None] // NUM_RANKS == np.arange(4)).any(axis=1)
     to_come = (street >= 1) & (street <= 2)
     flush_draw = ((suit_counts == 4) & hole_suits).any(axis=1) & ~(suit_counts >= 5).any(axis=1)
-
-    present = np.zeros((n, NUM_RANKS), dtype=bool)
-    rows = np.repeat(np.arange(n), 7)[shown.reshape(-1)]
-    present[rows, rank[shown]] = True
-    hole = np.zeros((n, NUM_RANKS), dtype=bool)
-    hole[np.repeat(np.arange(n), 2), rank[:, :2].reshape(-1)] = True
-    wheel = lambda m: np.concatenate([m[:, 12:], m], axis=1)  # noqa: E731
-    windows = np.lib.stride_tricks.sliding_window_view(wheel(present), 5, axis=1).sum(axis=2)
-    with_hole = np.lib.stride_tricks.sliding_window_view(wheel(hole), 5, axis=1).any(axis=2)
-    straight_draw = ((windows == 4) & with_hole).any(axis=1) & ~(windows == 5).any(axis=1)
-    return flush_draw & to_come, straight_draw & to_come
+    present = np.bitwise_or.reduce(masks, axis=1)
+    hole = (np.int64(1) << rank[:, 0]) | (np.int64(1) << rank[:, 1])
+    draw = np.zeros(len(cards), dtype=bool)
+    made = np.zeros(len(cards), dtype=bool)
+    for window in _WINDOWS:
+        held = _POPCOUNT[present & window]
+        draw |= (held == 4) & ((hole & window) != 0)
+        made |= held == 5
+    return flush_draw & to_come, draw & ~made & to_come
 
 
 def _one_hot(index: np.ndarray, width: int) -> np.ndarray:
@@ -373,20 +406,40 @@ def _raise_one_hot(raise_nums: np.ndarray) -> np.ndarray:
 
 RLCARD = RLCardEncoding()
 STRENGTH = StrengthEncoding()
+STRENGTH_V1 = StrengthEncoding(version=1)
+# The current encoding of each name (what a user asks for).
 ENCODINGS: Mapping[str, Encoding] = {e.name: e for e in (RLCARD, STRENGTH)}
+# Every version by its spec (what runs record).
+ENCODING_SPECS: Mapping[str, Encoding] = {e.spec: e for e in (RLCARD, STRENGTH, STRENGTH_V1)}
+# Records made before encodings had versions wrote the bare name.
+_UNVERSIONED: Mapping[str, Encoding] = {"rlcard": RLCARD, "strength": STRENGTH_V1}
 DEFAULT_ENCODING = EncodingName.RLCARD
 
 
 def get_encoding(name: str | Encoding | None) -> Encoding:
-    """The encoding called ``name`` (None: ``rlcard``); :class:`ConfigError` naming the
-    known ones otherwise.
+    """The encoding called ``name`` (None: ``rlcard``): a name gives its current version, a
+    spec (``strength-v1``) that version; :class:`ConfigError` naming the known ones otherwise.
 
     >>> get_encoding("strength").width, get_encoding(None).name
     (174, <EncodingName.RLCARD: 'rlcard'>)
+    >>> get_encoding("strength-v1").version
+    1
     """
     if isinstance(name, Encoding):
         return name
-    found = ENCODINGS.get(DEFAULT_ENCODING if name is None else name)
+    key = DEFAULT_ENCODING if name is None else name
+    found = ENCODINGS.get(key) or ENCODING_SPECS.get(key)
     if found is None:
         raise ConfigError(f"unknown encoding {name!r} (known: {', '.join(ENCODINGS)})")
+    return found
+
+
+def recorded_encoding(spec: str | None) -> Encoding:
+    """The encoding a run or an agent recorded (None: ``rlcard``, as records made before
+    encodings): a spec, or a bare name meaning the version there was before versions
+    (``strength`` is ``strength-v1``). :class:`ConfigError` for one it does not know."""
+    key = DEFAULT_ENCODING if spec is None else str(spec)
+    found = _UNVERSIONED.get(key) or ENCODING_SPECS.get(key)
+    if found is None:
+        raise ConfigError(f"unknown encoding {key[:40]!r} (known: {', '.join(ENCODING_SPECS)})")
     return found

@@ -75,6 +75,7 @@ from pokerirl.poker.folds import ImputeConfig
 PAIR_TEXT = tuple(f"{CARD_TEXT[a]} {CARD_TEXT[b]}" for a, b in PAIRS)
 # One forward pass of π_B reads this many states: 49 decisions x 1,326 pairs.
 CHUNK_ROWS = 1 << 16
+ENCODED_CACHE_BYTES = 1 << 28  # 256 MB of encoded (decision, pair) states kept across EM rounds
 # A hand is unexplained when its best pair's actions average less than this per decision.
 MIN_ACTION_PROBABILITY = 1e-6
 NO_SHOWDOWN, LOST, TIED, WON = -1, 0, 1, 2
@@ -286,7 +287,7 @@ class _GivenEquity(StrengthEncoding):
     same features, without recomputing one equity per decision and round."""
 
     def __init__(self, base: StrengthEncoding, values: np.ndarray) -> None:
-        super().__init__(equity_samples=base.equity_samples)
+        super().__init__(version=base.version, equity_samples=base.equity_samples)
         self.values = values
 
     def equity(self, cards: np.ndarray) -> np.ndarray:
@@ -325,12 +326,26 @@ class Expansion:
         self.per_chunk = max(1, CHUNK_ROWS // NUM_PAIRS)
         self._board_ids: np.ndarray | None = None
         self._equity: np.ndarray | None = None
+        # EM's rounds encode the same states again: the first chunks are kept, up to
+        # ENCODED_CACHE_BYTES (the same arrays, so the same likelihoods).
+        self._encoded: dict[int, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
+        self._encoded_bytes = 0
 
     def chunks(self) -> range:
         return range(0, len(self.hidden.owner), self.per_chunk)
 
     def encode(self, start: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(index of the chunk's decisions, (n·1326, width) features, (n, 1326) clash)."""
+        found = self._encoded.get(start)
+        if found is None:
+            found = self._encode(start)
+            size = sum(part.nbytes for part in found)
+            if self._encoded_bytes + size <= ENCODED_CACHE_BYTES:
+                self._encoded[start] = found
+                self._encoded_bytes += size
+        return found
+
+    def _encode(self, start: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         hidden = self.hidden
         index = np.arange(start, min(start + self.per_chunk, len(hidden.owner)))
         cards, clash = pair_cards(hidden.board[index])
@@ -691,7 +706,7 @@ def impute(
     taken = hidden.action[imputed_players[hidden.owner]]
     summary = FoldsSummary(
         behaviour=behaviour.source,
-        behaviour_encoding=str(behaviour.encoding.name),
+        behaviour_encoding=behaviour.encoding.spec,
         imputations=config.imputations,
         seed=config.seed,
         hidden_players=hidden.players,
