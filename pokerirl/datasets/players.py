@@ -79,12 +79,13 @@ class Period(Serializable):
         try:
             if not colon:
                 raise ValueError
-            return cls(start=float(start), end=float(end))
+            bounds = float(start), float(end)
         except ValueError:
             raise ConfigError(
                 f"period must be START:END, fractions of each month's hands by time "
                 f"(0:0.6, 0.6:1), got {text!r}"
             ) from None
+        return cls(start=bounds[0], end=bounds[1])
 
     @property
     def whole(self) -> bool:
@@ -145,8 +146,7 @@ class Selection(Serializable):
             raise ConfigError(f"min_hands must be a whole number >= 1, got {self.min_hands!r}")
         if self.min_bb_per_100 is not None:
             if not (
-                isinstance(self.min_bb_per_100, int | float)
-                and math.isfinite(self.min_bb_per_100)
+                isinstance(self.min_bb_per_100, int | float) and math.isfinite(self.min_bb_per_100)
             ):
                 raise ConfigError(
                     f"min_bb_per_100 must be a finite number, got {self.min_bb_per_100!r}"
