@@ -187,13 +187,13 @@ def test_the_period_cuts_by_time_and_its_parts_are_disjoint_and_cover_the_month(
 ) -> None:
     _, whole = ingest(month, tmp_path / "whole.parquet")
     parts = []
-    for start, end in ((0, 0.3), (0.3, 0.6), (0.6, 1)):
+    for start, end in ((0, 0.25), (0.25, 0.6), (0.6, 1)):  # 2.5 hands: floor, both sides
         summary, rows = ingest(month, tmp_path / "p.parquet", period=Period(start=start, end=end))
         parts.append(rows)
         assert summary.rows == len(rows["timestamp"]) and summary.buckets_add_up
     hands = [{hand for hand, _ in kept(rows)} for rows in parts]
-    # Hands 1-3, 4-6, 7-10 of the month by time (the hdb lists them latest first).
-    assert hands == [{1, 3}, {5, 6}, {8, 9, 10}]
+    # Hands 1-2, 3-6, 7-10 of the month by time (the hdb lists them latest first).
+    assert hands == [{1}, {3, 5, 6}, {8, 9, 10}]
 
     def decisions(rows: dict) -> list[tuple]:
         return sorted(zip(rows["timestamp"], rows["player"], rows["street"], strict=True))
