@@ -364,3 +364,25 @@ def test_real_parts_are_disjoint_and_cover_the_month(tmp_path: Path) -> None:
     assert first["timestamp"] + second["timestamp"] == whole["timestamp"]
     assert early.selection is not None and late.selection is not None
     assert early.selection.months[0].period_hands + late.selection.months[0].period_hands == 13426
+
+
+def test_with_imputed_folds_the_selection_comes_first(tmp_path: Path) -> None:
+    """--folds impute on a synthetic month: the behaviour model and the draws see the
+    expert's rows of the period alone, and the buckets still add up."""
+    from pokerirl.game.synth import write_synthetic_month
+    from pokerirl.poker.folds import ImputeConfig
+    from pokerirl.poker.impute import ingest_imputed
+
+    month = write_synthetic_month(tmp_path / "irc", hands=300, seed=3)
+    selection = Selection(period=Period(end=0.5), players=("TightBot",))
+    out = tmp_path / "t.parquet"
+    config = ImputeConfig(behaviour_rounds=0, behaviour_epochs=1)
+    summary = ingest_imputed([month], out, config, selection=selection)
+    rows = pq.read_table(out).to_pydict()
+    assert summary.selection is not None and summary.folds is not None
+    (period,) = summary.selection.months
+    assert period.period_hands == 150 and period.after_timestamp is not None
+    assert set(rows["player"]) == {"TightBot"} and any(rows["imputed"])
+    assert max(rows["timestamp"]) < period.after_timestamp
+    assert summary.dropped["outside_period"] > 0 and summary.dropped["not_the_expert"] > 0
+    assert summary.buckets_add_up
