@@ -386,3 +386,27 @@ def test_with_imputed_folds_the_selection_comes_first(tmp_path: Path) -> None:
     assert max(rows["timestamp"]) < period.after_timestamp
     assert summary.dropped["outside_period"] > 0 and summary.dropped["not_the_expert"] > 0
     assert summary.buckets_add_up
+
+
+def test_each_month_is_cut_apart_and_the_statistics_add_up(tmp_path: Path) -> None:
+    """Two months of the same hands: each cut at its own 60%; over both, A has 8 early hands,
+    B and C 6 each, so --min-hands 8 keeps A alone."""
+    hdb, roster, pdb = month_lines(HANDS)
+    april = write_month(tmp_path / "irc", month="199504", hdb=hdb, hroster=roster, pdb=pdb)
+    may = write_month(tmp_path / "irc", month="199505", hdb=hdb, hroster=roster, pdb=pdb)
+    out = tmp_path / "t.parquet"
+    summary = ingest_table(
+        [april, may], out, selection=Selection(period=Period(end=0.6), min_hands=8)
+    )
+    assert summary.selection is not None
+    assert [(m.month, m.hands, m.period_hands) for m in summary.selection.months] == [
+        ("holdem/199504", 10, 6),
+        ("holdem/199505", 10, 6),
+    ]
+    assert summary.selection.expert == ("A",)
+    rows = pq.read_table(out).to_pydict()
+    assert sorted({hand_id.rsplit("/", 1)[0] for hand_id in rows["hand_id"]}) == [
+        "holdem/199504",
+        "holdem/199505",
+    ]
+    assert kept(rows) == {(1, "A"), (5, "A"), (6, "A")} and summary.rows == 24

@@ -266,12 +266,13 @@ class Selector:
     ) -> pa.Table:
         """``table``, one month's rows, cut to the period of the month whose distinct hands
         have ``hand_timestamps``; ``results`` are its heads-up pdb lines."""
-        cut = self.selection.period.cut(hand_timestamps)
+        hands = np.unique(hand_timestamps)
+        cut = self.selection.period.cut(hands)
         self._months.append(
             MonthPeriod(
                 month=key,
-                hands=len(np.unique(hand_timestamps)),
-                period_hands=int(in_period(np.unique(hand_timestamps), cut).sum()),
+                hands=len(hands),
+                period_hands=int(in_period(hands, cut).sum()),
                 first_timestamp=cut[0],
                 after_timestamp=cut[1],
             )
