@@ -901,11 +901,13 @@ def heads_up_results(month: MonthFiles) -> HeadsUpResults:
                 continue
             stamp = _stamp(fields[1])
             chips_in, chips_won = fields[9], fields[10]
-            if stamp is None or not all(
-                len(chips) <= _MAX_DIGITS and chips.isdecimal() for chips in (chips_in, chips_won)
+            if (
+                stamp is None
+                or len(chips_in) > _MAX_DIGITS
+                or len(chips_won) > _MAX_DIGITS
+                or not (chips_in.isdecimal() and chips_won.isdecimal())
+                or (fields[0], stamp) in seen
             ):
-                continue
-            if (fields[0], stamp) in seen:
                 continue
             seen.add((fields[0], stamp))
             stamps.append(stamp)
