@@ -410,3 +410,20 @@ def test_each_month_is_cut_apart_and_the_statistics_add_up(tmp_path: Path) -> No
         "holdem/199505",
     ]
     assert kept(rows) == {(1, "A"), (5, "A"), (6, "A")} and summary.rows == 24
+
+
+def test_months_spilled_to_parts_give_the_same_selection(
+    month: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from pokerirl.datasets import ingest as ingest_module
+
+    (tmp_path / "held").mkdir()
+    (tmp_path / "spilled").mkdir()
+    early = {"period": Period(end=0.6), "min_hands": 3, "min_bb_per_100": 0.0}
+    held, _ = ingest(month, tmp_path / "held" / "t.parquet", **early)
+    monkeypatch.setattr(ingest_module, "SPILL_BYTES", 0)  # every month goes to a part file
+    spilled, _ = ingest(month, tmp_path / "spilled" / "t.parquet", **early)
+    assert (tmp_path / "spilled" / "t.parquet").read_bytes() == (
+        tmp_path / "held" / "t.parquet"
+    ).read_bytes()
+    assert spilled.selection == held.selection and spilled.rows == held.rows == 20
