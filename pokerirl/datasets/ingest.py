@@ -334,7 +334,7 @@ def _account_for(chosen: SelectionSummary, stats: IngestStats, drops: dict[str, 
     in_period = hands.get(Filter.PERIOD, hands[Filter.ALL])
     drops[OUTSIDE_PERIOD] = hands[Filter.ALL] - in_period
     drops[NOT_THE_EXPERT] = in_period - chosen.steps[-1].hands
-    stats.buckets[KEPT] = chosen.steps[-1].hands
+    stats.buckets[KEPT] -= drops[OUTSIDE_PERIOD] + drops[NOT_THE_EXPERT]
 
 
 def _of_players(data: pa.Table | Path, players: frozenset[str] | None) -> pa.Table:
