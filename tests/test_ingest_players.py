@@ -146,6 +146,10 @@ def test_winners_in_the_early_period_match_the_hand_written_table(
     ]
     assert kept(rows) == {(1, "B"), (3, "B"), (3, "C"), (5, "B"), (6, "C")}
     assert summary.selection is not None and summary.selection.expert == ("B", "C")
+    assert [
+        (r.player, r.hands, r.net_bb, round(r.bb_per_100, 2))
+        for r in summary.selection.expert_results
+    ] == [("B", 3, 1.0, 33.33), ("C", 3, 0.5, 16.67)]
     assert summary.rows == 20 and summary.kept_hands == 4
     assert summary.dropped["outside_period"] == 3 and summary.dropped["not_the_expert"] == 0
     assert summary.buckets_add_up

@@ -195,6 +195,16 @@ class MonthPeriod(Serializable):
 
 
 @dataclass(frozen=True, kw_only=True)
+class PlayerResult(Serializable):
+    """A player's heads-up hands and winnings in the period, as the pdb lines record them."""
+
+    player: str
+    hands: int
+    net_bb: float
+    bb_per_100: float
+
+
+@dataclass(frozen=True, kw_only=True)
 class SelectionSummary(Serializable):
     """The ``selection`` key of an ingest summary: the settings, each month's period, what
     each filter kept, in order, and the expert's names when players were chosen."""
@@ -203,6 +213,7 @@ class SelectionSummary(Serializable):
     months: tuple[MonthPeriod, ...]
     steps: tuple[FilterStep, ...]
     expert: tuple[str, ...] = ()  # sorted; empty when no player filter was given
+    expert_results: tuple[PlayerResult, ...] = ()  # theirs in the period, in the same order
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -226,6 +237,20 @@ class PlayerStats:
             players=tuple(players),
             hands=np.bincount(ids, minlength=len(players)).astype(np.int64),
             net_bb=np.bincount(ids, weights=net, minlength=len(players)),
+        )
+
+    def results_of(self, players: Sequence[str]) -> tuple[PlayerResult, ...]:
+        """The results of ``players`` (none for a player without a heads-up hand)."""
+        index = {name: i for i, name in enumerate(self.players)}
+        found = [index[name] for name in players if name in index]
+        return tuple(
+            PlayerResult(
+                player=self.players[i],
+                hands=int(self.hands[i]),
+                net_bb=float(self.net_bb[i]),
+                bb_per_100=float(self.bb_per_100[i]),
+            )
+            for i in found
         )
 
     def chosen(self, selection: Selection) -> dict[Filter, frozenset[str]]:
@@ -304,7 +329,8 @@ class Selector:
 
     def finish(self) -> tuple[frozenset[str] | None, SelectionSummary]:
         """The expert's names (None: every player's rows are kept) and the summary."""
-        chosen = PlayerStats.of(self._results).chosen(self.selection)
+        stats = PlayerStats.of(self._results)
+        chosen = stats.chosen(self.selection)
         hand_month = np.concatenate([np.zeros(0, np.int64), *self._hand_month])
         hand_time = np.concatenate([np.zeros(0, np.int64), *self._hand_time])
         player = np.concatenate([np.zeros(0, np.int64), *self._player_ids])
@@ -327,11 +353,12 @@ class Selector:
                 )
             )
         expert = chosen[self.selection.filters[-1]] if self.selection.chooses_players else None
-        kept_names = frozenset(names[np.unique(player[keep])]) if expert is not None else None
+        kept_names = sorted(names[np.unique(player[keep])]) if expert is not None else []
         summary = SelectionSummary(
             settings=self.selection,
             months=tuple(self._months),
             steps=tuple(steps),
-            expert=tuple(sorted(kept_names or ())),
+            expert=tuple(kept_names),
+            expert_results=stats.results_of(kept_names),
         )
         return expert, summary
