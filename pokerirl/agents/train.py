@@ -60,8 +60,8 @@ from pokerirl.agents.checkpoint import (
     save_agent,
 )
 from pokerirl.agents.config import (
-    SELF_PLAY,
     AgentOverrides,  # noqa: F401 - re-exported from its old home
+    Opponent,
     RewardMode,
     TrainConfig,
     TrainingProtocol,
@@ -283,7 +283,7 @@ class _TrainUnit:
     config: TrainConfig
     reward_source: RewardSource | None  # None: sparse, or a reward_fn given in this process
     reward_fingerprint: str | None
-    opponent: ShippedAgent | None  # None: self-play
+    opponent: ShippedAgent | Opponent  # an agent's files, or self-play or the pool
     threads: int
     progress: bool
 
@@ -338,9 +338,10 @@ def _train_many(
         read = RewardSource.read if reward_fn is not None else RewardSource.resolve
         source = read(first.reward_run)
         reward_print = source.fingerprint
+    opponent: ShippedAgent | Opponent
     opponent_print: str
-    if first.opponent == SELF_PLAY:
-        opponent, opponent_print = None, SELF_PLAY
+    if first.opponent in tuple(Opponent):
+        opponent = opponent_print = Opponent(first.opponent)
     else:
         opponent_print = agent_fingerprint(resolve_agent(first.opponent))
         opponent = ship_agent(first.opponent)
@@ -399,8 +400,8 @@ def _train_unit(unit: _TrainUnit, reward_fn: RewardFn | None = None) -> UnitOutp
                 reward = as_poker_reward(reward_fn)
             reward = TransformedReward(reward, config.reward_transform)  # type: ignore[arg-type]
         opponent = (
-            SELF_PLAY
-            if unit.opponent is None
+            unit.opponent
+            if isinstance(unit.opponent, Opponent)
             else land_agent(unit.opponent, Path(private, "opponent"))
         )
         out = Path(private, "agent")
@@ -448,7 +449,7 @@ def _train_into(
     progress: bool,
 ) -> tuple[MetricsLine, Timings]:
     """Train into the new folder ``out``; return the last metrics line and the timings."""
-    # The frozen self-play copy changes all the time: evaluate against random only then.
+    # The frozen self-play copy and the pool change all the time: against random only then.
     opponents: dict[str, Agent] = {"random": make_agent("random")}
     if not isinstance(opponent, str) and config.opponent != "random":
         opponents[config.opponent] = opponent
@@ -515,7 +516,7 @@ def _train_into(
         },
         "opponent": {
             "spec": config.opponent,
-            "fingerprint": SELF_PLAY if isinstance(opponent, str) else agent_fingerprint(opponent),
+            "fingerprint": opponent if isinstance(opponent, str) else agent_fingerprint(opponent),
         },
         "seed": config.seed,
         "hands": config.hands,
