@@ -171,7 +171,7 @@ def _evaluate(
     decisions against random (the first opponent) that follow it."""
     greedy = learner.greedy_agent()
     authors = config.protocol == TrainingProtocol.AUTHORS
-    results = {}
+    results: dict[str, Score] = {}
     log: list[DecisionLog] = []
     for label, opponent in opponents.items():
         result = play_match(

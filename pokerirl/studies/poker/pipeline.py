@@ -375,6 +375,19 @@ def _final_vs_random(agent_set: Path, seeds: Sequence[int]) -> list[float]:
     return [read_metrics(agent_set / f"seed-{s}")[-1].eval["random"].mbb_per_hand for s in seeds]
 
 
+def _follows_reward(sets: dict[str, Path], seeds: Sequence[int]) -> dict[str, list[float]] | None:
+    """Each learned-reward kind's follow metric per seed; None if an agent lacks it."""
+    from pokerirl.agents.train import read_metrics
+
+    found = {
+        kind: [read_metrics(out / f"seed-{s}")[-1].follows_reward for s in seeds]
+        for kind, out in sets.items() if kind != "dqn"
+    }  # fmt: skip
+    if any(v is None for values in found.values() for v in values):
+        return None
+    return {kind: [float(v) for v in values if v is not None] for kind, values in found.items()}
+
+
 def _curve(agent_set: Path, seeds: Sequence[int]) -> Curve:
     from pokerirl.agents.train import read_metrics
 
@@ -468,6 +481,7 @@ def agents_stage(study: Study, irl: IRLResult) -> AgentsResult:
             short=_final_vs_random(sets["dqn"] if short_is_long else short, config.seeds),
         ),
         references=references,
+        follows_reward=_follows_reward(sets, config.seeds),
         playing_vs_random={
             kind: _playing_vs_random(out, config.seeds) for kind, out in sets.items()
         } if authors else None,

@@ -135,6 +135,7 @@ def build_report(
             if agents.playing_vs_random is not None
             else "the last evaluation of training"
         ),
+        follows_reward=agents.follows_reward,
     )
     length = agents.training_length
     summary = ingested.summary
@@ -335,6 +336,18 @@ def render_markdown(report: StudyReport) -> str:
         lines.append(f"| always-{name} | {ref.mbb_per_hand:+,.0f} (SE {ref.std_error:,.0f})"
                      " | one fixed strategy | not reported |")  # fmt: skip
     length = report.training_length
+    if rl.follows_reward:
+        follows = ", ".join(
+            f"{KIND_LABELS[kind]} {sum(values) / len(values):.0%} "
+            f"({min(values):.0%} to {max(values):.0%})"
+            for kind, values in rl.follows_reward.items()
+        )
+        lines += [
+            "",
+            "How closely each learned-reward DQN follows its reward (the share of its decisions "
+            "against random that take the reward's best legal action; mean, seed range): "
+            f"{follows}.",
+        ]
     lines += [
         "",
         f"![RL against random]({figures['rl_vs_random']})",

@@ -95,6 +95,11 @@ class RLPart(Serializable):
     references: Mapping[str, Reference]
     per_seed: Mapping[str, list[float]]
     measured: str | None = field(default=None, metadata=meta(omit=Omit.NONE))
+    # Each learned-reward kind's share of its decisions against random that take its reward's
+    # best legal action, per seed (agents trained before the metric: absent).
+    follows_reward: Mapping[str, list[float]] | None = field(
+        default=None, metadata=meta(omit=Omit.NONE)
+    )
 
 
 @dataclass(frozen=True, kw_only=True)
