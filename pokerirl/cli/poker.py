@@ -98,17 +98,50 @@ def ingest(
         Default(IMPUTE_CONFIG, "seed"), "--seed", **SEED_OPTION,
         help="With --folds impute: seeds the behaviour model's fit and the draws.",
     ),
+    period: str | None = typer.Option(
+        None, "--period", metavar="START:END",
+        help="Keep the hands from fraction START to END of each month's hands in time order "
+        "(0:0.6 the earlier 60%, 0.6:1 the rest: disjoint, together the month). The players' "
+        "statistics for --min-hands and --min-bb-per-100 come from this period alone.",
+    ),
+    players: list[str] | None = typer.Option(
+        None, "--player", metavar="NAME",
+        help="Keep this player's decisions (repeat for several); with the filters below, "
+        "only those of the named players that pass them.",
+    ),
+    min_hands: int | None = typer.Option(
+        None, "--min-hands", min=1, metavar="N",
+        help="Keep the decisions of the players who played at least N heads-up hands in the "
+        "period (every hand their pdb lines record, folds included).",
+    ),
+    min_bb_per_100: float | None = typer.Option(
+        None, "--min-bb-per-100", metavar="X",
+        help="With --min-hands: keep those of them who won at least X big blinds per 100 "
+        "hands (chips won minus chips put in, over their heads-up hands in the period).",
+    ),
 ) -> None:
     """Turn IRC Poker Database hand histories into a Parquet state-action table.
 
     Writes TABLE and TABLE.summary.json (where every hand went) and prints the summary.
     With --folds impute the table gains the columns imputed, weight, imputation and
-    posterior_entropy, and the summary a folds section.
+    posterior_entropy, and the summary a folds section. --period, --player, --min-hands
+    and --min-bb-per-100 select the expert's decisions; the summary's selection section
+    says what each kept.
     """
+    from pokerirl.datasets.players import Period, Selection
     from pokerirl.poker.folds import FoldsMode, ImputeConfig
 
     if folds not in tuple(FoldsMode):
         raise UsageError(f"unknown --folds {folds!r} ({', '.join(FoldsMode)})")
+    if min_bb_per_100 is not None and min_hands is None:
+        raise UsageError("--min-bb-per-100 needs --min-hands (the hands the winnings are over)")
+    selection = None
+    if period is not None or players or min_hands is not None:
+        selection = settings_from_options(
+            Selection, period=Period() if period is None else settings_from_options(
+                Period.parse, period),
+            players=tuple(players or ()), min_hands=min_hands, min_bb_per_100=min_bb_per_100,
+        )  # fmt: skip
     imputing = given(ctx, imputations=imputations, behaviour=behaviour,
                      behaviour_encoding=behaviour_encoding, behaviour_rounds=behaviour_rounds,
                      seed=seed)  # fmt: skip
@@ -118,7 +151,8 @@ def ingest(
             raise UsageError(f"{flags} apply only with --folds impute")
         from pokerirl.datasets.ingest import ingest_table
 
-        summary = ingest_table(sources, out, strict=strict, progress=not quiet)
+        summary = ingest_table(sources, out, strict=strict, progress=not quiet,
+                               selection=selection)  # fmt: skip
     else:
         config = settings_from_options(
             ImputeConfig, imputations=imputations,
@@ -127,7 +161,8 @@ def ingest(
         )  # fmt: skip
         from pokerirl.poker.impute import ingest_imputed
 
-        summary = ingest_imputed(sources, out, config, strict=strict, progress=not quiet)
+        summary = ingest_imputed(sources, out, config, strict=strict, progress=not quiet,
+                                 selection=selection)  # fmt: skip
     if not quiet:
         echo(json.dumps(summary.to_json(), indent=2))
 

@@ -23,9 +23,18 @@ from typing import Any, Protocol
 
 import numpy as np
 import pyarrow as pa
+import pyarrow.compute as pc
 import pyarrow.parquet as pq
 from tqdm import tqdm
 
+from pokerirl.datasets.players import (
+    NOT_THE_EXPERT,
+    OUTSIDE_PERIOD,
+    Filter,
+    Selection,
+    SelectionSummary,
+    Selector,
+)
 from pokerirl.datasets.table import IMPUTED_SCHEMA, SCHEMA, month_table
 from pokerirl.encoding import ACTIONS, FOLD
 from pokerirl.parsers.irc import (
@@ -34,6 +43,7 @@ from pokerirl.parsers.irc import (
     IngestError,
     IngestStats,
     check_sources,
+    heads_up_results,
     iter_months,
     parse_month,
 )
@@ -127,6 +137,10 @@ class IngestSummary(Serializable):
     # --folds impute only (absent from the JSON otherwise): hands kept with imputed cards.
     imputed_hands: int | None = field(default=None, metadata=meta(omit=Omit.NONE))
     folds: FoldsSummary | None = field(default=None, metadata=meta(omit=Omit.NONE))
+    # A selection only (absent otherwise): the period and the expert's players, and what
+    # each filter kept. kept_hands, rows and the buckets then count the table written
+    # (kept_fold_hands and the parser's counts stay those of the hands read).
+    selection: SelectionSummary | None = field(default=None, metadata=meta(omit=Omit.NONE))
 
 
 def summary_path(table_path: str | os.PathLike[str]) -> Path:
@@ -143,8 +157,13 @@ def ingest_table(
     progress: bool = False,
     folds: FoldsStep | None = None,
     recorded_as: str | os.PathLike[str] | None = None,
+    selection: Selection | None = None,
 ) -> IngestSummary:
     """Read IRC sources, write the table to ``out`` and its summary beside it; return the summary.
+
+    ``selection`` keeps a period of each month and the decisions of the players chosen as
+    the expert (:mod:`pokerirl.datasets.players`), before any ``folds`` step; the summary
+    records it and what each filter kept. None: every kept hand, as before.
 
     ``recorded_as`` is the table's path that the summary records, when ``out`` is a staging
     path that is moved into place afterwards (a study's unit); its file name must be ``out``'s.
@@ -173,7 +192,7 @@ def ingest_table(
             scratch = new / _SPILL_FOLDER  # inside the staging folder; gone before the swap
             scratch.mkdir()
             summary = _ingest(sources, named, new, scratch, strict=strict, progress=progress,
-                              folds=folds)  # fmt: skip
+                              folds=folds, selection=selection)  # fmt: skip
             shutil.rmtree(scratch)
             summary_path(out_path).unlink(missing_ok=True)
     except OSError as error:  # sources' read errors are IngestErrors: this is a write
@@ -193,22 +212,23 @@ def _ingest(
     strict: bool,
     progress: bool,
     folds: FoldsStep | None = None,
+    selection: Selection | None = None,
 ) -> IngestSummary:
     stats = IngestStats(strict=strict)
     keep = folds is not None
+    selector = None if selection is None else Selector(selection)
     seen: dict[str, np.ndarray] = {}
     # (month key, arrival order, table in memory or spilled part file)
     months: list[tuple[str, int, pa.Table | Path]] = []
     in_memory = 0
-    # Showdown hands hold no fold; a fold row (a hand with its cards revealed) adds the key.
-    counts = {action: 0 for action in ACTIONS if action != ACTIONS[FOLD]}
     with tqdm(desc="ingest", unit=" hands", disable=not progress, smoothing=0) as bar:
         for order, month in enumerate(iter_months(sources)):
             hands = parse_month(month, stats, seen, on_hands=bar.update, keep_concealed=keep)
             table, concealed = month_table(hands, keep_concealed=keep)
             stats.decisions_concealed += concealed
-            for action, count in zip(*_value_counts(table.column("action")), strict=True):
-                counts[action] = counts.get(action, 0) + count
+            if selector is not None:
+                table = selector.month(month.key, seen.get(month.key, np.zeros(0, np.int64)),
+                                       heads_up_results(month), table)  # fmt: skip
             if table.num_rows == 0:
                 continue
             months.append((month.key, order, table))
@@ -218,22 +238,58 @@ def _ingest(
                 in_memory = 0
     table_file, summary_file = new / out_path.name, new / summary_path(out_path).name
     ordered = [data for _, _, data in sorted(months, key=lambda item: item[:2])]
+    extra_drops: dict[str, int] = {}
+    chosen: SelectionSummary | None = None
+    expert: frozenset[str] | None = None
+    if selector is not None:
+        expert, chosen = selector.finish()
+        _account_for(chosen, stats, extra_drops)
+        if folds is not None and expert is not None:  # the step sees the expert's rows only
+            ordered = [_of_players(data, expert) for data in ordered]
+            expert = None
     if folds is not None:
         summary = _write_with_folds(folds, ordered, stats, sources, out_path, table_file,
-                                    progress=progress)  # fmt: skip
+                                    progress=progress, extra_drops=extra_drops)  # fmt: skip
     else:
-        summary = _summary(stats, sources, out_path, counts)
-        with (
-            _file(table_file, "wb") as sink,
-            pq.ParquetWriter(sink, SCHEMA, **PARQUET_OPTIONS) as writer,
-        ):
-            for data in ordered:
-                if isinstance(data, Path):
-                    with _file(data, "rb") as part:
-                        data = pq.read_table(part)
-                writer.write_table(data)
+        counts = _write_table(ordered, expert, table_file)
+        summary = _summary(stats, sources, out_path, counts, extra_drops=extra_drops)
+    if chosen is not None:
+        if summary.rows == 0:
+            steps = ", ".join(f"{step.filter}: {step.decisions}" for step in chosen.steps)
+            raise IngestError(f"no decision is left after the selection (decisions {steps})")
+        summary = dataclasses.replace(summary, selection=chosen)
     summary_file.write_text(json.dumps(summary.to_json(), indent=2) + "\n", encoding="utf-8")
     return summary
+
+
+def _write_table(
+    months: list[pa.Table | Path], players: frozenset[str] | None, table_file: Path
+) -> dict[str, int]:
+    """Write the rows of ``players`` (None: all) of ``months``, in order; their counts per
+    action."""
+    counts = _action_counts()
+    with (
+        _file(table_file, "wb") as sink,
+        pq.ParquetWriter(sink, SCHEMA, **PARQUET_OPTIONS) as writer,
+    ):
+        for data in months:
+            rows = _of_players(data, players)
+            _action_counts(rows, counts)
+            writer.write_table(rows)
+    return counts
+
+
+def _action_counts(
+    table: pa.Table | None = None, counts: dict[str, int] | None = None
+) -> dict[str, int]:
+    """``counts`` plus the rows of ``table`` per action. Showdown hands hold no fold: the
+    key starts absent, and a fold row (a hand with its cards revealed) adds it."""
+    if counts is None:
+        counts = {action: 0 for action in ACTIONS if action != ACTIONS[FOLD]}
+    if table is not None:
+        for action, count in zip(*_value_counts(table.column("action")), strict=True):
+            counts[action] = counts.get(action, 0) + count
+    return counts
 
 
 def _write_with_folds(
@@ -245,6 +301,7 @@ def _write_with_folds(
     table_file: Path,
     *,
     progress: bool,
+    extra_drops: Mapping[str, int],
 ) -> IngestSummary:
     """Run the folds step on every row and write its table; the summary's buckets move the
     hands it imputed or dropped out of ``kept``."""
@@ -254,11 +311,10 @@ def _write_with_folds(
     folds_summary = result.summary
     stats.buckets[KEPT] -= folds_summary.imputed_hands + folds_summary.dropped_hands
     stats.decisions_concealed += result.dropped_decisions
-    counts = {action: 0 for action in ACTIONS if action != ACTIONS[FOLD]}
-    for action, count in zip(*_value_counts(result.table.column("action")), strict=True):
-        counts[action] = counts.get(action, 0) + count
+    counts = _action_counts(result.table)
     summary = _summary(stats, sources, out_path, counts,
-                       extra_drops={UNEXPLAINED: folds_summary.dropped_hands})  # fmt: skip
+                       extra_drops={**extra_drops,
+                                    UNEXPLAINED: folds_summary.dropped_hands})  # fmt: skip
     summary = dataclasses.replace(
         summary,
         imputed_hands=folds_summary.imputed_hands,
@@ -270,6 +326,26 @@ def _write_with_folds(
     with _file(table_file, "wb") as sink:
         pq.write_table(result.table.cast(IMPUTED_SCHEMA), sink, **PARQUET_OPTIONS)
     return summary
+
+
+def _account_for(chosen: SelectionSummary, stats: IngestStats, drops: dict[str, int]) -> None:
+    """Move the kept hands that a selection leaves out into its two buckets."""
+    hands = {step.filter: step.hands for step in chosen.steps}
+    in_period = hands.get(Filter.PERIOD, hands[Filter.ALL])
+    drops[OUTSIDE_PERIOD] = hands[Filter.ALL] - in_period
+    drops[NOT_THE_EXPERT] = in_period - chosen.steps[-1].hands
+    stats.buckets[KEPT] = chosen.steps[-1].hands
+
+
+def _of_players(data: pa.Table | Path, players: frozenset[str] | None) -> pa.Table:
+    """The rows of ``players`` (all rows: None) of a month, read back if it was spilled."""
+    if isinstance(data, Path):
+        with _file(data, "rb") as part:
+            data = pq.read_table(part)
+    if players is None:
+        return data
+    wanted = pa.array(sorted(players), type=pa.string())
+    return data.filter(pc.is_in(data.column("player"), value_set=wanted))
 
 
 def _spill(

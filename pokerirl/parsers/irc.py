@@ -864,3 +864,57 @@ def _classify_hand(
     hands.chips_in += (in_a, in_b)
     hands.chips_won += (won_a, won_b)
     return KEPT
+
+
+# ---------------------------------------------------------------------------------------------
+# Players' results
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class HeadsUpResults:
+    """Every heads-up pdb line of one month, one entry per (player, hand): what the player
+    put in and won, in big blinds. Every hand the player was dealt into counts, folds and
+    unusable hands included: the table keeps only shown cards, and a player's winnings over
+    showdowns alone would leave out every blind folded away."""
+
+    timestamps: np.ndarray  # int64
+    players: tuple[str, ...]
+    net_bb: np.ndarray  # float64: (chips won - chips put in) / big blind
+
+    def __len__(self) -> int:
+        return len(self.players)
+
+
+def heads_up_results(month: MonthFiles) -> HeadsUpResults:
+    """The heads-up results the pdb files of ``month`` record (none for a channel that is
+    not limit hold'em). A line that is not a readable pdb line is left out (``parse_month``
+    counts it as malformed); a (player, hand) logged twice counts once."""
+    big_blind = BIG_BLIND_BY_CHANNEL.get(month.channel)
+    seen: set[tuple[str, int]] = set()
+    stamps: list[int] = []
+    players: list[str] = []
+    net: list[int] = []
+    for data in month.pdb.values() if big_blind is not None else ():
+        for line in _lines(data):
+            fields = line.split()
+            if len(fields) not in (11, 13) or fields[2] != "2":
+                continue
+            stamp = _stamp(fields[1])
+            chips_in, chips_won = fields[9], fields[10]
+            if (
+                stamp is None
+                or len(chips_in) > _MAX_DIGITS
+                or len(chips_won) > _MAX_DIGITS
+                or not (chips_in.isdecimal() and chips_won.isdecimal())
+                or (fields[0], stamp) in seen
+            ):
+                continue
+            seen.add((fields[0], stamp))
+            stamps.append(stamp)
+            players.append(fields[0])
+            net.append(int(chips_won) - int(chips_in))
+    return HeadsUpResults(
+        timestamps=np.array(stamps, dtype=np.int64),
+        players=tuple(players),
+        net_bb=np.array(net, dtype=np.float64) / (big_blind or 1),
+    )

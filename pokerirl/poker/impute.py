@@ -49,6 +49,7 @@ from tqdm.auto import tqdm
 
 from pokerirl.datasets.decisions import table_cards
 from pokerirl.datasets.ingest import FoldsResult, FoldsSummary, IngestSummary, ingest_table
+from pokerirl.datasets.players import Selection
 from pokerirl.datasets.table import IMPUTED_SCHEMA, SCHEMA, fixed_size_list
 from pokerirl.encoding import (
     ACTIONS,
@@ -739,11 +740,13 @@ def ingest_imputed(
     strict: bool = False,
     progress: bool = False,
     recorded_as: str | os.PathLike[str] | None = None,
+    selection: Selection | None = None,
 ) -> IngestSummary:
     """``pokerirl ingest --folds impute``: the table with the fold hands' hidden cards
-    imputed, and its summary (``recorded_as``: as :func:`ingest_table`'s)."""
+    imputed, and its summary (``recorded_as``, ``selection``: as :func:`ingest_table`'s; the
+    selection applies first, so the behaviour model sees the expert's rows alone)."""
 
     if config.behaviour is not None:
         Behaviour.from_run(config.behaviour)  # a bad run fails before the sources are read
     return ingest_table(sources, out, strict=strict, progress=progress, folds=folds_step(config),
-                        recorded_as=recorded_as)
+                        recorded_as=recorded_as, selection=selection)
