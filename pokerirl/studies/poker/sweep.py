@@ -486,7 +486,7 @@ def _table(sweep: _Sweep, cell: Cell) -> Path:
         config={
             "unit": "poker-sweep-table", "folds": cell.folds, "selection": selection.to_json(),
             **_sources_print(sweep.month),
-        },  # fmt: skip
+        },
     )
     if check(unit, overwrite=sweep.overwrite).fate is not Fate.REUSED:
         sweep.say(f"[1/5] ingest: {cell.table_key}, hands {selection.period} of the month")
@@ -605,10 +605,10 @@ def _evaluate(sweep: _Sweep, cells: Sequence[Cell]) -> dict[Any, AgentEval]:
     for cell in cells:
         runs = _irl_runs(sweep, cell)
         for seed in config.seeds:
-            sparse = str(_agent_folder(sweep, cell.sparse_key, seed))
-            jobs.setdefault(Path(sparse), (sparse, None, None))
+            baseline = str(_agent_folder(sweep, cell.sparse_key, seed))
+            jobs.setdefault(Path(baseline), (baseline, None, None))
             learned = _agent_folder(sweep, cell.name, seed)
-            jobs[learned] = (str(learned), sparse, str(runs[seed % len(runs)]))
+            jobs[learned] = (str(learned), baseline, str(runs[seed % len(runs)]))
     units = []
     for key, (spec, sparse, reward_run) in jobs.items():
         name = "call" if key == "call" else str(Path(spec).relative_to(sweep.root / "agents"))
