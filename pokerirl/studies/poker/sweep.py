@@ -544,14 +544,12 @@ def _irl(sweep: _Sweep, cell: Cell) -> None:
     sweep.say(f"      {cell.reward_key}: {sweep.config.runs} runs -> {out}")
     train_runs(sweep.root / "tables" / f"{cell.table_key}.parquet", out, runs=sweep.config.runs,
                algo=cell.algo, config=config, progress=sweep.progress,
-               overwrite=sweep.overwrite, backend=sweep.backend,
-               encoding=cell.encoding)  # fmt: skip
+               overwrite=sweep.overwrite, backend=sweep.backend, encoding=cell.encoding,
+               single_folder=False)  # fmt: skip
 
 
 def _irl_runs(sweep: _Sweep, cell: Cell) -> list[Path]:
-    from pokerirl.studies.poker.pipeline import run_paths
-
-    return run_paths(_irl_folder(sweep, cell), sweep.config.runs)
+    return [_irl_folder(sweep, cell) / f"run-{k}" for k in range(sweep.config.runs)]
 
 
 def _agreements(runs: Sequence[Path]) -> tuple[tuple[float, ...], tuple[float, ...]]:
