@@ -57,6 +57,7 @@ from pokerirl.studies.poker.results import (
 
 if TYPE_CHECKING:  # the layers below load lazily: ``pokerirl report`` needs none of them
     from pokerirl.agents.train import TrainConfig
+    from pokerirl.datasets.players import Selection
     from pokerirl.irl.config import AIRLConfig
     from pokerirl.tournaments import AuthorsMatchup, TournamentReport
 
@@ -217,6 +218,9 @@ def ingest_stage(study: Study, sources: Sequence[str | os.PathLike[str]]) -> Ing
     sources_print = _sources_fingerprint(sources)
     imputing = study.config.folds == "impute"
     folds = {"folds": "impute"} if imputing else {}  # drop: the records of before
+    selection = study_selection(study.config)
+    if selection is not None:  # none: the records of before
+        folds["selection"] = selection.to_json()
     legacy = study.legacy("ingest", {"sources": sources_print, **folds})
     unit: Unit[None] = Unit(
         key="ingest",
@@ -235,14 +239,29 @@ def ingest_stage(study: Study, sources: Sequence[str | os.PathLike[str]]) -> Ing
 
                 ingest_imputed(sources, folder / TABLE, ImputeConfig(),
                                progress=study.execution.progress,
-                               recorded_as=TABLE)  # fmt: skip
+                               recorded_as=TABLE, selection=selection)  # fmt: skip
             else:
                 # The summary names the table relative to the study folder, where it sits:
                 # not the unit's staging path, and the same bytes in any study folder.
                 ingest_table(sources, folder / TABLE, progress=study.execution.progress,
-                             recorded_as=TABLE)  # fmt: skip
+                             recorded_as=TABLE, selection=selection)  # fmt: skip
     summary = json.loads(summary_path(study.root / TABLE).read_text())
     return Ingested(summary=summary, fingerprint=fingerprint(legacy.identity))
+
+
+def study_selection(config: StudyConfig) -> Selection | None:
+    """The ingest's selection of the expert (a period, the winners), or None for all hands
+    and players."""
+    from pokerirl.datasets.players import Period, Selection
+
+    winners = config.experts == "winners"
+    if not winners and config.period == (0.0, 1.0):
+        return None
+    return Selection(
+        period=Period(start=config.period[0], end=config.period[1]),
+        min_hands=config.winners_min_hands if winners else None,
+        min_bb_per_100=config.winners_bb_per_100 if winners else None,
+    )
 
 
 def run_paths(out: Path, runs: int) -> list[Path]:
@@ -289,7 +308,7 @@ def irl_stage(study: Study, ingested: Ingested) -> IRLResult:
         "epochs": config.irl_epochs,
         "seed": config.irl_seed,
         "upstream": ingested.fingerprint,
-        **_non_default(config, "irl_settings", "encoding", "algos"),
+        **_non_default(config, "irl_settings", "encoding", "algos", "reward_decay"),
     }
     if config.reward_sources:
         stage["reward_sources"] = reward_source_prints(config)
@@ -302,7 +321,8 @@ def irl_stage(study: Study, ingested: Ingested) -> IRLResult:
         if source is not None:
             found[algo] = replaced_irl(study, algo, source, out)
             continue
-        chosen = {"epochs": config.irl_epochs, "seed": config.irl_seed}
+        chosen = {"epochs": config.irl_epochs, "seed": config.irl_seed,
+                  "reward_weight_decay": config.reward_decay}  # fmt: skip
         overrides = {
             **irl_overrides(config.irl_settings, algo),
             **{k: v for k, v in chosen.items() if v is not None},
@@ -434,11 +454,13 @@ def agents_stage(study: Study, irl: IRLResult) -> AgentsResult:
             eval_every=min(config.eval_every, hands),
             eval_hands=config.eval_hands,
             encoding=config.encoding,
+            opponent=config.opponent,
         )
         if algo is None:
             study.execution.train_seeds(out, base, config.seeds)
             return
-        learned = replace(base, reward="learned", reward_transform=config.reward_transform)
+        learned = replace(base, reward="learned", reward_transform=config.reward_transform,
+                          payoff_weight=config.payoff_weight)  # fmt: skip
         source = config.reward_source(algo)
         if source is not None:
             study.execution.train_seeds(out, replace(learned, reward_run=source), config.seeds)

@@ -54,6 +54,11 @@ class IRLAlgoPart(Serializable):
     final_disc_acc_policy: MeanStd
     per_run_val_alignment: list[float]
     paper: IRLPaper
+    # f's argmax against the expert on validation states (runs that record it; the policy's
+    # alignment is final_val_alignment).
+    final_val_reward_alignment: MeanStd | None = field(
+        default=None, metadata=meta(omit=Omit.NONE)
+    )
 
 
 @dataclass(frozen=True, kw_only=True)
