@@ -6,6 +6,11 @@ Prints hands per second of random vs random in :mod:`pokerirl.game` and in
 ``rlcard.utils.tournament`` with RLCard's ``RandomAgent`` (and the ratio), then always-raise
 vs random in both: mbb/h with its standard error, and the engine's wall time. Only ratios
 measured in one run are comparable; the machine may be shared.
+
+The gate (issue 41): the engine's raise vs random (alternating seats) must play at least
+:data:`MIN_RATIO` times RLCard's random-vs-random hands/s measured in the same run; below
+it the script says so and exits 1 (it was 158x, then 37x when `pokerirl match` began
+timing the AIVAT corrections and a match built observations no built-in agent reads).
 """
 
 from __future__ import annotations
@@ -24,6 +29,8 @@ from typing import Any
 import numpy as np
 
 from pokerirl.game import make_agent, play_match
+
+MIN_RATIO = 300.0  # engine raise-vs-random over RLCard random-vs-random, same run
 
 
 class RLCardRaiseAgent:
@@ -81,7 +88,7 @@ def rlcard_raise_vs_random(hands: int, seed: int) -> tuple[float, float, float]:
     return 1000 * results.mean(), 1000 * results.std(ddof=1) / np.sqrt(hands), hands / seconds
 
 
-def main() -> None:
+def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--hands", type=int, default=400_000, help="engine hands per figure")
     parser.add_argument("--rlcard-hands", type=int, default=20_000, help="RLCard hands per figure")
@@ -98,6 +105,7 @@ def main() -> None:
     print(f"random vs random, RLCard tournament ({args.rlcard_hands:,}): {theirs:12,.0f} hands/s")
     print(f"ratio engine / RLCard: {ours.hands_per_second / theirs:.0f}x")
 
+    raise_rate = 0.0
     for duplicate in (False, True):
         match = play_match(
             always_raise, random, hands=args.hands, seed=args.seed, duplicate=duplicate
@@ -106,13 +114,23 @@ def main() -> None:
         print(
             f"raise vs random, engine, {mode} ({args.hands:,} hands): "
             f"{match.mbb_per_hand:.1f} +- {match.std_error:.1f} mbb/h in {match.seconds:.2f} s"
+            f" ({match.hands_per_second:,.0f} hands/s)"
         )
+        if not duplicate:
+            raise_rate = match.hands_per_second
     mbb, se, speed = rlcard_raise_vs_random(args.rlcard_hands, args.seed)
     print(
         f"raise vs random, RLCard env.run ({args.rlcard_hands:,} hands): "
         f"{mbb:.1f} +- {se:.1f} mbb/h ({speed:,.0f} hands/s)"
     )
     encodings(args)
+    ratio = raise_rate / theirs
+    print(f"ratio engine raise vs random / RLCard random vs random: {ratio:.0f}x "
+          f"(gate {MIN_RATIO:.0f}x; load {os.getloadavg()[0]:.2f})")  # fmt: skip
+    if ratio < MIN_RATIO:
+        print(f"FAIL: the engine is below {MIN_RATIO:.0f}x RLCard: a regression")
+        return 1
+    return 0
 
 
 @dataclass(frozen=True)
@@ -141,4 +159,4 @@ def encodings(args: argparse.Namespace) -> None:
 
 
 if __name__ == "__main__":
-    main()
+    raise SystemExit(main())

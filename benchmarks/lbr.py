@@ -31,9 +31,10 @@ import numpy as np
 import torch
 
 from pokerirl.agents import resolve_agent
-from pokerirl.agents.dqn import GreedyQAgent, QNetwork
+from pokerirl.agents.dqn import GreedyQAgent, QNetwork, input_norm
 from pokerirl.game.agents import Agent
 from pokerirl.game.deals import deal_cards
+from pokerirl.game.encodings import get_encoding
 from pokerirl.game.match import play_match
 from pokerirl.tournaments.aivat import play_corrected_match
 from pokerirl.tournaments.lbr import LBRSettings, play_lbr
@@ -41,11 +42,14 @@ from pokerirl.tournaments.lbr import LBRSettings, play_lbr
 TARGET_HANDS, TARGET_SECONDS = 20_000, 600.0
 
 
-def _agent(spec: str | None) -> Agent:
+def _agent(spec: str | None, encoding: str = "rlcard") -> Agent:
     if spec is not None:
         return resolve_agent(spec)
     torch.manual_seed(0)
-    return GreedyQAgent(name="untrained-dqn", network=QNetwork(hidden=(64, 64)).eval())
+    chosen = get_encoding(encoding)
+    network = QNetwork(hidden=(64, 64), obs_size=chosen.width, input_norm=input_norm(chosen))
+    return GreedyQAgent(name=f"untrained-dqn-{chosen.spec}", network=network.eval(),
+                        encoding=chosen.spec)  # fmt: skip
 
 
 def bench_lbr(agent: Agent, hands: int, street: str) -> None:
@@ -92,12 +96,18 @@ def main() -> None:
     parser.add_argument("--streets", nargs="+", default=["turn", "preflop"])
     parser.add_argument("--opponents", nargs="*", default=["call"])
     parser.add_argument("--match-hands", type=int, default=200_000)
+    parser.add_argument("--encodings", nargs="+", default=["rlcard"],
+                        help="the untrained DQN's encodings (strength: the issue-41 target, "
+                        ">= 50 hands/s from the turn)")  # fmt: skip
     args = parser.parse_args()
     torch.set_num_threads(1)
     print(f"cores: {os.cpu_count()}, load average before: {os.getloadavg()[0]:.2f}")
-    agent = _agent(args.agent)
-    for street in args.streets:
-        bench_lbr(agent, args.hands, street)
+    agent: Agent | None = None
+    for encoding in args.encodings if args.agent is None else [None]:
+        agent = _agent(args.agent, encoding or "rlcard")
+        for street in args.streets:
+            bench_lbr(agent, args.hands, street)
+    assert agent is not None
     for spec in args.opponents:
         bench_aivat(agent, resolve_agent(spec), args.match_hands)
     print(f"load average after: {os.getloadavg()[0]:.2f}")

@@ -172,10 +172,10 @@ def test_a_strength_run_records_its_encoding_and_its_reward_reads_it(strength_ru
     from pokerirl.poker.rewards import RewardSource
 
     record = json.loads((strength_run / "config.json").read_text())
-    assert record["data"]["encoding"] == "strength"
+    assert record["data"]["encoding"] == "strength-v2"  # the spec: name and version
     assert record["architecture"]["obs_dim"] == STRENGTH.width
     source = RewardSource.resolve(strength_run)
-    assert source.encoding == "strength" and source.load().needs_cards
+    assert source.encoding == "strength-v2" and source.load().needs_cards
 
 
 def test_a_run_and_a_table_or_flag_of_another_encoding_are_refused(
@@ -186,7 +186,7 @@ def test_a_run_and_a_table_or_flag_of_another_encoding_are_refused(
     result = runner.invoke(app, ["reward-card", str(strength_run), "--encoding", "rlcard",
                                  "--out", str(tmp_path / "card")])  # fmt: skip
     assert result.exit_code == 1 and result.output.count("\n") == 1
-    assert "a reward on the strength encoding, not rlcard" in result.output
+    assert "a reward on the strength-v2 encoding, not rlcard" in result.output
     assert not (tmp_path / "card").exists()
     # A table without the columns the strength encoding is computed from.
     table = pq.read_table(strength_run.parent / "table.parquet").drop(["hole_cards", "board"])
@@ -220,7 +220,7 @@ def test_an_agent_folder_of_an_unknown_encoding_is_refused(tmp_path: Path) -> No
 
     save_agent(tmp_path / "a", QNetwork(hidden=(8,), obs_size=STRENGTH.width, input_norm=False),
                {"hidden": [8], "encoding": "strength"})  # fmt: skip
-    assert load_agent(tmp_path / "a").encoding == "strength"
+    assert load_agent(tmp_path / "a").encoding == "strength-v1"  # before versions: v1
     save_agent(tmp_path / "b", QNetwork(hidden=(8,)), {"hidden": [8], "encoding": "colour"})
     with pytest.raises(InputError, match="unknown encoding 'colour'"):
         load_agent(tmp_path / "b")
@@ -236,7 +236,7 @@ def test_agents_of_different_encodings_meet_in_one_match(strength_run: Path) -> 
     from pokerirl.agents.dqn import DQNConfig, train_dqn
 
     policy = resolve_agent(f"policy:{strength_run}")
-    assert policy.encoding == "strength"  # type: ignore[attr-defined]
+    assert policy.encoding == "strength-v2"  # type: ignore[attr-defined]
     dqn = train_dqn(DQNConfig(concurrent_hands=64, replay_init=32), hands=128, seed=0,
                     opponent=policy).greedy_agent()  # fmt: skip
     for rival in (make_agent("tightbot"), dqn):

@@ -279,7 +279,7 @@ def test_a_run_policy_is_a_behaviour(month: Path, tmp_path: Path) -> None:
                 progress=False, encoding="strength")  # fmt: skip
     summary = ingest_imputed([month], tmp_path / "t.parquet", ImputeConfig(behaviour=str(run)))
     assert summary.folds is not None
-    assert summary.folds.behaviour == str(run) and summary.folds.behaviour_encoding == "strength"
+    assert summary.folds.behaviour == str(run) and summary.folds.behaviour_encoding == "strength-v2"
     assert summary.folds.rounds == ()
     assert CARD_INDEX  # the module's card names are the tables'
 

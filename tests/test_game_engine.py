@@ -119,6 +119,9 @@ def test_illegal_actions_raise_and_change_nothing() -> None:
         game.step(np.array([CALL, CHECK, RAISE]))  # the small blind cannot check preflop
     with pytest.raises(IllegalActionError):
         game.step(np.array([CALL, 7, CALL]))
+    for bad in ([CALL, -1, CALL], [1.0, 1.5, 1.0]):  # out of range, not a whole number
+        with pytest.raises(IllegalActionError, match="hand 1"):
+            game.step(np.array(bad))
     np.testing.assert_array_equal(game.chips, before[0])
     np.testing.assert_array_equal(game.to_act, before[1])
     np.testing.assert_array_equal(game.raises, before[2])

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import itertools
+
 import numpy as np
 import pytest
 from rlcard.games.limitholdem.utils import compare_hands
@@ -113,3 +115,54 @@ def test_rejects_bad_input() -> None:
         hand_strength(np.zeros((3, 6), dtype=np.int64))
     with pytest.raises(ValueError, match=r"0..51"):
         hand_strength(np.full((1, 7), 52))
+
+
+# --------------------------------------------------------------------------- against eval7
+
+
+def _agree_in_order(ours: np.ndarray, theirs: np.ndarray) -> int:
+    """Assert that two evaluators order hands alike (equal exactly when equal) and return
+    how many classes they found."""
+    order = np.argsort(ours, kind="stable")
+    ours, theirs = ours[order], theirs[order]
+    new_class = np.diff(ours) != 0
+    assert (np.diff(theirs)[~new_class] == 0).all(), "ours ties hands eval7 tells apart"
+    assert (np.diff(theirs)[new_class] > 0).all(), "ours orders hands eval7 orders otherwise"
+    return int(new_class.sum()) + 1
+
+
+def _eval7(cards: np.ndarray) -> np.ndarray:
+    eval7 = pytest.importorskip("eval7")
+    from equity_reference import eval7_cards
+
+    deck = eval7_cards()
+    return np.array([eval7.evaluate([deck[c] for c in row]) for row in cards.tolist()])
+
+
+def test_every_five_card_class_is_ranked_as_eval7_ranks_it() -> None:
+    """The 7,462 classes: every multiset of five ranks (a rank at most four times) in mixed
+    suits, and every five distinct ranks as a flush."""
+    from pokerirl.game.evaluator import five_card_strength
+
+    hands = []
+    for ranks in itertools.combinations_with_replacement(range(13), 5):
+        if max(ranks.count(r) for r in ranks) > 4:
+            continue
+        seen: dict[int, int] = {}
+        cards = []
+        for r in ranks:  # the k-th card of a rank in suit k: never five of one suit
+            k = seen.get(r, 0)
+            seen[r] = k + 1
+            cards.append(((k + len(cards)) % 4 if len(set(ranks)) == 5 else k) * 13 + r)
+        hands.append(cards)
+        if len(set(ranks)) == 5:
+            hands.append([13 * 2 + r for r in ranks])  # all diamonds
+    hands_array = np.array(hands)
+    assert len({tuple(sorted(h)) for h in hands}) == len(hands) == 7_462
+    ours = five_card_strength(hands_array)
+    assert _agree_in_order(ours, _eval7(hands_array)) == 7_462
+
+
+def test_random_seven_card_hands_are_ranked_as_eval7_ranks_them() -> None:
+    cards = np.random.default_rng(8).random((200_000, 52)).argsort(axis=1)[:, :7]
+    assert _agree_in_order(hand_strength(cards), _eval7(cards)) > 3_000

@@ -110,7 +110,8 @@ def test_cli_match_prints_json_last() -> None:
     )
     assert result.exit_code == 0, result.output
     summary = json.loads(result.stdout.strip().splitlines()[-1])
-    assert set(summary) == {"mbb_per_hand", "std_error", "hands", "hands_per_second"}
+    assert set(summary) == {"mbb_per_hand", "std_error", "hands", "hands_per_second",
+                            "aivat_seconds"}  # fmt: skip
     assert summary["hands"] == 2000 and summary["mbb_per_hand"] > 2000
 
 
@@ -125,3 +126,35 @@ def test_cli_match_text_and_errors() -> None:
             failed.stderr.strip().startswith("error:")
             and len(failed.stderr.strip().splitlines()) == 1
         )
+
+
+@dataclass(frozen=True)
+class _Recorder:
+    """A random agent that records the observation widths it is given."""
+
+    widths: list
+    reads_obs: bool = True
+    name: str = "recorder"
+
+    def act(self, obs: np.ndarray, legal_mask: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+        self.widths.append(obs.shape[1])
+        return make_agent("random").act(obs, legal_mask, rng)
+
+
+def test_agents_that_read_no_observation_get_none_and_results_do_not_change() -> None:
+    """The built-ins decide from the legal mask: the engine skips their observations (half a
+    match's time), which must change no result; an agent that reads them still gets 72."""
+    reader, skipper = _Recorder(widths=[]), _Recorder(widths=[], reads_obs=False)
+    first = play_match(reader, make_agent("raise"), hands=500, seed=3)
+    second = play_match(skipper, make_agent("raise"), hands=500, seed=3)
+    assert set(reader.widths) == {72} and set(skipper.widths) == {0}
+    assert np.array_equal(first.results_bb, second.results_bb)
+    assert not make_agent("random").reads_obs and not make_agent("fold").reads_obs  # type: ignore[attr-defined]
+
+
+def test_time_in_on_batch_is_kept_apart_from_the_play() -> None:
+    import time
+
+    found = play_match(make_agent("raise"), make_agent("random"), hands=200, seed=0,
+                       batch_size=100, on_batch=lambda *_: time.sleep(0.2))  # fmt: skip
+    assert found.on_batch_seconds >= 0.4 and found.seconds < found.on_batch_seconds

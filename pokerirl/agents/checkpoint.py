@@ -32,8 +32,8 @@ from pokerirl.agents.config import PLAYS, Plays
 from pokerirl.agents.dqn import GreedyQAgent, QNetwork, input_norm
 from pokerirl.agents.registry import CONFIG_FILE, KEPT_FILE, MODEL_FILE
 from pokerirl.atomic import write_bytes, write_torch
-from pokerirl.errors import InputError
-from pokerirl.game.encodings import ENCODINGS, Encoding, EncodingName
+from pokerirl.errors import ConfigError, InputError
+from pokerirl.game.encodings import Encoding, EncodingName, recorded_encoding
 
 METRICS_FILE, CURVE_FILE = "metrics.jsonl", "learning_curve.png"
 FORMAT = "pokerirl-dqn"
@@ -108,14 +108,14 @@ def load_agent(folder: str | os.PathLike[str]) -> GreedyQAgent:
     except (RuntimeError, ValueError, TypeError) as error:
         raise _bad(
             checkpoint,
-            f"does not fit {CONFIG_FILE}'s hidden {list(hidden)} on the {encoding.name} "
+            f"does not fit {CONFIG_FILE}'s hidden {list(hidden)} on the {encoding.spec} "
             f"encoding ({encoding.width}-d): {_first_line(error)}",
         ) from None
     return GreedyQAgent(
         name=str(folder),
         network=network.eval(),
         fingerprint=folder_fingerprint(folder),
-        encoding=encoding.name,
+        encoding=encoding.spec,
     )
 
 
@@ -154,10 +154,11 @@ def _read_config(path: Path) -> tuple[tuple[int, ...], str, Encoding]:
         raise _bad(path, f"plays must be final or kept, got {str(plays)[:40]!r}")
     if plays == Plays.KEPT and not (path.parent / KEPT_FILE).is_file():
         raise _bad(path, f"plays the kept checkpoint, but there is no {KEPT_FILE}")
-    name = config.get("encoding", EncodingName.RLCARD)
-    if name not in ENCODINGS:
-        raise _bad(path, f"unknown encoding {str(name)[:40]!r} (known: {', '.join(ENCODINGS)})")
-    return tuple(hidden), plays, ENCODINGS[name]
+    try:  # a bare "strength" (before versions) is strength-v1
+        encoding = recorded_encoding(config.get("encoding", EncodingName.RLCARD))
+    except ConfigError as error:
+        raise _bad(path, str(error)) from None
+    return tuple(hidden), plays, encoding
 
 
 def _read_state_dict(path: Path) -> dict[str, torch.Tensor]:

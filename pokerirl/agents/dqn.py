@@ -286,7 +286,7 @@ class DQNLearner:
     def greedy_agent(self, name: str = "dqn") -> GreedyQAgent:
         """A frozen greedy copy of the current q-network."""
         return GreedyQAgent(name=name, network=copy.deepcopy(self.q_net).eval(),
-                            encoding=self.encoding.name)  # fmt: skip
+                            encoding=self.encoding.spec)  # fmt: skip
 
     def update(self, rng: np.random.Generator) -> float:
         """One gradient step on a replay minibatch; copies the target network like RLCard."""
@@ -395,7 +395,7 @@ def train_dqn(
                         assert cards is not None  # a non-RLCard encoding reads the cards
                         states = States(cards=cards, raise_nums=game.raises[learner_hands],
                                         legal_mask=legal)  # fmt: skip
-                        obs = encoded[encoding.name] = encoding.encode(states)
+                        obs = encoded[encoding.spec] = encoding.encode(states)
                     # This state closes the learner's previous transition in these hands.
                     waiting = pending.waiting[learner_hands]
                     before = learner_hands[waiting]

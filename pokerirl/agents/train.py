@@ -80,6 +80,7 @@ from pokerirl.errors import ConfigError, InputError
 from pokerirl.execution import Backend, read_files
 from pokerirl.game import DecisionLog, make_agent, play_match
 from pokerirl.game.agents import Agent
+from pokerirl.game.encodings import get_encoding
 from pokerirl.irl.run import REWARD_RUN_FILES  # noqa: F401 - re-exported: pokerirl.agents.train.REWARD_RUN_FILES
 from pokerirl.poker.rewards import (
     Decisions,
@@ -525,7 +526,7 @@ def _train_into(
     )
     record = {
         "hidden": list(config.dqn.hidden),
-        "encoding": str(config.encoding),
+        "encoding": get_encoding(config.encoding).spec,
         "source": {"kind": "pokerirl-dqn", "version": __version__, "torch": torch.__version__},
         "reward": {
             "mode": config.reward,

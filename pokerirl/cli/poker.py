@@ -251,13 +251,15 @@ def match(
             "std_error": result.std_error,
             "hands": result.hands,
             "hands_per_second": result.hands_per_second,
+            "aivat_seconds": result.on_batch_seconds,
         }
         echo(json.dumps(summary))
     else:
         echo(
             f"{result.agent_a} vs {result.agent_b}: {result.mbb_per_hand:+.1f} "
             f"+- {result.std_error:.1f} mbb/h over {result.hands:,} hands "
-            f"({result.hands_per_second:,.0f} hands/s); AIVAT-corrected "
+            f"({result.hands_per_second:,.0f} hands/s of play, "
+            f"{result.on_batch_seconds:.1f} s of AIVAT); AIVAT-corrected "
             f"{found.corrected_mbb_per_hand:+.1f} +- {found.corrected_std_error:.1f} mbb/h"
         )
 
@@ -682,8 +684,10 @@ def _encoding(name: str) -> str:
 
 def _check_encoding(source: object, expected: str) -> None:
     """Refuse, in one line naming the run, a reward run of another encoding."""
-    found = getattr(source, "encoding", None)
-    if found is not None and found != expected:
+    from pokerirl.game.encodings import get_encoding
+
+    found = getattr(source, "encoding", None)  # its spec: strength-v1 is still strength
+    if found is not None and get_encoding(found).name != get_encoding(expected).name:
         raise InputError(
             f"{getattr(source, 'spec', source)}: a reward on the {found} encoding, not "
             f"{expected} (its config.json's data.encoding)"

@@ -149,7 +149,7 @@ def decisions_from_arrow(
         next_obs=next_obs,
         dones=dones,
         rewards=rewards,
-        encoding=chosen.name,
+        encoding=chosen.spec,
         weights=weights,
         imputed=imputed,
     )

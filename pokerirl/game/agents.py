@@ -5,6 +5,9 @@ makes one batched forward pass. An agent whose ``sees_cards`` is true also gets 
 its hole cards and the board shown so far, in the order they were dealt (the observation's
 card bits cannot tell hole cards from board cards); :func:`agent_actions` passes them.
 
+An agent whose ``reads_obs`` is false (the built-ins that decide from the legal mask alone)
+gets an empty (B, 0) ``obs``: the engine skips building observations nobody reads.
+
 An agent that can say how likely each of its actions is (every built-in, the DQN agents)
 also has ``action_probs(obs, legal_mask)`` (:class:`PolicyAgent`): what local best response
 (:mod:`pokerirl.tournaments.lbr`) needs to keep the agent's range.
@@ -22,7 +25,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Protocol, runtime_checkable
+from typing import ClassVar, Protocol, runtime_checkable
 
 import numpy as np
 
@@ -95,6 +98,7 @@ class RandomAgent:
     """Uniform over the legal actions, like RLCard's ``RandomAgent``."""
 
     name: str = "random"
+    reads_obs: ClassVar[bool] = False  # decides from the legal mask alone
 
     def act(self, obs: np.ndarray, legal_mask: np.ndarray, rng: np.random.Generator) -> np.ndarray:
         # The k-th legal action of each row, k uniform in 0 .. (number legal - 1), by table.
@@ -112,6 +116,7 @@ class RaiseAgent:
     """Raise if legal, else call, else check."""
 
     name: str = "raise"
+    reads_obs: ClassVar[bool] = False  # decides from the legal mask alone
 
     def act(self, obs: np.ndarray, legal_mask: np.ndarray, rng: np.random.Generator) -> np.ndarray:
         passive = np.where(legal_mask[:, CALL], CALL, CHECK)
@@ -126,6 +131,7 @@ class CallAgent:
     """Call if facing a bet, else check: never raises, never folds."""
 
     name: str = "call"
+    reads_obs: ClassVar[bool] = False  # decides from the legal mask alone
 
     def act(self, obs: np.ndarray, legal_mask: np.ndarray, rng: np.random.Generator) -> np.ndarray:
         return np.where(legal_mask[:, CALL], CALL, CHECK).astype(np.int64)
@@ -141,6 +147,7 @@ class FoldAgent:
     against it from the small blind and 0.5 from the big blind."""
 
     name: str = "fold"
+    reads_obs: ClassVar[bool] = False
 
     def act(self, obs: np.ndarray, legal_mask: np.ndarray, rng: np.random.Generator) -> np.ndarray:
         return np.full(len(legal_mask), FOLD, dtype=np.int64)

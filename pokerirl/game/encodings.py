@@ -12,8 +12,12 @@ batch of them into one row of features each. Two exist:
   vectorized evaluator (:data:`STRENGTH_FEATURES` lists them; ``docs/encodings.md`` says why
   each). None is a synthetic bot's own score.
 
-Every table row, run and agent records the name of its encoding; a mismatch is refused in
-one line where it is loaded (:func:`get_encoding`).
+An encoding has a version, and what runs and agents record is its ``spec``: ``rlcard``,
+``strength-v2`` (equity exact on every street, :mod:`pokerirl.game.equity`), or
+``strength-v1`` (equity after the flop from 64 fixed Monte Carlo runouts), which is what a
+bare ``strength`` in a record made before versions means (:func:`recorded_encoding`). A user
+asking for ``strength`` gets the current version (:func:`get_encoding`); a run of the old one
+still loads, and says ``strength-v1``. A mismatch is refused in one line where it is loaded.
 
 >>> from pokerirl.encoding import parse_card
 >>> cards = np.array([[parse_card(c) for c in "As Ah Ad Kc 7h".split()] + [-1, -1]], np.int8)
@@ -24,6 +28,8 @@ one line where it is loaded (:func:`get_encoding`).
 >>> row = STRENGTH.features(states)
 >>> int(row["category"].argmax()) + 1, bool(row["equity"][0, 0] > 0.85)  # trips, far ahead
 (4, True)
+>>> STRENGTH.spec, recorded_encoding("strength").spec  # a bare name in a record: version 1
+('strength-v2', 'strength-v1')
 """
 
 from __future__ import annotations
@@ -45,16 +51,18 @@ from pokerirl.encoding import (
     encode_obs,
 )
 from pokerirl.errors import ConfigError
+from pokerirl.game.equity import exact_equity
 from pokerirl.game.evaluator import hand_strength
-from pokerirl.game.preflop import preflop_equity
+from pokerirl.game.preflop import sampled_preflop_equity
 
 NUM_RANKS = 13
 BOARD_CARDS_BY_STREET = (0, 3, 4, 5)
 # Chips in this game: blinds 1 and 2, bets 2 preflop and on the flop, 4 on the turn and river.
 BET_BY_STREET = np.array([2, 2, 4, 4])
 MAX_POT = 100  # 50 chips a player: 2 + 2·4 preflop, + 2·4 flop, + 4·4 turn, + 4·4 river
-EQUITY_SAMPLES = 64  # Monte Carlo runouts per state after the flop (preflop: a table)
-_SAMPLE_SEED = 20_261_204  # the fixed sample bank: the same state, the same features
+EQUITY_SAMPLES = 64  # version 1: Monte Carlo runouts per state after the flop
+_SAMPLE_SEED = 20_261_204  # version 1's fixed sample bank: the same state, the same features
+STRENGTH_VERSION = 2  # the current version: exact equity on every street
 
 
 class EncodingName(StrEnum):
@@ -110,12 +118,19 @@ class Encoding:
     width: ClassVar[int]
     dtype: ClassVar[type[np.generic]]
     needs_cards: ClassVar[bool]
+    version: int = 1
+
+    @property
+    def spec(self) -> str:
+        """What runs and agents record: the name, with ``-v<version>`` for an encoding that
+        has had more than one."""
+        return str(self.name)
 
     def encode(self, states: States) -> np.ndarray:
         raise NotImplementedError
 
     def __repr__(self) -> str:
-        return f"Encoding({self.name!r}, width={self.width})"
+        return f"Encoding({self.spec!r}, width={self.width})"
 
 
 class RLCardEncoding(Encoding):
@@ -146,7 +161,7 @@ STRENGTH_FEATURES: Mapping[str, int] = {
     "overpair": 1,  # a pocket pair above every board card
     "flush_draw": 1,  # four of a suit with a hole card among them, cards to come
     "straight_draw": 1,  # four of five consecutive ranks with a hole card, cards to come
-    "equity": 1,  # P(win) + P(tie)/2 against a random hand, the board rolled out
+    "equity": 1,  # P(win) + P(tie)/2 against a random hand, the board rolled out (exact)
     "facing_bet": 1,
     "pot": 1,  # chips in the pot / MAX_POT
     "pot_odds": 1,  # to call / (pot + to call); 0 when not facing a bet
@@ -154,15 +169,29 @@ STRENGTH_FEATURES: Mapping[str, int] = {
 
 
 class StrengthEncoding(Encoding):
-    """Hole and board apart, plus generic hand features (float32; see the module docstring)."""
+    """Hole and board apart, plus generic hand features (float32; see the module docstring).
+
+    ``version`` 2 (the current one) computes the equity exactly; version 1, kept so that runs
+    made with it load and play as they were trained, estimates it after the flop from
+    ``equity_samples`` fixed runouts (preflop from a 200,000-runout table).
+    """
 
     name = EncodingName.STRENGTH
     width = sum(STRENGTH_FEATURES.values())
     dtype = np.float32
     needs_cards = True
 
-    def __init__(self, *, equity_samples: int = EQUITY_SAMPLES) -> None:
+    def __init__(
+        self, *, version: int = STRENGTH_VERSION, equity_samples: int = EQUITY_SAMPLES
+    ) -> None:
+        if version not in (1, 2):
+            raise ConfigError(f"the strength encoding has versions 1 and 2, not {version}")
+        self.version = version
         self.equity_samples = equity_samples
+
+    @property
+    def spec(self) -> str:
+        return f"{self.name}-v{self.version}"
 
     def encode(self, states: States) -> np.ndarray:
         blocks = self.features(states)
@@ -206,14 +235,16 @@ class StrengthEncoding(Encoding):
         return {k: v.astype(np.float32) for k, v in found.items()}
 
     def equity(self, cards: np.ndarray) -> np.ndarray:
-        """(N,) equity against a uniformly random hand, the board rolled out: preflop from the
-        169-class table (:func:`pokerirl.game.preflop.preflop_equity`), after the flop by
-        ``equity_samples`` runouts of a fixed sample bank (so a state's equity is a function
-        of its cards alone: the same state, the same bytes)."""
+        """(N,) equity against a uniformly random hand, the board rolled out. Version 2:
+        exact (:func:`pokerirl.game.equity.exact_equity`). Version 1: preflop from its
+        169-class Monte Carlo table, after the flop by ``equity_samples`` runouts of a fixed
+        sample bank (a function of the cards alone: the same state, the same bytes)."""
         cards = np.asarray(cards, dtype=np.int64)
+        if self.version >= 2:
+            return exact_equity(cards)
         found = np.empty(len(cards))
         preflop = cards[:, 2] < 0
-        found[preflop] = preflop_equity(cards[preflop, :2])
+        found[preflop] = sampled_preflop_equity(cards[preflop, :2])
         later = np.flatnonzero(~preflop)
         for first in range(0, later.size, 4096):  # bounded memory: 4096 x samples x 7 cards
             rows = later[first : first + 4096]
@@ -373,20 +404,40 @@ def _raise_one_hot(raise_nums: np.ndarray) -> np.ndarray:
 
 RLCARD = RLCardEncoding()
 STRENGTH = StrengthEncoding()
+STRENGTH_V1 = StrengthEncoding(version=1)
+# The current encoding of each name (what a user asks for).
 ENCODINGS: Mapping[str, Encoding] = {e.name: e for e in (RLCARD, STRENGTH)}
+# Every version by its spec (what runs record).
+ENCODING_SPECS: Mapping[str, Encoding] = {e.spec: e for e in (RLCARD, STRENGTH, STRENGTH_V1)}
+# Records made before encodings had versions wrote the bare name.
+_UNVERSIONED: Mapping[str, Encoding] = {"rlcard": RLCARD, "strength": STRENGTH_V1}
 DEFAULT_ENCODING = EncodingName.RLCARD
 
 
 def get_encoding(name: str | Encoding | None) -> Encoding:
-    """The encoding called ``name`` (None: ``rlcard``); :class:`ConfigError` naming the
-    known ones otherwise.
+    """The encoding called ``name`` (None: ``rlcard``): a name gives its current version, a
+    spec (``strength-v1``) that version; :class:`ConfigError` naming the known ones otherwise.
 
     >>> get_encoding("strength").width, get_encoding(None).name
     (174, <EncodingName.RLCARD: 'rlcard'>)
+    >>> get_encoding("strength-v1").version
+    1
     """
     if isinstance(name, Encoding):
         return name
-    found = ENCODINGS.get(DEFAULT_ENCODING if name is None else name)
+    key = DEFAULT_ENCODING if name is None else name
+    found = ENCODINGS.get(key) or ENCODING_SPECS.get(key)
     if found is None:
         raise ConfigError(f"unknown encoding {name!r} (known: {', '.join(ENCODINGS)})")
+    return found
+
+
+def recorded_encoding(spec: str | None) -> Encoding:
+    """The encoding a run or an agent recorded (None: ``rlcard``, as records made before
+    encodings): a spec, or a bare name meaning the version there was before versions
+    (``strength`` is ``strength-v1``). :class:`ConfigError` for one it does not know."""
+    key = DEFAULT_ENCODING if spec is None else str(spec)
+    found = _UNVERSIONED.get(key) or ENCODING_SPECS.get(key)
+    if found is None:
+        raise ConfigError(f"unknown encoding {key[:40]!r} (known: {', '.join(ENCODING_SPECS)})")
     return found

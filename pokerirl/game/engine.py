@@ -57,6 +57,15 @@ SHOWDOWN = NUM_ROUNDS  # value of ``round`` once the river has closed
 _HOLE_COLUMNS = np.array([[0, 1], [2, 3]])  # deal columns of each seat's hole cards
 # (round, card) -> visible, for a seat's 2 hole cards then the board; round 4 is after the river.
 _VISIBLE = np.arange(7) < 2 + np.array((*BOARD_SIZE_BY_ROUND, 5))[:, None]
+# _LEGAL[4 * situation + action], situation = behind the opponent + 2 x (a raise is left).
+_LEGAL_BY_SITUATION = np.zeros((4, NUM_ACTIONS), dtype=bool)
+_LEGAL_BY_SITUATION[:, FOLD] = True
+_LEGAL_BY_SITUATION[[1, 3], CALL] = True
+_LEGAL_BY_SITUATION[[0, 2], CHECK] = True
+_LEGAL_BY_SITUATION[[2, 3], RAISE] = True
+_LEGAL = _LEGAL_BY_SITUATION.reshape(-1)
+_MATCHES = np.zeros(NUM_ACTIONS, dtype=np.int16)  # actions that first match the opponent
+_MATCHES[[CALL, RAISE]] = 1
 
 
 class IllegalActionError(PokerIRLError, ValueError):
@@ -167,6 +176,9 @@ class LimitHoldemBatch:
         """
         hands = self._hands(hands)
         actions = np.asarray(actions)
+        if actions.dtype.kind not in "iu":  # whole numbers only: 1.0 is a raise, 1.5 nothing
+            whole = actions.astype(np.int64)
+            actions = np.where(whole == actions, whole, -1)
         if actions.shape != hands.shape:
             raise ValueError(f"got {actions.shape} actions for {hands.shape} hands")
         if self.done[hands].any():
@@ -177,28 +189,28 @@ class LimitHoldemBatch:
         rnd = self.round[hands]
         raises_at = NUM_ROUNDS * hands + rnd
         mine, theirs = self._round_chips[mine_at], self._round_chips[mine_at ^ 1]
-        is_call, is_raise = actions == CALL, actions == RAISE
-        is_fold, is_check = actions == FOLD, actions == CHECK
-        legal = (
-            (is_call & (mine < theirs))
-            | (is_raise & (self._raises[raises_at] < MAX_RAISES))
-            | is_fold
-            | (is_check & (mine >= theirs))
-        )
+        raised = self._raises[raises_at]
+        # Legality by table: situation (behind?, may raise?) x action, one flat gather.
+        situation = (mine < theirs) + 2 * (raised < MAX_RAISES)
+        if actions.size and (actions.min() < 0 or actions.max() >= NUM_ACTIONS):
+            legal = (actions >= 0) & (actions < NUM_ACTIONS)
+        else:
+            legal = _LEGAL[NUM_ACTIONS * situation + actions]
         if not legal.all():
+            legal &= _LEGAL[NUM_ACTIONS * situation + np.clip(actions, 0, NUM_ACTIONS - 1)]
             bad = np.flatnonzero(~legal)[0]
             allowed = np.flatnonzero(self.legal_mask(hands[bad : bad + 1])[0]).tolist()
             raise IllegalActionError(
                 f"action {actions[bad]} is illegal in hand {hands[bad]} (legal: {allowed})"
             )
 
+        is_raise, is_fold = actions == RAISE, actions == FOLD
         # A call matches the opponent; a raise goes one raise size above them.
-        target = np.where(is_call, theirs, mine)
-        target = np.where(is_raise, theirs + RAISE_SIZE_BY_ROUND[rnd], target)
-        self._chips[mine_at] += target - mine
-        self._round_chips[mine_at] = target
-        self._raises[raises_at] += is_raise
-        unraised = np.where(is_raise, 1, self._unraised[hands] + is_call + is_check)
+        added = (theirs - mine) * _MATCHES[actions] + RAISE_SIZE_BY_ROUND[rnd] * is_raise
+        self._chips[mine_at] += added
+        self._round_chips[mine_at] = mine + added
+        self._raises[raises_at] = raised + is_raise
+        unraised = np.where(is_raise, 1, self._unraised[hands] + ~is_fold)
         self._unraised[hands] = unraised
         self.to_act[hands] = 1 - seat  # also the first to act next round: they did not close it
 

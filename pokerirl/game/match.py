@@ -36,6 +36,7 @@ MAX_HANDS = 100_000_000
 MAX_BATCH_SIZE = 1_048_576
 AGENT_STREAM = 1  # spawn-key word for agents' randomness (deals use 0)
 SEATINGS = ("alternate", "random")
+_NO_OBS = np.empty((MAX_BATCH_SIZE, 0), dtype=np.uint8)  # what an agent that reads none gets
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -49,10 +50,12 @@ class MatchResult:
     duplicate: bool
     mbb_per_hand: float  # 1000 x A's mean net big blinds per hand
     std_error: float  # of mbb_per_hand: over duplicate pairs, or over hands
-    seconds: float
+    seconds: float  # of play: the deals, the agents and the engine
     hands_per_second: float
     # A's net big blinds in every hand, in hand order (duplicate pairs are adjacent).
     results_bb: np.ndarray = field(repr=False, compare=False)
+    # Time in ``on_batch`` (e.g. the AIVAT corrections), apart from ``seconds``.
+    on_batch_seconds: float = 0.0
 
     @property
     def units_bb(self) -> np.ndarray:
@@ -145,21 +148,26 @@ def play_game(
     rounds, for callers that read more than the result: the chance corrections)."""
     game = LimitHoldemBatch(deals=deals)
     encodings = tuple(agent_encoding(agent) for agent in agents)
+    # Agents that decide from the legal mask alone get an empty obs: building (n, 72)
+    # observations nobody reads was half of a built-in match's time.
+    reads = tuple(getattr(agent, "reads_obs", True) for agent in agents)
     while game.active().size:
         hands = game.active()
         first_to_act = game.to_act[hands] == seat_of_first[hands]
         # Each agent decides for all hands where it is to act: one batched call per agent.
-        for which, agent, encoding, rng, turn in zip(
-            (0, 1), agents, encodings, rngs, (first_to_act, ~first_to_act), strict=True
+        for which, agent, encoding, reads_obs, rng, turn in zip(
+            (0, 1), agents, encodings, reads, rngs, (first_to_act, ~first_to_act), strict=True
         ):
             mine = hands[turn]
             if mine.size == 0:
                 continue
-            obs, legal = observe(game, mine, encoding), game.legal_mask(mine)
+            obs = observe(game, mine, encoding) if reads_obs else _NO_OBS[: mine.size]
+            legal = game.legal_mask(mine)
             cards = functools.partial(turn_cards, game, mine)
             actions = agent_actions(agent, obs, legal, rng, cards)
             if log is not None and which == 0:
-                seen = obs if encoding.name == EncodingName.RLCARD else game.observe(mine)
+                plain = reads_obs and encoding.name == EncodingName.RLCARD
+                seen = obs if plain else game.observe(mine)
                 log.append(DecisionLog(obs=seen, legal_mask=legal, cards=cards(), actions=actions))
             try:
                 game.step(actions, mine)
@@ -217,8 +225,9 @@ def play_match(
     seat for every hand, as RLCard draws the small blind for every game; the default
     alternates it. ``on_batch(start, game, seat_of_a)`` is called with each finished batch
     (hands ``start`` ..), for what a caller reads beyond the result (the chance corrections
-    of :mod:`pokerirl.tournaments.aivat`). ``report_progress``: the match is a unit of its
-    own (a tournament seed), whose hands move the driver's bar
+    of :mod:`pokerirl.tournaments.aivat`); its time is ``on_batch_seconds``, not part of
+    ``seconds`` and ``hands_per_second`` (the play's). ``report_progress``: the match is a
+    unit of its own (a tournament seed), whose hands move the driver's bar
     (:func:`pokerirl.execution.unit_progress`).
 
     Raises:
@@ -235,6 +244,7 @@ def play_match(
     results = np.empty(hands, dtype=np.float64)
     prepare_tables()  # one-time setup, kept out of hands_per_second
     started = time.perf_counter()
+    on_batch_seconds = 0.0
     with tqdm(total=hands, unit="hand", unit_scale=True, disable=not progress) as bar:
         for start in range(0, hands, batch_size):
             count = min(batch_size, hands - start)
@@ -251,11 +261,13 @@ def play_match(
             game = play_game((agent_a, agent_b), deals, seat_of_a, rngs, log=log)
             results[start : start + count] = game.payoffs[np.arange(count), seat_of_a]
             if on_batch is not None:
+                before = time.perf_counter()
                 on_batch(start, game, seat_of_a)
+                on_batch_seconds += time.perf_counter() - before
             bar.update(count)
             if report_progress:
                 unit_progress(start + count, hands)
-    seconds = time.perf_counter() - started
+    seconds = time.perf_counter() - started - on_batch_seconds
 
     units = independent_units(results, duplicate=duplicate)
     std_error = float(units.std(ddof=1) / np.sqrt(units.size)) if units.size > 1 else float("nan")
@@ -270,4 +282,5 @@ def play_match(
         seconds=seconds,
         hands_per_second=hands / seconds if seconds > 0 else float("inf"),
         results_bb=results,
+        on_batch_seconds=on_batch_seconds,
     )

@@ -1,16 +1,23 @@
 """Preflop equity against a random hand, for the 169 classes of hole cards.
 
 A class is a pocket pair, or two ranks suited or offsuit; every hand of a class has the same
-equity against a uniformly random opponent hand and board. :data:`PREFLOP_EQUITY` ships the
-table (13 x 13, row = higher rank for suited hands and lower rank for offsuit ones, pairs on
-the diagonal; ranks 2 .. A as 0 .. 12), computed by :func:`compute_preflop_table` with
-200,000 runouts per class (seed 0; standard error about 0.001). ``tests/test_encodings.py``
-recomputes it at a smaller size and checks two published figures (AA 85.2%, 72o 34.6%).
+equity against a uniformly random opponent hand and board. Two tables, 13 x 13 (row = higher
+rank for suited hands and lower rank for offsuit ones, pairs on the diagonal; ranks 2 .. A as
+0 .. 12):
+
+* :data:`PREFLOP_COUNTS`, exact: ``2 x wins + ties`` of a hand of the class over every flop,
+  turn, river and opponent hand (19,600 x 1,081 x 990 cases, :data:`PREFLOP_DENOMINATOR`),
+  summed from the exact flop table by ``benchmarks/equity_tables.py``
+  (:func:`pokerirl.game.equity.preflop_counts`); ``tests/test_equity.py`` sums it again and
+  checks the published AA 85.2% and 72o 34.6%;
+* :data:`PREFLOP_EQUITY`, the strength encoding's version 1 (kept for runs made with it):
+  :func:`compute_preflop_table` with 200,000 runouts per class (seed 0; standard error about
+  0.001).
 
 >>> from pokerirl.encoding import parse_card
 >>> aces, seven_deuce = [parse_card("As"), parse_card("Ah")], [parse_card("7c"), parse_card("2d")]
->>> [round(float(e), 2) for e in preflop_equity(np.array([aces, seven_deuce]))]
-[0.85, 0.34]
+>>> [round(float(e), 3) for e in preflop_equity(np.array([aces, seven_deuce]))]
+[0.852, 0.346]
 """
 
 from __future__ import annotations
@@ -18,6 +25,7 @@ from __future__ import annotations
 import numpy as np
 
 from pokerirl.encoding import NUM_CARDS
+from pokerirl.game.equity import PREFLOP_DENOMINATOR
 from pokerirl.game.evaluator import hand_strength
 
 NUM_RANKS = 13
@@ -32,10 +40,17 @@ def class_index(hole: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return np.where(suited, high, low), np.where(suited, low, high)
 
 
-def preflop_equity(hole: np.ndarray) -> np.ndarray:
-    """(N,) equity of (N, 2) hole cards against a random hand, from the shipped table."""
+def sampled_preflop_equity(hole: np.ndarray) -> np.ndarray:
+    """(N,) version 1's equity of (N, 2) hole cards: the 200,000-runout Monte Carlo table."""
     row, column = class_index(hole)
     return PREFLOP_EQUITY[row, column]
+
+
+def preflop_equity(hole: np.ndarray) -> np.ndarray:
+    """(N,) exact equity of (N, 2) hole cards against a random hand, from the shipped
+    exact table (:data:`PREFLOP_COUNTS`)."""
+    row, column = class_index(hole)
+    return PREFLOP_COUNTS[row, column] / PREFLOP_DENOMINATOR
 
 
 def compute_preflop_table(*, samples: int, seed: int = 0) -> np.ndarray:
@@ -93,4 +108,49 @@ PREFLOP_EQUITY = np.array([
     [0.5717, 0.5833, 0.5884, 0.5983, 0.5984, 0.6097, 0.6185,
      0.6271, 0.6445, 0.6557, 0.6611, 0.6723, 0.8534],
 ])
+# fmt: on
+
+# Made by benchmarks/equity_tables.py from the exact flop table (see the module docstring).
+# fmt: off
+PREFLOP_COUNTS = np.array([
+    [21115849840, 13551671950, 13927775910, 14382905230, 14295013940, 14508340820,
+     15449742550, 16402150410, 17480476430, 18604824330, 19841120610, 21189140990,
+     23043325730],
+    [15095989690, 22525023020, 14744211190, 15213596600, 15135088590, 15355176810,
+     15725002150, 16788765750, 17869030850, 18993746670, 20228751630, 21573821450,
+     23427619310],
+    [15450304960, 16210856880, 23921899180, 16006695420, 15945950210, 16172210980,
+     16548500210, 17062095870, 18250603250, 19375857090, 20609774850, 21952132250,
+     23798921210],
+    [15878341150, 16651772480, 17390310090, 25307177660, 16757213210, 16995357550,
+     17379447020, 17900323260, 18563914090, 19793065790, 21026100470, 22365983590,
+     24204531610],
+    [15802675890, 16584900840, 17339925840, 18095080090, 26548868240, 17755005150,
+     18140184460, 18664763570, 19336262790, 20071365330, 21405328770, 22747450670,
+     24198623980],
+    [16006949810, 16795654820, 17556392310, 18322520040, 19034113090, 27786970660,
+     18899468080, 19422600180, 20098156560, 20842290540, 21716446430, 23151892510,
+     24684733500],
+    [16894533780, 17147026820, 17913950970, 18687269450, 19399721060, 20109988850,
+     29014894860, 20177401690, 20858794270, 21600868960, 22485888900, 23501273560,
+     25117424790],
+    [17793778770, 18149982610, 18400731880, 19180988430, 19896854740, 20605599420,
+     21311652480, 30229060580, 21618282750, 22339648170, 23224504070, 24252939510,
+     25495072270],
+    [18810812280, 19168670420, 19520215830, 19807904330, 20531322110, 21243809500,
+     21955026320, 22665330590, 31468527860, 23177211430, 24034312870, 25061339920,
+     26312642330],
+    [19875820970, 20233864670, 20585765740, 20970207180, 21229910820, 21951003370,
+     22660344880, 23351212390, 24133769060, 32499565640, 24388344110, 25409440460,
+     26665707090],
+    [21046636740, 21403312660, 21754050070, 22137531970, 22491247930, 22780585710,
+     23500250120, 24191017940, 24947502220, 25279609110, 33529763640, 25781598000,
+     27030089590],
+    [22323090540, 22676845340, 23024899770, 23405936830, 23761608710, 24137914030,
+     24462875160, 25166034110, 25921194850, 26247905160, 26597387220, 34566180760,
+     27402715950],
+    [24071278500, 24424267520, 24765465100, 25138534980, 25131362300, 25583653660,
+     25986325510, 26337628310, 27101636700, 27433175740, 27775576480, 28126194060,
+     35744191480],
+], dtype=np.int64)
 # fmt: on

@@ -126,6 +126,6 @@ def policy_agent(spec: str | os.PathLike[str], files: dict[str, bytes] | None = 
     return PolicyAgent(
         name=name or f"{POLICY_PREFIX}{run}",
         policy=policy.eval(),
-        encoding=encoding.name,
+        encoding=encoding.spec,
         fingerprint=digest(b"".join(files.values())),
     )

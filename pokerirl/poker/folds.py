@@ -11,7 +11,7 @@ from dataclasses import dataclass
 from enum import StrEnum
 
 from pokerirl.errors import ConfigError
-from pokerirl.game.encodings import ENCODINGS, EncodingName
+from pokerirl.game.encodings import ENCODING_SPECS, ENCODINGS, EncodingName
 
 
 class FoldsMode(StrEnum):
@@ -47,7 +47,7 @@ class ImputeConfig:
             raise ConfigError(f"behaviour epochs must be >= 1, got {self.behaviour_epochs}")
         if self.seed < 0:
             raise ConfigError(f"seed must be non-negative, got {self.seed}")
-        if self.behaviour_encoding not in ENCODINGS:
+        if self.behaviour_encoding not in {**ENCODINGS, **ENCODING_SPECS}:
             raise ConfigError(
                 f"unknown behaviour encoding {self.behaviour_encoding!r} "
                 f"(known: {', '.join(ENCODINGS)})"

@@ -287,7 +287,7 @@ class _GivenEquity(StrengthEncoding):
     same features, without recomputing one equity per decision and round."""
 
     def __init__(self, base: StrengthEncoding, values: np.ndarray) -> None:
-        super().__init__(equity_samples=base.equity_samples)
+        super().__init__(version=base.version, equity_samples=base.equity_samples)
         self.values = values
 
     def equity(self, cards: np.ndarray) -> np.ndarray:
@@ -692,7 +692,7 @@ def impute(
     taken = hidden.action[imputed_players[hidden.owner]]
     summary = FoldsSummary(
         behaviour=behaviour.source,
-        behaviour_encoding=str(behaviour.encoding.name),
+        behaviour_encoding=behaviour.encoding.spec,
         imputations=config.imputations,
         seed=config.seed,
         hidden_players=hidden.players,

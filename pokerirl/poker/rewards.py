@@ -36,7 +36,13 @@ import numpy as np
 
 from pokerirl.encoding import MAX_RAISES, NUM_ACTIONS, NUM_ROUNDS, RAISE_OFFSET
 from pokerirl.errors import ConfigError, InputError
-from pokerirl.game.encodings import ENCODINGS, Encoding, EncodingName, States, get_encoding
+from pokerirl.game.encodings import (
+    Encoding,
+    EncodingName,
+    States,
+    get_encoding,
+    recorded_encoding,
+)
 from pokerirl.store import digest
 
 
@@ -99,9 +105,9 @@ class Decisions:
         """The states in ``encoding`` (the 72-d ``obs`` as it is for ``rlcard``)."""
         if encoding.name == EncodingName.RLCARD:
             return self.obs
-        if encoding.name not in self.encoded:
-            self.encoded[encoding.name] = encoding.encode(self.states())
-        return self.encoded[encoding.name]
+        if encoding.spec not in self.encoded:  # by spec: versions encode differently
+            self.encoded[encoding.spec] = encoding.encode(self.states())
+        return self.encoded[encoding.spec]
 
 
 class PokerReward:
@@ -361,7 +367,7 @@ class RewardSource:
         from pokerirl.irl.run import CONFIG_FILE, parse_run_config
 
         record = parse_run_config(dict(self.files)[CONFIG_FILE], where=self.spec)
-        return run_encoding(Path(self.spec), record).name
+        return run_encoding(Path(self.spec), record).spec
 
 
 def run_encoding(run: Path, record: Mapping[str, Any]) -> Encoding:
@@ -379,16 +385,16 @@ def run_encoding(run: Path, record: Mapping[str, Any]) -> Encoding:
             f"{run}: a Gymnasium IRL run (reward of {task}), not a poker reward; "
             "give a run of pokerirl train"
         )
-    name = data.get("encoding", EncodingName.RLCARD)
-    if name not in ENCODINGS:
-        raise InputError(f"{run}: unknown encoding {name!r} (known: {', '.join(ENCODINGS)})")
-    encoding = ENCODINGS[name]
+    try:  # a bare "strength" (before versions) is strength-v1
+        encoding = recorded_encoding(data.get("encoding", EncodingName.RLCARD))
+    except ConfigError as error:
+        raise InputError(f"{run}: {error}") from None
     architecture = record["architecture"]
     sizes = architecture["obs_dim"], architecture["action_space"].get("num_actions")
     if sizes != (encoding.width, NUM_ACTIONS):
         raise InputError(
             f"{run}: a reward on {sizes[0]}-d observations and {sizes[1]} actions, not the "
-            f"{encoding.name} encoding's {encoding.width}-d states and {NUM_ACTIONS} actions"
+            f"{encoding.spec} encoding's {encoding.width}-d states and {NUM_ACTIONS} actions"
         )
     return encoding
 

@@ -44,7 +44,7 @@ import torch
 from pokerirl.atomic import write_text
 from pokerirl.errors import ConfigError, Remedy
 from pokerirl.execution import Backend, pinned_threads
-from pokerirl.game.encodings import EncodingName
+from pokerirl.game.encodings import EncodingName, get_encoding
 from pokerirl.irl.airl import resolve_device
 from pokerirl.irl.config import AIRLConfig, Algo
 from pokerirl.irl.plots import plot_bands
@@ -151,7 +151,7 @@ def train_table_into(
     file to read the reward card's states from (default ``table``)."""
     summary = train_into(
         data, folder, algo=algo, config=config, device=device, progress=progress,
-        data_path=table, data_notes={"encoding": str(encoding)},
+        data_path=table, data_notes={"encoding": get_encoding(encoding).spec},
     )  # fmt: skip
     write_reward_card(folder, table_file or table, label=None if table is None else str(table))
     return summary
@@ -285,7 +285,7 @@ def train_runs(
         settings = {**config.to_dict(), "seed": config.seed + k}
         unit_config: dict[str, object] = {"algo": algo, "device": device, "settings": settings}
         if encoding != EncodingName.RLCARD:  # runs of the 72-d encoding keep their prints
-            unit_config["encoding"] = str(encoding)
+            unit_config["encoding"] = get_encoding(encoding).spec
         units.append(
             Unit(
                 key=folder.name,

@@ -1,0 +1,424 @@
+"""Exact equity against a uniformly random opponent hand, on every street (ties count 1/2).
+
+A hand's equity is ``P(win) + P(tie) / 2`` over every opponent hand and every runout of the
+board, all equally likely. Everything is counted in integers (``2 x wins + ties``) and
+divided once at the end, so the same cards give the same bytes on every platform.
+
+* **river**: the 990 opponent hands (two of the 45 unseen cards), each ranked by
+  :func:`~pokerirl.game.evaluator.board_strengths`;
+* **turn**: the same count summed over the 46 rivers (45,540 cases);
+* **flop**: a shipped table (:data:`FLOP_TABLE_FILE`): for each of the 1,755 flops up to a
+  permutation of the suits, and each of the 1,326 hole pairs, the count summed over the
+  1,081 turn-river runouts (1,070,190 cases). :func:`build_flop_table` makes it (about two
+  minutes on one core: every pair is ranked on each runout by a sort, see
+  :func:`river_counts`); a flop is mapped to its class, and the hole cards through the same
+  suit permutation, which changes no equity. The file carries its SHA-256 here
+  (:data:`FLOP_TABLE_SHA256`) and is refused if it differs;
+* **preflop**: :mod:`pokerirl.game.preflop`'s 169 classes, summed exactly from the flop
+  table over the 19,600 flops.
+
+``tests/test_equity.py`` checks the river and turn against an independent evaluator
+(``eval7``) by brute force, the flop table on random flops, and the preflop classes.
+
+>>> from pokerirl.encoding import parse_card
+>>> def cards(text):
+...     return np.array([[parse_card(c) for c in text.split()]])
+>>> round(float(river_equity(cards("As Ah"), cards("Ad Kc 7h 2s 3d"))[0]), 4)  # 45: a wheel
+0.9838
+>>> round(float(turn_equity(cards("7c 2d"), cards("Kh Qh 9s 4c"))[0]), 4)
+0.139
+"""
+
+from __future__ import annotations
+
+import hashlib
+import itertools
+from collections.abc import Callable
+from functools import cache, lru_cache
+from pathlib import Path
+
+import numpy as np
+
+from pokerirl.encoding import NUM_CARDS, NUM_PAIRS, PAIRS
+from pokerirl.game.evaluator import (
+    _CARD_BIT,
+    _CARD_KEY,
+    _CARD_SUIT,
+    _COMBO_KEY,
+    _COMBOS,
+    _PAIR_BITS,
+    _PAIR_COMBO,
+    _RANK,
+    _SUIT,
+    CLASH,
+    _card_sum,
+    _dense,
+    _non_flush,
+    board_strengths,
+    pair_index,
+    seven_card_strengths,
+)
+
+NUM_RANKS = 13
+RIVER_OPPONENTS = 990  # two of the 45 cards neither the hand nor the board holds
+TURN_RIVERS = 46
+FLOP_RUNOUTS = 1_081  # turn and river from the 47 unseen cards
+PREFLOP_FLOPS = 19_600  # three of the 50 cards
+FLOP_CLASSES = 1_755  # flops up to a permutation of the suits
+RIVER_DENOMINATOR = 2 * RIVER_OPPONENTS
+TURN_DENOMINATOR = TURN_RIVERS * RIVER_DENOMINATOR
+FLOP_DENOMINATOR = FLOP_RUNOUTS * RIVER_DENOMINATOR
+PREFLOP_DENOMINATOR = PREFLOP_FLOPS * FLOP_DENOMINATOR
+FLOP_TABLE_FILE = Path(__file__).parent / "data" / "flop_equity.npz"
+FLOP_TABLE_SHA256 = "7b69bc3c318aff63cb2a07a0ee442f5b5d5d021c3cd99921406ff725288eae8c"
+CHUNK_BOARDS = 512  # boards ranked at once: (512, 1326) int32 arrays stay small
+
+# The 24 permutations of the four suits, and each one applied to every card and pair.
+_SUIT_PERMS = np.array(list(itertools.permutations(range(4))), dtype=np.int64)  # (24, 4)
+_CARDS = np.arange(NUM_CARDS)
+_PERMUTED_CARD = _SUIT_PERMS[:, _CARDS // NUM_RANKS] * NUM_RANKS + _CARDS % NUM_RANKS
+_PERMUTED_PAIR = pair_index(_PERMUTED_CARD[:, PAIRS[:, 0]], _PERMUTED_CARD[:, PAIRS[:, 1]])
+# _WAYS[5 * a + b, same]: unseen pairs of a rank combination with a and b unseen cards of its
+# two ranks (C(a, 2) when both ranks are one).
+_LEFT = np.arange(25)
+_WAYS = np.stack([(_LEFT // 5) * (_LEFT % 5), (_LEFT // 5) * (_LEFT // 5 - 1) // 2], axis=1)
+_WAYS = _WAYS.astype(np.int16)
+_SAME_RANK = (_COMBOS[:, 0] == _COMBOS[:, 1]).astype(np.int64)
+_PAIR_CARD_BITS = (np.int64(1) << PAIRS[:, 0]) | (np.int64(1) << PAIRS[:, 1])
+# _COMPLETING[c][s]: the pairs that make a flush of suit s beside c board cards of it (both
+# cards of the suit beside three, one beside four): (4, 78) and (4, 585).
+_SUITED_IN_PAIR = (_SUIT[PAIRS][:, :, None] == np.arange(4)).sum(axis=1)  # (1326, 4)
+_COMPLETING = {
+    count: np.array([np.flatnonzero(_SUITED_IN_PAIR[:, s] >= 5 - count) for s in range(4)])
+    for count in (3, 4)
+}
+# Pairs holding each card: _CARD_PAIRS[c] (51 pair numbers); a pair's place in its cards' rows.
+_CARD_PAIRS = np.array([np.flatnonzero(CLASH[c]) for c in range(NUM_CARDS)])  # (52, 51)
+_PLACE = np.zeros((NUM_PAIRS, 2), dtype=np.int64)  # flat index card * 51 + place
+for _c in range(NUM_CARDS):
+    for _k, _p in enumerate(_CARD_PAIRS[_c]):
+        _PLACE[_p, int(PAIRS[_p, 1] == _c)] = _c * (NUM_CARDS - 1) + _k
+
+
+def _ranks(values: np.ndarray, *, bits: int) -> tuple[np.ndarray, np.ndarray]:
+    """For each entry of ``values`` (..., n): how many entries of its row are smaller, and
+    how many equal it (itself included). ``bits``: the values lie in [-1, 2**bits).
+
+    One sort of ``value << s | place`` gives the order and the sorted values together (a
+    plain sort is several times faster than an argsort; in int32 when it fits)."""
+    n = values.shape[-1]
+    shift = int(n - 1).bit_length()
+    dtype = np.int32 if bits + shift < 31 else np.int64
+    widened: np.ndarray = values.astype(dtype)
+    keys = np.sort((widened << shift) | np.arange(n, dtype=dtype), axis=-1)
+    ordered, order = keys >> shift, keys & ((1 << shift) - 1)
+    place = np.arange(n, dtype=np.int32)
+    starts = np.ones(values.shape, dtype=bool)
+    starts[..., 1:] = ordered[..., 1:] != ordered[..., :-1]
+    first = np.maximum.accumulate(np.where(starts, place, 0), axis=-1)
+    ends = np.ones(values.shape, dtype=bool)
+    ends[..., :-1] = starts[..., 1:]
+    last = np.minimum.accumulate(np.where(ends, place + 1, n)[..., ::-1], axis=-1)[..., ::-1]
+    at = (order + np.arange(values.size // n).reshape((*order.shape[:-1], 1)) * n).reshape(-1)
+    below, equal = np.empty(values.size, dtype=np.int32), np.empty(values.size, dtype=np.int32)
+    below[at], equal[at] = first.reshape(-1), (last - first).reshape(-1)
+    return below.reshape(values.shape), equal.reshape(values.shape)
+
+
+def river_counts(boards: np.ndarray) -> np.ndarray:
+    """(M, 1326) int32: ``2 x wins + ties`` of every hole pair against its 990 opponent
+    hands on each of M five-card boards; 0 for pairs that share a card with the board.
+
+    Every pair is ranked among the 1,081 that miss the board, and among the pairs holding
+    each of its two cards (the opponents it cannot meet): wins = below all - below in the
+    first card's pairs - below in the second's (only the pair itself holds both).
+    """
+    boards = np.asarray(boards, dtype=np.int64)
+    if len(boards) > CHUNK_BOARDS:
+        return np.concatenate([river_counts(boards[i : i + CHUNK_BOARDS])
+                               for i in range(0, len(boards), CHUNK_BOARDS)])  # fmt: skip
+    clash = CLASH[boards].any(axis=1)  # (M, 1326)
+    strength = np.where(clash, -1, board_strengths(boards)).astype(np.int32)
+    below, equal = _ranks(strength, bits=24)  # strengths stay below 2**24
+    # Within each card's pairs, order by the global rank (the same order, fewer bits).
+    by_card = below[:, _CARD_PAIRS]  # (M, 52, 51)
+    card_below, card_equal = _ranks(by_card, bits=11)
+    card_below = card_below.reshape(len(boards), -1)
+    card_equal = card_equal.reshape(len(boards), -1)
+    # Below counts include the pairs that hit the board (strength -1): 245 of all pairs, and
+    # 5 of a card's 51 when the card itself misses the board.
+    wins = (below - (NUM_PAIRS - 1_081)) - (card_below[:, _PLACE[:, 0]] - 5) - (
+        card_below[:, _PLACE[:, 1]] - 5
+    )
+    ties = equal - card_equal[:, _PLACE[:, 0]] - card_equal[:, _PLACE[:, 1]] + 1
+    return np.where(clash, 0, 2 * wins + ties).astype(np.int32)
+
+
+def hole_counts(holes: np.ndarray, boards: np.ndarray) -> np.ndarray:
+    """(N,) int64 ``2 x wins + ties`` of hole cards (N, 2) on five-card boards (N, 5) against
+    the 990 opponent hands.
+
+    Opponents are counted by their 91 rank combinations (how many unseen pairs each has,
+    and its non-flush strength on the board), not one by one: where the board holds three or
+    four of a suit, the pairs that complete a flush are then moved to their flush's
+    strength; boards of five of a suit are ranked pair by pair (:func:`_pairwise_counts`).
+    """
+    holes = np.asarray(holes, dtype=np.int64)
+    boards = np.asarray(boards, dtype=np.int64)
+    found = np.empty(len(holes), dtype=np.int64)
+    for first in range(0, len(holes), 4 * CHUNK_BOARDS):
+        rows = slice(first, first + 4 * CHUNK_BOARDS)
+        found[rows] = _combo_counts(holes[rows], boards[rows])
+    return found
+
+
+def _combo_counts(holes: np.ndarray, boards: np.ndarray) -> np.ndarray:
+    n = len(holes)
+    suit_counts = (_card_sum(_CARD_SUIT, boards)[:, None] >> (4 * np.arange(4))) & 15
+    suit, most = suit_counts.argmax(axis=1), suit_counts.max(axis=1)
+    found = np.empty(n, dtype=np.int64)
+    many = np.flatnonzero(most >= 5)  # a flush on the board: every pair plays one
+    if many.size:
+        found[many] = _pairwise_counts(holes[many], boards[many])
+    rows = np.flatnonzero(most < 5)
+    if rows.size == 0:
+        return found
+    hole, board = holes[rows], boards[rows]
+    known = np.concatenate([hole, board], axis=1)
+    m = len(known)
+    mine = seven_card_strengths(known)
+    combo = _non_flush(_card_sum(_CARD_KEY, board)[:, None] + _COMBO_KEY[None, :])  # (m, 91)
+    seen = np.bincount((np.arange(m)[:, None] * NUM_RANKS + _RANK[known]).reshape(-1),
+                       minlength=m * NUM_RANKS).reshape(m, NUM_RANKS)  # fmt: skip
+    # Unseen pairs of each rank combination: C(left, 2) of a pair of ranks, else the product.
+    ways = _WAYS[(4 - seen)[:, _COMBOS[:, 0]] * 5 + (4 - seen)[:, _COMBOS[:, 1]], _SAME_RANK]
+    wins = np.where(combo < mine[:, None], ways, 0).sum(axis=1, dtype=np.int64)
+    ties = np.where(combo == mine[:, None], ways, 0).sum(axis=1, dtype=np.int64)
+    for count in (3, 4):  # the unseen pairs that complete the board's suit hold a flush
+        at = np.flatnonzero(most[rows] == count)
+        if at.size == 0:
+            continue
+        s = suit[rows[at]]
+        pairs = _COMPLETING[count][s]  # (k, 78) or (k, 585)
+        known_bits = np.bitwise_or.reduce(np.int64(1) << known[at], axis=1)
+        unseen = (_PAIR_CARD_BITS[pairs] & known_bits[:, None]) == 0
+        board_bits = np.where(_SUIT[board[at]] == s[:, None], _CARD_BIT[board[at]], 0)
+        bits = board_bits.sum(axis=1)[:, None] | _PAIR_BITS[s[:, None], pairs]
+        # No quads or full house fit beside a flush in seven cards: the flush is the hand.
+        flush = _dense().flush[bits]
+        plain = np.take_along_axis(combo[at], _PAIR_COMBO[pairs], axis=1)
+        me = mine[at, None]
+        wins[at] += (unseen & (flush < me)).sum(axis=1) - (unseen & (plain < me)).sum(axis=1)
+        ties[at] += (unseen & (flush == me)).sum(axis=1) - (unseen & (plain == me)).sum(axis=1)
+    found[rows] = 2 * wins + ties
+    return found
+
+
+def _pairwise_counts(holes: np.ndarray, boards: np.ndarray) -> np.ndarray:
+    """:func:`hole_counts` by ranking all 1,326 pairs on each board."""
+    found = np.empty(len(holes), dtype=np.int64)
+    for first in range(0, len(holes), CHUNK_BOARDS):
+        rows = slice(first, first + CHUNK_BOARDS)
+        hole, board = holes[rows], boards[rows]
+        strength = board_strengths(board)
+        mine = strength[np.arange(len(hole)), pair_index(hole[:, 0], hole[:, 1])]
+        seen = np.concatenate([hole, board], axis=1)
+        opponent = ~CLASH[seen].any(axis=1)
+        wins = (opponent & (strength < mine[:, None])).sum(axis=1)
+        ties = (opponent & (strength == mine[:, None])).sum(axis=1)
+        found[rows] = 2 * wins + ties
+    return found
+
+
+def river_equity(holes: np.ndarray, boards: np.ndarray) -> np.ndarray:
+    """(N,) exact equity of hole cards (N, 2) on five-card boards (N, 5)."""
+    return _by_board(hole_counts, _all_pairs_river_counts, holes, boards) / RIVER_DENOMINATOR
+
+
+def _unseen(known: np.ndarray) -> np.ndarray:
+    """(N, 52 - k) the cards not in each row of ``known`` (N, k), ascending."""
+    free = np.ones((len(known), NUM_CARDS), dtype=bool)
+    free[np.arange(len(known))[:, None], known] = False
+    return np.nonzero(free)[1].reshape(len(known), NUM_CARDS - known.shape[1])
+
+
+def turn_counts(holes: np.ndarray, boards: np.ndarray) -> np.ndarray:
+    """(N,) int64 ``2 x wins + ties`` summed over the 46 rivers of four-card boards (N, 4)."""
+    holes = np.asarray(holes, dtype=np.int64)
+    boards = np.asarray(boards, dtype=np.int64)
+    n = len(holes)
+    rivers = _unseen(np.concatenate([holes, boards], axis=1))  # (N, 46)
+    full = np.concatenate(
+        [np.repeat(boards, TURN_RIVERS, axis=0), rivers.reshape(-1, 1)], axis=1
+    )
+    counts = hole_counts(np.repeat(holes, TURN_RIVERS, axis=0), full)
+    return counts.reshape(n, TURN_RIVERS).sum(axis=1)
+
+
+def turn_equity(holes: np.ndarray, boards: np.ndarray) -> np.ndarray:
+    """(N,) exact equity of hole cards (N, 2) on four-card boards (N, 4)."""
+    every = lambda board: _cached_turn_counts(tuple(board.tolist()))  # noqa: E731
+    return _by_board(turn_counts, every, holes, boards) / TURN_DENOMINATOR
+
+
+def all_pairs_turn_counts(board: np.ndarray) -> np.ndarray:
+    """(1326,) int64 :func:`turn_counts` of every pair on one four-card board (0 for pairs
+    that meet it): :func:`river_counts` on its 48 rivers, summed (a river that meets a pair
+    counts 0 for it, so each pair sums its own 46)."""
+    board = np.asarray(board, dtype=np.int64)
+    rivers = np.setdiff1d(np.arange(NUM_CARDS), board)
+    boards = np.concatenate([np.broadcast_to(board, (len(rivers), 4)), rivers[:, None]], axis=1)
+    return river_counts(boards).sum(axis=0, dtype=np.int64)
+
+
+@lru_cache(maxsize=4096)
+def _cached_turn_counts(board: tuple[int, ...]) -> np.ndarray:
+    """:func:`all_pairs_turn_counts` kept for recent boards (a state's rows come back at the
+    agent's next decision on the same turn): 4,096 boards, about 40 MB."""
+    found = all_pairs_turn_counts(np.array(board))
+    found.flags.writeable = False
+    return found
+
+
+def _all_pairs_river_counts(board: np.ndarray) -> np.ndarray:
+    return river_counts(np.asarray(board, dtype=np.int64)[None])[0].astype(np.int64)
+
+
+# Rows sharing a board from which every pair's count is computed at once, not row by row
+# (local best response encodes all 1,326 pairs of one state).
+ALL_PAIRS_ROWS = 64
+
+
+def _by_board(
+    per_row: Callable[[np.ndarray, np.ndarray], np.ndarray],
+    all_pairs: Callable[[np.ndarray], np.ndarray],
+    holes: np.ndarray,
+    boards: np.ndarray,
+) -> np.ndarray:
+    """``per_row(holes, boards)``, with the boards shared by at least :data:`ALL_PAIRS_ROWS`
+    rows done by ``all_pairs(board)`` once: the same integers either way."""
+    holes = np.asarray(holes, dtype=np.int64)
+    boards = np.sort(np.asarray(boards, dtype=np.int64), axis=1)  # a board is a set
+    found = np.empty(len(holes), dtype=np.int64)
+    unique, group, sizes = np.unique(boards, axis=0, return_inverse=True, return_counts=True)
+    group = group.reshape(-1)
+    shared = sizes[group] >= ALL_PAIRS_ROWS
+    for k in np.flatnonzero(sizes >= ALL_PAIRS_ROWS):
+        rows = np.flatnonzero(group == k)
+        found[rows] = all_pairs(unique[k])[pair_index(holes[rows, 0], holes[rows, 1])]
+    rows = np.flatnonzero(~shared)
+    if rows.size:
+        found[rows] = per_row(holes[rows], boards[rows])
+    return found
+
+
+def _flop_code(flops: np.ndarray) -> np.ndarray:
+    """A number for each set of three cards (any order): sorted, base 52."""
+    ordered = np.sort(np.asarray(flops, dtype=np.int64), axis=-1)
+    return (ordered[..., 0] * NUM_CARDS + ordered[..., 1]) * NUM_CARDS + ordered[..., 2]
+
+
+@cache
+def _flop_classes() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(class of each flop code, suit permutation taking it to its class, the classes'
+    representative flops (1755, 3)). A class's representative is the permuted flop with the
+    smallest code; its permutation is the first of the 24 (itertools order) that gives it."""
+    flops = np.array(list(itertools.combinations(range(NUM_CARDS), 3)), dtype=np.int64)
+    codes = _flop_code(_PERMUTED_CARD[:, flops])  # (24, 22100)
+    perm = codes.argmin(axis=0)
+    smallest = codes[perm, np.arange(len(flops))]
+    classes, class_of = np.unique(smallest, return_inverse=True)
+    if classes.size != FLOP_CLASSES:
+        raise AssertionError(f"{classes.size} flop classes, expected {FLOP_CLASSES}")
+    by_code = np.full(NUM_CARDS**3, -1, dtype=np.int16)
+    perm_by_code = np.zeros(NUM_CARDS**3, dtype=np.int8)
+    own = _flop_code(flops)
+    by_code[own], perm_by_code[own] = class_of, perm
+    representatives = np.stack(
+        [classes // NUM_CARDS**2, classes // NUM_CARDS % NUM_CARDS, classes % NUM_CARDS], axis=1
+    )
+    return by_code, perm_by_code, representatives
+
+
+def flop_class_counts(flop: np.ndarray) -> np.ndarray:
+    """(1326,) int64: each pair's ``2 x wins + ties`` summed over the 1,081 runouts of one
+    flop (3,) that miss it (0 for pairs holding a flop card): one row of the table."""
+    flop = np.asarray(flop, dtype=np.int64)
+    rest = np.setdiff1d(np.arange(NUM_CARDS), flop)
+    runouts = np.array(list(itertools.combinations(rest, 2)), dtype=np.int64)  # 1,176
+    boards = np.concatenate([np.broadcast_to(flop, (len(runouts), 3)), runouts], axis=1)
+    return river_counts(boards).sum(axis=0, dtype=np.int64)
+
+
+def build_flop_table(*, on_class: Callable[[int], None] | None = None) -> np.ndarray:
+    """(1755, 1326) uint32: :func:`flop_class_counts` of each flop class's representative
+    (``on_class(k)`` after class k: a progress hook)."""
+    _by_code, _perm, representatives = _flop_classes()
+    table = np.zeros((FLOP_CLASSES, NUM_PAIRS), dtype=np.uint32)
+    for k, flop in enumerate(representatives):
+        table[k] = flop_class_counts(flop)
+        if on_class is not None:
+            on_class(k)
+    return table
+
+
+def table_digest(table: np.ndarray) -> str:
+    """SHA-256 of the table's bytes (little-endian uint32, C order)."""
+    return hashlib.sha256(np.ascontiguousarray(table, dtype="<u4").tobytes()).hexdigest()
+
+
+@cache
+def flop_table() -> np.ndarray:
+    """The shipped flop table, checked against :data:`FLOP_TABLE_SHA256`."""
+    with np.load(FLOP_TABLE_FILE, allow_pickle=False) as data:
+        table = data["counts"].astype(np.uint32)
+    if table.shape != (FLOP_CLASSES, NUM_PAIRS) or table_digest(table) != FLOP_TABLE_SHA256:
+        raise RuntimeError(f"{FLOP_TABLE_FILE} is not the flop table this version shipped")
+    return table
+
+
+def flop_counts(holes: np.ndarray, flops: np.ndarray) -> np.ndarray:
+    """(N,) int64 ``2 x wins + ties`` over all runouts, from the table."""
+    holes = np.asarray(holes, dtype=np.int64)
+    by_code, perm_by_code, _ = _flop_classes()
+    code = _flop_code(flops)
+    perm = perm_by_code[code].astype(np.int64)
+    pair = _PERMUTED_PAIR[perm, pair_index(holes[:, 0], holes[:, 1])]
+    return flop_table()[by_code[code], pair].astype(np.int64)
+
+
+def flop_equity(holes: np.ndarray, flops: np.ndarray) -> np.ndarray:
+    """(N,) exact equity of hole cards (N, 2) on flops (N, 3)."""
+    return flop_counts(holes, flops) / FLOP_DENOMINATOR
+
+
+def preflop_counts() -> np.ndarray:
+    """(1326,) int64: each pair's count summed over every flop and runout (exact)."""
+    by_code, perm_by_code, _ = _flop_classes()
+    flops = np.array(list(itertools.combinations(range(NUM_CARDS), 3)), dtype=np.int64)
+    code = _flop_code(flops)
+    table = flop_table()
+    total = np.zeros(NUM_PAIRS, dtype=np.int64)
+    for first in range(0, len(flops), 1_000):
+        rows = slice(first, first + 1_000)
+        pairs = _PERMUTED_PAIR[perm_by_code[code[rows]].astype(np.int64)]  # (k, 1326)
+        total += table[by_code[code[rows]][:, None], pairs].sum(axis=0, dtype=np.int64)
+    return total
+
+
+def exact_equity(cards: np.ndarray) -> np.ndarray:
+    """(N,) exact equity of states' cards (N, 7): hole cards, then the board shown (``-1``
+    beyond, 0, 3, 4 or 5 cards)."""
+    from pokerirl.game.preflop import preflop_equity  # preflop's table is made from ours
+
+    cards = np.asarray(cards, dtype=np.int64)
+    shown = (cards[:, 2:] >= 0).sum(axis=1)
+    found = np.empty(len(cards))
+    for count, street_equity in ((3, flop_equity), (4, turn_equity), (5, river_equity)):
+        rows = np.flatnonzero(shown == count)
+        if rows.size:
+            found[rows] = street_equity(cards[rows, :2], cards[rows, 2 : 2 + count])
+    rows = np.flatnonzero(shown == 0)
+    if rows.size:
+        found[rows] = preflop_equity(cards[rows, :2])
+    return found
