@@ -236,6 +236,7 @@ PRESETS: dict[str, SweepConfig] = {
             "opponent": ("random", "self"),
             "hands": (150_000,),
         },
+        lbr_hands=500,  # as the quick study's: LBR dominates the evaluation's time
     ),
     # Seconds: every stage at sizes whose numbers mean nothing (tests, a first look).
     "smoke": SweepConfig(
