@@ -172,17 +172,25 @@ def _non_default(config: StudyConfig, *names: str) -> dict[str, Any]:
     }
 
 
-def _sources_fingerprint(sources: Sequence[str | os.PathLike[str]]) -> dict[str, Any]:
-    """Every source file's path, size and modification time (cheap on a large corpus)."""
+def source_files(sources: Sequence[str | os.PathLike[str]]) -> list[tuple[Path, Path]]:
+    """Every file of the sources (a file, or a folder's files in order), with the source it
+    is in; a missing source is one line."""
     files = []
     for source in sources:
         path = Path(source)
         if not path.exists():
             raise StudyError(f"{path}: no such file or folder")
         found = [path] if path.is_file() else sorted(p for p in path.rglob("*") if p.is_file())
-        for item in found:
-            stat = item.stat()
-            files.append([str(item.resolve()), stat.st_size, stat.st_mtime_ns])
+        files += [(path, item) for item in found]
+    return files
+
+
+def _sources_fingerprint(sources: Sequence[str | os.PathLike[str]]) -> dict[str, Any]:
+    """Every source file's path, size and modification time (cheap on a large corpus)."""
+    files = []
+    for _, item in source_files(sources):
+        stat = item.stat()
+        files.append([str(item.resolve()), stat.st_size, stat.st_mtime_ns])
     return {"files": files}
 
 

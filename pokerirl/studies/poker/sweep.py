@@ -509,15 +509,13 @@ def _table(sweep: _Sweep, cell: Cell) -> Path:
 def _sources_print(sources: Sequence[str]) -> dict[str, Any]:
     """The month's files by name and content digest, wherever the month lies. An edit of the
     test period re-ingests the choose table, whose bytes, the IRL's input, do not change."""
-    files = []
-    for source in sources:
-        path = Path(source)
-        if not path.exists():
-            raise StudyError(f"{path}: no such file or folder")
-        found = [path] if path.is_file() else sorted(p for p in path.rglob("*") if p.is_file())
-        files += [[p.name if p == path else str(p.relative_to(path)), digest(p.read_bytes())]
-                  for p in found]  # fmt: skip
-    return {"files": files}
+    from pokerirl.studies.poker.pipeline import source_files
+
+    return {"files": [
+        [item.name if item == source else str(item.relative_to(source)),
+         digest(item.read_bytes())]
+        for source, item in source_files(sources)
+    ]}  # fmt: skip
 
 
 def _table_counts(table: Path) -> dict[str, Any]:
