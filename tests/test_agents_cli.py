@@ -178,7 +178,10 @@ def test_learned_reward_training_records_the_run(tmp_path: Path) -> None:
         "transform": "raw",
         "raise_counts": "decision",
     }
-    assert sum(calls) == record["final"]["transitions"]
+    # f once per stored transition in training, then one call on the four actions of every
+    # decision of the final evaluation against random (the follow metric).
+    assert sum(calls[:-1]) == record["final"]["transitions"]
+    assert calls[-1] % 4 == 0 and record["final"]["follows_reward"] is not None
 
 
 def test_learned_reward_from_a_real_irl_run_end_to_end(

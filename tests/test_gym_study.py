@@ -292,10 +292,7 @@ def test_bad_inputs_are_one_line(tmp_path: Path) -> None:
     assert afile.read_text() == "x"
 
 
-SWEEP_WARNING = "warning: 'pokerirl sweep' is deprecated; use 'pokerirl gym sweep'"
-
-
-def test_sweep_is_a_gym_command_and_the_old_name_a_hidden_alias_that_warns_once(
+def test_sweep_is_a_gym_command_and_the_old_name_now_the_poker_sweep_says_so(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     import pokerirl.studies.gym.sweep as sweep
@@ -314,23 +311,18 @@ def test_sweep_is_a_gym_command_and_the_old_name_a_hidden_alias_that_warns_once(
     new = runner.invoke(["gym", "sweep", *args])
     assert new.exit_code == 0, new.output
     assert new.stderr == ""
-    old = runner.invoke(["sweep", *args])
-    assert old.exit_code == 0, old.output
-    assert old.stderr == SWEEP_WARNING + "\n"  # exactly one line
-    assert old.stdout == new.stdout
-    (new_args, new_kwargs), (old_args, old_kwargs) = calls
+    (new_args, new_kwargs), = calls
     assert new_args[1] == {"alpha": (0.0, 1.0)} and new_args[2].runs == 3
     assert new_args[2].seed == 7 and new_kwargs["rl_backend"] == "sb3"
-    new_kwargs.pop("backend"), old_kwargs.pop("backend")
-    assert (old_args, old_kwargs) == (new_args, new_kwargs)  # every option passed through
-    # The alias refuses as gym sweep does, after its warning line.
-    bad = runner.invoke(["sweep", "MountainCar-v0", "--param", "gamma=1", "--out",
-                              str(tmp_path)])  # fmt: skip
-    assert bad.exit_code == 1
-    assert bad.stderr.splitlines()[0] == SWEEP_WARNING
-    assert bad.stderr.splitlines()[1].startswith("error: bad sweep parameter 'gamma=1'")
-    # Listed under gym only.
-    assert " sweep " not in runner.invoke(["--help"]).output
+    # 'pokerirl sweep' (the gym sweep's old, deprecated name) is the poker sweep now: a
+    # Gymnasium id there is one usage line naming the gym command.
+    moved = runner.invoke(["sweep", "MountainCar-v0", "--out", str(tmp_path / "m")])
+    assert moved.exit_code == 2
+    assert moved.stderr.strip().splitlines() == [
+        "error: 'pokerirl sweep' is the poker sweep now; the Gymnasium one is "
+        "'pokerirl gym sweep MountainCar-v0'"
+    ]
+    assert len(calls) == 1
     assert " sweep " in runner.invoke(["gym", "--help"]).output
 
 

@@ -46,9 +46,15 @@ class Opponent(StrEnum):
     """Opponent specs that name no agent."""
 
     SELF = "self"  # a frozen greedy copy of the learner
+    # Each hand against one member of a mixture: the fixed strategies of POOL_STRATEGIES and,
+    # once there are some, the latest POOL_SNAPSHOTS greedy snapshots of the learner (half of
+    # the hands): an agent cannot win by exploiting random alone.
+    POOL = "pool"
 
 
 SELF_PLAY = Opponent.SELF
+POOL_STRATEGIES = ("random", "call", "raise", "tightbot", "loosebot")
+POOL_SNAPSHOTS = 4
 
 
 class RewardMode(StrEnum):
@@ -106,9 +112,9 @@ class DQNConfig:
     concurrent_hands: int = setting(
         1024, help="Hands played in lock-step.", max=MAX_BATCH
     )
-    # refreshes of the frozen copy with opponent "self"
+    # refreshes of the frozen copy with opponent "self", snapshots with "pool"
     self_play_every: int = setting(
-        1_000, help="Updates between refreshes of 'self'.", max=MAX_STEPS
+        1_000, help="Updates between refreshes of 'self' (snapshots of 'pool').", max=MAX_STEPS
     )
 
     def __post_init__(self) -> None:
@@ -164,9 +170,11 @@ class TrainConfig:
         0.0, help="w in r = w * payoff + (1 - w) * f(s, a); 0: the learned reward alone."
     )
     opponent: str = setting(
-        "random", metavar="AGENT|self",
+        "random", metavar="AGENT|self|pool",
         help="random (default), raise, call, tightbot, loosebot, an agent folder, rlcard:CKPT "
-        "(unpickled: runs any code it holds; trusted files only), or self.",
+        "(unpickled: runs any code it holds; trusted files only), self, or pool (each hand "
+        "against one of random, call, raise, tightbot, loosebot or, for half of the hands once "
+        "there are some, one of the learner's 4 latest snapshots).",
     )  # fmt: skip
     eval_every: int = setting(
         10_000, help="Evaluate every N training hands.", max=MAX_STEPS

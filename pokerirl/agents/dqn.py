@@ -35,11 +35,17 @@ import torch
 from torch import nn
 from tqdm import tqdm
 
-from pokerirl.agents.config import SELF_PLAY, DQNConfig
+from pokerirl.agents.config import (
+    POOL_SNAPSHOTS,
+    POOL_STRATEGIES,
+    SELF_PLAY,
+    DQNConfig,
+    Opponent,
+)
 from pokerirl.encoding import NUM_ACTIONS, OBS_SIZE
 from pokerirl.errors import ConfigError
 from pokerirl.execution import unit_progress
-from pokerirl.game.agents import Agent, RandomAgent, agent_actions
+from pokerirl.game.agents import Agent, RandomAgent, agent_actions, make_agent
 from pokerirl.game.deals import DEAL_BLOCK, deal_cards
 from pokerirl.game.encodings import RLCARD, Encoding, EncodingName, States, get_encoding
 from pokerirl.game.engine import LimitHoldemBatch
@@ -53,6 +59,7 @@ RewardFn = Callable[[np.ndarray, np.ndarray], np.ndarray] | PokerReward
 
 
 TRAIN_STREAM = 2  # spawn-key word of the trainer's randomness (deals use 0, match agents 1)
+POOL_STREAM = 1  # second word: the pool's draws of each hand's rival
 
 
 class QNetwork(nn.Module):
@@ -334,8 +341,10 @@ def train_dqn(
         hands: training hands; the learner sits as small blind in even hands.
         seed: seeds torch (initial weights), the deals (``deal_cards(seed=seed)``), the
             exploration, the replay sampling and the opponent's draws.
-        opponent: an engine agent, or ``"self"``: a frozen greedy copy of the learner,
-            refreshed every ``config.self_play_every`` updates.
+        opponent: an engine agent; ``"self"``: a frozen greedy copy of the learner,
+            refreshed every ``config.self_play_every`` updates; or ``"pool"``: each hand
+            against one member of a mixture of fixed strategies and the learner's latest
+            snapshots, taken every ``config.self_play_every`` updates (:class:`Rivals`).
         reward_fn: ``None`` for the sparse payoff; else f_θ, called once per lock-step on
             every learner decision of the step, with exactly the (obs, action) it took.
         payoff_weight: w in ``(1 - w) f(s, a) + w * payoff``; ignored when sparse.
@@ -355,9 +364,7 @@ def train_dqn(
     encoding = get_encoding(encoding)
     plain = encoding.name == EncodingName.RLCARD
     learner = DQNLearner.create(config, encoding)
-    self_play = opponent == SELF_PLAY
-    rival: Agent = learner.greedy_agent("self") if isinstance(opponent, str) else opponent
-    rival_encoding = agent_encoding(rival)
+    rivals = Rivals.of(opponent, learner, seed=seed)
     explore = RandomAgent()
     decision_weight = 0.0 if reward is None else 1.0 - payoff_weight
     payoff_scale = 1.0 if reward is None else payoff_weight
@@ -370,6 +377,7 @@ def train_dqn(
             count = min(config.concurrent_hands, hands - start)
             game = LimitHoldemBatch(deals=deals.get(start, count))
             my_seat = ((start + np.arange(count)) % 2).astype(np.int8)
+            rivals.deal(count)
             pending = _Pending(count, learner, _Staged() if at_end else None)
 
             while game.active().size:
@@ -412,13 +420,13 @@ def train_dqn(
                         rewards = decision_weight * reward(decisions, actions)
                     pending.open(learner_hands, obs, actions, rewards)
                     game.step(actions, learner_hands)
-                if rival_hands.size:
-                    rival_obs = observe(game, rival_hands, rival_encoding)
-                    rival_legal = game.legal_mask(rival_hands)
-                    cards_of = functools.partial(turn_cards, game, rival_hands)
+                for rival, hands_of_rival in rivals.split(rival_hands):
+                    rival_obs = observe(game, hands_of_rival, agent_encoding(rival))
+                    rival_legal = game.legal_mask(hands_of_rival)
+                    cards_of = functools.partial(turn_cards, game, hands_of_rival)
                     game.step(
                         agent_actions(rival, rival_obs, rival_legal, opponent_rng, cards_of),
-                        rival_hands,
+                        hands_of_rival,
                     )
 
                 # Hands that just ended close the learner's last transition with the payoff.
@@ -436,8 +444,8 @@ def train_dqn(
 
                 for _ in range(learner.updates_due()):
                     learner.update(rng)
-                    if self_play and learner.train_t % config.self_play_every == 0:
-                        rival = learner.greedy_agent("self")
+                    if learner.train_t % config.self_play_every == 0:
+                        rivals.snapshot(learner)
             bar.update(count)
             unit_progress(start + count, hands)  # the driver's bar, when this is a unit
             if on_hands is not None:
@@ -453,10 +461,80 @@ def _check_training(
         raise ConfigError(f"hands must be at least 1, got {hands}")
     if not 0.0 <= payoff_weight <= 1.0:
         raise ConfigError(f"payoff weight must be in [0, 1], got {payoff_weight}")
-    if isinstance(opponent, str) and opponent != SELF_PLAY:
-        raise ConfigError(f"opponent must be an agent or {SELF_PLAY!r}, got {opponent!r}")
+    if isinstance(opponent, str) and opponent not in tuple(Opponent):
+        names = " or ".join(repr(str(o)) for o in Opponent)
+        raise ConfigError(f"opponent must be an agent, {names}, got {opponent!r}")
     if raise_counts not in RAISE_COUNTS:
         raise ConfigError(f"raise_counts must be one of {', '.join(RAISE_COUNTS)}")
+
+
+@dataclass(kw_only=True)
+class Rivals:
+    """Who the learner plays in each hand of a lock-step batch.
+
+    One agent (a fixed opponent, or ``self``: the learner's frozen greedy copy, replaced at
+    each snapshot) plays every hand. ``pool``: each hand's rival is drawn when the batch is
+    dealt: one of ``POOL_STRATEGIES`` uniformly, or, once the learner has snapshots, with
+    probability ½ one of its ``POOL_SNAPSHOTS`` latest (uniformly). The draws come from a
+    stream of their own, so a single opponent's games do not change.
+    """
+
+    fixed: tuple[Agent, ...]
+    snapshots: list[Agent] = field(default_factory=list)
+    replaces: bool = False  # self-play: a snapshot replaces the one rival
+    pooled: bool = False
+    rng: np.random.Generator | None = None
+    member: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
+    joining: list[Agent] = field(default_factory=list)  # snapshots taken during a batch
+
+    @classmethod
+    def of(cls, opponent: Agent | str, learner: DQNLearner, *, seed: int) -> Rivals:
+        if opponent == Opponent.POOL:
+            stream = np.random.SeedSequence(seed, spawn_key=(TRAIN_STREAM, POOL_STREAM))
+            fixed = tuple(make_agent(name) for name in POOL_STRATEGIES)
+            return cls(fixed=fixed, pooled=True, rng=np.random.Generator(np.random.PCG64(stream)))
+        if opponent == SELF_PLAY:
+            return cls(fixed=(learner.greedy_agent("self"),), replaces=True)
+        assert not isinstance(opponent, str)  # checked by _check_training
+        return cls(fixed=(opponent,))
+
+    @property
+    def members(self) -> tuple[Agent, ...]:
+        return (*self.fixed, *self.snapshots)
+
+    def deal(self, count: int) -> None:
+        """Draw the rival of each of a new batch's ``count`` hands."""
+        if not self.pooled:
+            self.member = np.zeros(count, np.int64)
+            return
+        assert self.rng is not None
+        self.snapshots = [*self.snapshots, *self.joining][-POOL_SNAPSHOTS:]
+        self.joining = []
+        fixed = self.rng.integers(0, len(self.fixed), count)
+        if not self.snapshots:
+            self.member = fixed
+            return
+        snapshot = len(self.fixed) + self.rng.integers(0, len(self.snapshots), count)
+        self.member = np.where(self.rng.random(count) < 0.5, snapshot, fixed)
+
+    def split(self, hands: np.ndarray) -> list[tuple[Agent, np.ndarray]]:
+        """``hands`` (indices into the batch) grouped by their rival, in member order."""
+        if not hands.size:
+            return []
+        if len(self.members) == 1:
+            return [(self.members[0], hands)]
+        of_hand = self.member[hands]
+        return [(agent, hands[of_hand == k]) for k, agent in enumerate(self.members)
+                if (of_hand == k).any()]  # fmt: skip
+
+    def snapshot(self, learner: DQNLearner) -> None:
+        """After ``self_play_every`` updates: refresh ``self`` at once (as before pools), or
+        take a snapshot for the pool, which joins it at the next batch (the oldest leaves past
+        ``POOL_SNAPSHOTS``), so that the hands in play keep their rivals."""
+        if self.replaces:
+            self.fixed = (learner.greedy_agent("self"),)
+        elif self.pooled:
+            self.joining.append(learner.greedy_agent(f"snapshot-{learner.train_t}"))
 
 
 @dataclass(kw_only=True)

@@ -60,8 +60,8 @@ from pokerirl.agents.checkpoint import (
     save_agent,
 )
 from pokerirl.agents.config import (
-    SELF_PLAY,
     AgentOverrides,  # noqa: F401 - re-exported from its old home
+    Opponent,
     RewardMode,
     TrainConfig,
     TrainingProtocol,
@@ -78,16 +78,18 @@ from pokerirl.agents.registry import agent_fingerprint, resolve_agent
 from pokerirl.atomic import atomic_path
 from pokerirl.errors import ConfigError, InputError
 from pokerirl.execution import Backend, read_files
-from pokerirl.game import make_agent, play_match
+from pokerirl.game import DecisionLog, make_agent, play_match
 from pokerirl.game.agents import Agent
 from pokerirl.game.encodings import get_encoding
 from pokerirl.irl.run import REWARD_RUN_FILES  # noqa: F401 - re-exported: pokerirl.agents.train.REWARD_RUN_FILES
 from pokerirl.jsonio import read_json_lines
 from pokerirl.poker.rewards import (
+    Decisions,
     PokerReward,
     RewardSource,
     TransformedReward,
     as_poker_reward,
+    follow_share,
 )
 from pokerirl.serial import Omit, Serializable, meta
 from pokerirl.store import Unit, UnitOutput, run_units
@@ -111,7 +113,9 @@ class MetricsLine(Serializable):
     """One evaluation during training: a line of ``metrics.jsonl``, and the ``final`` and
     ``kept`` of an agent's ``config.json``. ``eval`` maps each opponent's label (``random``
     first) to its score; ``keep_rule`` (the authors' protocol only, written only when set)
-    says whether the line was offered to their keep rule."""
+    says whether the line was offered to their keep rule; ``follows_reward`` (learned rewards
+    only) is the share of the greedy policy's decisions against random where it takes the
+    reward's best legal action."""
 
     hands: int
     transitions: int
@@ -120,6 +124,9 @@ class MetricsLine(Serializable):
     loss: float | None  # None before the first update (JSON has no NaN)
     eval: Mapping[str, Score]
     keep_rule: bool | None = field(default=None, metadata=meta(omit=Omit.NONE))
+    # A learned-reward agent's share of its decisions against random (the evaluation's) where
+    # it takes f's best legal action: whether the DQN follows its reward (written when set).
+    follows_reward: float | None = field(default=None, metadata=meta(omit=Omit.NONE))
 
 
 def read_metrics(folder: str | os.PathLike[str]) -> list[MetricsLine]:
@@ -155,14 +162,17 @@ def reward_run_fingerprint(run_dir: str | os.PathLike[str]) -> str:
 
 
 def _evaluate(
-    learner: DQNLearner, opponents: Mapping[str, Agent], config: TrainConfig, index: int
-) -> dict[str, Score]:
+    learner: DQNLearner, opponents: Mapping[str, Agent], config: TrainConfig, index: int,
+    reward: PokerReward | None = None,
+) -> tuple[dict[str, Score], float | None]:  # fmt: skip
     """The greedy policy against each opponent: duplicate hands of the fixed evaluation seed,
     or, for the authors' protocol, fresh games (seed ``eval_seed + index``) with seats drawn
-    per game, as RLCard's ``tournament``."""
+    per game, as RLCard's ``tournament``; and, given its ``reward``, the share of its
+    decisions against random (the first opponent) that follow it."""
     greedy = learner.greedy_agent()
     authors = config.protocol == TrainingProtocol.AUTHORS
-    results = {}
+    results: dict[str, Score] = {}
+    log: list[DecisionLog] = []
     for label, opponent in opponents.items():
         result = play_match(
             greedy,
@@ -171,9 +181,18 @@ def _evaluate(
             seed=config.eval_seed + index if authors else config.eval_seed,
             duplicate=not authors,
             seating="random" if authors else "alternate",
+            log=log if reward is not None and not results else None,
         )
         results[label] = Score(mbb_per_hand=result.mbb_per_hand, std_error=result.std_error)
-    return results
+    return results, None if reward is None else followed(reward, log)
+
+
+def followed(reward: PokerReward, log: Sequence[DecisionLog]) -> float:
+    """The share of logged decisions (:class:`~pokerirl.game.DecisionLog`) that take
+    ``reward``'s best legal action (:func:`pokerirl.poker.rewards.follow_share`)."""
+    seen = DecisionLog.concatenate(list(log))
+    decisions = Decisions(obs=seen.obs, legal_mask=seen.legal_mask, cards=seen.cards)
+    return round(follow_share(reward, decisions, seen.actions), 6)
 
 
 def evaluation_points(config: TrainConfig) -> list[int]:
@@ -283,7 +302,7 @@ class _TrainUnit:
     config: TrainConfig
     reward_source: RewardSource | None  # None: sparse, or a reward_fn given in this process
     reward_fingerprint: str | None
-    opponent: ShippedAgent | None  # None: self-play
+    opponent: ShippedAgent | Opponent  # an agent's files, or self-play or the pool
     threads: int
     progress: bool
 
@@ -338,9 +357,10 @@ def _train_many(
         read = RewardSource.read if reward_fn is not None else RewardSource.resolve
         source = read(first.reward_run)
         reward_print = source.fingerprint
+    opponent: ShippedAgent | Opponent
     opponent_print: str
-    if first.opponent == SELF_PLAY:
-        opponent, opponent_print = None, SELF_PLAY
+    if first.opponent in tuple(Opponent):
+        opponent = opponent_print = Opponent(first.opponent)
     else:
         opponent_print = agent_fingerprint(resolve_agent(first.opponent))
         opponent = ship_agent(first.opponent)
@@ -399,8 +419,8 @@ def _train_unit(unit: _TrainUnit, reward_fn: RewardFn | None = None) -> UnitOutp
                 reward = as_poker_reward(reward_fn)
             reward = TransformedReward(reward, config.reward_transform)  # type: ignore[arg-type]
         opponent = (
-            SELF_PLAY
-            if unit.opponent is None
+            unit.opponent
+            if isinstance(unit.opponent, Opponent)
             else land_agent(unit.opponent, Path(private, "opponent"))
         )
         out = Path(private, "agent")
@@ -448,7 +468,7 @@ def _train_into(
     progress: bool,
 ) -> tuple[MetricsLine, Timings]:
     """Train into the new folder ``out``; return the last metrics line and the timings."""
-    # The frozen self-play copy changes all the time: evaluate against random only then.
+    # The frozen self-play copy and the pool change all the time: against random only then.
     opponents: dict[str, Agent] = {"random": make_agent("random")}
     if not isinstance(opponent, str) and config.opponent != "random":
         opponents[config.opponent] = opponent
@@ -469,6 +489,7 @@ def _train_into(
         del points[: len(due)]
         seconds.append(round(time.perf_counter() - started, 3))  # timings.json, not here
         keep_rule = None
+        scores, follows = _evaluate(learner, opponents, config, len(metrics), reward)
         if keeper is not None:
             # The authors never evaluate their last hands' model: the end is not offered.
             is_final = hands_done == config.hands and (config.hands - 1) % config.eval_every
@@ -479,8 +500,9 @@ def _train_into(
             updates=learner.train_t,
             epsilon=epsilon_at(config.dqn, learner.total_t),
             loss=None if np.isnan(learner.last_loss) else learner.last_loss,
-            eval=_evaluate(learner, opponents, config, len(metrics)),
+            eval=scores,
             keep_rule=keep_rule,
+            follows_reward=follows,
         )
         if keeper is not None and keep_rule:
             keeper.offer(learner, line)
@@ -515,7 +537,7 @@ def _train_into(
         },
         "opponent": {
             "spec": config.opponent,
-            "fingerprint": SELF_PLAY if isinstance(opponent, str) else agent_fingerprint(opponent),
+            "fingerprint": opponent if isinstance(opponent, str) else agent_fingerprint(opponent),
         },
         "seed": config.seed,
         "hands": config.hands,

@@ -12,6 +12,7 @@ from pokerirl.cli import (
     gym,  # noqa: F401
     poker,  # noqa: F401
     studies,  # noqa: F401
+    sweep,  # noqa: F401  (pokerirl sweep: the poker sweep)
 )
 from pokerirl.cli.app import app
 

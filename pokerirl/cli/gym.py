@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import functools
 import json
 from pathlib import Path
 from typing import Any
@@ -551,14 +550,3 @@ def gym_sweep(
             line += f", alignment {100 * row.final_alignment_mean:.1f}%"
         echo(line)
     echo(f"wrote {out / 'sweep.csv'} and {', '.join(str(p) for p in result.figures)}")
-
-
-SWEEP_DEPRECATED = "'pokerirl sweep' is deprecated; use 'pokerirl gym sweep'"
-
-
-@app.command("sweep", hidden=True)
-@functools.wraps(gym_sweep)
-def sweep(*args: Any, **kwargs: Any) -> None:
-    # The old name of gym sweep, kept for scripts: the same options, one warning line first.
-    typer.secho(f"warning: {SWEEP_DEPRECATED}", err=True, fg=typer.colors.YELLOW)
-    gym_sweep(*args, **kwargs)

@@ -675,7 +675,11 @@ def _echo_agent(folder: Path, line: MetricsLine | None, play: str) -> None:
     scores = ", ".join(
         f"vs {n} {e.mbb_per_hand:+.0f} +- {e.std_error:.0f} mbb/h" for n, e in line.eval.items()
     )
-    echo(f"{folder}: {line.hands:,} hands, {scores}")
+    follows = (
+        "" if line.follows_reward is None
+        else f"; follows its reward on {line.follows_reward:.0%} of its decisions vs random"
+    )  # fmt: skip
+    echo(f"{folder}: {line.hands:,} hands, {scores}{follows}")
     if play == Plays.KEPT:
         kept = MetricsLine.from_json(read_json(folder / CONFIG_FILE)["kept"])
         echo(

@@ -157,6 +157,25 @@ def study(
         help="drop (default: the hands that end in a fold hide the cards and are left out) "
         "or impute (kept, the hidden cards drawn from a posterior; docs/folds.md).",
     ),
+    opponent: str | None = typer.Option(
+        None, "--opponent", metavar="random|self|pool",
+        help="Every DQN's training opponent (default random; pool: fixed strategies and the "
+        "learner's own snapshots).",
+    ),
+    payoff_weight: float | None = typer.Option(
+        None, "--payoff-weight", help="w in w * payoff + (1 - w) * f for the learned-reward DQNs."
+    ),
+    reward_decay: float | None = typer.Option(
+        None, "--reward-decay", help="The reward net's weight decay (default: the IRL core's)."
+    ),
+    experts: str | None = typer.Option(
+        None, "--experts", metavar="all|winners",
+        help="Whose decisions are the expert's: all players (default) or the period's winners.",
+    ),
+    period: str | None = typer.Option(
+        None, "--period", metavar="START:END",
+        help="The part of each month read, as fractions of its hands by time (0:0.6, 0.6:1).",
+    ),
     jobs: int = typer.Option(
         2, "--jobs", min=1, max=STAGE_BOUNDS["jobs"], help="Processes for training and play."
     ),
@@ -192,6 +211,11 @@ def study(
         reward_transform=reward_transform,
         encoding=encoding,
         folds=folds,
+        opponent=opponent,
+        payoff_weight=payoff_weight,
+        reward_decay=reward_decay,
+        experts=experts,
+        period=None if period is None else _period(period),
     )
     result = run_study(
         sources,
@@ -206,6 +230,14 @@ def study(
     echo(result.markdown)
     echo(f"report: {out / 'report.md'} (pokerirl report {out})")
     write_logs(out, log_dir)
+
+
+def _period(text: str) -> tuple[float, float]:
+    """``--period START:END`` as a pair, checked (a usage error in one line)."""
+    from pokerirl.datasets.players import Period
+
+    found = settings_from_options(Period.parse, text)
+    return (found.start, found.end)
 
 
 @app.command()

@@ -32,14 +32,14 @@ from pokerirl.encoding import NUM_ACTIONS
 from pokerirl.errors import InputError
 from pokerirl.game.encodings import EncodingName
 from pokerirl.poker.agent_specs import POLICY_PREFIX, REWARD_PREFIX
-from pokerirl.poker.rewards import Decisions, PokerReward, RewardSource, run_encoding
+from pokerirl.poker.rewards import (
+    Decisions,
+    PokerReward,
+    RewardSource,
+    legal_argmax,
+    run_encoding,
+)
 from pokerirl.store import digest
-
-
-def _greedy(values: np.ndarray, legal_mask: np.ndarray) -> np.ndarray:
-    """Argmax over the legal actions (the first on ties), as int64."""
-    legal = np.asarray(legal_mask, dtype=bool)
-    return np.where(legal, values, -np.inf).argmax(axis=1).astype(np.int64)
 
 
 def _one_hot(actions: np.ndarray) -> np.ndarray:
@@ -65,7 +65,7 @@ class RewardArgmaxAgent:
 
     def act(self, obs: np.ndarray, legal_mask: np.ndarray, rng: np.random.Generator,
             *, cards: np.ndarray | None = None) -> np.ndarray:  # fmt: skip
-        return _greedy(self._values(obs, legal_mask, cards), legal_mask)
+        return legal_argmax(self._values(obs, legal_mask, cards), legal_mask)
 
     def action_probs(self, obs: np.ndarray, legal_mask: np.ndarray,
                      *, cards: np.ndarray | None = None) -> np.ndarray:  # fmt: skip
@@ -89,7 +89,7 @@ class PolicyAgent:
         return np.asarray(found.numpy(), dtype=np.float64)
 
     def act(self, obs: np.ndarray, legal_mask: np.ndarray, rng: np.random.Generator) -> np.ndarray:
-        return _greedy(self.log_probs(obs, legal_mask), legal_mask)
+        return legal_argmax(self.log_probs(obs, legal_mask), legal_mask)
 
     def action_probs(self, obs: np.ndarray, legal_mask: np.ndarray) -> np.ndarray:
         return _one_hot(self.act(obs, legal_mask, np.random.default_rng(0)))

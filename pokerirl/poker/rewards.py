@@ -161,6 +161,36 @@ class ObsReward(PokerReward):
         return np.asarray(self.fn(obs, actions), np.float32).reshape(NUM_ACTIONS, n).T.copy()
 
 
+def legal_argmax(values: np.ndarray, legal_mask: np.ndarray) -> np.ndarray:
+    """Argmax of (N, 4) ``values`` over the legal actions (the first on ties), as int64.
+
+    >>> legal_argmax(np.array([[5.0, 1.0, 2.0, 0.0]]), np.array([[False, True, True, True]]))
+    array([2])
+    """
+    legal = np.asarray(legal_mask, dtype=bool)
+    return np.where(legal, values, -np.inf).argmax(axis=1).astype(np.int64)
+
+
+def follow_share(reward: PokerReward, decisions: Decisions, actions: np.ndarray) -> float:
+    """The share of ``decisions`` where ``actions`` is f's best legal action (an action
+    tied with the best counts): how closely an agent trained on f follows it. NaN for none.
+
+    A DQN that ignores its reward (always-call on a reward that prefers raising) scores low:
+
+    >>> prefers_raise = ObsReward(lambda obs, actions: (actions == 1) * 1.0)
+    >>> legal = np.array([[True, True, True, False]] * 4)
+    >>> decisions = Decisions(obs=np.zeros((4, 72), np.uint8), legal_mask=legal)
+    >>> follow_share(prefers_raise, decisions, np.array([1, 1, 0, 0]))
+    0.5
+    """
+    actions = np.asarray(actions, dtype=np.int64)
+    if not len(actions):
+        return float("nan")
+    values = np.where(decisions.legal_mask, reward.action_values(decisions), -np.inf)
+    taken = values[np.arange(len(actions)), actions]
+    return float((taken >= values.max(axis=1)).mean())
+
+
 def as_poker_reward(reward: PokerReward | Callable[..., np.ndarray] | None) -> PokerReward | None:
     """``reward`` itself, or a plain ``f(obs, actions)`` wrapped as an :class:`ObsReward`."""
     if reward is None or isinstance(reward, PokerReward):

@@ -250,9 +250,11 @@ def train_runs(
     overwrite: bool = False,
     backend: Backend | None = None,
     encoding: str = EncodingName.RLCARD,
+    single_folder: bool = True,
 ) -> RunSummary:
     """``runs`` runs of ``config`` with seeds ``seed + k`` into ``out_dir/run-<k>``, then
-    ``summary.json`` and ``alignment_bands.png``. One run keeps the single-folder layout.
+    ``summary.json`` and ``alignment_bands.png``. One run keeps the single-folder layout
+    unless ``single_folder`` is False (then it is ``run-0``, a resumable unit like the others).
     The table's states are read in ``encoding`` (:mod:`pokerirl.game.encodings`).
 
     Each run is a unit of :func:`pokerirl.store.run_units` on ``backend`` (default: in this
@@ -263,7 +265,7 @@ def train_runs(
     if runs < 1:
         raise ConfigError(f"runs must be at least 1, got {runs}")
     config = config or AIRLConfig.for_algo(algo)
-    if runs == 1:
+    if runs == 1 and single_folder:
         return train_table(
             table,
             out_dir,

@@ -73,8 +73,13 @@ AUTHORS_HAIRL: dict[str, object] = {
 
 
 # Settings a study's record leaves out at these values (see StudyConfig.settings).
-UNRECORDED_DEFAULTS: dict[str, object] = {"encoding": "rlcard", "folds": "drop",
-                                          "algos": PAPER_ALGOS}  # fmt: skip
+UNRECORDED_DEFAULTS: dict[str, object] = {
+    "encoding": "rlcard", "folds": "drop", "algos": PAPER_ALGOS, "opponent": "random",
+    "payoff_weight": 0.0, "reward_decay": None, "experts": "all", "period": (0.0, 1.0),
+    "winners_bb_per_100": 0.0, "winners_min_hands": 200,
+}  # fmt: skip
+EXPERTS = ("all", "winners")  # which players' decisions are the expert's
+OPPONENTS = ("random", "self", "pool")  # whom the DQNs train against
 
 
 def irl_overrides(settings: str, algo: str) -> dict[str, object]:
@@ -150,6 +155,17 @@ class StudyConfig:
     folds: str = "drop"  # ingest's hands that end in a fold: left out, or imputed (docs/folds.md)
     # LBR (docs/exploit.md) against every panel member, per seed, from the turn; 0: none.
     lbr_hands: int = 10_000
+    # What the poker sweep varies (docs/sweep.md): every DQN's training opponent, the learned
+    # reward's payoff weight, the reward net's weight decay (None: the IRL core's), which
+    # players are the expert (winners: >= winners_bb_per_100 over >= winners_min_hands in
+    # the period) and the period of each month (fractions of its hands by time).
+    opponent: str = "random"
+    payoff_weight: float = 0.0
+    reward_decay: float | None = None
+    experts: str = "all"
+    winners_bb_per_100: float = 0.0
+    winners_min_hands: int = 200
+    period: tuple[float, float] = (0.0, 1.0)
     jobs: int = 2  # processes; the one setting that does not change a result
 
     def __post_init__(self) -> None:
@@ -184,6 +200,13 @@ class StudyConfig:
             **one_of("reward transform", self.reward_transform, TRANSFORMS),
             **one_of("encoding", self.encoding, ENCODINGS),
             **one_of("folds", self.folds, FOLDS),
+            **one_of("opponent", self.opponent, OPPONENTS),
+            **one_of("experts", self.experts, EXPERTS),
+            "payoff weight in [0, 1]": 0 <= self.payoff_weight <= 1,
+            "reward decay >= 0": self.reward_decay is None or self.reward_decay >= 0,
+            "winners' min hands >= 1": self.winners_min_hands >= 1,
+            f"period START:END with 0 <= START < END <= 1 (got {self.period})": len(self.period)
+            == 2 and 0 <= self.period[0] < self.period[1] <= 1,
         }
         broken = [name for name, ok in checks.items() if not ok]
         # every stage's bounds, before the first stage starts (an LBR of 10^15 hands was
@@ -207,6 +230,8 @@ class StudyConfig:
                 found.pop(name)
         if "algos" in found:
             found["algos"] = list(self.algos)
+        if "period" in found:
+            found["period"] = list(self.period)
         found["seeds"] = list(self.seeds)
         found["reward_sources"] = [list(pair) for pair in self.reward_sources]
         return found
@@ -317,4 +342,6 @@ def preset(name: str, **overrides: Any) -> StudyConfig:
         changes["algos"] = tuple(sorted(changes["algos"], key=lambda a: rank.get(a, len(rank))))
     if "reward_sources" in changes:
         changes["reward_sources"] = tuple(tuple(pair) for pair in changes["reward_sources"])
+    if "period" in changes:
+        changes["period"] = tuple(changes["period"])
     return with_overrides(PRESETS, name, **changes)

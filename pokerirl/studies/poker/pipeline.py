@@ -57,6 +57,7 @@ from pokerirl.studies.poker.results import (
 
 if TYPE_CHECKING:  # the layers below load lazily: ``pokerirl report`` needs none of them
     from pokerirl.agents.train import TrainConfig
+    from pokerirl.datasets.players import Selection
     from pokerirl.irl.config import AIRLConfig
     from pokerirl.tournaments import AuthorsMatchup, TournamentReport
 
@@ -171,17 +172,25 @@ def _non_default(config: StudyConfig, *names: str) -> dict[str, Any]:
     }
 
 
-def _sources_fingerprint(sources: Sequence[str | os.PathLike[str]]) -> dict[str, Any]:
-    """Every source file's path, size and modification time (cheap on a large corpus)."""
+def source_files(sources: Sequence[str | os.PathLike[str]]) -> list[tuple[Path, Path]]:
+    """Every file of the sources (a file, or a folder's files in order), with the source it
+    is in; a missing source is one line."""
     files = []
     for source in sources:
         path = Path(source)
         if not path.exists():
             raise StudyError(f"{path}: no such file or folder")
         found = [path] if path.is_file() else sorted(p for p in path.rglob("*") if p.is_file())
-        for item in found:
-            stat = item.stat()
-            files.append([str(item.resolve()), stat.st_size, stat.st_mtime_ns])
+        files += [(path, item) for item in found]
+    return files
+
+
+def _sources_fingerprint(sources: Sequence[str | os.PathLike[str]]) -> dict[str, Any]:
+    """Every source file's path, size and modification time (cheap on a large corpus)."""
+    files = []
+    for _, item in source_files(sources):
+        stat = item.stat()
+        files.append([str(item.resolve()), stat.st_size, stat.st_mtime_ns])
     return {"files": files}
 
 
@@ -217,6 +226,9 @@ def ingest_stage(study: Study, sources: Sequence[str | os.PathLike[str]]) -> Ing
     sources_print = _sources_fingerprint(sources)
     imputing = study.config.folds == "impute"
     folds = {"folds": "impute"} if imputing else {}  # drop: the records of before
+    selection = study_selection(study.config)
+    if selection is not None:  # none: the records of before
+        folds["selection"] = selection.to_json()
     legacy = study.legacy("ingest", {"sources": sources_print, **folds})
     unit: Unit[None] = Unit(
         key="ingest",
@@ -235,14 +247,29 @@ def ingest_stage(study: Study, sources: Sequence[str | os.PathLike[str]]) -> Ing
 
                 ingest_imputed(sources, folder / TABLE, ImputeConfig(),
                                progress=study.execution.progress,
-                               recorded_as=TABLE)  # fmt: skip
+                               recorded_as=TABLE, selection=selection)  # fmt: skip
             else:
                 # The summary names the table relative to the study folder, where it sits:
                 # not the unit's staging path, and the same bytes in any study folder.
                 ingest_table(sources, folder / TABLE, progress=study.execution.progress,
-                             recorded_as=TABLE)  # fmt: skip
+                             recorded_as=TABLE, selection=selection)  # fmt: skip
     summary = read_json(summary_path(study.root / TABLE))
     return Ingested(summary=summary, fingerprint=fingerprint(legacy.identity))
+
+
+def study_selection(config: StudyConfig) -> Selection | None:
+    """The ingest's selection of the expert (a period, the winners), or None for all hands
+    and players."""
+    from pokerirl.datasets.players import Period, Selection
+
+    winners = config.experts == "winners"
+    if not winners and config.period == (0.0, 1.0):
+        return None
+    return Selection(
+        period=Period(start=config.period[0], end=config.period[1]),
+        min_hands=config.winners_min_hands if winners else None,
+        min_bb_per_100=config.winners_bb_per_100 if winners else None,
+    )
 
 
 def run_paths(out: Path, runs: int) -> list[Path]:
@@ -289,7 +316,7 @@ def irl_stage(study: Study, ingested: Ingested) -> IRLResult:
         "epochs": config.irl_epochs,
         "seed": config.irl_seed,
         "upstream": ingested.fingerprint,
-        **_non_default(config, "irl_settings", "encoding", "algos"),
+        **_non_default(config, "irl_settings", "encoding", "algos", "reward_decay"),
     }
     if config.reward_sources:
         stage["reward_sources"] = reward_source_prints(config)
@@ -302,7 +329,8 @@ def irl_stage(study: Study, ingested: Ingested) -> IRLResult:
         if source is not None:
             found[algo] = replaced_irl(study, algo, source, out)
             continue
-        chosen = {"epochs": config.irl_epochs, "seed": config.irl_seed}
+        chosen = {"epochs": config.irl_epochs, "seed": config.irl_seed,
+                  "reward_weight_decay": config.reward_decay}  # fmt: skip
         overrides = {
             **irl_overrides(config.irl_settings, algo),
             **{k: v for k, v in chosen.items() if v is not None},
@@ -375,6 +403,19 @@ def _final_vs_random(agent_set: Path, seeds: Sequence[int]) -> list[float]:
     return [read_metrics(agent_set / f"seed-{s}")[-1].eval["random"].mbb_per_hand for s in seeds]
 
 
+def _follows_reward(sets: dict[str, Path], seeds: Sequence[int]) -> dict[str, list[float]] | None:
+    """Each learned-reward kind's follow metric per seed; None if an agent lacks it."""
+    from pokerirl.agents.train import read_metrics
+
+    found = {
+        kind: [read_metrics(out / f"seed-{s}")[-1].follows_reward for s in seeds]
+        for kind, out in sets.items() if kind != "dqn"
+    }  # fmt: skip
+    if any(v is None for values in found.values() for v in values):
+        return None
+    return {kind: [float(v) for v in values if v is not None] for kind, values in found.items()}
+
+
 def _curve(agent_set: Path, seeds: Sequence[int]) -> Curve:
     from pokerirl.agents.train import read_metrics
 
@@ -421,11 +462,13 @@ def agents_stage(study: Study, irl: IRLResult) -> AgentsResult:
             eval_every=min(config.eval_every, hands),
             eval_hands=config.eval_hands,
             encoding=config.encoding,
+            opponent=config.opponent,
         )
         if algo is None:
             study.execution.train_seeds(out, base, config.seeds)
             return
-        learned = replace(base, reward="learned", reward_transform=config.reward_transform)
+        learned = replace(base, reward="learned", reward_transform=config.reward_transform,
+                          payoff_weight=config.payoff_weight)  # fmt: skip
         source = config.reward_source(algo)
         if source is not None:
             study.execution.train_seeds(out, replace(learned, reward_run=source), config.seeds)
@@ -468,6 +511,7 @@ def agents_stage(study: Study, irl: IRLResult) -> AgentsResult:
             short=_final_vs_random(sets["dqn"] if short_is_long else short, config.seeds),
         ),
         references=references,
+        follows_reward=_follows_reward(sets, config.seeds),
         playing_vs_random={
             kind: _playing_vs_random(out, config.seeds) for kind, out in sets.items()
         } if authors else None,

@@ -106,6 +106,9 @@ def build_report(
             final_disc_acc_expert=final["disc_acc_expert"].stats,
             final_disc_acc_policy=final["disc_acc_policy"].stats,
             per_run_val_alignment=final["val_alignment"].values,
+            final_val_reward_alignment=(
+                final["val_reward_alignment"].stats if "val_reward_alignment" in final else None
+            ),
             paper=IRLPaper(
                 final_val_alignment=None if published is None else MeanStd(**published),
                 final_disc_acc=paper.DISC_ACC_FINAL.get(algo),
@@ -136,6 +139,7 @@ def build_report(
             if agents.playing_vs_random is not None
             else "the last evaluation of training"
         ),
+        follows_reward=agents.follows_reward,
     )
     length = agents.training_length
     summary = ingested.summary
@@ -211,14 +215,55 @@ def _p(p: float) -> str:
     return f"{p:.2e}" if p < 1e-3 else f"{p:.3f}"
 
 
+def plain_verdict(report: StudyReport) -> str | None:
+    """The report's first paragraph, in plain words: does the learned reward help the first
+    learned-reward DQN of Table 1 here, by how much, and against what (None: no Table 1)."""
+    if not report.table1:
+        return None
+    name, row = next(iter(report.table1.items()))
+    kind = name.split("_vs_")[0]
+    algo = kind.removesuffix("_dqn")
+    line = row.line
+    helps = line.mbb_per_hand > 0 and line.p_bonferroni < 0.05
+    words = [
+        f"**Does the learned reward help here?** {'Yes' if helps else 'No'}: "
+        f"{matchup_label(name)} is {line.mbb_per_hand:+,.0f} ± {line.std_error:,.0f} mbb/hand "
+        f"(SE over {line.n:,} independent units, {len(report.seeds)} seeds; Bonferroni p "
+        f"{_p(line.p_bonferroni)})."
+    ]
+    panel = report.panel.panel
+    lbr = dict(zip(panel.agents, panel.lbr_mbb_per_hand, strict=False))
+    if lbr.get(kind) is not None and lbr.get("dqn") is not None and lbr.get("call") is not None:
+        words.append(
+            f"A local best response wins {lbr[kind]:+,.0f} mbb/hand from it, "
+            f"{lbr['dqn']:+,.0f} from the sparse DQN and {lbr['call']:+,.0f} from always-call "
+            "(lower is less exploitable)."
+        )
+    follows = (report.rl_vs_random.follows_reward or {}).get(kind)
+    if follows:
+        words.append(f"It takes its reward's best action on {sum(follows) / len(follows):.0%} "
+                     "of its decisions against random.")  # fmt: skip
+    part = report.irl.algos.get(algo)
+    reward = getattr(part, "final_val_reward_alignment", None)
+    if reward is not None and report.irl.bc is not None:
+        bc = report.irl.bc.final_val_alignment.mean
+        words.append(
+            f"Its reward's argmax agrees with the expert on {reward.mean:.1%} of validation "
+            f"states, behaviour cloning on {bc:.1%}."
+        )
+    return " ".join(words)
+
+
 def render_markdown(report: StudyReport) -> str:
     """``report.md``: the paper's numbers beside ours, and what the paper leaves open."""
     settings = report.settings
     seeds = report.seeds
     n_seeds = len(seeds)
+    verdict = plain_verdict(report)
     lines = [
         f"# pokerirl study ({report.preset} preset)",
         "",
+        *([verdict, ""] if verdict else []),
         f"Data: {report.data.kept_hands:,} kept heads-up hands, {report.data.rows:,} decisions.",
         f"Sizes: {report.runs} IRL runs per algorithm "
         f"({report.irl.epochs} epochs), {n_seeds} agent seeds ({seeds[0]}-{seeds[-1]}) of "
@@ -338,6 +383,18 @@ def render_markdown(report: StudyReport) -> str:
         lines.append(f"| always-{name} | {ref.mbb_per_hand:+,.0f} (SE {ref.std_error:,.0f})"
                      " | one fixed strategy | not reported |")  # fmt: skip
     length = report.training_length
+    if rl.follows_reward:
+        follows = ", ".join(
+            f"{KIND_LABELS[kind]} {sum(values) / len(values):.0%} "
+            f"({min(values):.0%} to {max(values):.0%})"
+            for kind, values in rl.follows_reward.items()
+        )
+        lines += [
+            "",
+            "How closely each learned-reward DQN follows its reward (the share of its decisions "
+            "against random that take the reward's best legal action; mean, seed range): "
+            f"{follows}.",
+        ]
     lines += [
         "",
         f"![RL against random]({figures['rl_vs_random']})",

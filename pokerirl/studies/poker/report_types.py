@@ -54,6 +54,11 @@ class IRLAlgoPart(Serializable):
     final_disc_acc_policy: MeanStd
     per_run_val_alignment: list[float]
     paper: IRLPaper
+    # f's argmax against the expert on validation states (runs that record it; the policy's
+    # alignment is final_val_alignment).
+    final_val_reward_alignment: MeanStd | None = field(
+        default=None, metadata=meta(omit=Omit.NONE)
+    )
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -95,6 +100,11 @@ class RLPart(Serializable):
     references: Mapping[str, Reference]
     per_seed: Mapping[str, list[float]]
     measured: str | None = field(default=None, metadata=meta(omit=Omit.NONE))
+    # Each learned-reward kind's share of its decisions against random that take its reward's
+    # best legal action, per seed (agents trained before the metric: absent).
+    follows_reward: Mapping[str, list[float]] | None = field(
+        default=None, metadata=meta(omit=Omit.NONE)
+    )
 
 
 @dataclass(frozen=True, kw_only=True)

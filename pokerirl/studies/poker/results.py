@@ -106,6 +106,11 @@ class AgentsResult(Serializable):
         default=None, metadata=meta(omit=Omit.NONE)
     )
     playing_hands: int | None = field(default=None, metadata=meta(omit=Omit.NONE))
+    # Learned-reward kinds: how closely each seed's DQN follows its reward (read from its
+    # last evaluation; None for agents trained before the metric).
+    follows_reward: dict[str, list[float]] | None = field(
+        default=None, metadata=meta(omit=Omit.NONE)
+    )
 
     @property
     def vs_random(self) -> dict[str, list[float]]:

@@ -102,6 +102,9 @@ class TransferRow(Serializable):
     action_shares: list[dict[str, float]]  # per seed
     vs_experts: dict[str, list[float]] = field(default_factory=dict)  # bot -> mbb/h per seed
     kind: str = "dqn"  # dqn, argmax (f's), policy (π greedy), or fixed (a bot, a rule)
+    # Learned-reward DQNs: the share of their decisions against random that take f's best
+    # legal action, per seed (how closely the DQN follows its reward); empty for the others.
+    follows_reward: list[float] = field(default_factory=list)
 
     @property
     def mean_vs_random(self) -> float:
@@ -137,6 +140,9 @@ class TransferRow(Serializable):
             "se_vs_experts": {e: self.se_vs(e) for e in self.vs_experts},
             "mean_agreement": {e: self.mean_agreement(e) for e in self.agreement},
             "mean_action_shares": {a: self.mean_share(a) for a in ACTIONS},
+            "mean_follows_reward": (
+                float(np.mean(self.follows_reward)) if self.follows_reward else None
+            ),
         }
 
 
@@ -160,7 +166,8 @@ class TransferResult(Serializable):
         experts = list(self.config.experts)
         bots = [e for e in experts if e in EXPERTS]
         head = ["agent", "vs random (mbb/h)", *[f"vs {b} (mbb/h)" for b in bots],
-                *[f"= {e} rule" for e in experts], *[f"{a} share" for a in ACTIONS]]  # fmt: skip
+                *[f"= {e} rule" for e in experts], *[f"{a} share" for a in ACTIONS],
+                "follows f"]  # fmt: skip
         lines = [
             f"# Transfer test: {self.reward}",
             "",
@@ -183,7 +190,8 @@ class TransferResult(Serializable):
                  *[result(row.mean_vs(b), row.se_vs(b)) if b in row.vs_experts else "-"
                    for b in bots],
                  *[f"{row.mean_agreement(e):.1%}" for e in experts],
-                 *[f"{row.mean_share(a):.1%}" for a in ACTIONS]]
+                 *[f"{row.mean_share(a):.1%}" for a in ACTIONS],
+                 f"{np.mean(row.follows_reward):.1%}" if row.follows_reward else "-"]
                 for row in self.rows
             ),
         )  # fmt: skip
@@ -219,11 +227,14 @@ class _Judged:
     agreement: dict[str, float]
     shares: dict[str, float]
     vs_experts: dict[str, float]
+    follows_reward: float | None
 
 
-def _judge(agent: Any, config: TransferConfig) -> _Judged:
-    """An agent against random (mbb/h, agreement with each expert rule, action shares) and
-    head to head against each expert bot (mbb/h), all on the same duplicate deals."""
+def _judge(agent: Any, config: TransferConfig, reward: Any = None) -> _Judged:
+    """An agent against random (mbb/h, agreement with each expert rule, action shares, and
+    given its ``reward``, how often it takes f's best action) and head to head against each
+    expert bot (mbb/h), all on the same duplicate deals."""
+    from pokerirl.agents.train import followed
     from pokerirl.game import DecisionLog, make_agent, play_match
 
     log: list[DecisionLog] = []
@@ -238,12 +249,14 @@ def _judge(agent: Any, config: TransferConfig) -> _Judged:
         vs_experts[bot] = match.mbb_per_hand
     return _Judged(vs_random=result.mbb_per_hand, agreement=agreement,
                    shares={a: float(counts[i]) for i, a in enumerate(ACTIONS)},
-                   vs_experts=vs_experts)  # fmt: skip
+                   vs_experts=vs_experts,
+                   follows_reward=None if reward is None else followed(reward, log))  # fmt: skip
 
 
 def _row(label: str, agents: list[Any], config: TransferConfig, transform: str | None = None,
-         weight: float | None = None, kind: str = "dqn") -> TransferRow:  # fmt: skip
-    judged = [_judge(agent, config) for agent in agents]
+         weight: float | None = None, kind: str = "dqn",
+         reward: Any = None) -> TransferRow:  # fmt: skip
+    judged = [_judge(agent, config, reward) for agent in agents]
     return TransferRow(
         label=label,
         transform=transform,
@@ -253,6 +266,7 @@ def _row(label: str, agents: list[Any], config: TransferConfig, transform: str |
         action_shares=[j.shares for j in judged],
         vs_experts={b: [j.vs_experts[b] for j in judged] for b in judged[0].vs_experts},
         kind=kind,
+        follows_reward=[j.follows_reward for j in judged if j.follows_reward is not None],
     )
 
 
@@ -273,6 +287,7 @@ def run_transfer(
     from pokerirl.poker.rewards import RewardSource
 
     source = RewardSource.resolve(reward_run)  # one line for a bad reward, before anything runs
+    reward = source.load()  # f's best action is each transform's: they shift f per state
     encoding = config.encoding or source.encoding or "rlcard"
     out = Path(out)
     base = agent_preset(config.agent_preset, hands=config.hands, seed=config.seeds[0],
@@ -302,7 +317,7 @@ def run_transfer(
             )  # fmt: skip
             train(folder, learned)
             rows.append(_row(_label(transform, weight), agents_of(folder), config, transform,
-                             weight))  # fmt: skip
+                             weight, reward=reward))  # fmt: skip
     say(f"transfer: sparse DQN: {len(config.seeds)} seeds -> {out / 'agents' / 'sparse'}")
     train(out / "agents" / "sparse", base)
     rows.append(_row("sparse DQN", agents_of(out / "agents" / "sparse"), config))
