@@ -32,6 +32,7 @@ TINY: dict[str, tuple[dict[str, str], list[str]]] = {
     "match": ({"--hands 400000": "--hands 1000"}, []),
     "tournament": ({"--seeds 0-19": "--seeds 0-1"}, ["--hands", "200", "--jobs", "1"]),
     "study": ({"--preset quick": "--preset smoke"}, ["--jobs", "1"]),
+    "sweep": ({}, ["--preset", "smoke", "--jobs", "1"]),
     "gym study": ({}, GYM),
 }
 # Lines too long to run here, and the test that runs them at toy sizes instead.
@@ -101,6 +102,7 @@ def test_the_readme_command_block_runs_top_to_bottom(
     assert (tmp_path / "runs" / "hairl" / "reward_card.json").is_file()
     assert (tmp_path / "report" / "report.md").is_file()
     assert (tmp_path / "study" / "report.md").is_file()
+    assert (tmp_path / "sweep" / "choose" / "sweep.md").is_file()
     assert (tmp_path / "gym" / "report.md").is_file()
 
 

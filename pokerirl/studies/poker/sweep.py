@@ -454,7 +454,7 @@ def run_sweep(
 def _chosen(out: Path) -> str:
     path = out / Split.CHOOSE / JSON_FILE
     if not path.is_file():
-        raise StudyError(f"{path}: no choose split to test; run the sweep without --test first")
+        raise StudyError(f"{path}: no choose split to test: run the choose split first")
     found = SweepResult.from_json(read_json(path), str(path))
     if found.chosen is None:
         raise StudyError(f"{path}: names no chosen cell")
