@@ -6,11 +6,13 @@ anything not named as ours, stay."""
 from __future__ import annotations
 
 import os
+import shutil
 import signal
 import subprocess
 import sys
 import tempfile
 import time
+from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
@@ -46,12 +48,16 @@ def running(pid: int) -> bool:
 
 
 @pytest.fixture
-def temp(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
-    """A temporary folder of this test's own, for the driver and (through it) its workers."""
-    folder = tmp_path / "temp"
-    folder.mkdir()
+def temp(monkeypatch: pytest.MonkeyPatch) -> Iterator[Path]:
+    """A temporary folder of this test's own, for the driver and (through it) its workers.
+
+    A short path, not under ``tmp_path``: the fork server's socket goes in it, and an AF_UNIX
+    path must fit in 107 characters (``tmp_path`` under a pytest-xdist worker did not)."""
+    short = "/tmp" if os.path.isdir("/tmp") else None
+    folder = Path(tempfile.mkdtemp(prefix="pokerirl-test-", dir=short))
     monkeypatch.setattr(tempfile, "tempdir", str(folder))
-    return folder
+    yield folder
+    shutil.rmtree(folder, ignore_errors=True)
 
 
 def test_a_killed_workers_scratch_goes_with_it(tmp_path: Path, temp: Path) -> None:
