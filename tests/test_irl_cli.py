@@ -99,6 +99,7 @@ def test_checkpoints_are_state_dicts_and_round_trip(run_dir: Path, table_path: P
     assert alignment == pytest.approx(final["val_alignment"])
 
 
+@pytest.mark.slow
 def test_load_reward_numpy_and_torch_and_in_a_fresh_process(run_dir: Path) -> None:
     reward = load_reward(run_dir)
     rng = np.random.default_rng(0)
