@@ -18,7 +18,8 @@ install-dev: $(BIN)/python
 demo: install
 	$(BIN)/pokerirl demo
 
-# pytest-xdist workers; tests that share a session fixture run on one (--dist loadgroup).
+# pytest-xdist workers; the tests that share a module or session fixture run on one of them
+# (--dist loadgroup, groups set in tests/conftest.py), which builds it once.
 TEST_WORKERS ?= 2
 PYTEST := $(BIN)/python -m pytest -q -n $(TEST_WORKERS) --dist loadgroup
 
