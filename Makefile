@@ -27,7 +27,8 @@ demo: install
 	@echo "make: pokerirl is installed in $(VENV)/: run 'source $(VENV)/bin/activate' to put it on your PATH"
 	@echo "make: then, on real hands shipped with pokerirl: pokerirl study irc-199504 --preset quick --out study-real/"
 
-# pytest-xdist workers; tests that share a session fixture run on one (--dist loadgroup).
+# pytest-xdist workers; the tests that share a module or session fixture run on one of them
+# (--dist loadgroup, groups set in tests/conftest.py), which builds it once.
 TEST_WORKERS ?= 2
 PYTEST := $(BIN)/python -m pytest -q -n $(TEST_WORKERS) --dist loadgroup
 

@@ -1,7 +1,7 @@
 """Fixtures shared by the test files: the command line (``cli``), folder snapshots
 (``folder_bytes``, ``folder_snapshot``), small tables (``small_table``, ``small_table_path``)
 and the MountainCar gym study (``mountaincar_study``, built once per session). The helpers
-behind them are in :mod:`shared`, for module-scoped fixtures and module-level code.
+behind them are in :mod:`testkit`, for module-scoped fixtures and module-level code.
 
 The suite runs in two tiers: ``make test-fast`` (``-m "not slow"``, the edit-test loop) and
 ``make test`` (everything, over ``pytest-xdist`` workers with ``--dist loadgroup``). Tests
@@ -19,7 +19,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 import pytest
-from shared import TINY_GYM_STUDY, Cli, folder_bytes, folder_snapshot
+from testkit import TINY_GYM_STUDY, Cli, folder_bytes, folder_snapshot
 
 if TYPE_CHECKING:
     import pyarrow as pa

@@ -39,7 +39,8 @@ def test_every_example_is_listed() -> None:
     assert sorted(p.name for p in EXAMPLES_DIR.glob("*.py")) == sorted(EXAMPLES)
 
 
-SLOW_EXAMPLES = {"learned_reward_sb3.py"}  # trains PPO: `make test-fast` leaves it out
+# Over 15 s on a loaded machine (PPO, an RLCard match, gym rollouts): not in `make test-fast`.
+SLOW_EXAMPLES = {"learned_reward_sb3.py", "agent_in_rlcard.py", "airl_gym_rollouts.py"}
 
 
 @pytest.mark.parametrize(

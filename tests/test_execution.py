@@ -49,6 +49,7 @@ def read_relative(name: str) -> bool:
     return Path(name).exists()
 
 
+@pytest.mark.slow
 def test_results_in_unit_order_whatever_the_jobs_and_threads_pinned() -> None:
     import torch
 
@@ -69,6 +70,7 @@ def test_results_in_unit_order_whatever_the_jobs_and_threads_pinned() -> None:
     assert {r[1] for r in threads} == {2}
 
 
+@pytest.mark.slow
 def test_workers_run_in_a_private_folder_not_the_drivers(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:

@@ -20,7 +20,7 @@ from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
-from shared import Cli
+from testkit import Cli
 from typer.testing import CliRunner
 
 from pokerirl.cli import app

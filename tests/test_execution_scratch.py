@@ -51,9 +51,10 @@ def running(pid: int) -> bool:
 def temp(monkeypatch: pytest.MonkeyPatch) -> Iterator[Path]:
     """A temporary folder of this test's own, for the driver and (through it) its workers.
 
-    Short and under /tmp, not in ``tmp_path``: multiprocessing's sockets live in it, and a
-    socket path has at most 107 bytes, which pytest-xdist's deeper ``tmp_path`` can pass."""
-    folder = Path(tempfile.mkdtemp(prefix="pk-", dir="/tmp"))
+    A short path, not under ``tmp_path``: the fork server's socket goes in it, and an AF_UNIX
+    path must fit in 107 characters (``tmp_path`` under a pytest-xdist worker did not)."""
+    short = "/tmp" if os.path.isdir("/tmp") else None
+    folder = Path(tempfile.mkdtemp(prefix="pokerirl-test-", dir=short))
     monkeypatch.setattr(tempfile, "tempdir", str(folder))
     yield folder
     shutil.rmtree(folder, ignore_errors=True)

@@ -6,7 +6,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
-from shared import Cli
+from testkit import Cli
 
 pytest.importorskip("gymnasium")
 pytest.importorskip("stable_baselines3")
@@ -16,7 +16,7 @@ from pokerirl.gym.presets import GENERIC_PPO, TASKS
 from pokerirl.gym.tasks import task
 from pokerirl.studies.gym.config import PRESETS
 
-invoke = Cli()  # the shared in-process command line (tests/shared.py)
+invoke = Cli()  # the shared in-process command line (tests/testkit.py)
 
 
 def test_a_task_the_paper_lacks_gets_generic_settings_by_its_action_space() -> None:

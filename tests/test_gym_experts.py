@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 import torch
-from shared import Cli
+from testkit import Cli
 
 pytest.importorskip("gymnasium")
 pytest.importorskip("stable_baselines3")
@@ -33,7 +33,7 @@ from pokerirl.gym.presets import TASKS
 torch.set_num_threads(1)
 
 
-invoke = Cli()  # the shared in-process command line (tests/shared.py)
+invoke = Cli()  # the shared in-process command line (tests/testkit.py)
 
 
 @pytest.fixture(scope="module")

@@ -11,7 +11,7 @@ import numpy as np
 import pyarrow as pa
 import pyarrow.parquet as pq
 import pytest
-from shared import Cli
+from testkit import Cli
 
 pytest.importorskip("gymnasium")
 pytest.importorskip("stable_baselines3")
@@ -26,7 +26,7 @@ from pokerirl.studies.gym.config import PRESETS
 
 CORE_BASELINES = {"majority", "legal_majority", "bc"}
 
-CLI = Cli()  # pokerirl run in this process (tests/shared.py)
+CLI = Cli()  # pokerirl run in this process (tests/testkit.py)
 
 
 def shipped_data(env_id: str, path: Path, transitions: int) -> float:

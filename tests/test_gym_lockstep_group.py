@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import torch
-from shared import Cli, folder_snapshot
+from testkit import Cli, folder_snapshot
 
 pytest.importorskip("gymnasium")
 pytest.importorskip("stable_baselines3")
@@ -38,7 +38,7 @@ PENDULUM = dataclasses.replace(
 )
 FILES = ("config.json", "metrics.jsonl", "model.pt")
 
-CLI = Cli()  # pokerirl run in this process (tests/shared.py)
+CLI = Cli()  # pokerirl run in this process (tests/testkit.py)
 
 
 @pytest.fixture(autouse=True)

@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from click.testing import Result
-from shared import TINY_GYM_STUDY, Cli
+from testkit import TINY_GYM_STUDY, Cli
 
 pytest.importorskip("gymnasium")
 pytest.importorskip("stable_baselines3")
@@ -29,7 +29,7 @@ from pokerirl.studies.gym.units import DATA_FILE
 TINY = TINY_GYM_STUDY  # the session's MountainCar study (conftest) has these settings
 MEAN_STD = {"mean", "std"}
 
-CLI = Cli()  # pokerirl run in this process (tests/shared.py)
+CLI = Cli()  # pokerirl run in this process (tests/testkit.py)
 
 
 def jsonl(path: Path) -> list[dict]:

@@ -12,7 +12,7 @@ import numpy as np
 import pyarrow.parquet as pq
 import pytest
 import torch
-from shared import Cli
+from testkit import Cli
 
 from pokerirl.datasets.toy import toy_expert_table
 from pokerirl.irl import RunError, load_config, load_policy, load_reward, load_run_config
@@ -22,7 +22,7 @@ from pokerirl.poker import read_table
 torch.set_num_threads(1)
 REPO = Path(__file__).resolve().parents[1]
 
-CLI = Cli()  # pokerirl run in this process (tests/shared.py)
+CLI = Cli()  # pokerirl run in this process (tests/testkit.py)
 
 
 @pytest.fixture(scope="module")
@@ -99,6 +99,7 @@ def test_checkpoints_are_state_dicts_and_round_trip(run_dir: Path, table_path: P
     assert alignment == pytest.approx(final["val_alignment"])
 
 
+@pytest.mark.slow
 def test_load_reward_numpy_and_torch_and_in_a_fresh_process(run_dir: Path) -> None:
     reward = load_reward(run_dir)
     rng = np.random.default_rng(0)

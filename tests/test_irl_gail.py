@@ -10,7 +10,7 @@ from pathlib import Path
 import pyarrow.parquet as pq
 import pytest
 import torch
-from shared import Cli
+from testkit import Cli
 
 from pokerirl.datasets.toy import toy_expert_table
 from pokerirl.errors import ConfigError
@@ -21,7 +21,7 @@ from pokerirl.poker import transitions_from_arrow
 
 torch.set_num_threads(1)
 
-CLI = Cli()  # pokerirl run in this process (tests/shared.py)
+CLI = Cli()  # pokerirl run in this process (tests/testkit.py)
 
 
 def test_the_discriminators_give_their_logits_on_known_numbers() -> None:

@@ -17,8 +17,8 @@ from pathlib import Path
 from typing import Any
 
 import pytest
-from shared import folder_bytes, folder_snapshot
 from test_reliability import one_error_line, run_cli
+from testkit import folder_bytes, folder_snapshot
 
 from pokerirl.cli.app import MAX_SEED
 

@@ -24,8 +24,8 @@ from pathlib import Path
 import pyarrow as pa
 import pyarrow.parquet as pq
 import pytest
-from shared import folder_bytes
 from test_reliability import MINIMAL, one_error_line, run_cli, write_minimal
+from testkit import folder_bytes
 
 from irc_fixtures import real_month
 from pokerirl.datasets.ingest import ingest_table, summary_path

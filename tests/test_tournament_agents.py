@@ -51,6 +51,7 @@ def test_a_greedy_network_against_itself_is_exactly_even(agent_sets: Path) -> No
     assert [s.mbb_per_hand for s in report.matchups[0].seeds] == [0.0, 0.0]
 
 
+@pytest.mark.slow
 def test_processes_do_not_change_network_results(agent_sets: Path) -> None:
     matchup = [(str(agent_sets / "hairl-dqn"), str(agent_sets / "dqn"))]
     one = run_tournament(matchup, hands=HANDS, seeds=[0, 1], out=agent_sets / "1", jobs=1)

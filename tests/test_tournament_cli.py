@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from matplotlib.image import imread
-from shared import folder_bytes
+from testkit import folder_bytes
 from typer.testing import CliRunner
 
 from pokerirl.cli import app

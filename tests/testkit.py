@@ -1,4 +1,4 @@
-"""Helpers shared by the test files, importable at module level (``from shared import …``);
+"""Helpers shared by the test files, importable at module level (``from testkit import …``);
 :mod:`conftest` offers the same as fixtures. The command line run in-process, folder
 snapshots, and the tiny gym study budget."""
 
