@@ -106,8 +106,9 @@ def study(
         metavar=choices(STUDY_PRESETS),
         help="smoke (seconds; checks the pipeline, its numbers mean nothing), demo (what "
         "pokerirl demo runs), quick, paper "
-        "(ours) or authors (their IRL and DQN settings and their tournament protocol, beside "
-        "our duplicate-deal Table 1).",
+        "(ours), authors (their IRL and DQN settings and their tournament protocol, beside "
+        "our duplicate-deal Table 1) or real (what pokerirl sweep chose on real hands; "
+        "docs/sweep.md).",
     ),
     runs: int | None = typer.Option(
         None, "--runs", min=1, max=MAX_SEEDS, help="IRL runs per algorithm."
