@@ -9,8 +9,9 @@ stay isolated side by side: each writes in its own ``tmp_path``, starts its own 
 free ports, stops only those (by pid), and changes its folder or environment only through
 ``monkeypatch`` (each xdist worker is a process of its own). The tests that share a session
 fixture carry its ``xdist_group`` (asking ``--dist loadgroup`` for one worker, to build it
-once; with pytest 9.2 and pytest-xdist 3.8 a group's tests were still seen on both workers,
-so each worker may build it: correct, only slower).
+once). With pytest 9.2 and pytest-xdist 3.8 the groups are not honoured (pytest-xdist issue
+1386: it marks a group by rewriting ``item._nodeid``, which pytest 9.2 no longer reads), so
+each worker may build it: correct, only slower, until xdist's fix (PR 1388) is released.
 """
 
 from __future__ import annotations
