@@ -28,7 +28,7 @@ demo: install
 	@echo "make: then, on real hands shipped with pokerirl: pokerirl study irc-199504 --preset quick --out study-real/"
 
 # pytest-xdist workers; the tests that share a module or session fixture run on one of them
-# (--dist loadgroup, groups set in tests/conftest.py), which builds it once.
+# (--dist loadgroup, groups set in tests/conftest.py), to build it once.
 TEST_WORKERS ?= 2
 PYTEST := $(BIN)/python -m pytest -q -n $(TEST_WORKERS) --dist loadgroup
 

@@ -26,7 +26,8 @@ from typer.testing import CliRunner
 from pokerirl.cli import app
 from pokerirl.execution import _descendants, ray_head
 
-# slow; one worker: two Ray clusters side by side would crowd two cores
+# slow; one worker (once pytest-xdist honours groups again, its issue 1386): two Ray clusters
+# side by side would crowd two cores (each owns its ports and folders: correct, slower)
 pytestmark = [pytest.mark.slow, pytest.mark.xdist_group("ray")]
 
 SET = ["--hands", "1024", "--eval-every", "1024", "--eval-hands", "100"]
