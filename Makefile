@@ -32,15 +32,16 @@ demo: install
 TEST_WORKERS ?= 2
 PYTEST := $(BIN)/python -m pytest -q -n $(TEST_WORKERS) --dist loadgroup
 
-# Everything, slow tests included (CI: .ci/run).
+# Everything, slow tests included (CI: .ci/run); the timing-sensitive ones (serial) alone, last.
 test: install-dev
 	$(BIN)/ruff check pokerirl tests benchmarks
 	$(BIN)/mypy pokerirl
-	$(PYTEST)
+	$(PYTEST) -m "not serial"
+	$(BIN)/python -m pytest -q -m serial
 
 # The edit-test loop: the tests not marked slow (and the doctests).
 test-fast: install-dev
-	$(PYTEST) -m "not slow"
+	$(PYTEST) -m "not slow and not serial"
 
 lint: install-dev
 	$(BIN)/ruff check pokerirl tests benchmarks

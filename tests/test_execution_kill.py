@@ -19,7 +19,7 @@ from typer.testing import CliRunner
 from pokerirl.cli import app
 from pokerirl.store import Fate, Unit, check
 
-pytestmark = pytest.mark.slow
+pytestmark = [pytest.mark.slow, pytest.mark.serial]  # signals and timing: run alone
 
 SMALL = ["--eval-hands", "100", "--concurrent-hands", "64", "-q"]
 SET = ["--hands", "1536", "--eval-every", "1536", *SMALL]  # about a second a seed

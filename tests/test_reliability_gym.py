@@ -350,6 +350,7 @@ def _writing(out: Path) -> bool:
 
 
 @pytest.mark.slow
+@pytest.mark.serial  # waits for the run to be writing, within a time: run alone
 def test_a_killed_gym_irl_leaves_nothing_the_next_run_does_not_remove(tmp_path: Path) -> None:
     out = tmp_path / "irl"
     args = ["gym", "irl", "MountainCar-v0", "--out", str(out), "--preset", "quick", "--runs", "1"]

@@ -18,6 +18,9 @@ from processes import command, environment
 
 SILENCE = 10.0  # seconds: the longest pause allowed anywhere
 IN_UNITS = 3.0  # seconds: the longest pause once the units report their progress
+# Pauses are timed: with another test beside it on the same cores, a pause measures the other
+# test. `make test` runs these alone.
+pytestmark = pytest.mark.serial
 
 
 def watch(args: list[str]) -> list[tuple[float, bytes]]:
