@@ -177,3 +177,23 @@ def test_bad_sweep_settings_are_one_line_before_anything_runs(tmp_path: Path) ->
     assert result.exit_code == 2 and "nope" in result.output
     assert not (tmp_path / "o").exists()
     assert json.dumps(sweep_preset("sample").to_json())  # the preset serializes
+
+
+def test_the_real_study_preset_is_the_cell_the_shipped_sweep_chose() -> None:
+    from pokerirl.irl.config import AIRLConfig
+    from pokerirl.studies.poker.config import preset
+
+    shipped = Path(__file__).parents[1] / "docs" / "results" / "poker-real" / "choose"
+    result = load_sweep(shipped)
+    cell = next(c.cell for c in result.cells if c.name == result.chosen)
+    real = preset("real")
+    decay = AIRLConfig.for_algo(cell.algo).reward_weight_decay if real.reward_decay is None else (
+        real.reward_decay
+    )
+    assert (real.encoding, real.folds, real.experts, real.algos) == (
+        cell.encoding, cell.folds, str(cell.experts), (cell.algo,)
+    )
+    assert (real.reward_transform, real.payoff_weight, real.opponent, real.agent_hands) == (
+        cell.transform, cell.payoff_weight, cell.opponent, cell.hands
+    )
+    assert decay == cell.reward_decay
