@@ -405,8 +405,7 @@ def run_sweep(
     period = config.choose_period
     if split == Split.TEST:
         chosen = _chosen(out)
-        cells = [next(c for c in cells if c.name == chosen)] if any(
-            c.name == chosen for c in cells) else []  # fmt: skip
+        cells = [c for c in cells if c.name == chosen]
         if not cells:
             raise StudyError(f"{out / Split.CHOOSE / JSON_FILE}: chose {chosen!r}, which is not "
                              f"a cell of the {config.preset!r} sweep")  # fmt: skip
