@@ -16,6 +16,7 @@ from pokerirl.cli.app import (
     seed_list,
     settings_from_options,
 )
+from pokerirl.cli.data import MONTHS_HELP, months
 from pokerirl.errors import UsageError
 
 GYM_SWEEP_MOVED = (
@@ -26,7 +27,7 @@ GYM_SWEEP_MOVED = (
 @app.command()
 @on_error(interrupted=INTERRUPTED)
 def sweep(
-    sources: list[Path] = typer.Argument(..., help="IRC month folders or archives."),
+    sources: list[Path] = typer.Argument(..., callback=months, help=MONTHS_HELP),
     out: Path = typer.Option(..., "--out", "-o", help="The sweep folder."),
     preset_name: str = typer.Option(
         "sample", "--preset", metavar="sample|smoke",
