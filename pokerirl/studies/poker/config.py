@@ -14,9 +14,11 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Sequence
 from dataclasses import dataclass
+from enum import StrEnum
 from typing import Any
 
 from pokerirl.agents.config import AGENT_PRESETS as AGENT_TRAIN_PRESETS
+from pokerirl.agents.config import Opponent as AgentOpponent
 from pokerirl.game.encodings import EncodingName
 from pokerirl.game.match import MAX_HANDS
 from pokerirl.irl.config import MAX_EPOCHS, Algo
@@ -78,8 +80,16 @@ UNRECORDED_DEFAULTS: dict[str, object] = {
     "payoff_weight": 0.0, "reward_decay": None, "experts": "all", "period": (0.0, 1.0),
     "winners_bb_per_100": 0.0, "winners_min_hands": 200,
 }  # fmt: skip
-EXPERTS = ("all", "winners")  # which players' decisions are the expert's
-OPPONENTS = ("random", "self", "pool")  # whom the DQNs train against
+class Experts(StrEnum):
+    """Which players' decisions are the expert's."""
+
+    ALL = "all"
+    WINNERS = "winners"  # won >= winners_bb_per_100 over >= winners_min_hands in the period
+
+
+EXPERTS: tuple[str, ...] = tuple(Experts)
+# Whom the DQNs train against: random, or an opponent that names no agent (self, pool).
+OPPONENTS: tuple[str, ...] = ("random", *AgentOpponent)
 
 
 def irl_overrides(settings: str, algo: str) -> dict[str, object]:

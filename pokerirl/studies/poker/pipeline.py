@@ -37,6 +37,7 @@ from pokerirl.studies.poker.config import (
     BUILT_INS,
     IRL_ALGOS,
     LBR_CHECK_UNTIL,
+    Experts,
     StudyConfig,
     StudyError,
     irl_overrides,
@@ -258,17 +259,27 @@ def ingest_stage(study: Study, sources: Sequence[str | os.PathLike[str]]) -> Ing
 
 
 def study_selection(config: StudyConfig) -> Selection | None:
-    """The ingest's selection of the expert (a period, the winners), or None for all hands
-    and players."""
+    """The study's ingest selection, or None for all hands and players (the records of
+    before)."""
+    if config.experts == Experts.ALL and config.period == (0.0, 1.0):
+        return None
+    return expert_selection(config.period, winners=config.experts == Experts.WINNERS,
+                            min_hands=config.winners_min_hands,
+                            min_bb_per_100=config.winners_bb_per_100)  # fmt: skip
+
+
+def expert_selection(
+    period: tuple[float, float], *, winners: bool, min_hands: int, min_bb_per_100: float
+) -> Selection:
+    """The hands of ``period`` (fractions of each month by time) and, for ``winners``, the
+    players who won at least ``min_bb_per_100`` over at least ``min_hands`` of them: the
+    selection of the expert for a study and for each sweep table."""
     from pokerirl.datasets.players import Period, Selection
 
-    winners = config.experts == "winners"
-    if not winners and config.period == (0.0, 1.0):
-        return None
     return Selection(
-        period=Period(start=config.period[0], end=config.period[1]),
-        min_hands=config.winners_min_hands if winners else None,
-        min_bb_per_100=config.winners_bb_per_100 if winners else None,
+        period=Period(start=period[0], end=period[1]),
+        min_hands=min_hands if winners else None,
+        min_bb_per_100=min_bb_per_100 if winners else None,
     )
 
 

@@ -63,6 +63,7 @@ from pokerirl.store import (
     writing,
 )
 from pokerirl.studies.common import StudyError, markdown_table
+from pokerirl.studies.poker.config import Experts
 
 SWEEP_FORMAT = "pokerirl-poker-sweep/1"
 JSON_FILE, MARKDOWN_FILE, CSV_FILE, FIGURE_FILE = "sweep.json", "sweep.md", "sweep.csv", "sweep.png"
@@ -79,13 +80,6 @@ class Split(StrEnum):
 
     CHOOSE = "choose"
     TEST = "test"
-
-
-class Experts(StrEnum):
-    """Which players' decisions are the expert's."""
-
-    ALL = "all"
-    WINNERS = "winners"  # won >= winners_bb_per_100 over >= winners_min_hands (the period's)
 
 
 class Axis(StrEnum):
@@ -470,16 +464,13 @@ def load_sweep(path: str | os.PathLike[str]) -> SweepResult:
 def _table(sweep: _Sweep, cell: Cell) -> Path:
     """The period's table of ``cell``'s folds and experts: a ``file`` unit, ingested here."""
     from pokerirl.datasets.ingest import ingest_table
-    from pokerirl.datasets.players import Period, Selection
+    from pokerirl.studies.poker.pipeline import expert_selection
 
     config = sweep.config
     target = sweep.root / "tables" / f"{cell.table_key}.parquet"
-    winners = cell.experts == Experts.WINNERS
-    selection = Selection(
-        period=Period(start=sweep.period[0], end=sweep.period[1]),
-        min_hands=config.winners_min_hands if winners else None,
-        min_bb_per_100=config.winners_bb_per_100 if winners else None,
-    )
+    selection = expert_selection(sweep.period, winners=cell.experts == Experts.WINNERS,
+                                 min_hands=config.winners_min_hands,
+                                 min_bb_per_100=config.winners_bb_per_100)  # fmt: skip
     unit: Unit[None] = Unit(
         key=f"table {cell.table_key}",
         target=target,
