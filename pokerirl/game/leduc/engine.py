@@ -102,10 +102,8 @@ class LeducState:
 
         ``K:rc`` in the first round, ``KQ:rc/k`` in the second (suits too under OpenSpiel's
         rules: ``KhQs:rc/k``)."""
-        seen = self.rules.key_card(self.cards[position])
-        if self.round >= 1:
-            seen += self.rules.key_card(self.cards[2])
-        return f"{seen}:{'/'.join(self.histories)}"
+        public = self.cards[2] if self.round >= 1 else None
+        return info_key(self.rules, self.cards[position], public, self.histories)
 
     def observation(self, position: int) -> np.ndarray:
         """RLCard's 36-d ``obs`` of ``position``: its rank (3), the public rank (3), its chips
@@ -117,6 +115,12 @@ class LeducState:
         obs[6 + self.chips[position]] = 1
         obs[21 + self.chips[1 - position]] = 1
         return obs
+
+
+def info_key(rules: LeducRules, card: int, public: int | None, histories: tuple[str, ...]) -> str:
+    """The information-set key of a player holding ``card`` (see :meth:`LeducState.info_key`)."""
+    seen = rules.key_card(card) + ("" if public is None else rules.key_card(public))
+    return f"{seen}:{'/'.join(histories)}"
 
 
 def showdown(cards: tuple[int, int, int]) -> int:
