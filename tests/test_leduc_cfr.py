@@ -27,7 +27,7 @@ def test_the_curve_is_openspiels_cfr_plus_iteration_by_iteration() -> None:
     curve = CFRPlus(OPENSPIEL).run(4)
     assert [p.iteration for p in curve] == [1, 2, 3, 4]
     assert [p.exploitability for p in curve] == pytest.approx(expected, abs=1e-9)
-    assert expected[-1] < 0.6 * expected[0]  # it learns: the curve is no constant
+    assert expected[-1] < 0.7 * expected[0]  # it learns: the curve is no constant
 
 
 def test_a_rerun_writes_the_same_bytes() -> None:
