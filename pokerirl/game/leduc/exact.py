@@ -118,3 +118,55 @@ def expected_value(rules: LeducRules, a: Strategy, b: Strategy) -> Matchup:
 
     start = np.full(len(tree.deals), tree.chance)
     return Matchup(first=walk(tree.root, start, 0), second=walk(tree.root, start, 1))
+
+
+@dataclass(frozen=True, kw_only=True)
+class Agreement:
+    """How often two strategies' most likely actions agree over the information sets:
+    ``uniform`` counts each set once, ``reached`` weighs each by how often the reference
+    (B) reaches it playing itself, chance included. Ties go to the first legal action in
+    the order fold, check, call, raise."""
+
+    uniform: float
+    reached: float
+    information_sets: int
+
+
+def reach_probabilities(rules: LeducRules, strategy: Strategy) -> dict[str, float]:
+    """Each information set's probability of occurring in a hand ``strategy`` plays against
+    itself (chance and both players' actions)."""
+    tree = betting_tree(rules)
+    table = tables(tree, strategy)
+    found: dict[str, float] = {}
+
+    def walk(node: Node, reach: np.ndarray) -> None:
+        if node.actor is None:
+            return
+        assert node.rows is not None
+        totals = np.bincount(node.rows, reach, minlength=len(node.keys))
+        found.update(zip(node.keys, totals.tolist(), strict=True))
+        sigma = table[id(node)][node.rows]
+        for a, child in enumerate(node.children):
+            walk(child, reach * sigma[:, a])
+
+    walk(tree.root, np.full(len(tree.deals), tree.chance))
+    return found
+
+
+def agreement(rules: LeducRules, a: Strategy, b: Strategy) -> Agreement:
+    """The share of information sets where A's and B's argmax actions agree."""
+    tree = betting_tree(rules)
+    first, second = tables(tree, a), tables(tree, b)
+    weight = reach_probabilities(rules, b)
+    agree: list[bool] = []
+    weights: list[float] = []
+    for node in tree.nodes():
+        same = first[id(node)].argmax(axis=1) == second[id(node)].argmax(axis=1)
+        agree.extend(same.tolist())
+        weights.extend(weight[key] for key in node.keys)
+    shares = np.asarray(agree, dtype=np.float64)
+    return Agreement(
+        uniform=float(shares.mean()),
+        reached=float(np.dot(shares, weights) / np.sum(weights)),
+        information_sets=len(agree),
+    )
