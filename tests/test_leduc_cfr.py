@@ -47,4 +47,5 @@ def test_cfr_plus_gets_below_one_milli_chip_per_hand(rules: LeducRules) -> None:
     curve = solver.run(500, every=100)
     assert curve[-1].exploitability * MILLI < 1.0
     assert exploitability(rules, solver.average()) == curve[-1].exploitability
-    assert [p.exploitability for p in curve] == sorted((p.exploitability for p in curve), reverse=True)
+    values = [p.exploitability for p in curve]
+    assert values == sorted(values, reverse=True)

@@ -16,13 +16,14 @@ leduc_app = typer.Typer(
 )
 app.add_typer(leduc_app, name="leduc")
 
+RULES_CHOICES = choices(RuleSet)
 MAX_ITERATIONS = 1_000_000  # a million CFR+ iterations: hours; the curve is flat long before
 
 
 @leduc_app.command()
 def solve(
     rules: RuleSet = typer.Option(
-        RuleSet.RLCARD, "--rules", metavar=choices(RuleSet),
+        RuleSet.RLCARD, "--rules", metavar=RULES_CHOICES,
         help="The rule set: RLCard's leduc-holdem or OpenSpiel's leduc_poker.",
     ),
     iterations: int = typer.Option(
@@ -80,8 +81,8 @@ def exploit(
     if against is not None:
         second = _read(against, rules=rules.name)[1]
         matchup = expected_value(rules, first, second)
-        echo(f"  against {against}: {matchup.mean:+.9f} chips per hand "
-             f"({matchup.first:+.9f} in position 0, {matchup.second:+.9f} in position 1)")  # fmt: skip
+        echo(f"  against {against}: {matchup.mean:+.9f} chips per hand ({matchup.first:+.9f} "
+             f"in position 0, {matchup.second:+.9f} in position 1)")  # fmt: skip
 
 
 @leduc_app.command()

@@ -83,8 +83,9 @@ class LeducState:
             )  # fmt: skip
         first = other if self.rules.second_round is SecondRound.ALTERNATE else 0
         return replace(
-            self, histories=histories if self.round else (*histories, ""), chips=(chips[0], chips[1]), round=self.round + 1,
-            to_act=first, raises=0, settled=0, round_chips=(0, 0),
+            self, histories=histories if self.round else (*histories, ""),
+            chips=(chips[0], chips[1]), round=self.round + 1, to_act=first, raises=0, settled=0,
+            round_chips=(0, 0),
         )  # fmt: skip
 
     def payoffs(self) -> tuple[int, int]:
