@@ -130,9 +130,15 @@ def showdown(cards: tuple[int, int, int]) -> int:
     >>> showdown((0, 5, 1)), showdown((4, 2, 0)), showdown((0, 1, 4))
     (1, 1, 0)
     """
-    public = cards[2] // 2
-    strength = [(c // 2 == public, c // 2) for c in cards[:2]]
-    return (strength[0] > strength[1]) - (strength[0] < strength[1])
+    return int(showdowns(np.array([cards]))[0])
+
+
+def showdowns(cards: np.ndarray) -> np.ndarray:
+    """:func:`showdown` of each row of ``hands x 3`` cards: a pair with the public card beats
+    any high card, else the higher rank wins."""
+    ranks = cards // 2
+    strength = (ranks[:, :2] == ranks[:, 2:]) * 100 + ranks[:, :2]  # 100: above any rank
+    return np.sign(strength[:, 0] - strength[:, 1])
 
 
 def deal(rules: LeducRules, *, cards: tuple[int, int, int]) -> LeducState:

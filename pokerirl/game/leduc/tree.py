@@ -20,10 +20,11 @@ from __future__ import annotations
 import functools
 import itertools
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
-from pokerirl.game.leduc.engine import LeducState, deal, info_key, showdown
+from pokerirl.game.leduc.engine import LeducState, deal, info_key, showdowns
 from pokerirl.game.leduc.rules import Action, LeducRules
 
 
@@ -33,6 +34,9 @@ class Node:
     a leaf has the payoffs of position 0 for every deal."""
 
     histories: tuple[str, ...]
+    chips: tuple[int, int]  # each position's chips in the pot
+    round: int  # 2 after the second round
+    folded: int | None
     actor: int | None  # None at a leaf
     actions: tuple[Action, ...] = ()
     children: tuple[Node, ...] = ()
@@ -85,7 +89,7 @@ class BettingTree:
 def betting_tree(rules: LeducRules) -> BettingTree:
     """The tree of ``rules`` (built once per rule set)."""
     deals = np.array(list(itertools.permutations(range(rules.cards), 3)), dtype=np.int64)
-    signs = np.array([showdown((a, b, c)) for a, b, c in deals.tolist()], dtype=np.float64)
+    signs = showdowns(deals).astype(np.float64)
     start = deal(rules, cards=(0, 1, 2))  # the betting is the same for every deal
     return BettingTree(rules=rules, deals=deals, root=_node(start, deals, signs))
 
@@ -97,7 +101,7 @@ def _node(state: LeducState, deals: np.ndarray, signs: np.ndarray) -> Node:
             payoff = np.full(len(deals), -loss if state.folded == 0 else loss, dtype=np.float64)
         else:
             payoff = signs * state.chips[0]  # equal chips at a showdown
-        return Node(histories=state.histories, actor=None, payoff=payoff)
+        return Node(**_public(state), actor=None, payoff=payoff)
     actor = state.to_act
     seen = [
         info_key(state.rules, own, public if state.round else None, state.histories)
@@ -107,10 +111,17 @@ def _node(state: LeducState, deals: np.ndarray, signs: np.ndarray) -> Node:
     row_of = {key: row for row, key in enumerate(keys)}
     actions = state.legal_actions()
     return Node(
-        histories=state.histories,
+        **_public(state),
         actor=actor,
         actions=actions,
         children=tuple(_node(state.step(a), deals, signs) for a in actions),
         rows=np.array([row_of[key] for key in seen], dtype=np.int64),
         keys=keys,
     )
+
+
+def _public(state: LeducState) -> dict[str, Any]:
+    return {
+        "histories": state.histories, "chips": state.chips, "round": state.round,
+        "folded": state.folded,
+    }  # fmt: skip
