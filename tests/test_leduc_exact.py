@@ -22,6 +22,7 @@ from pokerirl.game.leduc.exact import best_response, expected_value, exploitabil
 from pokerirl.game.leduc.rules import Action
 from pokerirl.game.leduc.strategy import (
     Strategy,
+    profile,
     read_strategy,
     strategy_from_callable,
     to_json,
@@ -148,6 +149,14 @@ def test_the_expected_value_is_what_sampled_hands_win() -> None:
     error = np.std(won) / np.sqrt(len(won))
     assert abs(np.mean(won) - exact.first) < 4 * error
     assert exact.mean == pytest.approx((exact.first + exact.second) / 2)
+
+
+def test_a_pairs_exploitability_is_each_best_response_to_the_other() -> None:
+    a, b = random_strategy(RLCARD, seed=8), random_strategy(RLCARD, seed=9)
+    pair = profile(RLCARD, a, b)
+    expected = (best_response(RLCARD, b, 0).value + best_response(RLCARD, a, 1).value) / 2
+    assert exploitability(RLCARD, pair) == pytest.approx(expected, abs=1e-12)
+    assert exploitability(RLCARD, pair) != pytest.approx(exploitability(RLCARD, a), abs=1e-3)
 
 
 def test_a_strategy_must_cover_the_tree_with_distributions() -> None:

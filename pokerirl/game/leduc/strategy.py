@@ -52,6 +52,17 @@ def strategy_from_callable(
     }
 
 
+def profile(rules: LeducRules, first: Strategy, second: Strategy) -> dict[str, dict[str, float]]:
+    """The strategy that plays ``first`` in position 0 and ``second`` in position 1 (the keys
+    of the two positions never meet: the betting says whose turn it is), for the
+    exploitability of a strategy pair."""
+    found: dict[str, dict[str, float]] = {}
+    for node in betting_tree(rules).nodes():
+        source = first if node.actor == 0 else second
+        found.update({key: dict(source[key]) for key in node.keys if key in source})
+    return found
+
+
 def tables(tree: BettingTree, strategy: Strategy, *, positions: tuple[int, ...] = (0, 1)
            ) -> dict[int, np.ndarray]:  # fmt: skip
     """``id(node) -> rows x actions`` probabilities at each decision node of ``positions``
