@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 from pokerirl.errors import ConfigError
+from pokerirl.game.engine import IllegalActionError
 from pokerirl.game.leduc import OPENSPIEL, RLCARD, LeducRules, deal
 from pokerirl.game.leduc.batch import ACTIONS, LeducBatch
 
@@ -42,5 +43,5 @@ def test_the_batch_refuses_bad_cards_and_illegal_actions() -> None:
     with pytest.raises(ConfigError, match="different cards"):
         LeducBatch(RLCARD, cards=np.array([[0, 0, 1]]))
     batch = LeducBatch(OPENSPIEL, cards=np.array([[0, 1, 2]]))
-    with pytest.raises(ConfigError, match="illegal"):
+    with pytest.raises(IllegalActionError, match="illegal"):
         batch.step(np.array([ACTIONS.index(ACTIONS[0])]))  # no fold when nothing is faced

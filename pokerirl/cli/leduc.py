@@ -4,11 +4,15 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import typer
 
 from pokerirl.cli.app import app, choices, echo
-from pokerirl.game.leduc.rules import RuleSet
+from pokerirl.game.leduc.rules import LeducRules, RuleSet
+
+if TYPE_CHECKING:
+    from pokerirl.game.leduc.strategy import Strategy
 
 leduc_app = typer.Typer(
     help="Leduc hold'em: CFR+, exact best response and exploitability (docs/leduc.md).",
@@ -101,7 +105,7 @@ def agreement(
          "weighted by B's reach")  # fmt: skip
 
 
-def _read(path: Path, *, rules: str | None = None) -> tuple:  # type: ignore[type-arg]
+def _read(path: Path, *, rules: str | None = None) -> tuple[LeducRules, Strategy]:
     from pokerirl.errors import InputError
     from pokerirl.game.leduc.strategy import read_strategy
 

@@ -21,6 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from pokerirl.errors import ConfigError
+from pokerirl.game.engine import IllegalActionError
 from pokerirl.game.leduc.engine import OBSERVATION_SIZE, showdowns
 from pokerirl.game.leduc.rules import Action, LeducRules
 from pokerirl.game.leduc.tree import Node, betting_tree
@@ -102,7 +103,7 @@ class LeducBatch:
         live = ~self.over
         nxt = self.arrays.child[self.node[live], np.asarray(actions)[live]]
         if np.any(nxt < 0):
-            raise ConfigError("an illegal action")
+            raise IllegalActionError("an illegal action in a hand of the batch")
         self.node[live] = nxt
 
     def payoffs(self) -> np.ndarray:

@@ -22,6 +22,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from pokerirl.errors import ConfigError
+from pokerirl.game.engine import IllegalActionError  # the hold'em engine's: one kind of error
 from pokerirl.game.leduc.rules import Action, LeducRules, SecondRound
 
 OBSERVATION_SIZE = 36  # RLCard's leduc-holdem: hand 3, public 3, own chips 15, other's 15
@@ -61,9 +62,10 @@ class LeducState:
         return tuple(legal)
 
     def step(self, action: Action) -> LeducState:
-        """The state after the player to act plays ``action`` (a ``ConfigError`` if illegal)."""
+        """The state after the player to act plays ``action`` (an ``IllegalActionError`` if it
+        is not legal)."""
         if action not in self.legal_actions():
-            raise ConfigError(f"{action} is not legal here: {self.legal_actions()}")
+            raise IllegalActionError(f"{action} is not legal here: {self.legal_actions()}")
         me, other = self.to_act, 1 - self.to_act
         histories = (*self.histories[:-1], self.histories[-1] + action.letter)
         if action is Action.FOLD:
