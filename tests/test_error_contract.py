@@ -67,6 +67,9 @@ USAGE: dict[str, str] = {  # a command line that cannot be run: exit 2
     "gym reward-map": "gym reward-map MountainCar-v0 --out {O}/x.png",  # no folders
     "gym study": "gym study MountainCar-v0 --out {O} --rl-backend nope",
     "gym sweep": "gym sweep MountainCar-v0 --param alpha=0 --out {O} --seed 4294967295 --runs 2",
+    "leduc solve": "leduc solve --rules nope --out {O}",
+    "leduc exploit": "leduc exploit {G} --bogus",
+    "leduc agreement": "leduc agreement {G}",  # no B.json
 }
 MISSING: dict[str, str | None] = {  # an input that is not there: exit 1, naming it
     "version": None,  # reads nothing
@@ -93,6 +96,9 @@ MISSING: dict[str, str | None] = {  # an input that is not there: exit 1, naming
     "gym reward-map": "gym reward-map MountainCar-v0 --runs {F} --out {O}/x.png",
     "gym study": None,
     "gym sweep": None,
+    "leduc solve": None,  # reads nothing
+    "leduc exploit": "leduc exploit {F}",
+    "leduc agreement": "leduc agreement {F} {G}",
 }
 REFUSED: dict[str, str | None] = {  # a setting or a file the library refuses: exit 1
     "version": None,
@@ -119,6 +125,9 @@ REFUSED: dict[str, str | None] = {  # a setting or a file the library refuses: e
     "gym reward-map": "gym reward-map MountainCar-v0 --runs {E} --out {O}/x.png",
     "gym study": "gym study Nope-v0 --out {O}",
     "gym sweep": "gym sweep MountainCar-v0 --param bogus=1 --out {O}",
+    "leduc solve": "leduc solve -n 1 --out {A}",  # a file, not a folder
+    "leduc exploit": "leduc exploit {G}",
+    "leduc agreement": "leduc agreement {R}/report.json {R}/report.json",
 }
 
 

@@ -10,6 +10,7 @@ from pokerirl.cli import (
     data,  # noqa: F401  (pokerirl data: the named IRC data)
     exploit,  # noqa: F401  (pokerirl exploit: local best response)
     gym,  # noqa: F401
+    leduc,  # noqa: F401  (pokerirl leduc: CFR+, exact best response)
     poker,  # noqa: F401
     studies,  # noqa: F401
     sweep,  # noqa: F401  (pokerirl sweep: the poker sweep)

@@ -1,0 +1,115 @@
+"""``pokerirl leduc``: Leduc hold'em's exact tools (docs/leduc.md): ``solve`` (CFR+),
+``exploit`` (exact best response, exploitability, expected value) and ``agreement``."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import typer
+
+from pokerirl.cli.app import app, choices, echo
+from pokerirl.game.leduc.rules import LeducRules, RuleSet
+
+if TYPE_CHECKING:
+    from pokerirl.game.leduc.strategy import Strategy
+
+leduc_app = typer.Typer(
+    help="Leduc hold'em: CFR+, exact best response and exploitability (docs/leduc.md).",
+    no_args_is_help=True,
+)
+app.add_typer(leduc_app, name="leduc")
+
+RULES_CHOICES = choices(RuleSet)
+MAX_ITERATIONS = 1_000_000  # a million CFR+ iterations: hours; the curve is flat long before
+
+
+@leduc_app.command()
+def solve(
+    rules: RuleSet = typer.Option(
+        RuleSet.RLCARD, "--rules", metavar=RULES_CHOICES,
+        help="The rule set: RLCard's leduc-holdem or OpenSpiel's leduc_poker.",
+    ),
+    iterations: int = typer.Option(
+        1000, "--iterations", "-n", min=1, max=MAX_ITERATIONS, help="CFR+ iterations."
+    ),
+    every: int = typer.Option(
+        10, "--every", min=1, max=MAX_ITERATIONS,
+        help="Measure the exploitability every this many iterations (and after the last).",
+    ),
+    out: Path = typer.Option(..., "--out", "-o", help="Folder to write (new or empty)."),
+    overwrite: bool = typer.Option(False, "--overwrite", help="Replace what OUT holds."),
+    quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bar."),
+) -> None:
+    """Solve Leduc hold'em with CFR+ (deterministic: the same bytes on a rerun).
+
+    Writes OUT/strategy.json (the average strategy), curve.csv and curve.png (its exact
+    exploitability, milli-chips per hand, every --every iterations) and summary.json.
+    """
+    from tqdm import tqdm
+
+    from pokerirl.game.leduc.rules import get_rules
+    from pokerirl.game.leduc.solve import check_out
+    from pokerirl.game.leduc.solve import solve as run
+
+    check_out(out, overwrite=overwrite)  # before the progress bar
+    with tqdm(total=iterations, disable=quiet, unit="it", desc="CFR+") as bar:
+        solved = run(
+            get_rules(rules), iterations=iterations, out=out, every=every, overwrite=overwrite,
+            progress=lambda point: bar.update(point.iteration - bar.n),
+        )  # fmt: skip
+    echo(solved.line())
+    echo(f"wrote {out}/strategy.json, curve.csv, curve.png, summary.json")
+
+
+@leduc_app.command()
+def exploit(
+    strategy: Path = typer.Argument(..., metavar="STRATEGY.json", help="A strategy file."),
+    against: Path | None = typer.Option(
+        None, "--against", metavar="STRATEGY2.json",
+        help="Also the exact expected value of STRATEGY against this one.",
+    ),
+) -> None:
+    """Exact best response to STRATEGY and its exploitability (chips and milli-chips per
+    hand); with --against, the exact expected value of one against the other."""
+    from pokerirl.game.leduc.exact import MILLI, best_response_values, expected_value
+
+    rules, first = _read(strategy)
+    values = best_response_values(rules, first)
+    exploitability = sum(values) / 2
+    echo(f"{strategy} ({rules.name} rules)")
+    echo(f"  best response: {values[0]:+.6f} chips per hand in position 0, "
+         f"{values[1]:+.6f} in position 1")  # fmt: skip
+    echo(f"  exploitability: {exploitability:.9f} chips per hand "
+         f"({exploitability * MILLI:.4f} milli-chips)")  # fmt: skip
+    if against is not None:
+        second = _read(against, rules=rules.name)[1]
+        matchup = expected_value(rules, first, second)
+        echo(f"  against {against}: {matchup.mean:+.9f} chips per hand ({matchup.first:+.9f} "
+             f"in position 0, {matchup.second:+.9f} in position 1)")  # fmt: skip
+
+
+@leduc_app.command()
+def agreement(
+    a: Path = typer.Argument(..., metavar="A.json", help="A strategy file."),
+    b: Path = typer.Argument(..., metavar="B.json", help="The reference (a CFR expert)."),
+) -> None:
+    """The share of information sets where A's and B's most likely actions agree: each set
+    counted once, and weighted by how often B reaches it playing itself."""
+    from pokerirl.game.leduc.exact import agreement as agree
+
+    rules, first = _read(a)
+    found = agree(rules, first, _read(b, rules=rules.name)[1])
+    echo(f"agreement of {a} with {b} ({rules.name} rules, {found.information_sets} "
+         f"information sets): {found.uniform:.4f} uniform, {found.reached:.4f} "
+         "weighted by B's reach")  # fmt: skip
+
+
+def _read(path: Path, *, rules: str | None = None) -> tuple[LeducRules, Strategy]:
+    from pokerirl.errors import InputError
+    from pokerirl.game.leduc.strategy import read_strategy
+
+    found = read_strategy(path)
+    if rules is not None and found[0].name != rules:
+        raise InputError(f"{path}: a strategy for the {found[0].name} rules, not {rules}")
+    return found
