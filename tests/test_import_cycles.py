@@ -26,8 +26,10 @@ from pathlib import Path
 import pytest
 from test_layers import PACKAGE, _is_import_module, _literal_prefix, module_name
 
-# The modules of each cycle of today's tree -> why it is left. Each is in a package other
-# helpers were changing when this test came (issue 44): fix it there, then remove it here.
+# The modules of each cycle of today's tree -> why it is left. None is in `execution` or the
+# bottom layer; these were left to the packages' owners when the test came (issue 44, while
+# agents/, gym/, irl/ and poker/ were being changed beside it): break one there, then remove
+# it here.
 KNOWN_CYCLES_WHY: dict[tuple[str, ...], str] = {
     ("pokerirl.agents.checkpoint", "pokerirl.agents.registry", "pokerirl.agents.rlcard_import"):
         "registry resolves a spec by lazily importing the loaders, which import its file names",
@@ -80,7 +82,7 @@ def import_graph(package: Path = PACKAGE) -> dict[str, set[str]]:
     graph: dict[str, set[str]] = {}
     for module, path in modules.items():
         targets = {_resolve(name, modules) for name in imported_names(module, path)}
-        graph[module] = {target for target in targets if target not in (None, module)}  # type: ignore[misc]
+        graph[module] = {target for target in targets if target is not None and target != module}
     return graph
 
 
@@ -176,7 +178,8 @@ def _layout(tmp_path: Path, files: dict[str, str]) -> Path:
 @pytest.mark.parametrize(
     ("files", "expected"),
     [
-        ({"a.py": "import pokerirl.b", "b.py": "from pokerirl import a"}, [{"pokerirl.a", "pokerirl.b"}]),
+        ({"a.py": "import pokerirl.b", "b.py": "from pokerirl import a"},
+         [{"pokerirl.a", "pokerirl.b"}]),
         ({"a.py": "def f():\n    from pokerirl.b import x", "b.py": "from pokerirl.a import y"},
          [{"pokerirl.a", "pokerirl.b"}]),
         ({"a.py": "from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n    from pokerirl import b",
@@ -185,8 +188,8 @@ def _layout(tmp_path: Path, files: dict[str, str]) -> Path:
         ({"p/__init__.py": "from pokerirl.p.x import f", "p/x.py": "from .y import g",
           "p/y.py": "from . import x"}, [{"pokerirl.p.x", "pokerirl.p.y"}]),
         # a package re-exporting its modules, which import each other one way: no loop
-        ({"p/__init__.py": "from .x import f\nfrom .y import g", "p/x.py": "from pokerirl.p.y import g",
-          "p/y.py": "import os"}, []),
+        ({"p/__init__.py": "from .x import f\nfrom .y import g",
+          "p/x.py": "from pokerirl.p.y import g", "p/y.py": "import os"}, []),
         # a module of a package importing the package itself: a loop through its __init__
         ({"p/__init__.py": "from .x import f", "p/x.py": "from pokerirl.p import g"},
          [{"pokerirl.p", "pokerirl.p.x"}]),
@@ -202,7 +205,8 @@ def test_the_checker_sees_each_kind_of_loop(
 
 def test_a_message_names_a_loop(tmp_path: Path) -> None:
     package = _layout(tmp_path, {"__init__.py": "", "a.py": "import pokerirl.b",
-                                 "b.py": "import pokerirl.c", "c.py": "import pokerirl.a\nimport pokerirl.b"})  # fmt: skip
+                                 "b.py": "import pokerirl.c",
+                                 "c.py": "import pokerirl.a\nimport pokerirl.b"})  # fmt: skip
     graph = import_graph(package)
     assert describe(strongly_connected(graph), graph) == (
         "3 modules, e.g. pokerirl.a -> pokerirl.b -> pokerirl.c -> pokerirl.a"
