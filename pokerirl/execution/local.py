@@ -170,22 +170,31 @@ def _map_local(
                         remaining -= 1
                         finished(index, value)
                     elif not slot.process.is_alive() or slot.process.sentinel in ready:
-                        slot.process.join()
-                        sweep_leftovers(temp)  # the dead worker's scratch folder
-                        unit, slot.unit = slot.unit, None
-                        deaths[unit] += 1
-                        bar.fail(unit)
-                        if deaths[unit] > backend.retries:
-                            raise ExecutionError(
-                                f"{names[unit]}: its worker died {deaths[unit]} times "
-                                f"(last exit code {slot.process.exitcode}); giving up"
-                            )
-                        queue.appendleft(unit)
-                        slot.connection.close()
+                        queue.appendleft(_bury(slot, deaths, backend.retries, bar, names, temp))
                         slots[i] = start()
     finally:
         _stop(slots)
         sweep_leftovers(temp)  # workers killed by _stop
+
+
+def _bury(
+    slot: _Slot, deaths: list[int], retries: int, bar: _Bar, names: list[str], temp: str
+) -> int:
+    """A worker that died: its scratch folder removed, its unit's death counted; the unit, to
+    run again on a fresh worker, unless it has died more than ``retries`` times."""
+    slot.process.join()
+    sweep_leftovers(temp)  # the dead worker's scratch folder
+    unit, slot.unit = slot.unit, None
+    assert unit is not None  # only busy slots are watched
+    deaths[unit] += 1
+    bar.fail(unit)
+    if deaths[unit] > retries:
+        raise ExecutionError(
+            f"{names[unit]}: its worker died {deaths[unit]} times "
+            f"(last exit code {slot.process.exitcode}); giving up"
+        )
+    slot.connection.close()
+    return unit
 
 
 def _context(fn: Callable[..., Any]) -> Any:
