@@ -39,6 +39,14 @@ save each result as it arrives (``on_result``), so a rerun resumes from them.
 **Unit records** are the store's (:mod:`pokerirl.store`: ``Unit``, ``run_units``), which runs
 its units with :func:`map_units`.
 
+**Modules**, each saying what it owns; this one re-exports their public names: ``backend``
+(:class:`Backend`, :func:`choose_backend`, :class:`ExecutionError`), ``mapping``
+(:func:`map_units`), ``threads`` (thread pinning), ``progress`` (a unit's progress and the
+bar), ``local`` (the fork server's workers), ``ray_connect`` (the session, the probe, the
+token), ``ray_private`` (the private instance's reaper, :func:`ray_head`), ``ray_tasks``
+(units as Ray tasks), ``scratch`` (scratch folders), ``processes`` (``/proc``), ``files``
+(inputs and outputs as bytes). They import each other, never this package.
+
 >>> map_units(pow, [(2, 3), (3, 2)], backend=Backend())
 [8, 9]
 """
