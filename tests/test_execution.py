@@ -200,3 +200,18 @@ def test_a_unit_of_phases_never_moves_the_bar_back(capsys: pytest.CaptureFixture
     map_units(two_phases, [(0,)], backend=Backend(), progress=True, desc="phases")
     shown = [float(n) for n in re.findall(r"phases: .*?\| (\d+\.\d\d)/1 ", capsys.readouterr().err)]
     assert shown == sorted(shown) and shown[-1] == 1.0 and any(0.3 < n < 1 for n in shown)
+
+
+def test_the_processes_started_for_ray_import_this_pokerirl(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """The private instance's reaper and ray_head's processes get the folder above this
+    ``pokerirl`` first on PYTHONPATH, wherever the module that starts them sits in it."""
+    import pokerirl
+    from pokerirl.execution.ray_private import _pythonpath
+
+    monkeypatch.delenv("PYTHONPATH", raising=False)
+    here = Path(pokerirl.__file__).resolve()
+    assert Path(_pythonpath()) / "pokerirl" / "__init__.py" == here
+    monkeypatch.setenv("PYTHONPATH", "/elsewhere")
+    assert _pythonpath().split(os.pathsep) == [str(here.parents[1]), "/elsewhere"]

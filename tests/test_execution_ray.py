@@ -24,7 +24,8 @@ from testkit import Cli
 from typer.testing import CliRunner
 
 from pokerirl.cli import app
-from pokerirl.execution import _descendants, ray_head
+from pokerirl.execution import ray_head
+from pokerirl.execution.processes import _descendants
 
 # slow; one worker (once pytest-xdist honours groups again, its issue 1386): two Ray clusters
 # side by side would crowd two cores (each owns its ports and folders: correct, slower)
@@ -161,7 +162,8 @@ def test_gym_study_on_ray_equals_local_processes(
 def test_a_loopback_address_is_used_exactly_as_given(cluster: str) -> None:
     # Ray would otherwise swap 127.0.0.1 for this machine's network address, where a head
     # started on loopback need not answer: it failed 2 times of 3 on another machine.
-    from pokerirl.execution import Backend, _ray_session, map_units
+    from pokerirl.execution import Backend, map_units
+    from pokerirl.execution.ray_connect import _ray_session
 
     backend = Backend(kind="ray", address=cluster)
     for _ in range(3):
@@ -187,7 +189,7 @@ def test_a_port_where_no_ray_head_answers_is_one_line_within_seconds(
     import socket
     import threading
 
-    from pokerirl import execution
+    from pokerirl.execution import ray_connect
 
     class Quiet(http.server.BaseHTTPRequestHandler):
         def log_message(self, *_: object) -> None:  # the command's stderr is under test
@@ -209,7 +211,7 @@ def test_a_port_where_no_ray_head_answers_is_one_line_within_seconds(
         "head (the head's --port, not its dashboard)\n"
     )
 
-    monkeypatch.setattr(execution, "PROBE_SECONDS", 1.0)
+    monkeypatch.setattr(ray_connect, "PROBE_SECONDS", 1.0)
     with socket.create_server(("127.0.0.1", 0)) as silent:  # accepts, never answers
         address = f"127.0.0.1:{silent.getsockname()[1]}"
         code, stderr, seconds = _refused(address)

@@ -247,13 +247,13 @@ def test_the_bar_moves_after_the_last_epoch_while_runs_are_saved(
 ) -> None:
     """Saving, figures and EPIC come after training: the unit's progress covers them run by
     run (issue 47: the demo's bar sat at 100% for 39 s at load 13 before the RL stage)."""
-    from pokerirl import execution
+    from pokerirl.execution import progress
     from pokerirl.gym.irl import TRAINED_SHARE
 
     data = tmp_path / "expert.parquet"
     shipped_data("MountainCar-v0", data, 300)
     fractions: list[float] = []
-    monkeypatch.setattr(execution, "_report", fractions.append)  # as inside a unit
+    monkeypatch.setattr(progress, "_report", fractions.append)  # as inside a unit
     settings = replace(TASKS["MountainCar-v0"].irl, epochs=1, eval_episodes=1)
     train_gym_irl("MountainCar-v0", data, algo="airl", runs=2, settings=settings,
                   out=tmp_path / "irl", progress=False)  # fmt: skip

@@ -109,13 +109,13 @@ def test_the_bar_moves_after_the_last_epoch_while_the_card_is_drawn(
     """A run unit's progress ends at TRAINED_SHARE with training and saving; the reward card
     (issue 47: the demo's bar sat at 100% for 26 s at load 12 while cards were drawn) brings
     it to 1."""
-    from pokerirl import execution
+    from pokerirl.execution import progress
     from pokerirl.irl import AIRLConfig
     from pokerirl.poker.reward_card import CARD_FILE
     from pokerirl.poker.train import TRAINED_SHARE, train_table_into
 
     fractions: list[float] = []
-    monkeypatch.setattr(execution, "_report", fractions.append)  # as inside a unit
+    monkeypatch.setattr(progress, "_report", fractions.append)  # as inside a unit
     train_table_into(read_table(table_path), tmp_path / "run", algo="airl",
                      config=AIRLConfig(epochs=2),
                      table=table_path)  # fmt: skip
