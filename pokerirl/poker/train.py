@@ -189,7 +189,7 @@ def train_unit(
     algo: str,
     settings: Mapping[str, Any],
     device: str,
-    encoding: str = TABLE_ENCODING,
+    encoding: str,
 ) -> UnitOutput[None]:
     """One run of a fan-out: a top-level, picklable function of plain arguments.
 
