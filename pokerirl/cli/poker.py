@@ -506,13 +506,14 @@ def _echo_run(
 ) -> None:
     """One IRL run's last epoch, its baselines and its reward card, as ``pokerirl train``
     prints them."""
+    from pokerirl.irl.metrics import Metric
     from pokerirl.poker.reward_card import read_card
 
     last = metrics[-1]
     echo(
         f"{name}: {len(metrics)} epochs on {rows[0]} rows; validation "
-        f"alignment {last['val_alignment']:.3f}, reward alignment "
-        f"{last['val_reward_alignment']:.3f}; baselines "
+        f"alignment {Metric.VAL_ALIGNMENT.of(last):.3f}, reward alignment "
+        f"{Metric.VAL_REWARD_ALIGNMENT.of(last):.3f}; baselines "
         + ", ".join(f"{k} {v:.3f}" for k, v in baselines.items())
         + f" on {rows[1]} rows"
     )

@@ -37,29 +37,25 @@ from torch import Tensor, nn
 
 from pokerirl.atomic import make_shareable, write_text
 from pokerirl.errors import ConfigError, InputError, Remedy
-from pokerirl.execution import progress_share, unit_progress
 from pokerirl.gym.episodes import play_episodes, policy_actions, random_return
 from pokerirl.gym.experts import make_env, shipped_experts
 from pokerirl.gym.presets import IRLSettings
 from pokerirl.gym.quality import has_true_reward, write_reward_quality
 from pokerirl.gym.tasks import task
-from pokerirl.irl.airl import default_nets, train_many
 from pokerirl.irl.config import AIRLConfig, Algo, NoiseSchedule
-from pokerirl.irl.nets import fold_obs_standardization
-from pokerirl.irl.plots import new_figure, plot_bands, plot_curves, save_figure
-from pokerirl.irl.records import EpochMetrics, EpochRecord
+from pokerirl.irl.metrics import Metric
+from pokerirl.irl.plots import new_figure, plot_bands, save_figure
+from pokerirl.irl.records import EpochRecord
 from pokerirl.irl.run import (
-    BASELINE_SHARE,
     SUMMARY_FILE,
+    ObsMap,
     RunError,
-    RunResult,
+    RunHooks,
     RunsSummary,
-    begin_run,
-    data_record,
-    run_baselines,
-    save_run,
     summarize,
+    train_runs_into,
 )
+from pokerirl.irl.run import TRAINED_SHARE as TRAINED_SHARE  # importable here as before
 from pokerirl.irl.transitions import Transitions
 from pokerirl.jsonio import read_json
 from pokerirl.meanstd import MeanStd
@@ -68,10 +64,6 @@ from pokerirl.store import staged_files, tidy
 
 RETURNS_FILE = "returns_bands.png"
 STAGE_KEY = "irl"  # the staged write's hidden folders in OUT: .irl.new-*, .irl.swap-*
-ALIGNMENT_BASELINES = ("majority", "legal_majority", "bc")  # shares of states, not returns
-# Of a unit's progress, where training ends: saving each run, its figures and its reward
-# quality (EPIC: rollouts) take the rest, so the bar moves after the last epoch too.
-TRAINED_SHARE = 0.9
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -182,18 +174,51 @@ def obs_standardization(data: Transitions, *, enabled: bool = True) -> tuple[Ten
 
 def standardized(data: Transitions, shift: Tensor, scale: Tensor) -> Transitions:
     """``data`` with obs and next_obs mapped to ``(x - shift) / scale``."""
-    next_obs = None if data.next_obs is None else (data.next_obs - shift) / scale
-    return replace(data, obs=(data.obs - shift) / scale, next_obs=next_obs)
+    return ObsMap(shift=shift, scale=scale).rows(data)
+
+
+def standardization(data: Transitions, *, enabled: bool) -> ObsMap:
+    """The runs' :class:`~pokerirl.irl.run.ObsMap` (a :class:`~pokerirl.irl.run.RunHooks`
+    ``obs_map``): :func:`obs_standardization` of the training rows, recorded in each run's
+    ``config.json`` when ``enabled`` (None when not)."""
+    shift, scale = obs_standardization(data, enabled=enabled)
+    record = {"shift": shift.tolist(), "scale": scale.tolist()} if enabled else None
+    return ObsMap(shift=shift, scale=scale, record=record)
 
 
 # --------------------------------------------------------------------------- evaluation
 
 
-def _standardized_actions(
-    policy: nn.Module, shift: np.ndarray, scale: np.ndarray, discrete: bool, obs: np.ndarray
-) -> np.ndarray:
-    """:func:`policy_actions` of a policy trained on standardized observations."""
-    return policy_actions(policy, (obs - shift) / scale, discrete=discrete)
+@dataclass(frozen=True, kw_only=True)
+class EnvReturns:
+    """The runs' :class:`~pokerirl.irl.records.EpochCallback`: each policy's return in the
+    environment after each epoch (``eval_return``, ``eval_return_std``), its observations
+    mapped as the policy was trained (``obs_map``; None: as they come)."""
+
+    obs_map: ObsMap | None
+    env_id: str
+    discrete: bool
+    episodes: int
+
+    def __call__(self, record: EpochRecord) -> list[Mapping[str, float]]:
+        # The nets' parameters were written back: evaluate each policy in the env.
+        extras: list[Mapping[str, float]] = []
+        for policy in record.policies:
+            was_training = policy.training
+            policy.eval()
+            (evaluation,) = play_episodes(
+                self.env_id, functools.partial(self.actions, policy), episodes=self.episodes
+            )
+            policy.train(was_training)
+            extras.append(
+                {Metric.EVAL_RETURN: evaluation.mean, Metric.EVAL_RETURN_STD: evaluation.std}
+            )
+        return extras
+
+    def actions(self, policy: nn.Module, obs: np.ndarray) -> np.ndarray:
+        """:func:`policy_actions` of a policy trained on mapped observations."""
+        mapped = obs if self.obs_map is None else self.obs_map.obs(obs)
+        return policy_actions(policy, mapped, discrete=self.discrete)
 
 
 def expert_return(env_id: str, data_path: str | os.PathLike[str]) -> float:
@@ -261,118 +286,54 @@ def train_gym_irl(
         raise RunError(f"{out} already holds {taken[0]}", remedy=Remedy.REPLACE)
     config = irl_config(algo, settings, seed=seed)
     data = load_env_transitions(env_id, data_path)
-    discrete = data.discrete
-    train_data, val_data, val_groups = data.split(val_fraction=config.val_fraction, seed=seed)
-    shift, scale = obs_standardization(train_data, enabled=settings.standardize_obs)
-    train_data, val_data = (
-        standardized(train_data, shift, scale),
-        standardized(val_data, shift, scale),
+    hooks = RunHooks(
+        obs_map=functools.partial(standardization, enabled=settings.standardize_obs),
+        baselines=lambda: {
+            "random": random_return(env_id, episodes=settings.eval_episodes),
+            "expert": expert_return(env_id, data_path),
+        },
+        callback=lambda obs_map: EnvReturns(
+            obs_map=obs_map, env_id=env_id, discrete=data.discrete,
+            episodes=settings.eval_episodes,
+        ),
+        # The learned reward against the true one (EPIC, Pearson): reward_quality.json, for a
+        # task whose true reward is known (the paper's).
+        finish=functools.partial(write_reward_quality, env_id=env_id, data_path=data_path)
+        if has_true_reward(env_id)
+        else None,
     )
-
-    with progress_share(0.0, BASELINE_SHARE):  # the baseline's epochs, then the runs'
-        found = run_baselines(train_data, val_data, config=config, device=device,
-                              progress=progress)  # fmt: skip
-    found["random"] = random_return(env_id, episodes=settings.eval_episodes)
-    found["expert"] = expert_return(env_id, data_path)
-
-    shift_np, scale_np = shift.numpy(), scale.numpy()
-    seeds = [seed + k for k in range(runs)]
-    nets = [default_nets(train_data, config, s) for s in seeds]
-    policies = [p for _, p in nets]
-
     # Staged by the store: a kill leaves the earlier outputs or the new ones, never a mix, and
     # the next run removes what a dead one left (also an older version's .irl.XXXXXXXX.tmp).
     with staged_files(out, key=STAGE_KEY) as stage:
         make_shareable(stage)
-        folders = [stage / f"run-{k}" for k in range(runs)]
-        logs = [begin_run(folder, val_groups=val_groups, baselines=found) for folder in folders]
-
-        def env_returns(record: EpochRecord) -> list[Mapping[str, float]]:
-            # The nets' parameters were written back: evaluate each policy in the env.
-            extras: list[Mapping[str, float]] = []
-            for policy in record.policies:
-                was_training = policy.training
-                policy.eval()
-                (evaluation,) = play_episodes(
-                    env_id,
-                    functools.partial(_standardized_actions, policy, shift_np, scale_np, discrete),
-                    episodes=settings.eval_episodes,
-                )
-                policy.train(was_training)
-                extras.append({"eval_return": evaluation.mean, "eval_return_std": evaluation.std})
-            return extras
-
-        def on_epoch(all_metrics: list[EpochMetrics]) -> None:
-            for log, metrics in zip(logs, all_metrics, strict=False):
-                log.write(metrics)
-
-        with progress_share(BASELINE_SHARE, TRAINED_SHARE):
-            many = train_many(
-                train_data,
-                val_data,
-                config=config,
-                seeds=seeds,
-                rewards=[r for r, _ in nets],
-                policies=policies,
-                device=device,
-                progress=progress,
-                on_epoch=on_epoch,
-                callback=env_returns,
-            )
-        data_info = {
-            "env": env_id,
-            **data_record(data, train_data, val_data, path=data_label or data_path),
-            "obs_standardization": {"shift": shift.tolist(), "scale": scale.tolist()}
-            if settings.standardize_obs
-            else None,
-        }
-        shares = {k: v for k, v in found.items() if k in ALIGNMENT_BASELINES and discrete}
-        results = []
-        for k, result in enumerate(many.runs):
-            # The saved nets take raw observations (load_reward, the RL wrapper, reward maps).
-            fold_obs_standardization(result.reward, shift, scale)
-            fold_obs_standardization(result.policy, shift, scale)
-            save_run(result, folders[k], algo=algo, data=data_info, baselines=found, device=device)
-            plot_curves(result.metrics, folders[k], baselines=shares)
-            # The learned reward against the true one (EPIC, Pearson): reward_quality.json,
-            # for a task whose true reward is known (the paper's).
-            if has_true_reward(env_id):
-                write_reward_quality(folders[k], env_id=env_id, data_path=data_path)
-            results.append(
-                RunResult(
-                    out=str(out / folders[k].name),
-                    seed=seeds[k],
-                    metrics=tuple(result.metrics),
-                    baselines=found,
-                    samples_per_second=result.samples_per_second,
-                    train_rows=len(train_data),
-                    val_rows=len(val_data),
-                )
-            )
-            with progress_share(TRAINED_SHARE, 1.0):  # the bar moves while runs are saved
-                unit_progress(k + 1, len(many.runs))
+        trained = train_runs_into(
+            data, [stage / f"run-{k}" for k in range(runs)], algo=algo, config=config,
+            hooks=hooks, device=device, progress=progress, data_path=data_label or data_path,
+            data_lead={"env": env_id},
+        )  # fmt: skip
+        results = [replace(r, out=str(out / Path(r.out).name)) for r in trained.results]
         over_runs = summarize(results)
+        curves = over_runs.metrics
 
-        def last(key: str) -> MeanStd:
-            return MeanStd(mean=over_runs.metrics[key].mean[-1], std=over_runs.metrics[key].std[-1])
+        def last(metric: Metric) -> MeanStd:
+            curve = metric.of(curves)
+            return MeanStd(mean=curve.mean[-1], std=curve.std[-1])
 
         summary = GymIRLSummary(
             env=env_id,
             algo=algo,
-            expert_return=found["expert"],
-            irl_final_return=last("eval_return"),
-            final_alignment=last("val_alignment") if "val_alignment" in over_runs.metrics else None,
+            expert_return=trained.baselines["expert"],
+            irl_final_return=last(Metric.EVAL_RETURN),
+            final_alignment=last(Metric.VAL_ALIGNMENT) if Metric.VAL_ALIGNMENT in curves else None,
             over_runs=over_runs,
         )
         as_json = summary.to_json()
         write_text(stage / SUMMARY_FILE, json.dumps(as_json, indent=2) + "\n")
         plot_returns(summary, stage / RETURNS_FILE)
-        if discrete:
-            plot_bands(
-                {**as_json, "baselines": {k: over_runs.baselines[k].to_json() for k in shares}},
-                stage,
-            )
-    return GymIRLResult(out=out, runs=runs, summary=summary, baselines=found)
+        if data.discrete:
+            drawn = {k: over_runs.baselines[k].to_json() for k in trained.drawn}
+            plot_bands({**as_json, "baselines": drawn}, stage)
+    return GymIRLResult(out=out, runs=runs, summary=summary, baselines=trained.baselines)
 
 
 def plot_returns(summary: GymIRLSummary, path: Path) -> Path:
@@ -380,8 +341,8 @@ def plot_returns(summary: GymIRLSummary, path: Path) -> Path:
     figure, axes = new_figure()
     runs = summary.over_runs
     epochs = list(runs.epochs)
-    mean = np.array(runs.metrics["eval_return"].mean)
-    std = np.array(runs.metrics["eval_return"].std)
+    curve = Metric.EVAL_RETURN.of(runs.metrics)
+    mean, std = np.array(curve.mean), np.array(curve.std)
     label = f"{summary.algo} policy (mean of {len(runs.seeds)} runs)"
     axes.plot(epochs, mean, color="C0", label=label)
     axes.fill_between(epochs, mean - std, mean + std, color="C0", alpha=0.25, label="± 1 std")

@@ -5,10 +5,12 @@
 :class:`AdversarialTrainer`, made of strategies: a :class:`Discriminator` (AIRL's D or
 GAIL's, :mod:`~.discriminators`) and a :class:`PolicyHead` (discrete or Gaussian,
 :mod:`~.heads`). Its other pieces are :mod:`~.losses`, :mod:`~.fast`, :mod:`~.stacked` nets,
-:mod:`~.records`, :mod:`~.evaluate` and :mod:`~.baselines`; :mod:`~.nets` has the default
+:mod:`~.records`, :mod:`~.metrics` (every epoch metric, named once), :mod:`~.evaluate` and
+:mod:`~.baselines`; :mod:`~.nets` has the default
 networks (:class:`RewardNet` and :class:`PolicyNet`: :mod:`~.reward`), :mod:`~.transitions`
 the data (:mod:`~.interop`: to and from the ``imitation`` library's arrays), :mod:`~.run` the
-run folders and :func:`load_reward`.
+run folders (:func:`train_runs_into`, the one trainer of runs into them) and
+:func:`load_reward`.
 It knows nothing of poker or Gymnasium (``tests/test_layers.py``): poker tables and
 ``pokerirl train`` are :mod:`pokerirl.poker`, environments :mod:`pokerirl.gym`.
 For example::
@@ -49,6 +51,7 @@ if TYPE_CHECKING:  # what the names are, for type checkers
         to_imitation_trajectories,
         to_imitation_transitions,
     )
+    from pokerirl.irl.metrics import Metric
     from pokerirl.irl.nets import (
         DiscretePolicy,
         GaussianPolicy,
@@ -61,8 +64,10 @@ if TYPE_CHECKING:  # what the names are, for type checkers
     from pokerirl.irl.records import Batch, EpochCallback, EpochMetrics, EpochRecord, StepLosses
     from pokerirl.irl.reward import PolicyNet, RewardFn, RewardNet
     from pokerirl.irl.run import (
+        ObsMap,
         RewardFunction,
         RunError,
+        RunHooks,
         RunResult,
         RunsSummary,
         RunSummary,
@@ -70,6 +75,7 @@ if TYPE_CHECKING:  # what the names are, for type checkers
         load_reward,
         load_run_config,
         train_into,
+        train_runs_into,
     )
     from pokerirl.irl.trainer import AdversarialTrainer
     from pokerirl.irl.transitions import Transitions
@@ -103,6 +109,7 @@ _LAZY = {
     "from_imitation_transitions": "interop",
     "to_imitation_trajectories": "interop",
     "to_imitation_transitions": "interop",
+    "Metric": "metrics",
     "DiscretePolicy": "nets",
     "GaussianPolicy": "nets",
     "NetSpec": "nets",
@@ -118,7 +125,9 @@ _LAZY = {
     "RewardFn": "reward",
     "RewardNet": "reward",
     "PolicyNet": "reward",
+    "ObsMap": "run",
     "RewardFunction": "run",
+    "RunHooks": "run",
     "RunError": "run",
     "RunResult": "run",
     "RunSummary": "run",
@@ -127,6 +136,7 @@ _LAZY = {
     "load_reward": "run",
     "load_run_config": "run",
     "train_into": "run",
+    "train_runs_into": "run",
     "Transitions": "transitions",
 }
 # Functions named as the submodules they live in: the package's name is the function.
@@ -166,13 +176,16 @@ __all__ = [
     "ImitationTrajectory",
     "ImitationTransitions",
     "ManyResult",
+    "Metric",
     "NetSpec",
+    "ObsMap",
     "PolicyHead",
     "PolicyNet",
     "RewardFn",
     "RewardFunction",
     "RewardNet",
     "RunError",
+    "RunHooks",
     "RunResult",
     "RunSummary",
     "RunsSummary",
@@ -199,4 +212,5 @@ __all__ = [
     "train",
     "train_into",
     "train_many",
+    "train_runs_into",
 ]

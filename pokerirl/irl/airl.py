@@ -40,7 +40,8 @@ over stacked parameters is R independent ones).
 >>> data = Transitions.from_arrays(obs, (obs[:, 0] > 0.5).astype(np.int64), groups=np.arange(512))
 >>> config = AIRLConfig.for_algo("hairl", epochs=20, batch_size=64, alpha=1.0)
 >>> result = train(data, data, config=config, progress=False)
->>> result.metrics[-1]["val_alignment"] > 0.9
+>>> from pokerirl.irl.metrics import Metric
+>>> Metric.VAL_ALIGNMENT.of(result.metrics[-1]) > 0.9
 True
 """
 

@@ -7,6 +7,7 @@ import math
 import torch
 from torch import Tensor, nn
 
+from pokerirl.irl.metrics import Metric, Part
 from pokerirl.irl.transitions import Transitions
 
 
@@ -38,7 +39,10 @@ def evaluate(
                 mean, log_std = policy(val.obs[i : i + chunk].to(device))
                 errors.append((mean - val.actions[i : i + chunk].to(device)).square().sum(-1))
             # log σ: collapsing σ lets -log π alone win D and invert the reward (issue 20)
-            return {"val_mse": torch.cat(errors).mean().item(), "log_std": log_std.mean().item()}
+            return {
+                Metric.VAL_MSE: torch.cat(errors).mean().item(),
+                Metric.LOG_STD: log_std.mean().item(),
+            }
         k = val.action_dim
         eye = torch.eye(k, device=device)[:, None, :]
         log_probs, reward_ids = [], []
@@ -56,11 +60,11 @@ def evaluate(
         by_reward = torch.cat(reward_ids)
         if val.weights is None and val.imputed is None:
             return {
-                "val_alignment": (predicted == expert).float().mean().item(),
-                "val_reward_alignment": (by_reward == expert).float().mean().item(),
-                "val_policy_dist": log_pi.exp().mean(0).tolist(),
-                "val_policy_argmax_dist": _histogram(predicted, k),
-                "val_expert_dist": _histogram(expert, k),
+                Metric.VAL_ALIGNMENT: (predicted == expert).float().mean().item(),
+                Metric.VAL_REWARD_ALIGNMENT: (by_reward == expert).float().mean().item(),
+                Metric.VAL_POLICY_DIST: log_pi.exp().mean(0).tolist(),
+                Metric.VAL_POLICY_ARGMAX_DIST: _histogram(predicted, k),
+                Metric.VAL_EXPERT_DIST: _histogram(expert, k),
             }
         return _weighted_metrics(val, log_pi, predicted, by_reward, expert)
     finally:
@@ -88,16 +92,16 @@ def _weighted_metrics(
 
     every = torch.ones(len(expert), dtype=torch.bool, device=device)
     found: dict[str, float | list[float]] = {
-        "val_alignment": share(predicted == expert, every),
-        "val_reward_alignment": share(by_reward == expert, every),
-        "val_policy_dist": ((log_pi.exp() * w[:, None]).sum(0) / w.sum()).tolist(),
-        "val_policy_argmax_dist": _histogram(predicted, k, w),
-        "val_expert_dist": _histogram(expert, k, w),
+        Metric.VAL_ALIGNMENT: share(predicted == expert, every),
+        Metric.VAL_REWARD_ALIGNMENT: share(by_reward == expert, every),
+        Metric.VAL_POLICY_DIST: ((log_pi.exp() * w[:, None]).sum(0) / w.sum()).tolist(),
+        Metric.VAL_POLICY_ARGMAX_DIST: _histogram(predicted, k, w),
+        Metric.VAL_EXPERT_DIST: _histogram(expert, k, w),
     }
     if val.imputed is not None:
         imputed = val.imputed.to(device)
-        for part, rows in (("observed", ~imputed), ("imputed", imputed)):
+        for part, rows in ((Part.OBSERVED, ~imputed), (Part.IMPUTED, imputed)):
             if rows.any():
-                found[f"val_alignment_{part}"] = share(predicted == expert, rows)
-                found[f"val_reward_alignment_{part}"] = share(by_reward == expert, rows)
+                found[Metric.VAL_ALIGNMENT.on(part)] = share(predicted == expert, rows)
+                found[Metric.VAL_REWARD_ALIGNMENT.on(part)] = share(by_reward == expert, rows)
     return found

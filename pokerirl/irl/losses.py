@@ -14,16 +14,10 @@ from torch import Tensor
 
 from pokerirl.irl.config import NoiseSchedule
 from pokerirl.irl.discriminators import AIRL, Discriminator
+from pokerirl.irl.metrics import LOSSES
 
 LOG_2PI = math.log(2 * math.pi)
-LOSS_KEYS = (
-    "disc_loss",
-    "disc_airl_loss",
-    "disc_env_loss",
-    "policy_loss",
-    "policy_adv_loss",
-    "policy_sup_loss",
-)
+LOSS_KEYS = LOSSES  # the loss metrics, named in pokerirl.irl.metrics
 
 
 def noise_schedule(

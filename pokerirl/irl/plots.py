@@ -12,31 +12,25 @@ from matplotlib.figure import Figure
 
 from pokerirl.atomic import atomic_path
 from pokerirl.figures import finish
+from pokerirl.irl.metrics import Metric
 
 ALIGNMENT_FIGURE = "alignment.png"
-# file name -> (title, y label, [(metric key, legend label)])
-CURVES: dict[str, tuple[str, str, list[tuple[str, str]]]] = {
+# file name -> (title, y label, the metrics drawn, each with its label)
+CURVES: dict[str, tuple[str, str, tuple[Metric, ...]]] = {
     ALIGNMENT_FIGURE: (
         "Validation action alignment",
         "share of validation states",
-        [
-            ("val_alignment", "policy argmax = expert"),
-            ("val_reward_alignment", "reward argmax = expert"),
-        ],
+        (Metric.VAL_ALIGNMENT, Metric.VAL_REWARD_ALIGNMENT),
     ),
     "losses.png": (
         "Training losses",
         "loss",
-        [
-            ("disc_loss", "discriminator"),
-            ("policy_adv_loss", "policy, adversarial"),
-            ("policy_sup_loss", "policy, supervised"),
-        ],
+        (Metric.DISC_LOSS, Metric.POLICY_ADV_LOSS, Metric.POLICY_SUP_LOSS),
     ),
     "disc_accuracy.png": (
         "Discriminator accuracy",
         "accuracy (share of samples)",
-        [("disc_acc_expert", "on expert samples"), ("disc_acc_policy", "on policy samples")],
+        (Metric.DISC_ACC_EXPERT, Metric.DISC_ACC_POLICY),
     ),
 }
 BANDS_FILE = "alignment_bands.png"
@@ -78,12 +72,13 @@ def plot_curves(
     epochs = [m["epoch"] for m in metrics]
     written = []
     for name, (title, ylabel, series) in CURVES.items():
-        present = [(key, label) for key, label in series if metrics and key in metrics[0]]
+        present = [metric for metric in series if metrics and metric in metrics[0]]
         if not present:
             continue
         figure, axes = new_figure()
-        for key, label in present:
-            axes.plot(epochs, [m[key] for m in metrics], marker=".", label=label)
+        for metric in present:
+            values = [metric.of(m) for m in metrics]
+            axes.plot(epochs, values, marker=".", label=metric.label)
         if name == ALIGNMENT_FIGURE and baselines:
             _baseline_lines(axes, baselines)
         written.append(save_figure(figure, axes, out_dir / name, title, ylabel))
@@ -93,15 +88,14 @@ def plot_curves(
 def plot_bands(summary: Mapping[str, Any], out_dir: str | os.PathLike[str]) -> Path | None:
     """Mean ± std over runs of the alignment metrics, with the baselines' means as lines."""
     epochs = summary["epochs"]
-    series = [
-        (key, label) for key, label in CURVES[ALIGNMENT_FIGURE][2] if key in summary["metrics"]
-    ]
+    series = [m for m in CURVES[ALIGNMENT_FIGURE][2] if m in summary["metrics"]]
     if not series:
         return None
     figure, axes = new_figure()
-    for i, (key, label) in enumerate(series):
-        mean, std = summary["metrics"][key]["mean"], summary["metrics"][key]["std"]
-        axes.plot(epochs, mean, color=f"C{i}", label=label)
+    for i, metric in enumerate(series):
+        curve = metric.of(summary["metrics"])
+        mean, std = curve["mean"], curve["std"]
+        axes.plot(epochs, mean, color=f"C{i}", label=metric.label)
         low = [m - s for m, s in zip(mean, std, strict=True)]
         high = [m + s for m, s in zip(mean, std, strict=True)]
         axes.fill_between(epochs, low, high, color=f"C{i}", alpha=0.25)

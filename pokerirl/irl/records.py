@@ -13,6 +13,8 @@ from typing import Any, NamedTuple, Protocol
 
 from torch import Tensor, nn
 
+# Declared with the metrics; importable from here as before.
+from pokerirl.irl.metrics import DISCRIMINATOR_METRICS as DISCRIMINATOR_METRICS
 from pokerirl.serial import Serializable, meta
 
 
@@ -83,16 +85,6 @@ def unpack_steps(record: Tensor, batch: int) -> tuple[DiscriminatorRecord, StepL
     return disc, losses
 
 
-DISCRIMINATOR_METRICS = (
-    "disc_loss",
-    "disc_airl_loss",
-    "disc_env_loss",
-    "disc_acc_expert",
-    "disc_acc_policy",
-    "reward_expert",
-    "reward_policy",
-    "reward_gap",
-)  # zero when the discriminator is off (behaviour cloning)
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -101,12 +93,13 @@ class EpochMetrics(Mapping[str, Any], Serializable):
 
     ``metrics`` are the trainer's metrics (losses, discriminator, validation: which ones
     depends on the actions and on the adversary), then an :class:`EpochCallback`'s extras,
-    in that order. The set is open, so a metric is read by name, ``metrics["val_alignment"]``:
-    the record is also a read-only mapping that starts with ``epoch`` (and equals the dict of
-    its line).
+    in that order. The metrics are named once, in :class:`~pokerirl.irl.metrics.Metric`, and
+    read through it, ``Metric.VAL_ALIGNMENT.of(line)``: the record is a read-only mapping that
+    starts with ``epoch`` (and equals the dict of its line), open to a callback's extras.
 
+    >>> from pokerirl.irl.metrics import Metric
     >>> line = EpochMetrics.from_json({"epoch": 1, "disc_loss": 0.5, "val_alignment": 0.75})
-    >>> line.epoch, line["val_alignment"], line.scalars()
+    >>> line.epoch, Metric.VAL_ALIGNMENT.of(line), line.scalars()
     (1, 0.75, {'disc_loss': 0.5, 'val_alignment': 0.75})
     >>> line.to_json()
     {'epoch': 1, 'disc_loss': 0.5, 'val_alignment': 0.75}

@@ -1,4 +1,5 @@
-"""Run folders on disk: writing one run of the trainer, and reading runs back (``load_reward``).
+"""Run folders on disk: training runs into them (:func:`train_runs_into`), and reading runs
+back (``load_reward``).
 
 A run folder holds ``reward.pt`` and ``policy.pt`` (state_dicts), ``config.json``
 (architecture, hyperparameters, data fingerprint, package versions, final metrics: what
@@ -7,9 +8,11 @@ determines the result, never wall-clock times), ``timings.json`` (samples/s, sec
 group ids) and PNG curves. A folder of several runs holds ``run-<k>`` folders and
 ``summary.json`` (:func:`summarize`: mean and std over runs).
 
-Poker-free: ``pokerirl train`` (a poker table, the reward card, several runs on a backend) is
-:mod:`pokerirl.poker.train`; ``pokerirl gym irl`` is :mod:`pokerirl.gym.irl`. Both write this
-format, and :func:`load_reward` reads either.
+Poker-free and Gymnasium-free: ``pokerirl train`` (a poker table, the reward card, several
+runs on a backend, EM) is :mod:`pokerirl.poker.train`; ``pokerirl gym irl`` is
+:mod:`pokerirl.gym.irl`. Both train through :func:`train_runs_into`, adding what is theirs as
+:class:`RunHooks` (an observation standardization, baselines, an epoch callback, a finish per
+folder), and :func:`load_reward` reads either.
 
 >>> import tempfile
 >>> from pokerirl.irl.config import load_config
@@ -31,7 +34,7 @@ import io
 import json
 import os
 import warnings
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
@@ -42,12 +45,20 @@ from torch import Tensor, nn
 
 from pokerirl.atomic import write_text, write_torch
 from pokerirl.errors import PokerIRLError, check_argument
-from pokerirl.execution import progress_share
-from pokerirl.irl.airl import TrainResult, baselines, default_nets, train
+from pokerirl.execution import progress_share, unit_progress
+from pokerirl.irl.airl import TrainResult, baselines, default_nets, train, train_many
 from pokerirl.irl.config import AIRLConfig, Algo
-from pokerirl.irl.nets import ACTIVATIONS, REWARD_FAMILIES, NetSpec, RewardFamily, build_nets
+from pokerirl.irl.metrics import Metric, Part
+from pokerirl.irl.nets import (
+    ACTIVATIONS,
+    REWARD_FAMILIES,
+    NetSpec,
+    RewardFamily,
+    build_nets,
+    fold_obs_standardization,
+)
 from pokerirl.irl.plots import plot_curves
-from pokerirl.irl.records import EpochMetrics
+from pokerirl.irl.records import EpochCallback, EpochMetrics
 from pokerirl.irl.transitions import Transitions
 from pokerirl.jsonio import parse_json, read_bytes, read_json, read_json_lines
 from pokerirl.meanstd import Curve, MeanStd, mean_std
@@ -95,7 +106,22 @@ class RunSummary:
     val_rows: int
     results: tuple[RunResult, ...] = ()  # several runs: each run's result
 
-
+    @classmethod
+    def of(
+        cls, results: Sequence[RunResult], *, out_dir: Path, several: bool = True
+    ) -> RunSummary:
+        """The first of ``results`` (its speed: the mean over runs that measured one), and
+        all of them in ``results`` when they are ``several`` runs' (not one run's)."""
+        first = results[0]
+        return cls(
+            out_dir=out_dir,
+            metrics=list(first.metrics),
+            baselines=dict(first.baselines),
+            samples_per_second=float(np.nanmean([r.samples_per_second for r in results])),
+            train_rows=first.train_rows,
+            val_rows=first.val_rows,
+            results=tuple(results) if several else (),
+        )
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -139,6 +165,164 @@ def begin_run(
 
 
 BASELINE_SHARE = 0.3  # of a run's time: behaviour cloning has no adversary to train
+# Of the runs' time, where training ends: saving each run, its figures and a caller's
+# finish (a reward card, a reward quality) take the rest, so the bar moves after the last epoch.
+TRAINED_SHARE = 0.9
+
+
+@dataclass(frozen=True, kw_only=True)
+class ObsMap:
+    """The nets' view of observations, ``(x - shift) / scale``, fit on a split's training
+    rows by a :class:`RunHooks` ``obs_map`` (the Gymnasium layer's standardization): the runs
+    train on mapped rows, and their saved nets take raw observations (the map is folded into
+    their first layers). ``record`` is what ``config.json``'s ``data.obs_standardization``
+    says of it (None: the map is the identity and records nothing of itself)."""
+
+    shift: Tensor
+    scale: Tensor
+    record: Mapping[str, object] | None = None
+
+    def rows(self, data: Transitions) -> Transitions:
+        """``data`` with obs and next_obs mapped."""
+        next_obs = None if data.next_obs is None else (data.next_obs - self.shift) / self.scale
+        return replace(data, obs=(data.obs - self.shift) / self.scale, next_obs=next_obs)
+
+    def obs(self, obs: np.ndarray) -> np.ndarray:
+        """Raw observations (numpy) as the training nets see them."""
+        return (obs - self.shift.numpy()) / self.scale.numpy()
+
+    def fold(self, net: nn.Module) -> None:
+        """Make ``net``, trained on mapped observations, take raw ones (in place)."""
+        fold_obs_standardization(net, self.shift, self.scale)
+
+
+@dataclass(frozen=True, kw_only=True)
+class RunHooks:
+    """What a caller adds to :func:`train_runs_into`, each optional: how it stays poker-free
+    and Gymnasium-free while the poker and Gymnasium layers train through it.
+
+    ``obs_map`` fits an :class:`ObsMap` on the training rows (the Gymnasium layer
+    standardizes observations); ``baselines`` gives more baselines after the core's (a random
+    policy's and the expert's return); ``callback`` makes the trainer's
+    :class:`~pokerirl.irl.records.EpochCallback` once the map is known (None without
+    ``obs_map``), e.g. each epoch's return in an environment; ``finish`` is called with each
+    written run folder (the poker layer's reward card, the Gymnasium layer's reward quality).
+    """
+
+    obs_map: Callable[[Transitions], ObsMap] | None = None
+    baselines: Callable[[], Mapping[str, float]] | None = None
+    callback: Callable[[ObsMap | None], EpochCallback] | None = None
+    finish: Callable[[Path], object] | None = None
+
+
+@dataclass(frozen=True, kw_only=True)
+class RunsTrained:
+    """What :func:`train_runs_into` wrote: each run's result (in ``folders``' order), the
+    baselines (the core's and the hooks'), and those drawn as lines on alignment plots."""
+
+    results: tuple[RunResult, ...]
+    baselines: dict[str, float]
+    drawn: dict[str, float]
+
+
+def train_runs_into(
+    data: Transitions,
+    folders: Sequence[Path],
+    *,
+    algo: str,
+    config: AIRLConfig,
+    hooks: RunHooks | None = None,
+    device: str = "cpu",
+    progress: bool = False,
+    data_path: str | os.PathLike[str] | None = None,
+    data_lead: Mapping[str, object] | None = None,
+    data_notes: Mapping[str, object] | None = None,
+) -> RunsTrained:
+    """The one way runs are trained and written: ``len(folders)`` runs of ``algo`` on
+    ``data`` in lock-step, run k with seed ``config.seed + k`` into the (new) ``folders[k]``.
+
+    Split (validation is a seeded share of the *groups*, ``config.val_fraction``, never of
+    rows), ``hooks.obs_map``, baselines (:func:`run_baselines`, then ``hooks.baselines``),
+    :func:`begin_run` per folder, training (:func:`~pokerirl.irl.airl.train_many`, each epoch
+    logged to each folder), then per run :func:`save_run`, its curves and ``hooks.finish``.
+    ``data_path`` is where the data came from, for the record (``config.json``'s
+    ``data.path``); ``data_lead`` and ``data_notes`` are the caller's own keys of ``data``,
+    recorded before and after this layer's (the Gymnasium layer's ``env``, the poker layer's
+    ``encoding``) without being read.
+    """
+    check_argument("data", data, Transitions, "Transitions")
+    for folder in folders:
+        check_argument("folder", folder, (str, os.PathLike), "a folder (a path)")
+    algo = enum_value("algo", Algo, algo)  # the run records it: "nope" wrote a run of nope
+    check_argument("config", config, AIRLConfig, "an AIRLConfig (AIRLConfig.for_algo gives one)")
+    folders = [Path(folder) for folder in folders]
+    hooks = hooks or RunHooks()
+    train_data, val_data, val_groups = data.split(
+        val_fraction=config.val_fraction, seed=config.seed
+    )
+    obs_map = None if hooks.obs_map is None else hooks.obs_map(train_data)
+    if obs_map is not None:
+        train_data, val_data = obs_map.rows(train_data), obs_map.rows(val_data)
+    with progress_share(0.0, BASELINE_SHARE):  # the baseline's epochs, then the runs'
+        core = run_baselines(train_data, val_data, config=config, device=device,
+                             progress=progress)  # fmt: skip
+    found = {**core, **(hooks.baselines() if hooks.baselines is not None else {})}
+    # Shares of states only; without a legal mask legal_majority is majority under another name.
+    drawn = {
+        k: v for k, v in core.items()
+        if data.discrete and (k != "legal_majority" or data.legal_mask is not None)
+    }  # fmt: skip
+    seeds = [config.seed + k for k in range(len(folders))]
+    nets = [default_nets(train_data, config, seed) for seed in seeds]
+    logs = [begin_run(folder, val_groups=val_groups, baselines=found) for folder in folders]
+
+    def on_epoch(all_metrics: list[EpochMetrics]) -> None:
+        for log, metrics in zip(logs, all_metrics, strict=True):
+            log.write(metrics)
+
+    with progress_share(BASELINE_SHARE, TRAINED_SHARE):
+        many = train_many(
+            train_data,
+            val_data,
+            config=config,
+            seeds=seeds,
+            rewards=[reward for reward, _ in nets],
+            policies=[policy for _, policy in nets],
+            device=device,
+            progress=progress,
+            on_epoch=on_epoch,
+            callback=None if hooks.callback is None else hooks.callback(obs_map),
+        )
+    data_info = {
+        **(data_lead or {}),
+        **data_record(data, train_data, val_data, path=data_path),
+        **(data_notes or {}),
+    }
+    if obs_map is not None:
+        data_info["obs_standardization"] = obs_map.record
+    results = []
+    for k, (folder, result) in enumerate(zip(folders, many.runs, strict=True)):
+        if obs_map is not None:  # the saved nets take raw observations (load_reward, agents)
+            obs_map.fold(result.reward)
+            obs_map.fold(result.policy)
+        save_run(result, folder, algo=algo, data=data_info, baselines=found, device=device)
+        plot_curves(result.metrics, folder, baselines=drawn)
+        if hooks.finish is not None:
+            hooks.finish(folder)
+        results.append(
+            RunResult(
+                out=str(folder),
+                seed=seeds[k],
+                metrics=tuple(result.metrics),
+                baselines=found,
+                samples_per_second=result.samples_per_second,
+                train_rows=len(train_data),
+                val_rows=len(val_data),
+            )
+        )
+        with progress_share(TRAINED_SHARE, 1.0):  # the bar moves while runs are saved
+            unit_progress(k + 1, len(folders))
+    return RunsTrained(results=tuple(results), baselines=found, drawn=drawn)
 
 
 def train_into(
@@ -152,46 +336,16 @@ def train_into(
     data_path: str | os.PathLike[str] | None = None,
     data_notes: Mapping[str, object] | None = None,
 ) -> RunSummary:
-    """Split, compute the baselines, train and write a run into the (new) ``folder``.
+    """One run of :func:`train_runs_into` (seed ``config.seed``) into the (new) ``folder``.
 
-    Validation is a seeded share of the *groups* (``config.val_fraction``), never of rows.
     ``data_path`` is where the data came from, for the record (``config.json``'s
     ``data.path``); ``data_notes`` are the caller's own keys of ``data`` (the poker layer's
     ``encoding``), which this layer records without reading."""
-    check_argument("data", data, Transitions, "Transitions")
-    check_argument("folder", folder, (str, os.PathLike), "a folder (a path)")
-    algo = enum_value("algo", Algo, algo)  # the run records it: "nope" wrote a run of nope
-    check_argument("config", config, AIRLConfig, "an AIRLConfig (AIRLConfig.for_algo gives one)")
-    folder = Path(folder)
-    train_data, val_data, val_groups = data.split(
-        val_fraction=config.val_fraction, seed=config.seed
-    )
-    with progress_share(0.0, BASELINE_SHARE):  # the baseline's epochs, then the run's
-        found = run_baselines(train_data, val_data, config=config, device=device,
-                              progress=progress)  # fmt: skip
-    log = begin_run(folder, val_groups=val_groups, baselines=found)
-    with progress_share(BASELINE_SHARE, 1.0):
-        result = train(
-            train_data,
-            val_data,
-            config=config,
-            device=device,
-            progress=progress,
-            on_epoch=log.write,
-        )
-    data_info = {**data_record(data, train_data, val_data, path=data_path), **(data_notes or {})}
-    save_run(result, folder, algo=algo, data=data_info, baselines=found, device=device)
-    # Without a legal mask, legal_majority is majority under another name: not drawn.
-    drawn = {k: v for k, v in found.items() if k != "legal_majority" or data.legal_mask is not None}
-    plot_curves(result.metrics, folder, baselines=drawn)
-    return RunSummary(
-        out_dir=folder,
-        metrics=result.metrics,
-        baselines=found,
-        samples_per_second=result.samples_per_second,
-        train_rows=len(train_data),
-        val_rows=len(val_data),
-    )
+    trained = train_runs_into(
+        data, [folder], algo=algo, config=config, device=device, progress=progress,
+        data_path=data_path, data_notes=data_notes,
+    )  # fmt: skip
+    return RunSummary.of(trained.results, out_dir=Path(folder), several=False)
 
 
 def data_record(
@@ -247,10 +401,11 @@ def run_baselines(
         progress=progress,
     )
     last = bc.metrics[-1]
-    found["bc"] = last["val_alignment"] if train_data.discrete else last["val_mse"]
-    for part in ("observed", "imputed"):  # data with imputed rows: BC on each part apart
-        if f"val_alignment_{part}" in last:
-            found[f"bc_{part}"] = last[f"val_alignment_{part}"]
+    found["bc"] = (Metric.VAL_ALIGNMENT if train_data.discrete else Metric.VAL_MSE).of(last)
+    for part in Part:  # data with imputed rows: BC on each part apart
+        value = Metric.VAL_ALIGNMENT.on(part).of(last, None)
+        if value is not None:
+            found[f"bc_{part}"] = value
     return found
 
 
@@ -344,6 +499,24 @@ def read_epochs(run_dir: str | os.PathLike[str]) -> list[EpochMetrics]:
     path = Path(run_dir) / METRICS_FILE
     lines = read_json_lines(path)
     return [EpochMetrics.from_json(line, f"{path}:{k + 1}") for k, line in enumerate(lines)]
+
+
+def read_run_result(run_dir: str | os.PathLike[str]) -> RunResult:
+    """A finished run folder as :func:`summarize` reads it (a run reused from a store, or
+    one of an older pokerirl: its speed NaN when it has no ``timings.json``)."""
+    folder = Path(run_dir)
+    record = read_json(folder / CONFIG_FILE)
+    timings_path = folder / TIMINGS_FILE
+    timings = read_json(timings_path) if timings_path.is_file() else {}
+    return RunResult(
+        out=str(folder),
+        seed=record["hyperparameters"]["seed"],
+        metrics=tuple(read_epochs(folder)),
+        baselines=read_json(folder / BASELINES_FILE),
+        samples_per_second=timings.get("samples_per_second", float("nan")),
+        train_rows=record["data"]["train_rows"],
+        val_rows=record["data"]["val_rows"],
+    )
 
 
 def read_split(run_dir: str | os.PathLike[str]) -> set[str]:

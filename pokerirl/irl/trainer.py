@@ -54,10 +54,10 @@ from pokerirl.irl.discriminators import Discriminator, discriminator_for
 from pokerirl.irl.evaluate import evaluate
 from pokerirl.irl.heads import EpochDraw, PolicyHead, StepDraw, head_for
 from pokerirl.irl.losses import discriminator_loss, noise_schedule
+from pokerirl.irl.metrics import DISCRIMINATOR_METRICS, Metric
 from pokerirl.irl.nets import RewardFamily
 from pokerirl.irl.optim import FlatAdam
 from pokerirl.irl.records import (
-    DISCRIMINATOR_METRICS,
     Batch,
     EpochCallback,
     EpochMetrics,
@@ -335,16 +335,16 @@ class AdversarialTrainer:
         )  # fmt: skip
         logits = self.discriminator.logits
         values = {
-            "disc_loss": d_loss.mean(0),
-            "disc_airl_loss": d_airl.mean(0),
-            "disc_env_loss": d_env.mean(0),
+            Metric.DISC_LOSS: d_loss.mean(0),
+            Metric.DISC_AIRL_LOSS: d_airl.mean(0),
+            Metric.DISC_ENV_LOSS: d_env.mean(0),
             # a logit above 0 is D > 1/2
-            "disc_acc_expert": (logits(f_expert, lp_expert) > 0).float().mean((0, 2)),
-            "disc_acc_policy": (logits(f_seen, lp_seen) < 0).float().mean((0, 2)),
-            "reward_expert": f_expert.mean((0, 2)),
-            "reward_policy": f_seen.mean((0, 2)),
-            "reward_gap": (f_expert - f_seen).mean((0, 2)),  # expert minus policy
-            **{name: value.mean(0) for name, value in losses._asdict().items()},
+            Metric.DISC_ACC_EXPERT: (logits(f_expert, lp_expert) > 0).float().mean((0, 2)),
+            Metric.DISC_ACC_POLICY: (logits(f_seen, lp_seen) < 0).float().mean((0, 2)),
+            Metric.REWARD_EXPERT: f_expert.mean((0, 2)),
+            Metric.REWARD_POLICY: f_seen.mean((0, 2)),
+            Metric.REWARD_GAP: (f_expert - f_seen).mean((0, 2)),  # expert minus policy
+            **{name: value.mean(0) for name, value in losses._asdict().items()},  # named as LOSSES
         }
         if not self.adversarial:
             for key in DISCRIMINATOR_METRICS:
@@ -441,10 +441,9 @@ class AdversarialTrainer:
                 on_epoch(epoch_metrics)
             unit_progress(epoch, self.config.epochs)  # the driver's bar, when this is a unit
             first = epoch_metrics[0]
-            if "val_alignment" in first:
-                bar.set_postfix(
-                    align=f"{first['val_alignment']:.3f}", d_loss=f"{first['disc_loss']:.3f}"
-                )
+            if Metric.VAL_ALIGNMENT in first:
+                align, d_loss = Metric.VAL_ALIGNMENT.of(first), Metric.DISC_LOSS.of(first)
+                bar.set_postfix(align=f"{align:.3f}", d_loss=f"{d_loss:.3f}")
         bar.close()
         for result in results:
             result.reward.eval()

@@ -70,6 +70,7 @@ from pokerirl.game.encodings import (
     get_encoding,
 )
 from pokerirl.game.evaluator import hand_strength
+from pokerirl.irl.metrics import Metric, Part
 from pokerirl.parquet import fixed_width
 from pokerirl.poker.folds import ImputeConfig
 
@@ -641,11 +642,11 @@ def fit_behaviour(
 
 def _round_record(r: int, rows: int, metrics: dict[str, Any],
                   post: Posterior | None) -> dict[str, Any]:  # fmt: skip
-    found: dict[str, Any] = {"round": r, "rows": rows,
-                             "bc_val_alignment": metrics.get("val_alignment")}  # fmt: skip
-    for part in ("observed", "imputed"):
-        if f"val_alignment_{part}" in metrics:
-            found[f"bc_val_alignment_{part}"] = metrics[f"val_alignment_{part}"]
+    alignment = Metric.VAL_ALIGNMENT.of(metrics, None)
+    found: dict[str, Any] = {"round": r, "rows": rows, "bc_val_alignment": alignment}
+    for part in Part:
+        if Metric.VAL_ALIGNMENT.on(part) in metrics:
+            found[f"bc_val_alignment_{part}"] = Metric.VAL_ALIGNMENT.on(part).of(metrics)
     if post is not None:  # the posterior this round's rows were drawn from
         found["mean_entropy_bits"] = float(np.nanmean(post.entropy_bits)) if len(
             post.entropy_bits) else None  # fmt: skip

@@ -52,6 +52,7 @@ from pokerirl.encoding import ACTIONS, CALL, CHECK, FOLD, NUM_ACTIONS
 from pokerirl.errors import InputError
 from pokerirl.game.agents import street_of
 from pokerirl.game.evaluator import hand_strength
+from pokerirl.irl.metrics import Metric
 from pokerirl.jsonio import parse_json, read_bytes, read_json
 from pokerirl.poker.rewards import Decisions, PokerReward
 from pokerirl.serial import Omit, Serializable, meta
@@ -561,7 +562,7 @@ def with_run_alignments(card: RewardCard, record: Mapping[str, Any]) -> RewardCa
     final = result.get("final_metrics") or {}
     return dataclasses.replace(
         card,
-        reward_alignment=final.get("val_reward_alignment"),
+        reward_alignment=Metric.VAL_REWARD_ALIGNMENT.of(final, None),
         bc_alignment=(result.get("baselines") or {}).get("bc"),
     )
 

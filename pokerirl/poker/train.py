@@ -13,7 +13,7 @@ beside it and renamed into place at the end (replacing an old run only with ``ov
 Errors are :class:`~pokerirl.irl.RunError` s naming the folder, never a command-line flag; the
 ones a command could get past carry a :class:`~pokerirl.errors.Remedy`.
 
->>> import tempfile, pyarrow.parquet as pq
+>>> import tempfile, numpy as np, pyarrow.parquet as pq
 >>> from pokerirl.datasets.toy import toy_expert_table
 >>> from pokerirl.irl import load_config, load_reward
 >>> tmp = Path(tempfile.mkdtemp())
@@ -29,6 +29,7 @@ dtype('float32')
 
 from __future__ import annotations
 
+import functools
 import json
 import os
 import tempfile
@@ -38,36 +39,36 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
-import numpy as np
 import torch
 
 from pokerirl.atomic import write_text
 from pokerirl.errors import ConfigError, Remedy
-from pokerirl.execution import Backend, pinned_threads, progress_share, unit_progress
+from pokerirl.execution import Backend, pinned_threads
 from pokerirl.game.encodings import EncodingName, get_encoding
 from pokerirl.irl.airl import resolve_device
 from pokerirl.irl.config import AIRLConfig, Algo
+from pokerirl.irl.metrics import Metric
 from pokerirl.irl.plots import plot_bands
-from pokerirl.irl.records import EpochMetrics
 from pokerirl.irl.run import (
-    BASELINES_FILE,
     CONFIG_FILE,
-    METRICS_FILE,
     SUMMARY_FILE,
     TIMINGS_FILE,
     RunError,
-    RunResult,
+    RunHooks,
     RunSummary,
+    read_run_result,
     summarize,
-    train_into,
+    train_runs_into,
 )
+from pokerirl.irl.run import TRAINED_SHARE as TRAINED_SHARE  # importable here as before
 from pokerirl.irl.transitions import Transitions
-from pokerirl.jsonio import read_json, read_json_lines
+from pokerirl.jsonio import read_json
 from pokerirl.poker.data import read_table
 from pokerirl.poker.reward_card import CARD_FILE
 from pokerirl.store import Unit, UnitConflict, UnitOutput, digest, run_units, staged_folder
 
 CARD_COLUMNS = ("hole_cards", "board")  # what the card reads beyond the trainer's columns
+TABLE_ENCODING: str = EncodingName.RLCARD  # the states a table is read in, unless told
 
 
 # --------------------------------------------------------------------------- one run
@@ -82,7 +83,7 @@ def train_table(
     device: str = "cpu",
     progress: bool = True,
     overwrite: bool = False,
-    encoding: str = EncodingName.RLCARD,
+    encoding: str = TABLE_ENCODING,
 ) -> RunSummary:
     """Train on a Parquet decision table, its states in ``encoding``, and write the run
     folder ``out_dir``.
@@ -113,7 +114,7 @@ class RewardBelowBC(UserWarning):
 def below_bc(metrics: Mapping[str, Any], baselines: Mapping[str, float]) -> float | None:
     """How far the reward's argmax alignment (``val_reward_alignment``) falls below the
     run's BC baseline, or None when it does not (or either is missing)."""
-    reward, bc = metrics.get("val_reward_alignment"), baselines.get("bc")
+    reward, bc = Metric.VAL_REWARD_ALIGNMENT.of(metrics, None), baselines.get("bc")
     if reward is None or bc is None or reward >= bc:
         return None
     return float(bc - reward)
@@ -126,8 +127,8 @@ def warn_below_bc(run: Path, metrics: Mapping[str, Any], baselines: Mapping[str,
         warnings.warn(
             RewardBelowBC(
                 f"{run}: the reward's argmax agrees with the expert on "
-                f"{metrics['val_reward_alignment']:.1%} of validation states, below its own "
-                f"behaviour cloning's {baselines['bc']:.1%}"
+                f"{Metric.VAL_REWARD_ALIGNMENT.of(metrics):.1%} of validation states, below its "
+                f"own behaviour cloning's {baselines['bc']:.1%}"
             ),
             stacklevel=2,
         )
@@ -143,26 +144,20 @@ def train_table_into(
     progress: bool = False,
     table: str | os.PathLike[str] | None = None,
     table_file: str | os.PathLike[str] | None = None,
-    encoding: str = EncodingName.RLCARD,
+    encoding: str = TABLE_ENCODING,
 ) -> RunSummary:
-    """:func:`pokerirl.irl.run.train_into`, then the reward card.
+    """One run of :func:`pokerirl.irl.run.train_runs_into`, its reward card as the finish.
 
     ``data`` holds the table's states in ``encoding`` (recorded in ``config.json``'s
     ``data.encoding``); ``table`` is the table's path for the record; ``table_file`` the
     file to read the reward card's states from (default ``table``)."""
-    with progress_share(0.0, TRAINED_SHARE):
-        summary = train_into(
-            data, folder, algo=algo, config=config, device=device, progress=progress,
-            data_path=table, data_notes={"encoding": get_encoding(encoding).spec},
-        )  # fmt: skip
-    write_reward_card(folder, table_file or table, label=None if table is None else str(table))
-    unit_progress(1, 1)  # the card is done: the bar moves after the last epoch too
-    return summary
-
-
-# Of a run unit's progress, where train_into ends; its reward card (the validation hands'
-# f, a figure) takes the rest, so the bar does not sit at 100% while it is drawn.
-TRAINED_SHARE = 0.9
+    card = functools.partial(write_reward_card, table=table_file or table,
+                             label=None if table is None else str(table))  # fmt: skip
+    trained = train_runs_into(
+        data, [folder], algo=algo, config=config, hooks=RunHooks(finish=card), device=device,
+        progress=progress, data_path=table, data_notes={"encoding": get_encoding(encoding).spec},
+    )  # fmt: skip
+    return RunSummary.of(trained.results, out_dir=folder, several=False)
 
 
 def write_reward_card(
@@ -194,7 +189,7 @@ def train_unit(
     algo: str,
     settings: Mapping[str, Any],
     device: str,
-    encoding: str = EncodingName.RLCARD,
+    encoding: str,
 ) -> UnitOutput[None]:
     """One run of a fan-out: a top-level, picklable function of plain arguments.
 
@@ -222,22 +217,6 @@ def train_unit(
     return UnitOutput(files=files, unhashed=timings)
 
 
-def _run_result(folder: Path) -> RunResult:
-    """A finished run folder, as :func:`~pokerirl.irl.run.summarize` reads it."""
-    record = read_json(folder / CONFIG_FILE)
-    timings_path = folder / TIMINGS_FILE
-    timings = read_json(timings_path) if timings_path.is_file() else {}
-    return RunResult(
-        out=str(folder),
-        seed=record["hyperparameters"]["seed"],
-        metrics=tuple(map(EpochMetrics.from_json, read_json_lines(folder / METRICS_FILE))),
-        baselines=read_json(folder / BASELINES_FILE),
-        samples_per_second=timings.get("samples_per_second", float("nan")),
-        train_rows=record["data"]["train_rows"],
-        val_rows=record["data"]["val_rows"],
-    )
-
-
 def train_runs(
     table: str | os.PathLike[str],
     out_dir: str | os.PathLike[str],
@@ -249,7 +228,7 @@ def train_runs(
     progress: bool = True,
     overwrite: bool = False,
     backend: Backend | None = None,
-    encoding: str = EncodingName.RLCARD,
+    encoding: str = TABLE_ENCODING,
     single_folder: bool = True,
 ) -> RunSummary:
     """``runs`` runs of ``config`` with seeds ``seed + k`` into ``out_dir/run-<k>``, then
@@ -310,22 +289,13 @@ def train_runs(
     for folder in folders:  # runs of an older pokerirl, reused: add their card
         if not (folder / CARD_FILE).is_file():
             write_reward_card(folder, table)
-    results = [_run_result(folder) for folder in folders]
+    results = [read_run_result(folder) for folder in folders]
     for folder, result in zip(folders, results, strict=True):
         warn_below_bc(folder, result.metrics[-1], result.baselines)
     summary = summarize(results).to_json()
     write_text(out / SUMMARY_FILE, json.dumps(summary, indent=2) + "\n")
     plot_bands(summary, out)
-    first = results[0]
-    return RunSummary(
-        out_dir=out,
-        metrics=list(first.metrics),
-        baselines=dict(first.baselines),
-        samples_per_second=float(np.nanmean([r.samples_per_second for r in results])),
-        train_rows=first.train_rows,
-        val_rows=first.val_rows,
-        results=tuple(results),
-    )
+    return RunSummary.of(results, out_dir=out)
 
 
 # --------------------------------------------------------------------------- EM
@@ -344,7 +314,7 @@ def train_em(
     device: str = "cpu",
     progress: bool = True,
     overwrite: bool = False,
-    encoding: str = EncodingName.RLCARD,
+    encoding: str = TABLE_ENCODING,
 ) -> dict[str, Any]:
     """EM over the hidden cards of an imputed table (``ingest --folds impute``): train on it
     (``OUT/round-0``), then ``rounds`` times re-impute its hidden players with the last run's

@@ -41,13 +41,13 @@ from pokerirl.gym.irl import GymIRLSummary
 from pokerirl.gym.quality import has_true_reward
 from pokerirl.gym.rl import DEFAULT_RL_BACKEND, RLBackend, read_curve
 from pokerirl.gym.tasks import task
+from pokerirl.irl.metrics import Metric
+from pokerirl.irl.run import read_epochs
 from pokerirl.meanstd import Curve, MeanStd, mean_std
 from pokerirl.studies.common import (
-    METRICS_JSONL,
     REPORT_MD,
     SUMMARY_JSON,
     StudyError,
-    read_jsonl,
     study_folder,
 )
 from pokerirl.studies.gym.config import StudyPreset, authors_budget, task_root
@@ -307,22 +307,22 @@ def task_summary(
             irl_final_return=irl.irl_final_return,
             rl_final_return=mean_std(rl.per_run_final),
             baselines=dict(irl.over_runs.baselines),
-            irl_per_run_final=_per_run_final(root / "irl" / algo, preset.runs, "eval_return"),
+            irl_per_run_final=_per_run_final(root / "irl" / algo, preset.runs),
             rl_per_run_final=rl.per_run_final,
             curves=AlgoCurves(
                 irl_epochs=list(irl.over_runs.epochs),
-                irl_return=metrics["eval_return"],
+                irl_return=Metric.EVAL_RETURN.of(metrics),
                 rl=rl.curve,
-                alignment=metrics["val_alignment"]
+                alignment=Metric.VAL_ALIGNMENT.of(metrics)
                 if found_task.discrete
                 else None,
             ),
             final_alignment=irl.final_alignment if found_task.discrete else None,
-            final_reward_alignment=_last(metrics["val_reward_alignment"])
+            final_reward_alignment=_last(Metric.VAL_REWARD_ALIGNMENT.of(metrics))
             if found_task.discrete
             else None,
-            final_disc_acc_expert=_last_of(metrics, "disc_acc_expert"),
-            final_disc_acc_policy=_last_of(metrics, "disc_acc_policy"),
+            final_disc_acc_expert=_last_of(metrics, Metric.DISC_ACC_EXPERT),
+            final_disc_acc_policy=_last_of(metrics, Metric.DISC_ACC_POLICY),
             **(reward_quality(root, env, algo, preset.runs) if has_true_reward(env) else {}),
         )
     env_rl = rl_curves(root, "env", preset.runs)
@@ -376,9 +376,10 @@ def _last(curve: Curve) -> MeanStd:
     return MeanStd(mean=curve.mean[-1], std=curve.std[-1])
 
 
-def _last_of(metrics: Mapping[str, Curve], key: str) -> MeanStd | None:
-    """The last point of the runs' ``key`` curve; None where they lack it (older runs)."""
-    return _last(metrics[key]) if key in metrics else None
+def _last_of(metrics: Mapping[str, Curve], metric: Metric) -> MeanStd | None:
+    """The last point of the runs' ``metric`` curve; None where they lack it (older runs)."""
+    curve = metric.of(metrics, None)
+    return None if curve is None else _last(curve)
 
 
 def reward_quality(root: Path, env: str, algo: str, runs: int) -> dict[str, Any]:
@@ -408,7 +409,8 @@ def reward_quality(root: Path, env: str, algo: str, runs: int) -> dict[str, Any]
     }
 
 
-def _per_run_final(folder: Path, runs: int, key: str) -> list[float]:
-    return [read_jsonl(folder / f"run-{k}" / METRICS_JSONL)[-1][key] for k in range(runs)]
+def _per_run_final(folder: Path, runs: int) -> list[float]:
+    """Each run's last evaluation return."""
+    return [Metric.EVAL_RETURN.of(read_epochs(folder / f"run-{k}")[-1]) for k in range(runs)]
 
 

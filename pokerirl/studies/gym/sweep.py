@@ -36,6 +36,7 @@ from pokerirl.execution import Backend
 from pokerirl.gym.irl import GymIRLSummary, irl_config
 from pokerirl.gym.presets import TASKS
 from pokerirl.gym.rl import DEFAULT_RL_BACKEND
+from pokerirl.irl.metrics import Metric
 from pokerirl.meanstd import mean_and_std
 from pokerirl.serial import Serializable
 from pokerirl.studies.common import StudyError, study_folder
@@ -239,11 +240,11 @@ def point_row(
     irl = GymIRLSummary.read(root / "irl" / "hairl")
     rl_mean, rl_std = mean_and_std(rl_curves(root, "hairl", preset.runs).per_run_final)
     alignment: dict[str, float | None] = {}
-    for name, key in (
-        ("final_alignment", "val_alignment"),
-        ("final_reward_alignment", "val_reward_alignment"),
+    for name, metric in (
+        ("final_alignment", Metric.VAL_ALIGNMENT),
+        ("final_reward_alignment", Metric.VAL_REWARD_ALIGNMENT),
     ):
-        curve = irl.over_runs.metrics.get(key) if discrete else None
+        curve = metric.of(irl.over_runs.metrics, None) if discrete else None
         alignment[f"{name}_mean"] = None if curve is None else curve.mean[-1]
         alignment[f"{name}_std"] = None if curve is None else curve.std[-1]
     return SweepRow(

@@ -12,6 +12,7 @@ import numpy as np
 from pokerirl.atomic import write_bytes
 from pokerirl.encoding import ACTIONS
 from pokerirl.figures import finish
+from pokerirl.irl.metrics import Metric
 from pokerirl.meanstd import Curve
 from pokerirl.studies.common import band
 from pokerirl.studies.poker.config import ALGO_LABELS, KIND_LABELS, TABLE1_ORDER, matchup_label
@@ -92,7 +93,7 @@ def _epochs(curve: Curve) -> np.ndarray:
 def irl_alignment(irl: IRLResult, path: Path) -> None:
     """Validation alignment over epochs, mean ± std over runs, with the baselines as lines."""
     trained = _trained(irl)
-    curves = {label: runs.curves["val_alignment"] for label, runs in trained.values()}
+    curves = {label: Metric.VAL_ALIGNMENT.of(runs.curves) for label, runs in trained.values()}
     bands = [(_epochs(curve), curve, label) for label, curve in curves.items()]
     lines = []
     styles = {"majority": ":", "legal_majority": "--", "bc": "-."}
@@ -110,9 +111,9 @@ def irl_alignment(irl: IRLResult, path: Path) -> None:
 def irl_discriminator(irl: IRLResult, path: Path) -> None:
     """Discriminator accuracy on expert and on policy actions over epochs, mean ± std."""
     bands = [
-        (_epochs(runs.curves[key]), runs.curves[key], f"{label}, {side}")
+        (_epochs(metric.of(runs.curves)), metric.of(runs.curves), f"{label}, {side}")
         for label, runs in _trained(irl).values()
-        for key, side in (("disc_acc_expert", "expert"), ("disc_acc_policy", "policy"))
+        for metric, side in ((Metric.DISC_ACC_EXPERT, "expert"), (Metric.DISC_ACC_POLICY, "policy"))
     ]
     _band_figure(path, bands, xlabel="epoch", ylabel="accuracy (share of samples)",
                  title="IRL: discriminator accuracy", spread=_over_runs(irl), integer_x=True,
@@ -125,8 +126,8 @@ def irl_actions(irl: IRLResult, path: Path) -> None:
     trained = _trained(irl)
     groups: dict[str, Curve] = {}
     for label, runs in trained.values():
-        groups["expert"] = runs.action_dist["val_expert_dist"]
-        groups[label] = runs.action_dist["val_policy_dist"]
+        groups["expert"] = Metric.VAL_EXPERT_DIST.of(runs.action_dist)
+        groups[label] = Metric.VAL_POLICY_DIST.of(runs.action_dist)
     if not groups:
         figure, axis = plt.subplots(figsize=(6.4, 4))
         axis.set_title("no IRL runs: both rewards were given")

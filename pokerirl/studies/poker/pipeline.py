@@ -291,24 +291,29 @@ def run_paths(out: Path, runs: int) -> list[Path]:
 def summarize_irl(out: Path, runs: int) -> IRLRuns:
     """Per-epoch mean/std over runs of the curves the report draws, final values per run,
     mean action distributions and the baselines."""
+    from pokerirl.irl.metrics import Metric
     from pokerirl.irl.run import read_baselines, read_epochs
 
     metrics = [read_epochs(p) for p in run_paths(out, runs)]
     found_baselines = [read_baselines(p) for p in run_paths(out, runs)]
     epochs = min(len(m) for m in metrics)
     curves: dict[str, Curve] = {}
-    for key in ("val_alignment", "disc_acc_expert", "disc_acc_policy", "val_reward_alignment"):
-        if key in metrics[0][0]:
-            curves[key] = Curve.of([[line[key] for line in run[:epochs]] for run in metrics])
+    final: dict[str, Spread] = {}
+    for metric in (Metric.VAL_ALIGNMENT, Metric.DISC_ACC_EXPERT, Metric.DISC_ACC_POLICY,
+                   Metric.VAL_REWARD_ALIGNMENT):  # fmt: skip
+        if metric in metrics[0][0]:
+            curves[metric] = Curve.of([[metric.of(line) for line in run[:epochs]]
+                                       for run in metrics])  # fmt: skip
+            final[metric] = Spread.of([metric.of(run[epochs - 1]) for run in metrics])
     dists: dict[str, Curve] = {}
-    for key in ("val_expert_dist", "val_policy_dist"):
-        if key in metrics[0][-1]:
-            dists[key] = Curve.of([run[epochs - 1][key] for run in metrics])
+    for metric in (Metric.VAL_EXPERT_DIST, Metric.VAL_POLICY_DIST):
+        if metric in metrics[0][-1]:
+            dists[metric] = Curve.of([metric.of(run[epochs - 1]) for run in metrics])
     return IRLRuns(
         runs=runs,
         epochs=epochs,
         curves=curves,
-        final={key: Spread.of([run[epochs - 1][key] for run in metrics]) for key in curves},
+        final=final,
         action_dist=dists,
         baselines={key: Spread.of([b[key] for b in found_baselines]) for key in found_baselines[0]},
     )

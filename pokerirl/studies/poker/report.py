@@ -10,6 +10,7 @@ from typing import TYPE_CHECKING
 
 from pokerirl import atomic
 from pokerirl.encoding import ACTIONS
+from pokerirl.irl.metrics import Metric
 from pokerirl.jsonio import read_json
 from pokerirl.meanstd import MeanStd, mean_and_std
 from pokerirl.studies.common import REPORT_JSON, REPORT_MD, markdown_table
@@ -102,12 +103,14 @@ def build_report(
         final = found.final
         published = paper.IRL_ALIGNMENT.get(algo)  # GAIL is not in the paper
         algos[algo] = IRLAlgoPart(
-            final_val_alignment=final["val_alignment"].stats,
-            final_disc_acc_expert=final["disc_acc_expert"].stats,
-            final_disc_acc_policy=final["disc_acc_policy"].stats,
-            per_run_val_alignment=final["val_alignment"].values,
+            final_val_alignment=Metric.VAL_ALIGNMENT.of(final).stats,
+            final_disc_acc_expert=Metric.DISC_ACC_EXPERT.of(final).stats,
+            final_disc_acc_policy=Metric.DISC_ACC_POLICY.of(final).stats,
+            per_run_val_alignment=Metric.VAL_ALIGNMENT.of(final).values,
             final_val_reward_alignment=(
-                final["val_reward_alignment"].stats if "val_reward_alignment" in final else None
+                Metric.VAL_REWARD_ALIGNMENT.of(final).stats
+                if Metric.VAL_REWARD_ALIGNMENT in final
+                else None
             ),
             paper=IRLPaper(
                 final_val_alignment=None if published is None else MeanStd(**published),

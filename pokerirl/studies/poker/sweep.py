@@ -545,9 +545,10 @@ def _irl_runs(sweep: _Sweep, cell: Cell) -> list[Path]:
 def _agreements(runs: Sequence[Path]) -> tuple[tuple[float, ...], tuple[float, ...]]:
     """Per run: f's argmax agreement with the expert on the validation hands (the last
     epoch's), and behaviour cloning's."""
+    from pokerirl.irl.metrics import Metric
     from pokerirl.irl.run import read_baselines, read_epochs
 
-    reward = tuple(float(read_epochs(run)[-1]["val_reward_alignment"]) for run in runs)
+    reward = tuple(float(Metric.VAL_REWARD_ALIGNMENT.of(read_epochs(run)[-1])) for run in runs)
     bc = tuple(float(read_baselines(run)["bc"]) for run in runs)
     return reward, bc
 
