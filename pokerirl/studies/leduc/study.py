@@ -1,0 +1,377 @@
+"""The Leduc study (``pokerirl leduc study``): CFR+ expert -> demonstrations -> AIRL, H-AIRL,
+GAIL and BC runs -> tabular RL on each learned reward and on the sparse reward -> exact
+agreement, exploitability and expected values -> ``report.md``, ``report.json``, a figure.
+
+Stages write files under the study folder and a rerun skips those present (``study.json``
+refuses a folder made with other settings): ``solve/``, ``demos.npz``, ``irl/LEARNER.json``,
+``rl/SOURCE-SEED.json``. The store's units are not used: every stage here is seconds to
+minutes and runs in this process.
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from collections.abc import Callable
+from dataclasses import asdict, dataclass, replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from pokerirl.atomic import write_text
+from pokerirl.errors import ConfigError
+from pokerirl.game.leduc.demos import Demonstrations, load, save, synthesize
+from pokerirl.game.leduc.exact import MILLI, agreement, expected_value, exploitability
+from pokerirl.game.leduc.infosets import InfoSets, info_sets, one_hot_argmax
+from pokerirl.game.leduc.rules import LeducRules, RuleSet, get_rules
+from pokerirl.game.leduc.strategy import Strategy, read_strategy
+from pokerirl.meanstd import mean_and_std
+from pokerirl.studies.common import claim_folder, markdown_table
+from pokerirl.studies.leduc.learn import Learned, Learner, counted_policy, learn
+
+REWARDS = (Learner.AIRL, Learner.HAIRL, Learner.GAIL)  # the learners with a reward
+SPARSE = "sparse"
+FILES = ("report.md", "report.json", "agreement.png")
+
+
+@dataclass(frozen=True, kw_only=True)
+class LeducStudyConfig:
+    """A preset: CFR+ iterations, demonstration hands, IRL runs per learner and epochs, RL
+    seeds (seed s trains on IRL run ``s % runs``) and hands per RL agent."""
+
+    preset: str
+    rules: RuleSet = RuleSet.RLCARD
+    cfr_iterations: int
+    hands: int
+    runs: int
+    epochs: int
+    rl_seeds: tuple[int, ...]
+    rl_hands: int
+    seed: int = 0  # of the demonstrations
+
+    def __post_init__(self) -> None:
+        if min(self.cfr_iterations, self.hands, self.runs, self.epochs, self.rl_hands) < 1 \
+                or not self.rl_seeds or len(set(self.rl_seeds)) != len(self.rl_seeds) \
+                or min(self.rl_seeds) < 0:  # fmt: skip
+            raise ConfigError("a Leduc study needs counts >= 1 and distinct RL seeds >= 0")
+
+    def settings(self) -> dict[str, Any]:
+        return {**asdict(self), "rl_seeds": list(self.rl_seeds)}
+
+
+# quick: the poker study's quick IRL (2 runs per algorithm, 20 epochs, 4 agent seeds: two
+# per IRL run) on 10,000 expert hands (~35,000 decisions); smoke: seconds, numbers meaningless.
+PRESETS = {
+    "quick": LeducStudyConfig(preset="quick", cfr_iterations=1000, hands=10_000, runs=2,
+                              epochs=20, rl_seeds=(0, 1, 2, 3), rl_hands=500_000),
+    "smoke": LeducStudyConfig(preset="smoke", cfr_iterations=20, hands=200, runs=2, epochs=1,
+                              rl_seeds=(0, 1), rl_hands=2_000),
+}  # fmt: skip
+
+
+def preset(name: str, *, rules: str = RuleSet.RLCARD) -> LeducStudyConfig:
+    if name not in PRESETS:
+        raise ConfigError(f"unknown Leduc study preset {name!r}: choose {', '.join(PRESETS)}")
+    return replace(PRESETS[name], rules=RuleSet(get_rules(rules).name))
+
+
+def run_leduc_study(
+    config: LeducStudyConfig,
+    out: Path,
+    *,
+    expert: Path | None = None,
+    overwrite: bool = False,
+    echo: Callable[[str], None] = lambda line: None,
+) -> dict[str, Any]:
+    """Run (or finish) the study in ``out``; ``expert``: a strategy file or solve folder to
+    use in place of solving. Returns report.json's content."""
+    from pokerirl.game.leduc.solve import solve
+
+    rules = get_rules(config.rules)
+    strategy_file = _expert_file(expert) if expert is not None else out / "solve" / "strategy.json"
+    if expert is not None:
+        read_strategy(strategy_file)  # a bad file is refused before the folder is claimed
+    settings = {**config.settings(), "expert": None if expert is None else str(strategy_file)}
+    out.mkdir(parents=True, exist_ok=True)
+    claim_folder(out, settings, overwrite=overwrite)
+    clock = time.perf_counter()
+
+    def stage(line: str) -> None:
+        echo(f"[{time.perf_counter() - clock:6.1f} s] {line}")
+
+    if not strategy_file.is_file():
+        stage(f"solve: CFR+ {config.cfr_iterations:,} iterations ({rules.name} rules)")
+        solve(rules, iterations=config.cfr_iterations, out=out / "solve", overwrite=True)
+    found_rules, cfr = read_strategy(strategy_file)
+    if found_rules != rules:
+        raise ConfigError(f"{strategy_file}: a strategy for the {found_rules.name} rules, "
+                          f"not {rules.name}")  # fmt: skip
+    demos_file = out / "demos.npz"
+    if not demos_file.is_file() or overwrite:
+        stage(f"synth: {config.hands:,} hands of the expert against itself (seed {config.seed})")
+        save(synthesize(rules, cfr, hands=config.hands, seed=config.seed), demos_file)
+    demos = load(demos_file)
+    stage(f"demonstrations: {len(demos):,} decisions")
+    sets = info_sets(rules)
+    runs = tuple(range(config.runs))
+    learned: dict[Learner, list[Learned]] = {}
+    for learner in Learner:
+        path = out / "irl" / f"{learner}.json"
+        if not path.is_file() or overwrite:
+            stage(f"irl: {learner}, {config.runs} run(s) of {config.epochs} epochs")
+            _write_learned(path, learn(demos, learner, seeds=runs, epochs=config.epochs))
+        learned[learner] = _read_learned(path, learner, sets)
+    agents: dict[str, dict[int, dict[str, Any]]] = {}
+    for source in (SPARSE, *REWARDS):
+        agents[source] = {}
+        for seed in config.rl_seeds:
+            path = out / "rl" / f"{source}-{seed}.json"
+            if not path.is_file() or overwrite:
+                stage(f"rl: {source} reward, seed {seed}, {config.rl_hands:,} hands")
+                _write_agent(path, config, rules, cfr, sets, source, seed, learned)
+            agents[source][seed] = json.loads(path.read_text())
+    stage("evaluate: exact agreement, exploitability and expected values")
+    report = _report(config, rules, cfr, demos, sets, learned, agents)
+    write_text(out / "report.json", json.dumps(report, indent=1) + "\n")
+    write_text(out / "report.md", render(report))
+    _figure(report, out / "agreement.png")
+    stage(f"wrote {out}/report.md, report.json, agreement.png")
+    return report
+
+
+def _expert_file(expert: Path) -> Path:
+    return expert / "strategy.json" if expert.is_dir() else expert
+
+
+# ----------------------------------------------------------------------------- stage files
+
+
+def _write_learned(path: Path, runs: list[Learned]) -> None:
+    def table(values: np.ndarray | None) -> list[list[float]] | None:
+        return None if values is None else np.where(np.isfinite(values), values, 0.0).tolist()
+
+    rows = [{"seed": r.seed, "val_alignment": r.val_alignment, "reward": table(r.reward),
+             "policy": table(r.policy)} for r in runs]  # fmt: skip
+    path.parent.mkdir(parents=True, exist_ok=True)
+    write_text(path, json.dumps(rows) + "\n")
+
+
+def _read_learned(path: Path, learner: Learner, sets: InfoSets) -> list[Learned]:
+    rows = json.loads(path.read_text())
+
+    def table(values: list[list[float]] | None, fill: float) -> np.ndarray | None:
+        return None if values is None else np.where(sets.legal, np.asarray(values), fill)
+
+    return [
+        Learned(learner=learner, seed=row["seed"], val_alignment=row["val_alignment"],
+                reward=table(row["reward"], -np.inf),
+                policy=table(row["policy"], 0.0))  # type: ignore[arg-type]  # fmt: skip
+        for row in rows
+    ]
+
+
+def _write_agent(path: Path, config: LeducStudyConfig, rules: LeducRules, cfr: Strategy,
+                 sets: InfoSets, source: str, seed: int,
+                 learned: dict[Learner, list[Learned]]) -> None:  # fmt: skip
+    from pokerirl.agents.leduc_q import QConfig, train_q
+
+    run = None if source == SPARSE else learned[Learner(source)][seed % config.runs]
+    reward = None if run is None else np.where(sets.legal, run.reward, 0.0)
+    agent = train_q(rules, cfr, config=QConfig(hands=config.rl_hands, seed=seed), reward=reward)
+    greedy = one_hot_argmax(np.where(agent.visits > 0, agent.q, 0.0), sets.legal)
+    follows = None
+    if reward is not None:  # the share of information sets where it takes its reward's argmax
+        follows = float((greedy.argmax(1) == one_hot_argmax(reward, sets.legal).argmax(1)).mean())
+    document = {"source": source, "seed": seed, "irl_run": None if run is None else run.seed,
+                "follows_reward": follows, "greedy": greedy.argmax(1).tolist()}  # fmt: skip
+    path.parent.mkdir(parents=True, exist_ok=True)
+    write_text(path, json.dumps(document) + "\n")
+
+
+# ----------------------------------------------------------------------------- the report
+
+
+def _stats(values: list[float]) -> dict[str, float]:
+    mean, std = mean_and_std(values)
+    return {"mean": mean, "std": std, "n": len(values)}
+
+
+def _report(config: LeducStudyConfig, rules: LeducRules, cfr: Strategy, demos: Demonstrations,
+            sets: InfoSets, learned: dict[Learner, list[Learned]],
+            agents: dict[str, dict[int, dict[str, Any]]]) -> dict[str, Any]:  # fmt: skip
+    def agree(strategy: Strategy) -> dict[str, float]:
+        found = agreement(rules, strategy, cfr)
+        return {"uniform": found.uniform, "reached": found.reached}
+
+    learners: dict[str, Any] = {}
+    for learner, runs in learned.items():
+        rows = []
+        for run in runs:
+            policy = sets.strategy(run.policy)
+            row: dict[str, Any] = {"seed": run.seed, "val_alignment": run.val_alignment,
+                                   "policy_agreement": agree(policy),
+                                   "policy_exploitability": exploitability(rules, policy)}
+            if run.reward is not None:
+                row["reward_agreement"] = agree(sets.greedy(run.reward))
+            rows.append(row)
+        learners[learner] = {"runs": rows, "summary": _summary(rows)}
+    counted = sets.strategy(counted_policy(demos))
+    bc_counts = {"policy_agreement": agree(counted),
+                 "policy_exploitability": exploitability(rules, counted)}  # fmt: skip
+    strategies = {source: {seed: sets.strategy(np.eye(4)[a["greedy"]]) for seed, a in by.items()}
+                  for source, by in agents.items()}  # fmt: skip
+    rl: dict[str, Any] = {}
+    for source, by in agents.items():
+        rows = []
+        for seed, agent in by.items():
+            mine = strategies[source][seed]
+            row = {"seed": seed, "irl_run": agent["irl_run"],
+                   "exploitability": exploitability(rules, mine),
+                   "ev_vs_expert": expected_value(rules, mine, cfr).mean,
+                   "ev_vs_sparse": expected_value(rules, mine, strategies[SPARSE][seed]).mean,
+                   "follows_reward": agent["follows_reward"]}  # fmt: skip
+            rows.append(row)
+        rl[source] = {"agents": rows, "summary": _summary(rows)}
+    return {
+        "format": "leduc-study", "version": 1, "settings": config.settings(),
+        "rules": rules.name, "decisions": len(demos), "information_sets": len(sets.keys),
+        "expert": {"sha256": demos.expert_sha256, "exploitability": exploitability(rules, cfr)},
+        "learners": learners, "bc_counts": bc_counts, "rl": rl,
+    }  # fmt: skip
+
+
+def _summary(rows: list[dict[str, Any]]) -> dict[str, Any]:
+    """Mean and std (over runs or seeds) of every number, nested names joined by dots."""
+    flat: dict[str, list[float]] = {}
+    for row in rows:
+        for name, value in _flatten(row):
+            if name not in ("seed", "irl_run") and value is not None:
+                flat.setdefault(name, []).append(float(value))
+    return {name: _stats(values) for name, values in flat.items()}
+
+
+def _flatten(row: dict[str, Any], prefix: str = "") -> list[tuple[str, Any]]:
+    found: list[tuple[str, Any]] = []
+    for name, value in row.items():
+        if isinstance(value, dict):
+            found += _flatten(value, f"{prefix}{name}.")
+        else:
+            found.append((prefix + name, value))
+    return found
+
+
+def _pm(summary: dict[str, Any], name: str, scale: float = 1.0, digits: int = 3) -> str:
+    if name not in summary:
+        return "–"
+    s = summary[name]
+    return f"{s['mean'] * scale:.{digits}f} ± {s['std'] * scale:.{digits}f}"
+
+
+def render(report: dict[str, Any]) -> str:
+    """report.md: a verdict paragraph, then the tables (mean ± std over runs or seeds)."""
+    settings, learners, rl = report["settings"], report["learners"], report["rl"]
+    expert_mc = report["expert"]["exploitability"] * MILLI
+    lines = [f"# Leduc study ({report['rules']} rules, preset {settings['preset']})", "",
+             verdict(report), "",
+             f"Expert: CFR+ after {settings['cfr_iterations']:,} iterations, exploitability "
+             f"{expert_mc:.3f} milli-chips per hand. Demonstrations: {settings['hands']:,} "
+             f"hands of the expert against itself (seed {settings['seed']}), "
+             f"{report['decisions']:,} decisions; {report['information_sets']} information "
+             f"sets. IRL: {settings['runs']} runs per learner, {settings['epochs']} epochs. "
+             f"RL: tabular Monte-Carlo control against the expert, {settings['rl_hands']:,} "
+             f"hands per agent, seeds {settings['rl_seeds']} (seed s on IRL run s mod "
+             f"{settings['runs']}). Every figure is exact (no sampling) except the training "
+             "itself; ± is the standard deviation over IRL runs or RL seeds.", "",
+             "## What was learned, against the CFR expert", "",
+             "Agreement: the share of information sets where the argmax matches the expert's "
+             "(uniform: each set once; reached: weighted by how often the expert reaches "
+             "it). Exploitability in milli-chips per hand.", ""]  # fmt: skip
+    head = ["learner", "policy agreement (uniform)", "policy agreement (reached)",
+            "policy exploitability (mchips)", "reward argmax agreement (uniform)",
+            "reward argmax agreement (reached)", "validation alignment"]  # fmt: skip
+    rows = []
+    for name, part in learners.items():
+        s = part["summary"]
+        rows.append([name.upper() if name != "hairl" else "H-AIRL",
+                     _pm(s, "policy_agreement.uniform"), _pm(s, "policy_agreement.reached"),
+                     _pm(s, "policy_exploitability", MILLI, 0),
+                     _pm(s, "reward_agreement.uniform"), _pm(s, "reward_agreement.reached"),
+                     _pm(s, "val_alignment")])  # fmt: skip
+    counts = report["bc_counts"]
+    rows.append(["BC (counts: the data's frequencies)",
+                 f"{counts['policy_agreement']['uniform']:.3f}",
+                 f"{counts['policy_agreement']['reached']:.3f}",
+                 f"{counts['policy_exploitability'] * MILLI:.0f}", "–", "–", "–"])  # fmt: skip
+    rows.append(["CFR expert", "1", "1", f"{expert_mc:.3f}", "–", "–", "–"])
+    lines += markdown_table(head, rows)
+    lines += ["", "## RL on each reward, against the CFR expert", "",
+              "Greedy strategies of tabular agents; expected values in milli-chips per hand "
+              "for the agent, the mean over both seats (exact). 'follows reward': the share "
+              "of information sets where the agent's action is its reward's argmax.", ""]  # fmt: skip
+    head = ["reward", "exploitability (mchips)", "EV vs CFR expert (mchips)",
+            "EV vs sparse agent (mchips)", "follows reward"]  # fmt: skip
+    rows = []
+    for name, part in rl.items():
+        s = part["summary"]
+        rows.append([name if name == SPARSE else f"learned ({name})",
+                     _pm(s, "exploitability", MILLI, 0), _pm(s, "ev_vs_expert", MILLI, 1),
+                     _pm(s, "ev_vs_sparse", MILLI, 1), _pm(s, "follows_reward")])  # fmt: skip
+    lines += markdown_table(head, rows)
+    return "\n".join(lines) + "\n"
+
+
+def verdict(report: dict[str, Any]) -> str:
+    """The opening paragraph, from the numbers (what was found, not what was hoped)."""
+    learners, rl = report["learners"], report["rl"]
+    reached = {n: p["summary"]["policy_agreement.reached"]["mean"] for n, p in learners.items()}
+    rewards = {n: p["summary"]["reward_agreement.reached"]["mean"]
+               for n, p in learners.items() if "reward_agreement.reached" in p["summary"]}
+    best = max(rewards, key=rewards.__getitem__)
+    sparse = rl[SPARSE]["summary"]["ev_vs_expert"]["mean"] * MILLI
+    learned_ev = {n: p["summary"]["ev_vs_expert"]["mean"] * MILLI
+                  for n, p in rl.items() if n != SPARSE}  # fmt: skip
+    top = max(learned_ev, key=learned_ev.__getitem__)
+    bc = reached[Learner.BC]
+    beat_bc = [n for n in rewards if reached[n] > bc]
+    return (
+        f"Where the expert plays, every learned policy matches its most likely action at "
+        f"{min(reached.values()):.1%} to {max(reached.values()):.1%} of the reached "
+        f"information sets (BC: {bc:.1%}); "
+        f"{'none of the IRL policies beats BC' if not beat_bc else ', '.join(beat_bc) + ' beat BC'}"
+        f" there. The rewards' own argmax agrees less or more: best {best} at "
+        f"{rewards[best]:.1%} of the reached sets. Trained on a learned reward against the "
+        f"expert, the best agents ({top}) win {learned_ev[top]:+.0f} milli-chips per hand "
+        f"against it, where agents trained on the chips themselves win {sparse:+.0f}: "
+        + ("a learned reward did no worse than the sparse one here."
+           if learned_ev[top] >= sparse else
+           "no learned reward made as strong an agent as the sparse reward did.")
+    )  # fmt: skip
+
+
+def _figure(report: dict[str, Any], path: Path) -> None:
+    from matplotlib.figure import Figure
+
+    from pokerirl.figures import finish
+
+    figure = Figure(figsize=(7, 4))
+    axes = figure.add_subplot()
+    names = list(report["learners"])
+    for i, (metric, label) in enumerate((("policy_agreement.reached", "policy"),
+                                         ("reward_agreement.reached", "reward argmax"))):  # fmt: skip
+        xs, means, stds = [], [], []
+        for j, name in enumerate(names):
+            s = report["learners"][name]["summary"]
+            if metric in s:
+                xs.append(j + (i - 0.5) * 0.35)
+                means.append(s[metric]["mean"])
+                stds.append(s[metric]["std"])
+        axes.bar(xs, means, width=0.35, yerr=stds, capsize=3, label=label)
+    bc = report["learners"][Learner.BC]["summary"]["policy_agreement.reached"]["mean"]
+    axes.axhline(bc, linestyle="-.", color="k", label="BC (net) policy")
+    axes.set_xticks(range(len(names)), [n.upper() for n in names])
+    axes.set_ylim(0, 1.05)
+    finish(axes, title=f"Leduc ({report['rules']}): agreement with the CFR expert",
+           xlabel="learner", ylabel="share of reached information sets",
+           spread="bars: mean ± std over IRL runs")  # fmt: skip
+    figure.savefig(path, format="png", dpi=100, bbox_inches="tight", metadata={"Software": None})
