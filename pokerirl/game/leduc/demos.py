@@ -33,7 +33,7 @@ from pokerirl.game.leduc.strategy import Strategy, sha256, to_json
 
 FORMAT = "leduc-demonstrations"
 ARRAYS = ("obs", "legal", "action", "next_obs", "done", "reward", "hand", "position", "row")
-MAX_HANDS = 10_000_000  # about 25M decisions: 2 GB of observations
+MAX_HANDS = 10_000_000  # about 25M decisions: 2 GB of observations (the CLI offers the same)
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
