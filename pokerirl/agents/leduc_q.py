@@ -45,8 +45,8 @@ class QConfig:
     seed: int = 0
 
     def __post_init__(self) -> None:
-        if not (1 <= self.hands <= MAX_HANDS and self.batch >= 1
-                and 0 <= self.epsilon_end <= self.epsilon_start <= 1 and self.seed >= 0):  # fmt: skip
+        epsilons = 0 <= self.epsilon_end <= self.epsilon_start <= 1
+        if not (1 <= self.hands <= MAX_HANDS and self.batch >= 1 and epsilons and self.seed >= 0):
             raise ConfigError(
                 f"invalid Q-learning settings: need 1 <= hands <= {MAX_HANDS:,}, batch >= 1, "
                 "0 <= epsilon_end <= epsilon_start <= 1, seed >= 0"

@@ -125,7 +125,9 @@ def synth(
         help="The expert: a solve folder (its strategy.json) or a strategy file.",
     ),
     hands: int = typer.Option(10_000, "--hands", "-n", min=1, max=MAX_HANDS, help="Hands."),
-    seed: int = typer.Option(0, "--seed", min=0, max=2**32 - 1, help="Seed of the deals and draws."),
+    seed: int = typer.Option(
+        0, "--seed", min=0, max=2**32 - 1, help="Seed of the deals and the draws."
+    ),
     opponent: Path | None = typer.Option(
         None, "--opponent", metavar="STRATEGY.json",
         help="Play the expert against this strategy (seats alternate) and record only the "
@@ -158,11 +160,14 @@ class StudyPreset(StrEnum):
     SMOKE = "smoke"
 
 
+PRESET_CHOICES = choices(StudyPreset)
+
+
 @leduc_app.command()
 def study(
     out: Path = typer.Option(..., "--out", "-o", help="The study folder (resumed if present)."),
     preset: StudyPreset = typer.Option(
-        StudyPreset.QUICK, "--preset", metavar=choices(StudyPreset),
+        StudyPreset.QUICK, "--preset", metavar=PRESET_CHOICES,
         help="quick: 10,000 expert hands, 2 IRL runs of 20 epochs per learner, 4 RL seeds; "
              "smoke: seconds, numbers meaningless.",
     ),

@@ -89,7 +89,8 @@ def synthesize(
 ) -> Demonstrations:
     """``hands`` hands: ``expert`` in position ``hand % 2``, ``opponent`` in the other (None:
     the expert plays itself and both seats are the expert's); the expert's decisions in
-    ``positions`` (0 acts first in the first round) are recorded. Seeded: the same arguments give the same arrays."""
+    ``positions`` (0 acts first in the first round) are recorded. Seeded: the same
+    arguments give the same arrays."""
     if not 1 <= hands <= MAX_HANDS:
         raise InputError(f"hands must lie in 1..{MAX_HANDS:,}, got {hands}")
     sets = info_sets(rules)

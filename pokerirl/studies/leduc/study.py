@@ -32,6 +32,7 @@ from pokerirl.studies.leduc.learn import Learned, Learner, counted_policy, learn
 
 REWARDS = (Learner.AIRL, Learner.HAIRL, Learner.GAIL)  # the learners with a reward
 SPARSE = "sparse"
+LABELS = {Learner.AIRL: "AIRL", Learner.HAIRL: "H-AIRL", Learner.GAIL: "GAIL", Learner.BC: "BC"}
 FILES = ("report.md", "report.json", "agreement.png")
 
 
@@ -160,13 +161,15 @@ def _write_learned(path: Path, runs: list[Learned]) -> None:
 def _read_learned(path: Path, learner: Learner, sets: InfoSets) -> list[Learned]:
     rows = json.loads(path.read_text())
 
-    def table(values: list[list[float]] | None, fill: float) -> np.ndarray | None:
-        return None if values is None else np.where(sets.legal, np.asarray(values), fill)
+    def table(values: list[list[float]], fill: float) -> np.ndarray:
+        return np.where(sets.legal, np.asarray(values), fill)
 
     return [
-        Learned(learner=learner, seed=row["seed"], val_alignment=row["val_alignment"],
-                reward=table(row["reward"], -np.inf),
-                policy=table(row["policy"], 0.0))  # type: ignore[arg-type]  # fmt: skip
+        Learned(
+            learner=learner, seed=row["seed"], val_alignment=row["val_alignment"],
+            reward=None if row["reward"] is None else table(row["reward"], -np.inf),
+            policy=table(row["policy"], 0.0),
+        )
         for row in rows
     ]
 
@@ -177,7 +180,7 @@ def _write_agent(path: Path, config: LeducStudyConfig, rules: LeducRules, cfr: S
     from pokerirl.agents.leduc_q import QConfig, train_q
 
     run = None if source == SPARSE else learned[Learner(source)][seed % config.runs]
-    reward = None if run is None else np.where(sets.legal, run.reward, 0.0)
+    reward = None if run is None or run.reward is None else np.where(sets.legal, run.reward, 0)
     agent = train_q(rules, cfr, config=QConfig(hands=config.rl_hands, seed=seed), reward=reward)
     greedy = one_hot_argmax(np.where(agent.visits > 0, agent.q, 0.0), sets.legal)
     follows = None
@@ -293,7 +296,7 @@ def render(report: dict[str, Any]) -> str:
     rows = []
     for name, part in learners.items():
         s = part["summary"]
-        rows.append([name.upper() if name != "hairl" else "H-AIRL",
+        rows.append([LABELS[Learner(name)],
                      _pm(s, "policy_agreement.uniform"), _pm(s, "policy_agreement.reached"),
                      _pm(s, "policy_exploitability", MILLI, 0),
                      _pm(s, "reward_agreement.uniform"), _pm(s, "reward_agreement.reached"),
@@ -308,13 +311,14 @@ def render(report: dict[str, Any]) -> str:
     lines += ["", "## RL on each reward, against the CFR expert", "",
               "Greedy strategies of tabular agents; expected values in milli-chips per hand "
               "for the agent, the mean over both seats (exact). 'follows reward': the share "
-              "of information sets where the agent's action is its reward's argmax.", ""]  # fmt: skip
+              "of information sets where the agent's action is its reward's argmax.",
+              ""]  # fmt: skip
     head = ["reward", "exploitability (mchips)", "EV vs CFR expert (mchips)",
             "EV vs sparse agent (mchips)", "follows reward"]  # fmt: skip
     rows = []
     for name, part in rl.items():
         s = part["summary"]
-        rows.append([name if name == SPARSE else f"learned ({name})",
+        rows.append([name if name == SPARSE else f"learned ({LABELS[Learner(name)]})",
                      _pm(s, "exploitability", MILLI, 0), _pm(s, "ev_vs_expert", MILLI, 1),
                      _pm(s, "ev_vs_sparse", MILLI, 1), _pm(s, "follows_reward")])  # fmt: skip
     lines += markdown_table(head, rows)
@@ -324,29 +328,46 @@ def render(report: dict[str, Any]) -> str:
 def verdict(report: dict[str, Any]) -> str:
     """The opening paragraph, from the numbers (what was found, not what was hoped)."""
     learners, rl = report["learners"], report["rl"]
-    reached = {n: p["summary"]["policy_agreement.reached"]["mean"] for n, p in learners.items()}
-    rewards = {n: p["summary"]["reward_agreement.reached"]["mean"]
-               for n, p in learners.items() if "reward_agreement.reached" in p["summary"]}
-    best = max(rewards, key=rewards.__getitem__)
-    sparse = rl[SPARSE]["summary"]["ev_vs_expert"]["mean"] * MILLI
-    learned_ev = {n: p["summary"]["ev_vs_expert"]["mean"] * MILLI
-                  for n, p in rl.items() if n != SPARSE}  # fmt: skip
-    top = max(learned_ev, key=learned_ev.__getitem__)
-    bc = reached[Learner.BC]
-    beat_bc = [n for n in rewards if reached[n] > bc]
+
+    def mean(part: dict[str, Any], name: str, scale: float = 1.0) -> float:
+        return float(part["summary"][name]["mean"]) * scale
+
+    def span(values: dict[str, float], fmt: str) -> str:
+        low, high = min(values.values()), max(values.values())
+        return format(low, fmt) if low == high else f"{low:{fmt}} to {high:{fmt}}"
+
+    irl = {n: p for n, p in learners.items() if n != Learner.BC}
+    reached = {n: mean(p, "policy_agreement.reached") for n, p in irl.items()}
+    uniform = {n: mean(p, "policy_agreement.uniform") for n, p in irl.items()}
+    rewards = {n: mean(p, "reward_agreement.reached") for n, p in irl.items()}
+    exploit = {n: mean(p, "policy_exploitability", MILLI) for n, p in learners.items()}
+    bc = learners[Learner.BC]
+    beat = [LABELS[Learner(n)] for n in irl if reached[n] > mean(bc, "policy_agreement.reached")]
+    learned = {n: p for n, p in rl.items() if n != SPARSE}
+    vs_expert = {n: mean(p, "ev_vs_expert", MILLI) for n, p in learned.items()}
+    vs_sparse = {n: mean(p, "ev_vs_sparse", MILLI) for n, p in learned.items()}
+    sparse = mean(rl[SPARSE], "ev_vs_expert", MILLI)
+    better = [LABELS[Learner(n)] for n, v in vs_expert.items() if v > sparse]
+    expert = report["expert"]["exploitability"] * MILLI
     return (
-        f"Where the expert plays, every learned policy matches its most likely action at "
-        f"{min(reached.values()):.1%} to {max(reached.values()):.1%} of the reached "
-        f"information sets (BC: {bc:.1%}); "
-        f"{'none of the IRL policies beats BC' if not beat_bc else ', '.join(beat_bc) + ' beat BC'}"
-        f" there. The rewards' own argmax agrees less or more: best {best} at "
-        f"{rewards[best]:.1%} of the reached sets. Trained on a learned reward against the "
-        f"expert, the best agents ({top}) win {learned_ev[top]:+.0f} milli-chips per hand "
-        f"against it, where agents trained on the chips themselves win {sparse:+.0f}: "
-        + ("a learned reward did no worse than the sparse one here."
-           if learned_ev[top] >= sparse else
-           "no learned reward made as strong an agent as the sparse reward did.")
-    )  # fmt: skip
+        f"Under {report['rules']}'s rules, the policies of AIRL, H-AIRL and GAIL take the CFR "
+        f"expert's most likely action at {span(reached, '.1%')} of the information sets, "
+        f"weighted by how often the expert reaches them; BC, the same policy net trained "
+        f"without an adversary, at {mean(bc, 'policy_agreement.reached'):.1%}, so "
+        + ("no IRL policy beats BC here" if not beat else f"{', '.join(beat)} beat BC")
+        + f". Counting each of the {report['information_sets']} sets once, agreement falls to "
+        f"{span(uniform, '.1%')} (BC {mean(bc, 'policy_agreement.uniform'):.1%}): the sets "
+        f"the expert rarely reaches have little or no data. The rewards' own argmax agrees "
+        f"with the expert at {span(rewards, '.1%')} of the reached sets. Every learned policy "
+        f"is far from an equilibrium: exploitability {span(exploit, ',.0f')} milli-chips per "
+        f"hand, against the expert's {expert:.3f}. Tabular agents trained against the expert "
+        f"on a learned reward score {span(vs_expert, '+.0f')} milli-chips per hand against it, "
+        f"agents trained on the chips themselves {sparse:+.0f}; "
+        + (f"the {', '.join(better)} reward(s) did better than the sparse one against "
+           "the expert" if better else "no learned reward did better than the sparse one")
+        + f", and head to head the learned-reward agents win {span(vs_sparse, '+.0f')} "
+        "milli-chips per hand against the sparse agents of the same seed."
+    )
 
 
 def _figure(report: dict[str, Any], path: Path) -> None:
@@ -357,8 +378,8 @@ def _figure(report: dict[str, Any], path: Path) -> None:
     figure = Figure(figsize=(7, 4))
     axes = figure.add_subplot()
     names = list(report["learners"])
-    for i, (metric, label) in enumerate((("policy_agreement.reached", "policy"),
-                                         ("reward_agreement.reached", "reward argmax"))):  # fmt: skip
+    metrics = (("policy_agreement.reached", "policy"), ("reward_agreement.reached", "reward"))
+    for i, (metric, label) in enumerate(metrics):
         xs, means, stds = [], [], []
         for j, name in enumerate(names):
             s = report["learners"][name]["summary"]
@@ -369,7 +390,7 @@ def _figure(report: dict[str, Any], path: Path) -> None:
         axes.bar(xs, means, width=0.35, yerr=stds, capsize=3, label=label)
     bc = report["learners"][Learner.BC]["summary"]["policy_agreement.reached"]["mean"]
     axes.axhline(bc, linestyle="-.", color="k", label="BC (net) policy")
-    axes.set_xticks(range(len(names)), [n.upper() for n in names])
+    axes.set_xticks(range(len(names)), [LABELS[Learner(n)] for n in names])
     axes.set_ylim(0, 1.05)
     finish(axes, title=f"Leduc ({report['rules']}): agreement with the CFR expert",
            xlabel="learner", ylabel="share of reached information sets",
