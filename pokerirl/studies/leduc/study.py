@@ -401,7 +401,8 @@ def _figure(report: dict[str, Any], path: Path) -> None:
         finish(axes, title=f"Leduc ({report['rules']}): argmax = CFR expert's",
                xlabel="learner", ylabel=f"share of information sets ({what})",
                spread="bars: mean ± std over IRL runs")  # fmt: skip
-        if panel == 0:
-            axes.get_legend().remove()  # one legend, beside the right panel
+        legend = axes.get_legend()
+        if panel == 0 and legend is not None:
+            legend.remove()  # one legend, beside the right panel
     figure.savefig(path, format="png", dpi=100, bbox_inches="tight", metadata={"Software": None})
 
