@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 
 from pokerirl.atomic import write_text
-from pokerirl.errors import ConfigError
+from pokerirl.errors import ConfigError, InputError
 from pokerirl.game.leduc.demos import Demonstrations, load, save, synthesize
 from pokerirl.game.leduc.exact import MILLI, agreement, expected_value, exploitability
 from pokerirl.game.leduc.infosets import InfoSets, info_sets, one_hot_argmax
@@ -91,8 +91,8 @@ def run_leduc_study(
 
     rules = get_rules(config.rules)
     strategy_file = _expert_file(expert) if expert is not None else out / "solve" / "strategy.json"
-    if expert is not None:
-        read_strategy(strategy_file)  # a bad file is refused before the folder is claimed
+    if expert is not None:  # a bad file is refused before the folder is claimed
+        _check_rules(strategy_file, read_strategy(strategy_file)[0], rules)
     settings = {**config.settings(), "expert": None if expert is None else str(strategy_file)}
     out.mkdir(parents=True, exist_ok=True)
     claim_folder(out, settings, overwrite=overwrite)
@@ -105,9 +105,7 @@ def run_leduc_study(
         stage(f"solve: CFR+ {config.cfr_iterations:,} iterations ({rules.name} rules)")
         solve(rules, iterations=config.cfr_iterations, out=out / "solve", overwrite=True)
     found_rules, cfr = read_strategy(strategy_file)
-    if found_rules != rules:
-        raise ConfigError(f"{strategy_file}: a strategy for the {found_rules.name} rules, "
-                          f"not {rules.name}")  # fmt: skip
+    _check_rules(strategy_file, found_rules, rules)
     demos_file = out / "demos.npz"
     if not demos_file.is_file() or overwrite:
         stage(f"synth: {config.hands:,} hands of the expert against itself (seed {config.seed})")
@@ -139,6 +137,11 @@ def run_leduc_study(
     _figure(report, out / "agreement.png")
     stage(f"wrote {out}/report.md, report.json, agreement.png")
     return report
+
+
+def _check_rules(path: Path, found: LeducRules, rules: LeducRules) -> None:
+    if found != rules:
+        raise InputError(f"{path}: a strategy for the {found.name} rules, not {rules.name}")
 
 
 def _expert_file(expert: Path) -> Path:
