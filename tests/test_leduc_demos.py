@@ -15,6 +15,7 @@ from pokerirl.game.leduc import (
     OPENSPIEL,
     RLCARD,
     LeducRules,
+    random_deal,
     strategy_from_callable,
     uniform_strategy,
 )
@@ -112,3 +113,23 @@ def test_info_set_rows_cover_the_tree() -> None:
         decided = (sets.node_rows >= 0).all(axis=1)  # a decision node: a row for every deal
         assert ((sets.node_rows == -1).all(axis=1) | decided).all() and decided.sum() == 36
         assert sets.strategy(sets.legal.astype(float)) == uniform_strategy(rules)
+
+
+@pytest.mark.parametrize("rules", [RLCARD, OPENSPIEL], ids=lambda r: r.name)
+def test_each_sets_observation_is_the_engines(rules: LeducRules) -> None:
+    # The study reads every learned reward and policy at these rows: they must be what the
+    # one-hand engine shows the player at that key, whatever the deal.
+    sets = info_sets(rules)
+    rng = np.random.default_rng(0)
+    seen = set()
+    for _ in range(300):
+        state = random_deal(rules, rng)
+        while not state.is_over:
+            key = state.info_key(state.to_act)
+            row = sets.row[key]
+            seen.add(row)
+            assert np.array_equal(sets.observations[row], state.observation(state.to_act)), key
+            legal = state.legal_actions()
+            assert [a in legal for a in Action] == sets.legal[row].tolist()
+            state = state.step(legal[rng.integers(len(legal))])
+    assert len(seen) > 100
