@@ -70,6 +70,8 @@ USAGE: dict[str, str] = {  # a command line that cannot be run: exit 2
     "leduc solve": "leduc solve --rules nope --out {O}",
     "leduc exploit": "leduc exploit {G} --bogus",
     "leduc agreement": "leduc agreement {G}",  # no B.json
+    "leduc synth": "leduc synth --expert {G} --out {O}/d.npz --hands lots",
+    "leduc study": "leduc study --out {O} --preset nope",
 }
 MISSING: dict[str, str | None] = {  # an input that is not there: exit 1, naming it
     "version": None,  # reads nothing
@@ -99,6 +101,8 @@ MISSING: dict[str, str | None] = {  # an input that is not there: exit 1, naming
     "leduc solve": None,  # reads nothing
     "leduc exploit": "leduc exploit {F}",
     "leduc agreement": "leduc agreement {F} {G}",
+    "leduc synth": "leduc synth --expert {F} --out {O}/d.npz",
+    "leduc study": "leduc study --out {O} --expert {F}",
 }
 REFUSED: dict[str, str | None] = {  # a setting or a file the library refuses: exit 1
     "version": None,
@@ -128,6 +132,8 @@ REFUSED: dict[str, str | None] = {  # a setting or a file the library refuses: e
     "leduc solve": "leduc solve -n 1 --out {A}",  # a file, not a folder
     "leduc exploit": "leduc exploit {G}",
     "leduc agreement": "leduc agreement {R}/report.json {R}/report.json",
+    "leduc synth": "leduc synth --expert {G} --out {O}/d.npz",  # not a strategy file
+    "leduc study": "leduc study --out {O} --expert {G}",
 }
 
 

@@ -1,8 +1,10 @@
 """``pokerirl leduc``: Leduc hold'em's exact tools (docs/leduc.md): ``solve`` (CFR+),
-``exploit`` (exact best response, exploitability, expected value) and ``agreement``."""
+``exploit`` (exact best response, exploitability, expected value), ``agreement``, ``synth``
+(expert demonstrations) and ``study`` (IRL and RL against the CFR expert)."""
 
 from __future__ import annotations
 
+from enum import StrEnum
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -22,6 +24,7 @@ app.add_typer(leduc_app, name="leduc")
 
 RULES_CHOICES = choices(RuleSet)
 MAX_ITERATIONS = 1_000_000  # a million CFR+ iterations: hours; the curve is flat long before
+MAX_HANDS = 10_000_000  # demonstrations: about 25M decisions, 2 GB of observations
 
 
 @leduc_app.command()
@@ -113,3 +116,82 @@ def _read(path: Path, *, rules: str | None = None) -> tuple[LeducRules, Strategy
     if rules is not None and found[0].name != rules:
         raise InputError(f"{path}: a strategy for the {found[0].name} rules, not {rules}")
     return found
+
+
+@leduc_app.command()
+def synth(
+    expert: Path = typer.Option(
+        ..., "--expert", metavar="DIR|STRATEGY.json",
+        help="The expert: a solve folder (its strategy.json) or a strategy file.",
+    ),
+    hands: int = typer.Option(10_000, "--hands", "-n", min=1, max=MAX_HANDS, help="Hands."),
+    seed: int = typer.Option(
+        0, "--seed", min=0, max=2**32 - 1, help="Seed of the deals and the draws."
+    ),
+    opponent: Path | None = typer.Option(
+        None, "--opponent", metavar="STRATEGY.json",
+        help="Play the expert against this strategy (seats alternate) and record only the "
+             "expert's decisions; default: the expert against itself, both seats recorded.",
+    ),
+    out: Path = typer.Option(..., "--out", "-o", metavar="FILE.npz", help="The file to write."),
+    overwrite: bool = typer.Option(False, "--overwrite", help="Replace FILE.npz."),
+) -> None:
+    """Demonstrations: HANDS hands of the expert on the batch engine, every decision as
+    arrays (36-d observation, legal actions, action, next observation, done, chips won,
+    hand, position, information set) in an .npz with a JSON header (no pickle). Seeded: the
+    same arguments write the same bytes."""
+    from pokerirl.errors import PokerIRLError, Remedy
+    from pokerirl.game.leduc.demos import save, synthesize
+
+    rules, strategy = _read(_strategy_path(expert))
+    other = None if opponent is None else _read(opponent, rules=rules.name)[1]
+    if out.exists() and not overwrite:
+        raise PokerIRLError(f"{out} exists", remedy=Remedy.REPLACE)
+    demos = synthesize(rules, strategy, hands=hands, seed=seed, opponent=other)
+    save(demos, out)
+    echo(f"wrote {out}: {len(demos):,} decisions of {hands:,} hands ({rules.name} rules, "
+         f"expert sha256 {demos.expert_sha256[:12]})")  # fmt: skip
+
+
+class StudyPreset(StrEnum):
+    """The Leduc study's presets (pokerirl/studies/leduc/study.py)."""
+
+    QUICK = "quick"
+    SMOKE = "smoke"
+
+
+PRESET_CHOICES = choices(StudyPreset)
+
+
+@leduc_app.command()
+def study(
+    out: Path = typer.Option(..., "--out", "-o", help="The study folder (resumed if present)."),
+    preset: StudyPreset = typer.Option(
+        StudyPreset.QUICK, "--preset", metavar=PRESET_CHOICES,
+        help="quick: 10,000 expert hands, 2 IRL runs of 20 epochs per learner, 4 RL seeds; "
+             "smoke: seconds, numbers meaningless.",
+    ),
+    rules: RuleSet = typer.Option(
+        RuleSet.RLCARD, "--rules", metavar=RULES_CHOICES, help="The rule set."
+    ),
+    expert: Path | None = typer.Option(
+        None, "--expert", metavar="DIR|STRATEGY.json",
+        help="Use this CFR expert (a solve folder or strategy file) instead of solving.",
+    ),
+    overwrite: bool = typer.Option(False, "--overwrite", help="Recompute every stage."),
+) -> None:
+    """The Leduc study: CFR+ expert, demonstrations, AIRL, H-AIRL, GAIL and BC runs, tabular
+    RL on each learned reward and on the sparse reward; the exact agreement with the expert,
+    exploitability and expected values in OUT/report.md and report.json (mean ± std over
+    runs), and OUT/agreement.png. A rerun skips the stages whose files are present."""
+    from pokerirl.studies.leduc.study import preset as get_preset
+    from pokerirl.studies.leduc.study import run_leduc_study
+
+    config = get_preset(preset, rules=rules)
+    run_leduc_study(config, out, expert=None if expert is None else _strategy_path(expert),
+                    overwrite=overwrite, echo=echo)  # fmt: skip
+
+
+def _strategy_path(path: Path) -> Path:
+    """A solve folder's strategy.json, or the file itself."""
+    return path / "strategy.json" if path.is_dir() else path
