@@ -141,7 +141,7 @@ def test_the_saved_policy_is_the_generator(mountaincar: Path, pendulum: Path) ->
 
 
 def test_the_hybrid_supervised_step_moves_the_generator_toward_the_expert(pendulum: Path) -> None:
-    generator, trainer, expert_obs = _generator_and_trainer("Pendulum-v1", pendulum, algo="hairl")
+    generator, trainer, _ = _generator_and_trainer("Pendulum-v1", pendulum, algo="hairl")
     data = trainer.data
     expert = data.action_vectors()
     before = generator.log_prob(data.obs, expert).mean().item()

@@ -27,7 +27,11 @@ from pokerirl.cli.app import (
 )
 from pokerirl.errors import InputError, UsageError
 from pokerirl.gym.presets import MAX_TRANSITIONS
-from pokerirl.irl.config import MAX_EPOCHS, Algo, IRLMode  # torch-free: `gym irl`, `train` offer each
+from pokerirl.irl.config import (  # torch-free: `gym irl`, `train` offer each
+    MAX_EPOCHS,
+    Algo,
+    IRLMode,
+)
 from pokerirl.settings import MAX_STEPS
 from pokerirl.studies.gym.config import MAX_EPISODES, PRESETS
 
@@ -329,8 +333,13 @@ def gym_irl(
     if mode == IRLMode.ONLINE:  # checked before any data is collected
         from pokerirl.gym.online import OnlineSettings
 
-        sizes = {"rounds": rounds, "generator_steps": generator_steps, "envs": generator_envs}
-        online = OnlineSettings(**{key: value for key, value in sizes.items() if value is not None})
+        online = OnlineSettings()  # the defaults, each option given replacing its own
+        online = replace(
+            online,
+            rounds=rounds or online.rounds,
+            generator_steps=generator_steps or online.generator_steps,
+            envs=generator_envs or online.envs,
+        )
     _known_task(env)
     if data is not None and not data.is_file():
         raise InputError(f"--data {display(str(data))}: no such file")

@@ -6,8 +6,8 @@ learned reward.
 
 * its envs are SB3's ``make_vec_env`` (``DummyVecEnv`` of Monitor-wrapped envs), their
   observations standardized with the expert data's mean and std (as the offline nets see
-  them), and their reward replaced by the learned f (:func:`pokerirl.gym.rewards.learned_reward_env`,
-  imitation's ``RewardVecEnvWrapper``);
+  them), and their reward replaced by the learned f
+  (:func:`pokerirl.gym.rewards.learned_reward_env`, imitation's ``RewardVecEnvWrapper``);
 * ``collect`` is PPO's own ``collect_rollouts`` into its rollout buffer; ``learn`` replaces
   each buffered f of collection time by the relabelled one (a time limit's bootstrap
   γ·V(s_T) that SB3 added stays), recomputes returns and advantages, and runs PPO's
@@ -49,8 +49,8 @@ from pokerirl.gym.irl import (
     RETURNS_FILE,
     STAGE_KEY,
     GymIRLResult,
-    _standardized_actions,
     GymIRLSummary,
+    _standardized_actions,
     expert_return,
     irl_config,
     load_env_transitions,
@@ -165,8 +165,9 @@ class PPOGenerator:
         }
         if not self.discrete:
             kwargs["log_std_init"] = settings.log_std_init
-        self.model: PPO = PPO(box_mean_policy() if not self.discrete else "MlpPolicy",
-                              self.venv, seed=seed, policy_kwargs=kwargs, device="cpu", **ppo)  # fmt: skip
+        policy_class = "MlpPolicy" if self.discrete else box_mean_policy()
+        self.model: PPO = PPO(policy_class, self.venv, seed=seed, policy_kwargs=kwargs,
+                              device="cpu", **ppo)  # fmt: skip
         self.model.set_logger(Logger(folder=None, output_formats=[]))
         total = settings.rounds * settings.generator_steps
         _, self.callback = self.model._setup_learn(total, None, True, "online", False)
@@ -210,7 +211,7 @@ class PPOGenerator:
         return Rollout(transitions=transitions, log_probs=log_probs)
 
     def log_prob(self, obs: Tensor, actions: Tensor) -> Tensor:
-        distribution = self.model.policy.get_distribution(obs).distribution
+        distribution: Any = self.model.policy.get_distribution(obs).distribution
         if self.discrete:
             return (actions * torch.log_softmax(distribution.logits, -1)).sum(-1)
         return distribution.log_prob(actions).sum(-1)
@@ -223,6 +224,7 @@ class PPOGenerator:
         with torch.no_grad():
             last_obs = torch.as_tensor(model._last_obs, dtype=torch.float32)  # type: ignore[arg-type]
             last_values = model.policy.predict_values(last_obs)
+        assert model._last_episode_starts is not None  # set by collect_rollouts
         buffer.compute_returns_and_advantage(last_values=last_values,
                                              dones=model._last_episode_starts)  # fmt: skip
         model._update_current_progress_remaining(model.num_timesteps, self.total)
@@ -246,7 +248,7 @@ class PPOGenerator:
     def policy_net(self) -> nn.Module:
         """The actor's Linear layers, in order, into the policy's MLP (log σ too)."""
         sb3 = self.model.policy
-        source = [m for m in sb3.mlp_extractor.policy_net if isinstance(m, nn.Linear)]
+        source: list[Any] = [m for m in sb3.mlp_extractor.policy_net if isinstance(m, nn.Linear)]
         source.append(sb3.action_net)
         target = [m for m in self.policy.mlp if isinstance(m, nn.Linear)]  # type: ignore[union-attr]
         with torch.no_grad():
@@ -448,4 +450,3 @@ def train_gym_online(
                 stage,
             )
     return GymIRLResult(out=out, runs=runs, summary=summary, baselines=found)
-

@@ -119,8 +119,13 @@ class OnlineTrainer:
         self.expert = demonstrations.action_vectors()
         self.beta = config.beta if demonstrations.rewards is not None else 0.0
         self.batch = min(config.batch_size, generator_steps)
-        self.sigma = noise_schedule(self.batch, config.sigma_start, config.sigma_end,
-                                    kind=config.noise_schedule, decay=config.noise_decay)  # fmt: skip
+        self.sigma = noise_schedule(
+            self.batch,
+            config.sigma_start,
+            config.sigma_end,
+            kind=config.noise_schedule,
+            decay=config.noise_decay,
+        )
         self.noisy = config.sigma_start > 0
         self.reward_opt = FlatAdam(
             reward.parameters(), lr=config.reward_lr, weight_decay=config.reward_weight_decay
@@ -238,8 +243,13 @@ class OnlineTrainer:
             self.reward.eval()
             metrics.update(evaluate(self.reward, policy, self.val))
             if callback is not None:
-                record = EpochRecord(epoch=number, metrics=(dict(metrics),),
-                                     rewards=(self.reward,), policies=(policy,), seconds=seconds)  # fmt: skip
+                record = EpochRecord(
+                    epoch=number,
+                    metrics=(dict(metrics),),
+                    rewards=(self.reward,),
+                    policies=(policy,),
+                    seconds=seconds,
+                )
                 extras = list(callback(record) or [{}])
                 metrics.update(extras[0])
             self.reward.train()
@@ -251,4 +261,3 @@ class OnlineTrainer:
             unit_progress(number, rounds)
         self.reward.eval()
         return result
-
