@@ -143,32 +143,21 @@ class PPOGenerator:
         settings: OnlineSettings,
         seed: int,
     ) -> None:
-        require_gym()
-        from stable_baselines3 import PPO
-        from stable_baselines3.common.env_util import make_vec_env
-        from stable_baselines3.common.logger import Logger
-        from stable_baselines3.common.vec_env import DummyVecEnv
-
         self.reward, self.policy = reward, policy
         space = make_env_space(env_id)
         self.discrete = hasattr(space, "n")
         self.num_actions = int(space.n) if self.discrete else 0
         self.recorded: list[np.ndarray] = []  # f of each vector step while collecting
-        venv = make_vec_env(functools.partial(make_env, env_id), n_envs=settings.envs,
-                            seed=seed, vec_env_cls=DummyVecEnv)  # fmt: skip
-        venv = standardized_env(venv, shift.numpy(), scale.numpy())
+        venv = standardized_env(vec_env(env_id, settings, seed=seed), shift.numpy(), scale.numpy())
         self.venv = learned_reward_env(venv, self.learned_reward)
-        ppo = ppo_kwargs(settings.ppo_for(env_id))
-        kwargs: dict[str, Any] = {
-            "net_arch": {"pi": list(policy_hidden), "vf": list(policy_hidden)},
-            "activation_fn": ACTIVATIONS[config_activation],
-        }
-        if not self.discrete:
-            kwargs["log_std_init"] = settings.log_std_init
-        policy_class = "MlpPolicy" if self.discrete else box_mean_policy()
-        self.model: PPO = PPO(policy_class, self.venv, seed=seed, policy_kwargs=kwargs,
-                              device="cpu", **ppo)  # fmt: skip
-        self.model.set_logger(Logger(folder=None, output_formats=[]))
+        self.model = generator_model(
+            env_id,
+            self.venv,
+            settings=settings,
+            seed=seed,
+            policy_hidden=policy_hidden,
+            activation=config_activation,
+        )
         total = settings.rounds * settings.generator_steps
         _, self.callback = self.model._setup_learn(total, None, True, "online", False)
         self.total = total
@@ -258,6 +247,44 @@ class PPOGenerator:
             if not self.discrete:
                 self.policy.log_std.copy_(sb3.log_std)  # type: ignore[union-attr, operator]
         return self.policy
+
+
+def vec_env(env_id: str, settings: OnlineSettings, *, seed: int) -> VecEnv:
+    """SB3's ``make_vec_env``: ``settings.envs`` Monitor-wrapped copies in a ``DummyVecEnv``."""
+    require_gym()
+    from stable_baselines3.common.env_util import make_vec_env
+    from stable_baselines3.common.vec_env import DummyVecEnv
+
+    return make_vec_env(functools.partial(make_env, env_id), n_envs=settings.envs, seed=seed,
+                        vec_env_cls=DummyVecEnv)  # fmt: skip
+
+
+def generator_model(
+    env_id: str,
+    venv: VecEnv,
+    *,
+    settings: OnlineSettings,
+    seed: int,
+    policy_hidden: tuple[int, ...],
+    activation: str,
+) -> PPO:
+    """The generator's SB3 PPO on ``venv``: ``settings``' PPO, its actor of the IRL policy's
+    form (hidden widths, activation; a box's mean squashed into the box)."""
+    from stable_baselines3 import PPO
+    from stable_baselines3.common.logger import Logger
+
+    discrete = hasattr(venv.action_space, "n")
+    kwargs: dict[str, Any] = {
+        "net_arch": {"pi": list(policy_hidden), "vf": list(policy_hidden)},
+        "activation_fn": ACTIVATIONS[activation],
+    }
+    if not discrete:
+        kwargs["log_std_init"] = settings.log_std_init
+    policy_class = "MlpPolicy" if discrete else box_mean_policy()
+    model = PPO(policy_class, venv, seed=seed, policy_kwargs=kwargs, device="cpu",
+                **ppo_kwargs(settings.ppo_for(env_id)))  # fmt: skip
+    model.set_logger(Logger(folder=None, output_formats=[]))  # no /tmp/SB3-<date> folders
+    return model
 
 
 def ppo_kwargs(ppo: PPOSettings) -> dict[str, Any]:
