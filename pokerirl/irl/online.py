@@ -50,7 +50,8 @@ from pokerirl.irl.transitions import Transitions
 class Rollout:
     """N steps of the generator: its ``transitions`` (observations as the reward net sees
     them, actions as the environment executed them) and ``log_probs`` (N,), the generator's
-    log π of its own actions when it drew them."""
+    log π of its own actions when it drew them (for a box, of the draw before the env clipped
+    it): the discriminator's π of the generator's rows when no noise is added."""
 
     transitions: Transitions
     log_probs: Tensor
@@ -160,7 +161,10 @@ class OnlineTrainer:
             obs_g, act_g = self.discriminator_inputs(generated.obs[rows], gen_actions[rows])
             with torch.no_grad():  # π is the generator's; only f learns here
                 log_pi_e = self.generator.log_prob(obs_e, act_e)
-                log_pi_g = self.generator.log_prob(obs_g, act_g)
+                if self.noisy:  # π of the noised action the discriminator sees
+                    log_pi_g = self.generator.log_prob(obs_g, act_g)
+                else:  # its own draw's, kept by the rollout (it has not learned since)
+                    log_pi_g = rollout.log_probs[rows]
             f_e, f_g = self.reward(obs_e, act_e), self.reward(obs_g, act_g)
             env = None if self.data.rewards is None else self.data.rewards[picks]
             loss, airl, env_loss = discriminator_loss(
