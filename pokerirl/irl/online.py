@@ -153,7 +153,7 @@ class OnlineTrainer:
         gen_actions = generated.action_vectors()
         perm = torch.randperm(len(generated), generator=self.rng)
         sums: dict[str, float] = {}
-        batches = len(generated) // self.batch  # the ragged tail waits for the next round
+        batches = len(generated) // self.batch  # a ragged tail is left out, as offline
         for b in range(batches):
             rows = perm[b * self.batch : (b + 1) * self.batch]
             picks = torch.randint(len(self.data), (self.batch,), generator=self.rng)
