@@ -335,3 +335,25 @@ def test_help_shows_the_config_dataclass_default(
     text = " ".join(result.stdout.replace("│", " ").split())  # the help, unwrapped
     entry = text.split(f" {option} ", 1)[1].split(" --", 1)[0]  # up to the next option
     assert re.search(rf"\[default: {default}[];]", entry), entry  # [default: 50; x>=1]
+
+
+# `gym irl --mode online` (issue 43): a bad mode or an online-only option without it is a
+# usage error; online sizes the library refuses are exit 1; a command that cannot learn
+# online (poker's train, the gym study) has no --mode and refuses it in one line.
+ONLINE_MODE: dict[str, tuple[str, int]] = {
+    "bad mode": ("gym irl MountainCar-v0 --out {O} --mode nope", 2),
+    "online option, offline mode": ("gym irl MountainCar-v0 --out {O} --rounds 3", 2),
+    "steps not a multiple of envs": (
+        "gym irl MountainCar-v0 --out {O} --mode online --generator-steps 3 --generator-envs 2",
+        1,
+    ),
+    "poker train": ("train {G} --out {O} --mode online", 2),
+    "gym study": ("gym study MountainCar-v0 --out {O} --mode online", 2),
+}
+
+
+@pytest.mark.parametrize("case", sorted(ONLINE_MODE))
+def test_online_mode_refusals_are_one_line(case: str, places: dict[str, str]) -> None:
+    line, expected = ONLINE_MODE[case]
+    code, error = run(line, places)
+    assert code == expected and ("mode" in error or "envs" in error), error

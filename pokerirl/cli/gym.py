@@ -27,7 +27,11 @@ from pokerirl.cli.app import (
 )
 from pokerirl.errors import InputError, UsageError
 from pokerirl.gym.presets import MAX_TRANSITIONS
-from pokerirl.irl.config import MAX_EPOCHS, Algo  # torch-free: `gym irl`, `train` offer each
+from pokerirl.irl.config import (  # torch-free: `gym irl`, `train` offer each
+    MAX_EPOCHS,
+    Algo,
+    IRLMode,
+)
 from pokerirl.settings import MAX_STEPS
 from pokerirl.studies.gym.config import MAX_EPISODES, PRESETS
 
@@ -286,12 +290,29 @@ def gym_irl(
     raw_obs: bool = typer.Option(
         False, "--raw-obs", help="Train on raw observations (default: standardized)."
     ),
+    mode: str = typer.Option(
+        "offline", metavar=choices(IRLMode),
+        help="offline: the policy acts at the expert's states (the paper's); online: a PPO "
+        "generator acts in the env on the current learned reward (imitation's AIRL/GAIL).",
+    ),
+    rounds: int | None = typer.Option(
+        None, min=1, max=MAX_EPOCHS,
+        help="Online: rounds of generator steps, discriminator pass, PPO update (default 20).",
+    ),
+    generator_steps: int | None = typer.Option(
+        None, min=1, max=MAX_STEPS,
+        help="Online: env steps the generator collects per round (default 2048).",
+    ),
+    generator_envs: int | None = typer.Option(
+        None, min=1, max=64, help="Online: the generator's vectorized envs (default 4)."
+    ),
     out: Path = typer.Option(..., "--out", "-o", help="Folder of run-<k> and summary.json."),
     overwrite: bool = typer.Option(False, help="Replace earlier runs in OUT."),
     threads: int = typer.Option(1, min=1, help="torch threads."),
     log_dir: Path | None = LOG_DIR,
 ) -> None:
-    """AIRL, H-AIRL or GAIL on a task's expert data; each epoch's policy is evaluated in the env."""
+    """AIRL, H-AIRL or GAIL on a task's expert data; each epoch's (online: each round's)
+    policy is evaluated in the env."""
     from dataclasses import replace
 
     from pokerirl.execution import pin_threads
@@ -301,6 +322,24 @@ def gym_irl(
         raise UsageError(f"--preset must be one of {', '.join(PRESETS)}, got {preset!r}")
     if algo not in tuple(Algo):
         raise UsageError(f"--algo must be one of {', '.join(Algo)}, got {algo!r}")
+    if mode not in tuple(IRLMode):
+        raise UsageError(f"--mode must be one of {', '.join(IRLMode)}, got {mode!r}")
+    online_options = {"--rounds": rounds, "--generator-steps": generator_steps,
+                      "--generator-envs": generator_envs}  # fmt: skip
+    given = [name for name, value in online_options.items() if value is not None]
+    if mode == IRLMode.OFFLINE and given:
+        raise UsageError(f"{given[0]} applies to --mode online only")
+    online = None
+    if mode == IRLMode.ONLINE:  # checked before any data is collected
+        from pokerirl.gym.online import OnlineSettings
+
+        online = OnlineSettings()  # the defaults, each option given replacing its own
+        online = replace(
+            online,
+            rounds=rounds or online.rounds,
+            generator_steps=generator_steps or online.generator_steps,
+            envs=generator_envs or online.envs,
+        )
     _known_task(env)
     if data is not None and not data.is_file():
         raise InputError(f"--data {display(str(data))}: no such file")
@@ -327,16 +366,21 @@ def gym_irl(
             echo(f"collected {settings.transitions:,} expert transitions into {data}")
         else:
             echo(f"reusing the expert data in {data}")
-    result = train_gym_irl(
-        env,
-        data,
-        algo=algo,
-        runs=runs or PRESETS[preset].runs,
-        settings=settings,
-        seed=seed,
-        out=out,
-        overwrite=overwrite,
-    )
+    if online is not None:
+        result = _online_irl(env, data, algo=algo, runs=runs or PRESETS[preset].runs,
+                             settings=settings, seed=seed, out=out, overwrite=overwrite,
+                             online=online)  # fmt: skip
+    else:
+        result = train_gym_irl(
+            env,
+            data,
+            algo=algo,
+            runs=runs or PRESETS[preset].runs,
+            settings=settings,
+            seed=seed,
+            out=out,
+            overwrite=overwrite,
+        )
     final = result.final_return
     line = (
         f"{env} {algo}: final return {final.mean:.1f} +- {final.std:.1f} over "
@@ -347,6 +391,20 @@ def gym_irl(
         line += f", alignment {100 * result.final_alignment.measured[0]:.1f}%"
     echo(f"{line}; wrote {out}")
     write_logs(out, log_dir)
+
+
+def _online_irl(env: str, data: Path, *, online: Any, **kwargs: Any) -> Any:
+    """``gym irl --mode online``: :func:`pokerirl.gym.online.train_gym_online`, a line a round."""
+    from pokerirl.gym.online import train_gym_online
+
+    def line(run: int, metrics: Any) -> None:
+        echo(
+            f"run {run} round {metrics.epoch}/{online.rounds}: return "
+            f"{metrics['eval_return']:.1f}, disc loss {metrics['disc_loss']:.3f}, D right on "
+            f"expert {metrics['disc_acc_expert']:.2f} / generator {metrics['disc_acc_policy']:.2f}"
+        )
+
+    return train_gym_online(env, data, online=online, on_round=line, progress=False, **kwargs)
 
 
 @gym_app.command("reward-map")

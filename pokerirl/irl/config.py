@@ -74,6 +74,15 @@ class Algo(StrEnum):
     GAIL = "gail"
 
 
+class IRLMode(StrEnum):
+    """Where the policy's actions come from: ``offline`` at the expert's own states
+    (:mod:`pokerirl.irl.trainer`), ``online`` from a generator acting in its environment
+    (:mod:`pokerirl.irl.online`)."""
+
+    OFFLINE = "offline"
+    ONLINE = "online"
+
+
 class DiscriminatorForm(StrEnum):
     """How D is made from f and π (:mod:`pokerirl.irl.discriminators`): AIRL's
     exp f / (exp f + π), or GAIL's σ(f)."""

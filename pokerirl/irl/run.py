@@ -267,11 +267,7 @@ def train_runs_into(
         core = run_baselines(train_data, val_data, config=config, device=device,
                              progress=progress)  # fmt: skip
     found = {**core, **(hooks.baselines() if hooks.baselines is not None else {})}
-    # Shares of states only; without a legal mask legal_majority is majority under another name.
-    drawn = {
-        k: v for k, v in core.items()
-        if data.discrete and (k != "legal_majority" or data.legal_mask is not None)
-    }  # fmt: skip
+    drawn = drawn_baselines(core, data)
     seeds = [config.seed + k for k in range(len(folders))]
     nets = [default_nets(train_data, config, seed) for seed in seeds]
     logs = [begin_run(folder, val_groups=val_groups, baselines=found) for folder in folders]
@@ -371,6 +367,16 @@ def data_record(
     if data.weights is not None:
         found["total_weight"] = float(data.weights.double().sum())
     return found
+
+
+def drawn_baselines(core: Mapping[str, float], data: Transitions) -> dict[str, float]:
+    """Of the core's baselines (:func:`run_baselines`), those drawn as lines on alignment
+    plots: shares of states, so none for continuous actions; without a legal mask
+    ``legal_majority`` is ``majority`` under another name."""
+    return {
+        k: v for k, v in core.items()
+        if data.discrete and (k != "legal_majority" or data.legal_mask is not None)
+    }  # fmt: skip
 
 
 def run_baselines(
