@@ -565,7 +565,8 @@ def reward_card_command(
     and what a DQN is predicted to learn. Writes OUT/reward_card.json and reward_card.png.
     """
     from pokerirl.poker.reward_card import CardStates, reward_card, write_card
-    from pokerirl.poker.rewards import TRANSFORMS, RewardSource, TransformedReward
+    from pokerirl.poker.reward_sources import RewardSource
+    from pokerirl.poker.rewards import TRANSFORMS, TransformedReward
 
     if transform not in TRANSFORMS:
         raise UsageError(f"unknown --transform {transform!r} ({', '.join(TRANSFORMS)})")
@@ -666,7 +667,7 @@ def agent_train(
 
 def _echo_agent(folder: Path, line: MetricsLine | None, play: str) -> None:
     """``agent train``: an agent's last evaluation (and the checkpoint it plays)."""
-    from pokerirl.agents.registry import CONFIG_FILE, KEPT_FILE, MODEL_FILE
+    from pokerirl.agents.names import CONFIG_FILE, KEPT_FILE, MODEL_FILE
     from pokerirl.agents.train import MetricsLine
 
     if line is None:
