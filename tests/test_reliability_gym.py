@@ -94,7 +94,7 @@ def test_a_pickled_expert_model_is_refused_in_one_line_and_never_run(
 
     import torch
 
-    from pokerirl.gym.experts import resolve_expert_dir
+    from pokerirl.gym.expert_policies import resolve_expert_dir
 
     expert = tmp_path / "expert"
     expert.mkdir()

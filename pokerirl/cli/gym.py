@@ -181,7 +181,7 @@ def gym_collect(
 ) -> None:
     """Write the expert's play as a Parquet transition table (same seed, same bytes)."""
     from pokerirl.gym.collect import collect
-    from pokerirl.gym.experts import load_expert, resolve_expert_dir
+    from pokerirl.gym.expert_policies import load_expert, resolve_expert_dir
 
     _known_task(env)
     if expert == "shipped":
@@ -313,7 +313,7 @@ def gym_irl(
     pin_threads(threads)  # SB3's small MLPs train fastest on one thread
     if data is None:
         from pokerirl.gym.collect import collect
-        from pokerirl.gym.experts import load_expert, resolve_expert_dir
+        from pokerirl.gym.expert_policies import load_expert, resolve_expert_dir
 
         data = out / "expert.parquet"
         if not data.is_file():

@@ -75,7 +75,7 @@ def demo(
     echo(result.markdown)
     echo(f"report: {out / 'report.md'} (pokerirl report {out})")
     if gym:
-        from pokerirl.gym.experts import require_gym
+        from pokerirl.gym.envs import require_gym
 
         try:
             require_gym()
