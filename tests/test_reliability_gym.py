@@ -20,7 +20,7 @@ import pytest
 from test_reliability import one_error_line, run_cli
 from testkit import folder_bytes, folder_snapshot
 
-from pokerirl.cli.app import MAX_SEED
+from pokerirl.cli.seeds import MAX_SEED
 
 pytest.importorskip("gymnasium")
 pytest.importorskip("stable_baselines3")
