@@ -1,4 +1,4 @@
-"""Where a fan-out command's units run: its ``--jobs``, ``--ray`` and ``--threads`` made an
+"""Where a fan-out command's units run: its ``--jobs``, ``--ray`` and ``--threads`` made into an
 execution backend (:func:`command_backend`), and the ``--ray`` help every such command shows
 (:data:`RAY_HELP`). The units and their backends are :mod:`pokerirl.execution`'s.
 """
