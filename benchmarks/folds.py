@@ -66,7 +66,7 @@ from pokerirl.poker.impute import (
     split_table,
 )
 from pokerirl.poker.reward_card import STRENGTH_EDGES, CardStates, reward_card
-from pokerirl.poker.rewards import load_reward_source
+from pokerirl.poker.reward_sources import load_reward_source
 from pokerirl.seeds import parse_seeds
 
 ROOT = Path(__file__).resolve().parents[1]

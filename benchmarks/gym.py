@@ -58,7 +58,8 @@ import torch
 from torch import Tensor, nn
 
 from pokerirl.gym.collect import collect
-from pokerirl.gym.experts import load_expert, make_env, make_model, resolve_expert_dir
+from pokerirl.gym.envs import make_env
+from pokerirl.gym.expert_policies import load_expert, make_model, resolve_expert_dir
 from pokerirl.gym.irl import irl_config, load_env_transitions
 from pokerirl.gym.presets import TASKS
 from pokerirl.gym.rewards import RewardCallable, learned_reward_env, module_reward

@@ -22,7 +22,7 @@ from pathlib import Path
 import torch
 
 from pokerirl.gym.collect import collect
-from pokerirl.gym.experts import load_expert, resolve_expert_dir
+from pokerirl.gym.expert_policies import load_expert, resolve_expert_dir
 from pokerirl.gym.irl import irl_config, load_env_transitions, obs_standardization, standardized
 from pokerirl.gym.online import OnlineSettings, PPOGenerator, generator_model, vec_env
 from pokerirl.gym.presets import TASKS

@@ -47,7 +47,7 @@ from pokerirl.game.synth import write_synthetic_month
 from pokerirl.irl import load_config, train
 from pokerirl.poker import read_table, train_runs
 from pokerirl.poker.reward_card import STRENGTH_EDGES, CardStates, reward_card
-from pokerirl.poker.rewards import load_reward_source
+from pokerirl.poker.reward_sources import load_reward_source
 from pokerirl.seeds import parse_seeds
 
 CONFIGS = (("strength", 0.0), ("rlcard", 0.0), ("strength", 5e-3), ("rlcard", 5e-3))

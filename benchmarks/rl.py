@@ -31,7 +31,7 @@ class Timing:
 
 def sb3_runs(env_id: str, runs: int, steps: int) -> Timing:
     """``runs`` SB3 PPO runs one after the other, as the sb3 backend trains them."""
-    from pokerirl.gym.experts import make_model
+    from pokerirl.gym.expert_policies import make_model
 
     update = 0.0
     total = 0

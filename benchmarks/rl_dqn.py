@@ -41,7 +41,7 @@ def _worker(kind: str, runs: int, steps: int) -> dict[str, float]:
         out.update(env_seconds=result.env_seconds, update_seconds=result.update_seconds,
                    timesteps=result.timesteps)
     else:
-        from pokerirl.gym.experts import make_model
+        from pokerirl.gym.expert_policies import make_model
 
         model = make_model(ENV_ID, rl, seed=runs)  # "runs" is the seed here
         wall, cpu = time.perf_counter(), time.process_time()

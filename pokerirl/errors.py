@@ -7,7 +7,7 @@ and its message is one line that names the user's file or setting, never a comma
 flag: the library does not know the command line. Where a command could get past it (another
 output folder, recomputing), the error says so as a :class:`Remedy`, and the command line
 adds the advice in terms of its own flags (its mapping of remedies to words,
-``pokerirl.cli.app.ADVICE``, given to :func:`report` and :class:`one_line_errors`).
+``pokerirl.cli.errors.ADVICE``, given to :func:`report` and :class:`one_line_errors`).
 
 :class:`one_line_errors` is the contract of every command, as a decorator or a ``with``
 block:

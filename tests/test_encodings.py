@@ -170,7 +170,7 @@ def strength_run(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 @pytest.mark.slow
 def test_a_strength_run_records_its_encoding_and_its_reward_reads_it(strength_run: Path) -> None:
-    from pokerirl.poker.rewards import RewardSource
+    from pokerirl.poker.reward_sources import RewardSource
 
     record = json.loads((strength_run / "config.json").read_text())
     assert record["data"]["encoding"] == "strength-v2"  # the spec: name and version
@@ -210,7 +210,7 @@ def test_a_run_and_a_table_or_flag_of_another_encoding_are_refused(
     record = json.loads((strength_run / "config.json").read_text())
     record["data"]["encoding"] = "rlcard"
     (forged / "config.json").write_text(json.dumps(record))
-    from pokerirl.poker.rewards import RewardSource
+    from pokerirl.poker.reward_sources import RewardSource
 
     with pytest.raises(InputError, match="not the rlcard encoding's 72-d states"):
         RewardSource.resolve(forged)

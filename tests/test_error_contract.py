@@ -1,4 +1,4 @@
-"""The error contract of every command (pokerirl/errors.py, pokerirl/cli/app.py).
+"""The error contract of every command (pokerirl/errors.py, pokerirl/cli/errors.py).
 
 Every command of ``pokerirl`` (the click tree, hidden commands included) runs with a bad
 input of each kind: a usage error (exit 2), a missing input file (exit 1, the line names it)

@@ -18,13 +18,8 @@ import pyarrow.parquet as pq
 
 from pokerirl.cli import app
 from pokerirl.gym.collect import collect, read_transitions
-from pokerirl.gym.experts import (
-    Expert,
-    build_policy,
-    load_expert,
-    make_env,
-    resolve_expert_dir,
-)
+from pokerirl.gym.envs import make_env
+from pokerirl.gym.expert_policies import Expert, build_policy, load_expert, resolve_expert_dir
 
 torch.set_num_threads(1)
 

@@ -13,15 +13,13 @@ pytest.importorskip("gymnasium")
 pytest.importorskip("stable_baselines3")
 
 from pokerirl.gym.episodes import sb3_evaluation
-from pokerirl.gym.experts import (
+from pokerirl.gym.expert_policies import FINAL_EVAL_SEED, ExpertRecord, load_expert
+from pokerirl.gym.manifest import (
     CONFIG_FILE,
-    FINAL_EVAL_SEED,
     MANIFEST_FILE,
     MANIFEST_KEYS,
     MODEL_FILE,
-    ExpertRecord,
     ManifestEntry,
-    load_expert,
     manifest_entry,
     shipped_dir,
     shipped_experts,

@@ -12,7 +12,7 @@ from stable_baselines3 import DQN
 from stable_baselines3.common.callbacks import BaseCallback
 from stable_baselines3.common.utils import polyak_update
 
-from pokerirl.gym.experts import make_model
+from pokerirl.gym.expert_policies import make_model
 from pokerirl.gym.lockstep.dqn import LockstepDQN, exploration_rate
 from pokerirl.gym.presets import TASKS, DQNSettings, RLSettings
 

@@ -18,7 +18,7 @@ pytest.importorskip("stable_baselines3")
 
 from pokerirl.execution import pinned_threads
 from pokerirl.gym.episodes import EVAL_SEED, sb3_evaluation
-from pokerirl.gym.experts import build_policy, policy_kwargs
+from pokerirl.gym.expert_policies import build_policy, policy_kwargs
 from pokerirl.gym.lockstep import LockstepPPO
 from pokerirl.gym.lockstep.group import train_rl_group
 from pokerirl.gym.presets import TASKS, PPOSettings, RLSettings

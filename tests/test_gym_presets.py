@@ -15,7 +15,7 @@ def test_every_task_is_a_registered_environment_with_the_declared_action_space(
 ) -> None:
     pytest.importorskip("gymnasium")
     monkeypatch.chdir(tmp_path)  # MuJoCo writes its warnings to MUJOCO_LOG.TXT in the cwd
-    from pokerirl.gym.experts import make_env
+    from pokerirl.gym.envs import make_env
 
     assert sorted(TASK_ORDER) == sorted(TASKS)
     for env_id, task in TASKS.items():
@@ -56,7 +56,7 @@ def test_importing_the_gym_package_and_the_cli_does_not_import_gymnasium_or_sb3(
     import sys
 
     code = (
-        "import sys, pokerirl.cli, pokerirl.gym.presets, pokerirl.gym.experts, "
+        "import sys, pokerirl.cli, pokerirl.gym.presets, pokerirl.gym.expert_policies, "
         "pokerirl.gym.collect, pokerirl.gym.rewards, pokerirl.gym.rl\n"
         "loaded = {'gymnasium', 'stable_baselines3', 'mujoco'} & set(sys.modules)\n"
         "assert not loaded, loaded"

@@ -125,7 +125,7 @@ def test_shaped_family_f_and_g_are_epic_equivalent() -> None:
 
 def _random_rollouts(env_id: str, *, episodes: int) -> Rollouts:
     """Episodes of uniformly random actions (the action space seeded 0), from seed 0."""
-    from pokerirl.gym.experts import make_env
+    from pokerirl.gym.envs import make_env
 
     env = make_env(env_id)
     space = env.action_space
@@ -194,7 +194,7 @@ def test_reward_quality_round_trips_with_null_scores_as_nan() -> None:
 def test_a_real_tiny_pendulum_irl_run_is_scored(tmp_path: Path) -> None:
     pytest.importorskip("stable_baselines3")
     from pokerirl.gym.collect import collect
-    from pokerirl.gym.experts import load_expert, resolve_expert_dir
+    from pokerirl.gym.expert_policies import load_expert, resolve_expert_dir
     from pokerirl.gym.irl import train_gym_irl
     from pokerirl.gym.presets import TASKS
 

@@ -15,7 +15,7 @@ pytest.importorskip("gymnasium")
 pytest.importorskip("stable_baselines3")
 
 from pokerirl.cli import app
-from pokerirl.gym.experts import load_expert, resolve_expert_dir
+from pokerirl.gym.expert_policies import load_expert, resolve_expert_dir
 from pokerirl.gym.reward_map import plot_reward_map, reward_map
 from pokerirl.irl.airl import TrainResult
 from pokerirl.irl.config import AIRLConfig

@@ -15,7 +15,7 @@ pytest.importorskip("stable_baselines3")
 from stable_baselines3.common.monitor import Monitor
 from stable_baselines3.common.vec_env import DummyVecEnv
 
-from pokerirl.gym.experts import make_env
+from pokerirl.gym.envs import make_env
 from pokerirl.gym.rewards import ENV_REWARD_KEY, learned_reward_env, module_reward
 from pokerirl.gym.rl import train_rl
 

@@ -116,7 +116,7 @@ def test_gails_fast_path_follows_autograd_and_differs_from_airl() -> None:
 @pytest.mark.slow
 def test_gail_trains_on_a_tiny_gym_table(tmp_path: Path) -> None:
     from pokerirl.gym.collect import collect
-    from pokerirl.gym.experts import load_expert, resolve_expert_dir
+    from pokerirl.gym.expert_policies import load_expert, resolve_expert_dir
 
     data = tmp_path / "expert.parquet"
     collect(load_expert(resolve_expert_dir("shipped", "MountainCar-v0")), data, transitions=2000,

@@ -18,7 +18,7 @@ pytest.importorskip("stable_baselines3")
 
 from pokerirl.gym.collect import collect
 from pokerirl.gym.episodes import play_episodes, policy_actions
-from pokerirl.gym.experts import load_expert, resolve_expert_dir
+from pokerirl.gym.expert_policies import load_expert, resolve_expert_dir
 from pokerirl.gym.irl import irl_config, load_env_transitions, obs_standardization, standardized
 from pokerirl.gym.online import OnlineSettings, PPOGenerator, train_gym_online
 from pokerirl.gym.presets import TASKS

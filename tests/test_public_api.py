@@ -32,7 +32,7 @@ HOME = {  # each public name and the module that defines it
     "resolve_agent": "pokerirl.agents.registry",
     "RLCardAgent": "pokerirl.agents.rlcard_adapter",
     "learned_reward_env": "pokerirl.gym.rewards",
-    "load_expert": "pokerirl.gym.experts",
+    "load_expert": "pokerirl.gym.expert_policies",
     "Encoding": "pokerirl.game.encodings",
     "get_encoding": "pokerirl.game.encodings",
 }

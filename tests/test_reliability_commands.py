@@ -23,7 +23,7 @@ from test_reliability_io import _gym_run, read_only
 
 from pokerirl.agents.checkpoint import save_agent
 from pokerirl.agents.dqn import QNetwork
-from pokerirl.cli.app import display, display_error
+from pokerirl.cli.errors import display, display_error
 from pokerirl.datasets.ingest import ingest_table
 from pokerirl.game.synth import write_synthetic_month
 

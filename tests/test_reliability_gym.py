@@ -20,7 +20,7 @@ import pytest
 from test_reliability import one_error_line, run_cli
 from testkit import folder_bytes, folder_snapshot
 
-from pokerirl.cli.app import MAX_SEED
+from pokerirl.cli.seeds import MAX_SEED
 
 pytest.importorskip("gymnasium")
 pytest.importorskip("stable_baselines3")
@@ -94,7 +94,7 @@ def test_a_pickled_expert_model_is_refused_in_one_line_and_never_run(
 
     import torch
 
-    from pokerirl.gym.experts import resolve_expert_dir
+    from pokerirl.gym.expert_policies import resolve_expert_dir
 
     expert = tmp_path / "expert"
     expert.mkdir()

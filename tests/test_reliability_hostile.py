@@ -17,7 +17,7 @@ from typer.testing import CliRunner
 
 from pokerirl.cli import app
 from pokerirl.errors import InputError, PokerIRLError
-from pokerirl.poker.rewards import RewardSource
+from pokerirl.poker.reward_sources import RewardSource
 
 
 class Discriminator(nn.Module):

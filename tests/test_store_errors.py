@@ -10,7 +10,7 @@ import pytest
 import typer
 from typer.testing import CliRunner
 
-from pokerirl.cli.app import ADVICE
+from pokerirl.cli.errors import ADVICE
 from pokerirl.errors import (
     PokerIRLError,
     Remedy,

@@ -15,7 +15,7 @@ from pathlib import Path
 
 import pytest
 
-from pokerirl.cli.app import ADVICE
+from pokerirl.cli.errors import ADVICE
 from pokerirl.errors import Remedy, report
 from pokerirl.store import (
     Fate,

@@ -25,18 +25,11 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from pokerirl.agents.registry import (
-    CONFIG_FILE,
-    KEPT_FILE,
-    MODEL_FILE,
-    POLICY_PREFIX,
-    REWARD_PREFIX,
-    RLCARD_PREFIX,
-    agent_fingerprint,
-    resolve_agent,
-)
+from pokerirl.agents.names import CONFIG_FILE, KEPT_FILE, MODEL_FILE, RLCARD_PREFIX
+from pokerirl.agents.registry import agent_fingerprint, resolve_agent
 from pokerirl.game.agents import BUILT_IN_AGENTS, Agent
 from pokerirl.jsonio import read_bytes
+from pokerirl.poker.agent_specs import POLICY_PREFIX, REWARD_PREFIX
 
 AGENT_FILES = (MODEL_FILE, CONFIG_FILE)  # what an agent folder's agent is made of (and
 # KEPT_FILE, the authors' kept checkpoint, when there is one)
@@ -55,7 +48,7 @@ def ship_agent(spec: str) -> ShippedAgent:
     if spec in BUILT_IN_AGENTS:
         return ShippedAgent(spec=spec)
     if spec.startswith(REWARD_PREFIX):
-        from pokerirl.poker.rewards import RewardSource
+        from pokerirl.poker.reward_sources import RewardSource
 
         source = RewardSource.resolve(spec.removeprefix(REWARD_PREFIX))
         return ShippedAgent(spec=spec, files=source.files)
@@ -90,7 +83,8 @@ def land_agent(shipped: ShippedAgent, folder: str | os.PathLike[str]) -> Agent:
     for name, data in shipped.files:
         (folder / name).write_bytes(data)
     if shipped.spec.startswith(REWARD_PREFIX):
-        from pokerirl.poker.rewards import AUTHORS_FILE, AUTHORS_PREFIX, is_authors_spec
+        from pokerirl.poker.reward_sources import AUTHORS_FILE
+        from pokerirl.poker.rewards import AUTHORS_PREFIX, is_authors_spec
 
         source = shipped.spec.removeprefix(REWARD_PREFIX)
         landed = f"{AUTHORS_PREFIX}{folder / AUTHORS_FILE}" if is_authors_spec(source) else folder

@@ -30,7 +30,7 @@ import torch
 
 from pokerirl.agents.config import PLAYS, Plays
 from pokerirl.agents.dqn import GreedyQAgent, QNetwork, input_norm
-from pokerirl.agents.registry import CONFIG_FILE, KEPT_FILE, MODEL_FILE
+from pokerirl.agents.names import CONFIG_FILE, KEPT_FILE, MODEL_FILE
 from pokerirl.atomic import write_bytes, write_torch
 from pokerirl.errors import ConfigError, InputError, check_argument
 from pokerirl.game.encodings import Encoding, EncodingName, recorded_encoding

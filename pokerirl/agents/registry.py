@@ -9,13 +9,10 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
+from pokerirl.agents.names import RLCARD_PREFIX
 from pokerirl.errors import InputError, check_argument
 from pokerirl.game.agents import BUILT_IN_AGENTS, Agent, make_agent
 from pokerirl.poker.agent_specs import POLICY_PREFIX, REWARD_PREFIX
-
-RLCARD_PREFIX = "rlcard:"
-# An agent folder's files, named here (torch-free) so that shipping an agent needs no torch.
-MODEL_FILE, CONFIG_FILE, KEPT_FILE = "model.pt", "config.json", "kept.pt"
 
 
 def resolve_agent(spec: str) -> Agent:

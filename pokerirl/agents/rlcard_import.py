@@ -25,7 +25,7 @@ import torch
 
 from pokerirl.agents.checkpoint import save_agent
 from pokerirl.agents.dqn import GreedyQAgent, QNetwork
-from pokerirl.agents.registry import RLCARD_PREFIX
+from pokerirl.agents.names import RLCARD_PREFIX
 from pokerirl.encoding import NUM_ACTIONS, OBS_SIZE
 from pokerirl.errors import InputError
 

@@ -51,14 +51,7 @@ import torch
 
 from pokerirl import __version__
 from pokerirl.agents import ShippedAgent, land_agent, ship_agent
-from pokerirl.agents.checkpoint import (
-    CONFIG_FILE,
-    CURVE_FILE,
-    KEPT_FILE,
-    METRICS_FILE,
-    MODEL_FILE,
-    save_agent,
-)
+from pokerirl.agents.checkpoint import CURVE_FILE, METRICS_FILE, save_agent
 from pokerirl.agents.config import (
     AgentOverrides,  # noqa: F401 - re-exported from its old home
     Opponent,
@@ -74,6 +67,7 @@ from pokerirl.agents.dqn import (
     epsilon_at,
     train_dqn,
 )
+from pokerirl.agents.names import CONFIG_FILE, KEPT_FILE, MODEL_FILE
 from pokerirl.agents.registry import agent_fingerprint, resolve_agent
 from pokerirl.atomic import atomic_path
 from pokerirl.errors import ConfigError, InputError
@@ -83,10 +77,10 @@ from pokerirl.game.agents import Agent
 from pokerirl.game.encodings import get_encoding
 from pokerirl.irl.run import REWARD_RUN_FILES  # noqa: F401 - re-exported: pokerirl.agents.train.REWARD_RUN_FILES
 from pokerirl.jsonio import read_json_lines
+from pokerirl.poker.reward_sources import RewardSource
 from pokerirl.poker.rewards import (
     Decisions,
     PokerReward,
-    RewardSource,
     TransformedReward,
     as_poker_reward,
     follow_share,
@@ -157,7 +151,7 @@ class Timings(Serializable):
 
 def reward_run_fingerprint(run_dir: str | os.PathLike[str]) -> str:
     """``sha256:<hex>`` of a reward source: a run's ``reward.pt`` and ``config.json``, or an
-    ``authors:FILE`` (:class:`pokerirl.poker.rewards.RewardSource`)."""
+    ``authors:FILE`` (:class:`pokerirl.poker.reward_sources.RewardSource`)."""
     return RewardSource.read(run_dir).fingerprint
 
 

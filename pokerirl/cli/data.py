@@ -7,7 +7,8 @@ from pathlib import Path
 
 import typer
 
-from pokerirl.cli.app import app, echo, settings_from_options
+from pokerirl.cli.app import app
+from pokerirl.cli.errors import echo, settings_from_options
 from pokerirl.errors import InputError, UsageError
 
 data_app = typer.Typer(

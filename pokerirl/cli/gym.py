@@ -8,23 +8,18 @@ from typing import Any
 
 import typer
 
-from pokerirl.cli.app import (
+from pokerirl.cli.app import app
+from pokerirl.cli.errors import (
     INTERRUPTED,
-    LOG_DIR,
-    MAX_SEED,
-    MAX_SEEDS,
-    RAY_HELP,
     RUN_ADVICE,
-    SEED_OPTION,
-    _backend,
-    app,
-    choices,
     display,
     echo,
     on_error,
     settings_from_options,
-    write_logs,
 )
+from pokerirl.cli.fanout import RAY_HELP, command_backend
+from pokerirl.cli.options import LOG_DIR, choices, write_logs
+from pokerirl.cli.seeds import MAX_SEED, MAX_SEEDS, SEED_OPTION
 from pokerirl.errors import InputError, UsageError
 from pokerirl.gym.presets import MAX_TRANSITIONS
 from pokerirl.irl.config import (  # torch-free: `gym irl`, `train` offer each
@@ -185,7 +180,7 @@ def gym_collect(
 ) -> None:
     """Write the expert's play as a Parquet transition table (same seed, same bytes)."""
     from pokerirl.gym.collect import collect
-    from pokerirl.gym.experts import load_expert, resolve_expert_dir
+    from pokerirl.gym.expert_policies import load_expert, resolve_expert_dir
 
     _known_task(env)
     if expert == "shipped":
@@ -352,7 +347,7 @@ def gym_irl(
     pin_threads(threads)  # SB3's small MLPs train fastest on one thread
     if data is None:
         from pokerirl.gym.collect import collect
-        from pokerirl.gym.experts import load_expert, resolve_expert_dir
+        from pokerirl.gym.expert_policies import load_expert, resolve_expert_dir
 
         data = out / "expert.parquet"
         if not data.is_file():
@@ -534,7 +529,7 @@ def gym_study(
     result = run_gym_study(
         out,
         preset,
-        backend=_backend(jobs, ray),
+        backend=command_backend(jobs, ray),
         overwrite=overwrite,
         progress=not quiet,
         say=echo,
@@ -592,7 +587,7 @@ def gym_sweep(
         params,
         preset,
         out,
-        backend=_backend(jobs, ray),
+        backend=command_backend(jobs, ray),
         overwrite=overwrite,
         progress=not quiet,
         say=echo,

@@ -10,7 +10,9 @@ from typing import TYPE_CHECKING
 
 import typer
 
-from pokerirl.cli.app import app, choices, echo
+from pokerirl.cli.app import app
+from pokerirl.cli.errors import echo
+from pokerirl.cli.options import choices
 from pokerirl.game.leduc.rules import LeducRules, RuleSet
 
 if TYPE_CHECKING:

@@ -1,5 +1,9 @@
-"""A command's options made from the fields of config dataclasses: a setting is declared once,
-in its dataclass, and every command that offers it shows the same flag and help.
+"""A command's options made from the fields of config dataclasses (a setting is declared once,
+in its dataclass, and every command that offers it shows the same flag and help), and the
+options the commands share: a metavar listing values (:func:`choices`, the encodings'
+:data:`ENCODING_CHOICES`), a default read from a config field (:class:`Default`), which
+options a command line set (:func:`given`) and ``--log-dir`` (:data:`LOG_DIR`,
+:func:`write_logs`).
 
 A field is offered when its metadata holds ``help`` (``pokerirl.irl.config.setting``), with
 optional ``flags`` (default ``--field-name``), ``metavar``, ``min``, ``max`` and
@@ -24,23 +28,102 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+import importlib
 import inspect
 import re
 import types
 import typing
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 from enum import StrEnum
+from pathlib import Path
 from typing import Any, TypeVar
 
 import typer
 
-from pokerirl.cli.app import SEED_OPTION, choices, given
+from pokerirl.cli.errors import echo
+from pokerirl.cli.seeds import SEED_OPTION
 from pokerirl.errors import UsageError
+from pokerirl.game.encodings import EncodingName  # numpy only: the values help lists
 from pokerirl.settings import MAX_LAYERS, MAX_WIDTH
 
 T = TypeVar("T")
 Settings = Mapping[str, Any]
 NO_SETTINGS: Settings = types.MappingProxyType({})
+
+
+def choices(values: Iterable[str]) -> str:
+    """An option's metavar that lists its values, as ``--help`` shows them.
+
+    >>> choices(("rlcard", "strength"))
+    '[rlcard|strength]'
+    """
+    return f"[{'|'.join(values)}]"
+
+
+ENCODING_CHOICES = choices(EncodingName)
+
+
+class Default:
+    """A typer option's default, read from a config dataclass's field: declared once, in the
+    dataclass, and shown by ``--help``. Lazy: the module is imported when the default is used
+    or shown, never when the command line starts. A tuple is given as the command line
+    writes it (``raw,centered``).
+
+    >>> Default("pokerirl.studies.poker.transfer:TransferConfig", "hands")()
+    50000
+    >>> str(Default("pokerirl.studies.poker.transfer:TransferConfig", "transforms"))
+    'raw,centered,log_softmax,advantage'
+    """
+
+    def __init__(self, config: str, field: str) -> None:
+        self.config, self.field = config, field
+
+    def __call__(self) -> Any:
+        module, _, name = self.config.partition(":")
+        config = getattr(importlib.import_module(module), name)
+        field = {f.name: f for f in dataclasses.fields(config)}[self.field]
+        if field.default is dataclasses.MISSING:
+            value = field.default_factory()  # type: ignore[operator]  # has one: no default
+        else:
+            value = field.default
+        return ",".join(map(str, value)) if isinstance(value, tuple) else value
+
+    def __str__(self) -> str:
+        return str(self())
+
+    def __repr__(self) -> str:
+        return f"Default({self.config!r}, {self.field!r})"
+
+
+def given(ctx: typer.Context, **options: T) -> dict[str, T]:
+    """The ``options`` the command line set (not left at their default), for settings that
+    a preset or a ``--config`` file gives otherwise."""
+    left = ("DEFAULT", "DEFAULT_MAP")  # by name: typer's click or click's ParameterSource
+    return {
+        name: value
+        for name, value in options.items()
+        if getattr(ctx.get_parameter_source(name), "name", "DEFAULT") not in left
+    }
+
+
+# --log-dir DIR, one option for every command that trains runs (typer options may be shared).
+LOG_DIR = typer.Option(
+    None,
+    "--log-dir",
+    metavar="DIR",
+    help="Also write each run's scalars into DIR as TensorBoard event files and progress.csv "
+    "(SB3's layout; needs pip install 'pokerirl[logs]'). metrics.jsonl stays the record.",
+)
+
+
+def write_logs(out: Path, log_dir: Path | None) -> None:
+    """``--log-dir``: the scalars of the runs under ``out``, copied into ``log_dir``."""
+    if log_dir is None:
+        return
+    from pokerirl.scalars import export_scalars
+
+    written = export_scalars(out, log_dir)
+    echo(f"scalars of {len(written)} runs -> {log_dir} (tensorboard --logdir {log_dir})")
 
 
 def widths(text: str, flag: str = "--hidden") -> tuple[int, ...]:

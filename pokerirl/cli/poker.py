@@ -11,27 +11,23 @@ import typer
 
 from pokerirl import execution
 from pokerirl.agents.config import AGENT_PRESETS, DQNConfig, Plays, TrainConfig  # torch-free
-from pokerirl.cli.app import (
+from pokerirl.cli.app import app
+from pokerirl.cli.data import MONTHS_HELP, months
+from pokerirl.cli.errors import INTERRUPTED, RUN_ADVICE, echo, on_error, settings_from_options
+from pokerirl.cli.fanout import RAY_HELP, command_backend
+from pokerirl.cli.options import (
     ENCODING_CHOICES,
-    INTERRUPTED,
     LOG_DIR,
-    MAX_SEEDS,
-    RAY_HELP,
-    RUN_ADVICE,
-    SEED_OPTION,
+    NO_SETTINGS,
     Default,
-    _backend,
-    app,
+    Settings,
     choices,
-    echo,
     given,
-    on_error,
-    seed_list,
-    settings_from_options,
+    settings_options,
+    widths,
     write_logs,
 )
-from pokerirl.cli.data import MONTHS_HELP, months
-from pokerirl.cli.options import NO_SETTINGS, Settings, settings_options, widths
+from pokerirl.cli.seeds import MAX_SEEDS, SEED_OPTION, seed_list
 from pokerirl.errors import InputError, UsageError
 from pokerirl.game.encodings import EncodingName
 from pokerirl.irl.config import AIRLConfig, Algo  # torch-free
@@ -389,7 +385,7 @@ def tournament(
         batch_size=batch_size,
         overwrite=overwrite,
         progress=not quiet,
-        backend=_backend(jobs, ray),
+        backend=command_backend(jobs, ray),
     )
     if not quiet:
         echo(render_report(report))
@@ -469,7 +465,8 @@ def train(
     if em_rounds:
         _echo_em(train_em(table, out, rounds=em_rounds, **common), out, em_rounds)
     else:
-        _echo_runs(algo, train_runs(table, out, runs=runs, backend=_backend(jobs, ray), **common))
+        backend = command_backend(jobs, ray)
+        _echo_runs(algo, train_runs(table, out, runs=runs, backend=backend, **common))
     write_logs(Path(out), log_dir)
 
 
@@ -566,7 +563,8 @@ def reward_card_command(
     and what a DQN is predicted to learn. Writes OUT/reward_card.json and reward_card.png.
     """
     from pokerirl.poker.reward_card import CardStates, reward_card, write_card
-    from pokerirl.poker.rewards import TRANSFORMS, RewardSource, TransformedReward
+    from pokerirl.poker.reward_sources import RewardSource
+    from pokerirl.poker.rewards import TRANSFORMS, TransformedReward
 
     if transform not in TRANSFORMS:
         raise UsageError(f"unknown --transform {transform!r} ({', '.join(TRANSFORMS)})")
@@ -648,7 +646,7 @@ def agent_train(
     from pokerirl.agents.train import train_agent, train_seeds
     from pokerirl.seeds import parse_seeds
 
-    backend = _backend(jobs, ray, threads)
+    backend = command_backend(jobs, ray, threads)
     from_file = AgentOverrides()
     if config_file is not None:
         from_file = settings_from_options(load_agent_config, config_file)
@@ -667,7 +665,7 @@ def agent_train(
 
 def _echo_agent(folder: Path, line: MetricsLine | None, play: str) -> None:
     """``agent train``: an agent's last evaluation (and the checkpoint it plays)."""
-    from pokerirl.agents.registry import CONFIG_FILE, KEPT_FILE, MODEL_FILE
+    from pokerirl.agents.names import CONFIG_FILE, KEPT_FILE, MODEL_FILE
     from pokerirl.agents.train import MetricsLine
 
     if line is None:

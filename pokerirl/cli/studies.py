@@ -8,24 +8,12 @@ from pathlib import Path
 
 import typer
 
-from pokerirl.cli.app import (
-    ENCODING_CHOICES,
-    INTERRUPTED,
-    LOG_DIR,
-    MAX_SEEDS,
-    RAY_HELP,
-    SEED_OPTION,
-    Default,
-    _backend,
-    app,
-    choices,
-    echo,
-    on_error,
-    seed_list,
-    settings_from_options,
-    write_logs,
-)
+from pokerirl.cli.app import app
 from pokerirl.cli.data import MONTHS_HELP, months
+from pokerirl.cli.errors import INTERRUPTED, echo, on_error, settings_from_options
+from pokerirl.cli.fanout import RAY_HELP, command_backend
+from pokerirl.cli.options import ENCODING_CHOICES, LOG_DIR, Default, choices, write_logs
+from pokerirl.cli.seeds import MAX_SEEDS, SEED_OPTION, seed_list
 from pokerirl.errors import MissingExtra, UsageError
 from pokerirl.jsonio import read_json
 from pokerirl.studies.poker.config import (
@@ -75,7 +63,7 @@ def demo(
     echo(result.markdown)
     echo(f"report: {out / 'report.md'} (pokerirl report {out})")
     if gym:
-        from pokerirl.gym.experts import require_gym
+        from pokerirl.gym.envs import require_gym
 
         try:
             require_gym()
@@ -225,7 +213,7 @@ def study(
         overwrite=overwrite,
         progress=not quiet,
         say=echo,
-        backend=_backend(jobs, ray),
+        backend=command_backend(jobs, ray),
     )
     echo("")
     echo(result.markdown)
@@ -317,7 +305,7 @@ def transfer(
         encoding=encoding,
     )
     result = run_transfer(
-        reward_run, out, config, backend=_backend(jobs, ray), progress=not quiet, say=echo
+        reward_run, out, config, backend=command_backend(jobs, ray), progress=not quiet, say=echo
     )
     echo(result.markdown())
     echo(f"wrote {out / 'transfer.json'} and transfer.md")

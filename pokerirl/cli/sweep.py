@@ -6,17 +6,11 @@ from pathlib import Path
 
 import typer
 
-from pokerirl.cli.app import (
-    INTERRUPTED,
-    RAY_HELP,
-    _backend,
-    app,
-    echo,
-    on_error,
-    seed_list,
-    settings_from_options,
-)
+from pokerirl.cli.app import app
 from pokerirl.cli.data import MONTHS_HELP, months
+from pokerirl.cli.errors import INTERRUPTED, echo, on_error, settings_from_options
+from pokerirl.cli.fanout import RAY_HELP, command_backend
+from pokerirl.cli.seeds import seed_list
 from pokerirl.errors import UsageError
 
 GYM_SWEEP_MOVED = (
@@ -66,7 +60,7 @@ def sweep(
     )  # fmt: skip
     result = run_sweep(
         sources, out, config, split=Split.TEST if test else Split.CHOOSE,
-        backend=_backend(jobs, ray), overwrite=overwrite, progress=not quiet, say=echo,
+        backend=command_backend(jobs, ray), overwrite=overwrite, progress=not quiet, say=echo,
     )  # fmt: skip
     folder = out / result.split
     echo("")

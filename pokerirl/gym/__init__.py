@@ -16,7 +16,7 @@ from typing import Any
 # functions Gymnasium and SB3, load then).
 _LAZY = {
     "learned_reward_env": "rewards",
-    "load_expert": "experts",
+    "load_expert": "expert_policies",
 }
 
 __all__ = [*_LAZY]

@@ -33,7 +33,8 @@ import torch
 from pokerirl.atomic import atomic_path
 from pokerirl.errors import ConfigError
 from pokerirl.execution import unit_progress
-from pokerirl.gym.experts import Expert, make_env
+from pokerirl.gym.envs import make_env
+from pokerirl.gym.expert_policies import Expert
 from pokerirl.gym.presets import MAX_TRANSITIONS, TASKS
 
 COLUMNS = ("obs", "action", "reward", "next_obs", "done", "truncated", "episode")

@@ -87,7 +87,7 @@ def episode_steps(
 ) -> Iterator[Step]:
     """Every step of ``runs`` x ``episodes`` episodes (episode k of every run from
     ``reset(seed=seed + k)``); ``act`` maps the observations ``batching`` says to actions."""
-    from pokerirl.gym.experts import make_env  # gymnasium is imported lazily
+    from pokerirl.gym.envs import make_env  # gymnasium is imported lazily
 
     if runs > 1 and batching != Batching.ALL:
         raise ValueError("a batch of policies plays with Batching.ALL: its rows say whose")
@@ -174,7 +174,7 @@ def sb3_evaluation(policy: BasePolicy, env_id: str, *, episodes: int, seed: int)
 
 def random_return(env_id: str, *, episodes: int, seed: int = EVAL_SEED) -> float:
     """A uniformly random policy's mean return on the evaluation episodes (seeded)."""
-    from pokerirl.gym.experts import make_env
+    from pokerirl.gym.envs import make_env
 
     env = make_env(env_id)
     space = env.action_space

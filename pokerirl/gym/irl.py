@@ -37,8 +37,9 @@ from torch import Tensor, nn
 
 from pokerirl.atomic import make_shareable, write_text
 from pokerirl.errors import ConfigError, InputError, Remedy
+from pokerirl.gym.envs import make_env
 from pokerirl.gym.episodes import play_episodes, policy_actions, random_return
-from pokerirl.gym.experts import make_env, shipped_experts
+from pokerirl.gym.manifest import shipped_experts
 from pokerirl.gym.presets import IRLSettings
 from pokerirl.gym.quality import has_true_reward, write_reward_quality
 from pokerirl.gym.tasks import task

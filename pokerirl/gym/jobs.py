@@ -29,7 +29,9 @@ from typing import Any
 
 from pokerirl.errors import InputError
 from pokerirl.execution import Backend, folder_files
-from pokerirl.gym.experts import CONFIG_FILE, METRICS_FILE, MODEL_FILE, ExpertRecord, require_gym
+from pokerirl.gym.envs import require_gym
+from pokerirl.gym.expert_policies import ExpertRecord
+from pokerirl.gym.manifest import CONFIG_FILE, METRICS_FILE, MODEL_FILE
 from pokerirl.gym.tasks import task
 from pokerirl.irl.reward import RewardFn
 from pokerirl.jsonio import read_json
@@ -65,8 +67,8 @@ def expert_unit(
     eval_episodes: int,
     final_episodes: int,
 ) -> UnitOutput[None]:
-    """An SB3 expert's files (see :func:`pokerirl.gym.experts.train_expert_record`)."""
-    from pokerirl.gym.experts import train_expert_record
+    """An SB3 expert's files (see :func:`pokerirl.gym.expert_policies.train_expert_record`)."""
+    from pokerirl.gym.expert_policies import train_expert_record
 
     with tempfile.TemporaryDirectory(prefix="pokerirl-gym-expert-") as scratch:
         train_expert_record(
@@ -165,7 +167,7 @@ def expert_folder(
     """Train an SB3 expert into the unit folder ``out``, or keep the one there if it was
     trained with the same settings (others are refused, unless ``overwrite``). Its files
     land together, or not at all."""
-    from pokerirl.gym.experts import expert_settings
+    from pokerirl.gym.expert_policies import expert_settings
 
     settings = {
         "env": env, "seed": seed, "hyper": hyper,

@@ -1,6 +1,7 @@
 """The shipped experts' manifest (``pokerirl/gym/experts/manifest.json``), read and written
 without torch, Gymnasium or SB3: ``pokerirl gym experts`` only prints it, and should start in
-a fraction of a second (issue 34). :mod:`pokerirl.gym.experts` re-exports these names.
+a fraction of a second (issue 34). It also names an expert folder's files, which
+:mod:`pokerirl.gym.expert_policies` writes and reads.
 
 >>> [entry.env for entry in shipped_experts()][:2]
 ['Acrobot-v1', 'MountainCar-v0']

@@ -42,8 +42,8 @@ from torch import Tensor, nn
 from pokerirl.atomic import make_shareable, write_text
 from pokerirl.errors import ConfigError, Remedy
 from pokerirl.execution import progress_share, unit_progress
+from pokerirl.gym.envs import make_env, require_gym
 from pokerirl.gym.episodes import random_return
-from pokerirl.gym.experts import make_env, require_gym
 from pokerirl.gym.irl import (
     RETURNS_FILE,
     STAGE_KEY,

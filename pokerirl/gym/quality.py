@@ -53,8 +53,8 @@ from pokerirl.atomic import write_text
 from pokerirl.errors import PokerIRLError
 from pokerirl.execution import pinned_threads
 from pokerirl.gym.collect import read_transitions
+from pokerirl.gym.envs import make_env
 from pokerirl.gym.episodes import episode_steps, policy_actions
-from pokerirl.gym.experts import make_env
 from pokerirl.gym.presets import TASKS
 from pokerirl.irl.nets import RewardFamily, fold_obs_standardization
 from pokerirl.irl.run import (

@@ -86,7 +86,7 @@ class RewardMap:
 def task_space(env_id: str) -> tuple[np.ndarray, np.ndarray, int]:
     """(low, high, number of actions) of a task with a bounded 2-d observation and discrete
     actions; a one-line ``ValueError`` for any other task."""
-    from pokerirl.gym.experts import make_env
+    from pokerirl.gym.envs import make_env
 
     env = make_env(env_id)
     try:
@@ -175,7 +175,7 @@ def check_run(run: Path, env_id: str, num_actions: int) -> str:
 
 def expert_actions(expert: str | os.PathLike[str], env_id: str, states: np.ndarray) -> np.ndarray:
     """The expert's greedy actions on ``states`` (``shipped`` or an expert folder)."""
-    from pokerirl.gym.experts import load_expert, resolve_expert_dir
+    from pokerirl.gym.expert_policies import load_expert, resolve_expert_dir
 
     loaded = load_expert(resolve_expert_dir(expert, env_id))
     if loaded.env_id != env_id:

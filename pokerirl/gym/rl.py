@@ -20,17 +20,10 @@ import numpy as np
 from pokerirl.atomic import write_text, write_torch
 from pokerirl.errors import ConfigError, InputError
 from pokerirl.execution import unit_progress
+from pokerirl.gym.envs import make_env, require_gym
 from pokerirl.gym.episodes import EVAL_SEED, sb3_evaluation
-from pokerirl.gym.experts import (
-    CONFIG_FILE,
-    METRICS_FILE,
-    MODEL_FILE,
-    gym_versions,
-    make_env,
-    make_model,
-    policy_kwargs,
-    require_gym,
-)
+from pokerirl.gym.expert_policies import gym_versions, make_model, policy_kwargs
+from pokerirl.gym.manifest import CONFIG_FILE, METRICS_FILE, MODEL_FILE
 from pokerirl.gym.presets import RLBackend, RLSettings
 from pokerirl.gym.rewards import RewardCallable, learned_reward_env
 from pokerirl.gym.tasks import task

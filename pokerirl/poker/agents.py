@@ -32,13 +32,8 @@ from pokerirl.encoding import NUM_ACTIONS
 from pokerirl.errors import InputError
 from pokerirl.game.encodings import EncodingName
 from pokerirl.poker.agent_specs import POLICY_PREFIX, REWARD_PREFIX
-from pokerirl.poker.rewards import (
-    Decisions,
-    PokerReward,
-    RewardSource,
-    legal_argmax,
-    run_encoding,
-)
+from pokerirl.poker.reward_sources import RewardSource
+from pokerirl.poker.rewards import Decisions, PokerReward, legal_argmax, run_encoding
 from pokerirl.store import digest
 
 

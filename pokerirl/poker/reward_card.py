@@ -545,7 +545,7 @@ def run_card(
     ``table``, the decision table it was trained on; ``label`` names the table in the card
     (default: ``table``'s path; a worker's scratch copy passes the real table's path)."""
     from pokerirl.irl.run import CONFIG_FILE, read_split
-    from pokerirl.poker.rewards import load_reward_source
+    from pokerirl.poker.reward_sources import load_reward_source
 
     groups = read_split(run_dir)
     states = CardStates.from_table(table, groups=groups, label=label)

@@ -22,7 +22,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
-from pokerirl.agents.registry import RLCARD_PREFIX
+from pokerirl.agents.names import RLCARD_PREFIX
 from pokerirl.errors import PokerIRLError
 from pokerirl.game.agents import BUILT_IN_AGENTS
 from pokerirl.seeds import format_seeds

@@ -45,7 +45,8 @@ import numpy as np
 import torch
 
 from pokerirl.gym.collect import read_transitions
-from pokerirl.gym.experts import build_policy, load_expert, make_env, resolve_expert_dir
+from pokerirl.gym.envs import make_env
+from pokerirl.gym.expert_policies import build_policy, load_expert, resolve_expert_dir
 from pokerirl.gym.presets import TASKS
 from pokerirl.gym.rl import EVAL_SEED
 from pokerirl.irl import load_reward
@@ -363,7 +364,7 @@ def update_probe(
     from stable_baselines3.common.monitor import Monitor
     from stable_baselines3.common.vec_env import DummyVecEnv
 
-    from pokerirl.gym.experts import make_model
+    from pokerirl.gym.expert_policies import make_model
     from pokerirl.gym.rewards import learned_reward_env
 
     venv: Any = DummyVecEnv([lambda: Monitor(make_env(ENV))])

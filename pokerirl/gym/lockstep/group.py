@@ -79,7 +79,7 @@ def train_rl_group(
     """R = ``len(seeds)`` runs of ``train_rl`` in lock-step: run r trains on ``rewards[r]``
     (``None``: the env reward) with seed ``seeds[r]``; ``outs[r]``, when given, gets its run
     folder."""
-    from pokerirl.gym.experts import require_gym
+    from pokerirl.gym.envs import require_gym
 
     require_gym()
     settings = settings or task(env_id).rl

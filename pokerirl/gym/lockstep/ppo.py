@@ -196,7 +196,7 @@ class _RunEnvs:
     """One run's n envs, stepped as SB3's DummyVecEnv (auto-reset, terminal_observation)."""
 
     def __init__(self, env_id: str, n_envs: int, seed: int) -> None:
-        from pokerirl.gym.experts import make_env  # its warnings filter: the v4 tasks
+        from pokerirl.gym.envs import make_env  # its warnings filter: the v4 tasks
 
         self.envs = [make_env(env_id) for _ in range(n_envs)]
         self.obs = np.stack([e.reset(seed=seed + i)[0] for i, e in enumerate(self.envs)])

@@ -170,7 +170,8 @@ def run_gym_study(
         StudyError: ``out`` is a file, or a unit was made with other settings or inputs
             (without ``overwrite``); the message names it.
     """
-    from pokerirl.gym.experts import read_expert_record, require_gym
+    from pokerirl.gym.envs import require_gym
+    from pokerirl.gym.expert_policies import read_expert_record
 
     require_gym()
     check_rl_backend(rl_backend)

@@ -170,7 +170,7 @@ def run_sweep(
 ) -> SweepResult:
     """Run (or resume) the sweep of ``params`` on ``env`` with ``preset``'s budgets; the RL runs
     train with ``rl_backend`` (lockstep: each point's unfinished runs as one group)."""
-    from pokerirl.gym.experts import require_gym
+    from pokerirl.gym.envs import require_gym
 
     require_gym()
     if env not in TASKS:

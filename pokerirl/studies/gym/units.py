@@ -61,7 +61,8 @@ def _output(files: dict[str, bytes]) -> UnitOutput[None]:
 def expert_fingerprint(env_id: str, expert: Path | None = None) -> dict[str, Json]:
     """The shipped expert of ``env_id`` (``expert`` None): its manifest entry and the sha256 of
     its weights; or the expert folder ``expert``: the sha256 of its files."""
-    from pokerirl.gym.experts import MODEL_FILE, resolve_expert_dir, shipped_manifest
+    from pokerirl.gym.expert_policies import resolve_expert_dir
+    from pokerirl.gym.manifest import MODEL_FILE, shipped_manifest
 
     if expert is not None:
         return {"folder_sha256": {n: digest(b) for n, b in expert_files(expert).items()}}
@@ -72,10 +73,10 @@ def expert_fingerprint(env_id: str, expert: Path | None = None) -> dict[str, Jso
 
 
 def expert_files(folder: Path) -> dict[str, bytes]:
-    """What :func:`pokerirl.gym.experts.load_expert` reads of an expert folder, by name: the
+    """What :func:`pokerirl.gym.expert_policies.load_expert` reads of an expert folder, by name: the
     bytes travel to the unit, which may run on another machine."""
-    from pokerirl.gym.experts import CONFIG_FILE as EXPERT_CONFIG
-    from pokerirl.gym.experts import MODEL_FILE
+    from pokerirl.gym.manifest import CONFIG_FILE as EXPERT_CONFIG
+    from pokerirl.gym.manifest import MODEL_FILE
 
     try:
         return {name: (folder / name).read_bytes() for name in (EXPERT_CONFIG, MODEL_FILE)}
@@ -94,7 +95,7 @@ def collect_unit(
     (episode k from ``reset(seed=seed + k)``), as the bytes of the table ``gym collect``
     writes."""
     from pokerirl.gym.collect import collect
-    from pokerirl.gym.experts import load_expert, resolve_expert_dir
+    from pokerirl.gym.expert_policies import load_expert, resolve_expert_dir
 
     with tempfile.TemporaryDirectory(prefix="pokerirl-collect-") as scratch:
         path = Path(scratch) / DATA_FILE

@@ -393,7 +393,7 @@ def single_run(
 
 def reward_source_prints(config: StudyConfig) -> dict[str, str]:
     """The fingerprint of each reward that replaces IRL runs; one-line StudyError if bad."""
-    from pokerirl.poker.rewards import RewardSource
+    from pokerirl.poker.reward_sources import RewardSource
 
     try:
         sources = config.reward_sources
@@ -405,7 +405,7 @@ def reward_source_prints(config: StudyConfig) -> dict[str, str]:
 def replaced_irl(study: Study, algo: str, source: str, out: Path) -> Replaced:
     """An algorithm whose IRL runs a given reward replaces: its card over the whole table."""
     from pokerirl.poker.reward_card import CardStates, reward_card, write_card
-    from pokerirl.poker.rewards import load_reward_source
+    from pokerirl.poker.reward_sources import load_reward_source
 
     study.say(f"      {algo}: replaced by {source}")
     card = reward_card(load_reward_source(source), CardStates.from_table(study.root / TABLE))

@@ -584,7 +584,7 @@ def _evaluate(sweep: _Sweep, cells: Sequence[Cell]) -> dict[Any, AgentEval]:
     (``"call"`` for always-call)."""
     from pokerirl.agents import ship_agent
     from pokerirl.agents.registry import agent_fingerprint, resolve_agent
-    from pokerirl.poker.rewards import RewardSource
+    from pokerirl.poker.reward_sources import RewardSource
 
     config = sweep.config
     settings = {"kind": EVAL_KIND, "eval_hands": config.eval_hands, "eval_seed": EVAL_SEED,

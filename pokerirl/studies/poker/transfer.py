@@ -284,7 +284,7 @@ def run_transfer(
     from pokerirl.agents import resolve_agent
     from pokerirl.agents.train import agent_preset, train_seeds
     from pokerirl.poker.agent_specs import POLICY_PREFIX, REWARD_PREFIX
-    from pokerirl.poker.rewards import RewardSource
+    from pokerirl.poker.reward_sources import RewardSource
 
     source = RewardSource.resolve(reward_run)  # one line for a bad reward, before anything runs
     reward = source.load()  # f's best action is each transform's: they shift f per state

@@ -28,30 +28,16 @@ import numpy as np
 import torch
 
 from pokerirl.atomic import write_text, write_torch
-from pokerirl.errors import ConfigError, InputError, MissingExtra, check_argument
+from pokerirl.errors import ConfigError, InputError, check_argument
+from pokerirl.gym.envs import make_env, require_gym
 from pokerirl.gym.episodes import sb3_evaluation
-
-# Re-exported: the manifest's names lived here before pokerirl.gym.manifest (issue 34).
-from pokerirl.gym.manifest import (  # noqa: F401
-    CONFIG_FILE,
-    MANIFEST_FILE,
-    MANIFEST_KEYS,
-    METRICS_FILE,
-    MODEL_FILE,
-    ManifestEntry,
-    manifest_entry,
-    shipped_dir,
-    shipped_experts,
-    shipped_manifest,
-    write_manifest,
-)
+from pokerirl.gym.manifest import CONFIG_FILE, METRICS_FILE, MODEL_FILE, shipped_dir
 from pokerirl.gym.presets import PPOSettings, RLSettings
 from pokerirl.gym.tasks import task
 from pokerirl.jsonio import read_json
 from pokerirl.serial import Serializable
 
 if TYPE_CHECKING:  # gymnasium and SB3 are imported lazily: a poker-only user never pays.
-    import gymnasium
     from stable_baselines3.common.base_class import BaseAlgorithm
     from stable_baselines3.common.policies import BasePolicy
 
@@ -106,33 +92,6 @@ class ExpertRecord(Serializable):
     policy_kwargs: Mapping[str, Any]
     evaluation: ExpertEvaluation
     versions: Mapping[str, str | None]
-
-
-def require_gym() -> None:
-    """Raise one clear line when the ``pokerirl[gym]`` extra is missing."""
-    try:
-        import gymnasium  # noqa: F401
-        import stable_baselines3  # noqa: F401
-    except ImportError as error:
-        raise MissingExtra(
-            f"pokerirl.gym needs the gym extra (pip install 'pokerirl[gym]'): {error}"
-        ) from None
-
-
-def make_env(env_id: str) -> gymnasium.Env:
-    """``gymnasium.make(env_id)``, with a clear error for an unknown id."""
-    require_gym()
-    import gymnasium
-
-    try:
-        with warnings.catch_warnings():
-            # Ant-v4 and HalfCheetah-v4 are kept on purpose (the paper's versions).
-            warnings.filterwarnings(
-                "ignore", message=".*is out of date", category=DeprecationWarning
-            )
-            return gymnasium.make(env_id)
-    except gymnasium.error.Error as error:
-        raise ConfigError(f"unknown environment {env_id!r}: {error}") from None
 
 
 # --------------------------------------------------------------------------- architecture
