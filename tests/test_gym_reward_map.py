@@ -19,7 +19,7 @@ from pokerirl.gym.expert_policies import load_expert, resolve_expert_dir
 from pokerirl.gym.reward_map import plot_reward_map, reward_map
 from pokerirl.irl.airl import TrainResult
 from pokerirl.irl.config import AIRLConfig
-from pokerirl.irl.nets import build_nets
+from pokerirl.irl.nets import NetSpec, build_nets
 from pokerirl.irl.run import save_run
 
 LEFT, NO_PUSH, RIGHT = 0, 1, 2
@@ -43,7 +43,7 @@ def hand_set_run(
     f(s, no push) = constant + relu(position·(x − position_at)).
     """
     config = AIRLConfig.for_algo(algo, reward_hidden=(4,), policy_hidden=(4,))
-    reward, policy = build_nets(config.net_spec(), obs_dim=2, action_dim=3, discrete=True)
+    reward, policy = build_nets(NetSpec.of(config), obs_dim=2, action_dim=3, discrete=True)
     with torch.no_grad():
         for p in reward.parameters():
             p.zero_()

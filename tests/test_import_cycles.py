@@ -36,8 +36,6 @@ KNOWN_CYCLES_WHY: dict[tuple[str, ...], str] = {
         "equity's preflop call lazily imports preflop, whose table is built from equity's",
     ("pokerirl.irl.airl", "pokerirl.irl.run", "pokerirl.irl.trainer"):
         "the trainer lazily imports run's MetricsLog and save_run; run imports airl's train",
-    ("pokerirl.irl.config", "pokerirl.irl.nets"):
-        "config names NetSpec (TYPE_CHECKING and lazily, for torch); nets imports its enums",
 }  # fmt: skip
 KNOWN_CYCLES: frozenset[frozenset[str]] = frozenset(map(frozenset, KNOWN_CYCLES_WHY))
 

@@ -63,11 +63,11 @@ def _gym_run(folder: Path) -> Path:
     """A MountainCar IRL run folder (the project's own ``save_run``), untrained."""
     from pokerirl.irl.airl import TrainResult
     from pokerirl.irl.config import AIRLConfig
-    from pokerirl.irl.nets import build_nets
+    from pokerirl.irl.nets import NetSpec, build_nets
     from pokerirl.irl.run import save_run
 
     config = AIRLConfig.for_algo("hairl", reward_hidden=(4,), policy_hidden=(4,))
-    reward, policy = build_nets(config.net_spec(), obs_dim=2, action_dim=3, discrete=True)
+    reward, policy = build_nets(NetSpec.of(config), obs_dim=2, action_dim=3, discrete=True)
     result = TrainResult(reward=reward, policy=policy, config=config, beta_used=0.0)
     save_run(result, folder, algo="hairl", data={"env": "MountainCar-v0"})
     return folder

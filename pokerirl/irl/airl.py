@@ -65,7 +65,7 @@ from pokerirl.irl.losses import (
     noise_schedule,
     sample_one_hot,
 )
-from pokerirl.irl.nets import build_nets
+from pokerirl.irl.nets import NetSpec, build_nets
 from pokerirl.irl.records import Batch, EpochCallback, EpochMetrics, EpochRecord, StepLosses
 from pokerirl.irl.reward import PolicyNet, RewardNet
 from pokerirl.irl.stacked import (
@@ -115,7 +115,7 @@ def default_nets(
     with torch.random.fork_rng(devices=[]):
         torch.manual_seed(config.seed if seed is None else seed)
         return build_nets(
-            config.net_spec(),
+            NetSpec.of(config),
             obs_dim=data.obs_dim,
             action_dim=data.action_dim,
             discrete=data.discrete,

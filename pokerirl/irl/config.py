@@ -32,7 +32,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from enum import StrEnum
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 from pokerirl.errors import ConfigError as ConfigError  # its old home: imports keep working
 from pokerirl.settings import (
@@ -45,9 +45,6 @@ from pokerirl.settings import (
     setting,
     with_overrides,
 )
-
-if TYPE_CHECKING:
-    from pokerirl.irl.nets import NetSpec
 
 
 class Activation(StrEnum):
@@ -214,18 +211,6 @@ class AIRLConfig:
                 "the algorithm sets it: leave it out"
             )
         return with_overrides(ALGO_PRESETS, algo, what="algo", **overrides)
-
-    def net_spec(self) -> NetSpec:
-        from pokerirl.irl.nets import NetSpec  # torch: only where nets are built
-
-        return NetSpec(
-            reward_hidden=self.reward_hidden,
-            policy_hidden=self.policy_hidden,
-            activation=self.activation,
-            layer_norm=self.layer_norm,
-            reward_family=self.reward_family,
-            gamma=self.gamma,
-        )
 
     def to_dict(self) -> dict[str, object]:
         """The settings as JSON, without the continuous-action options (issue 20) that hold

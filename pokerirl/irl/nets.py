@@ -35,7 +35,7 @@ import torch
 from torch import Tensor, nn
 
 from pokerirl.errors import ConfigError
-from pokerirl.irl.config import Activation, RewardFamily
+from pokerirl.irl.config import Activation, AIRLConfig, RewardFamily
 
 # Finite stand-in for log(0) on illegal actions: 0 * MASKED_LOGIT is 0, 0 * -inf would be NaN.
 MASKED_LOGIT = -1e9
@@ -66,6 +66,19 @@ class NetSpec:
         object.__setattr__(self, "reward_family", RewardFamily(self.reward_family))
         if not self.reward_hidden or min(self.reward_hidden + self.policy_hidden, default=1) < 1:
             raise ConfigError("hidden widths must be >= 1, with at least one reward layer")
+
+    @classmethod
+    def of(cls, config: AIRLConfig) -> NetSpec:
+        """The nets ``config`` asks for (its net fields). Here, not a method of the torch-free
+        config, so that config never imports the nets (no import loop)."""
+        return cls(
+            reward_hidden=config.reward_hidden,
+            policy_hidden=config.policy_hidden,
+            activation=config.activation,
+            layer_norm=config.layer_norm,
+            reward_family=config.reward_family,
+            gamma=config.gamma,
+        )
 
 
 def build_mlp(
