@@ -306,11 +306,12 @@ def turn_counts(holes: np.ndarray, boards: np.ndarray) -> np.ndarray:
 
     A river's count is a part that depends on the ranks alone and the hand's own strength
     (:func:`_plain_counts`), plus, where the five-card board holds three or four of a suit,
-    the opponents' flushes (:func:`_flush_corrections`). So the rivers of one rank that give
-    the hand the same strength (all but those that make its own flush) share the first part,
-    counted once and weighted by how many they are (about 13 of the 46 rivers are counted);
-    the second is counted river by river, only where a flush can be; a board of five of a
-    suit, one pair at a time (:func:`_pairwise_counts`)."""
+    the opponents' flushes (:func:`_flush_corrections`), which depend on the suited cards
+    and on how many unseen cards of each rank are left outside the suit. So the rivers of
+    one rank that give the hand the same strength and are not of the board's flush suit
+    share both: counted once, weighted by how many they are (about 13 groups and the
+    rivers of the flush suit are counted of the 46); a board of five of a suit, one pair
+    at a time (:func:`_pairwise_counts`)."""
     holes = np.asarray(holes, dtype=np.int64)
     boards = np.asarray(boards, dtype=np.int64)
     if len(holes) > TURN_CHUNK:  # bounded temporaries: 46 rivers of each state at once
@@ -330,19 +331,24 @@ def turn_counts(holes: np.ndarray, boards: np.ndarray) -> np.ndarray:
                              minlength=n).astype(np.int64)  # fmt: skip
     rest = np.flatnonzero(most < 5)
     mine = seven_card_strengths(known[rest])
-    # Strengths stay below 2**24: (state, river rank, strength) as one int64 key.
-    key = (state[rest] * NUM_RANKS + _RANK[rivers[rest]]) << 24 | mine
-    _, first, group, weight = np.unique(key, return_index=True, return_inverse=True,
-                                        return_counts=True)  # fmt: skip
-    plain, combo = _plain_counts(known[rest[first]], mine[first])
-    found += np.bincount(state[rest[first]], plain * weight, minlength=n).astype(np.int64)
-    flushing = np.flatnonzero(most[rest] >= 3)
+    # A river of the suit the board may flush in changes who can flush: a group of its own.
+    # The other rivers of one rank leave the board's suited cards, and how many unseen
+    # cards of each rank are left outside that suit, as they are: with the hand's own
+    # strength, they share the opponents' flushes as well as the rank-only count.
+    # (Two such rivers of one rank, of two suits of two cards each, are two groups.)
+    river_suit = _SUIT[rivers[rest]]
+    suited = np.where((most[rest] >= 3) & (river_suit == suit[rest]), 1 + river_suit, 0)
+    # Strengths stay below 2**24: (state, river rank, suited, strength) as one int64 key.
+    key = ((state[rest] * NUM_RANKS + _RANK[rivers[rest]]) * 5 + suited) << 24 | mine
+    _, first, weight = np.unique(key, return_index=True, return_counts=True)
+    rows = rest[first]
+    plain, combo = _plain_counts(known[rows], mine[first])
+    flushing = np.flatnonzero(most[rows] >= 3)
     if flushing.size:
-        rows = rest[flushing]
-        corrections = _flush_corrections(known[rows], mine[flushing],
-                                         combo[group.reshape(-1)[flushing]], suit[rows],
-                                         most[rows])  # fmt: skip
-        found += np.bincount(state[rows], corrections, minlength=n).astype(np.int64)
+        at = rows[flushing]
+        plain[flushing] += _flush_corrections(known[at], mine[first[flushing]],
+                                              combo[flushing], suit[at], most[at])  # fmt: skip
+    found += np.bincount(state[rows], plain * weight, minlength=n).astype(np.int64)
     return found
 
 
