@@ -290,7 +290,7 @@ def _pairwise_counts(holes: np.ndarray, boards: np.ndarray) -> np.ndarray:
 
 def river_equity(holes: np.ndarray, boards: np.ndarray) -> np.ndarray:
     """(N,) exact equity of hole cards (N, 2) on five-card boards (N, 5)."""
-    shared = _by_board(hole_counts, _all_pairs_river_counts, holes, boards, ALL_PAIRS_RIVER_ROWS)
+    shared = _by_board(_RIVER_ROWS, _all_pairs_river_counts, holes, boards, ALL_PAIRS_RIVER_ROWS)
     return shared / RIVER_DENOMINATOR
 
 
@@ -306,12 +306,11 @@ def turn_counts(holes: np.ndarray, boards: np.ndarray) -> np.ndarray:
 
     A river's count is a part that depends on the ranks alone and the hand's own strength
     (:func:`_plain_counts`), plus, where the five-card board holds three or four of a suit,
-    the opponents' flushes (:func:`_flush_corrections`), which depend on the suited cards
-    and on how many unseen cards of each rank are left outside the suit. So the rivers of
-    one rank that give the hand the same strength and are not of the board's flush suit
-    share both: counted once, weighted by how many they are (about 13 groups and the
-    rivers of the flush suit are counted of the 46); a board of five of a suit, one pair
-    at a time (:func:`_pairwise_counts`)."""
+    the opponents' flushes (:func:`_flush_corrections`). The rivers of one rank that give
+    the hand the same strength (all but those that make its own flush) share the first
+    part: counted once, weighted by how many they are (about 13 of the 46 rivers are
+    counted); those off the board's flush suit share the second as well. A board of five
+    of a suit is counted one pair at a time (:func:`_pairwise_counts`)."""
     holes = np.asarray(holes, dtype=np.int64)
     boards = np.asarray(boards, dtype=np.int64)
     if len(holes) > TURN_CHUNK:  # bounded temporaries: 46 rivers of each state at once
@@ -331,31 +330,36 @@ def turn_counts(holes: np.ndarray, boards: np.ndarray) -> np.ndarray:
                              minlength=n).astype(np.int64)  # fmt: skip
     rest = np.flatnonzero(most < 5)
     mine = seven_card_strengths(known[rest])
-    # A river of the suit the board may flush in changes who can flush: a group of its own.
-    # The other rivers of one rank leave the board's suited cards, and how many unseen
-    # cards of each rank are left outside that suit, as they are: with the hand's own
-    # strength, they share the opponents' flushes as well as the rank-only count.
-    # (Two such rivers of one rank, of two suits of two cards each, are two groups.)
-    river_suit = _SUIT[rivers[rest]]
-    suited = np.where((most[rest] >= 3) & (river_suit == suit[rest]), 1 + river_suit, 0)
-    # Strengths stay below 2**24: (state, river rank, suited, strength) as one int64 key.
-    key = ((state[rest] * NUM_RANKS + _RANK[rivers[rest]]) * 5 + suited) << 24 | mine
-    _, first, weight = np.unique(key, return_index=True, return_counts=True)
+    # Strengths stay below 2**24: (state, river rank, strength) as one int64 key, a group.
+    group_key = (state[rest] * NUM_RANKS + _RANK[rivers[rest]]) << 24 | mine
+    _, first, group, weight = np.unique(group_key, return_index=True, return_inverse=True,
+                                        return_counts=True)  # fmt: skip
     rows = rest[first]
     plain, combo = _plain_counts(known[rows], mine[first])
-    flushing = np.flatnonzero(most[rows] >= 3)
-    if flushing.size:
-        at = rows[flushing]
-        plain[flushing] += _flush_corrections(known[at], mine[first[flushing]],
-                                              combo[flushing], suit[at], most[at])  # fmt: skip
     found += np.bincount(state[rows], plain * weight, minlength=n).astype(np.int64)
+    # Opponents' flushes, where the board holds three or four of a suit. A river of that suit
+    # changes who can flush: it is counted alone. The group's other rivers leave the board's
+    # suited cards, and how many unseen cards of each rank are left outside the suit, as
+    # they are: they share the correction. (Two rivers of one rank, of two suits of two
+    # cards each, make three of different suits: two corrections.)
+    flushing = np.flatnonzero(most[rest] >= 3)
+    if flushing.size:
+        river_suit = _SUIT[rivers[rest[flushing]]]
+        suited = np.where(river_suit == suit[rest[flushing]], 1 + river_suit, 0)
+        key = group.reshape(-1)[flushing] * 5 + suited
+        _, pick, times = np.unique(key, return_index=True, return_counts=True)
+        at = rest[flushing[pick]]
+        corrections = _flush_corrections(known[at], mine[flushing[pick]],
+                                         combo[group.reshape(-1)[flushing[pick]]], suit[at],
+                                         most[at])  # fmt: skip
+        found += np.bincount(state[at], corrections * times, minlength=n).astype(np.int64)
     return found
 
 
 def turn_equity(holes: np.ndarray, boards: np.ndarray) -> np.ndarray:
     """(N,) exact equity of hole cards (N, 2) on four-card boards (N, 4)."""
     every = lambda board: _cached_turn_counts(tuple(board.tolist()))  # noqa: E731
-    shared = _by_board(turn_counts, every, holes, boards, ALL_PAIRS_TURN_ROWS)
+    shared = _by_board(_TURN_ROWS, every, holes, boards, ALL_PAIRS_TURN_ROWS)
     return shared / TURN_DENOMINATOR
 
 
@@ -414,6 +418,38 @@ def _by_board(
     if rows.size:
         found[rows] = per_row(holes[rows], boards[rows])
     return found
+
+
+class _RecentCounts:
+    """``per_row(holes, boards)`` remembered for recent states (hole pair and sorted board):
+    a player who acts again on the same street (checks, then calls a raise) is the same
+    state again, at a later lock-step (about a quarter of a DQN's turn states). The same
+    integers either way; at most ``size`` states are kept (then it starts afresh)."""
+
+    def __init__(self, per_row: Callable[[np.ndarray, np.ndarray], np.ndarray], size: int):
+        self.per_row = per_row
+        self.size = size
+        self.counts: dict[int, int] = {}
+
+    def __call__(self, holes: np.ndarray, boards: np.ndarray) -> np.ndarray:
+        """``per_row`` of ``holes`` (n, 2) on ``boards`` (n, k) sorted along each row."""
+        places = NUM_CARDS ** np.arange(boards.shape[1], dtype=np.int64)
+        code = (pair_index(holes[:, 0], holes[:, 1]) * NUM_CARDS ** boards.shape[1]
+                + boards @ places).tolist()  # fmt: skip
+        known = [self.counts.get(key, -1) for key in code]
+        found = np.array(known, dtype=np.int64)
+        missing = np.flatnonzero(found < 0)
+        if missing.size:
+            found[missing] = self.per_row(holes[missing], boards[missing])
+            if len(self.counts) + missing.size > self.size:
+                self.counts.clear()
+            self.counts.update(zip([code[i] for i in missing.tolist()],
+                                   found[missing].tolist(), strict=True))  # fmt: skip
+        return found
+
+
+_RIVER_ROWS = _RecentCounts(hole_counts, size=1 << 16)
+_TURN_ROWS = _RecentCounts(turn_counts, size=1 << 16)
 
 
 def _flop_code(flops: np.ndarray) -> np.ndarray:
