@@ -22,6 +22,7 @@ import torch
 
 from pokerirl.agents.dqn import DQNConfig, train_dqn
 from pokerirl.game import make_agent
+from pokerirl.game.equity import forget_recent_states
 
 TARGET = 0.95
 
@@ -36,6 +37,7 @@ def main() -> int:
     best: dict[str, tuple[float, float]] = {}
     for _ in range(args.repeats):
         for encoding in ("rlcard", "strength"):
+            forget_recent_states()  # each repeat computes its states' equity afresh
             wall, cpu = time.perf_counter(), time.process_time()
             train_dqn(DQNConfig(), hands=args.hands, seed=args.seed,
                       opponent=make_agent("random"), encoding=encoding)  # fmt: skip
