@@ -101,8 +101,11 @@ _PLACE = np.zeros((NUM_PAIRS, 2), dtype=np.int64)  # flat index card * 51 + plac
 # Per suit, the completing pairs' card bits, rank bits of the suit and rank combinations:
 # _COMPLETING_BITS[count] = three (4, k) tables read by the board's suit.
 _COMPLETING_BITS = {
-    count: (_PAIR_CARD_BITS[pairs], np.take_along_axis(_PAIR_BITS, pairs, axis=1),
-            _PAIR_COMBO[pairs])  # fmt: skip
+    count: (
+        _PAIR_CARD_BITS[pairs],
+        np.take_along_axis(_PAIR_BITS, pairs, axis=1),
+        _PAIR_COMBO[pairs],
+    )
     for count, pairs in _COMPLETING.items()
 }
 for _c in range(NUM_CARDS):
