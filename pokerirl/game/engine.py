@@ -56,7 +56,6 @@ SMALL_BLIND = 1
 BIG_BLIND = 2
 RAISE_SIZE_BY_ROUND = np.array([2, 2, 4, 4], dtype=np.int16)
 SHOWDOWN = NUM_ROUNDS  # value of ``round`` once the river has closed
-_HOLE_COLUMNS = np.array([[0, 1], [2, 3]])  # deal columns of each seat's hole cards
 # (round, card) -> visible, for a seat's 2 hole cards then the board; round 4 is after the river.
 _VISIBLE = np.arange(7) < 2 + np.array((*BOARD_SIZE_BY_ROUND, 5))[:, None]
 # _LEGAL[4 * situation + action], situation = behind the opponent + 2 x (a raise is left).
@@ -172,14 +171,12 @@ class LimitHoldemBatch:
         self._chips = self.chips.reshape(-1)
         self._round_chips = self.round_chips.reshape(-1)
         self._raises = self.raises.reshape(-1)
-        # Row hand * 2 + seat: that seat's hole cards and the whole board, for observations.
-        self._views = np.concatenate(
-            [
-                self.cards[:, _HOLE_COLUMNS].reshape(n, 2, 2),
-                np.repeat(self.cards[:, None, 4:], 2, 1),
-            ],
-            axis=2,
-        ).reshape(2 * n, 7)
+        # Row hand * 2 + seat: that seat's hole cards and the whole board, for observations
+        # (filled by slices: a third cheaper than a gather, a repeat and a concatenation).
+        views = np.empty((n, 2, 7), dtype=np.int8)
+        views[:, 0, :2], views[:, 1, :2] = self.cards[:, 0:2], self.cards[:, 2:4]
+        views[:, :, 2:] = self.cards[:, None, 4:]
+        self._views = views.reshape(2 * n, 7)
 
     @property
     def size(self) -> int:
