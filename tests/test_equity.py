@@ -181,3 +181,21 @@ def test_rows_sharing_a_board_give_the_same_counts_at_once() -> None:
     every = all_pairs_turn_counts(boards[0, :4])
     assert every[pair_index(pairs[:5, 0], pairs[:5, 1])].tolist() == turn_counts(
         pairs[:5], np.broadcast_to(boards[0, :4], (5, 4))).tolist()
+
+
+@pytest.mark.parametrize("board", ["Ah Kh 7h 2h", "Ah Kh 7h 2c", "Ah Kh 7s 2s", "Ah Kh 7d 2c",
+                                   "9s 9d 5c 2h", "Ts Js Qs 9s", "8c 8d 8h 3c"])  # fmt: skip
+def test_turn_counts_of_every_pair_equal_the_sorted_rivers(board: str) -> None:
+    """The turn's count by rank groups and flush corrections (every river of one rank shared
+    unless it makes the hand's own flush) equals every pair ranked on each river by a sort
+    (an independent path): on boards of four, three and two of a suit, and paired boards,
+    where the flush corrections and the grouping are all exercised (two suits of two
+    cards: a river of either makes three, two groups of one rank)."""
+    from pokerirl.game.equity import all_pairs_turn_counts
+
+    cards = np.array([parse_card(c) for c in board.split()])
+    live = ~(PAIRS[:, :, None] == cards[None, None, :]).any(axis=(1, 2))
+    pairs = PAIRS[live]
+    found = turn_counts(pairs, np.broadcast_to(cards, (len(pairs), 4)))
+    every = all_pairs_turn_counts(cards)
+    assert found.tolist() == every[pair_index(pairs[:, 0], pairs[:, 1])].tolist()

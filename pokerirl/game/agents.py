@@ -47,6 +47,25 @@ _KTH_LEGAL = np.array(
     [[a for a in range(4) if p >> a & 1] + [0] * (4 - bin(p).count("1")) for p in range(16)],
     dtype=np.int64,
 )
+_KTH_LEGAL_FLAT = _KTH_LEGAL.reshape(-1)  # [4 * pattern + k]: one 1-D gather
+_PATTERN_MULTIPLIER = np.uint32(0x01020408)
+
+
+def legal_patterns(legal_mask: np.ndarray) -> np.ndarray:
+    """(B,) int64 bit patterns of (B, 4) legal masks (bit i: action i legal).
+
+    A row's four bytes (0 or 1) read as one little-endian word ``b0 + b1 << 8 + ...``; times
+    0x01020408 its top byte is ``b0 + 2 b1 + 4 b2 + 8 b3`` (no carries: every byte sum stays
+    below 16). Several times faster than ``np.packbits`` over the rows.
+
+    >>> legal_patterns(np.array([[True, True, True, False], [False, False, True, True]])).tolist()
+    [7, 12]
+    """
+    mask = np.ascontiguousarray(legal_mask, dtype=np.bool_)
+    if mask.ndim != 2 or mask.shape[1] != NUM_ACTIONS:
+        raise ValueError(f"legal masks must have shape (B, {NUM_ACTIONS}), got {mask.shape}")
+    words = mask.view("<u4").reshape(-1)
+    return ((words * _PATTERN_MULTIPLIER) >> np.uint32(24)).astype(np.int64)
 
 
 @runtime_checkable
@@ -102,9 +121,9 @@ class RandomAgent:
 
     def act(self, obs: np.ndarray, legal_mask: np.ndarray, rng: np.random.Generator) -> np.ndarray:
         # The k-th legal action of each row, k uniform in 0 .. (number legal - 1), by table.
-        pattern = np.packbits(np.asarray(legal_mask, dtype=bool), axis=1, bitorder="little")[:, 0]
+        pattern = legal_patterns(legal_mask)
         k = (rng.random(pattern.size) * _LEGAL_COUNT[pattern]).astype(np.int64)
-        return _KTH_LEGAL[pattern, k]
+        return _KTH_LEGAL_FLAT[NUM_ACTIONS * pattern + k]
 
     def action_probs(self, obs: np.ndarray, legal_mask: np.ndarray) -> np.ndarray:
         legal = np.asarray(legal_mask, dtype=np.float64)

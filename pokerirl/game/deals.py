@@ -26,19 +26,35 @@ DEAL_BLOCK = 4096
 DEAL_STREAM = 0  # first spawn-key word for deals; other seeded streams use other values
 
 
-def _deal_block(seed: int, block: int) -> np.ndarray:
-    """(DEAL_BLOCK, 9) deals: the first nine cards of a partial Fisher-Yates shuffle."""
-    sequence = np.random.SeedSequence(seed, spawn_key=(DEAL_STREAM, block))
-    rng = np.random.Generator(np.random.Philox(sequence))
-    row_start = np.arange(DEAL_BLOCK) * NUM_CARDS
-    decks = np.tile(np.arange(NUM_CARDS, dtype=np.int8), DEAL_BLOCK)  # one deck per row, flat
+def _deal_blocks(seed: int, first: int, last: int) -> np.ndarray:
+    """(k * DEAL_BLOCK, 9) deals of blocks ``first .. last``: the first nine cards of a partial
+    Fisher-Yates shuffle of 0..51 in which step j swaps position j with a uniform position
+    p_j in j..51 (exact draws without replacement).
+
+    No deck is kept (scattering into 52 bytes a row was a fifth of a match's time): step j
+    takes the card at p_j, which is p_j itself unless an earlier step i had p_i = p_j, and
+    then the card position i held just before step i (``before[i]``: likewise i itself
+    unless an earlier step had drawn i). So the deals are the shuffle's exactly, from a few
+    comparisons of the draws, done for all the blocks at once."""
+    rows = (last - first + 1) * DEAL_BLOCK
+    draws = np.empty((DEAL_SIZE, rows), dtype=np.int8)  # p_j of every row
+    for k, block in enumerate(range(first, last + 1)):
+        sequence = np.random.SeedSequence(seed, spawn_key=(DEAL_STREAM, block))
+        rng = np.random.Generator(np.random.Philox(sequence))
+        for j in range(DEAL_SIZE):
+            # The same int16 draws as ever: the stream's words depend on the dtype asked.
+            draws[j, k * DEAL_BLOCK : (k + 1) * DEAL_BLOCK] = rng.integers(
+                j, NUM_CARDS, size=DEAL_BLOCK, dtype=np.int16
+            )
+    before = np.empty_like(draws)  # the card at position j just before step j
+    deals = np.empty_like(draws)  # the card step j puts at position j
     for j in range(DEAL_SIZE):
-        # Position j swaps with a uniform position in j..51: exact draws without replacement.
-        pick = row_start + rng.integers(j, NUM_CARDS, size=DEAL_BLOCK, dtype=np.int16)
-        chosen = decks[pick]
-        decks[pick] = decks[row_start + j]
-        decks[row_start + j] = chosen
-    return decks.reshape(DEAL_BLOCK, NUM_CARDS)[:, :DEAL_SIZE]
+        held, taken = np.full_like(draws[j], j), draws[j].copy()
+        for i in range(j):  # ascending: the last earlier swap of a position decides its card
+            np.copyto(held, before[i], where=draws[i] == j)
+            np.copyto(taken, before[i], where=draws[i] == draws[j])
+        before[j], deals[j] = held, taken
+    return np.ascontiguousarray(deals.T)  # rows of nine cards, as the engine reads them
 
 
 def deal_cards(*, seed: int, start: int, count: int) -> np.ndarray:
@@ -54,6 +70,6 @@ def deal_cards(*, seed: int, start: int, count: int) -> np.ndarray:
     if count == 0:
         return np.zeros((0, DEAL_SIZE), dtype=np.int8)
     first, last = start // DEAL_BLOCK, (start + count - 1) // DEAL_BLOCK
-    blocks = np.vstack([_deal_block(seed, b) for b in range(first, last + 1)])
+    blocks = _deal_blocks(seed, first, last)
     offset = start - first * DEAL_BLOCK
     return blocks[offset : offset + count]

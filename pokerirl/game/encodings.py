@@ -209,7 +209,8 @@ class StrengthEncoding(Encoding):
         top_board = board_rank.max(axis=1)
         pocket = hole_rank[:, 0] == hole_rank[:, 1]
         on_board = (hole_rank[:, :, None] == board_rank[:, None, :]).any(axis=2)  # (N, 2)
-        flush_draw, straight_draw = _draws(cards, rank, street)
+        masks = _suit_masks(cards)  # once for the category and the draws
+        flush_draw, straight_draw = _draws(cards, rank, street, masks)
         facing = np.asarray(states.legal_mask, dtype=bool)[:, CALL]
         pot, to_call = pot_and_call(street, np.asarray(states.raise_nums), facing)
         found = {
@@ -221,7 +222,7 @@ class StrengthEncoding(Encoding):
             "low_rank": _one_hot(low, NUM_RANKS),
             "pocket_pair": pocket[:, None],
             "suited": (hole[:, 0] // NUM_RANKS == hole[:, 1] // NUM_RANKS)[:, None],
-            "category": _one_hot(visible_category(cards) - 1, 9),
+            "category": _one_hot(_category(cards, masks) - 1, 9),
             "hole_pairs_board": on_board.sum(axis=1)[:, None] / 2,
             "top_pair": (on_board & (hole_rank == top_board[:, None])).any(axis=1)[:, None],
             "overpair": (pocket & (street > 0) & (high > top_board))[:, None],
@@ -323,17 +324,22 @@ def pot_and_call(
 _POPCOUNT = np.array([bin(mask).count("1") for mask in range(1 << NUM_RANKS)], dtype=np.int8)
 _WINDOWS = np.array([(1 << 12) | 0b1111] + [0b11111 << low for low in range(9)], np.int64)
 _STRAIGHT = ((np.arange(1 << NUM_RANKS)[:, None] & _WINDOWS) == _WINDOWS).any(axis=1)
+# _FOUR_OF_WINDOW[mask]: the union of the windows of which the mask holds exactly four ranks.
+_FOUR_OF_WINDOW = np.bitwise_or.reduce(
+    np.where(_POPCOUNT[np.arange(1 << NUM_RANKS)[:, None] & _WINDOWS] == 4, _WINDOWS, 0), axis=1
+)
+_CARD_RANK_BIT = np.int64(1) << (np.arange(NUM_CARDS) % NUM_RANKS + NUM_RANKS - 1) % NUM_RANKS
 
 
-def _rank_masks(cards: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(suit masks (N, 4), ranks (N, 7) 2 .. A as 0 .. 12 (0 where not shown), shown (N, 7))
-    of cards (N, 7) with ``-1`` pads."""
+def _suit_masks(cards: np.ndarray) -> np.ndarray:
+    """(N, 4) rank masks (bit r for rank r, 2 .. A as 0 .. 12) of each suit among cards
+    (N, 7) with ``-1`` pads: one bit per shown card, summed by suit in one bincount."""
+    cards = np.asarray(cards, dtype=np.int64)
     shown = cards >= 0
-    rank = np.where(shown, (cards % NUM_RANKS + NUM_RANKS - 1) % NUM_RANKS, 0)
-    bit = np.where(shown, np.int64(1) << rank, 0)
-    suit = cards // NUM_RANKS
-    masks = np.stack([np.where(suit == s, bit, 0).sum(axis=1) for s in range(4)], axis=1)
-    return masks, rank, shown
+    bit = np.where(shown, _CARD_RANK_BIT[cards], 0)
+    place = np.arange(len(cards))[:, None] * 4 + np.where(shown, cards // NUM_RANKS, 0)
+    masks = np.bincount(place.reshape(-1), weights=bit.reshape(-1), minlength=4 * len(cards))
+    return masks.astype(np.int64).reshape(-1, 4)
 
 
 def visible_category(cards: np.ndarray) -> np.ndarray:
@@ -341,8 +347,13 @@ def visible_category(cards: np.ndarray) -> np.ndarray:
     :func:`pokerirl.game.evaluator.category`) of the visible cards, 2 to 7 of them
     (``-1`` pads)."""
     cards = np.asarray(cards, dtype=np.int64)
+    return _category(cards, _suit_masks(cards))
+
+
+def _category(cards: np.ndarray, masks: np.ndarray) -> np.ndarray:
     n = len(cards)
-    masks, rank, shown = _rank_masks(cards)
+    shown = cards >= 0
+    rank = np.where(shown, (cards % NUM_RANKS + NUM_RANKS - 1) % NUM_RANKS, 0)
     where = (np.arange(n)[:, None] * NUM_RANKS + rank)[shown]
     counts = np.bincount(where, minlength=n * NUM_RANKS).reshape(n, NUM_RANKS)
     largest = counts.max(axis=1)
@@ -365,24 +376,21 @@ def visible_category(cards: np.ndarray) -> np.ndarray:
     return category
 
 
-def _draws(cards: np.ndarray, rank: np.ndarray, street: np.ndarray) -> tuple[np.ndarray, ...]:
+def _draws(
+    cards: np.ndarray, rank: np.ndarray, street: np.ndarray, masks: np.ndarray
+) -> tuple[np.ndarray, ...]:
     """(flush draw, straight draw) flags: four cards to a flush (or to five ranks in a row)
     among the visible cards, a hole card among them, no such hand made yet, and cards to come
-    (the flop or the turn)."""
-    masks, _, _ = _rank_masks(cards)
+    (the flop or the turn). ``masks``: :func:`_suit_masks` of the cards."""
     suit_counts = _POPCOUNT[masks]  # (N, 4)
     hole_suits = (cards[:, :2, None] // NUM_RANKS == np.arange(4)).any(axis=1)
     to_come = (street >= 1) & (street <= 2)
     flush_draw = ((suit_counts == 4) & hole_suits).any(axis=1) & ~(suit_counts >= 5).any(axis=1)
     present = np.bitwise_or.reduce(masks, axis=1)
     hole = (np.int64(1) << rank[:, 0]) | (np.int64(1) << rank[:, 1])
-    draw = np.zeros(len(cards), dtype=bool)
-    made = np.zeros(len(cards), dtype=bool)
-    for window in _WINDOWS:
-        held = _POPCOUNT[present & window]
-        draw |= (held == 4) & ((hole & window) != 0)
-        made |= held == 5
-    return flush_draw & to_come, draw & ~made & to_come
+    # A window of four held ranks with a hole card in it: the hole meets their union.
+    draw = (_FOUR_OF_WINDOW[present] & hole) != 0
+    return flush_draw & to_come, draw & ~_STRAIGHT[present] & to_come
 
 
 def _one_hot(index: np.ndarray, width: int) -> np.ndarray:

@@ -33,6 +33,8 @@ and only unfinished hands are visited, so hands that end early cost nothing afte
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from pokerirl.encoding import (
@@ -54,7 +56,6 @@ SMALL_BLIND = 1
 BIG_BLIND = 2
 RAISE_SIZE_BY_ROUND = np.array([2, 2, 4, 4], dtype=np.int16)
 SHOWDOWN = NUM_ROUNDS  # value of ``round`` once the river has closed
-_HOLE_COLUMNS = np.array([[0, 1], [2, 3]])  # deal columns of each seat's hole cards
 # (round, card) -> visible, for a seat's 2 hole cards then the board; round 4 is after the river.
 _VISIBLE = np.arange(7) < 2 + np.array((*BOARD_SIZE_BY_ROUND, 5))[:, None]
 # _LEGAL[4 * situation + action], situation = behind the opponent + 2 x (a raise is left).
@@ -64,13 +65,64 @@ _LEGAL_BY_SITUATION[[1, 3], CALL] = True
 _LEGAL_BY_SITUATION[[0, 2], CHECK] = True
 _LEGAL_BY_SITUATION[[2, 3], RAISE] = True
 _LEGAL = _LEGAL_BY_SITUATION.reshape(-1)
+_LEGAL_WORDS = _LEGAL_BY_SITUATION.view(np.uint32).reshape(-1)  # a row's 4 bytes as a word
 _BOTH_SEATS = np.array([0, 1])
 _MATCHES = np.zeros(NUM_ACTIONS, dtype=np.int16)  # actions that first match the opponent
 _MATCHES[[CALL, RAISE]] = 1
+# _UNRAISED_AFTER[4 * before + action]: actions in a row without a raise, after the action
+# (RLCard's not_raise_num): a raise starts the count at 1, a fold leaves it.
+_UNRAISED_AFTER = np.array([[1 + before, 1, before, 1 + before] for before in range(3)],
+                           dtype=np.int8).reshape(-1)  # fmt: skip
 
 
 class IllegalActionError(PokerIRLError, ValueError):
-    """An action that is not legal for the hand it was given to."""
+    """An action that is not legal for the hand it was given to (``position``: its place in
+    the actions, where known)."""
+
+    def __init__(self, message: str, *, position: int | None = None) -> None:
+        super().__init__(message)
+        self.position = position
+
+
+def whole_actions(actions: np.ndarray) -> np.ndarray:
+    """``actions`` as integers: whole numbers only (1.0 is a raise; 1.5 becomes -1, which no
+    hand allows)."""
+    actions = np.asarray(actions)
+    if actions.dtype.kind not in "iu":
+        whole = actions.astype(np.int64)
+        actions = np.where(whole == actions, whole, -1)
+    return actions
+
+
+@dataclass(frozen=True, kw_only=True)
+class Turn:
+    """The state the seats to act in ``hands`` face (see :meth:`LimitHoldemBatch.turn`)."""
+
+    hands: np.ndarray  # (n,) hand indices
+    seat: np.ndarray  # seat to act
+    mine_at: np.ndarray  # flat index of its chips (^ 1: the opponent's)
+    rnd: np.ndarray  # betting round
+    raises_at: np.ndarray  # flat index of this round's raise count
+    mine: np.ndarray  # chips it has put in this round
+    theirs: np.ndarray  # ... and the opponent
+    raised: np.ndarray  # raises this round
+    situation: np.ndarray  # behind the opponent + 2 x (a raise is left)
+
+    @property
+    def legal_words(self) -> np.ndarray:
+        """(n,) uint32: each legal mask's four bytes as one word (``legal_mask_of`` reads
+        them back): one gather instead of a row gather, and cheap to split between agents."""
+        return _LEGAL_WORDS[self.situation]
+
+    @property
+    def legal_mask(self) -> np.ndarray:
+        """(n, 4) bool over (call, raise, fold, check)."""
+        return legal_mask_of(self.legal_words)
+
+
+def legal_mask_of(words: np.ndarray) -> np.ndarray:
+    """(n, 4) bool legal masks of (n,) words from :attr:`Turn.legal_words`."""
+    return words.view(np.bool_).reshape(-1, NUM_ACTIONS)
 
 
 class LimitHoldemBatch:
@@ -119,14 +171,12 @@ class LimitHoldemBatch:
         self._chips = self.chips.reshape(-1)
         self._round_chips = self.round_chips.reshape(-1)
         self._raises = self.raises.reshape(-1)
-        # Row hand * 2 + seat: that seat's hole cards and the whole board, for observations.
-        self._views = np.concatenate(
-            [
-                self.cards[:, _HOLE_COLUMNS].reshape(n, 2, 2),
-                np.repeat(self.cards[:, None, 4:], 2, 1),
-            ],
-            axis=2,
-        ).reshape(2 * n, 7)
+        # Row hand * 2 + seat: that seat's hole cards and the whole board, for observations
+        # (filled by slices: a third cheaper than a gather, a repeat and a concatenation).
+        views = np.empty((n, 2, 7), dtype=np.int8)
+        views[:, 0, :2], views[:, 1, :2] = self.cards[:, 0:2], self.cards[:, 2:4]
+        views[:, :, 2:] = self.cards[:, None, 4:]
+        self._views = views.reshape(2 * n, 7)
 
     @property
     def size(self) -> int:
@@ -159,15 +209,21 @@ class LimitHoldemBatch:
 
         Only meaningful for unfinished hands.
         """
-        hands = self._hands(hands)
-        mine_at = 2 * hands + self.to_act[hands]
+        return self.turn(self._hands(hands)).legal_mask
+
+    def turn(self, hands: np.ndarray) -> Turn:
+        """What the seats to act in ``hands`` (distinct, unfinished) face, gathered once for
+        both their legal mask and :meth:`apply` (a match reads each decision's state once)."""
+        seat = self.to_act[hands]
+        mine_at = 2 * hands + seat  # flat index of the actor's chips; ^ 1 is the opponent's
+        rnd = self.round[hands]
+        raises_at = NUM_ROUNDS * hands + rnd
         mine, theirs = self._round_chips[mine_at], self._round_chips[mine_at ^ 1]
-        mask = np.empty((hands.size, NUM_ACTIONS), dtype=bool)
-        mask[:, CALL] = mine < theirs
-        mask[:, RAISE] = self._raises[NUM_ROUNDS * hands + self.round[hands]] < MAX_RAISES
-        mask[:, FOLD] = True
-        mask[:, CHECK] = mine >= theirs
-        return mask
+        raised = self._raises[raises_at]
+        # Legality by table: situation (behind?, may raise?) x action.
+        situation = (mine < theirs) + 2 * (raised < MAX_RAISES)
+        return Turn(hands=hands, seat=seat, mine_at=mine_at, rnd=rnd, raises_at=raises_at,
+                    mine=mine, theirs=theirs, raised=raised, situation=situation)  # fmt: skip
 
     def step(self, actions: np.ndarray, hands: np.ndarray | None = None) -> None:
         """Apply one action to each of ``hands`` (distinct, unfinished; default :meth:`active`).
@@ -176,60 +232,71 @@ class LimitHoldemBatch:
             IllegalActionError: if any action is not legal in its hand; nothing is applied then.
         """
         hands = self._hands(hands)
-        actions = np.asarray(actions)
-        if actions.dtype.kind not in "iu":  # whole numbers only: 1.0 is a raise, 1.5 nothing
-            whole = actions.astype(np.int64)
-            actions = np.where(whole == actions, whole, -1)
+        actions = whole_actions(actions)
         if actions.shape != hands.shape:
             raise ValueError(f"got {actions.shape} actions for {hands.shape} hands")
         if self.done[hands].any():
             raise IllegalActionError(f"hand {hands[self.done[hands]][0]} is already over")
+        self.apply(self.turn(hands), actions)
 
-        seat = self.to_act[hands]
-        mine_at = 2 * hands + seat  # flat index of the actor's chips; ^ 1 is the opponent's
-        rnd = self.round[hands]
-        raises_at = NUM_ROUNDS * hands + rnd
-        mine, theirs = self._round_chips[mine_at], self._round_chips[mine_at ^ 1]
-        raised = self._raises[raises_at]
-        # Legality by table: situation (behind?, may raise?) x action, one flat gather.
-        situation = (mine < theirs) + 2 * (raised < MAX_RAISES)
+    def apply(self, turn: Turn, actions: np.ndarray) -> None:
+        """:meth:`step` from the :meth:`turn` of its hands, taken since no step touched them;
+        ``actions`` (n,) integers (see :func:`whole_actions`).
+
+        Raises:
+            IllegalActionError: as :meth:`step` (its ``position``: the first bad one in
+                ``turn.hands``); nothing is applied then.
+        """
+        hands, situation = turn.hands, turn.situation
         if actions.size and (actions.min() < 0 or actions.max() >= NUM_ACTIONS):
             legal = (actions >= 0) & (actions < NUM_ACTIONS)
         else:
             legal = _LEGAL[NUM_ACTIONS * situation + actions]
         if not legal.all():
             legal &= _LEGAL[NUM_ACTIONS * situation + np.clip(actions, 0, NUM_ACTIONS - 1)]
-            bad = np.flatnonzero(~legal)[0]
-            allowed = np.flatnonzero(self.legal_mask(hands[bad : bad + 1])[0]).tolist()
+            bad = int(np.flatnonzero(~legal)[0])
+            allowed = np.flatnonzero(_LEGAL_BY_SITUATION[situation[bad]]).tolist()
             raise IllegalActionError(
-                f"action {actions[bad]} is illegal in hand {hands[bad]} (legal: {allowed})"
+                f"action {actions[bad]} is illegal in hand {hands[bad]} (legal: {allowed})",
+                position=bad,
             )
 
-        is_raise, is_fold = actions == RAISE, actions == FOLD
+        seat, mine_at, mine = turn.seat, turn.mine_at, turn.mine
+        is_raise = actions == RAISE
         # A call matches the opponent; a raise goes one raise size above them.
-        added = (theirs - mine) * _MATCHES[actions] + RAISE_SIZE_BY_ROUND[rnd] * is_raise
+        added = (turn.theirs - mine) * _MATCHES[actions] + RAISE_SIZE_BY_ROUND[turn.rnd] * is_raise
         self._chips[mine_at] += added
         self._round_chips[mine_at] = mine + added
-        self._raises[raises_at] = raised + is_raise
-        unraised = np.where(is_raise, 1, self._unraised[hands] + ~is_fold)
+        self._raises[turn.raises_at] = turn.raised + is_raise
+        # Actions in a row without a raise: a raise is the first, a fold ends the hand.
+        unraised = _UNRAISED_AFTER[NUM_ACTIONS * self._unraised[hands] + actions]
         self._unraised[hands] = unraised
         self.to_act[hands] = 1 - seat  # also the first to act next round: they did not close it
 
-        folds = hands[is_fold]
+        # Indices, not boolean masks, to pick the few hands that fold or close a round: a
+        # masked gather costs several times a gather by index.
+        fold_at = np.flatnonzero(actions == FOLD)
+        folds = hands[fold_at]
         self.folded[folds] = True
-        closed = hands[unraised >= 2]
-        self.round[closed] += 1
-        self.round_chips[closed] = 0
+        close_at = np.flatnonzero(unraised >= 2)
+        closed = hands[close_at]
+        next_round = turn.rnd[close_at] + 1
+        self.round[closed] = next_round
+        self._round_chips[mine_at[close_at]] = 0
+        self._round_chips[mine_at[close_at] ^ 1] = 0
         self._unraised[closed] = 0
-        showdowns = closed[self.round[closed] == SHOWDOWN]
-        self._settle(folds, seat[is_fold], showdowns)
+        showdowns = closed[np.flatnonzero(next_round == SHOWDOWN)]
+        self._settle(folds, seat[fold_at], showdowns)
 
     def _settle(self, folds: np.ndarray, loser: np.ndarray, showdowns: np.ndarray) -> None:
         """Payoffs of hands that just ended (``loser``: the folding seats); drop them from play."""
         if folds.size:
-            lost = self.chips[folds, loser] / BIG_BLIND
-            self.payoffs[folds, loser] = -lost
-            self.payoffs[folds, 1 - loser] = lost
+            # Flat places: one 1-D gather at hand * 2 + seat beats 2-D fancy indexing.
+            lost_at = 2 * folds + loser
+            lost = self._chips[lost_at] / BIG_BLIND
+            payoffs = self.payoffs.reshape(-1)
+            payoffs[lost_at] = -lost
+            payoffs[lost_at ^ 1] = lost
         if showdowns.size:
             # Both seats' seven cards in one pass of the evaluator (the engine's own cards:
             # no checks); (n, 2) strengths.
@@ -237,11 +304,11 @@ class LimitHoldemBatch:
             strength = seven_card_strengths(seen).reshape(-1, 2).astype(np.int64)
             # Both seats have equal chips in at a showdown; a tie returns them.
             won = np.sign(strength[:, 0] - strength[:, 1]) * (
-                self.chips[showdowns, 0] / BIG_BLIND
+                self._chips[2 * showdowns] / BIG_BLIND
             )
             self.payoffs[showdowns, 0] = won
             self.payoffs[showdowns, 1] = 0.0 - won  # not -won: no -0.0 for split pots
         if folds.size or showdowns.size:
             self.done[folds] = True
             self.done[showdowns] = True
-            self._active = self._active[~self.done[self._active]]
+            self._active = self._active[np.flatnonzero(~self.done[self._active])]

@@ -48,6 +48,7 @@ from pokerirl.game.evaluator import (
     _COMBOS,
     _PAIR_BITS,
     _PAIR_COMBO,
+    _POW5_32,
     _RANK,
     _SUIT,
     CLASH,
@@ -72,6 +73,7 @@ PREFLOP_DENOMINATOR = PREFLOP_FLOPS * FLOP_DENOMINATOR
 FLOP_TABLE_FILE = Path(__file__).parent / "data" / "flop_equity.npz"
 FLOP_TABLE_SHA256 = "7b69bc3c318aff63cb2a07a0ee442f5b5d5d021c3cd99921406ff725288eae8c"
 CHUNK_BOARDS = 512  # boards ranked at once: (512, 1326) int32 arrays stay small
+TURN_CHUNK = 64  # turn states counted at once (their 2,208 rivers)
 
 # The 24 permutations of the four suits, and each one applied to every card and pair.
 _SUIT_PERMS = np.array(list(itertools.permutations(range(4))), dtype=np.int64)  # (24, 4)
@@ -84,6 +86,7 @@ _LEFT = np.arange(25)
 _WAYS = np.stack([(_LEFT // 5) * (_LEFT % 5), (_LEFT // 5) * (_LEFT // 5 - 1) // 2], axis=1)
 _WAYS = _WAYS.astype(np.int16)
 _SAME_RANK = (_COMBOS[:, 0] == _COMBOS[:, 1]).astype(np.int64)
+_WAYS_FLAT = _WAYS.reshape(-1)  # [2 * (5 * a + b) + same]: one 1-D gather
 _PAIR_CARD_BITS = (np.int64(1) << PAIRS[:, 0]) | (np.int64(1) << PAIRS[:, 1])
 # _COMPLETING[c][s]: the pairs that make a flush of suit s beside c board cards of it (both
 # cards of the suit beside three, one beside four): (4, 78) and (4, 585).
@@ -95,6 +98,16 @@ _COMPLETING = {
 # Pairs holding each card: _CARD_PAIRS[c] (51 pair numbers); a pair's place in its cards' rows.
 _CARD_PAIRS = np.array([np.flatnonzero(CLASH[c]) for c in range(NUM_CARDS)])  # (52, 51)
 _PLACE = np.zeros((NUM_PAIRS, 2), dtype=np.int64)  # flat index card * 51 + place
+# Per suit, the completing pairs' card bits, rank bits of the suit and rank combinations:
+# _COMPLETING_BITS[count] = three (4, k) tables read by the board's suit.
+_COMPLETING_BITS = {
+    count: (
+        _PAIR_CARD_BITS[pairs],
+        np.take_along_axis(_PAIR_BITS, pairs, axis=1),
+        _PAIR_COMBO[pairs],
+    )
+    for count, pairs in _COMPLETING.items()
+}
 for _c in range(NUM_CARDS):
     for _k, _p in enumerate(_CARD_PAIRS[_c]):
         _PLACE[_p, int(PAIRS[_p, 1] == _c)] = _c * (NUM_CARDS - 1) + _k
@@ -183,34 +196,82 @@ def _combo_counts(holes: np.ndarray, boards: np.ndarray) -> np.ndarray:
     rows = np.flatnonzero(most < 5)
     if rows.size == 0:
         return found
-    hole, board = holes[rows], boards[rows]
-    known = np.concatenate([hole, board], axis=1)
-    m = len(known)
+    known = np.concatenate([holes[rows], boards[rows]], axis=1)
     mine = seven_card_strengths(known)
-    combo = _non_flush(_card_sum(_CARD_KEY, board)[:, None] + _COMBO_KEY[None, :])  # (m, 91)
+    plain, combo = _plain_counts(known, mine)
+    found[rows] = plain + _flush_corrections(known, mine, combo, suit[rows], most[rows])
+    return found
+
+
+def _plain_counts(known: np.ndarray, mine: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(``2 x wins + ties`` against the 990 opponent hands as if no opponent held a flush,
+    the opponents' non-flush strengths (m, 91) by rank combination) of hole cards and
+    five-card boards ``known`` (m, 7) whose own strength is ``mine``.
+
+    Both depend on the cards' ranks alone (and ``mine``): rivers of one rank that leave
+    ``mine`` as it is share them (:func:`turn_counts`)."""
+    m = len(known)
+    keys, strengths = _board_combos()
+    combo = strengths[np.searchsorted(keys, _card_sum(_CARD_KEY, known[:, 2:]))]
     seen = np.bincount((np.arange(m)[:, None] * NUM_RANKS + _RANK[known]).reshape(-1),
                        minlength=m * NUM_RANKS).reshape(m, NUM_RANKS)  # fmt: skip
     # Unseen pairs of each rank combination: C(left, 2) of a pair of ranks, else the product.
-    ways = _WAYS[(4 - seen)[:, _COMBOS[:, 0]] * 5 + (4 - seen)[:, _COMBOS[:, 1]], _SAME_RANK]
-    wins = np.where(combo < mine[:, None], ways, 0).sum(axis=1, dtype=np.int64)
-    ties = np.where(combo == mine[:, None], ways, 0).sum(axis=1, dtype=np.int64)
-    for count in (3, 4):  # the unseen pairs that complete the board's suit hold a flush
-        at = np.flatnonzero(most[rows] == count)
+    left = (4 - seen).astype(np.int16)
+    ways = _WAYS_FLAT[np.take(left, _COMBOS[:, 0], axis=1) * 10
+                      + np.take(left, _COMBOS[:, 1], axis=1) * 2 + _SAME_RANK]  # fmt: skip
+    # 2 x wins + ties of a strength x against mine: (x < mine) + (x <= mine).
+    me = mine[:, None]
+    score = (combo < me).view(np.int8) + (combo <= me).view(np.int8)
+    return (score * ways).sum(axis=1, dtype=np.int64), combo
+
+
+@cache
+def _board_combos() -> tuple[np.ndarray, np.ndarray]:
+    """(sorted rank keys (K,) of the five-card boards' rank multisets, the non-flush strength
+    (K, 91) int32 of each with each rank combination of two more cards): a board's 91
+    opponents' strengths by one row gather (about 2 MB, built in a few ms)."""
+    multisets = np.array(list(itertools.combinations_with_replacement(range(NUM_RANKS), 5)))
+    keys = np.unique(_POW5_32[multisets].sum(axis=1))  # sum 5**rank, as _CARD_KEY sums
+    keys = keys[_digits_at_most_4(keys)]
+    return keys, _non_flush(keys[:, None] + _COMBO_KEY[None, :])
+
+
+def _digits_at_most_4(keys: np.ndarray) -> np.ndarray:
+    """Where base-5 rank keys hold no rank five times (no digit carried past 4)."""
+    ok = np.ones(keys.shape, dtype=bool)
+    rest = keys.astype(np.int64)
+    for _ in range(NUM_RANKS):
+        ok &= rest % 5 <= 4
+        rest = rest // 5
+    return ok
+
+
+def _flush_corrections(
+    known: np.ndarray, mine: np.ndarray, combo: np.ndarray, suit: np.ndarray, most: np.ndarray
+) -> np.ndarray:
+    """What :func:`_plain_counts` misses on boards (``known[:, 2:]``) with ``most`` (< 5) cards
+    of ``suit``: the unseen pairs that complete the board's suit hold a flush, not their
+    non-flush strength (``combo``)."""
+    found = np.zeros(len(known), dtype=np.int64)
+    board = known[:, 2:]
+    for count in (3, 4):
+        at = np.flatnonzero(most == count)
         if at.size == 0:
             continue
-        s = suit[rows[at]]
-        pairs = _COMPLETING[count][s]  # (k, 78) or (k, 585)
+        s = suit[at]
+        card_bits, suit_bits, combos = _COMPLETING_BITS[count]
         known_bits = np.bitwise_or.reduce(np.int64(1) << known[at], axis=1)
-        unseen = (_PAIR_CARD_BITS[pairs] & known_bits[:, None]) == 0
+        unseen = (card_bits[s] & known_bits[:, None]) == 0
         board_bits = np.where(_SUIT[board[at]] == s[:, None], _CARD_BIT[board[at]], 0)
-        bits = board_bits.sum(axis=1)[:, None] | _PAIR_BITS[s[:, None], pairs]
+        bits = board_bits.sum(axis=1, dtype=np.int32)[:, None] | suit_bits[s]
         # No quads or full house fit beside a flush in seven cards: the flush is the hand.
         flush = _dense().flush[bits]
-        plain = np.take_along_axis(combo[at], _PAIR_COMBO[pairs], axis=1)
+        plain = combo.reshape(-1)[(at * combo.shape[1])[:, None] + combos[s]]  # one gather
         me = mine[at, None]
-        wins[at] += (unseen & (flush < me)).sum(axis=1) - (unseen & (plain < me)).sum(axis=1)
-        ties[at] += (unseen & (flush == me)).sum(axis=1) - (unseen & (plain == me)).sum(axis=1)
-    found[rows] = 2 * wins + ties
+        # 2 x wins + ties with the flush, less those counted with the plain strength.
+        gained = ((flush < me).view(np.int8) + (flush <= me).view(np.int8)
+                  - (plain < me).view(np.int8) - (plain <= me).view(np.int8))  # fmt: skip
+        found[at] = np.where(unseen, gained, 0).sum(axis=1, dtype=np.int64)
     return found
 
 
@@ -232,7 +293,7 @@ def _pairwise_counts(holes: np.ndarray, boards: np.ndarray) -> np.ndarray:
 
 def river_equity(holes: np.ndarray, boards: np.ndarray) -> np.ndarray:
     """(N,) exact equity of hole cards (N, 2) on five-card boards (N, 5)."""
-    shared = _by_board(hole_counts, _all_pairs_river_counts, holes, boards, ALL_PAIRS_RIVER_ROWS)
+    shared = _by_board(_RIVER_ROWS, _all_pairs_river_counts, holes, boards, ALL_PAIRS_RIVER_ROWS)
     return shared / RIVER_DENOMINATOR
 
 
@@ -246,33 +307,62 @@ def _unseen(known: np.ndarray) -> np.ndarray:
 def turn_counts(holes: np.ndarray, boards: np.ndarray) -> np.ndarray:
     """(N,) int64 ``2 x wins + ties`` summed over the 46 rivers of four-card boards (N, 4).
 
-    A river whose suit leaves every suit at two board cards or fewer makes no flush for
-    anyone: its count depends on its rank alone, so one river of each such rank is counted
-    and weighted by how many there are (about half the rivers); the others one by one."""
+    A river's count is a part that depends on the ranks alone and the hand's own strength
+    (:func:`_plain_counts`), plus, where the five-card board holds three or four of a suit,
+    the opponents' flushes (:func:`_flush_corrections`). The rivers of one rank that give
+    the hand the same strength (all but those that make its own flush) share the first
+    part: counted once, weighted by how many they are (about 13 of the 46 rivers are
+    counted); those off the board's flush suit share the second as well. A board of five
+    of a suit is counted one pair at a time (:func:`_pairwise_counts`)."""
     holes = np.asarray(holes, dtype=np.int64)
     boards = np.asarray(boards, dtype=np.int64)
+    if len(holes) > TURN_CHUNK:  # bounded temporaries: 46 rivers of each state at once
+        return np.concatenate([turn_counts(holes[i : i + TURN_CHUNK], boards[i : i + TURN_CHUNK])
+                               for i in range(0, len(holes), TURN_CHUNK)])  # fmt: skip
     n = len(holes)
-    rivers = _unseen(np.concatenate([holes, boards], axis=1))  # (N, 46)
-    on_board = (_SUIT[boards][:, :, None] == np.arange(4)).sum(axis=1)  # (N, 4)
-    plain = (on_board.max(axis=1) <= 2)[:, None] & (
-        np.take_along_axis(on_board, _SUIT[rivers], axis=1) <= 1
-    )
-    state = np.broadcast_to(np.arange(n)[:, None], rivers.shape)
-    group = (state * NUM_RANKS + _RANK[rivers])[plain]
-    _, first, weight = np.unique(group, return_index=True, return_counts=True)
-    picked_state, picked_river = state[plain][first], rivers[plain][first]
-    alone_state, alone_river = state[~plain], rivers[~plain]
-    which = np.concatenate([picked_state, alone_state])
-    river = np.concatenate([picked_river, alone_river])
-    counts = hole_counts(holes[which], np.concatenate([boards[which], river[:, None]], axis=1))
-    counts[: len(weight)] *= weight
-    return np.bincount(which, weights=counts, minlength=n).astype(np.int64)
+    rivers = _unseen(np.concatenate([holes, boards], axis=1)).reshape(-1)  # (N * 46,)
+    state = np.repeat(np.arange(n), TURN_RIVERS)
+    five = np.concatenate([boards[state], rivers[:, None]], axis=1)
+    known = np.concatenate([holes[state], five], axis=1)
+    suit_counts = (_card_sum(_CARD_SUIT, five)[:, None] >> (4 * np.arange(4))) & 15
+    suit, most = suit_counts.argmax(axis=1), suit_counts.max(axis=1)
+    found = np.zeros(n, dtype=np.int64)
+    full = np.flatnonzero(most >= 5)  # a flush on the board: every pair plays one
+    if full.size:
+        found += np.bincount(state[full], _pairwise_counts(holes[state[full]], five[full]),
+                             minlength=n).astype(np.int64)  # fmt: skip
+    rest = np.flatnonzero(most < 5)
+    mine = seven_card_strengths(known[rest])
+    # Strengths stay below 2**24: (state, river rank, strength) as one int64 key, a group.
+    group_key = (state[rest] * NUM_RANKS + _RANK[rivers[rest]]) << 24 | mine
+    _, first, group, weight = np.unique(group_key, return_index=True, return_inverse=True,
+                                        return_counts=True)  # fmt: skip
+    rows = rest[first]
+    plain, combo = _plain_counts(known[rows], mine[first])
+    found += np.bincount(state[rows], plain * weight, minlength=n).astype(np.int64)
+    # Opponents' flushes, where the board holds three or four of a suit. A river of that suit
+    # changes who can flush: it is counted alone. The group's other rivers leave the board's
+    # suited cards, and how many unseen cards of each rank are left outside the suit, as
+    # they are: they share the correction. (Two rivers of one rank, of two suits of two
+    # cards each, make three of different suits: two corrections.)
+    flushing = np.flatnonzero(most[rest] >= 3)
+    if flushing.size:
+        river_suit = _SUIT[rivers[rest[flushing]]]
+        suited = np.where(river_suit == suit[rest[flushing]], 1 + river_suit, 0)
+        key = group.reshape(-1)[flushing] * 5 + suited
+        _, pick, times = np.unique(key, return_index=True, return_counts=True)
+        at = rest[flushing[pick]]
+        corrections = _flush_corrections(known[at], mine[flushing[pick]],
+                                         combo[group.reshape(-1)[flushing[pick]]], suit[at],
+                                         most[at])  # fmt: skip
+        found += np.bincount(state[at], corrections * times, minlength=n).astype(np.int64)
+    return found
 
 
 def turn_equity(holes: np.ndarray, boards: np.ndarray) -> np.ndarray:
     """(N,) exact equity of hole cards (N, 2) on four-card boards (N, 4)."""
     every = lambda board: _cached_turn_counts(tuple(board.tolist()))  # noqa: E731
-    shared = _by_board(turn_counts, every, holes, boards, ALL_PAIRS_TURN_ROWS)
+    shared = _by_board(_TURN_ROWS, every, holes, boards, ALL_PAIRS_TURN_ROWS)
     return shared / TURN_DENOMINATOR
 
 
@@ -331,6 +421,46 @@ def _by_board(
     if rows.size:
         found[rows] = per_row(holes[rows], boards[rows])
     return found
+
+
+class _RecentCounts:
+    """``per_row(holes, boards)`` remembered for recent states (hole pair and sorted board):
+    a player who acts again on the same street (checks, then calls a raise) is the same
+    state again, at a later lock-step (about a quarter of a DQN's turn states). The same
+    integers either way; at most ``size`` states are kept (then it starts afresh)."""
+
+    def __init__(self, per_row: Callable[[np.ndarray, np.ndarray], np.ndarray], size: int):
+        self.per_row = per_row
+        self.size = size
+        self.counts: dict[int, int] = {}
+
+    def __call__(self, holes: np.ndarray, boards: np.ndarray) -> np.ndarray:
+        """``per_row`` of ``holes`` (n, 2) on ``boards`` (n, k) sorted along each row."""
+        places = NUM_CARDS ** np.arange(boards.shape[1], dtype=np.int64)
+        code = (pair_index(holes[:, 0], holes[:, 1]) * NUM_CARDS ** boards.shape[1]
+                + boards @ places).tolist()  # fmt: skip
+        known = [self.counts.get(key, -1) for key in code]
+        found = np.array(known, dtype=np.int64)
+        missing = np.flatnonzero(found < 0)
+        if missing.size:
+            found[missing] = self.per_row(holes[missing], boards[missing])
+            if len(self.counts) + missing.size > self.size:
+                self.counts.clear()
+            self.counts.update(zip([code[i] for i in missing.tolist()],
+                                   found[missing].tolist(), strict=True))  # fmt: skip
+        return found
+
+
+_RIVER_ROWS = _RecentCounts(hole_counts, size=1 << 16)
+_TURN_ROWS = _RecentCounts(turn_counts, size=1 << 16)
+
+
+def forget_recent_states() -> None:
+    """Empty the memory of recent states' counts (the rows' and the turn boards'): what a
+    benchmark does between repeats of one seed, so that no repeat reads the one before."""
+    _RIVER_ROWS.counts.clear()
+    _TURN_ROWS.counts.clear()
+    _cached_turn_counts.cache_clear()
 
 
 def _flop_code(flops: np.ndarray) -> np.ndarray:

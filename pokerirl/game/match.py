@@ -27,7 +27,12 @@ from pokerirl.execution import unit_progress
 from pokerirl.game.agents import Agent, agent_actions, seat_cards
 from pokerirl.game.deals import deal_cards
 from pokerirl.game.encodings import Encoding, EncodingName, States, get_encoding
-from pokerirl.game.engine import IllegalActionError, LimitHoldemBatch
+from pokerirl.game.engine import (
+    IllegalActionError,
+    LimitHoldemBatch,
+    legal_mask_of,
+    whole_actions,
+)
 from pokerirl.game.evaluator import prepare_tables
 
 DEFAULT_BATCH_SIZE = 65_536
@@ -154,26 +159,39 @@ def play_game(
     reads = tuple(getattr(agent, "reads_obs", True) for agent in agents)
     while game.active().size:
         hands = game.active()
-        first_to_act = game.to_act[hands] == seat_of_first[hands]
+        # Each decision's state is gathered once for the legal masks and the step; the two
+        # agents' hands are disjoint, so both decide on the state before either acts and
+        # one step applies all their actions (two steps on halves cost twice the calls).
+        turn = game.turn(hands)
+        words = turn.legal_words
+        first_to_act = turn.seat == seat_of_first[hands]
+        actions = np.empty(hands.size, dtype=np.int64)
         # Each agent decides for all hands where it is to act: one batched call per agent.
-        for which, agent, encoding, reads_obs, rng, turn in zip(
-            (0, 1), agents, encodings, reads, rngs, (first_to_act, ~first_to_act), strict=True
-        ):
-            mine = hands[turn]
-            if mine.size == 0:
+        # (Indices, not boolean masks: a masked gather costs several times one by index.)
+        for which, agent, encoding, reads_obs, rng, at in zip(
+            (0, 1), agents, encodings, reads, rngs,
+            (np.flatnonzero(first_to_act), np.flatnonzero(~first_to_act)), strict=True,
+        ):  # fmt: skip
+            if at.size == 0:
                 continue
+            mine = hands[at]
             obs = observe(game, mine, encoding) if reads_obs else _NO_OBS[: mine.size]
-            legal = game.legal_mask(mine)
+            legal = legal_mask_of(words[at])
             cards = functools.partial(turn_cards, game, mine)
-            actions = agent_actions(agent, obs, legal, rng, cards)
+            chosen = whole_actions(agent_actions(agent, obs, legal, rng, cards))
+            if chosen.shape != mine.shape:
+                raise ValueError(f"agent {agent.name!r}: got {chosen.shape} actions for "
+                                 f"{mine.shape} hands")  # fmt: skip
             if log is not None and which == 0:
                 plain = reads_obs and encoding.name == EncodingName.RLCARD
                 seen = obs if plain else game.observe(mine)
-                log.append(DecisionLog(obs=seen, legal_mask=legal, cards=cards(), actions=actions))
-            try:
-                game.step(actions, mine)
-            except IllegalActionError as error:
-                raise IllegalActionError(f"agent {agent.name!r}: {error}") from error
+                log.append(DecisionLog(obs=seen, legal_mask=legal, cards=cards(), actions=chosen))
+            actions[at] = chosen
+        try:
+            game.apply(turn, actions)
+        except IllegalActionError as error:
+            which = 0 if error.position is None or first_to_act[error.position] else 1
+            raise IllegalActionError(f"agent {agents[which].name!r}: {error}") from error
     return game
 
 
