@@ -34,8 +34,6 @@ from test_layers import PACKAGE, _is_import_module, _literal_prefix, module_name
 KNOWN_CYCLES_WHY: dict[tuple[str, ...], str] = {
     ("pokerirl.game.equity", "pokerirl.game.preflop"):
         "equity's preflop call lazily imports preflop, whose table is built from equity's",
-    ("pokerirl.irl.airl", "pokerirl.irl.run", "pokerirl.irl.trainer"):
-        "the trainer lazily imports run's MetricsLog and save_run; run imports airl's train",
 }  # fmt: skip
 KNOWN_CYCLES: frozenset[frozenset[str]] = frozenset(map(frozenset, KNOWN_CYCLES_WHY))
 

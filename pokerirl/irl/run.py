@@ -35,7 +35,7 @@ import json
 import os
 import warnings
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
@@ -43,11 +43,25 @@ import numpy as np
 import torch
 from torch import Tensor, nn
 
-from pokerirl.atomic import write_text, write_torch
+from pokerirl.atomic import write_text
 from pokerirl.errors import PokerIRLError, check_argument
 from pokerirl.execution import progress_share, unit_progress
-from pokerirl.irl.airl import TrainResult, baselines, default_nets, train, train_many
+from pokerirl.irl.airl import baselines, default_nets, train, train_many
 from pokerirl.irl.config import AIRLConfig, Algo
+
+# A run folder's names and writer live in irl/folder.py (the trainer's `TrainResult.save`
+# uses them without importing this module, which imports the trainer): importable here too.
+from pokerirl.irl.folder import BASELINES_FILE as BASELINES_FILE
+from pokerirl.irl.folder import CONFIG_FILE as CONFIG_FILE
+from pokerirl.irl.folder import FORMAT_VERSION as FORMAT_VERSION
+from pokerirl.irl.folder import METRICS_FILE as METRICS_FILE
+from pokerirl.irl.folder import POLICY_FILE as POLICY_FILE
+from pokerirl.irl.folder import REWARD_FILE as REWARD_FILE
+from pokerirl.irl.folder import SPLIT_FILE as SPLIT_FILE
+from pokerirl.irl.folder import SUMMARY_FILE as SUMMARY_FILE
+from pokerirl.irl.folder import TIMINGS_FILE as TIMINGS_FILE
+from pokerirl.irl.folder import MetricsLog as MetricsLog
+from pokerirl.irl.folder import save_run as save_run
 from pokerirl.irl.metrics import Metric, Part
 from pokerirl.irl.nets import (
     ACTIVATIONS,
@@ -65,12 +79,7 @@ from pokerirl.meanstd import Curve, MeanStd, mean_std
 from pokerirl.parquet import first_line
 from pokerirl.serial import Serializable, from_json
 from pokerirl.settings import MAX_ACTIONS, MAX_LAYERS, MAX_OBS_DIM, MAX_WIDTH, enum_value
-from pokerirl.versions import package_versions
 
-FORMAT_VERSION = 2
-REWARD_FILE, POLICY_FILE, CONFIG_FILE = "reward.pt", "policy.pt", "config.json"
-METRICS_FILE, BASELINES_FILE, SPLIT_FILE = "metrics.jsonl", "baselines.json", "split.json"
-TIMINGS_FILE, SUMMARY_FILE = "timings.json", "summary.json"
 REWARD_RUN_FILES = (REWARD_FILE, CONFIG_FILE)  # what identifies a learned-reward run
 POLICY_RUN_FILES = (POLICY_FILE, CONFIG_FILE)  # ... and its policy
 
@@ -139,19 +148,6 @@ class RunsSummary(Serializable):
 
 
 # --------------------------------------------------------------------------- one run
-
-
-@dataclass(frozen=True)
-class MetricsLog:
-    """A run folder's ``metrics.jsonl``, one line per epoch."""
-
-    path: Path
-    lines: list[str] = field(default_factory=list)
-
-    def write(self, metrics: EpochMetrics) -> None:
-        # Rewrite the whole (small) file each epoch: readable live, never half-written.
-        self.lines.append(json.dumps(metrics.to_json()))
-        write_text(self.path, "\n".join(self.lines) + "\n")
 
 
 def begin_run(
@@ -413,66 +409,6 @@ def run_baselines(
         if value is not None:
             found[f"bc_{part}"] = value
     return found
-
-
-def save_run(
-    result: TrainResult,
-    out_dir: str | os.PathLike[str],
-    *,
-    algo: str,
-    data: Mapping[str, Any],
-    baselines: Mapping[str, float] | None = None,
-    device: str = "cpu",
-) -> None:
-    """Write ``reward.pt``, ``policy.pt``, ``config.json`` and ``timings.json``."""
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    for module, name in ((result.reward, REWARD_FILE), (result.policy, POLICY_FILE)):
-        # Clone: training keeps parameters as views of one flat buffer; save each on its own.
-        state = {k: v.detach().cpu().clone() for k, v in module.state_dict().items()}
-        write_torch(out / name, state)
-    policy = result.policy
-    if isinstance(getattr(policy, "low", None), Tensor):
-        space: dict[str, object] = {
-            "type": "box",
-            "low": policy.get_buffer("low").tolist(),
-            "high": policy.get_buffer("high").tolist(),
-        }
-    else:
-        space = {"type": "discrete", "num_actions": int(policy.action_dim)}  # type: ignore[arg-type]
-    config = result.config
-    record = {
-        "format_version": FORMAT_VERSION,
-        "algo": algo,
-        "architecture": {
-            "obs_dim": int(result.reward.obs_dim),  # type: ignore[arg-type]
-            "action_space": space,
-            "reward_family": config.reward_family,
-            "reward_hidden": list(config.reward_hidden),
-            "policy_hidden": list(config.policy_hidden),
-            "activation": config.activation,
-            "layer_norm": config.layer_norm,
-            "gamma": config.gamma,
-        },
-        "hyperparameters": config.to_dict(),
-        "beta_used": result.beta_used,
-        "gradients": result.gradients,
-        "data": dict(data),
-        "device": str(device),
-        "versions": package_versions(),
-        "result": {
-            "epochs": len(result.metrics),
-            "final_metrics": result.metrics[-1].to_json() if result.metrics else None,
-            "baselines": dict(baselines or {}),
-        },
-    }
-    write_text(out / CONFIG_FILE, json.dumps(record, indent=2) + "\n")
-    timings = {
-        "samples_per_second": result.samples_per_second,
-        "train_seconds": sum(result.epoch_seconds),
-        "epoch_seconds": result.epoch_seconds,
-    }
-    write_text(out / TIMINGS_FILE, json.dumps(timings, indent=2) + "\n")
 
 
 # --------------------------------------------------------------------------- several runs: summary

@@ -104,7 +104,7 @@ class TrainResult:
         ``metrics.jsonl``), which :func:`~pokerirl.irl.run.load_reward`,
         :func:`~pokerirl.irl.run.load_policy` and every command read; no training again.
         ``algo`` is recorded (``airl``, ``hairl``, ``gail``); ``data`` describes the data."""
-        from pokerirl.irl.run import MetricsLog, save_run
+        from pokerirl.irl.folder import MetricsLog, save_run
 
         out = Path(folder)
         save_run(self, out, algo=algo, data=data or {}, baselines=baselines)
