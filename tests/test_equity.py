@@ -14,6 +14,7 @@ import pytest
 from equity_reference import engine_flop_count, eval7_cards, eval7_count
 
 from pokerirl.encoding import NUM_PAIRS, PAIRS, parse_card
+from pokerirl.game.cases import PREFLOP_DENOMINATOR
 from pokerirl.game.encodings import (
     STRENGTH,
     STRENGTH_V1,
@@ -25,7 +26,6 @@ from pokerirl.game.equity import (
     _PERMUTED_CARD,
     FLOP_CLASSES,
     FLOP_DENOMINATOR,
-    PREFLOP_DENOMINATOR,
     RIVER_DENOMINATOR,
     TURN_DENOMINATOR,
     _flop_classes,

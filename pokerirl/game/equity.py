@@ -40,6 +40,12 @@ from pathlib import Path
 import numpy as np
 
 from pokerirl.encoding import NUM_CARDS, NUM_PAIRS, PAIRS
+from pokerirl.game.cases import (
+    FLOP_DENOMINATOR,
+    RIVER_DENOMINATOR,
+    TURN_DENOMINATOR,
+    TURN_RIVERS,
+)
 from pokerirl.game.evaluator import (
     _CARD_BIT,
     _CARD_KEY,
@@ -59,17 +65,10 @@ from pokerirl.game.evaluator import (
     pair_index,
     seven_card_strengths,
 )
+from pokerirl.game.preflop import preflop_equity  # its table is summed from our flop table
 
 NUM_RANKS = 13
-RIVER_OPPONENTS = 990  # two of the 45 cards neither the hand nor the board holds
-TURN_RIVERS = 46
-FLOP_RUNOUTS = 1_081  # turn and river from the 47 unseen cards
-PREFLOP_FLOPS = 19_600  # three of the 50 cards
 FLOP_CLASSES = 1_755  # flops up to a permutation of the suits
-RIVER_DENOMINATOR = 2 * RIVER_OPPONENTS
-TURN_DENOMINATOR = TURN_RIVERS * RIVER_DENOMINATOR
-FLOP_DENOMINATOR = FLOP_RUNOUTS * RIVER_DENOMINATOR
-PREFLOP_DENOMINATOR = PREFLOP_FLOPS * FLOP_DENOMINATOR
 FLOP_TABLE_FILE = Path(__file__).parent / "data" / "flop_equity.npz"
 FLOP_TABLE_SHA256 = "7b69bc3c318aff63cb2a07a0ee442f5b5d5d021c3cd99921406ff725288eae8c"
 CHUNK_BOARDS = 512  # boards ranked at once: (512, 1326) int32 arrays stay small
@@ -560,8 +559,6 @@ def preflop_counts() -> np.ndarray:
 def exact_equity(cards: np.ndarray) -> np.ndarray:
     """(N,) exact equity of states' cards (N, 7): hole cards, then the board shown (``-1``
     beyond, 0, 3, 4 or 5 cards)."""
-    from pokerirl.game.preflop import preflop_equity  # preflop's table is made from ours
-
     cards = np.asarray(cards, dtype=np.int64)
     shown = (cards[:, 2:] >= 0).sum(axis=1)
     found = np.empty(len(cards))

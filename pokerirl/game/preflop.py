@@ -25,7 +25,7 @@ from __future__ import annotations
 import numpy as np
 
 from pokerirl.encoding import NUM_CARDS
-from pokerirl.game.equity import PREFLOP_DENOMINATOR
+from pokerirl.game.cases import PREFLOP_DENOMINATOR
 from pokerirl.game.evaluator import hand_strength
 
 NUM_RANKS = 13
