@@ -26,7 +26,7 @@ import functools
 import json
 import math
 import os
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
@@ -52,6 +52,7 @@ from pokerirl.irl.run import (
     ObsMap,
     RunError,
     RunHooks,
+    RunResult,
     RunsSummary,
     summarize,
     train_runs_into,
@@ -277,14 +278,7 @@ def train_gym_irl(
         raise ConfigError("runs must be at least 1")
     settings = settings or task(env_id).irl  # refuses an unknown id in one line
     out = Path(out)
-    products = [f"run-{k}" for k in range(runs)] + [SUMMARY_FILE, RETURNS_FILE]
-    if out.exists() and not out.is_dir():
-        raise RunError(f"{out} exists and is not a folder", remedy=Remedy.ELSEWHERE)
-    if out.is_dir():
-        tidy(out, key=STAGE_KEY)  # finish or remove what a killed run left
-    taken = [p for p in products if (out / p).exists()] if out.is_dir() else []
-    if taken and not overwrite:
-        raise RunError(f"{out} already holds {taken[0]}", remedy=Remedy.REPLACE)
+    check_destination(out, runs=runs, overwrite=overwrite)
     config = irl_config(algo, settings, seed=seed)
     data = load_env_transitions(env_id, data_path)
     hooks = RunHooks(
@@ -313,28 +307,60 @@ def train_gym_irl(
             data_lead={"env": env_id},
         )  # fmt: skip
         results = [replace(r, out=str(out / Path(r.out).name)) for r in trained.results]
-        over_runs = summarize(results)
-        curves = over_runs.metrics
-
-        def last(metric: Metric) -> MeanStd:
-            curve = metric.of(curves)
-            return MeanStd(mean=curve.mean[-1], std=curve.std[-1])
-
-        summary = GymIRLSummary(
-            env=env_id,
-            algo=algo,
-            expert_return=trained.baselines["expert"],
-            irl_final_return=last(Metric.EVAL_RETURN),
-            final_alignment=last(Metric.VAL_ALIGNMENT) if Metric.VAL_ALIGNMENT in curves else None,
-            over_runs=over_runs,
-        )
-        as_json = summary.to_json()
-        write_text(stage / SUMMARY_FILE, json.dumps(as_json, indent=2) + "\n")
-        plot_returns(summary, stage / RETURNS_FILE)
-        if data.discrete:
-            drawn = {k: over_runs.baselines[k].to_json() for k in trained.drawn}
-            plot_bands({**as_json, "baselines": drawn}, stage)
+        summary = write_summary(
+            stage, env_id=env_id, algo=algo, results=results, expert=trained.baselines["expert"],
+            drawn=trained.drawn if data.discrete else None,
+        )  # fmt: skip
     return GymIRLResult(out=out, runs=runs, summary=summary, baselines=trained.baselines)
+
+
+def check_destination(out: Path, *, runs: int, overwrite: bool) -> None:
+    """Refuse ``out`` unless it can take ``runs`` run folders and the summary (a file, or
+    earlier results without ``overwrite``), after finishing or removing what a killed run
+    left there."""
+    products = [f"run-{k}" for k in range(runs)] + [SUMMARY_FILE, RETURNS_FILE]
+    if out.exists() and not out.is_dir():
+        raise RunError(f"{out} exists and is not a folder", remedy=Remedy.ELSEWHERE)
+    if out.is_dir():
+        tidy(out, key=STAGE_KEY)  # finish or remove what a killed run left
+    taken = [p for p in products if (out / p).exists()] if out.is_dir() else []
+    if taken and not overwrite:
+        raise RunError(f"{out} already holds {taken[0]}", remedy=Remedy.REPLACE)
+
+
+def write_summary(
+    stage: Path,
+    *,
+    env_id: str,
+    algo: str,
+    results: Sequence[RunResult],
+    expert: float,
+    drawn: Mapping[str, float] | None,
+) -> GymIRLSummary:
+    """The runs' ``summary.json`` and returns figure in ``stage``, and (``drawn``: the
+    alignment baselines drawn, discrete actions only) the alignment bands."""
+    over_runs = summarize(results)
+    curves = over_runs.metrics
+
+    def last(metric: Metric) -> MeanStd:
+        curve = metric.of(curves)
+        return MeanStd(mean=curve.mean[-1], std=curve.std[-1])
+
+    summary = GymIRLSummary(
+        env=env_id,
+        algo=algo,
+        expert_return=expert,
+        irl_final_return=last(Metric.EVAL_RETURN),
+        final_alignment=last(Metric.VAL_ALIGNMENT) if Metric.VAL_ALIGNMENT in curves else None,
+        over_runs=over_runs,
+    )
+    as_json = summary.to_json()
+    write_text(stage / SUMMARY_FILE, json.dumps(as_json, indent=2) + "\n")
+    plot_returns(summary, stage / RETURNS_FILE)
+    if drawn is not None:
+        bands = {k: over_runs.baselines[k].to_json() for k in drawn}
+        plot_bands({**as_json, "baselines": bands}, stage)
+    return summary
 
 
 def plot_returns(summary: GymIRLSummary, path: Path) -> Path:

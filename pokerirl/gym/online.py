@@ -28,7 +28,6 @@ earlier outputs or the new ones, never a mix, and starts over when run again.
 from __future__ import annotations
 
 import functools
-import json
 import os
 from collections.abc import Callable, Mapping
 from dataclasses import asdict, dataclass, field, replace
@@ -39,23 +38,22 @@ import numpy as np
 import torch
 from torch import Tensor, nn
 
-from pokerirl.atomic import make_shareable, write_text
-from pokerirl.errors import ConfigError, Remedy
+from pokerirl.atomic import make_shareable
+from pokerirl.errors import ConfigError
 from pokerirl.execution import progress_share, unit_progress
 from pokerirl.gym.envs import make_env, require_gym
 from pokerirl.gym.episodes import random_return
 from pokerirl.gym.irl import (
-    RETURNS_FILE,
     STAGE_KEY,
     EnvReturns,
     GymIRLResult,
-    GymIRLSummary,
+    check_destination,
     expert_return,
     irl_config,
     load_env_transitions,
     obs_standardization,
-    plot_returns,
     standardized,
+    write_summary,
 )
 from pokerirl.gym.presets import GENERIC_PPO, IRLSettings, PPOSettings
 from pokerirl.gym.quality import has_true_reward, write_reward_quality
@@ -65,24 +63,20 @@ from pokerirl.irl.airl import default_nets
 from pokerirl.irl.config import IRLMode
 from pokerirl.irl.nets import ACTIVATIONS, fold_obs_standardization
 from pokerirl.irl.online import OnlineTrainer, Rollout
-from pokerirl.irl.plots import plot_bands, plot_curves
+from pokerirl.irl.plots import plot_curves
 from pokerirl.irl.records import EpochMetrics
 from pokerirl.irl.run import (
     BASELINE_SHARE,
-    SUMMARY_FILE,
     ObsMap,
-    RunError,
     RunResult,
     begin_run,
     data_record,
     drawn_baselines,
     run_baselines,
     save_run,
-    summarize,
 )
 from pokerirl.irl.transitions import Transitions
-from pokerirl.meanstd import MeanStd
-from pokerirl.store import staged_files, tidy
+from pokerirl.store import staged_files
 
 if TYPE_CHECKING:
     from stable_baselines3 import PPO
@@ -369,14 +363,7 @@ def train_gym_online(
     settings = settings or task(env_id).irl
     online = online or OnlineSettings()
     out = Path(out)
-    products = [f"run-{k}" for k in range(runs)] + [SUMMARY_FILE, RETURNS_FILE]
-    if out.exists() and not out.is_dir():
-        raise RunError(f"{out} exists and is not a folder", remedy=Remedy.ELSEWHERE)
-    if out.is_dir():
-        tidy(out, key=STAGE_KEY)  # finish or remove what a killed run left
-    taken = [p for p in products if (out / p).exists()] if out.is_dir() else []
-    if taken and not overwrite:
-        raise RunError(f"{out} already holds {taken[0]}", remedy=Remedy.REPLACE)
+    check_destination(out, runs=runs, overwrite=overwrite)
     config = irl_config(algo, settings, seed=seed)
     data = load_env_transitions(env_id, data_path)
     train_data, val_data, val_groups = data.split(val_fraction=config.val_fraction, seed=seed)
@@ -446,8 +433,7 @@ def train_gym_online(
             fold_obs_standardization(result.reward, shift, scale)
             fold_obs_standardization(result.policy, shift, scale)
             save_run(result, folder, algo=algo, data=data_info, baselines=found)
-            shares = drawn_baselines(core, data)
-            plot_curves(result.metrics, folder, baselines=shares)
+            plot_curves(result.metrics, folder, baselines=drawn_baselines(core, data))
             if has_true_reward(env_id):
                 write_reward_quality(folder, env_id=env_id, data_path=data_path)
             results.append(
@@ -459,26 +445,8 @@ def train_gym_online(
             )  # fmt: skip
             with progress_share(TRAINED_SHARE, 1.0):
                 unit_progress(k + 1, runs)
-        over_runs = summarize(results)
-
-        def last(key: str) -> MeanStd:
-            return MeanStd(mean=over_runs.metrics[key].mean[-1], std=over_runs.metrics[key].std[-1])
-
-        summary = GymIRLSummary(
-            env=env_id,
-            algo=algo,
-            expert_return=found["expert"],
-            irl_final_return=last("eval_return"),
-            final_alignment=last("val_alignment") if "val_alignment" in over_runs.metrics else None,
-            over_runs=over_runs,
-        )
-        as_json = summary.to_json()
-        write_text(stage / SUMMARY_FILE, json.dumps(as_json, indent=2) + "\n")
-        plot_returns(summary, stage / RETURNS_FILE)
-        if data.discrete:
-            shares = drawn_baselines(core, data)
-            plot_bands(
-                {**as_json, "baselines": {k: over_runs.baselines[k].to_json() for k in shares}},
-                stage,
-            )
+        summary = write_summary(
+            stage, env_id=env_id, algo=algo, results=results, expert=found["expert"],
+            drawn=drawn_baselines(core, data) if data.discrete else None,
+        )  # fmt: skip
     return GymIRLResult(out=out, runs=runs, summary=summary, baselines=found)
