@@ -42,7 +42,7 @@ import pyarrow.compute as pc
 from pokerirl.encoding import NUM_ACTIONS, NUM_ROUNDS, OBS_SIZE, cards_from_text
 from pokerirl.errors import InputError
 from pokerirl.game.encodings import RLCARD, Encoding, EncodingName, States
-from pokerirl.game.spec import LEDUC, TableSpec, holdem_spec
+from pokerirl.game.spec import LEDUC, GameName, TableSpec, holdem_spec
 from pokerirl.parquet import fixed_width, read_parquet
 
 REQUIRED_COLUMNS = ("hand_id", "obs", "action_id", "legal_mask")
@@ -106,7 +106,7 @@ def read_data(path: str | os.PathLike[str], *, encoding: Encoding | None = None)
     (:func:`read_decisions`, its states in ``encoding``). Raises ``FileNotFoundError`` for a
     missing file and ``ValueError`` for anything else wrong."""
     source = Path(path)
-    if _is_zip(source):  # a Parquet file starts with PAR1, an .npz with a zip header
+    if data_game(source) is GameName.LEDUC:
         if encoding is not None:
             raise InputError(
                 f"{source}: Leduc demonstrations are in their one encoding "
@@ -116,12 +116,14 @@ def read_data(path: str | os.PathLike[str], *, encoding: Encoding | None = None)
     return read_decisions(source, encoding=encoding)
 
 
-def _is_zip(path: Path) -> bool:
+def data_game(path: str | os.PathLike[str]) -> GameName:
+    """The game of the decisions at ``path``: Leduc for an ``.npz`` (a zip file: Leduc
+    demonstrations), else hold'em (a Parquet table, whose reader says what else is wrong)."""
     try:
-        with path.open("rb") as stream:
-            return stream.read(4) == b"PK\x03\x04"
+        with Path(path).open("rb") as stream:
+            return GameName.LEDUC if stream.read(4) == b"PK\x03\x04" else GameName.HOLDEM
     except OSError:  # missing, a folder: the Parquet reader says so in its words
-        return False
+        return GameName.HOLDEM
 
 
 def leduc_table(path: Path) -> Table:

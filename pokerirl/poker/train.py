@@ -42,7 +42,7 @@ from typing import Any
 import torch
 
 from pokerirl.atomic import write_text
-from pokerirl.datasets.decisions import Table, read_data
+from pokerirl.datasets.decisions import Table, data_game, read_data
 from pokerirl.errors import ConfigError, Remedy
 from pokerirl.execution import Backend, pinned_threads
 from pokerirl.game.encodings import RLCARD, Encoding
@@ -341,6 +341,9 @@ def train_em(
     config = config or AIRLConfig.for_algo(algo)
     out = Path(out_dir)
     check_destination(out, overwrite=overwrite)
+    if data_game(table) is not GameName.HOLDEM:
+        raise ConfigError(f"{table}: EM re-imputes the hidden cards of a hold'em table, not "
+                          "Leduc demonstrations")  # fmt: skip
     names = pq.read_schema(table).names
     if "imputed" not in names or "imputation" not in names:
         raise ConfigError(
