@@ -16,10 +16,14 @@ row's weight in every mean), ``imputed`` (bool: its hole cards are a posterior d
 ``imputation`` (integer: which draw, 0 for observed rows); a player's next decision is then
 looked up within the same draw.
 
-A table's ``obs`` column is RLCard's 72-d observation. Another encoding
-(:mod:`pokerirl.game.encodings`) is computed on reading from the columns that hold the state
-apart: ``hole_cards`` and ``board`` (texts) and ``raise_nums``; a table without them cannot
-give it, and is refused in one line.
+A table's ``obs`` column is RLCard's 72-d observation (read only for that encoding). Another
+encoding (:mod:`pokerirl.game.encodings`) is computed on reading from the columns that hold
+the state apart: ``hole_cards`` and ``board`` (texts) and ``raise_nums``; a table without them
+cannot give it, and is refused in one line.
+
+:func:`read_data` is the one reader: a :class:`Table` holds the arrays and their
+:class:`~pokerirl.game.spec.TableSpec` (the game, the encoding), from a hold'em table or from
+Leduc demonstrations (``pokerirl leduc synth``'s ``.npz``).
 
 >>> from pokerirl.datasets.toy import toy_expert_table
 >>> decisions = decisions_from_arrow(toy_expert_table(num_hands=20, seed=1))
