@@ -38,6 +38,7 @@ from __future__ import annotations
 import os
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pyarrow as pa
@@ -48,6 +49,9 @@ from pokerirl.errors import InputError
 from pokerirl.game.encodings import RLCARD, Encoding, EncodingName, States
 from pokerirl.game.spec import LEDUC, GameName, TableSpec, holdem_spec
 from pokerirl.parquet import fixed_width, read_parquet
+
+if TYPE_CHECKING:
+    from pokerirl.game.leduc.demos import Demonstrations
 
 REQUIRED_COLUMNS = ("hand_id", "obs", "action_id", "legal_mask")
 OPTIONAL_COLUMNS = ("reward", "player")
@@ -131,14 +135,20 @@ def data_game(path: str | os.PathLike[str]) -> GameName:
 
 
 def leduc_table(path: Path) -> Table:
-    """Leduc demonstrations (:func:`pokerirl.game.leduc.demos.load`) as a :class:`Table`,
-    one group per hand."""
+    """The Leduc demonstrations file at ``path`` (:func:`pokerirl.game.leduc.demos.load`) as
+    a :class:`Table`."""
     from pokerirl.game.leduc.demos import load
 
     demos = load(path)
     if len(demos) == 0:
         raise InputError(f"{path} is empty: no expert decisions to learn from")
     check_legal_actions(demos.action, demos.legal, str(path))
+    return demos_table(demos)
+
+
+def demos_table(demos: Demonstrations) -> Table:
+    """Leduc demonstrations as a :class:`Table`, one group per hand (a split keeps the hands'
+    order of appearance, so the ids' type changes no split)."""
     return Table(
         spec=LEDUC, obs=demos.obs, action_ids=demos.action, groups=demos.hand.astype(str),
         legal_mask=demos.legal, next_obs=demos.next_obs, dones=demos.done, rewards=demos.reward,
