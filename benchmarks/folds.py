@@ -48,6 +48,7 @@ import torch
 from pokerirl.datasets.ingest import ingest_table
 from pokerirl.encoding import CALL, CARD_INDEX, CHECK, FOLD, RAISE
 from pokerirl.execution import Backend
+from pokerirl.game.encodings import get_encoding
 from pokerirl.game.synth import DEFAULT_PLAYERS, visible_strength, write_synthetic_month
 from pokerirl.irl import load_config
 from pokerirl.poker import train_runs
@@ -258,7 +259,7 @@ def irl_stage(out: Path, args: argparse.Namespace, truth: CardStates) -> dict[st
         folder = out / "runs" / f"hairl-{name}"
         started = time.time()
         train_runs(out / f"{name}.parquet", folder, runs=args.runs, config=config,
-                   progress=False, backend=backend, encoding=ENCODING)  # fmt: skip
+                   progress=False, backend=backend, encoding=get_encoding(ENCODING))  # fmt: skip
         scores = [score_run(run, truth) for run in runs_of(folder, args.runs)]
         found[name] = {"per_run": scores, "seconds": time.time() - started,
                        **{key: mean_se([s[key] for s in scores]) for key in (
@@ -317,7 +318,8 @@ def real_stage(out: Path, args: argparse.Namespace) -> dict[str, Any]:
     for name, table in (("drop", drop), ("imputed", imputed)):
         folder = real / "runs" / f"hairl-{name}"
         train_runs(table, folder, runs=args.runs, config=config, progress=False,
-                   backend=Backend(jobs=args.jobs), encoding=ENCODING)  # fmt: skip
+                   backend=Backend(jobs=args.jobs),
+                   encoding=get_encoding(ENCODING))  # fmt: skip
         cards = [reward_card(load_reward_source(run), states)
                  for run in runs_of(folder, args.runs)]  # fmt: skip
         found["cards"][name] = {

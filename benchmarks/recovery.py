@@ -43,6 +43,7 @@ import torch
 
 from pokerirl.datasets.ingest import ingest_table
 from pokerirl.execution import Backend
+from pokerirl.game.encodings import get_encoding
 from pokerirl.game.synth import write_synthetic_month
 from pokerirl.irl import load_config, train
 from pokerirl.poker import read_table, train_runs
@@ -98,12 +99,12 @@ def bc_on_truth(showdown: Path, truth: Path, encoding: str, decay: float, seed: 
     """BC (α = 1, no adversary) on the showdown table's training hands, scored on every
     state of the truth table."""
     config = load_config("hairl", overrides={"reward_weight_decay": decay, "seed": seed})
-    data = read_table(showdown, encoding=encoding)
+    data = read_table(showdown, encoding=get_encoding(encoding))
     train_data, val_data, _ = data.split(val_fraction=config.val_fraction, seed=seed)
     torch.manual_seed(seed)
     result = train(train_data, val_data, config=dataclasses.replace(config, alpha=1.0),
                    adversarial=False, progress=False)  # fmt: skip
-    every = read_table(truth, encoding=encoding)
+    every = read_table(truth, encoding=get_encoding(encoding))
     with torch.no_grad():
         log_pi = result.policy(every.obs, every.legal_mask)
     return float((log_pi.argmax(-1) == every.actions).float().mean())
@@ -155,7 +156,7 @@ def main() -> None:
         print(f"[{time.time() - started:6.0f}s] {key}: {args.runs} runs -> {folder}", flush=True)
         config = load_config("hairl", overrides={"reward_weight_decay": decay})
         train_runs(showdown, folder, runs=args.runs, config=config, progress=False,
-                   backend=backend, encoding=encoding)  # fmt: skip
+                   backend=backend, encoding=get_encoding(encoding))  # fmt: skip
         runs = [folder / f"run-{k}" for k in range(args.runs)] if args.runs > 1 else [folder]
         scores = [score_run(run, truth) for run in runs]
         bc_truth = None  # no truth on real data

@@ -164,7 +164,7 @@ def strength_run(tmp_path_factory: pytest.TempPathFactory) -> Path:
     pq.write_table(toy_expert_table(num_hands=150, seed=2), root / "table.parquet")
     config = load_config("hairl", overrides={"epochs": 1, "batch_size": 64})
     train_table(root / "table.parquet", root / "run", config=config, progress=False,
-                encoding="strength")  # fmt: skip
+                encoding=STRENGTH)  # fmt: skip
     return root / "run"
 
 

@@ -19,7 +19,7 @@ from irc_fixtures import real_month
 from pokerirl.datasets.ingest import UNEXPLAINED, IngestSummary, ingest_table
 from pokerirl.datasets.table import IMPUTED_SCHEMA, SCHEMA, month_table
 from pokerirl.encoding import CARD_INDEX, FOLD, cards_from_text, encode_obs
-from pokerirl.game.encodings import States, get_encoding
+from pokerirl.game.encodings import STRENGTH, States, get_encoding
 from pokerirl.game.evaluator import hand_strength
 from pokerirl.game.synth import write_synthetic_month
 from pokerirl.irl.nets import DiscretePolicy
@@ -270,7 +270,7 @@ def test_an_imputed_table_reads_with_weights_and_draws(month: Path, tmp_path: Pa
     out = tmp_path / "t.parquet"
     ingest_imputed([month], out, ImputeConfig(behaviour_rounds=0, behaviour_epochs=1))
     for encoding in ("rlcard", "strength"):
-        data = read_table(out, encoding=encoding)
+        data = read_table(out, encoding=get_encoding(encoding))
         assert data.weights is not None and data.imputed is not None
         assert bool(data.imputed.any()) and math.isclose(
             float(data.weights[~data.imputed].sum()), float((~data.imputed).sum()))
@@ -296,7 +296,7 @@ def test_a_run_policy_is_a_behaviour(month: Path, tmp_path: Path) -> None:
     ingest_table([month], drop)
     run = tmp_path / "run"
     train_table(drop, run, config=load_config("hairl", overrides={"epochs": 1}),
-                progress=False, encoding="strength")  # fmt: skip
+                progress=False, encoding=STRENGTH)  # fmt: skip
     summary = ingest_imputed([month], tmp_path / "t.parquet", ImputeConfig(behaviour=str(run)))
     assert summary.folds is not None
     assert summary.folds.behaviour == str(run) and summary.folds.behaviour_encoding == "strength-v2"

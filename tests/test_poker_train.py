@@ -12,7 +12,7 @@ import pytest
 from typer.testing import CliRunner
 
 from pokerirl.cli import app
-from pokerirl.datasets.decisions import DecisionArrays, read_decisions
+from pokerirl.datasets.decisions import Table, read_decisions
 from pokerirl.datasets.toy import toy_expert_table
 from pokerirl.errors import Remedy
 from pokerirl.irl import ConfigError, RunError, Transitions, load_config
@@ -28,7 +28,7 @@ def table_path(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 def test_datasets_reads_numpy_and_poker_makes_the_same_transitions(table_path: Path) -> None:
     decisions = read_decisions(table_path)
-    assert isinstance(decisions, DecisionArrays)
+    assert isinstance(decisions, Table)
     arrays = [decisions.obs, decisions.action_ids, decisions.legal_mask, decisions.next_obs]
     assert all(isinstance(a, np.ndarray) for a in arrays)  # no torch below irl/
     data = read_table(table_path)
@@ -116,9 +116,42 @@ def test_the_bar_moves_after_the_last_epoch_while_the_card_is_drawn(
 
     fractions: list[float] = []
     monkeypatch.setattr(progress, "_report", fractions.append)  # as inside a unit
-    train_table_into(read_table(table_path), tmp_path / "run", algo="airl",
+    train_table_into(read_decisions(table_path), tmp_path / "run", algo="airl",
                      config=AIRLConfig(epochs=2),
                      table=table_path)  # fmt: skip
     assert (tmp_path / "run" / CARD_FILE).is_file()
     assert fractions == sorted(fractions) and fractions[-1] == 1.0
     assert fractions[-2] == pytest.approx(TRAINED_SHARE)  # training and saving done, not more
+
+
+def test_the_table_carries_its_game_and_encoding(table_path: Path) -> None:
+    from pokerirl.datasets.decisions import read_data
+    from pokerirl.game.encodings import RLCARD
+    from pokerirl.game.spec import GameName, holdem_spec
+
+    table = read_data(table_path)
+    assert table.spec == holdem_spec(RLCARD)
+    assert (table.spec.game, table.spec.encoding, table.spec.width) == (GameName.HOLDEM,
+                                                                        "rlcard", 72)  # fmt: skip
+    assert table.obs.shape[1] == table.spec.width
+    assert table.legal_mask.shape[1] == table.num_actions == 4
+
+
+def test_several_runs_read_and_encode_the_table_once(
+    table_path: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The driver reads the table once; its arrays go to every unit (issue 42: it was read
+    and encoded R + 1 times)."""
+    from pokerirl.datasets import decisions
+
+    reads: list[str] = []
+    read = decisions.decisions_from_arrow
+
+    def counted(*args: object, **kwargs: object) -> object:
+        reads.append(str(kwargs.get("source")))
+        return read(*args, **kwargs)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(decisions, "decisions_from_arrow", counted)
+    config = load_config("airl", overrides={"epochs": 1, "batch_size": 64})
+    train_runs(table_path, tmp_path / "runs", runs=2, config=config, progress=False)
+    assert reads == [str(table_path)]

@@ -29,7 +29,6 @@ from pokerirl.cli.options import (
 )
 from pokerirl.cli.seeds import MAX_SEEDS, SEED_OPTION, seed_list
 from pokerirl.errors import InputError, UsageError
-from pokerirl.game.encodings import EncodingName
 from pokerirl.irl.config import AIRLConfig, Algo  # torch-free
 from pokerirl.jsonio import read_json
 from pokerirl.poker.folds import FoldsMode
@@ -37,6 +36,7 @@ from pokerirl.poker.rewards import Transform
 
 if TYPE_CHECKING:
     from pokerirl.agents.train import MetricsLine
+    from pokerirl.game.encodings import Encoding
     from pokerirl.irl.records import EpochMetrics
     from pokerirl.irl.run import RunSummary
 
@@ -236,7 +236,7 @@ def match(
     players = resolve_agent(agent_a), resolve_agent(agent_b)
     if encoding is not None:
         _check_agents_encoding(dict(zip((agent_a, agent_b), players, strict=True)),
-                               _encoding(encoding))  # fmt: skip
+                               _encoding(encoding).name)  # fmt: skip
     found = play_corrected_match(
         *players,
         hands=hands,
@@ -373,7 +373,7 @@ def tournament(
     if encoding is not None:
         specs = [spec for pair in matchups for side in pair
                  for spec in ([side] if isinstance(side, str) else side)]  # fmt: skip
-        _check_agents_encoding(_resolve_lineup(specs), _encoding(encoding))
+        _check_agents_encoding(_resolve_lineup(specs), _encoding(encoding).name)
     report = run_tournament(
         matchups,
         hands=hands,
@@ -398,7 +398,9 @@ def tournament(
 def train(
     ctx: typer.Context,
     table: str = typer.Argument(
-        ..., metavar="TABLE", help="Parquet decision table written by `pokerirl ingest`."
+        ..., metavar="TABLE",
+        help="Parquet decision table written by `pokerirl ingest`, or Leduc demonstrations "
+        "(the .npz of `pokerirl leduc synth`).",
     ),
     out: str = typer.Option(
         ..., "--out", metavar="DIR", help="Run folder (with --runs > 1: a folder of runs)."
@@ -423,8 +425,9 @@ def train(
         None, "--hidden", metavar="WIDTHS", help="Widths for both nets, e.g. 64,64."
     ),
     irl: Settings = NO_SETTINGS,  # AIRLConfig's options: --epochs, --seed, --alpha, ...
-    encoding: str = typer.Option(
-        EncodingName.RLCARD, "--encoding", metavar=ENCODING_CHOICES, help=ENCODING_HELP
+    encoding: str | None = typer.Option(
+        None, "--encoding", metavar=ENCODING_CHOICES,
+        help=ENCODING_HELP + " Default: rlcard; Leduc demonstrations have their one encoding.",
     ),
     threads: int = typer.Option(
         1, "--threads", min=1, help="CPU threads; small nets train best on 1."
@@ -454,13 +457,13 @@ def train(
     flags = {**irl, **nets}
     settings = settings_from_options(load_config, algo, config_file=config, overrides=flags)
     settings_from_options(resolve_device, device)
-    encoding = _encoding(encoding)
+    chosen = None if encoding is None else _encoding(encoding)
     if em_rounds and runs > 1:
         raise UsageError("--em-rounds re-imputes with one run's policy: give --runs 1")
     execution.pin_threads(threads)
     common: dict[str, Any] = dict(
         algo=algo, config=settings, device=device, progress=not quiet, overwrite=overwrite,
-        encoding=encoding,
+        encoding=chosen,
     )
     if em_rounds:
         _echo_em(train_em(table, out, rounds=em_rounds, **common), out, em_rounds)
@@ -688,24 +691,25 @@ def _echo_agent(folder: Path, line: MetricsLine | None, play: str) -> None:
         )
 
 
-def _encoding(name: str) -> str:
-    """``--encoding NAME``, checked (a usage error naming the known ones)."""
+def _encoding(name: str) -> Encoding:
+    """``--encoding NAME``: the one place the name is checked (a usage error naming the known
+    ones) and becomes the encoding every layer below is given."""
     from pokerirl.game.encodings import ENCODINGS
 
     if name not in ENCODINGS:
         raise UsageError(f"unknown --encoding {name!r} ({', '.join(ENCODINGS)})")
-    return name
+    return ENCODINGS[name]
 
 
-def _check_encoding(source: object, expected: str) -> None:
+def _check_encoding(source: object, expected: Encoding) -> None:
     """Refuse, in one line naming the run, a reward run of another encoding."""
     from pokerirl.game.encodings import get_encoding
 
     found = getattr(source, "encoding", None)  # its spec: strength-v1 is still strength
-    if found is not None and get_encoding(found).name != get_encoding(expected).name:
+    if found is not None and get_encoding(found).name != expected.name:
         raise InputError(
             f"{getattr(source, 'spec', source)}: a reward on the {found} encoding, not "
-            f"{expected} (its config.json's data.encoding)"
+            f"{expected.name} (its config.json's data.encoding)"
         )
 
 

@@ -16,15 +16,21 @@ row's weight in every mean), ``imputed`` (bool: its hole cards are a posterior d
 ``imputation`` (integer: which draw, 0 for observed rows); a player's next decision is then
 looked up within the same draw.
 
-A table's ``obs`` column is RLCard's 72-d observation. Another encoding
-(:mod:`pokerirl.game.encodings`) is computed on reading from the columns that hold the state
-apart: ``hole_cards`` and ``board`` (texts) and ``raise_nums``; a table without them cannot
-give it, and is refused in one line.
+A table's ``obs`` column is RLCard's 72-d observation (read only for that encoding). Another
+encoding (:mod:`pokerirl.game.encodings`) is computed on reading from the columns that hold
+the state apart: ``hole_cards`` and ``board`` (texts) and ``raise_nums``; a table without them
+cannot give it, and is refused in one line.
+
+:func:`read_data` is the one reader: a :class:`Table` holds the arrays and their
+:class:`~pokerirl.game.spec.TableSpec` (the game, the encoding), from a hold'em table or from
+Leduc demonstrations (``pokerirl leduc synth``'s ``.npz``).
 
 >>> from pokerirl.datasets.toy import toy_expert_table
 >>> decisions = decisions_from_arrow(toy_expert_table(num_hands=20, seed=1))
 >>> decisions.obs.shape[1], decisions.num_actions, decisions.dones is not None
 (72, 4, True)
+>>> decisions.spec.game, decisions.spec.encoding
+(<GameName.HOLDEM: 'holdem'>, 'rlcard')
 """
 
 from __future__ import annotations
@@ -32,6 +38,7 @@ from __future__ import annotations
 import os
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pyarrow as pa
@@ -39,30 +46,40 @@ import pyarrow.compute as pc
 
 from pokerirl.encoding import NUM_ACTIONS, NUM_ROUNDS, OBS_SIZE, cards_from_text
 from pokerirl.errors import InputError
-from pokerirl.game.encodings import Encoding, EncodingName, States, get_encoding
+from pokerirl.game.encodings import RLCARD, Encoding, EncodingName, States
+from pokerirl.game.spec import LEDUC, GameName, TableSpec, holdem_spec
 from pokerirl.parquet import fixed_width, read_parquet
+
+if TYPE_CHECKING:
+    from pokerirl.game.leduc.demos import Demonstrations
 
 REQUIRED_COLUMNS = ("hand_id", "obs", "action_id", "legal_mask")
 OPTIONAL_COLUMNS = ("reward", "player")
 IMPUTATION_COLUMNS = ("weight", "imputed", "imputation")  # ingest --folds impute
 STATE_COLUMNS = ("hole_cards", "board", "raise_nums")  # what other encodings are computed from
+TABLE_ENCODING = RLCARD  # a hold'em table's states, unless told: its obs column as it is
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
-class DecisionArrays:
-    """A validated decision table as numpy arrays, one row per expert decision."""
+class Table:
+    """A validated table of decisions as numpy arrays, one row per expert decision, and what
+    it is of (``spec``: the game, the encoding of ``obs``, the actions)."""
 
-    obs: np.ndarray  # (N, width) in ``encoding``: (N, 72) uint8 for rlcard
+    spec: TableSpec
+    obs: np.ndarray  # (N, spec.width): (N, 72) uint8 for hold'em's rlcard
     action_ids: np.ndarray  # (N,) int64, legal under legal_mask
-    groups: np.ndarray  # (N,) hand_id strings
-    legal_mask: np.ndarray  # (N, 4) bool
-    next_obs: np.ndarray | None = None  # (N, 72) uint8: the same player's next decision
+    groups: np.ndarray  # (N,) hand ids (strings)
+    legal_mask: np.ndarray  # (N, spec.num_actions) bool
+    next_obs: np.ndarray | None = None  # (N, spec.width): the same player's next decision
     dones: np.ndarray | None = None  # (N,) bool: the player's last decision of the hand
     rewards: np.ndarray | None = None  # (N,) float32
-    num_actions: int = NUM_ACTIONS
-    encoding: str = EncodingName.RLCARD
     weights: np.ndarray | None = None  # (N,) float32 > 0, from a ``weight`` column
     imputed: np.ndarray | None = None  # (N,) bool, from an ``imputed`` column
+
+    @property
+    def num_actions(self) -> int:
+        return self.spec.num_actions
+
 
 def table_cards(table: pa.Table, source: str) -> np.ndarray:
     """(N, 7) int8 cards of a table's ``hole_cards`` and ``board`` texts (``-1`` not shown);
@@ -75,10 +92,11 @@ def table_cards(table: pa.Table, source: str) -> np.ndarray:
 
 
 def check_legal_actions(actions: np.ndarray, legal_mask: np.ndarray, source: str) -> None:
-    """Refuse, in one line naming ``source``, action ids outside 0..3, rows with no legal
-    action, and actions their row's legal mask forbids."""
-    if len(actions) and (actions.min() < 0 or actions.max() >= NUM_ACTIONS):
-        raise InputError(f"{source}: 'action_id' must lie in 0..{NUM_ACTIONS - 1}")
+    """Refuse, in one line naming ``source``, action ids outside the legal mask's columns,
+    rows with no legal action, and actions their row's legal mask forbids."""
+    count = legal_mask.shape[1]
+    if len(actions) and (actions.min() < 0 or actions.max() >= count):
+        raise InputError(f"{source}: 'action_id' must lie in 0..{count - 1}")
     empty = ~legal_mask.any(axis=1)
     if empty.any():
         bad = int(empty.sum())
@@ -90,11 +108,56 @@ def check_legal_actions(actions: np.ndarray, legal_mask: np.ndarray, source: str
         )
 
 
-def read_decisions(
-    path: str | os.PathLike[str], *, encoding: str | Encoding | None = None
-) -> DecisionArrays:
-    """Read and validate the decision table at ``path``, its states in ``encoding`` (default
-    ``rlcard``, the ``obs`` column as it is).
+def read_data(path: str | os.PathLike[str], *, encoding: Encoding | None = None) -> Table:
+    """The decisions at ``path``, validated, with their game: Leduc demonstrations (the
+    ``.npz`` of ``pokerirl leduc synth``, in their one encoding) or a hold'em decision table
+    (:func:`read_decisions`, its states in ``encoding``). Raises ``FileNotFoundError`` for a
+    missing file and ``ValueError`` for anything else wrong."""
+    source = Path(path)
+    if data_game(source) is GameName.LEDUC:
+        if encoding is not None:
+            raise InputError(
+                f"{source}: Leduc demonstrations are in their one encoding "
+                f"({LEDUC.encoding}), not {encoding.spec}"
+            )
+        return leduc_table(source)
+    return read_decisions(source, encoding=encoding)
+
+
+def data_game(path: str | os.PathLike[str]) -> GameName:
+    """The game of the decisions at ``path``: Leduc for an ``.npz`` (a zip file: Leduc
+    demonstrations), else hold'em (a Parquet table, whose reader says what else is wrong)."""
+    try:
+        with Path(path).open("rb") as stream:
+            return GameName.LEDUC if stream.read(4) == b"PK\x03\x04" else GameName.HOLDEM
+    except OSError:  # missing, a folder: the Parquet reader says so in its words
+        return GameName.HOLDEM
+
+
+def leduc_table(path: Path) -> Table:
+    """The Leduc demonstrations file at ``path`` (:func:`pokerirl.game.leduc.demos.load`) as
+    a :class:`Table`."""
+    from pokerirl.game.leduc.demos import load
+
+    demos = load(path)
+    if len(demos) == 0:
+        raise InputError(f"{path} is empty: no expert decisions to learn from")
+    check_legal_actions(demos.action, demos.legal, str(path))
+    return demos_table(demos)
+
+
+def demos_table(demos: Demonstrations) -> Table:
+    """Leduc demonstrations as a :class:`Table`, one group per hand (a split keeps the hands'
+    order of appearance, so the ids' type changes no split)."""
+    return Table(
+        spec=LEDUC, obs=demos.obs, action_ids=demos.action, groups=demos.hand.astype(str),
+        legal_mask=demos.legal, next_obs=demos.next_obs, dones=demos.done, rewards=demos.reward,
+    )  # fmt: skip
+
+
+def read_decisions(path: str | os.PathLike[str], *, encoding: Encoding | None = None) -> Table:
+    """Read and validate the hold'em decision table at ``path``, its states in ``encoding``
+    (default :data:`TABLE_ENCODING`: the ``obs`` column as it is).
 
     Raises ``FileNotFoundError`` for a missing file and ``ValueError`` for anything else wrong
     (not Parquet, missing columns, wrong types or widths, nulls, empty, illegal expert actions).
@@ -105,17 +168,16 @@ def read_decisions(
 
 
 def decisions_from_arrow(
-    table: pa.Table, *, source: str = "table", encoding: str | Encoding | None = None
-) -> DecisionArrays:
+    table: pa.Table, *, source: str = "table", encoding: Encoding | None = None
+) -> Table:
     """Validate an Arrow table with the decision-table schema and convert it."""
-    chosen = get_encoding(encoding)
+    chosen = TABLE_ENCODING if encoding is None else encoding
     if table.num_rows == 0:
         raise InputError(f"{source} is empty: no expert decisions to learn from")
     for name in (*REQUIRED_COLUMNS, *OPTIONAL_COLUMNS, *IMPUTATION_COLUMNS):
         if name in table.column_names and table.column(name).null_count:
             raise InputError(f"{source}: column {name!r} has null values")
     hand = _strings(table, "hand_id", source)
-    obs = fixed_width(table, "obs", OBS_SIZE, source).astype(np.uint8, copy=False)
     mask = fixed_width(table, "legal_mask", NUM_ACTIONS, source).astype(bool, copy=False)
 
     action = table.column("action_id")
@@ -132,7 +194,9 @@ def decisions_from_arrow(
         rewards = reward.to_numpy().astype(np.float32)
 
     weights, imputed, draw = _imputation_columns(table, source)
-    if chosen.name != EncodingName.RLCARD:
+    if chosen.name == EncodingName.RLCARD:  # the obs column is read only when it is the states
+        obs = fixed_width(table, "obs", OBS_SIZE, source).astype(np.uint8, copy=False)
+    else:
         obs = chosen.encode(table_states(table, mask, source, chosen.name))
     next_obs = dones = None
     if "player" in table.column_names:
@@ -141,7 +205,8 @@ def decisions_from_arrow(
         dones = following < 0
         next_obs = obs[np.where(dones, np.arange(len(obs)), following)]
 
-    return DecisionArrays(
+    return Table(
+        spec=holdem_spec(chosen),
         obs=obs,
         action_ids=action_ids,
         groups=np.asarray(hand.dictionary.to_numpy(zero_copy_only=False))[hand.indices],
@@ -149,7 +214,6 @@ def decisions_from_arrow(
         next_obs=next_obs,
         dones=dones,
         rewards=rewards,
-        encoding=chosen.spec,
         weights=weights,
         imputed=imputed,
     )

@@ -16,31 +16,30 @@ import os
 
 import pyarrow as pa
 
-from pokerirl.datasets.decisions import DecisionArrays, decisions_from_arrow, read_decisions
+from pokerirl.datasets.decisions import Table, decisions_from_arrow, read_data
 from pokerirl.game.encodings import Encoding
 from pokerirl.irl.transitions import Transitions
 
 
-def read_table(
-    path: str | os.PathLike[str], *, encoding: str | Encoding | None = None
-) -> Transitions:
-    """The decision table at ``path`` (``pokerirl ingest``'s) as ``Transitions``, its states
-    in ``encoding`` (default ``rlcard``; see :mod:`pokerirl.game.encodings`).
+def read_table(path: str | os.PathLike[str], *, encoding: Encoding | None = None) -> Transitions:
+    """The decisions at ``path`` (a table of ``pokerirl ingest``, or Leduc demonstrations) as
+    ``Transitions``, a hold'em table's states in ``encoding`` (default ``rlcard``; see
+    :mod:`pokerirl.game.encodings`).
 
     Raises ``FileNotFoundError`` for a missing file and ``ValueError`` for anything else wrong
-    (see :func:`pokerirl.datasets.decisions.read_decisions`).
+    (see :func:`pokerirl.datasets.decisions.read_data`).
     """
-    return as_transitions(read_decisions(path, encoding=encoding))
+    return as_transitions(read_data(path, encoding=encoding))
 
 
 def transitions_from_arrow(
-    table: pa.Table, *, source: str = "table", encoding: str | Encoding | None = None
+    table: pa.Table, *, source: str = "table", encoding: Encoding | None = None
 ) -> Transitions:
     """An Arrow table with the decision-table schema as ``Transitions``, validated."""
     return as_transitions(decisions_from_arrow(table, source=source, encoding=encoding))
 
 
-def as_transitions(decisions: DecisionArrays) -> Transitions:
+def as_transitions(decisions: Table) -> Transitions:
     d = decisions
     return Transitions.from_arrays(d.obs, d.action_ids, groups=d.groups, next_obs=d.next_obs,
                                    dones=d.dones, rewards=d.rewards, legal_mask=d.legal_mask,

@@ -43,6 +43,7 @@ from pokerirl.game.encodings import (
     get_encoding,
     recorded_encoding,
 )
+from pokerirl.game.spec import GameName, recorded_game
 
 
 class Transform(StrEnum):
@@ -288,8 +289,9 @@ def run_encoding(run: Path, record: Mapping[str, Any]) -> Encoding:
     """The encoding a poker run's ``config.json`` records (``data.encoding``; ``rlcard`` for
     runs made before encodings), checked against the reward's input width.
 
-    :class:`~pokerirl.errors.InputError` (one line naming the run) for a Gymnasium run, an
-    unknown encoding, or a width or action count that does not fit it.
+    :class:`~pokerirl.errors.InputError` (one line naming the run) for a Gymnasium run, a run
+    of another game (Leduc: ``data.game``), an unknown encoding, or a width or action count
+    that does not fit it.
     """
     data = record.get("data") or {}
     data = data if isinstance(data, dict) else {}
@@ -298,6 +300,11 @@ def run_encoding(run: Path, record: Mapping[str, Any]) -> Encoding:
         raise InputError(
             f"{run}: a Gymnasium IRL run (reward of {task}), not a poker reward; "
             "give a run of pokerirl train"
+        )
+    if recorded_game(data) is not GameName.HOLDEM:  # a run of another game reads other states
+        raise InputError(
+            f"{run}: a reward learned on the game {str(data.get('game'))[:40]!r}, not on "
+            "heads-up limit hold'em"
         )
     try:  # a bare "strength" (before versions) is strength-v1
         encoding = recorded_encoding(data.get("encoding", EncodingName.RLCARD))

@@ -42,9 +42,11 @@ from typing import Any
 import torch
 
 from pokerirl.atomic import write_text
+from pokerirl.datasets.decisions import Table, data_game, read_data
 from pokerirl.errors import ConfigError, Remedy
 from pokerirl.execution import Backend, pinned_threads
-from pokerirl.game.encodings import EncodingName, get_encoding
+from pokerirl.game.encodings import RLCARD, Encoding
+from pokerirl.game.spec import GameName
 from pokerirl.irl.airl import resolve_device
 from pokerirl.irl.config import AIRLConfig, Algo
 from pokerirl.irl.metrics import Metric
@@ -61,14 +63,12 @@ from pokerirl.irl.run import (
     train_runs_into,
 )
 from pokerirl.irl.run import TRAINED_SHARE as TRAINED_SHARE  # importable here as before
-from pokerirl.irl.transitions import Transitions
 from pokerirl.jsonio import read_json
-from pokerirl.poker.data import read_table
+from pokerirl.poker.data import as_transitions, read_table
 from pokerirl.poker.reward_card import CARD_FILE
 from pokerirl.store import Unit, UnitConflict, UnitOutput, digest, run_units, staged_folder
 
 CARD_COLUMNS = ("hole_cards", "board")  # what the card reads beyond the trainer's columns
-TABLE_ENCODING: str = EncodingName.RLCARD  # the states a table is read in, unless told
 
 
 # --------------------------------------------------------------------------- one run
@@ -83,9 +83,10 @@ def train_table(
     device: str = "cpu",
     progress: bool = True,
     overwrite: bool = False,
-    encoding: str = TABLE_ENCODING,
+    encoding: Encoding | None = None,
 ) -> RunSummary:
-    """Train on a Parquet decision table, its states in ``encoding``, and write the run
+    """Train on the decisions at ``table`` (:func:`~pokerirl.datasets.decisions.read_data`:
+    a hold'em table, its states in ``encoding``, or Leduc demonstrations) and write the run
     folder ``out_dir``.
 
     Validation is a seeded share of the *hands* (``config.val_fraction``), never of rows. A
@@ -96,12 +97,11 @@ def train_table(
     resolve_device(device)  # fail before reading a large table
     out = Path(out_dir)
     check_destination(out, overwrite=overwrite)
-    data = read_table(table, encoding=encoding)
+    data = read_data(table, encoding=encoding)
     with staged_folder(out) as folder:  # the store's: a kill leaves out as it was
         summary = train_table_into(
-            data, folder, algo=algo, config=config, device=device, progress=progress,
-            table=table, encoding=encoding,
-        )  # fmt: skip
+            data, folder, algo=algo, config=config, device=device, progress=progress, table=table
+        )
     warn_below_bc(out, summary.metrics[-1], summary.baselines)
     return replace(summary, out_dir=out)
 
@@ -135,7 +135,7 @@ def warn_below_bc(run: Path, metrics: Mapping[str, Any], baselines: Mapping[str,
 
 
 def train_table_into(
-    data: Transitions,
+    data: Table,
     folder: Path,
     *,
     algo: str,
@@ -144,18 +144,20 @@ def train_table_into(
     progress: bool = False,
     table: str | os.PathLike[str] | None = None,
     table_file: str | os.PathLike[str] | None = None,
-    encoding: str = TABLE_ENCODING,
 ) -> RunSummary:
-    """One run of :func:`pokerirl.irl.run.train_runs_into`, its reward card as the finish.
+    """One run of :func:`pokerirl.irl.run.train_runs_into`, its reward card (hold'em) as the
+    finish.
 
-    ``data`` holds the table's states in ``encoding`` (recorded in ``config.json``'s
-    ``data.encoding``); ``table`` is the table's path for the record; ``table_file`` the
-    file to read the reward card's states from (default ``table``)."""
-    card = functools.partial(write_reward_card, table=table_file or table,
-                             label=None if table is None else str(table))  # fmt: skip
+    ``data`` is the table, its spec recorded in ``config.json``'s ``data`` (the encoding,
+    and the game when not hold'em); ``table`` is the table's path for the record;
+    ``table_file`` the file to read the reward card's states from (default ``table``)."""
+    card = None
+    if data.spec.game is GameName.HOLDEM:
+        card = functools.partial(write_reward_card, table=table_file or table,
+                                 label=None if table is None else str(table))  # fmt: skip
     trained = train_runs_into(
-        data, [folder], algo=algo, config=config, hooks=RunHooks(finish=card), device=device,
-        progress=progress, data_path=table, data_notes={"encoding": get_encoding(encoding).spec},
+        as_transitions(data), [folder], algo=algo, config=config, hooks=RunHooks(finish=card),
+        device=device, progress=progress, data_path=table, data_notes=data.spec.record(),
     )  # fmt: skip
     return RunSummary.of(trained.results, out_dir=folder, several=False)
 
@@ -184,16 +186,17 @@ def write_reward_card(
 
 
 def train_unit(
+    data: Table,
     table: bytes,
     table_path: str,
     algo: str,
     settings: Mapping[str, Any],
     device: str,
-    encoding: str,
 ) -> UnitOutput[None]:
     """One run of a fan-out: a top-level, picklable function of plain arguments.
 
-    The table arrives as bytes and the run folder leaves as bytes (the driver writes them;
+    ``data`` arrives read and encoded once by the driver; the table's bytes come along for
+    the reward card, and the run folder leaves as bytes (the driver writes them;
     ``timings.json`` unfingerprinted), so a worker needs no shared filesystem. Pins torch to
     one thread (restored after) and seeds from ``settings["seed"]``.
     """
@@ -203,14 +206,13 @@ def train_unit(
         torch.manual_seed(settings["seed"])
         run = Path(scratch) / "run"
         train_table_into(
-            read_table(path, encoding=encoding),
+            data,
             run,
             algo=algo,
             config=AIRLConfig(**settings),
             device=device,
             table=table_path,
             table_file=path,
-            encoding=encoding,
         )
         files = {f.name: f.read_bytes() for f in sorted(run.iterdir()) if f.is_file()}
     timings = {TIMINGS_FILE: files.pop(TIMINGS_FILE)}
@@ -228,13 +230,15 @@ def train_runs(
     progress: bool = True,
     overwrite: bool = False,
     backend: Backend | None = None,
-    encoding: str = TABLE_ENCODING,
+    encoding: Encoding | None = None,
     single_folder: bool = True,
 ) -> RunSummary:
     """``runs`` runs of ``config`` with seeds ``seed + k`` into ``out_dir/run-<k>``, then
     ``summary.json`` and ``alignment_bands.png``. One run keeps the single-folder layout
     unless ``single_folder`` is False (then it is ``run-0``, a resumable unit like the others).
-    The table's states are read in ``encoding`` (:mod:`pokerirl.game.encodings`).
+    The table is read once (:func:`~pokerirl.datasets.decisions.read_data`: a hold'em
+    table's states in ``encoding``, :mod:`pokerirl.game.encodings`, or Leduc demonstrations)
+    and its arrays go to every run.
 
     Each run is a unit of :func:`pokerirl.store.run_units` on ``backend`` (default: in this
     process): written atomically with a record of its settings and table, reused by a
@@ -263,15 +267,15 @@ def train_runs(
         raise RunError(
             f"{out} holds a single run, not a folder of {runs} runs", remedy=Remedy.ELSEWHERE
         )
-    read_table(table, encoding=encoding)  # a bad table fails once, before any unit starts
+    data = read_data(table, encoding=encoding)  # a bad table fails once, before any unit starts
     table_bytes = Path(table).read_bytes()
     folders = [out / f"run-{k}" for k in range(runs)]
     units = []
     for k, folder in enumerate(folders):
         settings = {**config.to_dict(), "seed": config.seed + k}
         unit_config: dict[str, object] = {"algo": algo, "device": device, "settings": settings}
-        if encoding != EncodingName.RLCARD:  # runs of the 72-d encoding keep their prints
-            unit_config["encoding"] = get_encoding(encoding).spec
+        if data.spec.encoding != RLCARD.spec:  # runs of the 72-d encoding keep their prints
+            unit_config.update(data.spec.record())
         units.append(
             Unit(
                 key=folder.name,
@@ -279,7 +283,7 @@ def train_runs(
                 config=unit_config,
                 inputs={"table": digest(table_bytes)},
                 fn=train_unit,
-                args=(table_bytes, str(Path(table).resolve()), algo, settings, device, encoding),
+                args=(data, table_bytes, str(Path(table).resolve()), algo, settings, device),
             )
         )
     try:
@@ -287,7 +291,7 @@ def train_runs(
     except UnitConflict as error:
         raise RunError(str(error), remedy=error.remedy) from None
     for folder in folders:  # runs of an older pokerirl, reused: add their card
-        if not (folder / CARD_FILE).is_file():
+        if data.spec.game is GameName.HOLDEM and not (folder / CARD_FILE).is_file():
             write_reward_card(folder, table)
     results = [read_run_result(folder) for folder in folders]
     for folder, result in zip(folders, results, strict=True):
@@ -314,7 +318,7 @@ def train_em(
     device: str = "cpu",
     progress: bool = True,
     overwrite: bool = False,
-    encoding: str = TABLE_ENCODING,
+    encoding: Encoding | None = None,
 ) -> dict[str, Any]:
     """EM over the hidden cards of an imputed table (``ingest --folds impute``): train on it
     (``OUT/round-0``), then ``rounds`` times re-impute its hidden players with the last run's
@@ -337,6 +341,9 @@ def train_em(
     config = config or AIRLConfig.for_algo(algo)
     out = Path(out_dir)
     check_destination(out, overwrite=overwrite)
+    if data_game(table) is not GameName.HOLDEM:
+        raise ConfigError(f"{table}: EM re-imputes the hidden cards of a hold'em table, not "
+                          "Leduc demonstrations")  # fmt: skip
     names = pq.read_schema(table).names
     if "imputed" not in names or "imputation" not in names:
         raise ConfigError(
@@ -374,7 +381,7 @@ def train_em(
     return report
 
 
-def _agreement(run: Path, table: Path, encoding: str) -> dict[str, float]:
+def _agreement(run: Path, table: Path, encoding: Encoding | None) -> dict[str, float]:
     """How often the run's policy argmax and reward argmax (legal actions) take the action of
     the table's rows, weighted, over its imputed rows and its observed rows apart."""
     from pokerirl.irl.run import load_policy, load_reward

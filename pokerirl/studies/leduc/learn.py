@@ -45,13 +45,12 @@ class Learned:
 
 
 def transitions(demos: Demonstrations):  # type: ignore[no-untyped-def]  # torch: lazily
-    """The decisions as discrete :class:`~pokerirl.irl.Transitions` (one group per hand)."""
-    from pokerirl.irl import Transitions
+    """The decisions as discrete :class:`~pokerirl.irl.Transitions` (one group per hand), as
+    ``pokerirl train`` reads a demonstrations file."""
+    from pokerirl.datasets.decisions import demos_table
+    from pokerirl.poker.data import as_transitions
 
-    return Transitions.from_arrays(
-        demos.obs, demos.action, groups=demos.hand, next_obs=demos.next_obs, dones=demos.done,
-        legal_mask=demos.legal, num_actions=len(ACTIONS),
-    )  # fmt: skip
+    return as_transitions(demos_table(demos))
 
 
 def learn(

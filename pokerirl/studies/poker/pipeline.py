@@ -85,6 +85,7 @@ class Execution:
     def train_runs(
         self, table: Path, out: Path, *, algo: str, runs: int, config: AIRLConfig, encoding: str
     ) -> None:
+        from pokerirl.game.encodings import get_encoding
         from pokerirl.poker.train import train_runs
 
         train_runs(
@@ -96,7 +97,7 @@ class Execution:
             progress=self.progress,
             overwrite=self.overwrite,
             backend=self.backend,
-            encoding=encoding,
+            encoding=get_encoding(encoding),  # the study config's name, checked when read
         )
 
     def train_seeds(self, out: Path, config: TrainConfig, seeds: Sequence[int]) -> None:
@@ -368,8 +369,9 @@ def single_run(
 ) -> None:
     """One IRL run into ``out`` itself: a ``folder`` unit trained in this process (an older
     pokerirl's has no record of its own: its ``stages/irl.json`` vouches for it)."""
+    from pokerirl.datasets.decisions import read_data
+    from pokerirl.game.encodings import get_encoding
     from pokerirl.irl.run import TIMINGS_FILE
-    from pokerirl.poker import read_table
     from pokerirl.poker.train import train_table_into
 
     table = study.root / TABLE
@@ -386,9 +388,9 @@ def single_run(
     if check(unit, overwrite=study.overwrite).fate is Fate.REUSED:
         return
     with writing(unit, unhashed={TIMINGS_FILE}) as folder:
-        train_table_into(read_table(table, encoding=encoding), folder, algo=algo,
-                         config=settings, progress=study.execution.progress, table=table,
-                         encoding=encoding)  # fmt: skip
+        train_table_into(read_data(table, encoding=get_encoding(encoding)), folder, algo=algo,
+                         config=settings, progress=study.execution.progress,
+                         table=table)  # fmt: skip
 
 
 def reward_source_prints(config: StudyConfig) -> dict[str, str]:

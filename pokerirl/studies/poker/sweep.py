@@ -525,6 +525,7 @@ def _irl_folder(sweep: _Sweep, cell: Cell) -> Path:
 
 
 def _irl(sweep: _Sweep, cell: Cell) -> None:
+    from pokerirl.game.encodings import get_encoding
     from pokerirl.irl.config import AIRLConfig
     from pokerirl.poker.train import train_runs
 
@@ -534,8 +535,8 @@ def _irl(sweep: _Sweep, cell: Cell) -> None:
     sweep.say(f"      {cell.reward_key}: {sweep.config.runs} runs -> {out}")
     train_runs(sweep.root / "tables" / f"{cell.table_key}.parquet", out, runs=sweep.config.runs,
                algo=cell.algo, config=config, progress=sweep.progress,
-               overwrite=sweep.overwrite, backend=sweep.backend, encoding=cell.encoding,
-               single_folder=False)  # fmt: skip
+               overwrite=sweep.overwrite, backend=sweep.backend,
+               encoding=get_encoding(cell.encoding), single_folder=False)  # fmt: skip
 
 
 def _irl_runs(sweep: _Sweep, cell: Cell) -> list[Path]:
