@@ -35,6 +35,7 @@ still loads, and says ``strength-v1``. A mismatch is refused in one line where i
 from __future__ import annotations
 
 import functools
+import itertools
 from collections.abc import Mapping
 from dataclasses import dataclass
 from enum import StrEnum
@@ -168,6 +169,13 @@ STRENGTH_FEATURES: Mapping[str, int] = {
 }
 
 
+# Each block's columns (start, stop) in the strength encoding's row.
+_EDGES = [0, *itertools.accumulate(STRENGTH_FEATURES.values())]
+_COLUMNS: Mapping[str, tuple[int, int]] = dict(
+    zip(STRENGTH_FEATURES, itertools.pairwise(_EDGES), strict=True)
+)
+
+
 class StrengthEncoding(Encoding):
     """Hole and board apart, plus generic hand features (float32; see the module docstring).
 
@@ -194,11 +202,23 @@ class StrengthEncoding(Encoding):
         return f"{self.name}-v{self.version}"
 
     def encode(self, states: States) -> np.ndarray:
-        blocks = self.features(states)
-        return np.concatenate([blocks[name] for name in STRENGTH_FEATURES], axis=1)
+        # Each block is cast as it is written into its columns of one array: no per-block
+        # float32 copies and no concatenation (a DQN encodes ~120 rows a call, so these
+        # per-call copies were a tenth of the encoding's time). The same values as
+        # ``astype(np.float32)`` of each block, bit for bit.
+        found = np.empty((len(states), self.width), dtype=np.float32)
+        for (start, stop), block in zip(_COLUMNS.values(), self._blocks(states), strict=True):
+            found[:, start:stop] = block
+        return found
 
     def features(self, states: States) -> dict[str, np.ndarray]:
-        """Each block of :data:`STRENGTH_FEATURES` as an (N, width) float32 array."""
+        """Each block of :data:`STRENGTH_FEATURES` as an (N, width) float32 array (views of
+        :meth:`encode`'s row)."""
+        found = self.encode(states)
+        return {name: found[:, start:stop] for name, (start, stop) in _COLUMNS.items()}
+
+    def _blocks(self, states: States) -> tuple[np.ndarray, ...]:
+        """The blocks of :data:`STRENGTH_FEATURES`, in its order, as computed (any dtype)."""
         cards = np.asarray(states.cards, dtype=np.int64)
         street = states.street
         hole, board = cards[:, :2], cards[:, 2:]
@@ -213,7 +233,7 @@ class StrengthEncoding(Encoding):
         flush_draw, straight_draw = _draws(cards, rank, street, masks)
         facing = np.asarray(states.legal_mask, dtype=bool)[:, CALL]
         pot, to_call = pot_and_call(street, np.asarray(states.raise_nums), facing)
-        found = {
+        found = {  # by name, so that the order is checked against STRENGTH_FEATURES
             "hole": _one_hot_cards(hole),
             "board": _one_hot_cards(board),
             "raises": _raise_one_hot(states.raise_nums),
@@ -233,7 +253,8 @@ class StrengthEncoding(Encoding):
             "pot": (pot / MAX_POT)[:, None],
             "pot_odds": np.where(facing, to_call / np.maximum(pot + to_call, 1), 0.0)[:, None],
         }
-        return {k: v.astype(np.float32) for k, v in found.items()}
+        assert tuple(found) == tuple(STRENGTH_FEATURES)
+        return tuple(found.values())
 
     def equity(self, cards: np.ndarray) -> np.ndarray:
         """(N,) equity against a uniformly random hand, the board rolled out. Version 2:

@@ -51,6 +51,7 @@ from pokerirl.game.evaluator import (
     _CARD_KEY,
     _CARD_SUIT,
     _COMBO_KEY,
+    _COMBO_OF,
     _COMBOS,
     _PAIR_BITS,
     _PAIR_COMBO,
@@ -87,26 +88,21 @@ _WAYS = _WAYS.astype(np.int16)
 _SAME_RANK = (_COMBOS[:, 0] == _COMBOS[:, 1]).astype(np.int64)
 _WAYS_FLAT = _WAYS.reshape(-1)  # [2 * (5 * a + b) + same]: one 1-D gather
 _PAIR_CARD_BITS = (np.int64(1) << PAIRS[:, 0]) | (np.int64(1) << PAIRS[:, 1])
-# _COMPLETING[c][s]: the pairs that make a flush of suit s beside c board cards of it (both
-# cards of the suit beside three, one beside four): (4, 78) and (4, 585).
-_SUITED_IN_PAIR = (_SUIT[PAIRS][:, :, None] == np.arange(4)).sum(axis=1)  # (1326, 4)
-_COMPLETING = {
-    count: np.array([np.flatnonzero(_SUITED_IN_PAIR[:, s] >= 5 - count) for s in range(4)])
-    for count in (3, 4)
-}
+# The pairs of two cards of suit s (4, 78): they alone complete its flush beside three of it.
+_TWO_SUITED = np.array([np.flatnonzero((_SUIT[PAIRS] == s).all(axis=1)) for s in range(4)])
 # Pairs holding each card: _CARD_PAIRS[c] (51 pair numbers); a pair's place in its cards' rows.
 _CARD_PAIRS = np.array([np.flatnonzero(CLASH[c]) for c in range(NUM_CARDS)])  # (52, 51)
 _PLACE = np.zeros((NUM_PAIRS, 2), dtype=np.int64)  # flat index card * 51 + place
-# Per suit, the completing pairs' card bits, rank bits of the suit and rank combinations:
-# _COMPLETING_BITS[count] = three (4, k) tables read by the board's suit.
-_COMPLETING_BITS = {
-    count: (
-        _PAIR_CARD_BITS[pairs],
-        np.take_along_axis(_PAIR_BITS, pairs, axis=1),
-        _PAIR_COMBO[pairs],
-    )
-    for count, pairs in _COMPLETING.items()
-}
+# Per suit, those pairs' card bits, rank bits of the suit and rank combinations: three (4, 78)
+# tables read by the board's suit.
+_TWO_SUITED_BITS = (
+    _PAIR_CARD_BITS[_TWO_SUITED],
+    np.take_along_axis(_PAIR_BITS, _TWO_SUITED, axis=1),
+    _PAIR_COMBO[_TWO_SUITED],
+)
+# _CARD_OF[13 * s + r]: the card of suit s and rank r (2 .. A as 0 .. 12); a rank's bit.
+_CARD_OF = (np.arange(4)[:, None] * NUM_RANKS + (np.arange(NUM_RANKS) + 1) % NUM_RANKS).reshape(-1)
+_RANK_BITS = (1 << np.arange(NUM_RANKS)).astype(np.int32)
 for _c in range(NUM_CARDS):
     for _k, _p in enumerate(_CARD_PAIRS[_c]):
         _PLACE[_p, int(PAIRS[_p, 1] == _c)] = _c * (NUM_CARDS - 1) + _k
@@ -159,8 +155,10 @@ def river_counts(boards: np.ndarray) -> np.ndarray:
     card_equal = card_equal.reshape(len(boards), -1)
     # Below counts include the pairs that hit the board (strength -1): 245 of all pairs, and
     # 5 of a card's 51 when the card itself misses the board.
-    wins = (below - (NUM_PAIRS - 1_081)) - (card_below[:, _PLACE[:, 0]] - 5) - (
-        card_below[:, _PLACE[:, 1]] - 5
+    wins = (
+        (below - (NUM_PAIRS - 1_081))
+        - (card_below[:, _PLACE[:, 0]] - 5)
+        - (card_below[:, _PLACE[:, 1]] - 5)
     )
     ties = equal - card_equal[:, _PLACE[:, 0]] - card_equal[:, _PLACE[:, 1]] + 1
     return np.where(clash, 0, 2 * wins + ties).astype(np.int32)
@@ -250,28 +248,61 @@ def _flush_corrections(
 ) -> np.ndarray:
     """What :func:`_plain_counts` misses on boards (``known[:, 2:]``) with ``most`` (< 5) cards
     of ``suit``: the unseen pairs that complete the board's suit hold a flush, not their
-    non-flush strength (``combo``)."""
+    non-flush strength (``combo``).
+
+    Beside three of the suit, the pairs of two cards of it complete it (78, pair by pair).
+    Beside four, so do the pairs of one card of it and one of another suit (507): those are
+    counted by ranks (13 x 13, :func:`_one_suited_gains`), since the flush depends on the
+    suited card's rank alone and the non-flush strength on the two ranks."""
     found = np.zeros(len(known), dtype=np.int64)
-    board = known[:, 2:]
-    for count in (3, 4):
-        at = np.flatnonzero(most == count)
-        if at.size == 0:
-            continue
-        s = suit[at]
-        card_bits, suit_bits, combos = _COMPLETING_BITS[count]
-        known_bits = np.bitwise_or.reduce(np.int64(1) << known[at], axis=1)
-        unseen = (card_bits[s] & known_bits[:, None]) == 0
-        board_bits = np.where(_SUIT[board[at]] == s[:, None], _CARD_BIT[board[at]], 0)
-        bits = board_bits.sum(axis=1, dtype=np.int32)[:, None] | suit_bits[s]
-        # No quads or full house fit beside a flush in seven cards: the flush is the hand.
-        flush = _dense().flush[bits]
-        plain = combo.reshape(-1)[(at * combo.shape[1])[:, None] + combos[s]]  # one gather
-        me = mine[at, None]
-        # 2 x wins + ties with the flush, less those counted with the plain strength.
-        gained = ((flush < me).view(np.int8) + (flush <= me).view(np.int8)
-                  - (plain < me).view(np.int8) - (plain <= me).view(np.int8))  # fmt: skip
-        found[at] = np.where(unseen, gained, 0).sum(axis=1, dtype=np.int64)
+    at = np.flatnonzero(most >= 3)
+    if at.size == 0:
+        return found
+    s = suit[at]
+    board = known[at, 2:]
+    board_bits = np.where(_SUIT[board] == s[:, None], _CARD_BIT[board], 0)
+    board_bits = board_bits.sum(axis=1, dtype=np.int32)
+    card_bits, suit_bits, combos = _TWO_SUITED_BITS
+    known_bits = np.bitwise_or.reduce(np.int64(1) << known[at], axis=1)
+    unseen = (card_bits[s] & known_bits[:, None]) == 0
+    # No quads or full house fit beside a flush in seven cards: the flush is the hand.
+    flush = _dense().flush[board_bits[:, None] | suit_bits[s]]
+    plain = combo.reshape(-1)[(at * combo.shape[1])[:, None] + combos[s]]  # one gather
+    me = mine[at, None]
+    gained = np.where(unseen, _score(flush, me) - _score(plain, me), 0)
+    found[at] = gained.sum(axis=1, dtype=np.int64)
+    four = np.flatnonzero(most[at] == 4)
+    if four.size:
+        rows = at[four]
+        found[rows] += _one_suited_gains(known[rows], mine[rows], combo[rows], s[four],
+                                         board_bits[four])  # fmt: skip
     return found
+
+
+def _score(strength: np.ndarray, me: np.ndarray) -> np.ndarray:
+    """``2 x wins + ties`` (int8) of a hand of strength ``me`` against ``strength``."""
+    return (strength < me).view(np.int8) + (strength <= me).view(np.int8)
+
+
+def _one_suited_gains(
+    known: np.ndarray, mine: np.ndarray, combo: np.ndarray, suit: np.ndarray,
+    board_bits: np.ndarray,
+) -> np.ndarray:  # fmt: skip
+    """The flush correction of the unseen pairs of one card of ``suit`` (rank a) and one of
+    another suit (rank b), beside four of the suit on the board (rank bits ``board_bits``):
+    the flush of rank a against the non-flush strength of (a, b), times the unseen such
+    pairs (a unseen in the suit, times the unseen cards of rank b outside it)."""
+    m = len(known)
+    seen = np.zeros((m, NUM_CARDS), dtype=bool)
+    seen[np.arange(m)[:, None], known] = True
+    by_rank = seen[:, _CARD_OF].reshape(m, 4, NUM_RANKS)  # (m, suit, rank)
+    suited = ~by_rank[np.arange(m), suit]  # (m, 13): rank a unseen in the suit
+    others = (3 - by_rank.sum(axis=1) + ~suited).astype(np.int64)  # unseen outside the suit
+    me = mine[:, None]
+    flush = _score(_dense().flush[board_bits[:, None] | _RANK_BITS], me)  # (m, 13) by a
+    plain = _score(combo[:, _COMBO_OF.reshape(-1)], me).reshape(m, NUM_RANKS, NUM_RANKS)
+    per_a = flush * others.sum(axis=1, keepdims=True) - (plain * others[:, None, :]).sum(axis=2)
+    return np.where(suited, per_a, 0).sum(axis=1, dtype=np.int64)
 
 
 def _pairwise_counts(holes: np.ndarray, boards: np.ndarray) -> np.ndarray:
