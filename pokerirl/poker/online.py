@@ -31,6 +31,7 @@ opponent's numpy generator and the policy's torch generator all come from the ru
 
 from __future__ import annotations
 
+import functools
 import json
 import os
 from collections.abc import Callable, Mapping
@@ -106,9 +107,7 @@ class PokerOnlineSettings:
         if self.rounds < 1 or self.generator_steps < 1 or self.ppo_epochs < 1:
             raise ConfigError("online IRL needs at least 1 round, 1 generator step, 1 PPO epoch")
         if self.opponent not in tuple(Opponent):
-            raise ConfigError(
-                f"unknown opponent {self.opponent!r} (known: {', '.join(Opponent)})"
-            )
+            raise ConfigError(f"unknown opponent {self.opponent!r} (known: {', '.join(Opponent)})")
         if not 0 < self.clip < 1:
             raise ConfigError(f"the PPO clip must lie in (0, 1), got {self.clip}")
 
@@ -174,14 +173,19 @@ class EngineGenerator:
                                          torch.as_tensor(legal))  # fmt: skip
                 actions = torch.multinomial(log_pi.exp(), 1, generator=self.torch_rng)[:, 0]
                 chosen = log_pi.gather(1, actions[:, None])[:, 0]
-                for key, value in (("hand", first + ours), ("obs", obs), ("legal", legal),
-                                   ("action", actions.numpy()), ("log_prob", chosen.numpy())):
+                for key, value in (
+                    ("hand", first + ours),
+                    ("obs", obs),
+                    ("legal", legal),
+                    ("action", actions.numpy()),
+                    ("log_prob", chosen.numpy()),
+                ):
                     parts[key].append(np.asarray(value))  # fmt: skip
                 game.step(actions.numpy(), ours)
             if theirs.size:
                 seen = observe(game, theirs, self.opponent_encoding)
                 legal = game.legal_mask(theirs)
-                cards: Callable[[], np.ndarray] = lambda: turn_cards(game, theirs)  # noqa: B023
+                cards = functools.partial(turn_cards, game, theirs)  # only if it sees them
                 game.step(agent_actions(self.opponent, seen, legal, self.rng, cards), theirs)
         decisions = {k: np.concatenate(v) if v else np.empty(0) for k, v in parts.items()}
         return decisions, game.payoffs[np.arange(hands), mine_seat]
@@ -335,8 +339,8 @@ def train_poker_online(
                 if on_round is not None:
                     on_round(k, line)
 
-            with progress_share(BASELINE_SHARE + (1 - BASELINE_SHARE) * k / runs,
-                                BASELINE_SHARE + (1 - BASELINE_SHARE) * (k + 1) / runs):  # fmt: skip
+            share = (1 - BASELINE_SHARE) / runs
+            with progress_share(BASELINE_SHARE + share * k, BASELINE_SHARE + share * (k + 1)):
                 result = trainer.train(settings.rounds, on_round=write)
             save_run(result, folder, algo=algo, data=data_info, baselines=found)
             plot_curves(result.metrics, folder, baselines=drawn_baselines(found, data))
