@@ -72,7 +72,12 @@ from pokerirl.irl.run import (
 )
 from pokerirl.irl.transitions import Transitions
 from pokerirl.poker.data import read_table
-from pokerirl.poker.train import TABLE_ENCODING, check_destination, write_reward_card
+from pokerirl.poker.train import (
+    TABLE_ENCODING,
+    check_destination,
+    warn_below_bc,
+    write_reward_card,
+)
 from pokerirl.store import staged_folder
 
 NUM_ACTIONS = 4  # call, raise, fold, check
@@ -357,4 +362,6 @@ def train_poker_online(
             summary = summarize(results).to_json()
             write_text(stage / SUMMARY_FILE, json.dumps(summary, indent=2) + "\n")
             plot_bands(summary, stage)
+    for run in results:  # as offline: a reward below its own BC is flagged
+        warn_below_bc(Path(run.out), run.metrics[-1], run.baselines)
     return RunSummary.of(results, out_dir=out, several=several)
