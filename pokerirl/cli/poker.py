@@ -472,12 +472,12 @@ def train(
     # the algorithm's defaults, then the --config file's, then the flags given
     flags = {**irl, **nets}
     settings = settings_from_options(load_config, algo, config_file=config, overrides=flags)
+    online = _online_settings(mode, rounds, generator_steps, opponent, em_rounds=em_rounds,
+                              device=device)  # fmt: skip
     settings_from_options(resolve_device, device)
     encoding = _encoding(encoding)
     if em_rounds and runs > 1:
         raise UsageError("--em-rounds re-imputes with one run's policy: give --runs 1")
-    online = _online_settings(mode, rounds, generator_steps, opponent, em_rounds=em_rounds,
-                              device=device)  # fmt: skip
     execution.pin_threads(threads)
     common: dict[str, Any] = dict(
         algo=algo, config=settings, device=device, progress=not quiet, overwrite=overwrite,
