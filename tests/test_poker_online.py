@@ -130,8 +130,9 @@ def test_the_generator_learns_what_the_reward_pays(table: Path) -> None:
     """A reward paying only for raises: a few rounds of its PPO step raise its raise rate."""
     data = read_table(table)
     _, policy = default_nets(data, config())
-    generator = EngineGenerator(policy=policy, encoding="rlcard",  # type: ignore[arg-type]
-                                settings=replace(SETTINGS, ppo_epochs=8), lr=1e-2, seed=0)  # fmt: skip
+    settings = replace(SETTINGS, ppo_epochs=8)
+    generator = EngineGenerator(policy=policy, encoding="rlcard", settings=settings,  # type: ignore[arg-type]
+                                lr=1e-2, seed=0)  # fmt: skip
 
     def raise_rate() -> float:
         rollout = generator.collect(512)
