@@ -97,6 +97,15 @@ class Opponent(StrEnum):
         return make_agent("tightbot" if self == Opponent.TIGHT else self.value)
 
 
+class Returns(StrEnum):
+    """What the generator's PPO step credits a decision with: ``hand``, the sum of the hand's
+    learned rewards from it on (γ = 1); ``decision``, its own f(s, a) alone (the offline
+    policy step's per-state objective, blind to how long a hand lasts)."""
+
+    HAND = "hand"
+    DECISION = "decision"
+
+
 @dataclass(frozen=True, kw_only=True)
 class PokerOnlineSettings:
     """The generator's budget and update: ``rounds`` of ``generator_steps`` decisions against
@@ -107,12 +116,15 @@ class PokerOnlineSettings:
     opponent: str = Opponent.RANDOM
     ppo_epochs: int = 4
     clip: float = 0.2
+    returns: str = Returns.HAND
 
     def __post_init__(self) -> None:
         if self.rounds < 1 or self.generator_steps < 1 or self.ppo_epochs < 1:
             raise ConfigError("online IRL needs at least 1 round, 1 generator step, 1 PPO epoch")
         if self.opponent not in tuple(Opponent):
             raise ConfigError(f"unknown opponent {self.opponent!r} (known: {', '.join(Opponent)})")
+        if self.returns not in tuple(Returns):
+            raise ConfigError(f"unknown returns {self.returns!r} (known: {', '.join(Returns)})")
         if not 0 < self.clip < 1:
             raise ConfigError(f"the PPO clip must lie in (0, 1), got {self.clip}")
 
@@ -120,7 +132,7 @@ class PokerOnlineSettings:
         """What a run's ``config.json`` says of its generator."""
         return {"rounds": self.rounds, "generator_steps": self.generator_steps,
                 "opponent": str(self.opponent), "ppo_epochs": self.ppo_epochs,
-                "clip": self.clip}  # fmt: skip
+                "clip": self.clip, "returns": str(self.returns)}  # fmt: skip
 
 
 def _stream(seed: int, word: int) -> np.random.Generator:
@@ -232,7 +244,8 @@ class EngineGenerator:
     def learn(self, rollout: Rollout, rewards: Tensor) -> Mapping[str, float]:
         data = rollout.transitions
         assert data.dones is not None and data.legal_mask is not None  # collect sets both
-        advantages = standardized(hand_returns(rewards, data.dones))
+        by_hand = self.settings.returns == Returns.HAND
+        advantages = standardized(hand_returns(rewards, data.dones) if by_hand else rewards)
         old = rollout.log_probs
         clip = self.settings.clip
         for _ in range(self.settings.ppo_epochs):
@@ -302,10 +315,10 @@ def train_poker_online(
     progress: bool = True,
     on_round: Callable[[int, EpochMetrics], None] | None = None,
 ) -> RunSummary:
-    """``runs`` online runs of ``algo`` (seeds ``config.seed + k``, one split by
-    ``config.seed`` as offline) on the decision table ``table`` in ``encoding``, into
-    ``out`` as offline ``train`` writes it (one run: ``out`` itself); ``on_round`` gets each
-    run's index and round line."""
+    """``runs`` online runs of ``algo`` (seeds ``config.seed + k``, each its own split and
+    baselines by its seed, as offline ``train --runs``) on the decision table ``table`` in
+    ``encoding``, into ``out`` as offline ``train`` writes it (one run: ``out`` itself);
+    ``on_round`` gets each run's index and round line."""
     if runs < 1:
         raise ConfigError(f"runs must be at least 1, got {runs}")
     config = config or AIRLConfig.for_algo(algo)
@@ -313,22 +326,23 @@ def train_poker_online(
     out = Path(out)
     check_destination(out, overwrite=overwrite)
     data = read_table(table, encoding=encoding)
-    train_data, val_data, val_groups = data.split(val_fraction=config.val_fraction,
-                                                  seed=config.seed)  # fmt: skip
-    with progress_share(0.0, BASELINE_SHARE):
-        found = run_baselines(train_data, val_data, config=config, progress=progress)
-    data_info = {
-        **data_record(data, train_data, val_data, path=table),
-        "encoding": get_encoding(encoding).spec,
-        "mode": IRLMode.ONLINE.value,
-        "generator": settings.record(),
-    }
     several = runs > 1
     results = []
     with staged_folder(out) as stage:  # the store's: a kill leaves out as it was
         for k in range(runs):
             folder = stage / f"run-{k}" if several else stage
             run_config = replace(config, seed=config.seed + k)
+            # As offline train's runs: each its own split and baselines, by its own seed.
+            train_data, val_data, val_groups = data.split(val_fraction=config.val_fraction,
+                                                          seed=run_config.seed)  # fmt: skip
+            with progress_share(k / runs, (k + BASELINE_SHARE) / runs):
+                found = run_baselines(train_data, val_data, config=run_config, progress=progress)
+            data_info = {
+                **data_record(data, train_data, val_data, path=table),
+                "encoding": get_encoding(encoding).spec,
+                "mode": IRLMode.ONLINE.value,
+                "generator": settings.record(),
+            }
             log = begin_run(folder, val_groups=val_groups, baselines=found)
             reward, policy = default_nets(train_data, config, run_config.seed)
             assert isinstance(policy, DiscretePolicy)  # a table's actions are discrete
@@ -344,8 +358,7 @@ def train_poker_online(
                 if on_round is not None:
                     on_round(k, line)
 
-            share = (1 - BASELINE_SHARE) / runs
-            with progress_share(BASELINE_SHARE + share * k, BASELINE_SHARE + share * (k + 1)):
+            with progress_share((k + BASELINE_SHARE) / runs, (k + 1) / runs):
                 result = trainer.train(settings.rounds, on_round=write)
             save_run(result, folder, algo=algo, data=data_info, baselines=found)
             plot_curves(result.metrics, folder, baselines=drawn_baselines(found, data))
