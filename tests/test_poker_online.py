@@ -126,11 +126,12 @@ def test_hand_returns_sum_the_rest_of_the_hand() -> None:
     assert hand_returns(rewards, dones).tolist() == [3.0, 2.0, 12.0, 8.0]
 
 
-def test_the_generator_learns_what_the_reward_pays(table: Path) -> None:
+@pytest.mark.parametrize("returns", ["hand", "decision"])
+def test_the_generator_learns_what_the_reward_pays(table: Path, returns: str) -> None:
     """A reward paying only for raises: a few rounds of its PPO step raise its raise rate."""
     data = read_table(table)
     _, policy = default_nets(data, config())
-    settings = replace(SETTINGS, ppo_epochs=8)
+    settings = replace(SETTINGS, ppo_epochs=8, returns=returns)
     generator = EngineGenerator(policy=policy, encoding="rlcard", settings=settings,  # type: ignore[arg-type]
                                 lr=1e-2, seed=0)  # fmt: skip
 
@@ -177,5 +178,7 @@ def test_the_online_command_writes_a_run(table: Path, tmp_path: Path) -> None:
 def test_unknown_settings_are_refused() -> None:
     with pytest.raises(ValueError, match="opponent"):
         PokerOnlineSettings(opponent="nobody")
+    with pytest.raises(ValueError, match="returns"):
+        PokerOnlineSettings(returns="episode")
     with pytest.raises(ValueError, match="round"):
         PokerOnlineSettings(rounds=0)
