@@ -452,8 +452,9 @@ def train(
         help="Online: the policy's decisions on the engine per round (default 2048).",
     ),
     opponent: str | None = typer.Option(
-        None, "--opponent", metavar="random|call|raise|tight",
-        help="Online: the fixed opponent the policy plays (default random; tight: TightBot).",
+        None, "--opponent", metavar="random|call|raise|tight|loose",
+        help="Online: the fixed opponent the policy plays (default random; tight, loose: the "
+        "synthetic months' TightBot, LooseBot).",
     ),
 ) -> None:
     """Learn a reward function with AIRL, Hybrid-AIRL or GAIL from an expert decision table.

@@ -91,10 +91,13 @@ class Opponent(StrEnum):
     RANDOM = "random"
     CALL = "call"
     RAISE = "raise"
-    TIGHT = "tight"  # the synthetic months' TightBot, with its noise
+    TIGHT = "tight"  # the synthetic months' bots, with their noise: TightBot, LooseBot
+    LOOSE = "loose"
 
     def agent(self) -> Agent:
-        return make_agent("tightbot" if self == Opponent.TIGHT else self.value)
+        return make_agent(
+            f"{self.value}bot" if self in (Opponent.TIGHT, Opponent.LOOSE) else self.value
+        )
 
 
 class Returns(StrEnum):
