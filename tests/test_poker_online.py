@@ -151,6 +151,7 @@ ERRORS = {
     "bad opponent": ("--mode online --opponent nope", "--opponent"),
     "em rounds online": ("--mode online --em-rounds 1", "--em-rounds"),
     "device online": ("--mode online --device cuda", "--device"),
+    "jobs online": ("--mode online --jobs 2", "--jobs"),
 }
 
 

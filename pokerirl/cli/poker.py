@@ -473,8 +473,9 @@ def train(
     # the algorithm's defaults, then the --config file's, then the flags given
     flags = {**irl, **nets}
     settings = settings_from_options(load_config, algo, config_file=config, overrides=flags)
-    online = _online_settings(mode, rounds, generator_steps, opponent, em_rounds=em_rounds,
-                              device=device)  # fmt: skip
+    offline_only = {"--em-rounds": em_rounds > 0, "--device": device != "cpu",
+                    "--jobs": jobs > 1, "--ray": ray is not None}  # fmt: skip
+    online = _online_settings(mode, rounds, generator_steps, opponent, offline_only)
     settings_from_options(resolve_device, device)
     encoding = _encoding(encoding)
     if em_rounds and runs > 1:
@@ -495,11 +496,11 @@ def train(
 
 
 def _online_settings(
-    mode: str, rounds: int | None, steps: int | None, opponent: str | None, *, em_rounds: int,
-    device: str,
+    mode: str, rounds: int | None, steps: int | None, opponent: str | None,
+    offline_only: Mapping[str, bool],
 ) -> Any:
     """``train --mode``: None offline, else the online settings (a usage error for an
-    online-only option offline, or an offline-only one online)."""
+    online-only option offline, or an offline-only one given online: ``offline_only``)."""
     if mode not in tuple(IRLMode):
         raise UsageError(f"--mode must be one of {', '.join(IRLMode)}, got {mode!r}")
     options = {"--rounds": rounds, "--generator-steps": steps, "--opponent": opponent}
@@ -508,9 +509,9 @@ def _online_settings(
         if given:
             raise UsageError(f"{given[0]} applies to --mode online only")
         return None
-    if em_rounds or device != "cpu":
-        offline_only = "--em-rounds" if em_rounds else "--device"
-        raise UsageError(f"{offline_only} applies to --mode offline only")
+    refused = [name for name, given_online in offline_only.items() if given_online]
+    if refused:  # online runs train one after another, on the CPU, without EM
+        raise UsageError(f"{refused[0]} applies to --mode offline only")
     from pokerirl.poker.online import Opponent, PokerOnlineSettings
 
     if opponent is not None and opponent not in tuple(Opponent):
