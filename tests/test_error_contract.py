@@ -337,9 +337,9 @@ def test_help_shows_the_config_dataclass_default(
     assert re.search(rf"\[default: {default}[];]", entry), entry  # [default: 50; x>=1]
 
 
-# `gym irl --mode online` (issue 43): a bad mode or an online-only option without it is a
-# usage error; online sizes the library refuses are exit 1; a command that cannot learn
-# online (poker's train, the gym study) has no --mode and refuses it in one line.
+# `gym irl --mode online` and poker's `train --mode online` (issue 43): a bad mode or an
+# online-only option without it is a usage error; online sizes the library refuses are exit 1;
+# a command that cannot learn online (the studies) has no --mode and refuses it in one line.
 ONLINE_MODE: dict[str, tuple[str, int]] = {
     "bad mode": ("gym irl MountainCar-v0 --out {O} --mode nope", 2),
     "online option, offline mode": ("gym irl MountainCar-v0 --out {O} --rounds 3", 2),
@@ -347,7 +347,10 @@ ONLINE_MODE: dict[str, tuple[str, int]] = {
         "gym irl MountainCar-v0 --out {O} --mode online --generator-steps 3 --generator-envs 2",
         1,
     ),
-    "poker train": ("train {G} --out {O} --mode online", 2),
+    "poker train bad mode": ("train {G} --out {O} --mode nope", 2),
+    "poker online option, offline mode": ("train {G} --out {O} --generator-steps 3", 2),
+    "poker online, an offline option": ("train {G} --out {O} --mode online --em-rounds 1", 2),
+    "poker study": ("study {G} --out {O} --mode online", 2),
     "gym study": ("gym study MountainCar-v0 --out {O} --mode online", 2),
 }
 

@@ -29,10 +29,11 @@ from pokerirl.cli.options import (
 )
 from pokerirl.cli.seeds import MAX_SEEDS, SEED_OPTION, seed_list
 from pokerirl.errors import InputError, UsageError
-from pokerirl.irl.config import AIRLConfig, Algo  # torch-free
+from pokerirl.irl.config import MAX_EPOCHS, AIRLConfig, Algo, IRLMode  # torch-free
 from pokerirl.jsonio import read_json
 from pokerirl.poker.folds import FoldsMode
 from pokerirl.poker.rewards import Transform
+from pokerirl.settings import MAX_STEPS
 
 if TYPE_CHECKING:
     from pokerirl.agents.train import MetricsLine
@@ -440,12 +441,31 @@ def train(
         "(OUT/round-<r>, OUT/table-<r>.parquet, OUT/em.json); one run only.",
     ),
     log_dir: Path | None = LOG_DIR,
+    mode: str = typer.Option(
+        IRLMode.OFFLINE, "--mode", metavar=choices(IRLMode),
+        help="offline: the policy acts at the expert's states (the paper's); online: it plays "
+        "hands on the engine against --opponent on the current learned reward.",
+    ),
+    rounds: int | None = typer.Option(
+        None, "--rounds", min=1, max=MAX_EPOCHS,
+        help="Online: rounds of generator hands, discriminator pass, policy update (default 20).",
+    ),
+    generator_steps: int | None = typer.Option(
+        None, "--generator-steps", min=1, max=MAX_STEPS,
+        help="Online: the policy's decisions on the engine per round (default 2048).",
+    ),
+    opponent: str | None = typer.Option(
+        None, "--opponent", metavar="random|call|raise|tight|loose",
+        help="Online: the fixed opponent the policy plays (default random; tight, loose: the "
+        "synthetic months' TightBot, LooseBot).",
+    ),
 ) -> None:
     """Learn a reward function with AIRL, Hybrid-AIRL or GAIL from an expert decision table.
 
     Writes OUT/reward.pt, policy.pt, config.json, timings.json, metrics.jsonl,
     baselines.json, split.json and plots; with --runs N, OUT/run-<k> and OUT/summary.json.
     A finished OUT is replaced only with --overwrite, and only once the new run is complete.
+    With --mode online the same folder, its config.json saying data.mode = online.
     """
     from pokerirl.irl import load_config
     from pokerirl.irl.airl import resolve_device
@@ -456,6 +476,9 @@ def train(
     # the algorithm's defaults, then the --config file's, then the flags given
     flags = {**irl, **nets}
     settings = settings_from_options(load_config, algo, config_file=config, overrides=flags)
+    offline_only = {"--em-rounds": em_rounds > 0, "--device": device != "cpu",
+                    "--jobs": jobs > 1, "--ray": ray is not None}  # fmt: skip
+    online = _online_settings(mode, rounds, generator_steps, opponent, offline_only)
     settings_from_options(resolve_device, device)
     chosen = None if encoding is None else _encoding(encoding)
     if em_rounds and runs > 1:
@@ -467,10 +490,55 @@ def train(
     )
     if em_rounds:
         _echo_em(train_em(table, out, rounds=em_rounds, **common), out, em_rounds)
+    elif online is not None:
+        _echo_runs(algo, _train_online(table, out, runs=runs, online=online, **common))
     else:
         backend = command_backend(jobs, ray)
         _echo_runs(algo, train_runs(table, out, runs=runs, backend=backend, **common))
     write_logs(Path(out), log_dir)
+
+
+def _online_settings(
+    mode: str, rounds: int | None, steps: int | None, opponent: str | None,
+    offline_only: Mapping[str, bool],
+) -> Any:
+    """``train --mode``: None offline, else the online settings (a usage error for an
+    online-only option offline, or an offline-only one given online: ``offline_only``)."""
+    if mode not in tuple(IRLMode):
+        raise UsageError(f"--mode must be one of {', '.join(IRLMode)}, got {mode!r}")
+    options = {"--rounds": rounds, "--generator-steps": steps, "--opponent": opponent}
+    given = [name for name, value in options.items() if value is not None]
+    if mode == IRLMode.OFFLINE:
+        if given:
+            raise UsageError(f"{given[0]} applies to --mode online only")
+        return None
+    refused = [name for name, given_online in offline_only.items() if given_online]
+    if refused:  # online runs train one after another, on the CPU, without EM
+        raise UsageError(f"{refused[0]} applies to --mode offline only")
+    from pokerirl.poker.online import Opponent, PokerOnlineSettings
+
+    if opponent is not None and opponent not in tuple(Opponent):
+        raise UsageError(f"--opponent must be one of {', '.join(Opponent)}, got {opponent!r}")
+    found = PokerOnlineSettings()  # the defaults, each option given replacing its own
+    return PokerOnlineSettings(rounds=rounds or found.rounds, opponent=opponent or found.opponent,
+                               generator_steps=steps or found.generator_steps)  # fmt: skip
+
+
+def _train_online(table: str, out: str, *, online: Any, **kwargs: Any) -> RunSummary:
+    """``train --mode online``: :func:`pokerirl.poker.online.train_poker_online`, a line a
+    round."""
+    from pokerirl.poker.online import train_poker_online
+
+    kwargs.pop("device")  # the engine and the generator run on the CPU
+
+    def line(run: int, metrics: EpochMetrics) -> None:
+        echo(
+            f"run {run} round {metrics.epoch}/{online.rounds}: reward alignment "
+            f"{metrics['val_reward_alignment']:.3f}, disc loss {metrics['disc_loss']:.3f}, "
+            f"generator {metrics['generator_bb_per_hand']:+.2f} bb/hand vs {online.opponent}"
+        )
+
+    return train_poker_online(table, out, settings=online, on_round=line, **kwargs)
 
 
 def _echo_em(report: Mapping[str, Any], out: str, rounds: int) -> None:

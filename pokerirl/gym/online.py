@@ -194,7 +194,8 @@ class PPOGenerator:
         log_probs = torch.as_tensor(buffer.log_probs.reshape(-1), dtype=torch.float32)
         return Rollout(transitions=transitions, log_probs=log_probs)
 
-    def log_prob(self, obs: Tensor, actions: Tensor) -> Tensor:
+    def log_prob(self, obs: Tensor, actions: Tensor, legal_mask: Tensor | None = None) -> Tensor:
+        # Gymnasium's actions are all legal: a mask, if any, is all True.
         distribution: Any = self.model.policy.get_distribution(obs).distribution
         if self.discrete:
             return (actions * torch.log_softmax(distribution.logits, -1)).sum(-1)
@@ -220,7 +221,9 @@ class PPOGenerator:
             "generator_steps": float(model.num_timesteps),
         }
 
-    def imitate(self, obs: Tensor, actions: Tensor, *, weight: float) -> float:
+    def imitate(
+        self, obs: Tensor, actions: Tensor, *, weight: float, legal_mask: Tensor | None = None
+    ) -> float:
         policy = self.model.policy
         loss = -weight * self.log_prob(obs, actions).mean()
         policy.optimizer.zero_grad()

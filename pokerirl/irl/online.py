@@ -65,9 +65,11 @@ class Generator(Protocol):
         """``steps`` environment steps with the current policy."""
         ...
 
-    def log_prob(self, obs: Tensor, actions: Tensor) -> Tensor:
+    def log_prob(self, obs: Tensor, actions: Tensor, legal_mask: Tensor | None = None) -> Tensor:
         """The current policy's log π (B,) of action vectors (B, k) at ``obs`` (B, d):
-        one-hots or simplex points (Σ_k a_k log π_k) for discrete actions, values for a box."""
+        one-hots or simplex points (Σ_k a_k log π_k) for discrete actions, values for a box;
+        π over the legal actions only where ``legal_mask`` (B, k) is given (as the rollout's
+        own log-probs are), so that expert and generator rows are scored alike."""
         ...
 
     def learn(self, rollout: Rollout, rewards: Tensor) -> Mapping[str, float]:
@@ -75,9 +77,11 @@ class Generator(Protocol):
         generator's own metrics."""
         ...
 
-    def imitate(self, obs: Tensor, actions: Tensor, *, weight: float) -> float:
-        """One gradient step on −weight·mean log π(actions|obs) (actions as in
-        :meth:`log_prob`); the loss before the step."""
+    def imitate(
+        self, obs: Tensor, actions: Tensor, *, weight: float, legal_mask: Tensor | None = None
+    ) -> float:
+        """One gradient step on −weight·mean log π(actions|obs) (actions and ``legal_mask``
+        as in :meth:`log_prob`); the loss before the step."""
         ...
 
     def policy_net(self) -> nn.Module:
@@ -158,11 +162,14 @@ class OnlineTrainer:
             rows = perm[b * self.batch : (b + 1) * self.batch]
             picks = torch.randint(len(self.data), (self.batch,), generator=self.rng)
             obs_e, act_e = self.data.obs[picks], self.expert[picks]
-            obs_g, act_g = self.discriminator_inputs(generated.obs[rows], gen_actions[rows])
+            mask_e = None if self.data.legal_mask is None else self.data.legal_mask[picks]
+            mask_g = None if generated.legal_mask is None else generated.legal_mask[rows]
+            obs_g, act_g = self.discriminator_inputs(generated.obs[rows], gen_actions[rows],
+                                                     mask_g)  # fmt: skip
             with torch.no_grad():  # π is the generator's; only f learns here
-                log_pi_e = self.generator.log_prob(obs_e, act_e)
+                log_pi_e = self.generator.log_prob(obs_e, act_e, mask_e)
                 if self.noisy:  # π of the noised action the discriminator sees
-                    log_pi_g = self.generator.log_prob(obs_g, act_g)
+                    log_pi_g = self.generator.log_prob(obs_g, act_g, mask_g)
                 else:  # its own draw's, kept by the rollout (it has not learned since)
                     log_pi_g = rollout.log_probs[rows]
             f_e, f_g = self.reward(obs_e, act_e), self.reward(obs_g, act_g)
@@ -186,7 +193,9 @@ class OnlineTrainer:
                 sums[key] = sums.get(key, 0.0) + float(value.detach())
         return {key: value / max(batches, 1) for key, value in sums.items()}
 
-    def discriminator_inputs(self, obs: Tensor, actions: Tensor) -> tuple[Tensor, Tensor]:
+    def discriminator_inputs(
+        self, obs: Tensor, actions: Tensor, legal_mask: Tensor | None = None
+    ) -> tuple[Tensor, Tensor]:
         """The generator's rows as the discriminator sees them: H-AIRL's noise on the actions
         (σ decaying along the mini-batch, the authors' schedule shuffled), as offline: a
         discrete action's one-hot noised and projected back onto the simplex, a box action
@@ -199,7 +208,7 @@ class OnlineTrainer:
             sigma = sigma[torch.rand(len(sigma), generator=self.rng).argsort()]
         noise = sigma[:, None] * torch.randn(actions.shape, generator=self.rng)
         if self.data.discrete:
-            return obs, project_to_simplex(actions + noise)
+            return obs, project_to_simplex(actions + noise, legal_mask)  # legal ones, as offline
         low = torch.tensor(self.data.action_low)
         high = torch.tensor(self.data.action_high)
         if self.config.noise_form == NoiseForm.AUTHORS:
@@ -215,8 +224,9 @@ class OnlineTrainer:
     def imitate(self) -> float:
         """H-AIRL's supervised term on the generator: one step on an expert mini-batch."""
         picks = torch.randint(len(self.data), (self.batch,), generator=self.rng)
+        mask = None if self.data.legal_mask is None else self.data.legal_mask[picks]
         return self.generator.imitate(
-            self.data.obs[picks], self.expert[picks], weight=self.config.alpha
+            self.data.obs[picks], self.expert[picks], weight=self.config.alpha, legal_mask=mask
         )
 
     # ------------------------------------------------------------------ the loop
