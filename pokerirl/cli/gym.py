@@ -391,12 +391,14 @@ def gym_irl(
 def _online_irl(env: str, data: Path, *, online: Any, **kwargs: Any) -> Any:
     """``gym irl --mode online``: :func:`pokerirl.gym.online.train_gym_online`, a line a round."""
     from pokerirl.gym.online import train_gym_online
+    from pokerirl.irl.metrics import Metric
 
     def line(run: int, metrics: Any) -> None:
         echo(
             f"run {run} round {metrics.epoch}/{online.rounds}: return "
-            f"{metrics['eval_return']:.1f}, disc loss {metrics['disc_loss']:.3f}, D right on "
-            f"expert {metrics['disc_acc_expert']:.2f} / generator {metrics['disc_acc_policy']:.2f}"
+            f"{Metric.EVAL_RETURN.of(metrics):.1f}, disc loss {Metric.DISC_LOSS.of(metrics):.3f}, "
+            f"D right on expert {Metric.DISC_ACC_EXPERT.of(metrics):.2f} / generator "
+            f"{Metric.DISC_ACC_POLICY.of(metrics):.2f}"
         )
 
     return train_gym_online(env, data, online=online, on_round=line, progress=False, **kwargs)

@@ -527,6 +527,7 @@ def _online_settings(
 def _train_online(table: str, out: str, *, online: Any, **kwargs: Any) -> RunSummary:
     """``train --mode online``: :func:`pokerirl.poker.online.train_poker_online`, a line a
     round."""
+    from pokerirl.irl.metrics import Metric
     from pokerirl.poker.online import train_poker_online
 
     kwargs.pop("device")  # the engine and the generator run on the CPU
@@ -534,7 +535,8 @@ def _train_online(table: str, out: str, *, online: Any, **kwargs: Any) -> RunSum
     def line(run: int, metrics: EpochMetrics) -> None:
         echo(
             f"run {run} round {metrics.epoch}/{online.rounds}: reward alignment "
-            f"{metrics['val_reward_alignment']:.3f}, disc loss {metrics['disc_loss']:.3f}, "
+            f"{Metric.VAL_REWARD_ALIGNMENT.of(metrics):.3f}, "
+            f"disc loss {Metric.DISC_LOSS.of(metrics):.3f}, "
             f"generator {metrics['generator_bb_per_hand']:+.2f} bb/hand vs {online.opponent}"
         )
 

@@ -61,6 +61,7 @@ from pokerirl.gym.rewards import learned_reward_env
 from pokerirl.gym.tasks import task
 from pokerirl.irl.airl import default_nets
 from pokerirl.irl.config import IRLMode
+from pokerirl.irl.metrics import Metric
 from pokerirl.irl.nets import ACTIVATIONS, fold_obs_standardization
 from pokerirl.irl.online import OnlineTrainer, Rollout
 from pokerirl.irl.plots import plot_curves
@@ -216,7 +217,7 @@ class PPOGenerator:
         model.train()
         logged = model.logger.name_to_value
         return {
-            "policy_loss": float(logged["train/loss"]),
+            Metric.POLICY_LOSS: float(logged["train/loss"]),
             "policy_entropy": float(-logged["train/entropy_loss"]),
             "generator_steps": float(model.num_timesteps),
         }

@@ -39,6 +39,7 @@ from pokerirl.irl.config import AIRLConfig, NoiseForm, NoiseSchedule
 from pokerirl.irl.discriminators import Discriminator, discriminator_for
 from pokerirl.irl.evaluate import evaluate
 from pokerirl.irl.losses import discriminator_loss, noise_schedule
+from pokerirl.irl.metrics import Metric
 from pokerirl.irl.nets import RewardFamily, project_to_simplex
 from pokerirl.irl.optim import FlatAdam
 from pokerirl.irl.records import EpochCallback, EpochMetrics, EpochRecord
@@ -146,7 +147,7 @@ class OnlineTrainer:
         rewards = self.relabel(rollout)
         metrics.update(self.generator.learn(rollout, rewards))
         if self.config.alpha > 0:
-            metrics["policy_sup_loss"] = self.imitate()
+            metrics[Metric.POLICY_SUP_LOSS] = self.imitate()
         metrics["reward_policy_relabelled"] = float(rewards.mean())
         return metrics
 
@@ -183,11 +184,12 @@ class OnlineTrainer:
             self.reward_opt.step()
             logits = self.discriminator.logits
             step = {
-                "disc_loss": loss, "disc_airl_loss": airl, "disc_env_loss": env_loss,
-                "disc_acc_expert": (logits(f_e, log_pi_e) > 0).float().mean(),
-                "disc_acc_policy": (logits(f_g, log_pi_g) < 0).float().mean(),
-                "reward_expert": f_e.mean(), "reward_policy": f_g.mean(),
-                "reward_gap": f_e.mean() - f_g.mean(),
+                Metric.DISC_LOSS: loss, Metric.DISC_AIRL_LOSS: airl,
+                Metric.DISC_ENV_LOSS: env_loss,
+                Metric.DISC_ACC_EXPERT: (logits(f_e, log_pi_e) > 0).float().mean(),
+                Metric.DISC_ACC_POLICY: (logits(f_g, log_pi_g) < 0).float().mean(),
+                Metric.REWARD_EXPERT: f_e.mean(), Metric.REWARD_POLICY: f_g.mean(),
+                Metric.REWARD_GAP: f_e.mean() - f_g.mean(),
             }  # fmt: skip
             for key, value in step.items():
                 sums[key] = sums.get(key, 0.0) + float(value.detach())

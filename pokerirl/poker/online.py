@@ -53,6 +53,7 @@ from pokerirl.game.engine import LimitHoldemBatch
 from pokerirl.game.match import agent_encoding, observe, turn_cards
 from pokerirl.irl.airl import default_nets
 from pokerirl.irl.config import AIRLConfig, Algo, IRLMode
+from pokerirl.irl.metrics import Metric
 from pokerirl.irl.nets import DiscretePolicy
 from pokerirl.irl.online import OnlineTrainer, Rollout
 from pokerirl.irl.plots import plot_bands, plot_curves
@@ -263,7 +264,7 @@ class EngineGenerator:
             log_pi = self.policy(data.obs, data.legal_mask)
             entropy = -(log_pi.exp() * log_pi.clamp_min(-30)).sum(-1).mean()
         return {
-            "policy_loss": float(loss.detach()),
+            Metric.POLICY_LOSS: float(loss.detach()),
             "policy_entropy": float(entropy),
             "generator_bb_per_hand": float(self.payoffs.mean()) if self.payoffs.size else 0.0,
         }

@@ -62,6 +62,7 @@ def learn(
 
     from pokerirl.execution import pinned_threads
     from pokerirl.irl import AIRLConfig, train
+    from pokerirl.irl.metrics import Metric
 
     algo = Learner.AIRL if learner is Learner.BC else learner
     config = AIRLConfig.for_algo(algo, epochs=epochs, seed=seeds[0])
@@ -79,7 +80,7 @@ def learn(
             reward = None if learner is Learner.BC else reward_table(run.reward, sets)
             found.append(Learned(
                 learner=learner, seed=seed, reward=reward, policy=policy_table(run.policy, sets),
-                val_alignment=float(run.metrics[-1]["val_alignment"]),
+                val_alignment=float(Metric.VAL_ALIGNMENT.of(run.metrics[-1])),
             ))  # fmt: skip
     return found
 
