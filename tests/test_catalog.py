@@ -159,9 +159,11 @@ class Archive(http.server.BaseHTTPRequestHandler):
             type(self).cut = False
             body = body[: len(body) // 2]
             self.close_connection = True
+        # Recorded before the write: once the client has the last byte, the test may read
+        # `served` before this thread would have appended after the write (a race CI hit).
+        type(self).served.append(len(body))
         self.wfile.write(body)
         self.wfile.flush()
-        type(self).served.append(len(body))
 
     def log_message(self, *_: object) -> None:  # quiet
         pass
