@@ -59,18 +59,16 @@ from pokerirl.gym.presets import GENERIC_PPO, IRLSettings, PPOSettings
 from pokerirl.gym.quality import has_true_reward, write_reward_quality
 from pokerirl.gym.rewards import learned_reward_env
 from pokerirl.gym.tasks import task
-from pokerirl.irl.airl import default_nets
 from pokerirl.irl.config import IRLMode
 from pokerirl.irl.metrics import Metric
 from pokerirl.irl.nets import ACTIVATIONS, fold_obs_standardization
-from pokerirl.irl.online import OnlineTrainer, Rollout
+from pokerirl.irl.online import Rollout, train_online_run
 from pokerirl.irl.plots import plot_curves
 from pokerirl.irl.records import EpochMetrics
 from pokerirl.irl.run import (
     BASELINE_SHARE,
     ObsMap,
     RunResult,
-    begin_run,
     data_record,
     drawn_baselines,
     run_baselines,
@@ -412,28 +410,23 @@ def train_gym_online(
         for k in range(runs):
             run_seed = seed + k
             folder = stage / f"run-{k}"
-            log = begin_run(folder, val_groups=val_groups, baselines=found)
-            reward, policy = default_nets(train_data, config, run_seed)
-            run_config = replace(config, seed=run_seed)
-            generator = PPOGenerator(
-                env_id=env_id, reward=reward, policy=policy, config_activation=config.activation,
+            make_generator = functools.partial(
+                PPOGenerator, env_id=env_id, config_activation=config.activation,
                 policy_hidden=tuple(config.policy_hidden), shift=shift, scale=scale,
                 settings=online, seed=run_seed,
             )  # fmt: skip
-            trainer = OnlineTrainer(
-                demonstrations=train_data, validation=val_data, generator=generator,
-                reward=reward, config=run_config, generator_steps=online.generator_steps,
-            )  # fmt: skip
-
-            def write(line: EpochMetrics, k: int = k, log: Any = log) -> None:
-                log.write(line)
-                if on_round is not None:
-                    on_round(k, line)
-
             start, end = BASELINE_SHARE, TRAINED_SHARE
             with progress_share(start + (end - start) * k / runs,
                                 start + (end - start) * (k + 1) / runs):  # fmt: skip
-                result = trainer.train(online.rounds, on_round=write, callback=env_returns)
+                result = train_online_run(
+                    folder, demonstrations=train_data, validation=val_data,
+                    val_groups=val_groups, baselines=found,
+                    config=replace(config, seed=run_seed),
+                    make_generator=make_generator,
+                    rounds=online.rounds, generator_steps=online.generator_steps,
+                    on_round=None if on_round is None else functools.partial(on_round, k),
+                    callback=env_returns,
+                )  # fmt: skip
             fold_obs_standardization(result.reward, shift, scale)
             fold_obs_standardization(result.policy, shift, scale)
             save_run(result, folder, algo=algo, data=data_info, baselines=found)

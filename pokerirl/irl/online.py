@@ -26,9 +26,10 @@ four methods. Seeded: the discriminator's shuffles and noise come from one
 from __future__ import annotations
 
 import time
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, replace
-from typing import Protocol, runtime_checkable
+from pathlib import Path
+from typing import Any, Protocol, runtime_checkable
 
 import torch
 from torch import Tensor, nn
@@ -277,3 +278,41 @@ class OnlineTrainer:
             unit_progress(number, rounds)
         self.reward.eval()
         return result
+
+
+def train_online_run(
+    folder: Path,
+    *,
+    demonstrations: Transitions,
+    validation: Transitions,
+    val_groups: Sequence[Any],
+    baselines: Mapping[str, float],
+    config: AIRLConfig,
+    make_generator: Callable[..., Generator],
+    rounds: int,
+    generator_steps: int,
+    on_round: Callable[[EpochMetrics], None] | None = None,
+    callback: EpochCallback | None = None,
+) -> TrainResult:
+    """One online run into ``folder``, as both online commands train theirs: the folder begun
+    (split, baselines, a live ``metrics.jsonl``), the default nets from ``config.seed``, the
+    generator ``make_generator(reward=, policy=)`` makes of them, ``rounds`` rounds. The caller
+    saves the result (:func:`~pokerirl.irl.run.save_run`) after what it adds (a fold of the
+    observations' map)."""
+    from pokerirl.irl.airl import default_nets
+    from pokerirl.irl.run import begin_run
+
+    log = begin_run(folder, val_groups=val_groups, baselines=baselines)
+    reward, policy = default_nets(demonstrations, config, config.seed)
+    trainer = OnlineTrainer(
+        demonstrations=demonstrations, validation=validation,
+        generator=make_generator(reward=reward, policy=policy), reward=reward, config=config,
+        generator_steps=generator_steps,
+    )  # fmt: skip
+
+    def write(line: EpochMetrics) -> None:
+        log.write(line)
+        if on_round is not None:
+            on_round(line)
+
+    return trainer.train(rounds, on_round=write, callback=callback)

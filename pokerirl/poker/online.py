@@ -40,7 +40,7 @@ from pathlib import Path
 
 import numpy as np
 import torch
-from torch import Tensor
+from torch import Tensor, nn
 
 from pokerirl.atomic import write_text
 from pokerirl.datasets.decisions import TABLE_ENCODING
@@ -51,20 +51,17 @@ from pokerirl.game.deals import deal_cards
 from pokerirl.game.encodings import Encoding, get_encoding
 from pokerirl.game.engine import LimitHoldemBatch
 from pokerirl.game.match import agent_encoding, observe, turn_cards
-from pokerirl.irl.airl import default_nets
 from pokerirl.irl.config import AIRLConfig, Algo, IRLMode
 from pokerirl.irl.metrics import Metric
 from pokerirl.irl.nets import DiscretePolicy
-from pokerirl.irl.online import OnlineTrainer, Rollout
+from pokerirl.irl.online import Rollout, train_online_run
 from pokerirl.irl.plots import plot_bands, plot_curves
 from pokerirl.irl.records import EpochMetrics
 from pokerirl.irl.run import (
     BASELINE_SHARE,
     SUMMARY_FILE,
-    MetricsLog,
     RunResult,
     RunSummary,
-    begin_run,
     data_record,
     drawn_baselines,
     run_baselines,
@@ -349,23 +346,21 @@ def train_poker_online(
                 "mode": IRLMode.ONLINE.value,
                 "generator": settings.record(),
             }
-            log = begin_run(folder, val_groups=val_groups, baselines=found)
-            reward, policy = default_nets(train_data, config, run_config.seed)
-            assert isinstance(policy, DiscretePolicy)  # a table's actions are discrete
-            generator = EngineGenerator(policy=policy, encoding=encoding, settings=settings,
-                                        lr=config.policy_lr, seed=run_config.seed)  # fmt: skip
-            trainer = OnlineTrainer(
-                demonstrations=train_data, validation=val_data, generator=generator,
-                reward=reward, config=run_config, generator_steps=settings.generator_steps,
-            )  # fmt: skip
-
-            def write(line: EpochMetrics, k: int = k, log: MetricsLog = log) -> None:
-                log.write(line)
-                if on_round is not None:
-                    on_round(k, line)
+            def make_generator(
+                reward: nn.Module, policy: nn.Module, seed: int = run_config.seed
+            ) -> EngineGenerator:
+                assert isinstance(policy, DiscretePolicy)  # a table's actions are discrete
+                return EngineGenerator(policy=policy, encoding=encoding, settings=settings,
+                                       lr=config.policy_lr, seed=seed)  # fmt: skip
 
             with progress_share((k + BASELINE_SHARE) / runs, (k + 1) / runs):
-                result = trainer.train(settings.rounds, on_round=write)
+                result = train_online_run(
+                    folder, demonstrations=train_data, validation=val_data,
+                    val_groups=val_groups, baselines=found, config=run_config,
+                    make_generator=make_generator, rounds=settings.rounds,
+                    generator_steps=settings.generator_steps,
+                    on_round=None if on_round is None else functools.partial(on_round, k),
+                )  # fmt: skip
             save_run(result, folder, algo=algo, data=data_info, baselines=found)
             plot_curves(result.metrics, folder, baselines=drawn_baselines(found, data))
             write_reward_card(folder, table)
