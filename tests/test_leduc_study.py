@@ -1,6 +1,6 @@
 """The Leduc pipeline: the tabular agent (pokerirl/agents/leduc_q.py) learns what its reward
-asks against a fixed strategy, and the smoke study (pokerirl/studies/leduc/) writes its
-report and reproduces its bytes."""
+asks against a fixed strategy, and the smoke study (pokerirl/studies/leduc/, DQN agents)
+writes its report and reproduces its bytes (the DQN itself: tests/test_leduc_dqn.py)."""
 
 from __future__ import annotations
 
@@ -68,6 +68,7 @@ def test_the_smoke_study_writes_its_report_and_reproduces_it(expert: Path, tmp_p
     assert set(report["rl"]) == {"sparse", "airl", "hairl", "gail"}
     assert report["learners"]["hairl"]["summary"]["policy_agreement.reached"]["n"] == 2
     assert report["rl"]["sparse"]["summary"]["ev_vs_sparse"]["mean"] == 0  # itself
+    assert report["settings"]["rl"] == report["rl_agent"]["kind"] == "dqn"  # the default
     assert (outs[0] / "report.md").read_text().startswith("# Leduc study")
     # A rerun resumes: nothing is trained again, the report is the same.
     result = CliRunner().invoke(app, ["leduc", "study", "--preset", "smoke", "--out",

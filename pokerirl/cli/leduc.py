@@ -159,6 +159,7 @@ class StudyPreset(StrEnum):
     """The Leduc study's presets (pokerirl/studies/leduc/study.py)."""
 
     QUICK = "quick"
+    WIDE = "wide"
     SMOKE = "smoke"
 
 
@@ -181,7 +182,8 @@ def study(
     preset: StudyPreset = typer.Option(
         StudyPreset.QUICK, "--preset", metavar=PRESET_CHOICES,
         help="quick: 10,000 expert hands, 2 IRL runs of 20 epochs per learner, 4 RL seeds; "
-             "smoke: seconds, numbers meaningless.",
+             "wide: the same with 5 IRL runs and 10 RL seeds; smoke: seconds, numbers "
+             "meaningless.",
     ),
     rl: StudyRL = typer.Option(
         StudyRL.DQN, "--rl", metavar=RL_CHOICES,

@@ -77,15 +77,18 @@ class LeducStudyConfig:
 
 
 # quick: the poker study's quick IRL (2 runs per algorithm, 20 epochs, 4 agent seeds: two
-# per IRL run) on 10,000 expert hands (~35,000 decisions); smoke: seconds, numbers meaningless.
+# per IRL run) on 10,000 expert hands (~35,000 decisions); wide: quick's sizes with 5 IRL runs
+# and 10 agent seeds, for the spreads; smoke: seconds, numbers meaningless.
 PRESETS = {
     "quick": LeducStudyConfig(preset="quick", cfr_iterations=1000, hands=10_000, runs=2,
                               epochs=20, rl_seeds=(0, 1, 2, 3), rl_hands=100_000),
+    "wide": LeducStudyConfig(preset="wide", cfr_iterations=1000, hands=10_000, runs=5,
+                             epochs=20, rl_seeds=tuple(range(10)), rl_hands=100_000),
     "smoke": LeducStudyConfig(preset="smoke", cfr_iterations=20, hands=200, runs=2, epochs=1,
                               rl_seeds=(0, 1), rl_hands=2_000),
 }  # fmt: skip
 # The tabular learner's hands per agent (samples are cheap, and it needs many: one cell each).
-TABULAR_HANDS = {"quick": 500_000, "smoke": 2_000}
+TABULAR_HANDS = {"quick": 500_000, "wide": 500_000, "smoke": 2_000}
 
 
 def preset(name: str, *, rules: str = RuleSet.RLCARD, rl: str = RLKind.DQN) -> LeducStudyConfig:
@@ -416,8 +419,9 @@ def verdict(report: dict[str, Any]) -> str:
         f"on a learned reward score {span(vs_expert, '+.0f')} milli-chips per hand against it, "
         f"agents trained on the chips themselves {sparse:+.0f} (a best response to the expert: "
         f"{expert:+.1f}); "
-        + (f"the {', '.join(better)} reward(s) did better than the sparse one against "
-           "the expert" if better else "no learned reward did better than the sparse one")
+        + (f"the {', '.join(better)} reward(s) did better in the mean than the sparse one "
+           "against the expert (the tables give the spreads)" if better
+           else "no learned reward did better in the mean than the sparse one")
         + f", and head to head the learned-reward agents win {span(vs_sparse, '+.0f')} "
         "milli-chips per hand against the sparse agents of the same seed."
     )
