@@ -17,7 +17,7 @@ from pokerirl.game.leduc.rules import Action
 from pokerirl.game.leduc.strategy import uniform_strategy
 from pokerirl.studies.leduc.study import RLKind, preset
 
-SMALL = LeducDQNConfig(hands=2_000, batch=500, updates=4, minibatch=64, seed=3)
+SMALL = LeducDQNConfig(hands=1_000, batch=500, updates=4, minibatch=64, seed=3)
 CALLER = pure(RLCARD, {Action.CALL: 2, Action.CHECK: 1})  # calls, checks when nothing is faced
 
 
