@@ -1,10 +1,11 @@
 """The Leduc pipeline: the tabular agent (pokerirl/agents/leduc_q.py) learns what its reward
-asks against a fixed strategy, and the smoke study (pokerirl/studies/leduc/) writes its
-report and reproduces its bytes."""
+asks against a fixed strategy, and the smoke study (pokerirl/studies/leduc/, DQN agents)
+writes its report and reproduces its bytes (the DQN itself: tests/test_leduc_dqn.py)."""
 
 from __future__ import annotations
 
 import json
+import shutil
 from pathlib import Path
 
 import numpy as np
@@ -68,9 +69,24 @@ def test_the_smoke_study_writes_its_report_and_reproduces_it(expert: Path, tmp_p
     assert set(report["rl"]) == {"sparse", "airl", "hairl", "gail"}
     assert report["learners"]["hairl"]["summary"]["policy_agreement.reached"]["n"] == 2
     assert report["rl"]["sparse"]["summary"]["ev_vs_sparse"]["mean"] == 0  # itself
+    assert report["settings"]["rl"] == report["rl_agent"]["kind"] == "dqn"  # the default
     assert (outs[0] / "report.md").read_text().startswith("# Leduc study")
     # A rerun resumes: nothing is trained again, the report is the same.
     result = CliRunner().invoke(app, ["leduc", "study", "--preset", "smoke", "--out",
                                       str(outs[0]), "--expert", str(expert)])  # fmt: skip
     assert result.exit_code == 0 and "irl:" not in result.output, result.output
     assert (outs[0] / "report.json").read_bytes() == first
+    # The RL agents are a setting of the folder; tabular ones on the same IRL stage files.
+    tabular = ["leduc", "study", "--preset", "smoke", "--rl", "tabular", "--expert", str(expert)]
+    result = CliRunner().invoke(app, [*tabular, "--out", str(outs[0])])
+    assert result.exit_code == 1, result.output
+    (tmp_path / "c" / "irl").mkdir(parents=True)
+    shutil.copy(outs[0] / "demos.npz", tmp_path / "c")
+    for path in (outs[0] / "irl").iterdir():
+        shutil.copy(path, tmp_path / "c" / "irl")
+    result = CliRunner().invoke(app, [*tabular, "--out", str(tmp_path / "c")])
+    assert result.exit_code == 0 and "irl:" not in result.output, result.output
+    assert "rl: tabular on the gail reward, seed 1" in result.output
+    report = json.loads((tmp_path / "c" / "report.json").read_text())
+    assert report["rl_agent"]["kind"] == "tabular" and report["learners"] == json.loads(
+        first)["learners"]

@@ -20,6 +20,7 @@ opponent.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -79,36 +80,23 @@ def train_q(
     sets = info_sets(rules)
     if reward is not None and reward.shape != sets.legal.shape:
         raise ConfigError(f"a reward table must be {sets.legal.shape}, got {reward.shape}")
-    cumulative = np.cumsum(sets.probabilities(opponent), axis=1)
+    cumulative = opponent_table(rules, opponent)
     rng = np.random.default_rng(config.seed)
     q = np.zeros(sets.legal.shape)
     visits = np.zeros(sets.legal.shape, dtype=np.int64)
+    def values(rows: np.ndarray) -> np.ndarray:
+        return np.where(visits[rows] > 0, q[rows], 0.0)  # unvisited actions count 0
+
     played = 0
     while played < config.hands:
         hands = min(config.batch, config.hands - played)
         share = played / max(config.hands - 1, 1)
         epsilon = config.epsilon_start + (config.epsilon_end - config.epsilon_start) * share
-        batch = LeducBatch.dealt(rules, hands, rng)
+
         seat = (np.arange(hands) + played) % 2
-        taken: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []  # hand, row, action
-        while not batch.over.all():
-            live = np.flatnonzero(~batch.over)
-            rows = sets.rows_of(batch.node[live], batch.cards[live])
-            mine = batch.to_act[live] == seat[live]
-            legal = sets.legal[rows]
-            draw = rng.random(len(live))
-            # the agent: ε-greedy on q (ties to the first legal action); the opponent: sampled
-            greedy = np.where(legal, np.where(visits[rows] > 0, q[rows], 0.0), -np.inf)
-            explore = rng.random((len(live), legal.shape[1])) * legal
-            agent = np.where(draw[:, None] < epsilon, explore, greedy).argmax(axis=1)
-            table = cumulative[rows]
-            sampled = np.minimum((table <= draw[:, None] * table[:, -1:]).sum(axis=1), 3)
-            choice = np.where(mine, agent, sampled)
-            taken.append((live[mine], rows[mine], choice[mine]))
-            actions = np.zeros(hands, dtype=np.int64)
-            actions[live] = choice
-            batch.step(actions)
-        hand, row, action = (np.concatenate(c) for c in zip(*taken, strict=True))
+        batch, hand, row, action = play_batch(
+            rules, cumulative, seat=seat, rng=rng, epsilon=epsilon, values=values
+        )
         if reward is None:
             returns = batch.payoffs()[hand, seat[hand]]
         else:  # the reward from this decision on: its hand's total minus what came before
@@ -129,3 +117,40 @@ def train_q(
         q[seen] += (sums[seen] - counts[seen] * q[seen]) / visits[seen]  # running means
         played += hands
     return TabularAgent(sets=sets, q=np.where(sets.legal, q, -np.inf), visits=visits)
+
+
+def opponent_table(rules: LeducRules, opponent: Strategy) -> np.ndarray:
+    """rows x 4: ``opponent``'s cumulative probabilities, what :func:`play_batch` samples."""
+    return np.cumsum(info_sets(rules).probabilities(opponent), axis=1)
+
+
+def play_batch(
+    rules: LeducRules, cumulative: np.ndarray, *, seat: np.ndarray, rng: np.random.Generator,
+    epsilon: float, values: Callable[[np.ndarray], np.ndarray],
+) -> tuple[LeducBatch, np.ndarray, np.ndarray, np.ndarray]:  # fmt: skip
+    """Deal ``len(seat)`` hands and play them to the end: the agent, in ``seat[hand]``, is
+    ε-greedy on ``values(rows)`` (rows x 4 at its information sets' rows; ties to the first
+    legal action), the opponent samples ``cumulative`` (:func:`opponent_table`). Returns the
+    finished batch and the agent's decisions in play order: hand, row, action."""
+    sets = info_sets(rules)
+    batch = LeducBatch.dealt(rules, len(seat), rng)
+    taken: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []  # hand, row, action
+    while not batch.over.all():
+        live = np.flatnonzero(~batch.over)
+        rows = sets.rows_of(batch.node[live], batch.cards[live])
+        mine = batch.to_act[live] == seat[live]
+        legal = sets.legal[rows]
+        draw = rng.random(len(live))  # the agent's exploring and the opponent's sampling
+        explore = rng.random((len(live), legal.shape[1])) * legal
+        greedy = np.full(legal.shape, -np.inf)
+        greedy[mine] = np.where(legal[mine], values(rows[mine]), -np.inf)
+        agent = np.where(draw[:, None] < epsilon, explore, greedy).argmax(axis=1)
+        table = cumulative[rows]
+        sampled = np.minimum((table <= draw[:, None] * table[:, -1:]).sum(axis=1), 3)
+        choice = np.where(mine, agent, sampled)
+        taken.append((live[mine], rows[mine], choice[mine]))
+        actions = np.zeros(len(seat), dtype=np.int64)
+        actions[live] = choice
+        batch.step(actions)
+    hand, row, action = (np.concatenate(c) for c in zip(*taken, strict=True))
+    return batch, hand, row, action

@@ -159,10 +159,21 @@ class StudyPreset(StrEnum):
     """The Leduc study's presets (pokerirl/studies/leduc/study.py)."""
 
     QUICK = "quick"
+    WIDE = "wide"
     SMOKE = "smoke"
 
 
 PRESET_CHOICES = choices(StudyPreset)
+
+
+class StudyRL(StrEnum):
+    """The Leduc study's RL agents (pokerirl/studies/leduc/study.py's ``RLKind``)."""
+
+    DQN = "dqn"
+    TABULAR = "tabular"
+
+
+RL_CHOICES = choices(StudyRL)
 
 
 @leduc_app.command()
@@ -171,7 +182,13 @@ def study(
     preset: StudyPreset = typer.Option(
         StudyPreset.QUICK, "--preset", metavar=PRESET_CHOICES,
         help="quick: 10,000 expert hands, 2 IRL runs of 20 epochs per learner, 4 RL seeds; "
-             "smoke: seconds, numbers meaningless.",
+             "wide: the same with 5 IRL runs and 10 RL seeds; smoke: seconds, numbers "
+             "meaningless.",
+    ),
+    rl: StudyRL = typer.Option(
+        StudyRL.DQN, "--rl", metavar=RL_CHOICES,
+        help="The RL agents: DQNs (100,000 hands each in the quick preset) or the tabular "
+             "Monte-Carlo learner (500,000).",
     ),
     rules: RuleSet = typer.Option(
         RuleSet.RLCARD, "--rules", metavar=RULES_CHOICES, help="The rule set."
@@ -182,14 +199,15 @@ def study(
     ),
     overwrite: bool = typer.Option(False, "--overwrite", help="Recompute every stage."),
 ) -> None:
-    """The Leduc study: CFR+ expert, demonstrations, AIRL, H-AIRL, GAIL and BC runs, tabular
-    RL on each learned reward and on the sparse reward; the exact agreement with the expert,
-    exploitability and expected values in OUT/report.md and report.json (mean ± std over
-    runs), and OUT/agreement.png. A rerun skips the stages whose files are present."""
+    """The Leduc study: CFR+ expert, demonstrations, AIRL, H-AIRL, GAIL and BC runs, RL
+    agents (DQNs or tabular) against the expert on each learned reward and on the sparse
+    reward; the exact agreement with the expert, exploitability and expected values in
+    OUT/report.md and report.json (mean ± std over runs or seeds), and OUT/agreement.png.
+    A rerun skips the stages whose files are present."""
     from pokerirl.studies.leduc.study import preset as get_preset
     from pokerirl.studies.leduc.study import run_leduc_study
 
-    config = get_preset(preset, rules=rules)
+    config = get_preset(preset, rules=rules, rl=rl)
     run_leduc_study(config, out, expert=None if expert is None else _strategy_path(expert),
                     overwrite=overwrite, echo=echo)  # fmt: skip
 

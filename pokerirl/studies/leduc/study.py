@@ -1,5 +1,6 @@
 """The Leduc study (``pokerirl leduc study``): CFR+ expert -> demonstrations -> AIRL, H-AIRL,
-GAIL and BC runs -> tabular RL on each learned reward and on the sparse reward -> exact
+GAIL and BC runs -> RL (DQN seeds, or the tabular learner) on each learned reward and on the
+sparse reward, against the expert -> exact
 agreement, exploitability and expected values -> ``report.md``, ``report.json``, a figure.
 
 Stages write files under the study folder and a rerun skips those present (``study.json``
@@ -14,6 +15,7 @@ import json
 import time
 from collections.abc import Callable
 from dataclasses import asdict, dataclass, replace
+from enum import StrEnum
 from pathlib import Path
 from typing import Any
 
@@ -36,10 +38,20 @@ LABELS = {Learner.AIRL: "AIRL", Learner.HAIRL: "H-AIRL", Learner.GAIL: "GAIL", L
 FILES = ("report.md", "report.json", "agreement.png")
 
 
+class RLKind(StrEnum):
+    """The RL stage's agents: :mod:`pokerirl.agents.leduc_dqn` or :mod:`pokerirl.agents.leduc_q`."""
+
+    DQN = "dqn"
+    TABULAR = "tabular"
+
+
+RL_NAMES = {RLKind.DQN: "DQN", RLKind.TABULAR: "tabular Monte-Carlo"}
+
+
 @dataclass(frozen=True, kw_only=True)
 class LeducStudyConfig:
-    """A preset: CFR+ iterations, demonstration hands, IRL runs per learner and epochs, RL
-    seeds (seed s trains on IRL run ``s % runs``) and hands per RL agent."""
+    """A preset: CFR+ iterations, demonstration hands, IRL runs per learner and epochs, the RL
+    agents (``rl``), their seeds (seed s trains on IRL run ``s % runs``) and hands per agent."""
 
     preset: str
     rules: RuleSet = RuleSet.RLCARD
@@ -49,9 +61,12 @@ class LeducStudyConfig:
     epochs: int
     rl_seeds: tuple[int, ...]
     rl_hands: int
+    rl: RLKind = RLKind.DQN
     seed: int = 0  # of the demonstrations
 
     def __post_init__(self) -> None:
+        if self.rl not in tuple(RLKind):
+            raise ConfigError(f"unknown RL agent {self.rl!r}: choose {', '.join(RLKind)}")
         if min(self.cfr_iterations, self.hands, self.runs, self.epochs, self.rl_hands) < 1 \
                 or not self.rl_seeds or len(set(self.rl_seeds)) != len(self.rl_seeds) \
                 or min(self.rl_seeds) < 0:  # fmt: skip
@@ -62,19 +77,27 @@ class LeducStudyConfig:
 
 
 # quick: the poker study's quick IRL (2 runs per algorithm, 20 epochs, 4 agent seeds: two
-# per IRL run) on 10,000 expert hands (~35,000 decisions); smoke: seconds, numbers meaningless.
+# per IRL run) on 10,000 expert hands (~35,000 decisions); wide: quick's sizes with 5 IRL runs
+# and 10 agent seeds, for the spreads; smoke: seconds, numbers meaningless.
 PRESETS = {
     "quick": LeducStudyConfig(preset="quick", cfr_iterations=1000, hands=10_000, runs=2,
-                              epochs=20, rl_seeds=(0, 1, 2, 3), rl_hands=500_000),
+                              epochs=20, rl_seeds=(0, 1, 2, 3), rl_hands=100_000),
+    "wide": LeducStudyConfig(preset="wide", cfr_iterations=1000, hands=10_000, runs=5,
+                             epochs=20, rl_seeds=tuple(range(10)), rl_hands=100_000),
     "smoke": LeducStudyConfig(preset="smoke", cfr_iterations=20, hands=200, runs=2, epochs=1,
                               rl_seeds=(0, 1), rl_hands=2_000),
 }  # fmt: skip
+# The tabular learner's hands per agent (samples are cheap, and it needs many: one cell each).
+TABULAR_HANDS = {"quick": 500_000, "wide": 500_000, "smoke": 2_000}
 
 
-def preset(name: str, *, rules: str = RuleSet.RLCARD) -> LeducStudyConfig:
+def preset(name: str, *, rules: str = RuleSet.RLCARD, rl: str = RLKind.DQN) -> LeducStudyConfig:
     if name not in PRESETS:
         raise ConfigError(f"unknown Leduc study preset {name!r}: choose {', '.join(PRESETS)}")
-    return replace(PRESETS[name], rules=RuleSet(get_rules(rules).name))
+    if rl not in tuple(RLKind):
+        raise ConfigError(f"unknown RL agent {rl!r}: choose {', '.join(RLKind)}")
+    found = replace(PRESETS[name], rules=RuleSet(get_rules(rules).name), rl=RLKind(rl))
+    return replace(found, rl_hands=TABULAR_HANDS[name]) if rl == RLKind.TABULAR else found
 
 
 def run_leduc_study(
@@ -127,7 +150,8 @@ def run_leduc_study(
         for seed in config.rl_seeds:
             path = out / "rl" / f"{source}-{seed}.json"
             if not path.is_file() or overwrite:
-                stage(f"rl: {source} reward, seed {seed}, {config.rl_hands:,} hands")
+                stage(f"rl: {config.rl} on the {source} reward, seed {seed}, "
+                      f"{config.rl_hands:,} hands")
                 _write_agent(path, config, rules, cfr, sets, source, seed, learned)
             agents[source][seed] = json.loads(path.read_text())
     stage("evaluate: exact agreement, exploitability and expected values")
@@ -180,16 +204,25 @@ def _read_learned(path: Path, learner: Learner, sets: InfoSets) -> list[Learned]
 def _write_agent(path: Path, config: LeducStudyConfig, rules: LeducRules, cfr: Strategy,
                  sets: InfoSets, source: str, seed: int,
                  learned: dict[Learner, list[Learned]]) -> None:  # fmt: skip
-    from pokerirl.agents.leduc_q import QConfig, train_q
-
     run = None if source == SPARSE else learned[Learner(source)][seed % config.runs]
     reward = None if run is None or run.reward is None else np.where(sets.legal, run.reward, 0)
-    agent = train_q(rules, cfr, config=QConfig(hands=config.rl_hands, seed=seed), reward=reward)
-    greedy = one_hot_argmax(np.where(agent.visits > 0, agent.q, 0.0), sets.legal)
+    if config.rl == RLKind.DQN:
+        from pokerirl.agents.leduc_dqn import LeducDQNConfig, train_leduc_dqn
+
+        dqn = LeducDQNConfig(hands=config.rl_hands, seed=seed)
+        values = train_leduc_dqn(rules, cfr, config=dqn, reward=reward).q
+    else:
+        from pokerirl.agents.leduc_q import QConfig, train_q
+
+        agent = train_q(rules, cfr, config=QConfig(hands=config.rl_hands, seed=seed),
+                        reward=reward)  # fmt: skip
+        values = np.where(agent.visits > 0, agent.q, 0.0)  # unvisited actions count 0
+    greedy = one_hot_argmax(values, sets.legal)
     follows = None
     if reward is not None:  # the share of information sets where it takes its reward's argmax
         follows = float((greedy.argmax(1) == one_hot_argmax(reward, sets.legal).argmax(1)).mean())
-    document = {"source": source, "seed": seed, "irl_run": None if run is None else run.seed,
+    document = {"source": source, "agent": config.rl, "seed": seed,
+                "irl_run": None if run is None else run.seed,
                 "follows_reward": follows, "greedy": greedy.argmax(1).tolist()}  # fmt: skip
     path.parent.mkdir(parents=True, exist_ok=True)
     write_text(path, json.dumps(document) + "\n")
@@ -243,8 +276,23 @@ def _report(config: LeducStudyConfig, rules: LeducRules, cfr: Strategy, demos: D
         "format": "leduc-study", "version": 1, "settings": config.settings(),
         "rules": rules.name, "decisions": len(demos), "information_sets": len(sets.keys),
         "expert": {"sha256": demos.expert_sha256, "exploitability": exploitability(rules, cfr)},
-        "learners": learners, "bc_counts": bc_counts, "rl": rl,
+        "learners": learners, "bc_counts": bc_counts, "rl_agent": _rl_agent(config), "rl": rl,
     }  # fmt: skip
+
+
+def _rl_agent(config: LeducStudyConfig) -> dict[str, Any]:
+    """The RL agents' settings, as trained (seed: the agent's)."""
+    if config.rl == RLKind.DQN:
+        from pokerirl.agents.leduc_dqn import LeducDQNConfig
+
+        found = asdict(LeducDQNConfig(hands=config.rl_hands))
+        found["hidden"] = list(found["hidden"])
+    else:
+        from pokerirl.agents.leduc_q import QConfig
+
+        found = asdict(QConfig(hands=config.rl_hands))
+    del found["seed"]
+    return {"kind": str(config.rl), **found}
 
 
 def _summary(rows: list[dict[str, Any]]) -> dict[str, Any]:
@@ -285,7 +333,7 @@ def render(report: dict[str, Any]) -> str:
              f"hands of the expert against itself (seed {settings['seed']}), "
              f"{report['decisions']:,} decisions; {report['information_sets']} information "
              f"sets. IRL: {settings['runs']} runs per learner, {settings['epochs']} epochs. "
-             f"RL: tabular Monte-Carlo control against the expert, {settings['rl_hands']:,} "
+             f"RL: {_rl_name(report)} agents against the expert, {settings['rl_hands']:,} "
              f"hands per agent, seeds {settings['rl_seeds']} (seed s on IRL run s mod "
              f"{settings['runs']}). Every figure is exact (no sampling) except the training "
              "itself; ± is the standard deviation over IRL runs or RL seeds.", "",
@@ -312,12 +360,13 @@ def render(report: dict[str, Any]) -> str:
     rows.append(["CFR expert", "1", "1", f"{expert_mc:.3f}", "–", "–", "–"])
     lines += markdown_table(head, rows)
     lines += ["", "## RL on each reward, against the CFR expert", "",
-              "Greedy strategies of tabular agents; expected values in milli-chips per hand "
-              "for the agent, the mean over both seats (exact). 'follows reward': the share "
-              "of information sets where the agent's action is its reward's argmax. No "
+              f"Greedy strategies of {_rl_name(report)} agents; expected values in milli-chips "
+              "per hand for the agent, the mean over both seats (exact). 'follows reward': the "
+              "share of information sets where the agent's action is its reward's argmax. No "
               "strategy scores more against the expert than its exploitability "
-              f"({expert_mc:.3f}); a pure strategy inside the expert's support scores the "
-              "game value in each seat, 0 on average over the seats.", ""]  # fmt: skip
+              f"({expert_mc:.3f}: a best response's value, over the seats); a pure strategy "
+              "inside the expert's support scores the game value in each seat, 0 on average "
+              "over the seats.", ""]  # fmt: skip
     head = ["reward", "exploitability (mchips)", "EV vs CFR expert (mchips)",
             "EV vs sparse agent (mchips)", "follows reward"]  # fmt: skip
     rows = []
@@ -365,14 +414,26 @@ def verdict(report: dict[str, Any]) -> str:
         f"the expert rarely reaches have little or no data. The rewards' own argmax agrees "
         f"with the expert at {span(rewards, '.1%')} of the reached sets. Every learned policy "
         f"is far from an equilibrium: exploitability {span(exploit, ',.0f')} milli-chips per "
-        f"hand, against the expert's {expert:.3f}. Tabular agents trained against the expert "
+        f"hand, against the expert's {expert:.3f}. {_capital(_rl_name(report))} agents "
+        "trained against the expert "
         f"on a learned reward score {span(vs_expert, '+.0f')} milli-chips per hand against it, "
-        f"agents trained on the chips themselves {sparse:+.0f}; "
-        + (f"the {', '.join(better)} reward(s) did better than the sparse one against "
-           "the expert" if better else "no learned reward did better than the sparse one")
+        f"agents trained on the chips themselves {sparse:+.0f} (a best response to the expert: "
+        f"{expert:+.1f}); "
+        + (f"the {', '.join(better)} reward(s) did better in the mean than the sparse one "
+           "against the expert (the tables give the spreads)" if better
+           else "no learned reward did better in the mean than the sparse one")
         + f", and head to head the learned-reward agents win {span(vs_sparse, '+.0f')} "
         "milli-chips per hand against the sparse agents of the same seed."
     )
+
+
+def _rl_name(report: dict[str, Any]) -> str:
+    """The RL agents' name (reports written before the DQN had tabular agents)."""
+    return RL_NAMES[RLKind(report["settings"].get("rl", RLKind.TABULAR))]
+
+
+def _capital(text: str) -> str:
+    return text[:1].upper() + text[1:]
 
 
 def _figure(report: dict[str, Any], path: Path) -> None:
