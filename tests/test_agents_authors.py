@@ -17,8 +17,8 @@ from torch.nn import functional
 from pokerirl.agents.config import AGENT_PRESETS, TrainConfig, agent_preset
 from pokerirl.agents.dqn import train_dqn
 from pokerirl.agents.train import train_agent
-from pokerirl.encoding import NUM_ACTIONS, RANKS, SUITS
 from pokerirl.game import make_agent, play_match
+from pokerirl.holdem import NUM_ACTIONS, RANKS, SUITS
 from pokerirl.poker.authors_reward import AuthorsReward, authors_state, read_authors_file
 from pokerirl.poker.rewards import Decisions, PokerReward, TransformedReward
 
@@ -109,7 +109,7 @@ def test_state_and_forward_are_the_authors(authors_file: tuple[Path, Discriminat
     )
     np.testing.assert_array_equal(authors_state(cards, raises), theirs)
 
-    from pokerirl.encoding import encode_obs
+    from pokerirl.holdem import encode_obs
 
     reward = AuthorsReward.from_file(path)
     decisions = Decisions(obs=encode_obs(cards, raises), legal_mask=np.ones((200, 4), bool),
@@ -253,7 +253,7 @@ def test_transformed_authors_reward_is_centered_over_legal_actions(
     authors_file: tuple[Path, Discriminator],
 ) -> None:
     cards, raises = _random_states(np.random.default_rng(2), 50)
-    from pokerirl.encoding import encode_obs
+    from pokerirl.holdem import encode_obs
 
     legal = np.random.default_rng(3).random((50, 4)) < 0.7
     legal[:, 2] = True

@@ -15,7 +15,6 @@ import pytest
 from typer.testing import CliRunner
 
 from pokerirl.cli import app
-from pokerirl.encoding import CALL, cards_from_text, parse_card
 from pokerirl.errors import ConfigError, InputError
 from pokerirl.game import DecisionLog, LimitHoldemBatch, make_agent, play_match
 from pokerirl.game.encodings import (
@@ -31,6 +30,7 @@ from pokerirl.game.encodings import (
 from pokerirl.game.evaluator import category, hand_strength
 from pokerirl.game.match import observe, turn_cards
 from pokerirl.game.preflop import PREFLOP_EQUITY, class_index, compute_preflop_table
+from pokerirl.holdem import CALL, cards_from_text, parse_card
 from pokerirl.poker.rewards import Decisions
 
 

@@ -13,7 +13,6 @@ import numpy as np
 import pytest
 from equity_reference import engine_flop_count, eval7_cards, eval7_count
 
-from pokerirl.encoding import NUM_PAIRS, PAIRS, parse_card
 from pokerirl.game.cases import PREFLOP_DENOMINATOR
 from pokerirl.game.encodings import (
     STRENGTH,
@@ -41,6 +40,7 @@ from pokerirl.game.equity import (
 )
 from pokerirl.game.evaluator import pair_index
 from pokerirl.game.preflop import PREFLOP_COUNTS, class_index, preflop_equity
+from pokerirl.holdem import NUM_PAIRS, PAIRS, parse_card
 
 eval7 = pytest.importorskip("eval7")
 

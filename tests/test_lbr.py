@@ -18,7 +18,6 @@ import pytest
 import torch
 
 from pokerirl.agents.dqn import GreedyQAgent, QNetwork
-from pokerirl.encoding import NUM_CARDS, RAISE
 from pokerirl.errors import ConfigError
 from pokerirl.execution import Backend
 from pokerirl.game.agents import agent_action_probs, make_agent
@@ -28,6 +27,7 @@ from pokerirl.game.engine import LimitHoldemBatch
 from pokerirl.game.evaluator import hand_strength
 from pokerirl.game.match import agent_encoding, observe, turn_cards
 from pokerirl.game.preflop import preflop_equity
+from pokerirl.holdem import NUM_CARDS, RAISE
 from pokerirl.tournaments.equity import (
     CLASH,
     PAIRS,

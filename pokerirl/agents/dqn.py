@@ -42,7 +42,6 @@ from pokerirl.agents.config import (
     DQNConfig,
     Opponent,
 )
-from pokerirl.encoding import NUM_ACTIONS, OBS_SIZE
 from pokerirl.errors import ConfigError
 from pokerirl.execution import unit_progress
 from pokerirl.game.agents import Agent, RandomAgent, agent_actions, make_agent
@@ -50,6 +49,7 @@ from pokerirl.game.deals import DEAL_BLOCK, deal_cards
 from pokerirl.game.encodings import RLCARD, Encoding, EncodingName, States, get_encoding
 from pokerirl.game.engine import LimitHoldemBatch
 from pokerirl.game.match import agent_encoding, observe, turn_cards
+from pokerirl.holdem import NUM_ACTIONS, OBS_SIZE
 from pokerirl.poker.rewards import RAISE_COUNTS, Decisions, PokerReward, as_poker_reward
 
 RewardFn = Callable[[np.ndarray, np.ndarray], np.ndarray] | PokerReward

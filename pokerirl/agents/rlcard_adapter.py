@@ -36,12 +36,12 @@ from typing import Any
 
 import numpy as np
 
-from pokerirl.encoding import ACTIONS, NUM_ACTIONS, NUM_CARDS, NUM_ROUNDS, rlcard_card_str
 from pokerirl.errors import InputError, check_count
 from pokerirl.game.agents import Agent, agent_action_probs, agent_actions
 from pokerirl.game.encodings import States
 from pokerirl.game.engine import SMALL_BLIND
 from pokerirl.game.match import agent_encoding
+from pokerirl.holdem import ACTIONS, NUM_ACTIONS, NUM_CARDS, NUM_ROUNDS, rlcard_card_str
 
 # RLCard's suit-then-rank card text ("SA", "CQ") -> pokerirl's card index.
 RLCARD_CARD_INDEX: Mapping[str, int] = {rlcard_card_str(i): i for i in range(NUM_CARDS)}

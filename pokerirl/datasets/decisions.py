@@ -44,10 +44,10 @@ import numpy as np
 import pyarrow as pa
 import pyarrow.compute as pc
 
-from pokerirl.encoding import NUM_ACTIONS, NUM_ROUNDS, OBS_SIZE, cards_from_text
 from pokerirl.errors import InputError
 from pokerirl.game.encodings import RLCARD, Encoding, EncodingName, States
 from pokerirl.game.spec import LEDUC, GameName, TableSpec, holdem_spec
+from pokerirl.holdem import NUM_ACTIONS, NUM_ROUNDS, OBS_SIZE, cards_from_text
 from pokerirl.parquet import fixed_width, read_parquet
 
 if TYPE_CHECKING:

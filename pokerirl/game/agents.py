@@ -29,7 +29,9 @@ from typing import ClassVar, Protocol, runtime_checkable
 
 import numpy as np
 
-from pokerirl.encoding import (
+from pokerirl.errors import ConfigError
+from pokerirl.game.synth import DEFAULT_PLAYERS, ScriptedPlayer, visible_strength
+from pokerirl.holdem import (
     BOARD_SIZE_BY_ROUND,
     CALL,
     CHECK,
@@ -38,8 +40,6 @@ from pokerirl.encoding import (
     RAISE,
     RAISE_OFFSET,
 )
-from pokerirl.errors import ConfigError
-from pokerirl.game.synth import DEFAULT_PLAYERS, ScriptedPlayer, visible_strength
 
 # For each of the 16 legal-mask patterns (bit i: action i legal): how many, and the k-th one.
 _LEGAL_COUNT = np.array([bin(p).count("1") for p in range(16)])

@@ -5,7 +5,7 @@ player's hole cards and the board shown so far (in the order dealt, ``-1`` beyon
 raises per round as RLCard counts them, and the legal actions. An :class:`Encoding` turns a
 batch of them into one row of features each. Two exist:
 
-* ``rlcard``: RLCard 1.2.0's 72-d ``limit-holdem`` observation (:func:`~pokerirl.encoding.
+* ``rlcard``: RLCard 1.2.0's 72-d ``limit-holdem`` observation (:func:`~pokerirl.holdem.
   encode_obs`), bit for bit: 52 card bits with hole and board merged, and a raise-count
   one-hot per round. The paper's protocol and the authors' stay on it.
 * ``strength``: hole and board kept apart, and generic hand features computed by the
@@ -19,7 +19,7 @@ bare ``strength`` in a record made before versions means (:func:`recorded_encodi
 asking for ``strength`` gets the current version (:func:`get_encoding`); a run of the old one
 still loads, and says ``strength-v1``. A mismatch is refused in one line where it is loaded.
 
->>> from pokerirl.encoding import parse_card
+>>> from pokerirl.holdem import parse_card
 >>> cards = np.array([[parse_card(c) for c in "As Ah Ad Kc 7h".split()] + [-1, -1]], np.int8)
 >>> states = States(cards=cards, raise_nums=np.zeros((1, 4), np.int8),
 ...                 legal_mask=np.array([[False, True, True, True]]))
@@ -43,7 +43,11 @@ from typing import ClassVar
 
 import numpy as np
 
-from pokerirl.encoding import (
+from pokerirl.errors import ConfigError
+from pokerirl.game.equity import exact_equity
+from pokerirl.game.evaluator import hand_strength
+from pokerirl.game.preflop import sampled_preflop_equity
+from pokerirl.holdem import (
     CALL,
     MAX_RAISES,
     NUM_CARDS,
@@ -51,10 +55,6 @@ from pokerirl.encoding import (
     OBS_SIZE,
     encode_obs,
 )
-from pokerirl.errors import ConfigError
-from pokerirl.game.equity import exact_equity
-from pokerirl.game.evaluator import hand_strength
-from pokerirl.game.preflop import sampled_preflop_equity
 
 NUM_RANKS = 13
 BOARD_CARDS_BY_STREET = (0, 3, 4, 5)

@@ -28,9 +28,9 @@ from typing import Any
 import numpy as np
 import torch
 
-from pokerirl.encoding import NUM_ACTIONS
 from pokerirl.errors import InputError
 from pokerirl.game.encodings import EncodingName
+from pokerirl.holdem import NUM_ACTIONS
 from pokerirl.poker.agent_specs import POLICY_PREFIX, REWARD_PREFIX
 from pokerirl.poker.reward_sources import RewardSource
 from pokerirl.poker.rewards import Decisions, PokerReward, legal_argmax, run_encoding

@@ -36,8 +36,8 @@ from pathlib import Path
 
 import numpy as np
 
-from pokerirl.encoding import NUM_ACTIONS
 from pokerirl.errors import InputError
+from pokerirl.holdem import NUM_ACTIONS
 from pokerirl.poker.rewards import AUTHORS_PREFIX, Decisions, PokerReward, read_capped
 
 STATE_SIZE = 61  # 7 cards x 7 bits, then 4 rounds x 3 bits

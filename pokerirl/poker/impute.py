@@ -51,7 +51,15 @@ from pokerirl.datasets.decisions import table_cards
 from pokerirl.datasets.ingest import FoldsResult, FoldsSummary, IngestSummary, ingest_table
 from pokerirl.datasets.players import Selection
 from pokerirl.datasets.table import IMPUTED_SCHEMA, SCHEMA, fixed_size_list
-from pokerirl.encoding import (
+from pokerirl.errors import InputError
+from pokerirl.game.encodings import (
+    Encoding,
+    States,
+    StrengthEncoding,
+    get_encoding,
+)
+from pokerirl.game.evaluator import hand_strength
+from pokerirl.holdem import (
     ACTIONS,
     CARD_TEXT,
     FOLD,
@@ -62,14 +70,6 @@ from pokerirl.encoding import (
     PAIRS,
     encode_obs,
 )
-from pokerirl.errors import InputError
-from pokerirl.game.encodings import (
-    Encoding,
-    States,
-    StrengthEncoding,
-    get_encoding,
-)
-from pokerirl.game.evaluator import hand_strength
 from pokerirl.irl.metrics import Metric, Part
 from pokerirl.parquet import fixed_width
 from pokerirl.poker.folds import ImputeConfig

@@ -48,10 +48,10 @@ import numpy as np
 from tqdm import tqdm
 
 from pokerirl.datasets.decisions import check_legal_actions, table_cards
-from pokerirl.encoding import ACTIONS, CALL, CHECK, FOLD, NUM_ACTIONS
 from pokerirl.errors import InputError
 from pokerirl.game.agents import street_of
 from pokerirl.game.evaluator import hand_strength
+from pokerirl.holdem import ACTIONS, CALL, CHECK, FOLD, NUM_ACTIONS
 from pokerirl.irl.metrics import Metric
 from pokerirl.jsonio import parse_json, read_bytes, read_json
 from pokerirl.poker.rewards import Decisions, PokerReward
@@ -80,7 +80,7 @@ def equity(cards: np.ndarray, *, samples: int = EQUITY_SAMPLES, seed: int = EQUI
     numbers). ``cards``: (N, 7) hole cards then the board shown, -1 beyond. ``progress``: a
     bar over the states (about 3,000 a second: a 30,000-hand table takes 40 s).
 
-    >>> from pokerirl.encoding import parse_card
+    >>> from pokerirl.holdem import parse_card
     >>> aces = [parse_card(c) for c in "As Ah".split()] + [-1] * 5
     >>> float(equity(np.array([aces]))[0]) > 0.8
     True

@@ -34,7 +34,6 @@ from typing import Any
 
 import numpy as np
 
-from pokerirl.encoding import MAX_RAISES, NUM_ACTIONS, NUM_ROUNDS, RAISE_OFFSET
 from pokerirl.errors import ConfigError, InputError
 from pokerirl.game.encodings import (
     Encoding,
@@ -44,6 +43,7 @@ from pokerirl.game.encodings import (
     recorded_encoding,
 )
 from pokerirl.game.spec import GameName, recorded_game
+from pokerirl.holdem import MAX_RAISES, NUM_ACTIONS, NUM_ROUNDS, RAISE_OFFSET
 
 
 class Transform(StrEnum):

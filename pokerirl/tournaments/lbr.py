@@ -47,12 +47,12 @@ from enum import StrEnum
 
 import numpy as np
 
-from pokerirl.encoding import CALL, CHECK, FOLD, MAX_RAISES, NUM_ACTIONS, RAISE
 from pokerirl.errors import ConfigError
 from pokerirl.game.agents import Agent, agent_action_probs
 from pokerirl.game.encodings import Encoding, States
 from pokerirl.game.engine import RAISE_SIZE_BY_ROUND, LimitHoldemBatch
 from pokerirl.game.match import agent_encoding
+from pokerirl.holdem import CALL, CHECK, FOLD, MAX_RAISES, NUM_ACTIONS, RAISE
 from pokerirl.tournaments.equity import (
     CLASH,
     NUM_PAIRS,
