@@ -1,4 +1,4 @@
-"""``action_probs`` on every agent (pokerirl/game/agents.py, pokerirl/agents/dqn.py): a
+"""``action_probs`` on every agent (pokerirl/game/bots.py, pokerirl/agents/dqn.py): a
 distribution over the legal actions, and the very one ``act`` draws from."""
 
 from __future__ import annotations
@@ -11,7 +11,7 @@ import torch
 
 from pokerirl.agents.dqn import GreedyQAgent, QNetwork
 from pokerirl.errors import ConfigError
-from pokerirl.game.agents import BUILT_IN_AGENTS, PolicyAgent, agent_action_probs, make_agent
+from pokerirl.game.bots import BUILT_IN_AGENTS, PolicyAgent, agent_action_probs, make_agent
 from pokerirl.game.deals import deal_cards
 from pokerirl.game.engine import LimitHoldemBatch
 from pokerirl.game.match import play_match, turn_cards

@@ -126,7 +126,7 @@ V1_DIGEST = "206dfba6d2ae77b7c5401b5f7db0d69eff5631b5381478c2213628aac741b9a5"
 
 
 def _v1_states() -> States:
-    from pokerirl.game.agents import seat_cards
+    from pokerirl.game.bots import seat_cards
     from pokerirl.game.deals import deal_cards
 
     rng = np.random.default_rng(41)

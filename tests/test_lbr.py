@@ -20,7 +20,7 @@ import torch
 from pokerirl.agents.dqn import GreedyQAgent, QNetwork
 from pokerirl.errors import ConfigError
 from pokerirl.execution import Backend
-from pokerirl.game.agents import agent_action_probs, make_agent
+from pokerirl.game.bots import agent_action_probs, make_agent
 from pokerirl.game.deals import deal_cards
 from pokerirl.game.encodings import get_encoding
 from pokerirl.game.engine import LimitHoldemBatch

@@ -27,7 +27,7 @@ HOME = {  # each public name and the module that defines it
     "from_imitation_trajectories": "pokerirl.irl.interop",
     "to_imitation_trajectories": "pokerirl.irl.interop",
     "play_match": "pokerirl.game.match",
-    "Agent": "pokerirl.game.agents",
+    "Agent": "pokerirl.game.bots",
     "load_agent": "pokerirl.agents.checkpoint",
     "resolve_agent": "pokerirl.agents.registry",
     "RLCardAgent": "pokerirl.agents.rlcard_adapter",

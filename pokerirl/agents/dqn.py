@@ -44,7 +44,7 @@ from pokerirl.agents.config import (
 )
 from pokerirl.errors import ConfigError
 from pokerirl.execution import unit_progress
-from pokerirl.game.agents import Agent, RandomAgent, agent_actions, make_agent
+from pokerirl.game.bots import Agent, RandomAgent, agent_actions, make_agent
 from pokerirl.game.deals import DEAL_BLOCK, deal_cards
 from pokerirl.game.encodings import RLCARD, Encoding, EncodingName, States, get_encoding
 from pokerirl.game.engine import LimitHoldemBatch

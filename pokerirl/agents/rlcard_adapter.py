@@ -1,6 +1,6 @@
 """Play a pokerirl agent inside RLCard 1.2.0: an adapter with RLCard's agent interface.
 
-:class:`RLCardAgent` wraps any :class:`~pokerirl.game.agents.Agent` (a built-in, an agent
+:class:`RLCardAgent` wraps any :class:`~pokerirl.game.bots.Agent` (a built-in, an agent
 folder, ``reward:RUN``: whatever :func:`~pokerirl.agents.resolve_agent` returns) so that it
 sits in ``rlcard.make("limit-holdem")`` and plays RLCard's own ``rlcard.utils.tournament``:
 ``use_raw`` False, ``step(state)`` and ``eval_step(state)`` returning ``(action, info)``.
@@ -37,7 +37,7 @@ from typing import Any
 import numpy as np
 
 from pokerirl.errors import InputError, check_count
-from pokerirl.game.agents import Agent, agent_action_probs, agent_actions
+from pokerirl.game.bots import Agent, agent_action_probs, agent_actions
 from pokerirl.game.encodings import States
 from pokerirl.game.engine import SMALL_BLIND
 from pokerirl.game.match import agent_encoding
@@ -80,7 +80,7 @@ def rlcard_states(state: Mapping[str, Any]) -> States:
 
 @dataclass(frozen=True, kw_only=True)
 class RLCardAgent:
-    """A pokerirl :class:`~pokerirl.game.agents.Agent` with RLCard 1.2.0's agent interface.
+    """A pokerirl :class:`~pokerirl.game.bots.Agent` with RLCard 1.2.0's agent interface.
 
     ``env.set_agents([RLCardAgent(agent=resolve_agent("agents/dqn")), RandomAgent(4)])``,
     then ``rlcard.utils.tournament(env, hands)``. ``seed`` seeds the generator the agent

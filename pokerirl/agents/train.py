@@ -73,7 +73,7 @@ from pokerirl.atomic import atomic_path
 from pokerirl.errors import ConfigError, InputError
 from pokerirl.execution import Backend, read_files
 from pokerirl.game import DecisionLog, make_agent, play_match
-from pokerirl.game.agents import Agent
+from pokerirl.game.bots import Agent
 from pokerirl.game.encodings import get_encoding
 from pokerirl.irl.run import REWARD_RUN_FILES  # noqa: F401 - re-exported: pokerirl.agents.train.REWARD_RUN_FILES
 from pokerirl.jsonio import read_json_lines

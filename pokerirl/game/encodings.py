@@ -78,7 +78,7 @@ class States:
     """A batch of decision states, as the engine and the tables hold them.
 
     ``cards`` (N, 7): hole cards, then the board shown so far, ``-1`` beyond (see
-    :func:`pokerirl.game.agents.seat_cards`); ``raise_nums`` (N, 4): raises per round as
+    :func:`pokerirl.game.bots.seat_cards`); ``raise_nums`` (N, 4): raises per round as
     RLCard counts them (big blind excluded, capped at 4); ``legal_mask`` (N, 4) over (call,
     raise, fold, check).
     """

@@ -49,7 +49,7 @@ from tqdm import tqdm
 
 from pokerirl.datasets.decisions import check_legal_actions, table_cards
 from pokerirl.errors import InputError
-from pokerirl.game.agents import street_of
+from pokerirl.game.bots import street_of
 from pokerirl.game.evaluator import hand_strength
 from pokerirl.holdem import ACTIONS, CALL, CHECK, FOLD, NUM_ACTIONS
 from pokerirl.irl.metrics import Metric

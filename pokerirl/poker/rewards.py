@@ -75,7 +75,7 @@ class Decisions:
     """A batch of decisions as the learner saw them.
 
     ``cards`` (hole cards, then the board shown, -1 beyond; see
-    :func:`pokerirl.game.agents.seat_cards`) is there when the reward reads cards in order
+    :func:`pokerirl.game.bots.seat_cards`) is there when the reward reads cards in order
     (``needs_cards``); the 72-d observation cannot tell hole cards from the board.
     ``encoded`` holds the states already computed in other encodings (name -> rows), so a
     learner and its reward on the same encoding compute it once.

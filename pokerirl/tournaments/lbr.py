@@ -31,7 +31,7 @@ that share a card with LBR's hand or the board shown.
 LBR is a lower bound on the agent's exploitability: it looks one action ahead, assumes the
 hand is checked down after its action, and ignores re-raises.
 
->>> from pokerirl.game.agents import make_agent
+>>> from pokerirl.game.bots import make_agent
 >>> from pokerirl.game.deals import deal_cards
 >>> deals = np.repeat(deal_cards(seed=0, start=0, count=4), 2, axis=0)
 >>> seats = np.arange(8) % 2
@@ -48,7 +48,7 @@ from enum import StrEnum
 import numpy as np
 
 from pokerirl.errors import ConfigError
-from pokerirl.game.agents import Agent, agent_action_probs
+from pokerirl.game.bots import Agent, agent_action_probs
 from pokerirl.game.encodings import Encoding, States
 from pokerirl.game.engine import RAISE_SIZE_BY_ROUND, LimitHoldemBatch
 from pokerirl.game.match import agent_encoding

@@ -1,8 +1,11 @@
 """Agents made of an IRL run: its reward's argmax, and its policy played greedily.
 
+(Not the built-in bots of :mod:`pokerirl.game.bots`, nor the learned DQN agents of
+:mod:`pokerirl.agents`, which resolves all three kinds by name.)
+
 They separate the two ways a learned reward can fail to teach: if f's argmax already plays
 like the expert but a DQN trained on f does not, the RL failed; if f's argmax does not, the
-reward did. Both follow the engine's :class:`~pokerirl.game.agents.Agent` protocol (with
+reward did. Both follow the engine's :class:`~pokerirl.game.bots.Agent` protocol (with
 ``action_probs``, for local best response) and are named by specs that
 :func:`pokerirl.agents.resolve_agent` understands:
 

@@ -1,4 +1,8 @@
-"""The agent protocol the engine talks to, the built-in agents and the name registry.
+"""The agent protocol the engine talks to, the built-in bots and the name registry.
+
+The bots are the fixed, hand-written agents (``random``, ``call``, ``raise``, ...);
+:mod:`pokerirl.poker.run_agents` holds the agents made of an IRL run, and
+:mod:`pokerirl.agents` the learned (DQN) agents and the resolution of every agent name.
 
 An agent decides for a whole batch at once: one call per decision step, so a network agent
 makes one batched forward pass. An agent whose ``sees_cards`` is true also gets ``cards``:
