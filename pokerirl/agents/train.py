@@ -79,7 +79,7 @@ from pokerirl.irl.run import REWARD_RUN_FILES  # noqa: F401 - re-exported: poker
 from pokerirl.jsonio import read_json_lines
 from pokerirl.poker.reward_sources import RewardSource
 from pokerirl.poker.rewards import (
-    Decisions,
+    ObservedDecisions,
     PokerReward,
     TransformedReward,
     as_poker_reward,
@@ -185,7 +185,7 @@ def followed(reward: PokerReward, log: Sequence[DecisionLog]) -> float:
     """The share of logged decisions (:class:`~pokerirl.game.DecisionLog`) that take
     ``reward``'s best legal action (:func:`pokerirl.poker.rewards.follow_share`)."""
     seen = DecisionLog.concatenate(list(log))
-    decisions = Decisions(obs=seen.obs, legal_mask=seen.legal_mask, cards=seen.cards)
+    decisions = ObservedDecisions(obs=seen.obs, legal_mask=seen.legal_mask, cards=seen.cards)
     return round(follow_share(reward, decisions, seen.actions), 6)
 
 

@@ -26,7 +26,7 @@ from pokerirl.errors import ConfigError, check_argument, check_protocol
 from pokerirl.execution import unit_progress
 from pokerirl.game.bots import Agent, agent_actions, seat_cards
 from pokerirl.game.deals import deal_cards
-from pokerirl.game.encodings import Encoding, EncodingName, States, get_encoding
+from pokerirl.game.encodings import Encoding, EncodingName, RawStates, get_encoding
 from pokerirl.game.engine import (
     IllegalActionError,
     LimitHoldemBatch,
@@ -96,7 +96,7 @@ def observe(game: LimitHoldemBatch, hands: np.ndarray, encoding: Encoding) -> np
     72-d one for ``rlcard``)."""
     if encoding.name == EncodingName.RLCARD:
         return game.observe(hands)
-    states = States(cards=turn_cards(game, hands), raise_nums=game.raises[hands],
+    states = RawStates(cards=turn_cards(game, hands), raise_nums=game.raises[hands],
                     legal_mask=game.legal_mask(hands))  # fmt: skip
     return encoding.encode(states)
 

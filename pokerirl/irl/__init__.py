@@ -61,7 +61,13 @@ if TYPE_CHECKING:  # what the names are, for type checkers
         build_nets,
         project_to_simplex,
     )
-    from pokerirl.irl.records import Batch, EpochCallback, EpochMetrics, EpochRecord, StepLosses
+    from pokerirl.irl.records import (
+        EpochCallback,
+        EpochMetrics,
+        EpochRecord,
+        StepLosses,
+        TrainingBatch,
+    )
     from pokerirl.irl.reward import PolicyNet, RewardFn, RewardNet
     from pokerirl.irl.run import (
         ObsMap,
@@ -117,7 +123,7 @@ _LAZY = {
     "StateActionReward": "nets",
     "build_nets": "nets",
     "project_to_simplex": "nets",
-    "Batch": "records",
+    "TrainingBatch": "records",
     "EpochCallback": "records",
     "EpochMetrics": "records",
     "EpochRecord": "records",
@@ -162,7 +168,6 @@ __all__ = [
     "AIRLConfig",
     "AIRLDiscriminator",
     "AdversarialTrainer",
-    "Batch",
     "ConfigError",
     "DiscreteHead",
     "DiscretePolicy",
@@ -193,6 +198,7 @@ __all__ = [
     "StateActionReward",
     "StepLosses",
     "TrainResult",
+    "TrainingBatch",
     "Transitions",
     "baselines",
     "build_nets",

@@ -8,7 +8,7 @@ clash with the cards known in the hand (the board dealt, an opponent's shown pai
 
 with a uniform prior P(c) and a behaviour model π_B: a policy over the legal actions, read in
 its own :class:`~pokerirl.game.encodings.Encoding`. ``obs_t(c)`` is the decision's state with
-the hole cards ``c``, built as the engine and the tables build it (:class:`States` of the
+the hole cards ``c``, built as the engine and the tables build it (:class:`RawStates` of the
 pair, the board shown at that decision, its raise counts and legal actions). Every decision
 is one batched forward pass of π_B over all 1,326 pairs, many decisions at a time: no Python
 loop over pairs. A player who reached a showdown and lost (or won, or split) against a shown
@@ -54,7 +54,7 @@ from pokerirl.datasets.table import IMPUTED_SCHEMA, SCHEMA, fixed_size_list
 from pokerirl.errors import InputError
 from pokerirl.game.encodings import (
     Encoding,
-    States,
+    RawStates,
     StrengthEncoding,
     get_encoding,
 )
@@ -351,7 +351,7 @@ class Expansion:
         hidden = self.hidden
         index = np.arange(start, min(start + self.per_chunk, len(hidden.owner)))
         cards, clash = pair_cards(hidden.board[index])
-        states = States(
+        states = RawStates(
             cards=cards,
             raise_nums=np.repeat(hidden.raise_nums[index], NUM_PAIRS, axis=0),
             legal_mask=np.repeat(hidden.legal_mask[index], NUM_PAIRS, axis=0),

@@ -54,7 +54,7 @@ from pokerirl.game.evaluator import hand_strength
 from pokerirl.holdem import ACTIONS, CALL, CHECK, FOLD, NUM_ACTIONS
 from pokerirl.irl.metrics import Metric
 from pokerirl.jsonio import parse_json, read_bytes, read_json
-from pokerirl.poker.rewards import Decisions, PokerReward
+from pokerirl.poker.rewards import ObservedDecisions, PokerReward
 from pokerirl.serial import Omit, Serializable, meta
 
 CARD_FILE, CARD_FIGURE = "reward_card.json", "reward_card.png"
@@ -121,7 +121,7 @@ class CardStates:
     """The decision states a card is drawn on: what was seen, the expert's action if known,
     the street and the equity of each."""
 
-    decisions: Decisions
+    decisions: ObservedDecisions
     expert: np.ndarray | None  # (N,) action ids
     street: np.ndarray  # (N,) 0..3
     strength: np.ndarray  # (N,) equity against a random hand
@@ -142,7 +142,7 @@ class CardStates:
         imputed: np.ndarray | None = None,
         progress: bool = False,
     ) -> CardStates:
-        decisions = Decisions(
+        decisions = ObservedDecisions(
             obs=np.asarray(obs, np.uint8),
             legal_mask=np.asarray(legal_mask, bool),
             cards=np.asarray(cards, np.int8),

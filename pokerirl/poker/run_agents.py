@@ -36,7 +36,7 @@ from pokerirl.game.encodings import EncodingName
 from pokerirl.holdem import NUM_ACTIONS
 from pokerirl.poker.agent_specs import POLICY_PREFIX, REWARD_PREFIX
 from pokerirl.poker.reward_sources import RewardSource
-from pokerirl.poker.rewards import Decisions, PokerReward, legal_argmax, run_encoding
+from pokerirl.poker.rewards import ObservedDecisions, PokerReward, legal_argmax, run_encoding
 from pokerirl.store import digest
 
 
@@ -57,7 +57,7 @@ class RewardArgmaxAgent:
         return self.reward.needs_cards
 
     def _values(self, obs: np.ndarray, legal_mask: np.ndarray, cards: Any) -> np.ndarray:
-        decisions = Decisions(obs=np.asarray(obs), legal_mask=np.asarray(legal_mask, bool),
+        decisions = ObservedDecisions(obs=np.asarray(obs), legal_mask=np.asarray(legal_mask, bool),
                               cards=None if cards is None else np.asarray(cards))  # fmt: skip
         return self.reward.action_values(decisions)
 

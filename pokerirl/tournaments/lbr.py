@@ -49,7 +49,7 @@ import numpy as np
 
 from pokerirl.errors import ConfigError
 from pokerirl.game.bots import Agent, agent_action_probs
-from pokerirl.game.encodings import Encoding, States
+from pokerirl.game.encodings import Encoding, RawStates
 from pokerirl.game.engine import RAISE_SIZE_BY_ROUND, LimitHoldemBatch
 from pokerirl.game.match import agent_encoding
 from pokerirl.holdem import CALL, CHECK, FOLD, MAX_RAISES, NUM_ACTIONS, RAISE
@@ -173,7 +173,7 @@ def range_policy(
         at = hands[rows]
         cards = np.concatenate([PAIRS[pairs[rows]], board[at]], axis=1).astype(np.int8)
         legal = legal_mask[at]
-        states = States(cards=cards, raise_nums=raise_nums[at], legal_mask=legal)
+        states = RawStates(cards=cards, raise_nums=raise_nums[at], legal_mask=legal)
         probs[rows] = agent_action_probs(agent, encoding.encode(states), legal, cards)
     return probs
 
