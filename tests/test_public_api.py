@@ -18,7 +18,7 @@ ROOT = Path(__file__).resolve().parents[1]
 HOME = {  # each public name and the module that defines it
     "Transitions": "pokerirl.irl.transitions",
     "AIRLConfig": "pokerirl.irl.config",
-    "train": "pokerirl.irl.airl",
+    "train": "pokerirl.irl.adversarial",
     "train_into": "pokerirl.irl.run",
     "load_reward": "pokerirl.irl.run",
     "load_policy": "pokerirl.irl.run",

@@ -8,13 +8,13 @@
 * a :class:`~pokerirl.irl.heads.PolicyHead`: everything that depends on the action space
   (discrete or Gaussian: act, log π, what the discriminator sees of π, the two policy losses).
 
-Its :meth:`~AdversarialTrainer.step` is the algorithm of :mod:`pokerirl.irl.airl`, top to
+Its :meth:`~AdversarialTrainer.step` is the algorithm of :mod:`pokerirl.irl.adversarial`, top to
 bottom: the policy acts, the discriminator is updated on the logits of expert and policy
 rows, then the policy. Where :func:`pokerirl.irl.fast.covers` the nets and strategies (the
 default poker nets, one run, the built-in head and discriminators, by exact type), a
 :class:`~pokerirl.irl.fast.HandDerivedStep` (the same step with hand-derived gradients) takes
-its place; a user's strategy always runs on autograd. :func:`~pokerirl.irl.airl.train` and
-:func:`~pokerirl.irl.airl.train_many` build one with the config's strategies.
+its place; a user's strategy always runs on autograd. :func:`~pokerirl.irl.adversarial.train` and
+:func:`~pokerirl.irl.adversarial.train_many` build one with the config's strategies.
 
 >>> import numpy as np
 >>> from pokerirl.irl import AIRLConfig, GAILDiscriminator, Transitions, default_nets

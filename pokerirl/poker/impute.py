@@ -590,7 +590,7 @@ def fit_bc(table: pa.Table, encoding: Encoding, *, epochs: int, seed: int,
            progress: bool = False) -> tuple[nn.Module, dict[str, Any]]:  # fmt: skip
     """Behaviour cloning (the IRL policy net, α = 1, no adversary) on ``table``'s rows,
     weighted; the policy and its final validation metrics (a seeded share of the hands)."""
-    from pokerirl.irl.airl import train
+    from pokerirl.irl.adversarial import train
     from pokerirl.irl.config import AIRLConfig
     from pokerirl.poker.data import transitions_from_arrow
 
