@@ -22,9 +22,9 @@ import time
 
 import numpy as np
 
-from pokerirl.encoding import PAIRS
 from pokerirl.game import equity
 from pokerirl.game.preflop import NUM_RANKS, class_index
+from pokerirl.holdem import PAIRS
 
 
 def main() -> int:

@@ -46,10 +46,10 @@ import pyarrow.parquet as pq
 import torch
 
 from pokerirl.datasets.ingest import ingest_table
-from pokerirl.encoding import CALL, CARD_INDEX, CHECK, FOLD, RAISE
 from pokerirl.execution import Backend
 from pokerirl.game.encodings import get_encoding
 from pokerirl.game.synth import DEFAULT_PLAYERS, visible_strength, write_synthetic_month
+from pokerirl.holdem import CALL, CARD_INDEX, CHECK, FOLD, RAISE
 from pokerirl.irl import load_config
 from pokerirl.poker import train_runs
 from pokerirl.poker.folds import ImputeConfig

@@ -64,7 +64,7 @@ from pokerirl.gym.irl import irl_config, load_env_transitions
 from pokerirl.gym.presets import TASKS
 from pokerirl.gym.rewards import RewardCallable, learned_reward_env, module_reward
 from pokerirl.irl import AIRLConfig, Transitions, train, train_many
-from pokerirl.irl.airl import (
+from pokerirl.irl.adversarial import (
     discriminator_loss,
     gaussian_log_prob,
     noise_schedule,

@@ -32,7 +32,7 @@ import torch
 
 from pokerirl.agents import resolve_agent
 from pokerirl.agents.dqn import GreedyQAgent, QNetwork, input_norm
-from pokerirl.game.agents import Agent
+from pokerirl.game.bots import Agent
 from pokerirl.game.deals import deal_cards
 from pokerirl.game.encodings import get_encoding
 from pokerirl.game.match import play_match

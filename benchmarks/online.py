@@ -26,7 +26,7 @@ from pokerirl.gym.expert_policies import load_expert, resolve_expert_dir
 from pokerirl.gym.irl import irl_config, load_env_transitions, obs_standardization, standardized
 from pokerirl.gym.online import OnlineSettings, PPOGenerator, generator_model, vec_env
 from pokerirl.gym.presets import TASKS
-from pokerirl.irl.airl import default_nets
+from pokerirl.irl.adversarial import default_nets
 from pokerirl.irl.online import OnlineTrainer
 
 

@@ -24,8 +24,8 @@ import time
 import numpy as np
 import torch
 
-from pokerirl.encoding import FOLD
 from pokerirl.game.match import play_match
+from pokerirl.holdem import FOLD
 from pokerirl.tournaments import format_seeds, parse_seeds, run_tournament
 
 

@@ -32,7 +32,7 @@ from torch.utils.data import DataLoader, Dataset
 
 from pokerirl.datasets.toy import toy_expert_table
 from pokerirl.irl import AIRLConfig, Transitions, default_nets, train, train_many
-from pokerirl.irl.airl import discriminator_loss, gaussian_log_prob, noise_schedule
+from pokerirl.irl.adversarial import discriminator_loss, gaussian_log_prob, noise_schedule
 from pokerirl.irl.nets import project_to_simplex
 from pokerirl.poker import transitions_from_arrow
 

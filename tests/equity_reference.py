@@ -13,8 +13,8 @@ import itertools
 
 import numpy as np
 
-from pokerirl.encoding import NUM_CARDS, card_str
 from pokerirl.game.evaluator import hand_strength
+from pokerirl.holdem import NUM_CARDS, card_str
 
 
 def eval7_cards() -> list:

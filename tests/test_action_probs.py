@@ -1,4 +1,4 @@
-"""``action_probs`` on every agent (pokerirl/game/agents.py, pokerirl/agents/dqn.py): a
+"""``action_probs`` on every agent (pokerirl/game/bots.py, pokerirl/agents/dqn.py): a
 distribution over the legal actions, and the very one ``act`` draws from."""
 
 from __future__ import annotations
@@ -10,12 +10,12 @@ import pytest
 import torch
 
 from pokerirl.agents.dqn import GreedyQAgent, QNetwork
-from pokerirl.encoding import CALL, CHECK, FOLD
 from pokerirl.errors import ConfigError
-from pokerirl.game.agents import BUILT_IN_AGENTS, PolicyAgent, agent_action_probs, make_agent
+from pokerirl.game.bots import BUILT_IN_AGENTS, PolicyAgent, agent_action_probs, make_agent
 from pokerirl.game.deals import deal_cards
 from pokerirl.game.engine import LimitHoldemBatch
 from pokerirl.game.match import play_match, turn_cards
+from pokerirl.holdem import CALL, CHECK, FOLD
 
 
 def _states(count: int = 400) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -17,10 +17,10 @@ from torch.nn import functional
 from pokerirl.agents.config import AGENT_PRESETS, TrainConfig, agent_preset
 from pokerirl.agents.dqn import train_dqn
 from pokerirl.agents.train import train_agent
-from pokerirl.encoding import NUM_ACTIONS, RANKS, SUITS
 from pokerirl.game import make_agent, play_match
+from pokerirl.holdem import NUM_ACTIONS, RANKS, SUITS
 from pokerirl.poker.authors_reward import AuthorsReward, authors_state, read_authors_file
-from pokerirl.poker.rewards import Decisions, PokerReward, TransformedReward
+from pokerirl.poker.rewards import ObservedDecisions, PokerReward, TransformedReward
 
 torch.set_num_threads(1)
 
@@ -109,10 +109,10 @@ def test_state_and_forward_are_the_authors(authors_file: tuple[Path, Discriminat
     )
     np.testing.assert_array_equal(authors_state(cards, raises), theirs)
 
-    from pokerirl.encoding import encode_obs
+    from pokerirl.holdem import encode_obs
 
     reward = AuthorsReward.from_file(path)
-    decisions = Decisions(obs=encode_obs(cards, raises), legal_mask=np.ones((200, 4), bool),
+    decisions = ObservedDecisions(obs=encode_obs(cards, raises), legal_mask=np.ones((200, 4), bool),
                           cards=cards)  # fmt: skip
     values = reward.action_values(decisions)
     with torch.no_grad():
@@ -208,7 +208,7 @@ class RaisesSeen(PokerReward):
     def __init__(self) -> None:
         self.seen: list[np.ndarray] = []
 
-    def __call__(self, decisions: Decisions, actions: np.ndarray) -> np.ndarray:
+    def __call__(self, decisions: ObservedDecisions, actions: np.ndarray) -> np.ndarray:
         self.seen.append(decisions.raise_counts())
         return np.zeros(len(actions), np.float32)
 
@@ -222,7 +222,9 @@ def test_end_of_hand_raise_counts_are_the_hands_final_ones() -> None:
             raise_counts=raise_counts,
         )  # fmt: skip
         n = learner.replay.size
-        decision_time = Decisions(obs=learner.replay.obs[:n], legal_mask=np.ones((n, 4), bool))
+        decision_time = ObservedDecisions(
+            obs=learner.replay.obs[:n], legal_mask=np.ones((n, 4), bool)
+        )
         return np.concatenate(reward.seen), decision_time.raise_counts()
 
     seen, stored = run("decision")
@@ -253,11 +255,11 @@ def test_transformed_authors_reward_is_centered_over_legal_actions(
     authors_file: tuple[Path, Discriminator],
 ) -> None:
     cards, raises = _random_states(np.random.default_rng(2), 50)
-    from pokerirl.encoding import encode_obs
+    from pokerirl.holdem import encode_obs
 
     legal = np.random.default_rng(3).random((50, 4)) < 0.7
     legal[:, 2] = True
-    decisions = Decisions(obs=encode_obs(cards, raises), legal_mask=legal, cards=cards)
+    decisions = ObservedDecisions(obs=encode_obs(cards, raises), legal_mask=legal, cards=cards)
     centered = TransformedReward(AuthorsReward.from_file(authors_file[0]), "centered")
     values = centered.action_values(decisions)
     np.testing.assert_allclose(np.nanmean(values, axis=1), 0.0, atol=1e-5)

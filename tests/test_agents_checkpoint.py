@@ -16,8 +16,8 @@ from pokerirl.agents import agent_fingerprint, load_agent, resolve_agent
 from pokerirl.agents.dqn import DQNConfig
 from pokerirl.agents.rlcard_import import import_rlcard_dqn, load_rlcard_dqn
 from pokerirl.agents.train import TrainConfig, train_agent
-from pokerirl.encoding import OBS_SIZE
 from pokerirl.game import LimitHoldemBatch, make_agent, play_match
+from pokerirl.holdem import OBS_SIZE
 
 torch.set_num_threads(1)
 

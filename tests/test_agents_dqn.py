@@ -17,8 +17,8 @@ from pokerirl.agents.dqn import (
     epsilon_at,
     train_dqn,
 )
-from pokerirl.encoding import NUM_ACTIONS, OBS_SIZE
 from pokerirl.game import make_agent, play_match
+from pokerirl.holdem import NUM_ACTIONS, OBS_SIZE
 
 torch.set_num_threads(1)
 SMALL = DQNConfig(concurrent_hands=64, replay_init=32)

@@ -20,13 +20,13 @@ import torch
 
 from pokerirl.agents import RLCardAgent, resolve_agent, rlcard_states
 from pokerirl.agents.dqn import GreedyQAgent, QNetwork
-from pokerirl.encoding import ACTIONS, FOLD, NUM_CARDS
 from pokerirl.errors import InputError
 from pokerirl.game import ScriptedAgent, agent_actions, play_match, turn_cards
 from pokerirl.game.encodings import RLCARD, get_encoding
 from pokerirl.game.engine import LimitHoldemBatch
 from pokerirl.game.match import agent_encoding, observe
 from pokerirl.game.synth import DEFAULT_PLAYERS
+from pokerirl.holdem import ACTIONS, FOLD, NUM_CARDS
 
 HANDS = 300  # per tournament; the replays check every decision of half as many
 with open(Path(rlcard.__path__[0]) / "games/limitholdem/card2index.json") as _file:

@@ -16,7 +16,7 @@ import pytest
 import torch
 
 from pokerirl.agents.dqn import GreedyQAgent, QNetwork
-from pokerirl.game.agents import make_agent
+from pokerirl.game.bots import make_agent
 from pokerirl.game.deals import deal_cards
 from pokerirl.game.encodings import get_encoding
 from pokerirl.game.engine import LimitHoldemBatch

@@ -9,7 +9,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 from rlcard.envs.limitholdem import LimitholdemEnv
 
-from pokerirl.encoding import (
+from pokerirl.holdem import (
     ACTIONS,
     OBS_SIZE,
     card_str,

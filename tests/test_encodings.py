@@ -15,14 +15,13 @@ import pytest
 from typer.testing import CliRunner
 
 from pokerirl.cli import app
-from pokerirl.encoding import CALL, cards_from_text, parse_card
 from pokerirl.errors import ConfigError, InputError
 from pokerirl.game import DecisionLog, LimitHoldemBatch, make_agent, play_match
 from pokerirl.game.encodings import (
     RLCARD,
     STRENGTH,
     STRENGTH_FEATURES,
-    States,
+    RawStates,
     get_encoding,
     pot_and_call,
     sampled_equity,
@@ -31,7 +30,8 @@ from pokerirl.game.encodings import (
 from pokerirl.game.evaluator import category, hand_strength
 from pokerirl.game.match import observe, turn_cards
 from pokerirl.game.preflop import PREFLOP_EQUITY, class_index, compute_preflop_table
-from pokerirl.poker.rewards import Decisions
+from pokerirl.holdem import CALL, cards_from_text, parse_card
+from pokerirl.poker.rewards import ObservedDecisions
 
 
 def _random_play(hands: int, seed: int) -> Iterator[tuple[LimitHoldemBatch, np.ndarray]]:
@@ -45,8 +45,8 @@ def _random_play(hands: int, seed: int) -> Iterator[tuple[LimitHoldemBatch, np.n
         game.step(random.act(game.observe(active), game.legal_mask(active), rng), active)
 
 
-def _states(game: LimitHoldemBatch, hands: np.ndarray) -> States:
-    return States(cards=turn_cards(game, hands), raise_nums=game.raises[hands],
+def _states(game: LimitHoldemBatch, hands: np.ndarray) -> RawStates:
+    return RawStates(cards=turn_cards(game, hands), raise_nums=game.raises[hands],
                   legal_mask=game.legal_mask(hands))  # fmt: skip
 
 
@@ -106,7 +106,7 @@ def test_the_shipped_preflop_table_matches_a_recomputation_and_published_figures
 
 def test_strength_features_of_a_known_hand() -> None:
     cards = np.array([[parse_card(c) for c in "Ah Kh Qh 7h 2c".split()] + [-1, -1]], np.int8)
-    states = States(cards=cards, raise_nums=np.array([[1, 1, 0, 0]]),
+    states = RawStates(cards=cards, raise_nums=np.array([[1, 1, 0, 0]]),
                     legal_mask=np.array([[True, True, True, False]]))  # fmt: skip
     found = STRENGTH.features(states)
     assert set(found) == set(STRENGTH_FEATURES)
@@ -130,7 +130,7 @@ def test_the_engine_builds_each_agents_own_encoding_as_a_log_would() -> None:
         log = DecisionLog(obs=game.observe(hands), legal_mask=game.legal_mask(hands),
                           cards=turn_cards(game, hands),
                           actions=np.zeros(len(hands), int))  # fmt: skip
-        decisions = Decisions(obs=log.obs, legal_mask=log.legal_mask, cards=log.cards)
+        decisions = ObservedDecisions(obs=log.obs, legal_mask=log.legal_mask, cards=log.cards)
         assert np.array_equal(decisions.encode(STRENGTH), direct)
 
 

@@ -13,12 +13,11 @@ import numpy as np
 import pytest
 from equity_reference import engine_flop_count, eval7_cards, eval7_count
 
-from pokerirl.encoding import NUM_PAIRS, PAIRS, parse_card
 from pokerirl.game.cases import PREFLOP_DENOMINATOR
 from pokerirl.game.encodings import (
     STRENGTH,
     STRENGTH_V1,
-    States,
+    RawStates,
     get_encoding,
     recorded_encoding,
 )
@@ -41,6 +40,7 @@ from pokerirl.game.equity import (
 )
 from pokerirl.game.evaluator import pair_index
 from pokerirl.game.preflop import PREFLOP_COUNTS, class_index, preflop_equity
+from pokerirl.holdem import NUM_PAIRS, PAIRS, parse_card
 
 eval7 = pytest.importorskip("eval7")
 
@@ -125,14 +125,14 @@ def test_exact_equity_reads_each_street_and_is_bitwise_stable() -> None:
 V1_DIGEST = "206dfba6d2ae77b7c5401b5f7db0d69eff5631b5381478c2213628aac741b9a5"
 
 
-def _v1_states() -> States:
-    from pokerirl.game.agents import seat_cards
+def _v1_states() -> RawStates:
+    from pokerirl.game.bots import seat_cards
     from pokerirl.game.deals import deal_cards
 
     rng = np.random.default_rng(41)
     deals = deal_cards(seed=41, start=0, count=2000)
     rounds, seats = rng.integers(0, 4, 2000), rng.integers(0, 2, 2000)
-    return States(cards=seat_cards(deals, rounds, seats),
+    return RawStates(cards=seat_cards(deals, rounds, seats),
                   raise_nums=rng.integers(0, 3, (2000, 4)).astype(np.int8),
                   legal_mask=np.tile([True, True, True, False], (2000, 1)))  # fmt: skip
 

@@ -18,10 +18,10 @@ import torch
 from irc_fixtures import real_month
 from pokerirl.datasets.ingest import UNEXPLAINED, IngestSummary, ingest_table
 from pokerirl.datasets.table import IMPUTED_SCHEMA, SCHEMA, month_table
-from pokerirl.encoding import CARD_INDEX, FOLD, cards_from_text, encode_obs
-from pokerirl.game.encodings import STRENGTH, States, get_encoding
+from pokerirl.game.encodings import STRENGTH, RawStates, get_encoding
 from pokerirl.game.evaluator import hand_strength
 from pokerirl.game.synth import write_synthetic_month
+from pokerirl.holdem import CARD_INDEX, FOLD, cards_from_text, encode_obs
 from pokerirl.irl.nets import DiscretePolicy
 from pokerirl.parsers.irc import IngestStats, iter_months, parse_month
 from pokerirl.poker.folds import ImputeConfig
@@ -92,7 +92,7 @@ def brute_force(split, player: int, chosen: Behaviour) -> np.ndarray:  # type: i
         if a in known or b in known:
             continue
         seen = np.concatenate([np.tile([a, b], (len(rows), 1)), hidden.board[rows]], axis=1)
-        states = States(cards=seen, raise_nums=hidden.raise_nums[rows],
+        states = RawStates(cards=seen, raise_nums=hidden.raise_nums[rows],
                         legal_mask=hidden.legal_mask[rows])  # fmt: skip
         obs = torch.as_tensor(chosen.encoding.encode(states)).float()
         with torch.no_grad():

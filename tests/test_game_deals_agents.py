@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from pokerirl.encoding import CALL, CHECK, FOLD, RAISE
 from pokerirl.game import Agent, deal_cards, make_agent
 from pokerirl.game.deals import DEAL_BLOCK
+from pokerirl.holdem import CALL, CHECK, FOLD, RAISE
 
 
 def test_deal_depends_only_on_seed_and_index() -> None:

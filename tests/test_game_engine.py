@@ -13,9 +13,9 @@ import rlcard
 from rlcard.games.base import Card
 from rlcard.games.limitholdem.game import LimitHoldemGame
 
-from pokerirl.encoding import ACTIONS, CALL, CHECK, FOLD, NUM_ACTIONS, RAISE, rlcard_card_str
 from pokerirl.game.deals import deal_cards
 from pokerirl.game.engine import IllegalActionError, LimitHoldemBatch
+from pokerirl.holdem import ACTIONS, CALL, CHECK, FOLD, NUM_ACTIONS, RAISE, rlcard_card_str
 
 # Action weights (call, raise, fold, check), renormalised over the legal actions.
 POLICIES = {

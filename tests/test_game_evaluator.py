@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 from rlcard.games.limitholdem.utils import compare_hands
 
-from pokerirl.encoding import parse_card, rlcard_card_str
 from pokerirl.game.evaluator import HAND_CATEGORIES, category, hand_strength
+from pokerirl.holdem import parse_card, rlcard_card_str
 
 
 def _cards(text: str) -> list[int]:

@@ -10,8 +10,8 @@ import pytest
 from typer.testing import CliRunner
 
 from pokerirl.cli import app
-from pokerirl.encoding import CHECK
 from pokerirl.game import IllegalActionError, LimitHoldemBatch, make_agent, play_match
+from pokerirl.holdem import CHECK
 
 
 def test_every_hand_ends_and_payoffs_sum_to_zero() -> None:

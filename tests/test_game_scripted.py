@@ -7,11 +7,11 @@ from pathlib import Path
 import numpy as np
 import pyarrow.parquet as pq
 
-from pokerirl.encoding import CALL, CHECK, RAISE, parse_card
 from pokerirl.game import make_agent, play_match
-from pokerirl.game.agents import ScriptedAgent, seat_cards
+from pokerirl.game.bots import ScriptedAgent, seat_cards
 from pokerirl.game.match import DecisionLog
 from pokerirl.game.synth import DEFAULT_PLAYERS, ScriptedPlayer, write_synthetic_month
+from pokerirl.holdem import CALL, CHECK, RAISE, parse_card
 
 
 def _cards(hole: str, board: str) -> list[int]:

@@ -17,7 +17,7 @@ pytest.importorskip("stable_baselines3")
 from pokerirl.cli import app
 from pokerirl.gym.expert_policies import load_expert, resolve_expert_dir
 from pokerirl.gym.reward_map import plot_reward_map, reward_map
-from pokerirl.irl.airl import TrainResult
+from pokerirl.irl.adversarial import TrainResult
 from pokerirl.irl.config import AIRLConfig
 from pokerirl.irl.nets import NetSpec, build_nets
 from pokerirl.irl.run import save_run

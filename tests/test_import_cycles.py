@@ -6,7 +6,7 @@ each other, even lazily). An edge A -> B is any import of B written in A, read w
 at module level, inside functions (a lazy import is still a loop), in ``TYPE_CHECKING``
 blocks, and ``importlib.import_module`` with a literal name. ``import a.b.c`` and
 ``from a.b import c`` lead to the module ``a.b.c`` when it exists, else to the longest
-module prefix (``from pokerirl.encoding import ACTIONS``: ``pokerirl.encoding``); the
+module prefix (``from pokerirl.holdem import ACTIONS``: ``pokerirl.holdem``); the
 packages above it, which Python imports first, are not edges (else every package whose
 ``__init__`` re-exports its modules would be a loop with each of them). Names built at run
 time (``pokerirl.__getattr__``'s table) are not seen.

@@ -24,7 +24,7 @@ from irc_fixtures import (
 from pokerirl.cli import app
 from pokerirl.datasets.ingest import IngestSummary, ingest_table, summary_path
 from pokerirl.datasets.table import REQUIRED_COLUMNS
-from pokerirl.encoding import CALL, CHECK, RAISE
+from pokerirl.holdem import CALL, CHECK, RAISE
 from pokerirl.parsers.irc import IngestError
 
 

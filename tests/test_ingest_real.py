@@ -15,7 +15,7 @@ from rlcard.games.limitholdem.game import LimitHoldemGame
 
 from irc_fixtures import real_month
 from pokerirl.datasets.ingest import ingest_table
-from pokerirl.encoding import ACTIONS, MAX_RAISES, parse_card, rlcard_card_str
+from pokerirl.holdem import ACTIONS, MAX_RAISES, parse_card, rlcard_card_str
 
 SAMPLE = real_month()
 

@@ -8,12 +8,12 @@ import torch
 
 from pokerirl.irl import (
     AIRLConfig,
-    Batch,
     EpochRecord,
     RewardNet,
     ShapedReward,
     StateActionReward,
     StepLosses,
+    TrainingBatch,
     Transitions,
     train,
     train_many,
@@ -103,7 +103,7 @@ def test_behaviour_cloning_zeroes_exactly_the_discriminator_metrics() -> None:
 
 
 def test_batch_at_indexes_every_present_tensor() -> None:
-    batch = Batch(
+    batch = TrainingBatch(
         obs=torch.zeros(3, 2, 4), expert=torch.ones(3, 2, 5), env=torch.arange(6.0).view(3, 2)
     )
     one = batch.at(2)

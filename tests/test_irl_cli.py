@@ -16,7 +16,7 @@ from testkit import Cli
 
 from pokerirl.datasets.toy import toy_expert_table
 from pokerirl.irl import RunError, load_config, load_policy, load_reward, load_run_config
-from pokerirl.irl.airl import LOSS_KEYS
+from pokerirl.irl.adversarial import LOSS_KEYS
 from pokerirl.poker import read_table
 
 torch.set_num_threads(1)

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 import torch
 
-from pokerirl.irl.airl import train
+from pokerirl.irl.adversarial import train
 from pokerirl.irl.config import AIRLConfig, ConfigError
 from pokerirl.irl.transitions import Transitions
 

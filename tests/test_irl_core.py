@@ -25,7 +25,7 @@ from pokerirl.irl import (
     train,
     train_many,
 )
-from pokerirl.irl.airl import gaussian_log_prob, sample_one_hot
+from pokerirl.irl.adversarial import gaussian_log_prob, sample_one_hot
 
 torch.set_num_threads(1)
 
@@ -265,7 +265,7 @@ class ConcatReward(torch.nn.Module):
 
 def test_lock_step_with_an_unknown_architecture_uses_vmap_and_matches() -> None:
     from pokerirl.irl import default_nets
-    from pokerirl.irl.airl import stack_modules
+    from pokerirl.irl.adversarial import stack_modules
 
     rng = np.random.default_rng(1)
     obs = rng.random((128, 4)).astype(np.float32)

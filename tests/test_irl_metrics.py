@@ -12,7 +12,7 @@ import pytest
 import torch
 
 from pokerirl.irl import AIRLConfig, Transitions
-from pokerirl.irl.airl import train
+from pokerirl.irl.adversarial import train
 from pokerirl.irl.metrics import Metric, Part
 from pokerirl.irl.records import EpochRecord
 from pokerirl.irl.run import (

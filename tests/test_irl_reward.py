@@ -1,7 +1,7 @@
 """The learned reward itself: it must encode the expert's rule, and recover a known reward.
 
 These fail when the reward is not learned (checked by hand: with ``self.reward_opt.step()``
-removed from ``pokerirl/irl/airl.py`` both tests fail).
+removed from ``pokerirl/irl/adversarial.py`` both tests fail).
 """
 
 from __future__ import annotations

@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 import torch
 
-from pokerirl.irl.airl import train
+from pokerirl.irl.adversarial import train
 from pokerirl.irl.config import AIRLConfig
 from pokerirl.irl.transitions import Transitions
 

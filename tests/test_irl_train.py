@@ -10,7 +10,7 @@ import torch
 
 from pokerirl.datasets.toy import toy_expert_table
 from pokerirl.irl import AIRLConfig, Transitions, baselines, train
-from pokerirl.irl.airl import LOSS_KEYS
+from pokerirl.irl.adversarial import LOSS_KEYS
 from pokerirl.poker import transitions_from_arrow
 
 torch.set_num_threads(1)

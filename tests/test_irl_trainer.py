@@ -17,7 +17,7 @@ from pokerirl.irl import (
     default_nets,
 )
 from pokerirl.irl.heads import DiscreteActs
-from pokerirl.irl.records import Batch
+from pokerirl.irl.records import TrainingBatch
 
 
 def _data() -> Transitions:
@@ -85,7 +85,7 @@ def test_a_users_discriminator_is_the_one_that_trains() -> None:
 class NoSupervision(DiscreteHead):
     """A head whose supervised term has no gradient."""
 
-    def supervised_loss(self, acts: DiscreteActs, batch: Batch) -> Tensor:
+    def supervised_loss(self, acts: DiscreteActs, batch: TrainingBatch) -> Tensor:
         return 0 * super().supervised_loss(acts, batch)
 
 

@@ -14,7 +14,7 @@ import pytest
 import torch
 
 from pokerirl.irl import AIRLConfig, Transitions, baselines, discriminator_loss, evaluate, fast
-from pokerirl.irl.airl import train
+from pokerirl.irl.adversarial import train
 from pokerirl.irl.losses import weighted_mean
 from pokerirl.irl.nets import NetSpec, build_nets
 from pokerirl.irl.run import run_baselines
@@ -161,7 +161,7 @@ def test_weighted_hand_derived_gradients_match_autograd(alpha: float, beta: floa
 
 
 def test_runs_in_lock_step_read_the_weights() -> None:
-    from pokerirl.irl.airl import train_many
+    from pokerirl.irl.adversarial import train_many
 
     config = AIRLConfig.for_algo("hairl", epochs=30, batch_size=50, alpha=1.0, seed=0)
     data = conflicting(weighted=True)

@@ -28,7 +28,7 @@ PACKAGE = Path(__file__).resolve().parents[1] / "pokerirl"
 
 # Lowest first. A component may import those of its own layer and of lower ones.
 LAYERS: tuple[tuple[str, ...], ...] = (
-    ("encoding", "atomic", "seeds", "versions", "errors", "jsonio", "parquet", "meanstd", "figures",
+    ("holdem", "atomic", "seeds", "versions", "errors", "jsonio", "parquet", "meanstd", "figures",
      "scalars", "serial", "stacking", "settings"),
     ("execution",),
     ("store",),
@@ -45,7 +45,7 @@ LAYER = {component: rank for rank, names in enumerate(LAYERS) for component in n
 # irl/ trains on Transitions with the nets it is given: no poker below it either, and
 # (named here too, so that a change to LAYERS cannot let them in) nothing above it.
 IRL_FORBIDDEN = frozenset(
-    {"encoding", "parsers", "datasets", "game"}  # poker, below irl/
+    {"holdem", "parsers", "datasets", "game"}  # poker, below irl/
     | {"agents", "gym", "poker", "tournaments", "studies", "cli", "__main__"}
 )
 
@@ -58,12 +58,12 @@ KNOWN_VIOLATIONS: frozenset[tuple[str, str]] = frozenset(KNOWN_VIOLATIONS_WHY)
 @dataclass(frozen=True)
 class Import:
     module: str  # the importing module, e.g. pokerirl.irl.table
-    component: str  # the imported component, e.g. encoding
+    component: str  # the imported component, e.g. holdem
     line: int
 
 
 def component_of(name: str, package: Path) -> str | None:
-    """``encoding`` for ``pokerirl.encoding.ACTIONS``, None outside the package or for the
+    """``holdem`` for ``pokerirl.holdem.ACTIONS``, None outside the package or for the
     package itself (``from pokerirl import __version__``)."""
     parts = name.split(".")
     if parts[0] != package.name or len(parts) < 2:
@@ -239,8 +239,8 @@ def test_no_two_components_import_each_other() -> None:
 @pytest.mark.parametrize(
     ("source", "expected"),
     [
-        ("import pokerirl.encoding", {("pokerirl.irl.new", "encoding")}),
-        ("from pokerirl.encoding import ACTIONS", {("pokerirl.irl.new", "encoding")}),
+        ("import pokerirl.holdem", {("pokerirl.irl.new", "holdem")}),
+        ("from pokerirl.holdem import ACTIONS", {("pokerirl.irl.new", "holdem")}),
         ("from pokerirl import datasets", {("pokerirl.irl.new", "datasets")}),
         ("from .. import game", {("pokerirl.irl.new", "game")}),
         ("def f():\n    from pokerirl.cli import app", {("pokerirl.irl.new", "cli")}),
@@ -259,7 +259,7 @@ def test_the_checker_sees_each_kind_of_import(
     for name in ("irl", "datasets", "game", "cli", "gym", "store", "poker"):
         (package / name).mkdir(parents=True)
         (package / name / "__init__.py").write_text("")
-    for name in ("encoding", "execution", "parquet"):
+    for name in ("holdem", "execution", "parquet"):
         (package / f"{name}.py").write_text("")
     (package / "__init__.py").write_text("")
     (package / "irl" / "run.py").write_text("")

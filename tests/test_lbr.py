@@ -18,16 +18,16 @@ import pytest
 import torch
 
 from pokerirl.agents.dqn import GreedyQAgent, QNetwork
-from pokerirl.encoding import NUM_CARDS, RAISE
 from pokerirl.errors import ConfigError
 from pokerirl.execution import Backend
-from pokerirl.game.agents import agent_action_probs, make_agent
+from pokerirl.game.bots import agent_action_probs, make_agent
 from pokerirl.game.deals import deal_cards
 from pokerirl.game.encodings import get_encoding
 from pokerirl.game.engine import LimitHoldemBatch
 from pokerirl.game.evaluator import hand_strength
 from pokerirl.game.match import agent_encoding, observe, turn_cards
 from pokerirl.game.preflop import preflop_equity
+from pokerirl.holdem import NUM_CARDS, RAISE
 from pokerirl.tournaments.equity import (
     CLASH,
     PAIRS,

@@ -23,7 +23,7 @@ from pokerirl.gym.irl import irl_config, load_env_transitions, obs_standardizati
 from pokerirl.gym.online import OnlineSettings, PPOGenerator, train_gym_online
 from pokerirl.gym.presets import TASKS
 from pokerirl.irl import load_policy, load_reward
-from pokerirl.irl.airl import default_nets
+from pokerirl.irl.adversarial import default_nets
 from pokerirl.irl.losses import gaussian_log_prob
 from pokerirl.irl.online import OnlineTrainer, Rollout
 

@@ -18,7 +18,7 @@ from pokerirl.cli import app
 from pokerirl.datasets.toy import toy_expert_table
 from pokerirl.game.deals import deal_cards
 from pokerirl.irl import load_config, load_reward
-from pokerirl.irl.airl import default_nets
+from pokerirl.irl.adversarial import default_nets
 from pokerirl.irl.online import OnlineTrainer
 from pokerirl.irl.run import load_policy
 from pokerirl.poker.data import read_table

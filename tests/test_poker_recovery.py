@@ -114,7 +114,7 @@ def test_a_dqn_on_the_strength_encoding_follows_a_strength_dependent_reward() ->
     from pokerirl.agents.dqn import DQNConfig, train_dqn
     from pokerirl.game import DecisionLog, make_agent, play_match
     from pokerirl.game.encodings import STRENGTH, STRENGTH_FEATURES
-    from pokerirl.poker.rewards import Decisions, ObsReward, TransformedReward
+    from pokerirl.poker.rewards import ObservedDecisions, ObsReward, TransformedReward
 
     column = list(STRENGTH_FEATURES).index("equity")
     offset = sum(list(STRENGTH_FEATURES.values())[:column])
@@ -136,7 +136,7 @@ def test_a_dqn_on_the_strength_encoding_follows_a_strength_dependent_reward() ->
     log: list[DecisionLog] = []
     play_match(learner.greedy_agent(), make_agent("random"), hands=4_000, seed=1, log=log)
     seen = DecisionLog.concatenate(log)
-    strong = Decisions(obs=seen.obs, legal_mask=seen.legal_mask, cards=seen.cards).encode(
+    strong = ObservedDecisions(obs=seen.obs, legal_mask=seen.legal_mask, cards=seen.cards).encode(
         STRENGTH
     )[:, offset] > 0.65
     can_raise = seen.legal_mask[:, 1]

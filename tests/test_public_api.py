@@ -18,7 +18,7 @@ ROOT = Path(__file__).resolve().parents[1]
 HOME = {  # each public name and the module that defines it
     "Transitions": "pokerirl.irl.transitions",
     "AIRLConfig": "pokerirl.irl.config",
-    "train": "pokerirl.irl.airl",
+    "train": "pokerirl.irl.adversarial",
     "train_into": "pokerirl.irl.run",
     "load_reward": "pokerirl.irl.run",
     "load_policy": "pokerirl.irl.run",
@@ -27,7 +27,7 @@ HOME = {  # each public name and the module that defines it
     "from_imitation_trajectories": "pokerirl.irl.interop",
     "to_imitation_trajectories": "pokerirl.irl.interop",
     "play_match": "pokerirl.game.match",
-    "Agent": "pokerirl.game.agents",
+    "Agent": "pokerirl.game.bots",
     "load_agent": "pokerirl.agents.checkpoint",
     "resolve_agent": "pokerirl.agents.registry",
     "RLCardAgent": "pokerirl.agents.rlcard_adapter",

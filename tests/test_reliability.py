@@ -32,7 +32,7 @@ from pokerirl.agents.dqn import QNetwork
 from pokerirl.agents.rlcard_import import UntrustedCheckpointWarning, load_rlcard_dqn
 from pokerirl.cli import app
 from pokerirl.datasets.ingest import ingest_table, summary_path
-from pokerirl.game.agents import make_agent
+from pokerirl.game.bots import make_agent
 from pokerirl.game.match import MAX_HANDS, check_match_size, play_match
 from pokerirl.game.synth import write_synthetic_month
 from pokerirl.parsers import irc

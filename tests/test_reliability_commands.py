@@ -47,7 +47,7 @@ class Inputs:
 def _poker_run(folder: Path) -> Path:
     """An untrained poker reward run (72-d observations, 4 actions), as ``pokerirl train``
     saves one."""
-    from pokerirl.irl.airl import TrainResult
+    from pokerirl.irl.adversarial import TrainResult
     from pokerirl.irl.config import AIRLConfig
     from pokerirl.irl.nets import NetSpec, build_nets
     from pokerirl.irl.run import save_run

@@ -61,7 +61,7 @@ def read_only(folder: Path) -> Iterator[None]:
 
 def _gym_run(folder: Path) -> Path:
     """A MountainCar IRL run folder (the project's own ``save_run``), untrained."""
-    from pokerirl.irl.airl import TrainResult
+    from pokerirl.irl.adversarial import TrainResult
     from pokerirl.irl.config import AIRLConfig
     from pokerirl.irl.nets import NetSpec, build_nets
     from pokerirl.irl.run import save_run

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from pokerirl.encoding import CALL, CHECK, FOLD, RAISE
+from pokerirl.holdem import CALL, CHECK, FOLD, RAISE
 from pokerirl.parsers.replay import ReplayError, replay_actions
 
 

@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from pokerirl.encoding import CALL, CHECK, FOLD, RAISE, encode_obs, parse_card
+from pokerirl.holdem import CALL, CHECK, FOLD, RAISE, encode_obs, parse_card
 from pokerirl.poker.reward_card import (
     CARD_FIGURE,
     CARD_FILE,

@@ -20,7 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 
 import pokerirl
-from pokerirl.encoding import CALL, CHECK, FOLD, RAISE  # action ids, RLCard's order
+from pokerirl.holdem import CALL, CHECK, FOLD, RAISE  # action ids, RLCard's order
 
 
 @dataclass(frozen=True, kw_only=True)

@@ -1,5 +1,8 @@
 """Trained agents (DQN on the sparse payoff or on a learned reward) and agent resolution.
 
+The learned agents live here; the built-in bots in :mod:`pokerirl.game.bots`, the agents
+made of an IRL run (``reward:RUN``, ``policy:RUN``) in :mod:`pokerirl.poker.run_agents`.
+
 :func:`resolve_agent` is the one place that turns what a user typed into an agent: a built-in
 name (``random``, ``raise``, ``call``, ``tightbot``, ``loosebot``), an agent folder written by
 ``pokerirl agent train``, or ``rlcard:PATH`` for an RLCard DQN checkpoint.
@@ -27,7 +30,7 @@ from typing import Any
 
 from pokerirl.agents.names import CONFIG_FILE, KEPT_FILE, MODEL_FILE, RLCARD_PREFIX
 from pokerirl.agents.registry import agent_fingerprint, resolve_agent
-from pokerirl.game.agents import BUILT_IN_AGENTS, Agent
+from pokerirl.game.bots import BUILT_IN_AGENTS, Agent
 from pokerirl.jsonio import read_bytes
 from pokerirl.poker.agent_specs import POLICY_PREFIX, REWARD_PREFIX
 
@@ -53,7 +56,7 @@ def ship_agent(spec: str) -> ShippedAgent:
         source = RewardSource.resolve(spec.removeprefix(REWARD_PREFIX))
         return ShippedAgent(spec=spec, files=source.files)
     if spec.startswith(POLICY_PREFIX):
-        from pokerirl.poker.agents import policy_files
+        from pokerirl.poker.run_agents import policy_files
 
         files = policy_files(spec.removeprefix(POLICY_PREFIX))
         return ShippedAgent(spec=spec, files=tuple(files.items()))

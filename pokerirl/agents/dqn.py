@@ -42,15 +42,15 @@ from pokerirl.agents.config import (
     DQNConfig,
     Opponent,
 )
-from pokerirl.encoding import NUM_ACTIONS, OBS_SIZE
 from pokerirl.errors import ConfigError
 from pokerirl.execution import unit_progress
-from pokerirl.game.agents import Agent, RandomAgent, agent_actions, make_agent
+from pokerirl.game.bots import Agent, RandomAgent, agent_actions, make_agent
 from pokerirl.game.deals import DEAL_BLOCK, deal_cards
-from pokerirl.game.encodings import RLCARD, Encoding, EncodingName, States, get_encoding
+from pokerirl.game.encodings import RLCARD, Encoding, EncodingName, RawStates, get_encoding
 from pokerirl.game.engine import LimitHoldemBatch
 from pokerirl.game.match import agent_encoding, observe, turn_cards
-from pokerirl.poker.rewards import RAISE_COUNTS, Decisions, PokerReward, as_poker_reward
+from pokerirl.holdem import NUM_ACTIONS, OBS_SIZE
+from pokerirl.poker.rewards import RAISE_COUNTS, ObservedDecisions, PokerReward, as_poker_reward
 
 RewardFn = Callable[[np.ndarray, np.ndarray], np.ndarray] | PokerReward
 """A learned reward: f(obs (B, 72) uint8, actions (B,) int64) -> (B,) float rewards, or a
@@ -393,7 +393,7 @@ def train_dqn(
                         obs = plain_obs
                     else:
                         assert cards is not None  # a non-RLCard encoding reads the cards
-                        states = States(cards=cards, raise_nums=game.raises[learner_hands],
+                        states = RawStates(cards=cards, raise_nums=game.raises[learner_hands],
                                         legal_mask=legal)  # fmt: skip
                         obs = encoded[encoding.spec] = encoding.encode(states)
                     # This state closes the learner's previous transition in these hands.
@@ -415,7 +415,7 @@ def train_dqn(
                         assert cards is not None  # staging needs the cards (needs_cards)
                         pending.staged.note(learner_hands, cards, legal, actions)
                     elif reward is not None:
-                        decisions = Decisions(obs=plain_obs, legal_mask=legal, cards=cards,
+                        decisions = ObservedDecisions(obs=plain_obs, legal_mask=legal, cards=cards,
                                               encoded=encoded)  # fmt: skip
                         rewards = decision_weight * reward(decisions, actions)
                     pending.open(learner_hands, obs, actions, rewards)
@@ -617,8 +617,8 @@ class _Staged:
         (_, obs, taken, rewards, next_obs, next_legal, done), self.closed = self._take(
             self.closed, ended
         )
-        states = States(cards=cards, raise_nums=raises[hands], legal_mask=legal)
-        decisions = Decisions(obs=RLCARD.encode(states), legal_mask=legal, cards=cards)
+        states = RawStates(cards=cards, raise_nums=raises[hands], legal_mask=legal)
+        decisions = ObservedDecisions(obs=RLCARD.encode(states), legal_mask=legal, cards=cards)
         f = reward(decisions, actions) if weight else np.zeros(len(actions), np.float32)
         learner.replay.add(obs, taken, rewards + weight * f, next_obs, next_legal, done=done)
         learner.total_t += len(taken)

@@ -11,7 +11,7 @@ from pathlib import Path
 
 from pokerirl.agents.names import RLCARD_PREFIX
 from pokerirl.errors import InputError, check_argument
-from pokerirl.game.agents import BUILT_IN_AGENTS, Agent, make_agent
+from pokerirl.game.bots import BUILT_IN_AGENTS, Agent, make_agent
 from pokerirl.poker.agent_specs import POLICY_PREFIX, REWARD_PREFIX
 
 
@@ -29,11 +29,11 @@ def resolve_agent(spec: str) -> Agent:
     if spec in BUILT_IN_AGENTS:
         return make_agent(spec)
     if spec.startswith(REWARD_PREFIX):
-        from pokerirl.poker.agents import reward_agent
+        from pokerirl.poker.run_agents import reward_agent
 
         return reward_agent(spec)
     if spec.startswith(POLICY_PREFIX):
-        from pokerirl.poker.agents import policy_agent
+        from pokerirl.poker.run_agents import policy_agent
 
         return policy_agent(spec)
     if spec.startswith(RLCARD_PREFIX):

@@ -1,6 +1,6 @@
 """Play a pokerirl agent inside RLCard 1.2.0: an adapter with RLCard's agent interface.
 
-:class:`RLCardAgent` wraps any :class:`~pokerirl.game.agents.Agent` (a built-in, an agent
+:class:`RLCardAgent` wraps any :class:`~pokerirl.game.bots.Agent` (a built-in, an agent
 folder, ``reward:RUN``: whatever :func:`~pokerirl.agents.resolve_agent` returns) so that it
 sits in ``rlcard.make("limit-holdem")`` and plays RLCard's own ``rlcard.utils.tournament``:
 ``use_raw`` False, ``step(state)`` and ``eval_step(state)`` returning ``(action, info)``.
@@ -36,12 +36,12 @@ from typing import Any
 
 import numpy as np
 
-from pokerirl.encoding import ACTIONS, NUM_ACTIONS, NUM_CARDS, NUM_ROUNDS, rlcard_card_str
 from pokerirl.errors import InputError, check_count
-from pokerirl.game.agents import Agent, agent_action_probs, agent_actions
-from pokerirl.game.encodings import States
+from pokerirl.game.bots import Agent, agent_action_probs, agent_actions
+from pokerirl.game.encodings import RawStates
 from pokerirl.game.engine import SMALL_BLIND
 from pokerirl.game.match import agent_encoding
+from pokerirl.holdem import ACTIONS, NUM_ACTIONS, NUM_CARDS, NUM_ROUNDS, rlcard_card_str
 
 # RLCard's suit-then-rank card text ("SA", "CQ") -> pokerirl's card index.
 RLCARD_CARD_INDEX: Mapping[str, int] = {rlcard_card_str(i): i for i in range(NUM_CARDS)}
@@ -53,8 +53,8 @@ def _card_indices(texts: Any, what: str) -> list[int]:
         raise InputError(f"RLCard state: {what} {texts!r} are not RLCard cards") from None
 
 
-def rlcard_states(state: Mapping[str, Any]) -> States:
-    """The one decision state (a :class:`~pokerirl.game.encodings.States` of length 1) of an
+def rlcard_states(state: Mapping[str, Any]) -> RawStates:
+    """The one decision state (a :class:`~pokerirl.game.encodings.RawStates` of length 1) of an
     RLCard ``limit-holdem`` state of the player to act.
 
     Raises:
@@ -75,12 +75,12 @@ def rlcard_states(state: Mapping[str, Any]) -> States:
         raise_nums[0] = np.asarray(raw.get("raise_nums"), dtype=np.int8)
     legal = np.zeros((1, NUM_ACTIONS), dtype=bool)
     legal[0, list(state["legal_actions"])] = True
-    return States(cards=cards, raise_nums=raise_nums, legal_mask=legal)
+    return RawStates(cards=cards, raise_nums=raise_nums, legal_mask=legal)
 
 
 @dataclass(frozen=True, kw_only=True)
 class RLCardAgent:
-    """A pokerirl :class:`~pokerirl.game.agents.Agent` with RLCard 1.2.0's agent interface.
+    """A pokerirl :class:`~pokerirl.game.bots.Agent` with RLCard 1.2.0's agent interface.
 
     ``env.set_agents([RLCardAgent(agent=resolve_agent("agents/dqn")), RandomAgent(4)])``,
     then ``rlcard.utils.tournament(env, hands)``. ``seed`` seeds the generator the agent
@@ -107,7 +107,7 @@ class RLCardAgent:
         """The wrapped agent's name."""
         return self.agent.name
 
-    def _decide(self, states: States, obs: np.ndarray) -> int:
+    def _decide(self, states: RawStates, obs: np.ndarray) -> int:
         action = agent_actions(self.agent, obs, states.legal_mask, self.rng, lambda: states.cards)
         return int(action[0])
 

@@ -26,8 +26,8 @@ import torch
 from pokerirl.agents.checkpoint import save_agent
 from pokerirl.agents.dqn import GreedyQAgent, QNetwork
 from pokerirl.agents.names import RLCARD_PREFIX
-from pokerirl.encoding import NUM_ACTIONS, OBS_SIZE
 from pokerirl.errors import InputError
+from pokerirl.holdem import NUM_ACTIONS, OBS_SIZE
 
 _LAYER_KEY = re.compile(r"^fc_layers\.(\d+)\.(.+)$")
 

@@ -73,13 +73,13 @@ from pokerirl.atomic import atomic_path
 from pokerirl.errors import ConfigError, InputError
 from pokerirl.execution import Backend, read_files
 from pokerirl.game import DecisionLog, make_agent, play_match
-from pokerirl.game.agents import Agent
+from pokerirl.game.bots import Agent
 from pokerirl.game.encodings import get_encoding
 from pokerirl.irl.run import REWARD_RUN_FILES  # noqa: F401 - re-exported: pokerirl.agents.train.REWARD_RUN_FILES
 from pokerirl.jsonio import read_json_lines
 from pokerirl.poker.reward_sources import RewardSource
 from pokerirl.poker.rewards import (
-    Decisions,
+    ObservedDecisions,
     PokerReward,
     TransformedReward,
     as_poker_reward,
@@ -185,7 +185,7 @@ def followed(reward: PokerReward, log: Sequence[DecisionLog]) -> float:
     """The share of logged decisions (:class:`~pokerirl.game.DecisionLog`) that take
     ``reward``'s best legal action (:func:`pokerirl.poker.rewards.follow_share`)."""
     seen = DecisionLog.concatenate(list(log))
-    decisions = Decisions(obs=seen.obs, legal_mask=seen.legal_mask, cards=seen.cards)
+    decisions = ObservedDecisions(obs=seen.obs, legal_mask=seen.legal_mask, cards=seen.cards)
     return round(follow_share(reward, decisions, seen.actions), 6)
 
 

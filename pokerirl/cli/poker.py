@@ -468,7 +468,7 @@ def train(
     With --mode online the same folder, its config.json saying data.mode = online.
     """
     from pokerirl.irl import load_config
-    from pokerirl.irl.airl import resolve_device
+    from pokerirl.irl.adversarial import resolve_device
     from pokerirl.poker.train import train_em, train_runs
 
     both = () if hidden is None else ("reward_hidden", "policy_hidden")

@@ -44,10 +44,10 @@ import numpy as np
 import pyarrow as pa
 import pyarrow.compute as pc
 
-from pokerirl.encoding import NUM_ACTIONS, NUM_ROUNDS, OBS_SIZE, cards_from_text
 from pokerirl.errors import InputError
-from pokerirl.game.encodings import RLCARD, Encoding, EncodingName, States
+from pokerirl.game.encodings import RLCARD, Encoding, EncodingName, RawStates
 from pokerirl.game.spec import LEDUC, GameName, TableSpec, holdem_spec
+from pokerirl.holdem import NUM_ACTIONS, NUM_ROUNDS, OBS_SIZE, cards_from_text
 from pokerirl.parquet import fixed_width, read_parquet
 
 if TYPE_CHECKING:
@@ -245,7 +245,7 @@ def _imputation_columns(
     return weights, imputed, draw
 
 
-def table_states(table: pa.Table, legal_mask: np.ndarray, source: str, why: str) -> States:
+def table_states(table: pa.Table, legal_mask: np.ndarray, source: str, why: str) -> RawStates:
     """The decision states of a table's rows, from its ``hole_cards``, ``board`` and
     ``raise_nums`` columns; one line naming ``why`` (the encoding) when it lacks them."""
     missing = [name for name in STATE_COLUMNS if name not in table.column_names]
@@ -262,7 +262,7 @@ def table_states(table: pa.Table, legal_mask: np.ndarray, source: str, why: str)
         row = int(np.flatnonzero(cards[:, 0] < 0)[0])
         raise InputError(f"{source}: row {row} has no hole cards (concealed decisions are none)")
     raise_nums = fixed_width(table, "raise_nums", NUM_ROUNDS, source)
-    return States(cards=cards, raise_nums=raise_nums, legal_mask=legal_mask)
+    return RawStates(cards=cards, raise_nums=raise_nums, legal_mask=legal_mask)
 
 
 class _Encoded:

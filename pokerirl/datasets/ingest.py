@@ -36,7 +36,7 @@ from pokerirl.datasets.players import (
     Selector,
 )
 from pokerirl.datasets.table import IMPUTED_SCHEMA, SCHEMA, month_table
-from pokerirl.encoding import ACTIONS, FOLD
+from pokerirl.holdem import ACTIONS, FOLD
 from pokerirl.parsers.irc import (
     DROP_REASONS,
     KEPT,

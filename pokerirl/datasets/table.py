@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 import pyarrow as pa
 
-from pokerirl.encoding import (
+from pokerirl.holdem import (
     ACTIONS,
     BOARD_SIZE_BY_ROUND,
     CARD_TEXT,

@@ -17,7 +17,7 @@ import numpy as np
 import pyarrow as pa
 
 from pokerirl.datasets.table import fixed_size_list
-from pokerirl.encoding import (
+from pokerirl.holdem import (
     ACTIONS,
     BOARD_SIZE_BY_ROUND,
     CALL,

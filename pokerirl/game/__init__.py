@@ -3,7 +3,7 @@ agents and matches. See ``docs/rules.md`` for how the rules differ from ACPC's."
 
 from __future__ import annotations
 
-from pokerirl.game.agents import (
+from pokerirl.game.bots import (
     BUILT_IN_AGENTS,
     Agent,
     CallAgent,

@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from pokerirl.encoding import NUM_CARDS
+from pokerirl.holdem import NUM_CARDS
 
 DEAL_SIZE = 9  # 2 + 2 hole cards, 5 board cards
 DEAL_BLOCK = 4096

@@ -1,11 +1,11 @@
 """Feature encodings of a poker decision: what a reward, a policy or a DQN sees of a state.
 
-A decision state is what the engine and the decision tables both hold (:class:`States`): the
+A decision state is what the engine and the decision tables both hold (:class:`RawStates`): the
 player's hole cards and the board shown so far (in the order dealt, ``-1`` beyond), the
 raises per round as RLCard counts them, and the legal actions. An :class:`Encoding` turns a
 batch of them into one row of features each. Two exist:
 
-* ``rlcard``: RLCard 1.2.0's 72-d ``limit-holdem`` observation (:func:`~pokerirl.encoding.
+* ``rlcard``: RLCard 1.2.0's 72-d ``limit-holdem`` observation (:func:`~pokerirl.holdem.
   encode_obs`), bit for bit: 52 card bits with hole and board merged, and a raise-count
   one-hot per round. The paper's protocol and the authors' stay on it.
 * ``strength``: hole and board kept apart, and generic hand features computed by the
@@ -19,9 +19,9 @@ bare ``strength`` in a record made before versions means (:func:`recorded_encodi
 asking for ``strength`` gets the current version (:func:`get_encoding`); a run of the old one
 still loads, and says ``strength-v1``. A mismatch is refused in one line where it is loaded.
 
->>> from pokerirl.encoding import parse_card
+>>> from pokerirl.holdem import parse_card
 >>> cards = np.array([[parse_card(c) for c in "As Ah Ad Kc 7h".split()] + [-1, -1]], np.int8)
->>> states = States(cards=cards, raise_nums=np.zeros((1, 4), np.int8),
+>>> states = RawStates(cards=cards, raise_nums=np.zeros((1, 4), np.int8),
 ...                 legal_mask=np.array([[False, True, True, True]]))
 >>> RLCARD.encode(states).shape, STRENGTH.encode(states).shape
 ((1, 72), (1, 174))
@@ -43,7 +43,11 @@ from typing import ClassVar
 
 import numpy as np
 
-from pokerirl.encoding import (
+from pokerirl.errors import ConfigError
+from pokerirl.game.equity import exact_equity
+from pokerirl.game.evaluator import hand_strength
+from pokerirl.game.preflop import sampled_preflop_equity
+from pokerirl.holdem import (
     CALL,
     MAX_RAISES,
     NUM_CARDS,
@@ -51,10 +55,6 @@ from pokerirl.encoding import (
     OBS_SIZE,
     encode_obs,
 )
-from pokerirl.errors import ConfigError
-from pokerirl.game.equity import exact_equity
-from pokerirl.game.evaluator import hand_strength
-from pokerirl.game.preflop import sampled_preflop_equity
 
 NUM_RANKS = 13
 BOARD_CARDS_BY_STREET = (0, 3, 4, 5)
@@ -74,11 +74,14 @@ class EncodingName(StrEnum):
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
-class States:
-    """A batch of decision states, as the engine and the tables hold them.
+class RawStates:
+    """A batch of decision states, as the engine and the tables hold them, before encoding.
+
+    What an :class:`Encoding` reads; a reward reads
+    :class:`~pokerirl.poker.rewards.ObservedDecisions` (the encoded observations).
 
     ``cards`` (N, 7): hole cards, then the board shown so far, ``-1`` beyond (see
-    :func:`pokerirl.game.agents.seat_cards`); ``raise_nums`` (N, 4): raises per round as
+    :func:`pokerirl.game.bots.seat_cards`); ``raise_nums`` (N, 4): raises per round as
     RLCard counts them (big blind excluded, capped at 4); ``legal_mask`` (N, 4) over (call,
     raise, fold, check).
     """
@@ -91,7 +94,7 @@ class States:
         n = len(self.cards)
         shapes = (np.shape(self.cards), np.shape(self.raise_nums), np.shape(self.legal_mask))
         if shapes != ((n, 7), (n, NUM_ROUNDS), (n, 4)):
-            raise ValueError(f"States need (N, 7), (N, 4) and (N, 4) arrays, got {shapes}")
+            raise ValueError(f"RawStates need (N, 7), (N, 4) and (N, 4) arrays, got {shapes}")
 
     def __len__(self) -> int:
         return len(self.cards)
@@ -102,14 +105,14 @@ class States:
         shown = (np.asarray(self.cards)[:, 2:] >= 0).sum(axis=1)
         return np.searchsorted(np.array(BOARD_CARDS_BY_STREET), shown).astype(np.int64)
 
-    def take(self, rows: np.ndarray) -> States:
+    def take(self, rows: np.ndarray) -> RawStates:
         rows = np.asarray(rows)
-        return States(cards=self.cards[rows], raise_nums=self.raise_nums[rows],
+        return RawStates(cards=self.cards[rows], raise_nums=self.raise_nums[rows],
                       legal_mask=self.legal_mask[rows])  # fmt: skip
 
 
 class Encoding:
-    """A named feature map of :class:`States` to (N, ``width``) rows of ``dtype``.
+    """A named feature map of :class:`RawStates` to (N, ``width``) rows of ``dtype``.
 
     ``needs_cards``: whether it reads the cards in the order dealt (hole apart from board),
     which RLCard's observation cannot give back.
@@ -127,7 +130,7 @@ class Encoding:
         has had more than one."""
         return str(self.name)
 
-    def encode(self, states: States) -> np.ndarray:
+    def encode(self, states: RawStates) -> np.ndarray:
         raise NotImplementedError
 
     def __repr__(self) -> str:
@@ -142,7 +145,7 @@ class RLCardEncoding(Encoding):
     dtype = np.uint8
     needs_cards = False
 
-    def encode(self, states: States) -> np.ndarray:
+    def encode(self, states: RawStates) -> np.ndarray:
         return encode_obs(states.cards, states.raise_nums)
 
 
@@ -201,7 +204,7 @@ class StrengthEncoding(Encoding):
     def spec(self) -> str:
         return f"{self.name}-v{self.version}"
 
-    def encode(self, states: States) -> np.ndarray:
+    def encode(self, states: RawStates) -> np.ndarray:
         # Each block is cast as it is written into its columns of one array: no per-block
         # float32 copies and no concatenation (a DQN encodes ~120 rows a call, so these
         # per-call copies were a tenth of the encoding's time). The same values as
@@ -211,13 +214,13 @@ class StrengthEncoding(Encoding):
             found[:, start:stop] = block
         return found
 
-    def features(self, states: States) -> dict[str, np.ndarray]:
+    def features(self, states: RawStates) -> dict[str, np.ndarray]:
         """Each block of :data:`STRENGTH_FEATURES` as an (N, width) float32 array (views of
         :meth:`encode`'s row)."""
         found = self.encode(states)
         return {name: found[:, start:stop] for name, (start, stop) in _COLUMNS.items()}
 
-    def _blocks(self, states: States) -> tuple[np.ndarray, ...]:
+    def _blocks(self, states: RawStates) -> tuple[np.ndarray, ...]:
         """The blocks of :data:`STRENGTH_FEATURES`, in its order, as computed (any dtype)."""
         cards = np.asarray(states.cards, dtype=np.int64)
         street = states.street

@@ -19,7 +19,7 @@ Betting as RLCard does it (``docs/rules.md`` lists how this differs from ACPC):
 All state lives in numpy arrays of length B; every method works on an index array of hands,
 and only unfinished hands are visited, so hands that end early cost nothing afterwards.
 
->>> from pokerirl.encoding import CALL, CHECK, FOLD
+>>> from pokerirl.holdem import CALL, CHECK, FOLD
 >>> game = LimitHoldemBatch.from_seed(seed=0, start=0, count=2)
 >>> game.legal_mask().astype(int).tolist()  # call, raise, fold, check for both small blinds
 [[1, 1, 1, 0], [1, 1, 1, 0]]
@@ -37,7 +37,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pokerirl.encoding import (
+from pokerirl.errors import PokerIRLError
+from pokerirl.game.deals import DEAL_SIZE, deal_cards
+from pokerirl.game.evaluator import seven_card_strengths
+from pokerirl.holdem import (
     BOARD_SIZE_BY_ROUND,
     CALL,
     CHECK,
@@ -48,9 +51,6 @@ from pokerirl.encoding import (
     RAISE,
     encode_obs,
 )
-from pokerirl.errors import PokerIRLError
-from pokerirl.game.deals import DEAL_SIZE, deal_cards
-from pokerirl.game.evaluator import seven_card_strengths
 
 SMALL_BLIND = 1
 BIG_BLIND = 2

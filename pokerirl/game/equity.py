@@ -20,7 +20,7 @@ divided once at the end, so the same cards give the same bytes on every platform
 ``tests/test_equity.py`` checks the river and turn against an independent evaluator
 (``eval7``) by brute force, the flop table on random flops, and the preflop classes.
 
->>> from pokerirl.encoding import parse_card
+>>> from pokerirl.holdem import parse_card
 >>> def cards(text):
 ...     return np.array([[parse_card(c) for c in text.split()]])
 >>> round(float(river_equity(cards("As Ah"), cards("Ad Kc 7h 2s 3d"))[0]), 4)  # 45: a wheel
@@ -39,7 +39,6 @@ from pathlib import Path
 
 import numpy as np
 
-from pokerirl.encoding import NUM_CARDS, NUM_PAIRS, PAIRS
 from pokerirl.game.cases import (
     FLOP_DENOMINATOR,
     RIVER_DENOMINATOR,
@@ -67,6 +66,7 @@ from pokerirl.game.evaluator import (
     seven_card_strengths,
 )
 from pokerirl.game.preflop import preflop_equity  # its table is summed from our flop table
+from pokerirl.holdem import NUM_CARDS, NUM_PAIRS, PAIRS
 
 NUM_RANKS = 13
 FLOP_CLASSES = 1_755  # flops up to a permutation of the suits

@@ -20,7 +20,7 @@ against eval7.
 Flushes never coexist with quads or full houses in seven cards, so a hand with five or more
 cards of one suit is scored by the flush table alone.
 
->>> from pokerirl.encoding import parse_card
+>>> from pokerirl.holdem import parse_card
 >>> def cards(text):
 ...     return np.array([[parse_card(c) for c in text.split()]])
 >>> royal = hand_strength(cards("As Ks Qs Js Ts 2c 3d"))
@@ -40,7 +40,7 @@ from functools import cache
 
 import numpy as np
 
-from pokerirl.encoding import NUM_CARDS, NUM_PAIRS, PAIRS
+from pokerirl.holdem import NUM_CARDS, NUM_PAIRS, PAIRS
 
 HAND_CATEGORIES: tuple[str, ...] = (
     "",  # RLCard's 0, "not yet evaluated"; never returned
@@ -172,14 +172,14 @@ def hand_strength(cards: np.ndarray) -> np.ndarray:
     """Strength of the best five of seven cards, for many hands at once.
 
     Args:
-        cards: (N, 7) card indices in :mod:`pokerirl.encoding` order (hole cards and board,
+        cards: (N, 7) card indices in :mod:`pokerirl.holdem` order (hole cards and board,
             any order, no duplicates within a row).
 
     Returns:
         (N,) int64; ``a > b`` exactly when RLCard's ``compare_hands`` says hand a beats hand b,
         and ``a == b`` when it splits the pot.
 
-    >>> from pokerirl.encoding import parse_card
+    >>> from pokerirl.holdem import parse_card
     >>> quads = [parse_card(c) for c in "9s 9h 9d 9c Ks 2h 3d".split()]
     >>> int(category(hand_strength(np.array([quads])))[0])
     8
@@ -196,7 +196,7 @@ def hand_strength(cards: np.ndarray) -> np.ndarray:
 # Every hole-card pair on many boards at once: the fast path shared by the engine's showdowns,
 # the strength encoding's exact equity, AIVAT and local best response.
 #
-# The 1,326 hole-card pairs are numbered in :data:`~pokerirl.encoding.PAIRS` (``(a, b)``,
+# The 1,326 hole-card pairs are numbered in :data:`~pokerirl.holdem.PAIRS` (``(a, b)``,
 # ``a < b``). :func:`board_strengths` ranks every pair on M five-card boards in one pass: a
 # board's rank key is summed once and shared by the 91 rank combinations of a pair, and a
 # dense index replaces the binary search. Pairs that share a card with their board get a

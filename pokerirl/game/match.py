@@ -5,7 +5,7 @@ when ``i`` is odd. Without duplicate, hand ``i`` uses deal ``i`` of the seed; wi
 hands ``2j`` and ``2j + 1`` both use deal ``j``, so each agent plays each deal from both seats
 (with each seat's cards), and the pair's mean is the independent unit for the standard error.
 
->>> from pokerirl.game.agents import make_agent
+>>> from pokerirl.game.bots import make_agent
 >>> result = play_match(make_agent("raise"), make_agent("call"), hands=1_000, seed=1)
 >>> result.hands, result.duplicate, round(result.mbb_per_hand) == round(result.mbb_per_hand)
 (1000, True, True)
@@ -24,9 +24,9 @@ from tqdm import tqdm
 
 from pokerirl.errors import ConfigError, check_argument, check_protocol
 from pokerirl.execution import unit_progress
-from pokerirl.game.agents import Agent, agent_actions, seat_cards
+from pokerirl.game.bots import Agent, agent_actions, seat_cards
 from pokerirl.game.deals import deal_cards
-from pokerirl.game.encodings import Encoding, EncodingName, States, get_encoding
+from pokerirl.game.encodings import Encoding, EncodingName, RawStates, get_encoding
 from pokerirl.game.engine import (
     IllegalActionError,
     LimitHoldemBatch,
@@ -96,7 +96,7 @@ def observe(game: LimitHoldemBatch, hands: np.ndarray, encoding: Encoding) -> np
     72-d one for ``rlcard``)."""
     if encoding.name == EncodingName.RLCARD:
         return game.observe(hands)
-    states = States(cards=turn_cards(game, hands), raise_nums=game.raises[hands],
+    states = RawStates(cards=turn_cards(game, hands), raise_nums=game.raises[hands],
                     legal_mask=game.legal_mask(hands))  # fmt: skip
     return encoding.encode(states)
 

@@ -14,7 +14,7 @@ rank for suited hands and lower rank for offsuit ones, pairs on the diagonal; ra
   :func:`compute_preflop_table` with 200,000 runouts per class (seed 0; standard error about
   0.001).
 
->>> from pokerirl.encoding import parse_card
+>>> from pokerirl.holdem import parse_card
 >>> aces, seven_deuce = [parse_card("As"), parse_card("Ah")], [parse_card("7c"), parse_card("2d")]
 >>> [round(float(e), 3) for e in preflop_equity(np.array([aces, seven_deuce]))]
 [0.852, 0.346]
@@ -24,9 +24,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from pokerirl.encoding import NUM_CARDS
 from pokerirl.game.cases import PREFLOP_DENOMINATOR
 from pokerirl.game.evaluator import hand_strength
+from pokerirl.holdem import NUM_CARDS
 
 NUM_RANKS = 13
 

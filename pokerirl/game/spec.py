@@ -19,10 +19,10 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from enum import StrEnum
 
-from pokerirl.encoding import ACTIONS as HOLDEM_ACTIONS
 from pokerirl.game.encodings import Encoding
 from pokerirl.game.leduc.batch import ACTIONS as LEDUC_ACTIONS
 from pokerirl.game.leduc.engine import OBSERVATION_SIZE
+from pokerirl.holdem import ACTIONS as HOLDEM_ACTIONS
 
 
 class GameName(StrEnum):

@@ -25,9 +25,9 @@ from pathlib import Path
 
 import numpy as np
 
-from pokerirl.encoding import card_str
 from pokerirl.errors import ConfigError
 from pokerirl.game.evaluator import hand_strength
+from pokerirl.holdem import card_str
 
 SMALL_BLIND, BIG_BLIND = 5, 10
 BET_BY_STREET = (10, 10, 20, 20)

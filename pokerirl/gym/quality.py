@@ -407,7 +407,7 @@ def _as_transition_reward(function: RewardFunction, *, full: bool) -> Transition
 
 def initial_reward(record: Mapping[str, Any]) -> RewardFunction:
     """The run's reward net as it was before training: same architecture, built from the
-    run's seed as :func:`pokerirl.irl.airl.default_nets` does, standardization folded in."""
+    run's seed as :func:`pokerirl.irl.adversarial.default_nets` does, standardization folded in."""
     space = record["architecture"]["action_space"]
     discrete = space["type"] == "discrete"
     with torch.random.fork_rng(devices=[]):

@@ -1,7 +1,7 @@
 """AIRL / Hybrid-AIRL / GAIL reward learning on expert :class:`Transitions`.
 
-:mod:`pokerirl.irl.airl` is the algorithm and its entry points :func:`train` and
-:func:`train_many` (one run, or R in lock-step); :mod:`~.trainer` is its
+:mod:`pokerirl.irl.adversarial` holds the three algorithms and their entry points
+:func:`train` and :func:`train_many` (one run, or R in lock-step); :mod:`~.trainer` is its
 :class:`AdversarialTrainer`, made of strategies: a :class:`Discriminator` (AIRL's D or
 GAIL's, :mod:`~.discriminators`) and a :class:`PolicyHead` (discrete or Gaussian,
 :mod:`~.heads`). Its other pieces are :mod:`~.losses`, :mod:`~.fast`, :mod:`~.stacked` nets,
@@ -29,7 +29,7 @@ import types
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:  # what the names are, for type checkers
-    from pokerirl.irl.airl import (
+    from pokerirl.irl.adversarial import (
         ManyResult,
         TrainResult,
         baselines,
@@ -61,7 +61,13 @@ if TYPE_CHECKING:  # what the names are, for type checkers
         build_nets,
         project_to_simplex,
     )
-    from pokerirl.irl.records import Batch, EpochCallback, EpochMetrics, EpochRecord, StepLosses
+    from pokerirl.irl.records import (
+        EpochCallback,
+        EpochMetrics,
+        EpochRecord,
+        StepLosses,
+        TrainingBatch,
+    )
     from pokerirl.irl.reward import PolicyNet, RewardFn, RewardNet
     from pokerirl.irl.run import (
         ObsMap,
@@ -84,15 +90,15 @@ if TYPE_CHECKING:  # what the names are, for type checkers
 # without it, so every name here loads its module when first used.
 _LAZY = {
     "AdversarialTrainer": "trainer",
-    "ManyResult": "airl",
-    "TrainResult": "airl",
-    "baselines": "airl",
-    "default_nets": "airl",
-    "discriminator_loss": "airl",
-    "evaluate": "airl",
-    "noise_schedule": "airl",
-    "train": "airl",
-    "train_many": "airl",
+    "ManyResult": "adversarial",
+    "TrainResult": "adversarial",
+    "baselines": "adversarial",
+    "default_nets": "adversarial",
+    "discriminator_loss": "adversarial",
+    "evaluate": "adversarial",
+    "noise_schedule": "adversarial",
+    "train": "adversarial",
+    "train_many": "adversarial",
     "AIRLConfig": "config",
     "ALGOS": "config",
     "ConfigError": "config",
@@ -117,7 +123,7 @@ _LAZY = {
     "StateActionReward": "nets",
     "build_nets": "nets",
     "project_to_simplex": "nets",
-    "Batch": "records",
+    "TrainingBatch": "records",
     "EpochCallback": "records",
     "EpochMetrics": "records",
     "EpochRecord": "records",
@@ -146,7 +152,7 @@ _FUNCTIONS = {"baselines", "evaluate"}
 class _Package(types.ModuleType):
     def __getattribute__(self, name: str) -> Any:
         if name in _FUNCTIONS:
-            return getattr(importlib.import_module("pokerirl.irl.airl"), name)
+            return getattr(importlib.import_module("pokerirl.irl.adversarial"), name)
         return super().__getattribute__(name)
 
     def __getattr__(self, name: str) -> Any:
@@ -162,7 +168,6 @@ __all__ = [
     "AIRLConfig",
     "AIRLDiscriminator",
     "AdversarialTrainer",
-    "Batch",
     "ConfigError",
     "DiscreteHead",
     "DiscretePolicy",
@@ -193,6 +198,7 @@ __all__ = [
     "StateActionReward",
     "StepLosses",
     "TrainResult",
+    "TrainingBatch",
     "Transitions",
     "baselines",
     "build_nets",

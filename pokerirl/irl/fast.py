@@ -34,7 +34,7 @@ from pokerirl.irl.heads import DiscreteHead, PolicyHead, StepDraw
 from pokerirl.irl.losses import weighted_mean
 from pokerirl.irl.nets import MASKED_LOGIT, DiscretePolicy, StateActionReward
 from pokerirl.irl.optim import FlatAdam
-from pokerirl.irl.records import Batch, StepLosses, pack_step
+from pokerirl.irl.records import StepLosses, TrainingBatch, pack_step
 
 
 def _plain_relu_mlp(mlp: nn.Sequential) -> bool:
@@ -254,7 +254,7 @@ class HandDerivedStep:
             )
 
     @torch.no_grad()
-    def __call__(self, batch: Batch, draw: StepDraw) -> Tensor:
+    def __call__(self, batch: TrainingBatch, draw: StepDraw) -> Tensor:
         one = batch.at(0)  # the one run
         obs, expert, mask, env, weights = one.obs, one.expert, one.mask, one.env, one.weights
         acts = mlp_forward(self.policy.mlp, obs)

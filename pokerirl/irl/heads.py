@@ -37,7 +37,7 @@ from torch import Tensor
 from pokerirl.irl.config import AIRLConfig, DiscAction, NoiseForm, SupervisedForm
 from pokerirl.irl.losses import gaussian_log_prob, sample_one_hot, weighted_mean
 from pokerirl.irl.nets import project_to_simplex
-from pokerirl.irl.records import Batch
+from pokerirl.irl.records import TrainingBatch
 from pokerirl.irl.stacked import StackedNets
 from pokerirl.irl.transitions import Transitions
 
@@ -98,7 +98,7 @@ class PolicyHead(ABC, Generic[Acts]):
         """This head's random numbers for an epoch, (steps, B, ...), from ``generator``."""
 
     @abstractmethod
-    def act(self, policies: StackedNets, batch: Batch, draw: StepDraw) -> Acts:
+    def act(self, policies: StackedNets, batch: TrainingBatch, draw: StepDraw) -> Acts:
         """The policies at ``batch``'s states, with autograd's graph (the policy loss needs it)."""
 
     @abstractmethod
@@ -106,16 +106,16 @@ class PolicyHead(ABC, Generic[Acts]):
         """log π (R, B) of action vectors (R, B, k)."""
 
     @abstractmethod
-    def discriminator_rows(self, acts: Acts, batch: Batch, draw: StepDraw) -> PolicyRows:
+    def discriminator_rows(self, acts: Acts, batch: TrainingBatch, draw: StepDraw) -> PolicyRows:
         """What the discriminator sees of the policy (detached), noised when ``draw`` has
         noise. The trainer calls it without autograd."""
 
     @abstractmethod
-    def supervised_loss(self, acts: Acts, batch: Batch) -> Tensor:
+    def supervised_loss(self, acts: Acts, batch: TrainingBatch) -> Tensor:
         """The supervised term (R,): how far the policy is from the expert's actions."""
 
     @abstractmethod
-    def adversarial_loss(self, acts: Acts, batch: Batch, rewards: StackedNets) -> Tensor:
+    def adversarial_loss(self, acts: Acts, batch: TrainingBatch, rewards: StackedNets) -> Tensor:
         """E_π[log π − g] (R,), g the rewards' action-dependent part (called without s')."""
 
 
@@ -146,7 +146,7 @@ class DiscreteHead(PolicyHead[DiscreteActs]):
             return None
         return torch.rand(steps, batch, generator=generator, device=self.device)
 
-    def act(self, policies: StackedNets, batch: Batch, draw: StepDraw) -> DiscreteActs:
+    def act(self, policies: StackedNets, batch: TrainingBatch, draw: StepDraw) -> DiscreteActs:
         log_pi = policies(batch.obs, batch.mask)
         return DiscreteActs(log_pi=log_pi, probs=log_pi.exp())
 
@@ -164,17 +164,21 @@ class DiscreteHead(PolicyHead[DiscreteActs]):
             seen = project_to_simplex(seen + draw.sigma[..., None] * draw.noise, mask)
         return seen
 
-    def discriminator_rows(self, acts: DiscreteActs, batch: Batch, draw: StepDraw) -> PolicyRows:
+    def discriminator_rows(
+        self, acts: DiscreteActs, batch: TrainingBatch, draw: StepDraw
+    ) -> PolicyRows:
         seen = self.seen(acts.probs.detach(), batch.mask, draw)
         return PolicyRows(seen, self.log_prob(acts, batch.expert), self.log_prob(acts, seen))
 
-    def supervised_loss(self, acts: DiscreteActs, batch: Batch) -> Tensor:
+    def supervised_loss(self, acts: DiscreteActs, batch: TrainingBatch) -> Tensor:
         if self.supervised_form == SupervisedForm.SUM_MSE:
             # The authors': mse_loss(π's probabilities, one-hot a_E, reduction="sum").
             return _summed((acts.probs - batch.expert).square(), batch.weights)
         return weighted_mean(-self.log_prob(acts, batch.expert), batch.weights)
 
-    def adversarial_loss(self, acts: DiscreteActs, batch: Batch, rewards: StackedNets) -> Tensor:
+    def adversarial_loss(
+        self, acts: DiscreteActs, batch: TrainingBatch, rewards: StackedNets
+    ) -> Tensor:
         # Exact over the K actions: Σ_k π_k (log π_k − g(s, e_k)).
         with torch.no_grad():
             g = rewards(batch.obs[:, None], self.each_action, shared=(False, True))
@@ -208,7 +212,7 @@ class GaussianHead(PolicyHead[GaussianActs]):
         width = len(self.low)
         return torch.randn(steps, batch, width, generator=generator, device=self.low.device)
 
-    def act(self, policies: StackedNets, batch: Batch, draw: StepDraw) -> GaussianActs:
+    def act(self, policies: StackedNets, batch: TrainingBatch, draw: StepDraw) -> GaussianActs:
         assert draw.act is not None  # drawn every epoch
         mean, log_std = policies(batch.obs)
         log_std = log_std.clamp(self.log_std_min, self.log_std_max)
@@ -217,7 +221,9 @@ class GaussianHead(PolicyHead[GaussianActs]):
     def log_prob(self, acts: GaussianActs, actions: Tensor) -> Tensor:
         return gaussian_log_prob(actions, acts.mean, acts.log_std)
 
-    def discriminator_rows(self, acts: GaussianActs, batch: Batch, draw: StepDraw) -> PolicyRows:
+    def discriminator_rows(
+        self, acts: GaussianActs, batch: TrainingBatch, draw: StepDraw
+    ) -> PolicyRows:
         clean = (acts.sample if self.disc_action == DiscAction.SAMPLE else acts.mean).detach()
         if draw.noise is None or draw.sigma is None:
             seen = clean
@@ -230,12 +236,14 @@ class GaussianHead(PolicyHead[GaussianActs]):
             seen = torch.maximum(torch.minimum(clean + noise, self.high), self.low)
         return PolicyRows(seen, self.log_prob(acts, batch.expert), self.log_prob(acts, seen))
 
-    def supervised_loss(self, acts: GaussianActs, batch: Batch) -> Tensor:
+    def supervised_loss(self, acts: GaussianActs, batch: TrainingBatch) -> Tensor:
         if self.supervised_form == SupervisedForm.SUM_MSE:  # the authors': summed
             return _summed((acts.sample - batch.expert).square(), batch.weights)
         return weighted_mean((acts.mean - batch.expert).square().sum(-1), batch.weights)
 
-    def adversarial_loss(self, acts: GaussianActs, batch: Batch, rewards: StackedNets) -> Tensor:
+    def adversarial_loss(
+        self, acts: GaussianActs, batch: TrainingBatch, rewards: StackedNets
+    ) -> Tensor:
         # The reparameterized sample's, with the gradient through g(s, sample).
         g = rewards(batch.obs[:, None], acts.sample[:, None])[:, 0]
         log_pi = self.log_prob(acts, acts.sample)

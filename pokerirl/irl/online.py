@@ -299,7 +299,7 @@ def train_online_run(
     generator ``make_generator(reward=, policy=)`` makes of them, ``rounds`` rounds. The caller
     saves the result (:func:`~pokerirl.irl.run.save_run`) after what it adds (a fold of the
     observations' map)."""
-    from pokerirl.irl.airl import default_nets
+    from pokerirl.irl.adversarial import default_nets
     from pokerirl.irl.run import begin_run
 
     log = begin_run(folder, val_groups=val_groups, baselines=baselines)

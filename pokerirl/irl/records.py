@@ -19,8 +19,9 @@ from pokerirl.serial import Serializable, meta
 
 
 @dataclass(frozen=True, slots=True)
-class Batch:
-    """Training rows at some indices; every tensor has the indices' shape first.
+class TrainingBatch:
+    """A mini-batch of training rows (tensors) at some indices; every tensor has the indices'
+    shape first.
 
     ``expert`` holds the expert's action vectors (one-hots for discrete actions); the
     optional tensors are there when the data has them.
@@ -34,9 +35,9 @@ class Batch:
     dones: Tensor | None = None
     weights: Tensor | None = None  # each row's weight in the losses' means
 
-    def at(self, step: int) -> Batch:
+    def at(self, step: int) -> TrainingBatch:
         """The rows at first index ``step`` (one step of an epoch's batches, or one run)."""
-        return Batch(
+        return TrainingBatch(
             obs=self.obs[step],
             expert=self.expert[step],
             mask=_index(self.mask, step),

@@ -46,7 +46,7 @@ from torch import Tensor, nn
 from pokerirl.atomic import write_text
 from pokerirl.errors import PokerIRLError, check_argument
 from pokerirl.execution import progress_share, unit_progress
-from pokerirl.irl.airl import baselines, default_nets, train, train_many
+from pokerirl.irl.adversarial import baselines, default_nets, train, train_many
 from pokerirl.irl.config import AIRLConfig, Algo
 
 # A run folder's names and writer live in irl/folder.py (the trainer's `TrainResult.save`
@@ -239,7 +239,7 @@ def train_runs_into(
 
     Split (validation is a seeded share of the *groups*, ``config.val_fraction``, never of
     rows), ``hooks.obs_map``, baselines (:func:`run_baselines`, then ``hooks.baselines``),
-    :func:`begin_run` per folder, training (:func:`~pokerirl.irl.airl.train_many`, each epoch
+    :func:`begin_run` per folder, training (:func:`~pokerirl.irl.adversarial.train_many`, each epoch
     logged to each folder), then per run :func:`save_run`, its curves and ``hooks.finish``.
     ``data_path`` is where the data came from, for the record (``config.json``'s
     ``data.path``); ``data_lead`` and ``data_notes`` are the caller's own keys of ``data``,

@@ -8,13 +8,13 @@
 * a :class:`~pokerirl.irl.heads.PolicyHead`: everything that depends on the action space
   (discrete or Gaussian: act, log π, what the discriminator sees of π, the two policy losses).
 
-Its :meth:`~AdversarialTrainer.step` is the algorithm of :mod:`pokerirl.irl.airl`, top to
+Its :meth:`~AdversarialTrainer.step` is the algorithm of :mod:`pokerirl.irl.adversarial`, top to
 bottom: the policy acts, the discriminator is updated on the logits of expert and policy
 rows, then the policy. Where :func:`pokerirl.irl.fast.covers` the nets and strategies (the
 default poker nets, one run, the built-in head and discriminators, by exact type), a
 :class:`~pokerirl.irl.fast.HandDerivedStep` (the same step with hand-derived gradients) takes
-its place; a user's strategy always runs on autograd. :func:`~pokerirl.irl.airl.train` and
-:func:`~pokerirl.irl.airl.train_many` build one with the config's strategies.
+its place; a user's strategy always runs on autograd. :func:`~pokerirl.irl.adversarial.train` and
+:func:`~pokerirl.irl.adversarial.train_many` build one with the config's strategies.
 
 >>> import numpy as np
 >>> from pokerirl.irl import AIRLConfig, GAILDiscriminator, Transitions, default_nets
@@ -58,11 +58,11 @@ from pokerirl.irl.metrics import DISCRIMINATOR_METRICS, Metric
 from pokerirl.irl.nets import RewardFamily
 from pokerirl.irl.optim import FlatAdam
 from pokerirl.irl.records import (
-    Batch,
     EpochCallback,
     EpochMetrics,
     EpochRecord,
     StepLosses,
+    TrainingBatch,
     pack_step,
     unpack_steps,
 )
@@ -200,7 +200,7 @@ class AdversarialTrainer:
             "dones": data.dones,
             "weights": data.weights,
         }
-        self.rows = Batch(  # every training row, on the device
+        self.rows = TrainingBatch(  # every training row, on the device
             obs=data.obs.to(device),
             expert=data.action_vectors().to(device),
             **{
@@ -216,7 +216,7 @@ class AdversarialTrainer:
         # Gather a whole epoch's batches at once when that is small (one index per tensor
         # per epoch instead of per step); else per step.
         self.gather_epoch = self.runs * len(data) * (data.obs_dim + 8) <= 2**25
-        self.update: Callable[[Batch, StepDraw], Tensor] = self.step
+        self.update: Callable[[TrainingBatch, StepDraw], Tensor] = self.step
         if (
             fast_path
             and self.runs == 1
@@ -267,16 +267,16 @@ class AdversarialTrainer:
 
     # ------------------------------------------------------------------ one batch
 
-    def gather(self, rows: Tensor) -> Batch:
+    def gather(self, rows: Tensor) -> TrainingBatch:
         """The training tensors at ``rows`` (any shape of indices)."""
         optional = {name: getattr(self.rows, name) for name in _OPTIONAL}
-        return Batch(
+        return TrainingBatch(
             obs=self.rows.obs[rows],
             expert=self.rows.expert[rows],
             **{name: None if value is None else value[rows] for name, value in optional.items()},
         )
 
-    def step(self, batch: Batch, draw: StepDraw) -> Tensor:
+    def step(self, batch: TrainingBatch, draw: StepDraw) -> Tensor:
         """One discriminator and one policy update on a batch of (R, B) rows.
 
         Returns (R, 4B + 3), :func:`~pokerirl.irl.records.pack_step`'s row: f on expert and
@@ -314,7 +314,7 @@ class AdversarialTrainer:
         self.policy_opt.step()
         return pack_step(disc_record, StepLosses(p_loss, adversarial, supervised))
 
-    def reward(self, batch: Batch, actions: Tensor) -> Tensor:
+    def reward(self, batch: TrainingBatch, actions: Tensor) -> Tensor:
         """f (R, M, B) of (R, M, B, k) action rows at the batch's states (with s' when shaped)."""
         obs = batch.obs[:, None]
         if self.shaped:

@@ -33,8 +33,8 @@ from typing import IO
 
 import numpy as np
 
-from pokerirl.encoding import BOARD_SIZE_BY_ROUND, CARD_INDEX
 from pokerirl.errors import PokerIRLError
+from pokerirl.holdem import BOARD_SIZE_BY_ROUND, CARD_INDEX
 from pokerirl.parsers.replay import Replay, ReplayError, replay_actions
 
 # Big blind in chips per limit hold'em channel; bets are one big blind, doubled on turn and river.

@@ -20,8 +20,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from functools import lru_cache
 
-from pokerirl.encoding import CALL, CHECK, FOLD, MAX_RAISES, NUM_ROUNDS, RAISE
 from pokerirl.errors import InputError
+from pokerirl.holdem import CALL, CHECK, FOLD, MAX_RAISES, NUM_ROUNDS, RAISE
 
 # Chips are counted in small blinds: blinds 1 and 2, bets 2 preflop and on the flop, 4 later.
 BET_IN_SMALL_BLINDS = (2, 2, 4, 4)

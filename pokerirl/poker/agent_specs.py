@@ -1,4 +1,4 @@
-"""The spec prefixes of the agents made of an IRL run (:mod:`pokerirl.poker.agents`), apart
+"""The spec prefixes of the agents made of an IRL run (:mod:`pokerirl.poker.run_agents`), apart
 so that naming one needs no torch."""
 
 REWARD_PREFIX = "reward:"  # reward:RUN or reward:authors:FILE: the reward's argmax

@@ -36,9 +36,9 @@ from pathlib import Path
 
 import numpy as np
 
-from pokerirl.encoding import NUM_ACTIONS
 from pokerirl.errors import InputError
-from pokerirl.poker.rewards import AUTHORS_PREFIX, Decisions, PokerReward, read_capped
+from pokerirl.holdem import NUM_ACTIONS
+from pokerirl.poker.rewards import AUTHORS_PREFIX, ObservedDecisions, PokerReward, read_capped
 
 STATE_SIZE = 61  # 7 cards x 7 bits, then 4 rounds x 3 bits
 HIDDEN = 64
@@ -254,9 +254,11 @@ class AuthorsReward(PokerReward):
     def from_file(cls, path: str | os.PathLike[str]) -> AuthorsReward:
         return cls(read_authors_file(path), name=f"{AUTHORS_PREFIX}{path}")
 
-    def _hidden_parts(self, decisions: Decisions) -> tuple[np.ndarray, np.ndarray]:
+    def _hidden_parts(self, decisions: ObservedDecisions) -> tuple[np.ndarray, np.ndarray]:
         if decisions.cards is None:
-            raise ValueError("the authors' reward reads the cards: Decisions.cards is missing")
+            raise ValueError(
+                "the authors' reward reads the cards: ObservedDecisions.cards is missing"
+            )
         state = authors_state(decisions.cards, decisions.raise_counts())
         w1 = self.weights.w1
         return state @ w1[:, :STATE_SIZE].T + self.weights.b1, w1[:, STATE_SIZE:]
@@ -265,10 +267,10 @@ class AuthorsReward(PokerReward):
         hidden = np.where(pre > 0, pre, LEAKY_SLOPE * pre)
         return (hidden @ self.weights.w2.T + self.weights.b2)[..., 0].astype(np.float32)
 
-    def __call__(self, decisions: Decisions, actions: np.ndarray) -> np.ndarray:
+    def __call__(self, decisions: ObservedDecisions, actions: np.ndarray) -> np.ndarray:
         state_part, action_columns = self._hidden_parts(decisions)
         return self._head(state_part + action_columns.T[np.asarray(actions, dtype=np.int64)])
 
-    def action_values(self, decisions: Decisions) -> np.ndarray:
+    def action_values(self, decisions: ObservedDecisions) -> np.ndarray:
         state_part, action_columns = self._hidden_parts(decisions)
         return self._head(state_part[:, None, :] + action_columns.T[None, :, :])

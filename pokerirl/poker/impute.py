@@ -8,7 +8,7 @@ clash with the cards known in the hand (the board dealt, an opponent's shown pai
 
 with a uniform prior P(c) and a behaviour model π_B: a policy over the legal actions, read in
 its own :class:`~pokerirl.game.encodings.Encoding`. ``obs_t(c)`` is the decision's state with
-the hole cards ``c``, built as the engine and the tables build it (:class:`States` of the
+the hole cards ``c``, built as the engine and the tables build it (:class:`RawStates` of the
 pair, the board shown at that decision, its raise counts and legal actions). Every decision
 is one batched forward pass of π_B over all 1,326 pairs, many decisions at a time: no Python
 loop over pairs. A player who reached a showdown and lost (or won, or split) against a shown
@@ -51,7 +51,15 @@ from pokerirl.datasets.decisions import table_cards
 from pokerirl.datasets.ingest import FoldsResult, FoldsSummary, IngestSummary, ingest_table
 from pokerirl.datasets.players import Selection
 from pokerirl.datasets.table import IMPUTED_SCHEMA, SCHEMA, fixed_size_list
-from pokerirl.encoding import (
+from pokerirl.errors import InputError
+from pokerirl.game.encodings import (
+    Encoding,
+    RawStates,
+    StrengthEncoding,
+    get_encoding,
+)
+from pokerirl.game.evaluator import hand_strength
+from pokerirl.holdem import (
     ACTIONS,
     CARD_TEXT,
     FOLD,
@@ -62,14 +70,6 @@ from pokerirl.encoding import (
     PAIRS,
     encode_obs,
 )
-from pokerirl.errors import InputError
-from pokerirl.game.encodings import (
-    Encoding,
-    States,
-    StrengthEncoding,
-    get_encoding,
-)
-from pokerirl.game.evaluator import hand_strength
 from pokerirl.irl.metrics import Metric, Part
 from pokerirl.parquet import fixed_width
 from pokerirl.poker.folds import ImputeConfig
@@ -351,7 +351,7 @@ class Expansion:
         hidden = self.hidden
         index = np.arange(start, min(start + self.per_chunk, len(hidden.owner)))
         cards, clash = pair_cards(hidden.board[index])
-        states = States(
+        states = RawStates(
             cards=cards,
             raise_nums=np.repeat(hidden.raise_nums[index], NUM_PAIRS, axis=0),
             legal_mask=np.repeat(hidden.legal_mask[index], NUM_PAIRS, axis=0),
@@ -590,7 +590,7 @@ def fit_bc(table: pa.Table, encoding: Encoding, *, epochs: int, seed: int,
            progress: bool = False) -> tuple[nn.Module, dict[str, Any]]:  # fmt: skip
     """Behaviour cloning (the IRL policy net, α = 1, no adversary) on ``table``'s rows,
     weighted; the policy and its final validation metrics (a seeded share of the hands)."""
-    from pokerirl.irl.airl import train
+    from pokerirl.irl.adversarial import train
     from pokerirl.irl.config import AIRLConfig
     from pokerirl.poker.data import transitions_from_arrow
 

@@ -7,7 +7,7 @@ expert's.
 
 * ``collect(N)``: the run's :class:`~pokerirl.irl.nets.DiscretePolicy` (legal actions only)
   plays whole hands of :class:`~pokerirl.game.engine.LimitHoldemBatch`, alternating seats,
-  against a built-in agent (:func:`pokerirl.game.agents.make_agent`: random by default),
+  against a built-in agent (:func:`pokerirl.game.bots.make_agent`: random by default),
   until it has taken N decisions; its rollout is those decisions in the run's encoding
   (obs, action, legal mask, the same player's next decision, done at its last one; a hand
   cut by the budget ends at the cut), with its log π of each action as drawn;
@@ -46,7 +46,7 @@ from pokerirl.atomic import write_text
 from pokerirl.datasets.decisions import TABLE_ENCODING
 from pokerirl.errors import ConfigError
 from pokerirl.execution import progress_share
-from pokerirl.game.agents import Agent, agent_actions, make_agent
+from pokerirl.game.bots import Agent, agent_actions, make_agent
 from pokerirl.game.deals import deal_cards
 from pokerirl.game.encodings import Encoding, get_encoding
 from pokerirl.game.engine import LimitHoldemBatch

@@ -48,13 +48,13 @@ import numpy as np
 from tqdm import tqdm
 
 from pokerirl.datasets.decisions import check_legal_actions, table_cards
-from pokerirl.encoding import ACTIONS, CALL, CHECK, FOLD, NUM_ACTIONS
 from pokerirl.errors import InputError
-from pokerirl.game.agents import street_of
+from pokerirl.game.bots import street_of
 from pokerirl.game.evaluator import hand_strength
+from pokerirl.holdem import ACTIONS, CALL, CHECK, FOLD, NUM_ACTIONS
 from pokerirl.irl.metrics import Metric
 from pokerirl.jsonio import parse_json, read_bytes, read_json
-from pokerirl.poker.rewards import Decisions, PokerReward
+from pokerirl.poker.rewards import ObservedDecisions, PokerReward
 from pokerirl.serial import Omit, Serializable, meta
 
 CARD_FILE, CARD_FIGURE = "reward_card.json", "reward_card.png"
@@ -80,7 +80,7 @@ def equity(cards: np.ndarray, *, samples: int = EQUITY_SAMPLES, seed: int = EQUI
     numbers). ``cards``: (N, 7) hole cards then the board shown, -1 beyond. ``progress``: a
     bar over the states (about 3,000 a second: a 30,000-hand table takes 40 s).
 
-    >>> from pokerirl.encoding import parse_card
+    >>> from pokerirl.holdem import parse_card
     >>> aces = [parse_card(c) for c in "As Ah".split()] + [-1] * 5
     >>> float(equity(np.array([aces]))[0]) > 0.8
     True
@@ -121,7 +121,7 @@ class CardStates:
     """The decision states a card is drawn on: what was seen, the expert's action if known,
     the street and the equity of each."""
 
-    decisions: Decisions
+    decisions: ObservedDecisions
     expert: np.ndarray | None  # (N,) action ids
     street: np.ndarray  # (N,) 0..3
     strength: np.ndarray  # (N,) equity against a random hand
@@ -142,7 +142,7 @@ class CardStates:
         imputed: np.ndarray | None = None,
         progress: bool = False,
     ) -> CardStates:
-        decisions = Decisions(
+        decisions = ObservedDecisions(
             obs=np.asarray(obs, np.uint8),
             legal_mask=np.asarray(legal_mask, bool),
             cards=np.asarray(cards, np.int8),

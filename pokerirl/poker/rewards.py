@@ -1,6 +1,6 @@
 """Rewards a DQN learns from, batched over decisions.
 
-A reward is a :class:`PokerReward`: called with a batch of :class:`Decisions` (what the
+A reward is a :class:`PokerReward`: called with a batch of :class:`ObservedDecisions` (what the
 learner saw) and the actions it took, it returns one float per decision. Three kinds:
 
 * :class:`ObsReward` wraps any ``f(obs, actions)`` on RLCard's 72-d observation, such as the
@@ -15,7 +15,7 @@ folder or ``authors:FILE``) into one of these; here are only the spec's prefix, 
 reading of a reward's files and the encoding a run records, which both sides use.
 
 >>> reward = ObsReward(lambda obs, actions: actions.astype(np.float32), name="id")
->>> decisions = Decisions(obs=np.zeros((2, 72), np.uint8),
+>>> decisions = ObservedDecisions(obs=np.zeros((2, 72), np.uint8),
 ...                       legal_mask=np.array([[1, 1, 1, 0], [0, 1, 1, 1]], bool))
 >>> reward.action_values(decisions).tolist()
 [[0.0, 1.0, 2.0, 3.0], [0.0, 1.0, 2.0, 3.0]]
@@ -34,16 +34,16 @@ from typing import Any
 
 import numpy as np
 
-from pokerirl.encoding import MAX_RAISES, NUM_ACTIONS, NUM_ROUNDS, RAISE_OFFSET
 from pokerirl.errors import ConfigError, InputError
 from pokerirl.game.encodings import (
     Encoding,
     EncodingName,
-    States,
+    RawStates,
     get_encoding,
     recorded_encoding,
 )
 from pokerirl.game.spec import GameName, recorded_game
+from pokerirl.holdem import MAX_RAISES, NUM_ACTIONS, NUM_ROUNDS, RAISE_OFFSET
 
 
 class Transform(StrEnum):
@@ -71,11 +71,11 @@ AUTHORS_PREFIX = "authors:"
 
 
 @dataclass(frozen=True, kw_only=True)
-class Decisions:
+class ObservedDecisions:
     """A batch of decisions as the learner saw them.
 
     ``cards`` (hole cards, then the board shown, -1 beyond; see
-    :func:`pokerirl.game.agents.seat_cards`) is there when the reward reads cards in order
+    :func:`pokerirl.game.bots.seat_cards`) is there when the reward reads cards in order
     (``needs_cards``); the 72-d observation cannot tell hole cards from the board.
     ``encoded`` holds the states already computed in other encodings (name -> rows), so a
     learner and its reward on the same encoding compute it once.
@@ -94,11 +94,13 @@ class Decisions:
         slots = RAISE_OFFSET + (MAX_RAISES + 1) * np.arange(NUM_ROUNDS)[:, None] + np.arange(5)
         return np.asarray(self.obs)[:, slots].argmax(axis=2)
 
-    def states(self) -> States:
-        """The decisions as :class:`~pokerirl.game.encodings.States` (needs ``cards``)."""
+    def states(self) -> RawStates:
+        """The decisions as :class:`~pokerirl.game.encodings.RawStates` (needs ``cards``)."""
         if self.cards is None:
-            raise ValueError("these decisions carry no cards: Decisions.cards is missing")
-        return States(cards=self.cards, raise_nums=self.raise_counts(), legal_mask=self.legal_mask)
+            raise ValueError("these decisions carry no cards: ObservedDecisions.cards is missing")
+        return RawStates(
+            cards=self.cards, raise_nums=self.raise_counts(), legal_mask=self.legal_mask
+        )
 
     def encode(self, encoding: Encoding) -> np.ndarray:
         """The states in ``encoding`` (the 72-d ``obs`` as it is for ``rlcard``)."""
@@ -113,17 +115,17 @@ class PokerReward:
     """A batched reward over decisions; subclasses define :meth:`__call__`.
 
     ``fingerprint`` identifies it by content; ``needs_cards`` asks the trainer for
-    :attr:`Decisions.cards`.
+    :attr:`ObservedDecisions.cards`.
     """
 
     name: str = "reward"
     fingerprint: str = ""
     needs_cards: bool = False
 
-    def __call__(self, decisions: Decisions, actions: np.ndarray) -> np.ndarray:
+    def __call__(self, decisions: ObservedDecisions, actions: np.ndarray) -> np.ndarray:
         raise NotImplementedError
 
-    def action_values(self, decisions: Decisions) -> np.ndarray:
+    def action_values(self, decisions: ObservedDecisions) -> np.ndarray:
         """(N, 4) float32: the reward of every action in every state (legal or not)."""
         columns = [
             self(decisions, np.full(len(decisions), action, np.int64))
@@ -148,11 +150,11 @@ class ObsReward(PokerReward):
         self.encoding = get_encoding(encoding)
         self.needs_cards = self.encoding.needs_cards
 
-    def __call__(self, decisions: Decisions, actions: np.ndarray) -> np.ndarray:
+    def __call__(self, decisions: ObservedDecisions, actions: np.ndarray) -> np.ndarray:
         obs = decisions.encode(self.encoding)
         return np.asarray(self.fn(obs, np.asarray(actions)), np.float32)
 
-    def action_values(self, decisions: Decisions) -> np.ndarray:
+    def action_values(self, decisions: ObservedDecisions) -> np.ndarray:
         # One call on the four actions of every state, stacked: one forward pass, not four.
         n = len(decisions)
         obs = np.tile(np.asarray(decisions.encode(self.encoding)), (NUM_ACTIONS, 1))
@@ -170,7 +172,7 @@ def legal_argmax(values: np.ndarray, legal_mask: np.ndarray) -> np.ndarray:
     return np.where(legal, values, -np.inf).argmax(axis=1).astype(np.int64)
 
 
-def follow_share(reward: PokerReward, decisions: Decisions, actions: np.ndarray) -> float:
+def follow_share(reward: PokerReward, decisions: ObservedDecisions, actions: np.ndarray) -> float:
     """The share of ``decisions`` where ``actions`` is f's best legal action (an action
     tied with the best counts): how closely an agent trained on f follows it. NaN for none.
 
@@ -178,7 +180,7 @@ def follow_share(reward: PokerReward, decisions: Decisions, actions: np.ndarray)
 
     >>> prefers_raise = ObsReward(lambda obs, actions: (actions == 1) * 1.0)
     >>> legal = np.array([[True, True, True, False]] * 4)
-    >>> decisions = Decisions(obs=np.zeros((4, 72), np.uint8), legal_mask=legal)
+    >>> decisions = ObservedDecisions(obs=np.zeros((4, 72), np.uint8), legal_mask=legal)
     >>> follow_share(prefers_raise, decisions, np.array([1, 1, 0, 0]))
     0.5
     """
@@ -236,14 +238,14 @@ class TransformedReward(PokerReward):
         self.name = base.name if transform == Transform.RAW else f"{base.name} ({transform})"
         self.fingerprint, self.needs_cards = base.fingerprint, base.needs_cards
 
-    def __call__(self, decisions: Decisions, actions: np.ndarray) -> np.ndarray:
+    def __call__(self, decisions: ObservedDecisions, actions: np.ndarray) -> np.ndarray:
         if self.transform == Transform.RAW:
             return self.base(decisions, actions)
         values = transform_values(self.base.action_values(decisions), decisions.legal_mask,
                                   self.transform)  # fmt: skip
         return values[np.arange(len(values)), np.asarray(actions)]
 
-    def action_values(self, decisions: Decisions) -> np.ndarray:
+    def action_values(self, decisions: ObservedDecisions) -> np.ndarray:
         values = self.base.action_values(decisions)
         if self.transform == Transform.RAW:
             return values

@@ -1,7 +1,7 @@
 """``pokerirl train``: AIRL / H-AIRL / GAIL on a poker decision table, one run or several.
 
 The run folder's format and the trainer are poker-free (:mod:`pokerirl.irl.run`,
-:mod:`pokerirl.irl.airl`); this module adds what is poker's: reading the decision table
+:mod:`pokerirl.irl.adversarial`); this module adds what is poker's: reading the decision table
 (:func:`pokerirl.poker.read_table`), the reward card of a table with cards
 (``reward_card.json`` and ``reward_card.png``, :mod:`pokerirl.poker.reward_card`), and the
 fan-out of several runs on an execution backend. A folder of several runs holds ``run-<k>``
@@ -47,7 +47,7 @@ from pokerirl.errors import ConfigError, Remedy
 from pokerirl.execution import Backend, pinned_threads
 from pokerirl.game.encodings import RLCARD, Encoding
 from pokerirl.game.spec import GameName
-from pokerirl.irl.airl import resolve_device
+from pokerirl.irl.adversarial import resolve_device
 from pokerirl.irl.config import AIRLConfig, Algo
 from pokerirl.irl.metrics import Metric
 from pokerirl.irl.plots import plot_bands

@@ -31,7 +31,7 @@ the agents' draws, so it cannot correlate with the play):
 ``tests/test_aivat.py`` checks that the corrections have mean zero (also between agents
 whose betting depends on their cards) and that the corrected standard error is smaller.
 
->>> from pokerirl.game.agents import make_agent
+>>> from pokerirl.game.bots import make_agent
 >>> from pokerirl.game.match import play_match
 >>> agents = make_agent("tightbot"), make_agent("call")
 >>> found = play_corrected_match(*agents, hands=2_000, seed=0)
@@ -47,7 +47,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from pokerirl.game.agents import Agent
+from pokerirl.game.bots import Agent
 from pokerirl.game.engine import LimitHoldemBatch
 from pokerirl.game.match import (
     DEFAULT_BATCH_SIZE,

@@ -2,14 +2,14 @@
 many boards at once, ranked exactly as :func:`pokerirl.game.evaluator.hand_strength` ranks.
 
 The 1,326 hole-card pairs are numbered in :data:`PAIRS` (``(a, b)`` with ``a < b``, card
-indices of :mod:`pokerirl.encoding`). :func:`board_strengths` ranks every pair on every
+indices of :mod:`pokerirl.holdem`). :func:`board_strengths` ranks every pair on every
 one of M five-card boards in one vectorized pass; the ranks equal ``hand_strength`` of the
 seven cards (``tests/test_lbr.py`` checks it on random boards), but a board's rank key is
 summed once and shared by the 91 rank combinations of a pair, so it runs many times faster
 than calling ``hand_strength`` on M x 1,326 rows. Pairs that share a card with their board
 get a meaningless strength: callers mask them with :data:`CLASH`.
 
->>> from pokerirl.encoding import parse_card
+>>> from pokerirl.holdem import parse_card
 >>> board = np.array([[parse_card(c) for c in "As Ks Qs 7d 2c".split()]])
 >>> aces, tens = pair_index(parse_card("Ah"), parse_card("Ad")), pair_index(
 ...     parse_card("Js"), parse_card("Ts"))
@@ -22,7 +22,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from pokerirl.encoding import NUM_PAIRS, PAIRS
 from pokerirl.game.evaluator import (  # the shared evaluator, re-exported for LBR and AIVAT
     _CARD_KEY,
     _CARD_SUIT,
@@ -36,6 +35,7 @@ from pokerirl.game.evaluator import (  # the shared evaluator, re-exported for L
     pair_index,
     win_share,
 )
+from pokerirl.holdem import NUM_PAIRS, PAIRS
 
 __all__ = ["CLASH", "NUM_PAIRS", "PAIRS", "board_strengths", "hole_strengths", "pair_index",
            "showdown_shares", "win_share"]  # fmt: skip

@@ -31,7 +31,7 @@ that share a card with LBR's hand or the board shown.
 LBR is a lower bound on the agent's exploitability: it looks one action ahead, assumes the
 hand is checked down after its action, and ignores re-raises.
 
->>> from pokerirl.game.agents import make_agent
+>>> from pokerirl.game.bots import make_agent
 >>> from pokerirl.game.deals import deal_cards
 >>> deals = np.repeat(deal_cards(seed=0, start=0, count=4), 2, axis=0)
 >>> seats = np.arange(8) % 2
@@ -47,12 +47,12 @@ from enum import StrEnum
 
 import numpy as np
 
-from pokerirl.encoding import CALL, CHECK, FOLD, MAX_RAISES, NUM_ACTIONS, RAISE
 from pokerirl.errors import ConfigError
-from pokerirl.game.agents import Agent, agent_action_probs
-from pokerirl.game.encodings import Encoding, States
+from pokerirl.game.bots import Agent, agent_action_probs
+from pokerirl.game.encodings import Encoding, RawStates
 from pokerirl.game.engine import RAISE_SIZE_BY_ROUND, LimitHoldemBatch
 from pokerirl.game.match import agent_encoding
+from pokerirl.holdem import CALL, CHECK, FOLD, MAX_RAISES, NUM_ACTIONS, RAISE
 from pokerirl.tournaments.equity import (
     CLASH,
     NUM_PAIRS,
@@ -173,7 +173,7 @@ def range_policy(
         at = hands[rows]
         cards = np.concatenate([PAIRS[pairs[rows]], board[at]], axis=1).astype(np.int8)
         legal = legal_mask[at]
-        states = States(cards=cards, raise_nums=raise_nums[at], legal_mask=legal)
+        states = RawStates(cards=cards, raise_nums=raise_nums[at], legal_mask=legal)
         probs[rows] = agent_action_probs(agent, encoding.encode(states), legal, cards)
     return probs
 

@@ -24,7 +24,7 @@ from pathlib import Path
 
 from pokerirl.agents.names import RLCARD_PREFIX
 from pokerirl.errors import PokerIRLError
-from pokerirl.game.agents import BUILT_IN_AGENTS
+from pokerirl.game.bots import BUILT_IN_AGENTS
 from pokerirl.seeds import format_seeds
 
 _SEED_FOLDER = re.compile(r"seed-(\d+)")

@@ -40,7 +40,7 @@ IRL_SETTINGS = ("ours", "authors")
 # The choices of the settings below, from where each is declared (all torch-free modules).
 AGENT_PRESETS: tuple[str, ...] = tuple(AGENT_TRAIN_PRESETS)
 TRANSFORMS: tuple[str, ...] = tuple(t.value for t in Transform)
-ENCODINGS: tuple[str, ...] = tuple(e.value for e in EncodingName)
+ENCODING_NAMES: tuple[str, ...] = tuple(e.value for e in EncodingName)
 FOLDS: tuple[str, ...] = tuple(f.value for f in FoldsMode)  # ingest's fold hands
 LBR_CHECK_UNTIL = "turn"  # a study's LBR checks or calls before the turn: faster (exploit.md)
 
@@ -208,7 +208,7 @@ class StudyConfig:
             )
             and len({algo for algo, _ in self.reward_sources}) == len(self.reward_sources),
             **one_of("reward transform", self.reward_transform, TRANSFORMS),
-            **one_of("encoding", self.encoding, ENCODINGS),
+            **one_of("encoding", self.encoding, ENCODING_NAMES),
             **one_of("folds", self.folds, FOLDS),
             **one_of("opponent", self.opponent, OPPONENTS),
             **one_of("experts", self.experts, EXPERTS),

@@ -10,8 +10,8 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from pokerirl.atomic import write_bytes
-from pokerirl.encoding import ACTIONS
 from pokerirl.figures import finish
+from pokerirl.holdem import ACTIONS
 from pokerirl.irl.metrics import Metric
 from pokerirl.meanstd import Curve
 from pokerirl.studies.common import band

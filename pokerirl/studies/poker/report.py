@@ -9,7 +9,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from pokerirl import atomic
-from pokerirl.encoding import ACTIONS
+from pokerirl.holdem import ACTIONS
 from pokerirl.irl.metrics import Metric
 from pokerirl.jsonio import read_json
 from pokerirl.meanstd import MeanStd, mean_and_std

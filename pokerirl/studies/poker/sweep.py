@@ -642,8 +642,8 @@ def _evaluate_unit(agent_files: Any, sparse_files: Any, reward_source: Any, eval
     """Evaluate one agent (in a worker): matches, its decisions against random, LBR."""
     from pokerirl.agents import land_agent
     from pokerirl.agents.train import followed
-    from pokerirl.encoding import ACTIONS
     from pokerirl.game import DecisionLog, make_agent, play_match
+    from pokerirl.holdem import ACTIONS
     from pokerirl.poker.reward_card import legal_majority
     from pokerirl.tournaments.exploit import lbr_of
 

@@ -39,9 +39,9 @@ from typing import Any
 import numpy as np
 
 from pokerirl.atomic import write_text
-from pokerirl.encoding import ACTIONS
 from pokerirl.errors import ConfigError
 from pokerirl.execution import Backend
+from pokerirl.holdem import ACTIONS
 from pokerirl.serial import Serializable, meta
 from pokerirl.studies.common import markdown_table
 from pokerirl.studies.poker.config import AGENT_PRESETS

@@ -66,7 +66,7 @@ from pokerirl.irl.losses import (
     sample_one_hot,
 )
 from pokerirl.irl.nets import NetSpec, build_nets
-from pokerirl.irl.records import Batch, EpochCallback, EpochMetrics, EpochRecord, StepLosses
+from pokerirl.irl.records import EpochCallback, EpochMetrics, EpochRecord, StepLosses, TrainingBatch
 from pokerirl.irl.reward import PolicyNet, RewardNet
 from pokerirl.irl.stacked import (
     StackedLayerNorm,
@@ -82,7 +82,6 @@ __all__ = [
     "LOG_2PI",
     "LOSS_KEYS",
     "AdversarialTrainer",
-    "Batch",
     "EpochCallback",
     "EpochRecord",
     "ManyResult",
@@ -91,6 +90,7 @@ __all__ = [
     "StackedNets",
     "StepLosses",
     "TrainResult",
+    "TrainingBatch",
     "baselines",
     "default_nets",
     "discriminator_loss",

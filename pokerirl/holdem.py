@@ -1,4 +1,4 @@
-"""Cards, actions and RLCard 1.2.0's 72-dimensional limit-holdem observation.
+"""Heads-up limit hold'em's cards, actions and RLCard 1.2.0's 72-dimensional observation.
 
 This is the bottom layer: every other module speaks these integers.
 

@@ -1,4 +1,8 @@
-"""The agent protocol the engine talks to, the built-in agents and the name registry.
+"""The agent protocol the engine talks to, the built-in bots and the name registry.
+
+The bots are the fixed, hand-written agents (``random``, ``call``, ``raise``, ...);
+:mod:`pokerirl.poker.run_agents` holds the agents made of an IRL run, and
+:mod:`pokerirl.agents` the learned (DQN) agents and the resolution of every agent name.
 
 An agent decides for a whole batch at once: one call per decision step, so a network agent
 makes one batched forward pass. An agent whose ``sees_cards`` is true also gets ``cards``:
@@ -29,7 +33,9 @@ from typing import ClassVar, Protocol, runtime_checkable
 
 import numpy as np
 
-from pokerirl.encoding import (
+from pokerirl.errors import ConfigError
+from pokerirl.game.synth import DEFAULT_PLAYERS, ScriptedPlayer, visible_strength
+from pokerirl.holdem import (
     BOARD_SIZE_BY_ROUND,
     CALL,
     CHECK,
@@ -38,8 +44,6 @@ from pokerirl.encoding import (
     RAISE,
     RAISE_OFFSET,
 )
-from pokerirl.errors import ConfigError
-from pokerirl.game.synth import DEFAULT_PLAYERS, ScriptedPlayer, visible_strength
 
 # For each of the 16 legal-mask patterns (bit i: action i legal): how many, and the k-th one.
 _LEGAL_COUNT = np.array([bin(p).count("1") for p in range(16)])

@@ -1,8 +1,11 @@
 """Agents made of an IRL run: its reward's argmax, and its policy played greedily.
 
+(Not the built-in bots of :mod:`pokerirl.game.bots`, nor the learned DQN agents of
+:mod:`pokerirl.agents`, which resolves all three kinds by name.)
+
 They separate the two ways a learned reward can fail to teach: if f's argmax already plays
 like the expert but a DQN trained on f does not, the RL failed; if f's argmax does not, the
-reward did. Both follow the engine's :class:`~pokerirl.game.agents.Agent` protocol (with
+reward did. Both follow the engine's :class:`~pokerirl.game.bots.Agent` protocol (with
 ``action_probs``, for local best response) and are named by specs that
 :func:`pokerirl.agents.resolve_agent` understands:
 
@@ -28,12 +31,12 @@ from typing import Any
 import numpy as np
 import torch
 
-from pokerirl.encoding import NUM_ACTIONS
 from pokerirl.errors import InputError
 from pokerirl.game.encodings import EncodingName
+from pokerirl.holdem import NUM_ACTIONS
 from pokerirl.poker.agent_specs import POLICY_PREFIX, REWARD_PREFIX
 from pokerirl.poker.reward_sources import RewardSource
-from pokerirl.poker.rewards import Decisions, PokerReward, legal_argmax, run_encoding
+from pokerirl.poker.rewards import ObservedDecisions, PokerReward, legal_argmax, run_encoding
 from pokerirl.store import digest
 
 
@@ -54,7 +57,7 @@ class RewardArgmaxAgent:
         return self.reward.needs_cards
 
     def _values(self, obs: np.ndarray, legal_mask: np.ndarray, cards: Any) -> np.ndarray:
-        decisions = Decisions(obs=np.asarray(obs), legal_mask=np.asarray(legal_mask, bool),
+        decisions = ObservedDecisions(obs=np.asarray(obs), legal_mask=np.asarray(legal_mask, bool),
                               cards=None if cards is None else np.asarray(cards))  # fmt: skip
         return self.reward.action_values(decisions)
 
