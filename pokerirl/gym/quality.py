@@ -464,6 +464,175 @@ def _number(x: float) -> float | None:
     return None if x is None or not math.isfinite(x) else round(float(x), DIGITS)
 
 
+@dataclass(frozen=True)
+class _UniformActions:
+    """Uniform draws from an action space: D_A of the coverage, the random rollouts' policy."""
+
+    space: Any  # Discrete (n) or Box (low, high)
+
+    @property
+    def discrete(self) -> bool:
+        return hasattr(self.space, "n")
+
+    def __call__(self, n: int, generator: np.random.Generator) -> np.ndarray:
+        if self.discrete:
+            return generator.integers(0, int(self.space.n), size=n)
+        low, high = self.space.low.astype(np.float64), self.space.high.astype(np.float64)
+        return generator.uniform(low, high, size=(n, len(low))).astype(np.float32)
+
+    def describe(self) -> str:
+        if self.discrete:
+            return f"uniform over the {int(self.space.n)} discrete actions"
+        return "uniform over the action box"
+
+
+@dataclass(frozen=True, kw_only=True)
+class _Sample:
+    """Every transition and coverage behind the scores, drawn in one seeded order."""
+
+    expert: Rollouts  # as many rows as ``random``: ρ is taken over both
+    random: Rollouts
+    on_policy: Rollouts
+    cover: Coverage  # D_S half the expert's states, half the random rollouts'
+    expert_cover: Coverage  # D_S the expert's states alone
+
+    def transitions(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """ρ's rows (s, a, s'): the expert's, then the random rollouts'."""
+        return (
+            np.concatenate([self.expert.obs, self.random.obs]),
+            np.concatenate([self.expert.actions, self.random.actions]),
+            np.concatenate([self.expert.next_obs, self.random.next_obs]),
+        )
+
+
+def _run_record(
+    run: Path, data_path: str | os.PathLike[str] | None
+) -> tuple[Mapping[str, Any], Path]:
+    """The run's config and the expert data it scores against (refusals are QualityErrors)."""
+    try:
+        record = load_run_config(run)
+    except ValueError as error:
+        raise QualityError(str(error)) from None
+    if data_path is None:
+        data_path = (record.get("data") or {}).get("path")
+        if not data_path:
+            raise QualityError(f"{run / CONFIG_FILE} names no expert data; pass data_path")
+    data_path = Path(data_path)
+    if not data_path.is_file():
+        raise QualityError(f"expert data not found: {data_path}")
+    return record, data_path
+
+
+def _draw_sample(
+    run: Path, env_id: str, data_path: Path, uniform: _UniformActions, *,
+    samples: int, coverage: int, episodes: int, seed: int,
+) -> _Sample:  # fmt: skip
+    """The expert's, random and the run's policy's transitions and the two coverages; every
+    draw from one generator in a fixed order (the same inputs, the same sample)."""
+    rng = np.random.default_rng(seed)
+    random_rng = np.random.default_rng(seed + 1)
+    expert = _expert_rollouts(data_path).take(samples, rng)
+    random = roll_out(
+        env_id, lambda obs: uniform(len(obs), random_rng), episodes=episodes, seed=QUALITY_SEED
+    ).take(samples, rng)
+    try:
+        policy = load_policy(run)
+    except ValueError as error:
+        raise QualityError(str(error)) from None
+    with torch.no_grad():
+        on_policy = roll_out(
+            env_id,
+            lambda obs: policy_actions(policy, obs, discrete=uniform.discrete),
+            episodes=episodes,
+            seed=QUALITY_SEED,
+        ).take(samples, rng)
+    half = coverage // 2
+    states = np.concatenate(
+        [expert.obs[rng.choice(len(expert), half)], random.obs[rng.choice(len(random), half)]]
+    )
+    cover = make_coverage(states, uniform(len(states), rng), seed=seed)
+    size = min(len(expert), len(random))  # ρ over as many of each
+    expert, random = expert.take(size, rng), random.take(size, rng)
+    # The same on the expert's states alone (one cluster of states, not two).
+    expert_cover = make_coverage(
+        expert.obs[rng.choice(len(expert), coverage)], uniform(coverage, rng), seed=seed
+    )
+    return _Sample(
+        expert=expert, random=random, on_policy=on_policy, cover=cover, expert_cover=expert_cover
+    )
+
+
+def _scores(run: Path, record: Mapping[str, Any], truth: Any, sample: _Sample,
+            gamma: float) -> dict[str, float]:  # fmt: skip
+    """Pearson and EPIC of the run's f (and g, and the untrained net) against the truth."""
+    family = record["architecture"].get("reward_family", RewardFamily.STATE_ACTION)
+    obs, actions, next_obs = sample.transitions()
+    expert = sample.expert
+    with pinned_threads(1):  # one summation order: the same bytes on any machine
+        shaped = family == RewardFamily.SHAPED
+        f_full = _as_transition_reward(load_reward(run, full=shaped), full=shaped)
+        g = _as_transition_reward(load_reward(run), full=False)
+        initial = _as_transition_reward(initial_reward(record), full=False)
+
+        def epic(reward: TransitionReward) -> float:
+            return epic_distance(
+                reward, truth.reward, obs, actions, next_obs, coverage=sample.cover, gamma=gamma
+            )
+
+        def epic_on_expert(reward: TransitionReward) -> float:
+            return epic_distance(reward, truth.reward, expert.obs, expert.actions,
+                                 expert.next_obs, coverage=sample.expert_cover,
+                                 gamma=gamma)  # fmt: skip
+
+        def raw(reward: TransitionReward, source: Rollouts) -> float:
+            return pearson(
+                reward(source.obs, source.actions, source.next_obs),
+                truth.reward(source.obs, source.actions, source.next_obs),
+            )
+
+        return {
+            "pearson_expert": raw(f_full, expert),
+            "pearson_policy": raw(f_full, sample.on_policy),
+            "epic": epic(f_full),
+            "epic_g": epic(g),
+            "epic_random_baseline": epic(initial),
+            "epic_expert_coverage": epic_on_expert(f_full),
+            "epic_random_baseline_expert_coverage": epic_on_expert(initial),
+        }
+
+
+def _truth_check(truth: Any, sample: _Sample) -> dict[str, Any]:
+    """The per-step part of the true reward against the env's recorded rewards."""
+    checks: dict[str, Any] = {"what": "the per-step part of r against the env's recorded rewards"}
+    for name, source in (("expert", sample.expert), ("random", sample.random)):
+        step = np.asarray(truth.step(source.obs, source.actions, source.next_obs), np.float64)
+        checks[name] = {
+            "pearson": _number(pearson(step, source.rewards)),
+            "max_abs_error": _number(float(np.abs(step - source.rewards).max())),
+        }
+    return checks
+
+
+def _coverage_record(sample: _Sample, uniform: _UniformActions, *, coverage: int,
+                     episodes: int) -> dict[str, Any]:  # fmt: skip
+    """What the file says of the states, actions and transitions behind the scores."""
+    half, expert, random = coverage // 2, sample.expert, sample.random
+    rollouts = f"({episodes} episodes from reset(seed={QUALITY_SEED} + k))"
+    return {
+        "states": f"observations: {half} of the expert's data, {half} of uniformly random "
+        f"rollouts {rollouts}",
+        "actions": uniform.describe(),
+        "next_states": "a seeded permutation of the same states",
+        "transitions": f"{len(expert)} of the expert's data and {len(random)} of the random "
+        "rollouts, actions as taken: ρ is taken over them",
+        "policy_transitions": f"{len(sample.on_policy)} of the run's deterministic policy "
+        f"{rollouts}",
+        "size": sample.cover.m,
+        "expert_coverage": f"epic_expert_coverage: {sample.cover.m} of the expert's states, "
+        f"the same actions, ρ over the {len(expert)} expert transitions",
+    }
+
+
 def write_reward_quality(
     run_dir: str | os.PathLike[str],
     *,
@@ -485,151 +654,25 @@ def write_reward_quality(
     if env_id not in TASKS:
         raise QualityError(f"unknown task {env_id!r}; choose one of {', '.join(TASKS)}")
     run = Path(run_dir)
-    try:
-        record = load_run_config(run)
-    except ValueError as error:
-        raise QualityError(str(error)) from None
-    if data_path is None:
-        data_path = (record.get("data") or {}).get("path")
-        if not data_path:
-            raise QualityError(f"{run / CONFIG_FILE} names no expert data; pass data_path")
-    data_path = Path(data_path)
-    if not data_path.is_file():
-        raise QualityError(f"expert data not found: {data_path}")
+    record, data = _run_record(run, data_path)
     gamma = task_gamma(env_id)
     truth = true_reward(env_id, gamma)
-    family = record["architecture"].get("reward_family", RewardFamily.STATE_ACTION)
-    rng = np.random.default_rng(seed)
-
     env = make_env(env_id)
-    space: Any = env.action_space  # Discrete (n) or Box (low, high)
+    uniform = _UniformActions(env.action_space)
     env.close()
-    discrete = hasattr(space, "n")
-
-    def uniform_actions(n: int, generator: np.random.Generator) -> np.ndarray:
-        if discrete:
-            return generator.integers(0, int(space.n), size=n)
-        low, high = space.low.astype(np.float64), space.high.astype(np.float64)
-        return generator.uniform(low, high, size=(n, len(low))).astype(np.float32)
-
-    random_rng = np.random.default_rng(seed + 1)
-    expert = _expert_rollouts(data_path).take(samples, rng)
-    random = roll_out(
-        env_id,
-        lambda obs: uniform_actions(len(obs), random_rng),
-        episodes=episodes,
-        seed=QUALITY_SEED,
-    ).take(samples, rng)
-
-    try:
-        policy = load_policy(run)
-    except ValueError as error:
-        raise QualityError(str(error)) from None
-    with torch.no_grad():
-        on_policy = roll_out(
-            env_id,
-            lambda obs: policy_actions(policy, obs, discrete=discrete),
-            episodes=episodes,
-            seed=QUALITY_SEED,
-        ).take(samples, rng)
-
-    half = coverage // 2
-    states = np.concatenate(
-        [expert.obs[rng.choice(len(expert), half)], random.obs[rng.choice(len(random), half)]]
-    )
-    cover = make_coverage(states, uniform_actions(len(states), rng), seed=seed)
-    # ρ over the expert's and the random rollouts' transitions, as many of each
-    size = min(len(expert), len(random))
-    expert, random = expert.take(size, rng), random.take(size, rng)
-    obs = np.concatenate([expert.obs, random.obs])
-    actions = np.concatenate([expert.actions, random.actions])
-    next_obs = np.concatenate([expert.next_obs, random.next_obs])
-
-    with pinned_threads(1):  # one summation order: the same bytes on any machine
-        shaped = family == RewardFamily.SHAPED
-        f_full = _as_transition_reward(load_reward(run, full=shaped), full=shaped)
-        g = _as_transition_reward(load_reward(run), full=False)
-        initial = _as_transition_reward(initial_reward(record), full=False)
-
-        def epic(reward: TransitionReward) -> float:
-            return epic_distance(
-                reward, truth.reward, obs, actions, next_obs, coverage=cover, gamma=gamma
-            )
-
-        def raw(reward: TransitionReward, source: Rollouts) -> float:
-            return pearson(
-                reward(source.obs, source.actions, source.next_obs),
-                truth.reward(source.obs, source.actions, source.next_obs),
-            )
-
-        # The same on the expert's states alone (one cluster of states, not two).
-        expert_cover = make_coverage(
-            expert.obs[rng.choice(len(expert), coverage)],
-            uniform_actions(coverage, rng),
-            seed=seed,
-        )
-
-        def epic_on_expert(reward: TransitionReward) -> float:
-            return epic_distance(
-                reward,
-                truth.reward,
-                expert.obs,
-                expert.actions,
-                expert.next_obs,
-                coverage=expert_cover,
-                gamma=gamma,
-            )
-
-        values = {
-            "pearson_expert": raw(f_full, expert),
-            "pearson_policy": raw(f_full, on_policy),
-            "epic": epic(f_full),
-            "epic_g": epic(g),
-            "epic_random_baseline": epic(initial),
-            "epic_expert_coverage": epic_on_expert(f_full),
-            "epic_random_baseline_expert_coverage": epic_on_expert(initial),
-        }
-    checks = {}
-    for name, source in (("expert", expert), ("random", random)):
-        step = np.asarray(truth.step(source.obs, source.actions, source.next_obs), np.float64)
-        checks[name] = {
-            "pearson": _number(pearson(step, source.rewards)),
-            "max_abs_error": _number(float(np.abs(step - source.rewards).max())),
-        }
+    sample = _draw_sample(run, env_id, data, uniform, samples=samples, coverage=coverage,
+                          episodes=episodes, seed=seed)  # fmt: skip
     quality = RewardQuality(
         env=env_id,
         algo=str(record.get("algo", "")),
-        reward_family=family,
-        pearson_expert=values["pearson_expert"],
-        pearson_policy=values["pearson_policy"],
-        epic=values["epic"],
-        epic_g=values["epic_g"],
-        epic_random_baseline=values["epic_random_baseline"],
-        epic_expert_coverage=values["epic_expert_coverage"],
-        epic_random_baseline_expert_coverage=values["epic_random_baseline_expert_coverage"],
+        reward_family=record["architecture"].get("reward_family", RewardFamily.STATE_ACTION),
+        **_scores(run, record, truth, sample, gamma),
         gamma=gamma,
         seed=seed,
-        samples=len(obs),
-        coverage={
-            "states": f"observations: {half} of the expert's data, {half} of uniformly random "
-            f"rollouts ({episodes} episodes from reset(seed={QUALITY_SEED} + k))",
-            "actions": f"uniform over the {int(space.n)} discrete actions"
-            if discrete
-            else "uniform over the action box",
-            "next_states": "a seeded permutation of the same states",
-            "transitions": f"{len(expert)} of the expert's data and {len(random)} of the random "
-            "rollouts, actions as taken: ρ is taken over them",
-            "policy_transitions": f"{len(on_policy)} of the run's deterministic policy "
-            f"({episodes} episodes from reset(seed={QUALITY_SEED} + k))",
-            "size": cover.m,
-            "expert_coverage": f"epic_expert_coverage: {cover.m} of the expert's states, "
-            f"the same actions, ρ over the {len(expert)} expert transitions",
-        },
+        samples=2 * len(sample.expert),
+        coverage=_coverage_record(sample, uniform, coverage=coverage, episodes=episodes),
         true_reward={"kind": truth.kind, "description": truth.description},
-        true_reward_check={
-            "what": "the per-step part of r against the env's recorded rewards",
-            **checks,
-        },
+        true_reward_check=_truth_check(truth, sample),
         reward_sha256=reward_digest(run),
     )
     write_quality(run / QUALITY_FILE, quality)
