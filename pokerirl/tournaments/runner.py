@@ -368,20 +368,13 @@ def run_tournament(
 
     backend = backend or Backend(jobs=jobs)
     cells = [(m, seed) for m in range(len(matchups)) for seed in seeds]
-    keys, units = [], []
-    for m, seed in cells:
-        a, b = matchups[m]
-        (print_a, shipped_a), (print_b, shipped_b) = prints[a][seed], prints[b][seed]
-        key = SeedKey(
-            seed=seed,
-            fingerprint_a=print_a,
-            fingerprint_b=print_b,
-            hands=hands,
-            duplicate=duplicate,
-            batch_size=batch_size,
-        )
-        keys.append(key)
-        units.append(_seed_unit(out, folders[m], key, shipped_a, shipped_b, aivat))
+    keys = [SeedKey(seed=seed, fingerprint_a=prints[matchups[m][0]][seed][0],
+                    fingerprint_b=prints[matchups[m][1]][seed][0], hands=hands,
+                    duplicate=duplicate, batch_size=batch_size)
+            for m, seed in cells]  # fmt: skip
+    units = [_seed_unit(out, folders[m], key, prints[matchups[m][0]][seed][1],
+                        prints[matchups[m][1]][seed][1], aivat)
+             for (m, seed), key in zip(cells, keys, strict=True)]  # fmt: skip
 
     started = time.perf_counter()
     try:  # each seed is saved as it finishes: resumable from there
@@ -391,9 +384,32 @@ def run_tournament(
     except UnitConflict as error:
         raise TournamentError(str(error), remedy=error.remedy) from None
     wall = time.perf_counter() - started
+    done, played = _seed_results(cells, keys, found.done)
+    report = _build_report(
+        matchups,
+        expanded.labels,
+        contests,
+        seeds,
+        done,
+        hands=hands,
+        duplicate=duplicate,
+        alpha=alpha,
+        batch_size=batch_size,
+        timing=_timing(
+            wall, done, played, folders, hands=hands, cells=len(cells), jobs=jobs, backend=backend
+        ),
+    )
+    write_report(report, out)
+    return report
+
+
+def _seed_results(
+    cells: Sequence[Cell], keys: Sequence[SeedKey], found: Sequence[Any]
+) -> tuple[dict[Cell, SeedResult], list[Cell]]:
+    """Each cell's result from its unit (played now or reused), and the cells played now."""
     done: dict[Cell, SeedResult] = {}
     played: list[Cell] = []
-    for cell, key, item in zip(cells, keys, found.done, strict=True):
+    for cell, key, item in zip(cells, keys, found, strict=True):
         saved = _estimate(item.record.result)
         if saved is None:  # reused only with one (accepts=), and _play_seed writes one
             raise TournamentError(f"{item.unit.target}: a saved seed without an estimate")
@@ -407,37 +423,31 @@ def run_tournament(
         )
         if item.extra is not None:
             played.append(cell)
+    return done, played
 
-    report = _build_report(
-        matchups,
-        expanded.labels,
-        contests,
-        seeds,
-        done,
-        hands=hands,
-        duplicate=duplicate,
-        alpha=alpha,
-        batch_size=batch_size,
-        timing={
-            "wall_seconds": wall,
-            "hands_played": len(played) * hands,
-            "hands_per_second": len(played) * hands / wall if wall > 0 else 0.0,
-            "seeds_reused": len(cells) - len(played),
-            "jobs": jobs,
-            "backend": backend.describe(),
-            "seeds_played": [
-                {
-                    "matchup": folders[m],
-                    "seed": seed,
-                    "seconds": done[m, seed].seconds,
-                    "hands_per_second": done[m, seed].hands_per_second,
-                }
-                for m, seed in played
-            ],
-        },
-    )
-    write_report(report, out)
-    return report
+
+def _timing(
+    wall: float, done: Mapping[Cell, SeedResult], played: Sequence[Cell],
+    folders: Sequence[str], *, hands: int, cells: int, jobs: int, backend: Backend,
+) -> dict[str, Any]:  # fmt: skip
+    """The report's ``timing``: this call's wall time and the seeds it played."""
+    return {
+        "wall_seconds": wall,
+        "hands_played": len(played) * hands,
+        "hands_per_second": len(played) * hands / wall if wall > 0 else 0.0,
+        "seeds_reused": cells - len(played),
+        "jobs": jobs,
+        "backend": backend.describe(),
+        "seeds_played": [
+            {
+                "matchup": folders[m],
+                "seed": seed,
+                "seconds": done[m, seed].seconds,
+                "hands_per_second": done[m, seed].hands_per_second,
+            }
+            for m, seed in played
+        ],
+    }
 
 
 def _pooled_aivat(per_seed: list[Estimate | None]) -> Estimate | None:
