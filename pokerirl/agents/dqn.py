@@ -357,19 +357,14 @@ def train_dqn(
     """
     _check_training(hands=hands, payoff_weight=payoff_weight, opponent=opponent,
                     raise_counts=raise_counts)  # fmt: skip
-    reward = as_poker_reward(reward_fn)
     torch.manual_seed(seed)
     streams = np.random.SeedSequence(seed, spawn_key=(TRAIN_STREAM,)).spawn(2)
     rng, opponent_rng = (np.random.Generator(np.random.PCG64(s)) for s in streams)
     encoding = get_encoding(encoding)
-    plain = encoding.name == EncodingName.RLCARD
     learner = DQNLearner.create(config, encoding)
     rivals = Rivals.of(opponent, learner, seed=seed)
-    explore = RandomAgent()
-    decision_weight = 0.0 if reward is None else 1.0 - payoff_weight
-    payoff_scale = 1.0 if reward is None else payoff_weight
-    at_end = reward is not None and raise_counts == "end-of-hand"
-    needs_cards = at_end or (reward is not None and reward.needs_cards) or not plain
+    shaping = _Shaping.of(as_poker_reward(reward_fn), payoff_weight=payoff_weight,
+                          raise_counts=raise_counts, encoding=encoding)  # fmt: skip
     deals = _Deals(seed=seed, chunk=max(config.concurrent_hands, DEAL_BLOCK))
 
     with tqdm(total=hands, unit="hand", unit_scale=True, disable=not progress) as bar:
@@ -378,48 +373,14 @@ def train_dqn(
             game = LimitHoldemBatch(deals=deals.get(start, count))
             my_seat = ((start + np.arange(count)) % 2).astype(np.int8)
             rivals.deal(count)
-            pending = _Pending(count, learner, _Staged() if at_end else None)
-
+            pending = _Pending(count, learner, _Staged() if shaping.at_end else None)
             while game.active().size:
                 active = game.active()
                 mine = game.to_act[active] == my_seat[active]
                 learner_hands, rival_hands = active[mine], active[~mine]
                 if learner_hands.size:
-                    legal = game.legal_mask(learner_hands)
-                    plain_obs = game.observe(learner_hands)  # RLCard's: what rewards get
-                    cards = turn_cards(game, learner_hands) if needs_cards else None
-                    encoded: dict[str, np.ndarray] = {}
-                    if plain:
-                        obs = plain_obs
-                    else:
-                        assert cards is not None  # a non-RLCard encoding reads the cards
-                        states = RawStates(cards=cards, raise_nums=game.raises[learner_hands],
-                                        legal_mask=legal)  # fmt: skip
-                        obs = encoded[encoding.spec] = encoding.encode(states)
-                    # This state closes the learner's previous transition in these hands.
-                    waiting = pending.waiting[learner_hands]
-                    before = learner_hands[waiting]
-                    pending.close(before, pending.reward[before], obs[waiting], legal[waiting],
-                                  done=False)  # fmt: skip
-
-                    # Epsilon-greedy: uniform over legal actions with probability epsilon.
-                    epsilon = epsilon_at(config, learner.total_t)
-                    with torch.no_grad():
-                        q = learner.q_net(torch.from_numpy(obs).float())
-                    actions = greedy_actions(q, torch.from_numpy(legal)).numpy()
-                    randomize = rng.random(actions.size) < epsilon
-                    actions[randomize] = explore.act(obs[randomize], legal[randomize], rng)
-
-                    rewards: np.ndarray = np.zeros(actions.size, np.float32)
-                    if pending.staged is not None:  # f comes when the hand ends
-                        assert cards is not None  # staging needs the cards (needs_cards)
-                        pending.staged.note(learner_hands, cards, legal, actions)
-                    elif reward is not None:
-                        decisions = ObservedDecisions(obs=plain_obs, legal_mask=legal, cards=cards,
-                                              encoded=encoded)  # fmt: skip
-                        rewards = decision_weight * reward(decisions, actions)
-                    pending.open(learner_hands, obs, actions, rewards)
-                    game.step(actions, learner_hands)
+                    _learner_decides(game, learner_hands, learner=learner, shaping=shaping,
+                                     pending=pending, rng=rng)  # fmt: skip
                 for rival, hands_of_rival in rivals.split(rival_hands):
                     rival_obs = observe(game, hands_of_rival, agent_encoding(rival))
                     rival_legal = game.legal_mask(hands_of_rival)
@@ -428,20 +389,7 @@ def train_dqn(
                         agent_actions(rival, rival_obs, rival_legal, opponent_rng, cards_of),
                         hands_of_rival,
                     )
-
-                # Hands that just ended close the learner's last transition with the payoff.
-                ended = np.flatnonzero(game.done & pending.waiting)
-                if ended.size:
-                    payoff = game.payoffs[ended, my_seat[ended]].astype(np.float32)
-                    # A terminal state is never bootstrapped from: RLCard's observation of
-                    # it, or zeros in another encoding (not worth encoding).
-                    terminal = (game.observe(ended, my_seat[ended]) if plain else
-                                np.zeros((ended.size, encoding.width), encoding.dtype))
-                    pending.close(ended, pending.reward[ended] + payoff_scale * payoff, terminal,
-                                  np.zeros((ended.size, NUM_ACTIONS), bool), done=True)  # fmt: skip
-                    if pending.staged is not None:
-                        pending.staged.flush(ended, game.raises, reward, decision_weight, learner)  # type: ignore[arg-type]
-
+                _close_ended(game, my_seat, pending, learner=learner, shaping=shaping)
                 for _ in range(learner.updates_due()):
                     learner.update(rng)
                     if learner.train_t % config.self_play_every == 0:
@@ -451,6 +399,101 @@ def train_dqn(
             if on_hands is not None:
                 on_hands(start + count, learner)
     return learner
+
+
+@dataclass(frozen=True, kw_only=True)
+class _Shaping:
+    """What the learner's transitions are paid and what it must see: f (weighted) on each
+    decision or staged to the hand's end, the payoff (scaled) when the hand ends."""
+
+    reward: PokerReward | None  # None: the sparse payoff alone
+    encoding: Encoding  # what the q-network reads
+    decision_weight: float
+    payoff_scale: float
+    at_end: bool  # f called when the hand ends, on its final raise counts
+    needs_cards: bool
+
+    @classmethod
+    def of(cls, reward: PokerReward | None, *, payoff_weight: float, raise_counts: str,
+           encoding: Encoding) -> _Shaping:  # fmt: skip
+        at_end = reward is not None and raise_counts == "end-of-hand"
+        plain = encoding.name == EncodingName.RLCARD
+        return cls(
+            reward=reward,
+            encoding=encoding,
+            decision_weight=0.0 if reward is None else 1.0 - payoff_weight,
+            payoff_scale=1.0 if reward is None else payoff_weight,
+            at_end=at_end,
+            needs_cards=at_end or (reward is not None and reward.needs_cards) or not plain,
+        )
+
+    @property
+    def plain(self) -> bool:
+        """The q-network reads RLCard's observation, the one rewards get."""
+        return self.encoding.name == EncodingName.RLCARD
+
+
+def _learner_decides(
+    game: LimitHoldemBatch, hands: np.ndarray, *, learner: DQNLearner, shaping: _Shaping,
+    pending: _Pending, rng: np.random.Generator,
+) -> None:  # fmt: skip
+    """The learner acts ε-greedily in ``hands``: its previous transitions there close on this
+    state, the new ones open with f's share of their reward, and the engine steps."""
+    encoding = shaping.encoding
+    legal = game.legal_mask(hands)
+    plain_obs = game.observe(hands)  # RLCard's: what rewards get
+    cards = turn_cards(game, hands) if shaping.needs_cards else None
+    encoded: dict[str, np.ndarray] = {}
+    if shaping.plain:
+        obs = plain_obs
+    else:
+        assert cards is not None  # a non-RLCard encoding reads the cards
+        states = RawStates(cards=cards, raise_nums=game.raises[hands], legal_mask=legal)
+        obs = encoded[encoding.spec] = encoding.encode(states)
+    # This state closes the learner's previous transition in these hands.
+    waiting = pending.waiting[hands]
+    before = hands[waiting]
+    pending.close(before, pending.reward[before], obs[waiting], legal[waiting], done=False)
+
+    # Epsilon-greedy: uniform over legal actions with probability epsilon.
+    epsilon = epsilon_at(learner.config, learner.total_t)
+    with torch.no_grad():
+        q = learner.q_net(torch.from_numpy(obs).float())
+    actions = greedy_actions(q, torch.from_numpy(legal)).numpy()
+    randomize = rng.random(actions.size) < epsilon
+    actions[randomize] = RandomAgent().act(obs[randomize], legal[randomize], rng)
+
+    rewards: np.ndarray = np.zeros(actions.size, np.float32)
+    if pending.staged is not None:  # f comes when the hand ends
+        assert cards is not None  # staging needs the cards (needs_cards)
+        pending.staged.note(hands, cards, legal, actions)
+    elif shaping.reward is not None:
+        decisions = ObservedDecisions(obs=plain_obs, legal_mask=legal, cards=cards,
+                                      encoded=encoded)  # fmt: skip
+        rewards = shaping.decision_weight * shaping.reward(decisions, actions)
+    pending.open(hands, obs, actions, rewards)
+    game.step(actions, hands)
+
+
+def _close_ended(
+    game: LimitHoldemBatch, my_seat: np.ndarray, pending: _Pending, *, learner: DQNLearner,
+    shaping: _Shaping,
+) -> None:  # fmt: skip
+    """Hands that just ended close the learner's last transition with the payoff."""
+    ended = np.flatnonzero(game.done & pending.waiting)
+    if not ended.size:
+        return
+    encoding = shaping.encoding
+    payoff = game.payoffs[ended, my_seat[ended]].astype(np.float32)
+    # A terminal state is never bootstrapped from: RLCard's observation of it, or zeros in
+    # another encoding (not worth encoding).
+    terminal = (game.observe(ended, my_seat[ended]) if shaping.plain else
+                np.zeros((ended.size, encoding.width), encoding.dtype))  # fmt: skip
+    pending.close(ended, pending.reward[ended] + shaping.payoff_scale * payoff, terminal,
+                  np.zeros((ended.size, NUM_ACTIONS), bool), done=True)  # fmt: skip
+    if pending.staged is not None:
+        pending.staged.flush(ended, game.raises, shaping.reward, shaping.decision_weight,  # type: ignore[arg-type]
+                             learner)  # fmt: skip
 
 
 def _check_training(
