@@ -21,7 +21,8 @@ import pyarrow.parquet as pq
 from pokerirl.datasets.ingest import PARQUET_OPTIONS, ingest_table
 from pokerirl.datasets.table import month_table
 from pokerirl.game.synth import write_synthetic_month
-from pokerirl.parsers.irc import IngestStats, iter_months, parse_month
+from pokerirl.parsers.irc import IngestStats, parse_month
+from pokerirl.parsers.irc_sources import iter_months
 
 TARGET_HANDS_PER_SECOND = 50_000
 JCOTTAS_HANDS_PER_SECOND = 820  # quoted in the issue: 27,508 hands in about 33 s

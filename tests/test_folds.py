@@ -23,7 +23,8 @@ from pokerirl.game.evaluator import hand_strength
 from pokerirl.game.synth import write_synthetic_month
 from pokerirl.holdem import CARD_INDEX, FOLD, cards_from_text, encode_obs
 from pokerirl.irl.nets import DiscretePolicy
-from pokerirl.parsers.irc import IngestStats, iter_months, parse_month
+from pokerirl.parsers.irc import IngestStats, parse_month
+from pokerirl.parsers.irc_sources import iter_months
 from pokerirl.poker.folds import ImputeConfig
 from pokerirl.poker.impute import (
     NUM_PAIRS,

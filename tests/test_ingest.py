@@ -25,7 +25,7 @@ from pokerirl.cli import app
 from pokerirl.datasets.ingest import IngestSummary, ingest_table, summary_path
 from pokerirl.datasets.table import REQUIRED_COLUMNS
 from pokerirl.holdem import CALL, CHECK, RAISE
-from pokerirl.parsers.irc import IngestError
+from pokerirl.parsers.irc_sources import IngestError
 
 
 def rows_of(table_path: Path, timestamp: int) -> dict[str, list]:

@@ -17,7 +17,8 @@ from pokerirl.cli import app
 from pokerirl.datasets.ingest import IngestSummary, ingest_table, summary_path
 from pokerirl.datasets.players import Filter, Period, Selection
 from pokerirl.errors import ConfigError
-from pokerirl.parsers.irc import IngestError, heads_up_results, iter_months
+from pokerirl.parsers.irc import heads_up_results
+from pokerirl.parsers.irc_sources import IngestError, iter_months
 
 T0 = 900000000
 BOARD = "2d 5h 9c Jd Ks"

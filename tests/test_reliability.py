@@ -35,8 +35,8 @@ from pokerirl.datasets.ingest import ingest_table, summary_path
 from pokerirl.game.bots import make_agent
 from pokerirl.game.match import MAX_HANDS, check_match_size, play_match
 from pokerirl.game.synth import write_synthetic_month
-from pokerirl.parsers import irc
-from pokerirl.parsers.irc import IngestError
+from pokerirl.parsers import irc_sources
+from pokerirl.parsers.irc_sources import IngestError
 from pokerirl.store import tidy
 
 REPO = Path(__file__).resolve().parents[1]
@@ -164,7 +164,7 @@ def test_oversized_member_is_refused_before_it_is_read(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     # The caps are module settings; small ones stand in for a 200 MB member of a tiny .tgz.
-    monkeypatch.setattr(irc, "MAX_FILE_BYTES", 1_000)
+    monkeypatch.setattr(irc_sources, "MAX_FILE_BYTES", 1_000)
     archive = tmp_path / "holdem.199504.tgz"
     line = MINIMAL["hdb"] + b"\r\n"
     with tarfile.open(archive, "w:gz") as tar:
@@ -177,8 +177,8 @@ def test_oversized_member_is_refused_before_it_is_read(
     (folder / "hdb").write_bytes(line * 20)
     with pytest.raises(IngestError, match=rf"{re.escape(str(folder))}/hdb: 1,120 bytes"):
         ingest_table([folder], tmp_path / "t.parquet")
-    monkeypatch.setattr(irc, "MAX_FILE_BYTES", 10_000)
-    monkeypatch.setattr(irc, "MAX_MONTH_BYTES", 1_150)
+    monkeypatch.setattr(irc_sources, "MAX_FILE_BYTES", 10_000)
+    monkeypatch.setattr(irc_sources, "MAX_MONTH_BYTES", 1_150)
     with pytest.raises(IngestError, match=r"its month holds .* more than the 1,150"):
         ingest_table([folder], tmp_path / "t.parquet")
 

@@ -29,7 +29,7 @@ from testkit import folder_bytes
 
 from irc_fixtures import real_month
 from pokerirl.datasets.ingest import ingest_table, summary_path
-from pokerirl.parsers import irc
+from pokerirl.parsers import irc_sources
 
 REPO = Path(__file__).resolve().parents[1]
 SAMPLE = real_month()
@@ -273,8 +273,8 @@ def test_ingest_reads_at_most_the_cap_of_a_file_that_grows(
     # hdb is small when its size is checked and 50,000 bytes when read: the read stops one
     # byte past the cap, and the file is refused.
     month = write_minimal(tmp_path)
-    monkeypatch.setattr(irc, "MAX_FILE_BYTES", 1_000)
-    opened = irc._open_regular
+    monkeypatch.setattr(irc_sources, "MAX_FILE_BYTES", 1_000)
+    opened = irc_sources._open_regular
 
     @contextlib.contextmanager
     def grows(path: Path) -> Iterator[tuple[io.BufferedReader, int]]:
@@ -282,8 +282,8 @@ def test_ingest_reads_at_most_the_cap_of_a_file_that_grows(
             path.write_bytes(b"7" * 50_000)  # the same inode: the handle reads the new bytes
             yield handle, size
 
-    monkeypatch.setattr(irc, "_open_regular", grows)
-    with pytest.raises(irc.IngestError, match=r"hdb: 1,001 bytes, more than the 1,000"):
+    monkeypatch.setattr(irc_sources, "_open_regular", grows)
+    with pytest.raises(irc_sources.IngestError, match=r"hdb: 1,001 bytes, more than the 1,000"):
         ingest_table([month], tmp_path / "t.parquet")
 
 

@@ -37,16 +37,8 @@ from pokerirl.datasets.players import (
 )
 from pokerirl.datasets.table import IMPUTED_SCHEMA, SCHEMA, month_table
 from pokerirl.holdem import ACTIONS, FOLD
-from pokerirl.parsers.irc import (
-    DROP_REASONS,
-    KEPT,
-    IngestError,
-    IngestStats,
-    check_sources,
-    heads_up_results,
-    iter_months,
-    parse_month,
-)
+from pokerirl.parsers.irc import DROP_REASONS, KEPT, IngestStats, heads_up_results, parse_month
+from pokerirl.parsers.irc_sources import IngestError, check_sources, iter_months
 from pokerirl.serial import Omit, Serializable, meta
 from pokerirl.store import staged_files
 

@@ -35,7 +35,7 @@ FIRST_TIMESTAMP = 978_307_200  # 2001-01-01 00:00 UTC
 SECONDS_PER_HAND = 60
 STARTING_BANKROLL = 1000
 # One month is built in memory (about 1.7 GB at this size) and must stay within ingest's caps
-# (pokerirl.parsers.irc.MAX_FILE_BYTES: 1M hands make a 68 MB hdb).
+# (pokerirl.parsers.irc_sources.MAX_FILE_BYTES: 1M hands make a 68 MB hdb).
 MAX_HANDS = 1_000_000
 
 

@@ -93,7 +93,7 @@ def run_study(
             stage record of an older pokerirl made with other settings. Lower layers' errors
             (IngestError, TournamentError, RunError...) pass through.
     """
-    from pokerirl.parsers.irc import check_sources
+    from pokerirl.parsers.irc_sources import check_sources
 
     if not sources:
         raise StudyError("give at least one SOURCE (an IRC month folder or archive)")
