@@ -4,7 +4,13 @@ bytes for a seed, and ``train --mode online`` refuses bad options in one line.""
 
 from __future__ import annotations
 
+import hashlib
 import json
+import os
+import shutil
+import signal
+import subprocess
+import sys
 from dataclasses import replace
 from pathlib import Path
 
@@ -183,3 +189,41 @@ def test_unknown_settings_are_refused() -> None:
         PokerOnlineSettings(returns="episode")
     with pytest.raises(ValueError, match="round"):
         PokerOnlineSettings(rounds=0)
+
+
+def _digests(folder: Path) -> dict[str, str]:
+    """sha256 of every file under ``folder`` but the wall-clock timings, by relative path."""
+    return {
+        p.relative_to(folder).as_posix(): hashlib.sha256(p.read_bytes()).hexdigest()
+        for p in sorted(folder.rglob("*"))
+        if p.is_file() and p.name != "timings.json"
+    }
+
+
+@pytest.mark.slow
+@pytest.mark.serial  # kills a process once it reports its first round: run alone
+def test_a_killed_online_run_reruns_to_the_uninterrupted_bytes(table: Path, tmp_path: Path) -> None:
+    out = tmp_path / "run"
+    line = ["train", str(table), "--out", str(out), "--mode", "online", "--rounds", "4",
+            "--generator-steps", "64", "--quiet"]  # fmt: skip
+    result = CliRunner().invoke(app, line)
+    assert result.exit_code == 0, result.stderr
+    reference = _digests(out)
+    assert "reward.pt" in reference and "metrics.jsonl" in reference
+    shutil.rmtree(out)
+    env = {**os.environ, "PYTHONUNBUFFERED": "1"}  # each round's line as it is said
+    process = subprocess.Popen([sys.executable, "-m", "pokerirl", *line], env=env, text=True,
+                               stdout=subprocess.PIPE, stderr=subprocess.DEVNULL)  # fmt: skip
+    try:
+        assert process.stdout is not None
+        said = next((text for text in process.stdout if "round 1/4" in text), None)
+        process.send_signal(signal.SIGKILL)  # on the event, not after a sleep
+    finally:
+        process.kill()
+        process.wait()
+    assert said is not None, "the run never reported its first round"
+    assert not out.exists()  # killed mid-run: nothing in place, only its staging beside
+    result = CliRunner().invoke(app, line)
+    assert result.exit_code == 0, result.stderr
+    assert _digests(out) == reference
+    assert [p.name for p in tmp_path.iterdir()] == ["run"]  # what the kill left, removed

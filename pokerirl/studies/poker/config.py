@@ -290,7 +290,9 @@ class StudyConfig:
                 opponent=self.online_opponent or found.opponent,
             )
         except ValueError as error:  # ConfigError: an unknown opponent, a count < 1
-            raise StudyError(f"bad study settings: {error}") from None
+            raise StudyError(
+                f"bad study settings, the online IRL mode's generator: {error}"
+            ) from None
 
     @property
     def kinds(self) -> tuple[str, ...]:
