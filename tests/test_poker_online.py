@@ -227,3 +227,25 @@ def test_a_killed_online_run_reruns_to_the_uninterrupted_bytes(table: Path, tmp_
     assert result.exit_code == 0, result.stderr
     assert _digests(out) == reference
     assert [p.name for p in tmp_path.iterdir()] == ["run"]  # what the kill left, removed
+
+
+def test_an_online_reward_loads_where_an_offline_one_does(
+    run: Path, table: Path, tmp_path: Path
+) -> None:
+    """``reward-card`` and ``agent train --reward-run`` read an online run as an offline one
+    (``load_reward``, ``load_policy`` and the card written at training:
+    :func:`test_the_folder_is_offline_trains_and_says_online`)."""
+    card = tmp_path / "card"
+    result = CliRunner().invoke(app, ["reward-card", str(run), "--table", str(table),
+                                      "--out", str(card), "--transform", "advantage"])  # fmt: skip
+    assert result.exit_code == 0, result.output
+    found = json.loads((card / "reward_card.json").read_text())
+    assert 0 <= found["agree_expert"] <= 1 and found["states"] > 0
+    agent = tmp_path / "agent"
+    result = CliRunner().invoke(app, [
+        "agent", "train", "--out", str(agent), "--reward", "learned", "--reward-run", str(run),
+        "--hands", "256", "--eval-every", "256", "--eval-hands", "100",
+        "--concurrent-hands", "64", "--quiet",
+    ])  # fmt: skip
+    assert result.exit_code == 0, result.output
+    assert "vs random" in result.output and (agent / "model.pt").is_file()
