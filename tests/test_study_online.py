@@ -9,7 +9,7 @@ import shutil
 from pathlib import Path
 
 import pytest
-from testkit import TINY_GYM_STUDY, Cli
+from testkit import TINY_GYM_STUDY, Cli, folder_bytes
 
 CLI = Cli()  # pokerirl run in this process (tests/testkit.py)
 GYM_ONLINE = ["--mode", "online", "--rounds", "1", "--generator-steps", "64",
@@ -90,3 +90,14 @@ def test_offline_study_settings_record_no_mode() -> None:
     online = preset("smoke", irl_mode="online", online_rounds=3).settings()
     assert (online["irl_mode"], online["online_rounds"]) == ("online", 3)
     assert (online["online_generator_steps"], online["online_opponent"]) == (2048, "random")
+
+
+@pytest.mark.slow
+def test_study_game_leduc_is_the_leduc_study(tmp_path: Path) -> None:
+    """``study --game leduc`` runs what ``leduc study`` runs: the same files, byte for byte."""
+    smoke = ["--preset", "smoke", "--rl", "tabular"]
+    CLI.ok("study", "--game", "leduc", "--out", tmp_path / "a", *smoke)
+    CLI.ok("leduc", "study", "--out", tmp_path / "b", *smoke)
+    found = folder_bytes(tmp_path / "a")
+    assert "report.json" in found and json.loads(found["report.json"])["settings"]["preset"] == "smoke"
+    assert found == folder_bytes(tmp_path / "b")
