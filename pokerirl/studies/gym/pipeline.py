@@ -41,6 +41,7 @@ from pokerirl.gym.irl import GymIRLSummary
 from pokerirl.gym.quality import has_true_reward
 from pokerirl.gym.rl import DEFAULT_RL_BACKEND, RLBackend, read_curve
 from pokerirl.gym.tasks import task
+from pokerirl.irl.config import IRLMode
 from pokerirl.irl.metrics import Metric
 from pokerirl.irl.run import read_epochs
 from pokerirl.meanstd import Curve, MeanStd, mean_std
@@ -104,19 +105,10 @@ def data_job(root: Path, env: str, preset: StudyPreset, *, expert: Path | None =
 
 
 def irl_job(
-    root: Path,
-    env: str,
-    algo: str,
-    preset: StudyPreset,
-    *,
-    data: Path,
-    online: OnlineSettings | None = None,
-    **settings: Any,
+    root: Path, env: str, algo: str, preset: StudyPreset, *, data: Path, **settings: Any
 ) -> IRLJob:
-    """``algo``'s runs on ``data`` into ``root/irl/<algo>`` (``online``: trained online);
-    ``settings`` override the preset's."""
+    """``algo``'s runs on ``data`` into ``root/irl/<algo>``; ``settings`` override the preset's."""
     return IRLJob(
-        online=online,
         env=env,
         algo=algo,
         runs=preset.runs,
@@ -219,8 +211,10 @@ def run_gym_study(
         _said_reused(say, reused, len(data))
 
         irl = {
-            (env, algo): irl_job(roots[env], env, algo, preset, data=roots[env] / DATA_FILE,
-                                 online=online)
+            (env, algo): replace(
+                irl_job(roots[env], env, algo, preset, data=roots[env] / DATA_FILE),
+                online=online,  # None: offline
+            )
             for env in tasks
             for algo in preset.algos
         }
@@ -377,7 +371,8 @@ def task_summary(
             seed=preset.seed,
             authors_budget=authors_budget(env, preset),
             rl_backend=rl_backend,
-            **({} if online is None else {"mode": "online", "online": online_record(online)}),
+            mode=None if online is None else IRLMode.ONLINE.value,
+            online=None if online is None else online_record(online),
         ),
         paper=None
         if paper is None

@@ -257,7 +257,7 @@ def plain_verdict(report: StudyReport) -> str | None:
     return " ".join(words)
 
 
-def irl_phase(settings: Mapping[str, Any], epochs: int) -> str:
+def irl_phase(settings: Mapping[str, Any], epochs: int | None) -> str:
     """How the IRL runs trained: offline epochs, or (issue 43) online rounds on the engine."""
     if settings.get("irl_mode") != "online":
         return f"{epochs} epochs"
