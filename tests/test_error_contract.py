@@ -339,7 +339,8 @@ def test_help_shows_the_config_dataclass_default(
 
 # `gym irl --mode online` and poker's `train --mode online` (issue 43): a bad mode or an
 # online-only option without it is a usage error; online sizes the library refuses are exit 1;
-# a command that cannot learn online (the studies) has no --mode and refuses it in one line.
+# a command that cannot learn online (the sweeps, leduc study) has no --mode and refuses it in
+# one line; the studies take it (an online option offline, a bad mode: one usage line).
 ONLINE_MODE: dict[str, tuple[str, int]] = {
     "bad mode": ("gym irl MountainCar-v0 --out {O} --mode nope", 2),
     "online option, offline mode": ("gym irl MountainCar-v0 --out {O} --rounds 3", 2),

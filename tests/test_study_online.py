@@ -99,5 +99,5 @@ def test_study_game_leduc_is_the_leduc_study(tmp_path: Path) -> None:
     CLI.ok("study", "--game", "leduc", "--out", tmp_path / "a", *smoke)
     CLI.ok("leduc", "study", "--out", tmp_path / "b", *smoke)
     found = folder_bytes(tmp_path / "a")
-    assert "report.json" in found and json.loads(found["report.json"])["settings"]["preset"] == "smoke"
+    assert json.loads(found["report.json"])["settings"]["preset"] == "smoke"
     assert found == folder_bytes(tmp_path / "b")

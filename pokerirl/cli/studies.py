@@ -1,4 +1,5 @@
-"""The study commands: demo, study (poker) and report (any study or tournament folder)."""
+"""The study commands: demo, study (poker: hold'em, or with ``--game leduc`` the Leduc study),
+transfer and report (any study or tournament folder)."""
 
 from __future__ import annotations
 

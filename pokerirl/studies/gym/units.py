@@ -4,7 +4,8 @@ Three kinds of unit, each a top-level function of plain arguments that returns b
 runs on any :mod:`pokerirl.execution` backend, with no shared filesystem):
 
 - :func:`collect_unit`: the shipped expert's transitions (``gym collect``) as Parquet bytes;
-- :func:`irl_unit`: one algorithm's IRL runs in lock-step (``gym irl``), as a folder's files;
+- :func:`irl_unit`: one algorithm's IRL runs in lock-step (``gym irl``), or online one after
+  another (``gym irl --mode online``), as a folder's files;
 - :func:`rl_unit`: one RL run (``gym rl``) on the env reward or on one IRL run's reward;
 - :func:`rl_group_unit`: with the lock-step RL backend, one group of RL runs (one task, one
   reward kind, one ``rl/<reward>`` folder: its unfinished runs) trained together, whose runs

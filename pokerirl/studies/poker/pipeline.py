@@ -5,7 +5,8 @@ The ``authors`` stage (the authors' tournament protocol) runs when the settings 
 
 Each stage is units of :mod:`pokerirl.store`, each with its own record: the table
 (``expert.parquet``, its record ``expert.unit.json``), the IRL runs (``irl/<algo>/run-<k>``, or
-``irl/<algo>`` for one run), the agent seeds, the tournament seeds and experiments. A stage's
+``irl/<algo>`` for one run; trained offline, or online with ``irl_mode`` online:
+:func:`online_runs`), the agent seeds, the tournament seeds and experiments. A stage's
 result (what the report reads) is recomputed from its units' outputs on every run. A rerun
 reuses every unit finished with the same settings and inputs, runs the missing ones, and
 refuses, in one line naming it, a unit made with other settings or inputs unless
