@@ -339,7 +339,8 @@ def test_help_shows_the_config_dataclass_default(
 
 # `gym irl --mode online` and poker's `train --mode online` (issue 43): a bad mode or an
 # online-only option without it is a usage error; online sizes the library refuses are exit 1;
-# a command that cannot learn online (the studies) has no --mode and refuses it in one line.
+# a command that cannot learn online (the sweeps, leduc study) has no --mode and refuses it in
+# one line; the studies take it (an online option offline, a bad mode: one usage line).
 ONLINE_MODE: dict[str, tuple[str, int]] = {
     "bad mode": ("gym irl MountainCar-v0 --out {O} --mode nope", 2),
     "online option, offline mode": ("gym irl MountainCar-v0 --out {O} --rounds 3", 2),
@@ -350,9 +351,25 @@ ONLINE_MODE: dict[str, tuple[str, int]] = {
     "poker train bad mode": ("train {G} --out {O} --mode nope", 2),
     "poker online option, offline mode": ("train {G} --out {O} --generator-steps 3", 2),
     "poker online, an offline option": ("train {G} --out {O} --mode online --em-rounds 1", 2),
-    "poker study": ("study {G} --out {O} --mode online", 2),
-    "gym study": ("gym study MountainCar-v0 --out {O} --mode online", 2),
-}
+    # The studies take --mode since (issue 43): an online option offline is refused instead.
+    "poker study": ("study {G} --out {O} --rounds 3", 2),
+    "gym study": ("gym study MountainCar-v0 --out {O} --generator-envs 2", 2),
+    "poker study bad mode": ("study {G} --out {O} --mode nope", 2),
+    "gym study bad mode": ("gym study MountainCar-v0 --out {O} --mode nope", 2),
+    "poker study, an online option offline": ("study {G} --out {O} --generator-opponent call", 2),
+    "poker study, an unknown generator opponent": (
+        "study {G} --out {O} --mode online --generator-opponent nope", 2),
+    "poker study, online on imputed folds": ("study {G} --out {O} --mode online --folds impute",
+                                             2),
+    "gym study, steps not a multiple of envs": (
+        "gym study MountainCar-v0 --out {O} --mode online --generator-steps 3 "
+        "--generator-envs 2", 1),
+    "gym sweep cannot learn online": (
+        "gym sweep MountainCar-v0 --param alpha=0 --out {O} --mode online", 2),
+    "poker sweep cannot learn online": ("sweep {E} --out {O} --mode online", 2),
+    "leduc study cannot learn online": ("leduc study --out {O} --mode online", 2),
+    "leduc game, online": ("study --game leduc --out {O} --mode online", 2),
+}  # fmt: skip
 
 
 @pytest.mark.parametrize("case", sorted(ONLINE_MODE))
@@ -360,3 +377,23 @@ def test_online_mode_refusals_are_one_line(case: str, places: dict[str, str]) ->
     line, expected = ONLINE_MODE[case]
     code, error = run(line, places)
     assert code == expected and ("mode" in error or "envs" in error), error
+
+
+# `study --game leduc` (issue 43): the Leduc study; each game's options refused with the other.
+GAME: dict[str, tuple[str, int]] = {
+    "bad game": ("study --game chess --out {O}", 2),
+    "leduc, a hold'em source": ("study {G} --game leduc --out {O}", 2),
+    "leduc, a hold'em option": ("study --game leduc --out {O} --runs 2", 2),
+    "leduc, a hold'em preset": ("study --game leduc --out {O} --preset paper", 2),
+    "leduc, a bad rule set": ("study --game leduc --out {O} --rules nope", 2),
+    "hold'em, a Leduc option": ("study {G} --out {O} --rl tabular", 2),
+    "hold'em without a source": ("study --out {O}", 2),
+    "transfer on leduc": ("transfer {E} --out {O} --game leduc", 2),
+}
+
+
+@pytest.mark.parametrize("case", sorted(GAME))
+def test_game_refusals_are_one_line(case: str, places: dict[str, str]) -> None:
+    line, expected = GAME[case]
+    code, error = run(line, places)
+    assert code == expected and ("game" in error or "SOURCE" in error), error

@@ -22,6 +22,7 @@ from pokerirl.gym.expert_policies import load_expert, resolve_expert_dir
 from pokerirl.gym.irl import irl_config, load_env_transitions, obs_standardization, standardized
 from pokerirl.gym.online import OnlineSettings, PPOGenerator, train_gym_online
 from pokerirl.gym.presets import TASKS
+from pokerirl.gym.quality import run_quality
 from pokerirl.irl import load_policy, load_reward
 from pokerirl.irl.adversarial import default_nets
 from pokerirl.irl.losses import gaussian_log_prob
@@ -88,6 +89,15 @@ def test_an_online_run_writes_the_offline_run_folder_and_a_seed_gives_its_bytes(
     same = {k: v for k, v in folder_bytes(tmp_path / "a").items() if "timings" not in k}
     again = {k: v for k, v in folder_bytes(tmp_path / "b").items() if "timings" not in k}
     assert same == again  # same seed, same bytes (all but the wall-clock timings)
+    # Read where an offline run is: the reward quality (EPIC) reader and gym rl.
+    written = json.loads((run / "reward_quality.json").read_text())
+    (run / "reward_quality.json").unlink()  # computed again by the reader, as for an old run
+    quality = run_quality(run, env_id="MountainCar-v0", data_path=mountaincar)
+    assert quality == written and quality["epic"] is not None
+    rl = ["gym", "rl", "MountainCar-v0", "--reward-run", run, "--runs", "1", "--timesteps", "300",
+          "--evaluations", "1", "--eval-episodes", "1", "--quiet", "--out", tmp_path / "rl"]
+    assert "final true return" in CLI.ok(*rl)
+    assert (tmp_path / "rl" / "run-0" / "metrics.jsonl").is_file()
 
 
 def test_the_discriminator_learns_on_the_generators_states(mountaincar: Path) -> None:

@@ -4,7 +4,13 @@ bytes for a seed, and ``train --mode online`` refuses bad options in one line.""
 
 from __future__ import annotations
 
+import hashlib
 import json
+import os
+import shutil
+import signal
+import subprocess
+import sys
 from dataclasses import replace
 from pathlib import Path
 
@@ -183,3 +189,63 @@ def test_unknown_settings_are_refused() -> None:
         PokerOnlineSettings(returns="episode")
     with pytest.raises(ValueError, match="round"):
         PokerOnlineSettings(rounds=0)
+
+
+def _digests(folder: Path) -> dict[str, str]:
+    """sha256 of every file under ``folder`` but the wall-clock timings, by relative path."""
+    return {
+        p.relative_to(folder).as_posix(): hashlib.sha256(p.read_bytes()).hexdigest()
+        for p in sorted(folder.rglob("*"))
+        if p.is_file() and p.name != "timings.json"
+    }
+
+
+@pytest.mark.slow
+@pytest.mark.serial  # kills a process once it reports its first round: run alone
+def test_a_killed_online_run_reruns_to_the_uninterrupted_bytes(table: Path, tmp_path: Path) -> None:
+    out = tmp_path / "run"
+    line = ["train", str(table), "--out", str(out), "--mode", "online", "--rounds", "4",
+            "--generator-steps", "64", "--quiet"]  # fmt: skip
+    result = CliRunner().invoke(app, line)
+    assert result.exit_code == 0, result.stderr
+    reference = _digests(out)
+    assert "reward.pt" in reference and "metrics.jsonl" in reference
+    shutil.rmtree(out)
+    env = {**os.environ, "PYTHONUNBUFFERED": "1"}  # each round's line as it is said
+    process = subprocess.Popen([sys.executable, "-m", "pokerirl", *line], env=env, text=True,
+                               stdout=subprocess.PIPE, stderr=subprocess.DEVNULL)  # fmt: skip
+    try:
+        assert process.stdout is not None
+        said = next((text for text in process.stdout if "round 1/4" in text), None)
+        process.send_signal(signal.SIGKILL)  # on the event, not after a sleep
+    finally:
+        process.kill()
+        process.wait()
+    assert said is not None, "the run never reported its first round"
+    assert not out.exists()  # killed mid-run: nothing in place, only its staging beside
+    result = CliRunner().invoke(app, line)
+    assert result.exit_code == 0, result.stderr
+    assert _digests(out) == reference
+    assert [p.name for p in tmp_path.iterdir()] == ["run"]  # what the kill left, removed
+
+
+def test_an_online_reward_loads_where_an_offline_one_does(
+    run: Path, table: Path, tmp_path: Path
+) -> None:
+    """``reward-card`` and ``agent train --reward-run`` read an online run as an offline one
+    (``load_reward``, ``load_policy`` and the card written at training:
+    :func:`test_the_folder_is_offline_trains_and_says_online`)."""
+    card = tmp_path / "card"
+    result = CliRunner().invoke(app, ["reward-card", str(run), "--table", str(table),
+                                      "--out", str(card), "--transform", "advantage"])  # fmt: skip
+    assert result.exit_code == 0, result.output
+    found = json.loads((card / "reward_card.json").read_text())
+    assert 0 <= found["agree_expert"] <= 1 and found["states"] > 0
+    agent = tmp_path / "agent"
+    result = CliRunner().invoke(app, [
+        "agent", "train", "--out", str(agent), "--reward", "learned", "--reward-run", str(run),
+        "--hands", "256", "--eval-every", "256", "--eval-hands", "100",
+        "--concurrent-hands", "64", "--quiet",
+    ])  # fmt: skip
+    assert result.exit_code == 0, result.output
+    assert "vs random" in result.output and (agent / "model.pt").is_file()

@@ -85,6 +85,26 @@ def _folder_out(out: Path) -> None:
         raise UsageError(f"--out {display(str(out))}: exists and is not a folder")
 
 
+# `gym irl`'s and `gym study`'s IRL mode and its online options.
+GYM_MODE = typer.Option(
+    "offline", "--mode", metavar=choices(IRLMode),
+    help="offline: the policy acts at the expert's states (the paper's); online: a PPO "
+    "generator acts in the env on the current learned reward (imitation's AIRL/GAIL).",
+)  # fmt: skip
+GYM_ROUNDS = typer.Option(
+    None, "--rounds", min=1, max=MAX_EPOCHS,
+    help="Online: rounds of generator steps, discriminator pass, PPO update (default 20).",
+)  # fmt: skip
+GYM_GENERATOR_STEPS = typer.Option(
+    None, "--generator-steps", min=1, max=MAX_STEPS,
+    help="Online: env steps the generator collects per round (default 2048).",
+)  # fmt: skip
+GYM_GENERATOR_ENVS = typer.Option(
+    None, "--generator-envs", min=1, max=64,
+    help="Online: the generator's vectorized envs (default 4).",
+)  # fmt: skip
+
+
 @gym_app.command("expert")
 @on_error(interrupted=INTERRUPTED, advice=RUN_ADVICE)
 def gym_expert(
@@ -285,22 +305,10 @@ def gym_irl(
     raw_obs: bool = typer.Option(
         False, "--raw-obs", help="Train on raw observations (default: standardized)."
     ),
-    mode: str = typer.Option(
-        "offline", metavar=choices(IRLMode),
-        help="offline: the policy acts at the expert's states (the paper's); online: a PPO "
-        "generator acts in the env on the current learned reward (imitation's AIRL/GAIL).",
-    ),
-    rounds: int | None = typer.Option(
-        None, min=1, max=MAX_EPOCHS,
-        help="Online: rounds of generator steps, discriminator pass, PPO update (default 20).",
-    ),
-    generator_steps: int | None = typer.Option(
-        None, min=1, max=MAX_STEPS,
-        help="Online: env steps the generator collects per round (default 2048).",
-    ),
-    generator_envs: int | None = typer.Option(
-        None, min=1, max=64, help="Online: the generator's vectorized envs (default 4)."
-    ),
+    mode: str = GYM_MODE,
+    rounds: int | None = GYM_ROUNDS,
+    generator_steps: int | None = GYM_GENERATOR_STEPS,
+    generator_envs: int | None = GYM_GENERATOR_ENVS,
     out: Path = typer.Option(..., "--out", "-o", help="Folder of run-<k> and summary.json."),
     overwrite: bool = typer.Option(False, help="Replace earlier runs in OUT."),
     threads: int = typer.Option(1, min=1, help="torch threads."),
@@ -317,24 +325,7 @@ def gym_irl(
         raise UsageError(f"--preset must be one of {', '.join(PRESETS)}, got {preset!r}")
     if algo not in tuple(Algo):
         raise UsageError(f"--algo must be one of {', '.join(Algo)}, got {algo!r}")
-    if mode not in tuple(IRLMode):
-        raise UsageError(f"--mode must be one of {', '.join(IRLMode)}, got {mode!r}")
-    online_options = {"--rounds": rounds, "--generator-steps": generator_steps,
-                      "--generator-envs": generator_envs}  # fmt: skip
-    given = [name for name, value in online_options.items() if value is not None]
-    if mode == IRLMode.OFFLINE and given:
-        raise UsageError(f"{given[0]} applies to --mode online only")
-    online = None
-    if mode == IRLMode.ONLINE:  # checked before any data is collected
-        from pokerirl.gym.online import OnlineSettings
-
-        online = OnlineSettings()  # the defaults, each option given replacing its own
-        online = replace(
-            online,
-            rounds=rounds or online.rounds,
-            generator_steps=generator_steps or online.generator_steps,
-            envs=generator_envs or online.envs,
-        )
+    online = _online_settings(mode, rounds, generator_steps, generator_envs)
     _known_task(env)
     if data is not None and not data.is_file():
         raise InputError(f"--data {display(str(data))}: no such file")
@@ -386,6 +377,34 @@ def gym_irl(
         line += f", alignment {100 * result.final_alignment.measured[0]:.1f}%"
     echo(f"{line}; wrote {out}")
     write_logs(out, log_dir)
+
+
+def _online_settings(
+    mode: str, rounds: int | None, generator_steps: int | None, generator_envs: int | None
+) -> Any:
+    """``--mode`` and the online options (``gym irl``, ``gym study``): None offline, else the
+    generator's settings, the defaults replaced by each option given; an online option
+    offline is a usage error (exit 2), checked before any work."""
+    from dataclasses import replace
+
+    if mode not in tuple(IRLMode):
+        raise UsageError(f"--mode must be one of {', '.join(IRLMode)}, got {mode!r}")
+    online_options = {"--rounds": rounds, "--generator-steps": generator_steps,
+                      "--generator-envs": generator_envs}  # fmt: skip
+    given = [name for name, value in online_options.items() if value is not None]
+    if mode == IRLMode.OFFLINE:
+        if given:
+            raise UsageError(f"{given[0]} applies to --mode online only")
+        return None
+    from pokerirl.gym.online import OnlineSettings
+
+    online = OnlineSettings()
+    return replace(
+        online,
+        rounds=rounds or online.rounds,
+        generator_steps=generator_steps or online.generator_steps,
+        envs=generator_envs or online.envs,
+    )
 
 
 def _online_irl(env: str, data: Path, *, online: Any, **kwargs: Any) -> Any:
@@ -510,15 +529,24 @@ def gym_study(
         help="An expert folder (gym expert) for the data; default: the shipped one. Needed "
         "for a task the paper does not have.",
     ),
+    mode: str = GYM_MODE,
+    rounds: int | None = GYM_ROUNDS,
+    generator_steps: int | None = GYM_GENERATOR_STEPS,
+    generator_envs: int | None = GYM_GENERATOR_ENVS,
     log_dir: Path | None = LOG_DIR,
 ) -> None:
     """The paper's Gymnasium study: shipped expert -> data -> IRL (AIRL and H-AIRL, and GAIL
     with --algos) -> RL (env reward and each algorithm's rewards) -> summary.json, figures/
-    and report.md beside the authors' finals. Resumable: finished units are kept."""
+    and report.md beside the authors' finals. Resumable: finished units are kept.
+
+    With --mode online the IRL runs train online (as gym irl --mode online: a PPO generator
+    in the env), everything after them as offline; the report says so, and a folder made in
+    the other mode is refused unless --overwrite."""
     from pokerirl.studies.gym.config import parse_algos
     from pokerirl.studies.gym.pipeline import run_gym_study
 
     _rl_backend(rl_backend)
+    online = _online_settings(mode, rounds, generator_steps, generator_envs)
     if expert is not None and task == "all":
         raise UsageError("--expert is for one task, not all")
     preset = _gym_preset(
@@ -537,6 +565,7 @@ def gym_study(
         say=echo,
         rl_backend=rl_backend,
         expert=expert,
+        online=online,
     )
     echo("")
     echo(result.markdown)

@@ -1,4 +1,5 @@
-"""The study commands: demo, study (poker) and report (any study or tournament folder)."""
+"""The study commands: demo, study (poker: hold'em, or with ``--game leduc`` the Leduc study),
+transfer and report (any study or tournament folder)."""
 
 from __future__ import annotations
 
@@ -12,10 +13,16 @@ from pokerirl.cli.app import app
 from pokerirl.cli.data import MONTHS_HELP, months
 from pokerirl.cli.errors import INTERRUPTED, echo, on_error, settings_from_options
 from pokerirl.cli.fanout import RAY_HELP, command_backend
+from pokerirl.cli.leduc import StudyPreset as LeducPreset
+from pokerirl.cli.leduc import StudyRL
 from pokerirl.cli.options import ENCODING_CHOICES, LOG_DIR, Default, choices, write_logs
 from pokerirl.cli.seeds import MAX_SEEDS, SEED_OPTION, seed_list
 from pokerirl.errors import MissingExtra, UsageError
+from pokerirl.game.leduc.rules import RuleSet
+from pokerirl.game.spec import GameName
+from pokerirl.irl.config import MAX_EPOCHS, IRLMode  # torch-free
 from pokerirl.jsonio import read_json
+from pokerirl.settings import MAX_STEPS
 from pokerirl.studies.poker.config import (
     AGENT_PRESETS,
     FOLDS,
@@ -83,11 +90,23 @@ def demo(
         echo(line)
 
 
+def _sources(sources: list[Path] | None) -> list[Path]:
+    """The SOURCE arguments (none: the Leduc study's case, checked by the command)."""
+    return months(sources) if sources else []
+
+
 @app.command()
 @on_error(interrupted=INTERRUPTED)
 def study(
-    sources: list[Path] = typer.Argument(..., callback=months, help=MONTHS_HELP),
+    sources: list[Path] | None = typer.Argument(
+        None, callback=_sources, help=MONTHS_HELP + " Hold'em only."
+    ),
     out: Path = typer.Option(..., "--out", "-o", help="The study folder."),
+    game: str = typer.Option(
+        GameName.HOLDEM, "--game", metavar=choices(GameName),
+        help="holdem: the paper's study on IRC months; leduc: the Leduc study (as pokerirl "
+        "leduc study: CFR+ expert, IRL, RL against it; --rules, --rl).",
+    ),
     preset_name: str = typer.Option(
         "quick",
         "--preset",
@@ -96,7 +115,7 @@ def study(
         "pokerirl demo runs), quick, paper "
         "(ours), authors (their IRL and DQN settings and their tournament protocol, beside "
         "our duplicate-deal Table 1) or real (what pokerirl sweep chose on real hands; "
-        "docs/sweep.md).",
+        "docs/sweep.md). Leduc: quick, wide or smoke.",
     ),
     runs: int | None = typer.Option(
         None, "--runs", min=1, max=MAX_SEEDS, help="IRL runs per algorithm."
@@ -165,10 +184,36 @@ def study(
         None, "--period", metavar="START:END",
         help="The part of each month read, as fractions of its hands by time (0:0.6, 0.6:1).",
     ),
-    jobs: int = typer.Option(
-        2, "--jobs", min=1, max=STAGE_BOUNDS["jobs"], help="Processes for training and play."
+    jobs: int | None = typer.Option(
+        None, "--jobs", min=1, max=STAGE_BOUNDS["jobs"],
+        help="Processes for training and play (default 2).",
     ),
     ray: str | None = typer.Option(None, "--ray", metavar="ADDRESS", help=RAY_HELP),
+    mode: str | None = typer.Option(
+        None, "--mode", metavar=choices(IRLMode),
+        help="The IRL runs: offline (the default; the paper's: the policy acts at the expert's "
+        "states) or online (as train --mode online: the policy plays hands on the engine).",
+    ),
+    rounds: int | None = typer.Option(
+        None, "--rounds", min=1, max=MAX_EPOCHS,
+        help="Online: rounds of generator hands, discriminator pass, policy update (default 20).",
+    ),
+    generator_steps: int | None = typer.Option(
+        None, "--generator-steps", min=1, max=MAX_STEPS,
+        help="Online: the policy's decisions on the engine per round (default 2048).",
+    ),
+    generator_opponent: str | None = typer.Option(
+        None, "--generator-opponent", metavar="random|call|raise|tight|loose",
+        help="Online: the fixed opponent the IRL policy plays (default random; --opponent is "
+        "the DQNs').",
+    ),
+    rules: str | None = typer.Option(
+        None, "--rules", metavar=choices(RuleSet), help="Leduc: the rule set (default rlcard)."
+    ),
+    rl: str | None = typer.Option(
+        None, "--rl", metavar=choices(StudyRL),
+        help="Leduc: the RL agents, dqn (the default) or tabular.",
+    ),
     overwrite: bool = typer.Option(
         False, "--overwrite", help="Recompute changed units, and the units that read them."
     ),
@@ -178,9 +223,40 @@ def study(
     """The paper's poker study in one command: ingest, IRL (AIRL and H-AIRL, several runs),
     DQN agents (sparse, AIRL and H-AIRL rewards), Table 1, the panel, and a report beside the
     paper's numbers (report.md, report.json, panel.csv, figures/), with the reward cards.
-    --preset authors adds the authors' tournament protocol. Resumable: finished units are kept."""
+    --preset authors adds the authors' tournament protocol. Resumable: finished units are kept.
+
+    --mode online trains the IRL runs online (everything after them as offline; the report
+    says so; a folder made in the other mode is refused unless --overwrite). --game leduc
+    runs the Leduc study (pokerirl leduc study) instead."""
     from pokerirl.seeds import seeds_as_written
     from pokerirl.studies.poker import preset, run_study
+
+    if game not in tuple(GameName):
+        raise UsageError(f"--game must be one of {', '.join(GameName)}, got {game!r}")
+    holdem_only = {
+        "SOURCE": bool(sources), "--runs": runs, "--seeds": seeds, "--hands": hands,
+        "--lbr-hands": lbr_hands, "--algos": algos, "--reward-run": reward_run or None,
+        "--reward-transform": reward_transform, "--encoding": encoding, "--folds": folds,
+        "--opponent": opponent, "--payoff-weight": payoff_weight,
+        "--reward-decay": reward_decay, "--experts": experts, "--period": period,
+        "--jobs": jobs, "--ray": ray, "--mode": mode, "--rounds": rounds,
+        "--generator-steps": generator_steps, "--generator-opponent": generator_opponent,
+    }  # fmt: skip
+    if game == GameName.LEDUC:
+        refused = [name for name, value in holdem_only.items() if value not in (None, False)]
+        if refused:
+            raise UsageError(f"{refused[0]} applies to --game holdem only")
+        _leduc_study(out, preset_name, rules=rules, rl=rl, overwrite=overwrite)
+        write_logs(out, log_dir)
+        return
+    leduc_only = {"--rules": rules, "--rl": rl}
+    refused = [name for name, value in leduc_only.items() if value is not None]
+    if refused:
+        raise UsageError(f"{refused[0]} applies to --game leduc only")
+    if not sources:
+        raise UsageError("give at least one SOURCE (an IRC month folder or archive, or a "
+                         "dataset name), or --game leduc")  # fmt: skip
+    online = _study_mode(mode, rounds, generator_steps, generator_opponent)
 
     sources_given = []
     for item in reward_run:
@@ -205,6 +281,7 @@ def study(
         reward_decay=reward_decay,
         experts=experts,
         period=None if period is None else _period(period),
+        **online,
     )
     result = run_study(
         sources,
@@ -213,12 +290,46 @@ def study(
         overwrite=overwrite,
         progress=not quiet,
         say=echo,
-        backend=command_backend(jobs, ray),
+        backend=command_backend(config.jobs, ray),
     )
     echo("")
     echo(result.markdown)
     echo(f"report: {out / 'report.md'} (pokerirl report {out})")
     write_logs(out, log_dir)
+
+
+def _study_mode(
+    mode: str | None, rounds: int | None, steps: int | None, opponent: str | None
+) -> dict[str, object]:
+    """``study --mode`` and its online options as the study config's overrides (a usage
+    error for an online option offline, or an unknown mode)."""
+    if mode is not None and mode not in tuple(IRLMode):
+        raise UsageError(f"--mode must be one of {', '.join(IRLMode)}, got {mode!r}")
+    options = {"--rounds": rounds, "--generator-steps": steps, "--generator-opponent": opponent}
+    given = [name for name, value in options.items() if value is not None]
+    if mode != IRLMode.ONLINE:
+        if given:
+            raise UsageError(f"{given[0]} applies to --mode online only")
+        return {}
+    return {"irl_mode": mode, "online_rounds": rounds, "online_generator_steps": steps,
+            "online_opponent": opponent}  # fmt: skip
+
+
+def _leduc_study(
+    out: Path, preset_name: str, *, rules: str | None, rl: str | None, overwrite: bool
+) -> None:
+    """``study --game leduc``: the Leduc study, as ``pokerirl leduc study`` runs it."""
+    for option, value, allowed in (("--preset", preset_name, LeducPreset),
+                                   ("--rules", rules, RuleSet), ("--rl", rl, StudyRL)):  # fmt: skip
+        if value is not None and value not in tuple(allowed):
+            raise UsageError(f"--game leduc: {option} must be one of {', '.join(allowed)}, "
+                             f"got {value!r}")  # fmt: skip
+    from pokerirl.studies.leduc.study import preset as leduc_preset
+    from pokerirl.studies.leduc.study import run_leduc_study
+
+    config = settings_from_options(leduc_preset, preset_name, rules=rules or RuleSet.RLCARD,
+                                   rl=rl or StudyRL.DQN)  # fmt: skip
+    run_leduc_study(config, out, overwrite=overwrite, echo=echo)
 
 
 def _period(text: str) -> tuple[float, float]:
@@ -283,6 +394,10 @@ def transfer(
     ),
     jobs: int = typer.Option(2, "--jobs", min=1, help="Processes training seeds at once."),
     ray: str | None = typer.Option(None, "--ray", metavar="ADDRESS", help=RAY_HELP),
+    game: str = typer.Option(
+        GameName.HOLDEM, "--game", metavar=GameName.HOLDEM,
+        help="holdem, the only game transfer plays (the Leduc study trains its own agents).",
+    ),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bars."),
 ) -> None:
     """Does a learned reward teach the expert's play? DQNs on each reward transform (and
@@ -292,6 +407,12 @@ def transfer(
     Writes OUT/transfer.json and transfer.md; a rerun reuses the trained agents."""
     from pokerirl.seeds import seeds_as_written
     from pokerirl.studies.poker.transfer import TransferConfig, parse_list, run_transfer
+
+    if game != GameName.HOLDEM:
+        raise UsageError(
+            f"--game {game}: transfer plays hold'em only (the Leduc study trains its own RL "
+            "agents on its rewards: pokerirl study --game leduc)"
+        )
 
     config = settings_from_options(
         TransferConfig,

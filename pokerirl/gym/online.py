@@ -356,10 +356,12 @@ def train_gym_online(
     overwrite: bool = False,
     progress: bool = True,
     on_round: Callable[[int, EpochMetrics], None] | None = None,
+    data_label: str | os.PathLike[str] | None = None,
 ) -> GymIRLResult:
     """``runs`` online IRL runs (seeds ``seed + k``) of ``algo`` on ``data_path``, one after
     another, into ``out`` as :func:`~pokerirl.gym.irl.train_gym_irl` writes it; ``on_round``
-    gets each run's index and round line."""
+    gets each run's index and round line; ``data_label`` as offline (the path the configs
+    record)."""
     if runs < 1:
         raise ConfigError("runs must be at least 1")
     settings = settings or task(env_id).irl
@@ -388,7 +390,7 @@ def train_gym_online(
     }
     data_info = {
         "env": env_id,
-        **data_record(data, train_data, val_data, path=data_path),
+        **data_record(data, train_data, val_data, path=data_label or data_path),
         "obs_standardization": {"shift": shift.tolist(), "scale": scale.tolist()}
         if settings.standardize_obs
         else None,

@@ -30,7 +30,7 @@ import os
 from collections.abc import Mapping, Sequence
 from dataclasses import asdict, dataclass, replace
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -41,6 +41,7 @@ from pokerirl.gym.irl import GymIRLSummary
 from pokerirl.gym.quality import has_true_reward
 from pokerirl.gym.rl import DEFAULT_RL_BACKEND, RLBackend, read_curve
 from pokerirl.gym.tasks import task
+from pokerirl.irl.config import IRLMode
 from pokerirl.irl.metrics import Metric
 from pokerirl.irl.run import read_epochs
 from pokerirl.meanstd import Curve, MeanStd, mean_std
@@ -76,6 +77,9 @@ from pokerirl.studies.gym.units import (
     run_irl_jobs,
     run_rl_jobs,
 )
+
+if TYPE_CHECKING:  # torch: loaded only for an online study
+    from pokerirl.gym.online import OnlineSettings
 
 STEPS = 4
 
@@ -156,8 +160,14 @@ def run_gym_study(
     say: Say = lambda message: None,
     rl_backend: str = DEFAULT_RL_BACKEND,
     expert: str | os.PathLike[str] | None = None,
+    online: OnlineSettings | None = None,
 ) -> GymStudyResult:
     """Run (or resume) the study of ``preset.tasks`` into ``out``; ``say`` hears a line per step.
+
+    The IRL stage trains offline (the paper's), or with ``online`` online
+    (:func:`pokerirl.gym.online.train_gym_online`, a PPO generator in the env); every later
+    stage reads its runs alike. The mode is part of the IRL units' records: a folder made in
+    the other mode is refused (or, with ``overwrite``, recomputed).
 
     The expert data comes from the shipped expert, or from the expert folder ``expert`` (one
     task only; needed for a task the paper does not have, which ships none).
@@ -201,11 +211,15 @@ def run_gym_study(
         _said_reused(say, reused, len(data))
 
         irl = {
-            (env, algo): irl_job(roots[env], env, algo, preset, data=roots[env] / DATA_FILE)
+            (env, algo): replace(
+                irl_job(roots[env], env, algo, preset, data=roots[env] / DATA_FILE),
+                online=online,  # None: offline
+            )
             for env in tasks
             for algo in preset.algos
         }
-        say(f"[2/{STEPS}] IRL: {_and(preset.algos)}, {preset.runs} runs each, on {names}")
+        mode = "" if online is None else f" (online, {online.rounds} rounds)"
+        say(f"[2/{STEPS}] IRL{mode}: {_and(preset.algos)}, {preset.runs} runs each, on {names}")
         reused = run_irl_jobs(list(irl.values()), **options)
         _said_reused(say, reused, len(irl))
 
@@ -229,7 +243,7 @@ def run_gym_study(
     say(f"[4/{STEPS}] report -> {report}")
     summaries = {}
     for env in tasks:
-        summary = task_summary(roots[env], env, preset, rl_backend=rl_backend)
+        summary = task_summary(roots[env], env, preset, rl_backend=rl_backend, online=online)
         write_text(roots[env] / SUMMARY_JSON, json.dumps(summary.to_json(), indent=2) + "\n")
         draw_figures(roots[env], summary)
         if len(tasks) > 1:
@@ -290,7 +304,12 @@ def rl_curves(root: Path, reward: str, runs: int) -> RLCurves:
 
 
 def task_summary(
-    root: Path, env: str, preset: StudyPreset, *, rl_backend: str = DEFAULT_RL_BACKEND
+    root: Path,
+    env: str,
+    preset: StudyPreset,
+    *,
+    rl_backend: str = DEFAULT_RL_BACKEND,
+    online: OnlineSettings | None = None,
 ) -> TaskSummary:
     """The task's ``summary.json``: final values (mean ± std over runs) of every phase, the
     curves behind the figures, the baselines, the settings, and the authors' finals; with the
@@ -352,6 +371,8 @@ def task_summary(
             seed=preset.seed,
             authors_budget=authors_budget(env, preset),
             rl_backend=rl_backend,
+            mode=None if online is None else IRLMode.ONLINE.value,
+            online=None if online is None else online_record(online),
         ),
         paper=None
         if paper is None
@@ -370,6 +391,12 @@ def task_summary(
         ),
         reward_map=draw_reward_map(root, env, preset.algos),
     )
+
+
+def online_record(online: OnlineSettings) -> dict[str, Any]:
+    """What a summary says of an online study's generator (its config.json, all of it)."""
+    return {"rounds": online.rounds, "generator_steps": online.generator_steps,
+            "envs": online.envs}  # fmt: skip
 
 
 def _last(curve: Curve) -> MeanStd:

@@ -11,6 +11,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from pokerirl.gym.presets import TASKS, RLBackend
+from pokerirl.irl.config import IRLMode  # torch-free
 from pokerirl.jsonio import read_json
 from pokerirl.meanstd import MeanStd
 from pokerirl.serial import Json, SerialError, Serializable, meta
@@ -207,12 +208,17 @@ def _budget(summary: TaskSummary) -> str:
     irl, rl = settings.irl, settings.rl
     seeds = summary.seeds
     backend = settings.rl_backend or RLBackend.SB3
+    online = settings.online if settings.mode == IRLMode.ONLINE else None
+    phase = f"IRL {irl['epochs']} epochs" if online is None else (
+        f"IRL online (a PPO generator in the env): {online['rounds']} rounds of "
+        f"{online['generator_steps']:,} generator steps over {online['envs']} envs")  # fmt: skip
     return (
         f"{summary.runs} runs per algorithm (seeds {seeds[0]}–{seeds[-1]}); expert data "
-        f"{irl['transitions']:,} transitions; IRL {irl['epochs']} epochs, batch "
+        f"{irl['transitions']:,} transitions; {phase}, batch "
         f"{irl['batch_size']}, α {irl['alpha']}, β {irl['beta']}, σ {irl['sigma_start']} → "
-        f"{irl['sigma_end']} (H-AIRL), each epoch's policy over {irl['eval_episodes']} "
-        f"episodes; RL {rl['algo'].upper()} for {rl['timesteps']:,} steps, each point "
+        f"{irl['sigma_end']} (H-AIRL), each {'epoch' if online is None else 'round'}'s policy "
+        f"over {irl['eval_episodes']} episodes; RL {rl['algo'].upper()} for "
+        f"{rl['timesteps']:,} steps, each point "
         f"{settings.rl_eval_episodes} deterministic episodes"
         + ("." if backend == RLBackend.SB3 else f" ({backend} RL backend).")
     )

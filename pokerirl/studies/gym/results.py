@@ -3,7 +3,8 @@
 Written and read by :mod:`pokerirl.serial` from the fields below, in the order (and with the
 names) ``summary.json`` has always had; reading checks every field the classes type and names
 the first bad one by its path (``algos.airl.irl_final_return.mean``). An older summary may
-lack the fields added since: the reward map, the reward quality, the RL backend.
+lack the fields added since: the reward map, the reward quality, the RL backend; an offline
+study's has no IRL mode (only an online study's says ``settings.mode = "online"``).
 """
 
 from __future__ import annotations
@@ -95,6 +96,8 @@ class StudySettings(Serializable):
     seed: int
     authors_budget: bool
     rl_backend: str | None = field(default=None, metadata=OMIT_NONE)  # None: before (sb3)
+    mode: str | None = field(default=None, metadata=OMIT_NONE)  # None: offline IRL
+    online: Json | None = field(default=None, metadata=OMIT_NONE)  # rounds, generator steps, envs
 
     @classmethod
     def from_json(cls, data: Json, path: str = "") -> StudySettings:

@@ -4,7 +4,8 @@ Three kinds of unit, each a top-level function of plain arguments that returns b
 runs on any :mod:`pokerirl.execution` backend, with no shared filesystem):
 
 - :func:`collect_unit`: the shipped expert's transitions (``gym collect``) as Parquet bytes;
-- :func:`irl_unit`: one algorithm's IRL runs in lock-step (``gym irl``), as a folder's files;
+- :func:`irl_unit`: one algorithm's IRL runs in lock-step (``gym irl``), or online one after
+  another (``gym irl --mode online``), as a folder's files;
 - :func:`rl_unit`: one RL run (``gym rl``) on the env reward or on one IRL run's reward;
 - :func:`rl_group_unit`: with the lock-step RL backend, one group of RL runs (one task, one
   reward kind, one ``rl/<reward>`` folder: its unfinished runs) trained together, whose runs
@@ -25,7 +26,7 @@ import tempfile
 from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from pokerirl.execution import Backend, folder_files, read_files, write_files
 from pokerirl.gym.presets import IRLSettings, RLSettings
@@ -41,6 +42,9 @@ from pokerirl.store import (
     run_units,
 )
 from pokerirl.studies.common import StudyError
+
+if TYPE_CHECKING:  # torch: the units import it lazily
+    from pokerirl.gym.online import OnlineSettings
 
 DATA_FILE = "expert.parquet"
 DATA_RECORD = "expert.unit.json"
@@ -120,15 +124,24 @@ def irl_unit(
     runs: int,
     settings: IRLSettings,
     seed: int,
+    online: OnlineSettings | None = None,
 ) -> UnitOutput[None]:
     """``runs`` IRL runs of ``algo`` in lock-step on the expert data (Parquet bytes): the
-    files of a ``gym irl`` folder (``run-<k>/...``, ``summary.json``, figures)."""
+    files of a ``gym irl`` folder (``run-<k>/...``, ``summary.json``, figures); with
+    ``online``, ``gym irl --mode online``'s runs (one after another, a PPO generator each)."""
     from pokerirl.gym.irl import train_gym_irl
 
     with tempfile.TemporaryDirectory(prefix="pokerirl-gym-irl-") as scratch:
         path = Path(scratch) / DATA_FILE
         path.write_bytes(data)
         out = Path(scratch) / "out"
+        if online is not None:
+            from pokerirl.gym.online import train_gym_online
+
+            train_gym_online(env_id, path, algo=algo, runs=runs, settings=settings,
+                             online=online, seed=seed, out=out, progress=False,
+                             data_label=data_label)  # fmt: skip
+            return _output(folder_files(out))
         train_gym_irl(
             env_id,
             path,
@@ -260,6 +273,7 @@ class IRLJob:
     seed: int
     data: Path
     folder: Path
+    online: OnlineSettings | None = None  # None: offline IRL (the paper's)
 
     def config(self) -> dict[str, Json]:
         """The unit's configuration; its input is the data (:meth:`unit`)."""
@@ -270,6 +284,9 @@ class IRLJob:
             "runs": self.runs,
             "seed": self.seed,
             "settings": asdict(self.settings),
+            # Only online: offline records (every study made before) keep their bytes, and
+            # the two modes' runs never pass for each other.
+            **({} if self.online is None else {"mode": "online", "online": asdict(self.online)}),
         }
 
     def unit(self, data: bytes) -> Unit[None]:
@@ -281,7 +298,7 @@ class IRLJob:
             inputs={"data": digest(data)},
             fn=irl_unit,
             args=(self.env, data, str(self.data.resolve()), self.algo, self.runs,
-                  self.settings, self.seed),
+                  self.settings, self.seed, self.online),
         )  # fmt: skip
 
     def run(self, k: int) -> Path:

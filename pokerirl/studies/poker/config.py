@@ -21,7 +21,7 @@ from pokerirl.agents.config import AGENT_PRESETS as AGENT_TRAIN_PRESETS
 from pokerirl.agents.config import Opponent as AgentOpponent
 from pokerirl.game.encodings import EncodingName
 from pokerirl.game.match import MAX_HANDS
-from pokerirl.irl.config import MAX_EPOCHS, Algo
+from pokerirl.irl.config import MAX_EPOCHS, Algo, IRLMode
 from pokerirl.poker.folds import FoldsMode
 from pokerirl.poker.rewards import Transform
 from pokerirl.settings import MAX_LBR_HANDS, MAX_STEPS
@@ -78,7 +78,7 @@ AUTHORS_HAIRL: dict[str, object] = {
 UNRECORDED_DEFAULTS: dict[str, object] = {
     "encoding": "rlcard", "folds": "drop", "algos": PAPER_ALGOS, "opponent": "random",
     "payoff_weight": 0.0, "reward_decay": None, "experts": "all", "period": (0.0, 1.0),
-    "winners_bb_per_100": 0.0, "winners_min_hands": 200,
+    "winners_bb_per_100": 0.0, "winners_min_hands": 200, "irl_mode": IRLMode.OFFLINE.value,
 }  # fmt: skip
 class Experts(StrEnum):
     """Which players' decisions are the expert's."""
@@ -108,6 +108,8 @@ def one_of(name: str, value: str, allowed: Sequence[str]) -> dict[str, bool]:
     """A settings check that names the value given: ``folds in drop, impute (got 'x')``."""
     return {f"{name} in {', '.join(allowed)} (got {value!r})": value in allowed}
 
+
+ONLINE_FIELDS = ("online_rounds", "online_generator_steps", "online_opponent")
 
 MAX_RUNS = 10_000  # IRL runs per algorithm, as many as --seeds takes seeds
 # Each count's upper bound: the bound of the stage that uses it (a match's hands, LBR's, the
@@ -176,6 +178,14 @@ class StudyConfig:
     winners_bb_per_100: float = 0.0
     winners_min_hands: int = 200
     period: tuple[float, float] = (0.0, 1.0)
+    # The IRL stage's mode (issue 43): offline (the paper's), or online as `train --mode
+    # online` trains (the policy plays hands on the engine against ``online_opponent``),
+    # ``online_rounds`` rounds of ``online_generator_steps`` decisions; None: that command's
+    # defaults. Recorded only when online, so that offline studies keep their bytes.
+    irl_mode: str = IRLMode.OFFLINE
+    online_rounds: int | None = None
+    online_generator_steps: int | None = None
+    online_opponent: str | None = None
     jobs: int = 2  # processes; the one setting that does not change a result
 
     def __post_init__(self) -> None:
@@ -217,6 +227,12 @@ class StudyConfig:
             "winners' min hands >= 1": self.winners_min_hands >= 1,
             f"period START:END with 0 <= START < END <= 1 (got {self.period})": len(self.period)
             == 2 and 0 <= self.period[0] < self.period[1] <= 1,
+            **one_of("IRL mode", self.irl_mode, tuple(IRLMode)),
+            "online rounds, generator steps and opponent with the online IRL mode only": (
+                self.irl_mode == IRLMode.ONLINE or not self.online_given()),
+            # An imputed table weighs its rows; online IRL has no state to pair a weight with.
+            "folds drop with the online IRL mode": self.irl_mode == IRLMode.OFFLINE
+            or self.folds == FoldsMode.DROP,
         }
         broken = [name for name, ok in checks.items() if not ok]
         # every stage's bounds, before the first stage starts (an LBR of 10^15 hands was
@@ -228,6 +244,7 @@ class StudyConfig:
         ]
         if broken:
             raise StudyError(f"bad study settings: {', '.join(broken)}")
+        self.online_settings()  # online: an unknown opponent is refused before any stage
 
     def settings(self) -> dict[str, Any]:
         """What determines the results: every field but ``jobs``."""
@@ -244,7 +261,38 @@ class StudyConfig:
             found["period"] = list(self.period)
         found["seeds"] = list(self.seeds)
         found["reward_sources"] = [list(pair) for pair in self.reward_sources]
+        for name in ("irl_mode", *ONLINE_FIELDS):
+            found.pop(name, None)
+        online = self.online_settings()
+        if online is not None:  # the generator's settings, resolved, as its runs record them
+            found["irl_mode"] = str(self.irl_mode)
+            found.update({name: getattr(online, name.removeprefix("online_"))
+                          for name in ONLINE_FIELDS})  # fmt: skip
+            found["online_opponent"] = str(online.opponent)
         return found
+
+    def online_given(self) -> bool:
+        """Whether any online setting is given (not left to its default)."""
+        return any(getattr(self, name) is not None for name in ONLINE_FIELDS)
+
+    def online_settings(self) -> Any:
+        """The IRL stage's :class:`~pokerirl.poker.online.PokerOnlineSettings`, or None
+        offline (imported only then: it loads torch)."""
+        if self.irl_mode != IRLMode.ONLINE:
+            return None
+        from pokerirl.poker.online import PokerOnlineSettings
+
+        found = PokerOnlineSettings()
+        try:
+            return PokerOnlineSettings(
+                rounds=self.online_rounds or found.rounds,
+                generator_steps=self.online_generator_steps or found.generator_steps,
+                opponent=self.online_opponent or found.opponent,
+            )
+        except ValueError as error:  # ConfigError: an unknown opponent, a count < 1
+            raise StudyError(
+                f"bad study settings, the online IRL mode's generator: {error}"
+            ) from None
 
     @property
     def kinds(self) -> tuple[str, ...]:

@@ -5,7 +5,8 @@ The ``authors`` stage (the authors' tournament protocol) runs when the settings 
 
 Each stage is units of :mod:`pokerirl.store`, each with its own record: the table
 (``expert.parquet``, its record ``expert.unit.json``), the IRL runs (``irl/<algo>/run-<k>``, or
-``irl/<algo>`` for one run), the agent seeds, the tournament seeds and experiments. A stage's
+``irl/<algo>`` for one run; trained offline, or online with ``irl_mode`` online:
+:func:`online_runs`), the agent seeds, the tournament seeds and experiments. A stage's
 result (what the report reads) is recomputed from its units' outputs on every run. A rerun
 reuses every unit finished with the same settings and inputs, runs the missing ones, and
 refuses, in one line naming it, a unit made with other settings or inputs unless
@@ -335,6 +336,9 @@ def irl_stage(study: Study, ingested: Ingested) -> IRLResult:
         "upstream": ingested.fingerprint,
         **_non_default(config, "irl_settings", "encoding", "algos", "reward_decay"),
     }
+    online = config.online_settings()
+    if online is not None:  # only online: the records of before keep their bytes
+        stage["online"] = online.record()
     if config.reward_sources:
         stage["reward_sources"] = reward_source_prints(config)
     legacy = study.legacy("irl", stage)
@@ -353,9 +357,11 @@ def irl_stage(study: Study, ingested: Ingested) -> IRLResult:
             **{k: v for k, v in chosen.items() if v is not None},
         }
         settings = load_config(algo, overrides=overrides)
-        study.say(f"      {algo}: {config.runs} runs -> {out}")
+        study.say(f"      {algo}: {config.runs} runs{'' if online is None else ' online'} -> {out}")
         out.parent.mkdir(parents=True, exist_ok=True)
-        if config.runs == 1:
+        if online is not None:
+            online_runs(study, algo, settings, online, out)
+        elif config.runs == 1:
             single_run(study, algo, settings, out, legacy)
         else:  # run-<k> units, each with its record
             study.execution.train_runs(table, out, algo=algo, runs=config.runs, config=settings,
@@ -391,6 +397,45 @@ def single_run(
         train_table_into(read_data(table, encoding=get_encoding(encoding)), folder, algo=algo,
                          config=settings, progress=study.execution.progress,
                          table=table)  # fmt: skip
+
+
+def online_runs(
+    study: Study, algo: str, settings: AIRLConfig, online: Any, out: Path
+) -> None:
+    """The online IRL runs (``train --mode online``, :mod:`pokerirl.poker.online`), in the
+    folders the offline runs have (``out`` itself for one run, else ``run-<k>``): a ``folder``
+    unit each, trained in this process one after another, run k with seed ``seed + k`` (the
+    run ``train --mode online --runs N`` trains k-th). Its record holds the mode and the
+    generator's settings: an offline run in its place is refused, or with ``overwrite``
+    recomputed."""
+    import shutil
+    import tempfile
+    from dataclasses import replace
+
+    from pokerirl.game.encodings import get_encoding
+    from pokerirl.irl.run import TIMINGS_FILE
+    from pokerirl.poker.online import train_poker_online
+
+    table = study.root / TABLE
+    table_print = digest(table.read_bytes())
+    for k, folder in enumerate(run_paths(out, study.config.runs)):
+        run_settings = replace(settings, seed=settings.seed + k)
+        unit_config = {"unit": "poker-study-irl", "algo": algo, "mode": "online",
+                       "settings": run_settings.to_dict(), "online": online.record(),
+                       **_non_default(study.config, "encoding")}  # fmt: skip
+        unit: Unit[None] = Unit(
+            key=f"{algo} {folder.name}", target=folder, config=unit_config,
+            inputs={"table": table_print},
+        )  # fmt: skip
+        if check(unit, overwrite=study.overwrite).fate is Fate.REUSED:
+            continue
+        with writing(unit, unhashed={TIMINGS_FILE}) as new, \
+                tempfile.TemporaryDirectory(prefix="pokerirl-online-") as scratch:  # fmt: skip
+            run = Path(scratch) / "run"  # the command's own staging stays out of the unit's
+            train_poker_online(table, run, algo=algo, config=run_settings, settings=online,
+                               encoding=get_encoding(study.config.encoding),
+                               progress=study.execution.progress)  # fmt: skip
+            shutil.copytree(run, new, dirs_exist_ok=True)
 
 
 def reward_source_prints(config: StudyConfig) -> dict[str, str]:

@@ -6,7 +6,7 @@ from __future__ import annotations
 import json
 from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from pokerirl import atomic
 from pokerirl.holdem import ACTIONS
@@ -257,6 +257,15 @@ def plain_verdict(report: StudyReport) -> str | None:
     return " ".join(words)
 
 
+def irl_phase(settings: Mapping[str, Any], epochs: int | None) -> str:
+    """How the IRL runs trained: offline epochs, or (issue 43) online rounds on the engine."""
+    if settings.get("irl_mode") != "online":
+        return f"{epochs} epochs"
+    return (f"online: {settings['online_rounds']} rounds of "
+            f"{settings['online_generator_steps']:,} decisions on the engine against "
+            f"{settings['online_opponent']}")  # fmt: skip
+
+
 def render_markdown(report: StudyReport) -> str:
     """``report.md``: the paper's numbers beside ours, and what the paper leaves open."""
     settings = report.settings
@@ -268,8 +277,8 @@ def render_markdown(report: StudyReport) -> str:
         "",
         *([verdict, ""] if verdict else []),
         f"Data: {report.data.kept_hands:,} kept heads-up hands, {report.data.rows:,} decisions.",
-        f"Sizes: {report.runs} IRL runs per algorithm "
-        f"({report.irl.epochs} epochs), {n_seeds} agent seeds ({seeds[0]}-{seeds[-1]}) of "
+        f"Sizes: {report.runs} IRL runs per algorithm ({irl_phase(settings, report.irl.epochs)}), "
+        f"{n_seeds} agent seeds ({seeds[0]}-{seeds[-1]}) of "
         f"{settings['agent_hands']:,} training hands, {report.hands:,} tournament hands per "
         f"seed ({'duplicate deals' if settings['duplicate'] else 'no duplicate deals'}), "
         f"{settings['panel_hands']:,} per seed for each panel pair.",
