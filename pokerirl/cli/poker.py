@@ -1,4 +1,7 @@
-"""The poker commands: ingest, synth, match, tournament, train, agent train."""
+"""The poker commands: ingest, synth, match, tournament, train, agent train, reward-card.
+
+synth, match, tournament and agent train also take ``--game leduc`` (the exact Leduc paths of
+:mod:`pokerirl.cli.leduc`); heads-up limit hold'em stays the default, its outputs unchanged."""
 
 from __future__ import annotations
 
@@ -17,18 +20,24 @@ from pokerirl.cli.errors import INTERRUPTED, RUN_ADVICE, echo, on_error, setting
 from pokerirl.cli.fanout import RAY_HELP, command_backend
 from pokerirl.cli.options import (
     ENCODING_CHOICES,
+    GAME_OPTION,
     LOG_DIR,
     NO_SETTINGS,
+    RULES_OPTION,
     Default,
     Settings,
     choices,
     given,
+    holdem_only,
+    leduc_rules,
     settings_options,
     widths,
     write_logs,
 )
 from pokerirl.cli.seeds import MAX_SEEDS, SEED_OPTION, seed_list
 from pokerirl.errors import InputError, UsageError
+from pokerirl.game.leduc.rules import RuleSet
+from pokerirl.game.spec import GameName
 from pokerirl.irl.config import MAX_EPOCHS, AIRLConfig, Algo, IRLMode  # torch-free
 from pokerirl.jsonio import read_json
 from pokerirl.poker.folds import FoldsMode
@@ -193,6 +202,7 @@ def synth(
 
 @app.command()
 def match(
+    ctx: typer.Context,
     agent_a: str = typer.Argument(
         ...,
         metavar="AGENT_A",
@@ -221,11 +231,16 @@ def match(
         metavar=ENCODING_CHOICES,
         help=AGENTS_ENCODING_HELP,
     ),
+    game: GameName = GAME_OPTION,
+    rules: RuleSet | None = RULES_OPTION,
 ) -> None:
     """Play A against B and print A's result in milli-big-blinds per hand.
 
     Beside the raw result, the AIVAT-corrected one: chance corrections at the flop, turn and
     river give an unbiased estimate of the same payoff, usually with a smaller error.
+
+    With --game leduc nothing is dealt: A's exact expected value against B over every deal,
+    from both seats, in chips and milli-chips per hand (agents: docs/leduc.md).
     """
     from pokerirl.agents import resolve_agent
     from pokerirl.game import check_match_size
@@ -233,6 +248,15 @@ def match(
 
     if output_format not in ("text", "json"):
         raise UsageError(f"unknown --format {output_format!r} (text or json)")
+    leduc = leduc_rules(game, rules)
+    if leduc is not None:
+        from pokerirl.cli.leduc import exact_match
+
+        holdem_only(ctx, "a Leduc match is exact: every deal, both seats", hands=hands,
+                    seed=seed, duplicate=duplicate, encoding=encoding)  # fmt: skip
+        exact_match(agent_a, agent_b, leduc, as_json=output_format == "json")
+        return
+    _refuse_leduc_agents([agent_a, agent_b])
     settings_from_options(check_match_size, hands, duplicate=duplicate)
     players = resolve_agent(agent_a), resolve_agent(agent_b)
     if encoding is not None:
@@ -827,3 +851,13 @@ def _resolve_lineup(specs: Sequence[str]) -> dict[str, object]:
         for member in [str(folder) for folder in seeds] or [spec]:
             found[member] = resolve_agent(member)
     return found
+
+
+def _refuse_leduc_agents(specs: Sequence[str]) -> None:
+    """Refuse, in one line naming it, a Leduc agent given to hold'em."""
+    from pokerirl.agents.leduc_specs import leduc_spec_reason
+
+    for spec in specs:
+        reason = leduc_spec_reason(spec)
+        if reason is not None:
+            raise InputError(f"{spec}: {reason}, not a hold'em agent (give --game leduc)")
