@@ -299,7 +299,7 @@ def exact_tournament(specs: list[str], rules: LeducRules, *, out: Path, overwrit
     for i, a in enumerate(names):
         for b in names[i + 1:]:
             value = expected_value(rules, strategies[a], strategies[b]).mean
-            table[a][b], table[b][a] = value, -value  # zero-sum, both seats
+            table[a][b], table[b][a] = value, 0.0 - value  # zero-sum, both seats (no -0.0)
     exploit = {name: exploitability(rules, strategies[name]) for name in names}
     report = {
         "game": "leduc", "rules": rules.name, "agents": names, "units": "chips per hand",

@@ -292,6 +292,7 @@ def match(
 @app.command()
 @on_error(interrupted=INTERRUPTED)
 def tournament(
+    ctx: typer.Context,
     agents: list[str] = typer.Argument(
         None,
         help="A B (one matchup, A's payoff), or with --vs the agents to play against BASE. "
@@ -344,6 +345,8 @@ def tournament(
         help=AGENTS_ENCODING_HELP,
     ),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bar, no report."),
+    game: GameName = GAME_OPTION,
+    rules: RuleSet | None = RULES_OPTION,
 ) -> None:
     """Multi-seed head-to-head evaluation: mbb/h, duplicate deals, Bonferroni and Holm.
 
@@ -369,7 +372,19 @@ def tournament(
     A DIR that holds a tournament of other matchups is refused (--overwrite
     replaces its report; its saved seeds stay).
     pokerirl report DIR prints it again.
+
+    With --game leduc: AGENTS (two or more) in a round-robin of exact expected values
+    (every deal, both seats) and each one's exploitability; DIR/report.md and report.json.
     """
+    leduc = leduc_rules(game, rules)
+    if leduc is not None:
+        from pokerirl.cli.leduc import exact_tournament
+
+        holdem_only(ctx, "a Leduc tournament is an exact round-robin", vs=vs, cross=cross,
+                    hands=hands, seeds=seeds, duplicate=duplicate, jobs=jobs, ray=ray,
+                    alpha=alpha, batch_size=batch_size, encoding=encoding)  # fmt: skip
+        exact_tournament(agents or [], leduc, out=out, overwrite=overwrite, quiet=quiet)
+        return
     from pokerirl.game import check_match_size
     from pokerirl.seeds import parse_seeds
     from pokerirl.tournaments import render_report, run_tournament
@@ -395,6 +410,8 @@ def tournament(
             f"--hands must be at least 4 with duplicate deals (two pairs), got {hands}"
         )
     settings_from_options(check_match_size, hands, duplicate=duplicate, batch_size=batch_size)
+    _refuse_leduc_agents([spec for pair in matchups for side in pair
+                          for spec in ([side] if isinstance(side, str) else side)])  # fmt: skip
     if encoding is not None:
         specs = [spec for pair in matchups for side in pair
                  for spec in ([side] if isinstance(side, str) else side)]  # fmt: skip
