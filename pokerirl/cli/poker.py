@@ -179,7 +179,11 @@ def ingest(
 
 @app.command()
 def synth(
-    out: Path = typer.Option(..., "--out", "-o", help="Folder to write <out>/holdem/<YYYYMM>/ in."),
+    ctx: typer.Context,
+    out: Path = typer.Option(
+        ..., "--out", "-o",
+        help="Folder to write <out>/holdem/<YYYYMM>/ in; with --game leduc the .npz to write.",
+    ),
     hands: int = typer.Option(10_000, "--hands", "-n", min=1, help="Number of hands."),
     seed: int = typer.Option(
         0, "--seed", **SEED_OPTION, help="Random seed: the same seed, the same files."
@@ -190,9 +194,35 @@ def synth(
         help="Show every player's hole cards, folds included (the truth to score rewards "
         "on); the deals and actions are the same as without it.",
     ),
+    game: GameName = GAME_OPTION,
+    rules: RuleSet | None = RULES_OPTION,
+    expert: str = typer.Option(
+        "cfr", "--expert", metavar="AGENT",
+        help="With --game leduc: the expert, a Leduc agent (default cfr: CFR+ solved here).",
+    ),
+    opponent: str | None = typer.Option(
+        None, "--opponent", metavar="AGENT",
+        help="With --game leduc: play the expert against this Leduc agent (seats alternate) and "
+        "record only the expert's decisions; default: the expert against itself.",
+    ),
 ) -> None:
-    """Write a synthetic IRC-format month of heads-up 10-20 limit hold'em between two bots."""
+    """Write a synthetic IRC-format month of heads-up 10-20 limit hold'em between two bots.
+
+    With --game leduc: Leduc demonstrations of --expert, as `pokerirl leduc synth` writes
+    them (an .npz that `pokerirl train` reads).
+    """
     from pokerirl.game.synth import MAX_HANDS, write_synthetic_month
+
+    leduc = leduc_rules(game, rules)
+    if leduc is not None:
+        from pokerirl.cli.leduc import exact_synth
+
+        holdem_only(ctx, "Leduc's demonstrations are arrays, not hand histories",
+                    reveal_all=reveal_all)  # fmt: skip
+        exact_synth(leduc, expert=expert, opponent=opponent, hands=hands, seed=seed, out=out)
+        return
+    if given(ctx, expert=expert, opponent=opponent):
+        raise UsageError("--expert and --opponent apply to --game leduc only")
 
     if hands > MAX_HANDS:
         raise UsageError(f"--hands must be at most {MAX_HANDS:,} (one month), got {hands:,}")
@@ -747,6 +777,8 @@ def agent_train(
     dqn: Settings = NO_SETTINGS,  # DQNConfig's options: --hidden, --lr, --train-every, ...
     log_dir: Path | None = LOG_DIR,
     quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bar."),
+    game: GameName = GAME_OPTION,
+    rules: RuleSet | None = RULES_OPTION,
 ) -> None:
     """Train a DQN agent (or one per seed) on the sparse payoff or a learned reward.
 
@@ -755,7 +787,16 @@ def agent_train(
     written beside the old and swapped in at the end, so a killed run loses nothing.
     With --seeds, seeds run as units (--jobs or --ray); a rerun resumes the set.
     Every setting: --preset, then --config FILE, then the flags (docs/agents.md).
+
+    With --game leduc: the Leduc DQN (pokerirl/agents/leduc_dqn.py) against --opponent (a
+    Leduc agent, default random) for --hands (default 100,000) on the sparse reward or
+    --reward learned --reward-run RUN (a Leduc run's g); OUT/strategy.json (its greedy
+    strategy, a Leduc agent) and summary.json with its exact exploitability and value.
     """
+    leduc = leduc_rules(game, rules)
+    if leduc is not None:
+        _leduc_agent_train(ctx, leduc, out, train, dqn, seed=seed, overwrite=overwrite)
+        return
     from pokerirl.agents.config import AgentOverrides, load_agent_config
     from pokerirl.agents.train import train_agent, train_seeds
     from pokerirl.seeds import parse_seeds
@@ -775,6 +816,33 @@ def agent_train(
     for agent_seed, line in lines.items():
         _echo_agent(out if seeds is None else out / f"seed-{agent_seed}", line, config.play)
     write_logs(out, log_dir)
+
+
+LEDUC_TRAIN = ("hands", "opponent", "reward", "reward_run")  # the settings a Leduc DQN takes
+LEDUC_HANDS = 100_000  # the Leduc study's quick preset
+
+
+def _leduc_agent_train(ctx: typer.Context, rules: Any, out: Path, train: Settings,
+                       dqn: Settings, *, seed: int, overwrite: bool) -> None:  # fmt: skip
+    """``agent train --game leduc``: one line for a hold'em setting, then
+    :func:`pokerirl.cli.leduc.exact_agent_train`."""
+    from pokerirl.cli.leduc import exact_agent_train
+
+    why = "a Leduc agent is the Leduc DQN of --hands, --opponent, --reward, --reward-run, --seed"
+    holdem_only(ctx, why, **{k: v for k, v in {**train, **dqn}.items() if k not in LEDUC_TRAIN})
+    holdem_only(ctx, why, preset=ctx.params.get("preset"), config_file=ctx.params.get(
+        "config_file"), seeds=ctx.params.get("seeds"), jobs=ctx.params.get("jobs"),
+        ray=ctx.params.get("ray"), threads=ctx.params.get("threads"),
+        log_dir=ctx.params.get("log_dir"))  # fmt: skip
+    learned = str(train.get("reward", "sparse")) == "learned"
+    run = train.get("reward_run")
+    if learned != (run is not None):
+        raise UsageError("--reward learned and --reward-run RUN go together")
+    exact_agent_train(
+        rules, out=out, opponent=str(train.get("opponent", "random")),
+        hands=int(train.get("hands", LEDUC_HANDS)), seed=seed,
+        reward_run=None if run is None else str(run), overwrite=overwrite,
+    )  # fmt: skip
 
 
 def _echo_agent(folder: Path, line: MetricsLine | None, play: str) -> None:
