@@ -301,10 +301,10 @@ def exact_tournament(specs: list[str], rules: LeducRules, *, out: Path, overwrit
             value = expected_value(rules, strategies[a], strategies[b]).mean
             table[a][b], table[b][a] = value, 0.0 - value  # zero-sum, both seats (no -0.0)
     exploit = {name: exploitability(rules, strategies[name]) for name in names}
+    mean = {a: sum(table[a].values()) / (len(names) - 1) for a in names}
     report = {
         "game": "leduc", "rules": rules.name, "agents": names, "units": "chips per hand",
-        "expected_value": table, "exploitability": exploit,
-        "mean": {a: sum(table[a].values()) / (len(names) - 1) for a in names},
+        "expected_value": table, "exploitability": exploit, "mean": mean,
     }  # fmt: skip
     lines = [
         f"# Leduc round-robin ({rules.name} rules, exact)", "",
@@ -316,7 +316,7 @@ def exact_tournament(specs: list[str], rules: LeducRules, *, out: Path, overwrit
     for a in names:
         cells = ["" if a == b else f"{table[a][b] * MILLI:+.1f}" for b in names]
         lines.append(f"| {a} | " + " | ".join(cells)
-                     + f" | {report['mean'][a] * MILLI:+.1f} | {exploit[a] * MILLI:.1f} |")  # type: ignore[index]  # fmt: skip
+                     + f" | {mean[a] * MILLI:+.1f} | {exploit[a] * MILLI:.1f} |")  # fmt: skip
     text = "\n".join(lines) + "\n"
     out.mkdir(parents=True, exist_ok=True)
     write_text(out / "report.md", text)
@@ -382,16 +382,16 @@ def exact_agent_train(rules: LeducRules, *, out: Path, opponent: str, hands: int
     text = to_json(rules, strategy, agent="leduc-dqn", hands=hands, seed=seed,
                    opponent=opponent, reward=source)  # fmt: skip
     value = expected_value(rules, strategy, against).mean
+    exploit = exploitability(rules, strategy)
     summary = {
         "rules": rules.name, "agent": "leduc-dqn", "hands": hands, "seed": seed,
-        "opponent": opponent, "reward": source, "exploitability_chips": exploitability(
-            rules, strategy), "value_against_opponent_chips": value,
-        "strategy_sha256": sha256(text),
+        "opponent": opponent, "reward": source, "exploitability_chips": exploit,
+        "value_against_opponent_chips": value, "strategy_sha256": sha256(text),
     }  # fmt: skip
     out.mkdir(parents=True, exist_ok=True)
     write_text(out / STRATEGY_FILE, text)
     write_text(out / "summary.json", json.dumps(summary, indent=1) + "\n")
     echo(f"{out}: Leduc DQN, {hands:,} hands against {opponent} on the {source} reward; "
-         f"exact: exploitability {summary['exploitability_chips'] * MILLI:.1f} milli-chips, "
-         f"{value * MILLI:+.1f} milli-chips per hand against {opponent}")  # type: ignore[operator]  # fmt: skip
+         f"exact: exploitability {exploit * MILLI:.1f} milli-chips, "
+         f"{value * MILLI:+.1f} milli-chips per hand against {opponent}")  # fmt: skip
     echo(f"wrote {out}/{STRATEGY_FILE}, summary.json")

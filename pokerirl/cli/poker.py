@@ -62,6 +62,8 @@ ENCODING_HELP = (
 
 
 IMPUTE_CONFIG = "pokerirl.poker.folds:ImputeConfig"
+GAME_CHOICES = choices(GameName)
+GAME_WORDS = {GameName.HOLDEM: "a hold'em decision table", GameName.LEDUC: "Leduc demonstrations"}
 
 
 @app.command()
@@ -530,6 +532,11 @@ def train(
         help="Online: the fixed opponent the policy plays (default random; tight, loose: the "
         "synthetic months' TightBot, LooseBot).",
     ),
+    game: GameName | None = typer.Option(
+        None, "--game", metavar=GAME_CHOICES,
+        help="Check that TABLE holds this game's decisions (the game is read from the data: "
+        "holdem for a Parquet table, leduc for demonstrations).",
+    ),
 ) -> None:
     """Learn a reward function with AIRL, Hybrid-AIRL or GAIL from an expert decision table.
 
@@ -538,9 +545,14 @@ def train(
     A finished OUT is replaced only with --overwrite, and only once the new run is complete.
     With --mode online the same folder, its config.json saying data.mode = online.
     """
+    from pokerirl.datasets.decisions import data_game
     from pokerirl.irl import load_config
     from pokerirl.irl.adversarial import resolve_device
     from pokerirl.poker.train import train_em, train_runs
+
+    if game is not None and Path(table).is_file() and data_game(table) is not game:
+        raise InputError(f"{table}: {GAME_WORDS[data_game(table)]}, not {GAME_WORDS[game]} "
+                         "(the game is read from the data)")  # fmt: skip
 
     both = () if hidden is None else ("reward_hidden", "policy_hidden")
     nets = dict.fromkeys(both, widths(hidden or ""))
@@ -706,12 +718,19 @@ def reward_card_command(
     actions by street and equity, its agreement with the expert and the legal-majority rule,
     and what a DQN is predicted to learn. Writes OUT/reward_card.json and reward_card.png.
     """
+    from pokerirl.agents.leduc_specs import leduc_spec_reason
     from pokerirl.poker.reward_card import CardStates, reward_card, write_card
     from pokerirl.poker.reward_sources import RewardSource
     from pokerirl.poker.rewards import TRANSFORMS, TransformedReward
 
     if transform not in TRANSFORMS:
         raise UsageError(f"unknown --transform {transform!r} ({', '.join(TRANSFORMS)})")
+    if leduc_spec_reason("reward:" + reward) is not None:
+        raise InputError(
+            f"{reward}: a run learned on Leduc demonstrations; the reward card is hold'em's "
+            f"(on Leduc: pokerirl exploit reward:{reward} --game leduc, pokerirl match, or "
+            "pokerirl leduc agreement of the reward's strategy)"
+        )
     resolved = RewardSource.resolve(reward)
     if encoding is not None:
         _check_encoding(resolved, _encoding(encoding))
