@@ -171,8 +171,6 @@ def _run_game(run: Path) -> GameName | None:
 def run_strategy(run: Path, rules: LeducRules, *, prefix: str) -> Strategy:
     """The strategy of a Leduc IRL run: its reward's legal argmax (``reward:``), its policy
     greedy (``policy:``) or its policy's probabilities (``policy-probs:``)."""
-    import torch
-
     from pokerirl.irl.run import load_policy, load_reward
 
     game = _run_game(run)
@@ -182,10 +180,9 @@ def run_strategy(run: Path, rules: LeducRules, *, prefix: str) -> Strategy:
     _check_run_rules(run, rules)
     sets = info_sets(rules)
     try:
-        with torch.inference_mode():
-            if prefix == REWARD_PREFIX:
-                return sets.greedy(reward_table(load_reward(run).net, sets))
-            probabilities = policy_table(load_policy(run), sets)
+        if prefix == REWARD_PREFIX:
+            return sets.greedy(reward_table(load_reward(run).net, sets))
+        probabilities = policy_table(load_policy(run), sets)
     except ValueError as error:  # the run's files: one line naming the file
         raise InputError(f"{prefix}{run}: {error}") from None
     return sets.greedy(probabilities) if prefix == POLICY_PREFIX else sets.strategy(probabilities)
@@ -213,7 +210,8 @@ def reward_table(reward: Any, sets: InfoSets) -> np.ndarray:
 
     obs = torch.as_tensor(sets.observations, dtype=torch.float32)
     actions = torch.eye(len(ACTIONS))[:, None, :].expand(len(ACTIONS), len(obs), len(ACTIONS))
-    values = reward.transferable(obs, actions).T.double().numpy()
+    with torch.inference_mode():  # tables, not training
+        values = reward.transferable(obs, actions).T.double().numpy()
     return np.where(sets.legal, values, -np.inf)
 
 
@@ -222,5 +220,6 @@ def policy_table(policy: Any, sets: InfoSets) -> np.ndarray:
     import torch
 
     obs = torch.as_tensor(sets.observations, dtype=torch.float32)
-    log_p = policy(obs, torch.as_tensor(sets.legal))
+    with torch.inference_mode():
+        log_p = policy(obs, torch.as_tensor(sets.legal))
     return np.where(sets.legal, log_p.exp().double().numpy(), 0.0)

@@ -366,16 +366,13 @@ def exact_agent_train(rules: LeducRules, *, out: Path, opponent: str, hands: int
     against = resolve(opponent, rules)
     reward = None
     if reward_run is not None:
-        import torch
-
         from pokerirl.agents.leduc_specs import run_strategy
         from pokerirl.irl.run import load_reward
         from pokerirl.poker.agent_specs import REWARD_PREFIX
 
         run_strategy(Path(reward_run), rules, prefix=REWARD_PREFIX)  # a Leduc run, its rules
         sets = info_sets(rules)
-        with torch.inference_mode():
-            table = reward_table(load_reward(reward_run).net, sets)
+        table = reward_table(load_reward(reward_run).net, sets)
         reward = np.where(sets.legal, table, 0.0)  # as the study: 0 where illegal
     strategy = train_leduc_dqn(rules, against, config=config, reward=reward).strategy()
     source = "sparse" if reward_run is None else f"learned ({reward_run})"
