@@ -726,10 +726,10 @@ def reward_card_command(
     if transform not in TRANSFORMS:
         raise UsageError(f"unknown --transform {transform!r} ({', '.join(TRANSFORMS)})")
     if leduc_spec_reason("reward:" + reward) is not None:
-        raise InputError(
-            f"{reward}: a run learned on Leduc demonstrations; the reward card is hold'em's "
-            f"(on Leduc: pokerirl exploit reward:{reward} --game leduc, pokerirl match, or "
-            "pokerirl leduc agreement of the reward's strategy)"
+        raise InputError(  # the words of run_encoding's refusal, and what to use instead
+            f"{reward}: a reward learned on the game 'leduc', not on heads-up limit hold'em "
+            f"(on Leduc: pokerirl exploit reward:{reward} --game leduc, match --game leduc, "
+            "leduc agreement)"
         )
     resolved = RewardSource.resolve(reward)
     if encoding is not None:
