@@ -390,6 +390,7 @@ LEDUC_GAME: dict[str, tuple[str, int, str]] = {
     "agent train hold'em option": (
         "agent train --game leduc --out {O} --threads 2", 2, "--threads"
     ),
+    "agent train rl on hold'em": ("agent train --out {O} --rl tabular", 2, "--rl"),
     "agent train run alone": ("agent train --game leduc --out {O} --reward-run {E}", 2, "--reward"),
     "agent train not a run": (
         "agent train --game leduc --out {O} --reward learned --reward-run {E}", 1, "empty"

@@ -109,6 +109,25 @@ def test_agent_train_writes_a_strategy_that_exploit_and_match_read(tmp_path: Pat
     assert "against call" in text
 
 
+def test_agent_train_tabular_is_the_study_learner_and_reads_back(tmp_path: Path) -> None:
+    from pokerirl.agents.leduc_q import QConfig, train_q
+
+    invoke("agent", "train", "--game", "leduc", "--rl", "tabular", "--out", tmp_path / "q",
+           "--hands", "3000", "--opponent", "raise", "--seed", "2",
+           "--rules", "openspiel")  # fmt: skip
+    rules, strategy = read_strategy(tmp_path / "q" / "strategy.json")
+    raised = resolve_leduc_agent("raise", OPENSPIEL).strategy
+    direct = train_q(OPENSPIEL, raised, config=QConfig(hands=3000, seed=2)).strategy()
+    assert rules == OPENSPIEL and strategy == read_strategy_text(OPENSPIEL, direct)
+    assert exploitability_of(str(tmp_path / "q"), "--rules", "openspiel") == pytest.approx(
+        exploitability(OPENSPIEL, strategy), abs=1e-9)
+
+
+def read_strategy_text(rules, strategy):  # type: ignore[no-untyped-def]
+    """A strategy as its file holds it (rounded)."""
+    return json.loads(to_json(rules, strategy))["strategy"]
+
+
 def test_the_specs_of_each_game_are_refused_by_the_other(tmp_path: Path) -> None:
     strategy = tmp_path / "s.json"
     strategy.write_text(to_json(RLCARD, uniform_strategy(RLCARD)))

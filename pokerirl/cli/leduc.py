@@ -168,14 +168,16 @@ class StudyPreset(StrEnum):
 PRESET_CHOICES = choices(StudyPreset)
 
 
-class StudyRL(StrEnum):
-    """The Leduc study's RL agents (pokerirl/studies/leduc/study.py's ``RLKind``)."""
+class LeducRL(StrEnum):
+    """The Leduc RL agents: the study's ``--rl`` (pokerirl/studies/leduc/study.py's
+    ``RLKind``) and ``agent train --game leduc --rl``."""
 
     DQN = "dqn"
     TABULAR = "tabular"
 
 
-RL_CHOICES = choices(StudyRL)
+RL_CHOICES = choices(LeducRL)
+RL_NAMES = {LeducRL.DQN: "DQN", LeducRL.TABULAR: "tabular Monte-Carlo learner"}
 
 
 @leduc_app.command()
@@ -187,8 +189,8 @@ def study(
              "wide: the same with 5 IRL runs and 10 RL seeds; smoke: seconds, numbers "
              "meaningless.",
     ),
-    rl: StudyRL = typer.Option(
-        StudyRL.DQN, "--rl", metavar=RL_CHOICES,
+    rl: LeducRL = typer.Option(
+        LeducRL.DQN, "--rl", metavar=RL_CHOICES,
         help="The RL agents: DQNs (100,000 hands each in the quick preset) or the tabular "
              "Monte-Carlo learner (500,000).",
     ),
@@ -345,15 +347,16 @@ def exact_synth(rules: LeducRules, *, expert: str, opponent: str | None, hands: 
          f"expert {expert}, sha256 {demos.expert_sha256[:12]})")  # fmt: skip
 
 
-def exact_agent_train(rules: LeducRules, *, out: Path, opponent: str, hands: int, seed: int,
-                      reward_run: str | None, overwrite: bool) -> None:  # fmt: skip
-    """``agent train --game leduc``: the Leduc DQN against ``opponent`` on the sparse reward
-    or a Leduc run's learned g (as the Leduc study trains it); OUT/strategy.json (its greedy
-    strategy, an agent the specs resolve) and OUT/summary.json with its exact exploitability
-    and value against the opponent."""
+def exact_agent_train(rules: LeducRules, *, out: Path, rl: LeducRL, opponent: str, hands: int,
+                      seed: int, reward_run: str | None, overwrite: bool) -> None:  # fmt: skip
+    """``agent train --game leduc``: the Leduc DQN or the tabular learner (``rl``) against
+    ``opponent`` on the sparse reward or a Leduc run's learned g (as the Leduc study trains
+    them); OUT/strategy.json (its greedy strategy, an agent the specs resolve) and
+    OUT/summary.json with its exact exploitability and value against the opponent."""
     import numpy as np
 
     from pokerirl.agents.leduc_dqn import LeducDQNConfig, train_leduc_dqn
+    from pokerirl.agents.leduc_q import QConfig, train_q
     from pokerirl.agents.leduc_specs import STRATEGY_FILE, reward_table
     from pokerirl.atomic import write_text
     from pokerirl.game.leduc.exact import MILLI, expected_value, exploitability
@@ -362,7 +365,6 @@ def exact_agent_train(rules: LeducRules, *, out: Path, opponent: str, hands: int
     from pokerirl.game.leduc.strategy import sha256, to_json
 
     check_out(out, overwrite=overwrite)
-    config = LeducDQNConfig(hands=hands, batch=min(hands, LeducDQNConfig.batch), seed=seed)
     against = resolve(opponent, rules)
     reward = None
     if reward_run is not None:
@@ -374,21 +376,27 @@ def exact_agent_train(rules: LeducRules, *, out: Path, opponent: str, hands: int
         sets = info_sets(rules)
         table = reward_table(load_reward(reward_run).net, sets)
         reward = np.where(sets.legal, table, 0.0)  # as the study: 0 where illegal
-    strategy = train_leduc_dqn(rules, against, config=config, reward=reward).strategy()
+    if rl == LeducRL.DQN:
+        config = LeducDQNConfig(hands=hands, batch=min(hands, LeducDQNConfig.batch), seed=seed)
+        strategy = train_leduc_dqn(rules, against, config=config, reward=reward).strategy()
+    else:
+        tabular = QConfig(hands=hands, batch=min(hands, QConfig.batch), seed=seed)
+        strategy = train_q(rules, against, config=tabular, reward=reward).strategy()
+    agent = f"leduc-{rl}"
     source = "sparse" if reward_run is None else f"learned ({reward_run})"
-    text = to_json(rules, strategy, agent="leduc-dqn", hands=hands, seed=seed,
+    text = to_json(rules, strategy, agent=agent, hands=hands, seed=seed,
                    opponent=opponent, reward=source)  # fmt: skip
     value = expected_value(rules, strategy, against).mean
     exploit = exploitability(rules, strategy)
     summary = {
-        "rules": rules.name, "agent": "leduc-dqn", "hands": hands, "seed": seed,
+        "rules": rules.name, "agent": agent, "hands": hands, "seed": seed,
         "opponent": opponent, "reward": source, "exploitability_chips": exploit,
         "value_against_opponent_chips": value, "strategy_sha256": sha256(text),
     }  # fmt: skip
     out.mkdir(parents=True, exist_ok=True)
     write_text(out / STRATEGY_FILE, text)
     write_text(out / "summary.json", json.dumps(summary, indent=1) + "\n")
-    echo(f"{out}: Leduc DQN, {hands:,} hands against {opponent} on the {source} reward; "
+    echo(f"{out}: Leduc {RL_NAMES[rl]}, {hands:,} hands against {opponent} on the {source} reward; "
          f"exact: exploitability {exploit * MILLI:.1f} milli-chips, "
          f"{value * MILLI:+.1f} milli-chips per hand against {opponent}")  # fmt: skip
     echo(f"wrote {out}/{STRATEGY_FILE}, summary.json")

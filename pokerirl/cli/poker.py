@@ -18,6 +18,7 @@ from pokerirl.cli.app import app
 from pokerirl.cli.data import MONTHS_HELP, months
 from pokerirl.cli.errors import INTERRUPTED, RUN_ADVICE, echo, on_error, settings_from_options
 from pokerirl.cli.fanout import RAY_HELP, command_backend
+from pokerirl.cli.leduc import LeducRL
 from pokerirl.cli.options import (
     ENCODING_CHOICES,
     GAME_OPTION,
@@ -63,6 +64,7 @@ ENCODING_HELP = (
 
 IMPUTE_CONFIG = "pokerirl.poker.folds:ImputeConfig"
 GAME_CHOICES = choices(GameName)
+LEDUC_RL_CHOICES = choices(LeducRL)
 GAME_WORDS = {GameName.HOLDEM: "a hold'em decision table", GameName.LEDUC: "Leduc demonstrations"}
 
 
@@ -798,6 +800,11 @@ def agent_train(
     quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bar."),
     game: GameName = GAME_OPTION,
     rules: RuleSet | None = RULES_OPTION,
+    rl: LeducRL | None = typer.Option(
+        None, "--rl", metavar=LEDUC_RL_CHOICES,
+        help="With --game leduc: dqn (the Leduc DQN, the default) or tabular (the tabular "
+        "Monte-Carlo learner), as the Leduc study's --rl.",
+    ),
 ) -> None:
     """Train a DQN agent (or one per seed) on the sparse payoff or a learned reward.
 
@@ -807,15 +814,18 @@ def agent_train(
     With --seeds, seeds run as units (--jobs or --ray); a rerun resumes the set.
     Every setting: --preset, then --config FILE, then the flags (docs/agents.md).
 
-    With --game leduc: the Leduc DQN (pokerirl/agents/leduc_dqn.py) against --opponent (a
-    Leduc agent, default random) for --hands (default 100,000) on the sparse reward or
+    With --game leduc: the Leduc DQN (or --rl tabular: the tabular learner) against
+    --opponent (a Leduc agent, default random) for --hands (default 100,000) on the sparse reward or
     --reward learned --reward-run RUN (a Leduc run's g); OUT/strategy.json (its greedy
     strategy, a Leduc agent) and summary.json with its exact exploitability and value.
     """
     leduc = leduc_rules(game, rules)
     if leduc is not None:
-        _leduc_agent_train(ctx, leduc, out, train, dqn, seed=seed, overwrite=overwrite)
+        _leduc_agent_train(ctx, leduc, out, train, dqn, rl=rl or LeducRL.DQN, seed=seed,
+                           overwrite=overwrite)  # fmt: skip
         return
+    if rl is not None:
+        raise UsageError("--rl applies to --game leduc only (hold'em's agents are DQNs)")
     from pokerirl.agents.config import AgentOverrides, load_agent_config
     from pokerirl.agents.train import train_agent, train_seeds
     from pokerirl.seeds import parse_seeds
@@ -841,13 +851,13 @@ LEDUC_TRAIN = ("hands", "opponent", "reward", "reward_run")  # the settings a Le
 LEDUC_HANDS = 100_000  # the Leduc study's quick preset
 
 
-def _leduc_agent_train(ctx: typer.Context, rules: Any, out: Path, train: Settings,
-                       dqn: Settings, *, seed: int, overwrite: bool) -> None:  # fmt: skip
+def _leduc_agent_train(ctx: typer.Context, rules: Any, out: Path, train: Settings, dqn: Settings,
+                       *, rl: LeducRL, seed: int, overwrite: bool) -> None:  # fmt: skip
     """``agent train --game leduc``: one line for a hold'em setting, then
     :func:`pokerirl.cli.leduc.exact_agent_train`."""
     from pokerirl.cli.leduc import exact_agent_train
 
-    why = "a Leduc agent is the Leduc DQN of --hands, --opponent, --reward, --reward-run, --seed"
+    why = "a Leduc agent takes --rl, --hands, --opponent, --reward, --reward-run, --seed"
     holdem_only(ctx, why, **{k: v for k, v in {**train, **dqn}.items() if k not in LEDUC_TRAIN})
     holdem_only(ctx, why, preset=ctx.params.get("preset"), config_file=ctx.params.get(
         "config_file"), seeds=ctx.params.get("seeds"), jobs=ctx.params.get("jobs"),
@@ -858,7 +868,7 @@ def _leduc_agent_train(ctx: typer.Context, rules: Any, out: Path, train: Setting
     if learned != (run is not None):
         raise UsageError("--reward learned and --reward-run RUN go together")
     exact_agent_train(
-        rules, out=out, opponent=str(train.get("opponent", "random")),
+        rules, out=out, rl=rl, opponent=str(train.get("opponent", "random")),
         hands=int(train.get("hands", LEDUC_HANDS)), seed=seed,
         reward_run=None if run is None else str(run), overwrite=overwrite,
     )  # fmt: skip
