@@ -1,6 +1,8 @@
 """``pokerirl leduc``: Leduc hold'em's exact tools (docs/leduc.md): ``solve`` (CFR+),
 ``exploit`` (exact best response, exploitability, expected value), ``agreement``, ``synth``
-(expert demonstrations) and ``study`` (IRL and RL against the CFR expert)."""
+(expert demonstrations) and ``study`` (IRL and RL against the CFR expert); and the exact
+paths that ``match``, ``tournament``, ``exploit``, ``synth`` and ``agent train`` take with
+``--game leduc`` (their agents by the specs of :mod:`pokerirl.agents.leduc_specs`)."""
 
 from __future__ import annotations
 
