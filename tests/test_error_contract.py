@@ -397,3 +397,55 @@ def test_game_refusals_are_one_line(case: str, places: dict[str, str]) -> None:
     line, expected = GAME[case]
     code, error = run(line, places)
     assert code == expected and ("game" in error or "SOURCE" in error), error
+
+
+# --game leduc on the main commands (issue 42): a hold'em option with it, --rules or a Leduc
+# option without it, an agent of the other game: one line (exit 2 for the command line, 1 for
+# an agent or a file), naming what is wrong.
+LEDUC_GAME: dict[str, tuple[str, int, str]] = {
+    "bad game": ("match random call --game chess", 2, "--game"),
+    "match hold'em option": ("match random call --game leduc --hands 10", 2, "--hands"),
+    "match rules on hold'em": ("match random call --rules openspiel", 2, "--rules"),
+    "match hold'em bot": ("match tightbot call --game leduc", 1, "tightbot"),
+    "match Leduc agent on hold'em": ("match cfr call --hands 10", 1, "cfr"),
+    "match unknown Leduc agent": ("match nope call --game leduc", 1, "nope"),
+    "match cfr iterations": ("match cfr:0 call --game leduc", 1, "cfr:0"),
+    "exploit hold'em option": ("exploit random --game leduc --out {O}", 2, "--out"),
+    "exploit exact on hold'em": ("exploit random --exact --out {O}", 2, "--exact"),
+    "exploit pair on hold'em": ("exploit random --pair call --out {O}", 2, "--pair"),
+    "exploit hold'em without out": ("exploit random", 2, "--out"),
+    "tournament hold'em option": (
+        "tournament random call --game leduc --out {O} --seeds 0-1",
+        2,
+        "--seeds",
+    ),
+    "tournament one agent": ("tournament random --game leduc --out {O}", 2, "two agents"),
+    "tournament Leduc agent on hold'em": (
+        "tournament cfr random --out {O} --hands 4 --seeds 0",
+        1,
+        "cfr",
+    ),
+    "synth reveal-all": ("synth --game leduc --out {O}/d.npz --reveal-all", 2, "--reveal-all"),
+    "synth expert on hold'em": ("synth --out {O} --expert cfr", 2, "--expert"),
+    "synth hold'em bot": ("synth --game leduc --out {O}/d.npz --expert loosebot", 1, "loosebot"),
+    "agent train hold'em option": (
+        "agent train --game leduc --out {O} --threads 2",
+        2,
+        "--threads",
+    ),
+    "agent train rl on hold'em": ("agent train --out {O} --rl tabular", 2, "--rl"),
+    "agent train run alone": ("agent train --game leduc --out {O} --reward-run {E}", 2, "--reward"),
+    "agent train not a run": (
+        "agent train --game leduc --out {O} --reward learned --reward-run {E}",
+        1,
+        "empty",
+    ),
+    "train game of the data": ("train {G} --out {O} --game leduc", 1, "hold'em decision table"),
+}
+
+
+@pytest.mark.parametrize("case", sorted(LEDUC_GAME))
+def test_leduc_game_refusals_are_one_line(case: str, places: dict[str, str]) -> None:
+    line, expected, named = LEDUC_GAME[case]
+    code, error = run(line, places)
+    assert code == expected and named in error, error

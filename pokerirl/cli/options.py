@@ -2,8 +2,9 @@
 in its dataclass, and every command that offers it shows the same flag and help), and the
 options the commands share: a metavar listing values (:func:`choices`, the encodings'
 :data:`ENCODING_CHOICES`), a default read from a config field (:class:`Default`), which
-options a command line set (:func:`given`) and ``--log-dir`` (:data:`LOG_DIR`,
-:func:`write_logs`).
+options a command line set (:func:`given`), ``--log-dir`` (:data:`LOG_DIR`,
+:func:`write_logs`) and the game of the poker commands (:data:`GAME_OPTION`,
+:data:`RULES_OPTION`, :func:`leduc_rules`, :func:`holdem_only`).
 
 A field is offered when its metadata holds ``help`` (``pokerirl.irl.config.setting``), with
 optional ``flags`` (default ``--field-name``), ``metavar``, ``min``, ``max`` and
@@ -44,6 +45,8 @@ from pokerirl.cli.errors import echo
 from pokerirl.cli.seeds import SEED_OPTION
 from pokerirl.errors import UsageError
 from pokerirl.game.encodings import EncodingName  # numpy only: the values help lists
+from pokerirl.game.leduc.rules import LeducRules, RuleSet, get_rules
+from pokerirl.game.spec import GameName
 from pokerirl.settings import MAX_LAYERS, MAX_WIDTH
 
 T = TypeVar("T")
@@ -124,6 +127,39 @@ def write_logs(out: Path, log_dir: Path | None) -> None:
 
     written = export_scalars(out, log_dir)
     echo(f"scalars of {len(written)} runs -> {log_dir} (tensorboard --logdir {log_dir})")
+
+
+# --game and --rules: the poker commands that also play Leduc hold'em (docs/leduc.md).
+GAME_OPTION = typer.Option(
+    GameName.HOLDEM, "--game", metavar=choices(GameName),
+    help="holdem (heads-up limit hold'em) or leduc (Leduc hold'em, exact: docs/leduc.md).",
+)  # fmt: skip
+RULES_OPTION = typer.Option(
+    None, "--rules", metavar=choices(RuleSet),
+    help="With --game leduc: RLCard's leduc-holdem (rlcard, the default) or OpenSpiel's "
+    "leduc_poker (openspiel) rules.",
+)  # fmt: skip
+
+
+def leduc_rules(game: GameName, rules: RuleSet | None) -> LeducRules | None:
+    """The Leduc rules of ``--game leduc`` (RLCard's by default), None for hold'em (a usage
+    error for ``--rules`` there)."""
+    if game is GameName.HOLDEM:
+        if rules is not None:
+            raise UsageError("--rules applies to --game leduc only")
+        return None
+    return get_rules(rules or RuleSet.RLCARD)
+
+
+def holdem_only(ctx: typer.Context, why: str, **options: object) -> None:
+    """With ``--game leduc``: a usage error naming the hold'em options the line set (and
+    ``why`` they do not apply)."""
+    found = given(ctx, **options)
+    if found:
+        flag = {p.name: max(p.opts, key=len) for p in ctx.command.params}
+        flags = ", ".join(flag.get(name, name) for name in found)
+        verb = "applies" if len(found) == 1 else "apply"
+        raise UsageError(f"{flags} {verb} to hold'em only ({why})")
 
 
 def widths(text: str, flag: str = "--hidden") -> tuple[int, ...]:

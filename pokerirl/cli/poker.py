@@ -1,4 +1,7 @@
-"""The poker commands: ingest, synth, match, tournament, train, agent train."""
+"""The poker commands: ingest, synth, match, tournament, train, agent train, reward-card.
+
+synth, match, tournament and agent train also take ``--game leduc`` (the exact Leduc paths of
+:mod:`pokerirl.cli.leduc`); heads-up limit hold'em stays the default, its outputs unchanged."""
 
 from __future__ import annotations
 
@@ -15,20 +18,27 @@ from pokerirl.cli.app import app
 from pokerirl.cli.data import MONTHS_HELP, months
 from pokerirl.cli.errors import INTERRUPTED, RUN_ADVICE, echo, on_error, settings_from_options
 from pokerirl.cli.fanout import RAY_HELP, command_backend
+from pokerirl.cli.leduc import LeducRL
 from pokerirl.cli.options import (
     ENCODING_CHOICES,
+    GAME_OPTION,
     LOG_DIR,
     NO_SETTINGS,
+    RULES_OPTION,
     Default,
     Settings,
     choices,
     given,
+    holdem_only,
+    leduc_rules,
     settings_options,
     widths,
     write_logs,
 )
 from pokerirl.cli.seeds import MAX_SEEDS, SEED_OPTION, seed_list
 from pokerirl.errors import InputError, UsageError
+from pokerirl.game.leduc.rules import RuleSet
+from pokerirl.game.spec import GameName
 from pokerirl.irl.config import MAX_EPOCHS, AIRLConfig, Algo, IRLMode  # torch-free
 from pokerirl.jsonio import read_json
 from pokerirl.poker.folds import FoldsMode
@@ -53,6 +63,9 @@ ENCODING_HELP = (
 
 
 IMPUTE_CONFIG = "pokerirl.poker.folds:ImputeConfig"
+GAME_CHOICES = choices(GameName)
+LEDUC_RL_CHOICES = choices(LeducRL)
+GAME_WORDS = {GameName.HOLDEM: "a hold'em decision table", GameName.LEDUC: "Leduc demonstrations"}
 
 
 @app.command()
@@ -170,7 +183,11 @@ def ingest(
 
 @app.command()
 def synth(
-    out: Path = typer.Option(..., "--out", "-o", help="Folder to write <out>/holdem/<YYYYMM>/ in."),
+    ctx: typer.Context,
+    out: Path = typer.Option(
+        ..., "--out", "-o",
+        help="Folder to write <out>/holdem/<YYYYMM>/ in; with --game leduc the .npz to write.",
+    ),
     hands: int = typer.Option(10_000, "--hands", "-n", min=1, help="Number of hands."),
     seed: int = typer.Option(
         0, "--seed", **SEED_OPTION, help="Random seed: the same seed, the same files."
@@ -181,9 +198,35 @@ def synth(
         help="Show every player's hole cards, folds included (the truth to score rewards "
         "on); the deals and actions are the same as without it.",
     ),
+    game: GameName = GAME_OPTION,
+    rules: RuleSet | None = RULES_OPTION,
+    expert: str = typer.Option(
+        "cfr", "--expert", metavar="AGENT",
+        help="With --game leduc: the expert, a Leduc agent (default cfr: CFR+ solved here).",
+    ),
+    opponent: str | None = typer.Option(
+        None, "--opponent", metavar="AGENT",
+        help="With --game leduc: play the expert against this Leduc agent (seats alternate) and "
+        "record only the expert's decisions; default: the expert against itself.",
+    ),
 ) -> None:
-    """Write a synthetic IRC-format month of heads-up 10-20 limit hold'em between two bots."""
+    """Write a synthetic IRC-format month of heads-up 10-20 limit hold'em between two bots.
+
+    With --game leduc: Leduc demonstrations of --expert, as `pokerirl leduc synth` writes
+    them (an .npz that `pokerirl train` reads).
+    """
     from pokerirl.game.synth import MAX_HANDS, write_synthetic_month
+
+    leduc = leduc_rules(game, rules)
+    if leduc is not None:
+        from pokerirl.cli.leduc import exact_synth
+
+        holdem_only(ctx, "Leduc's demonstrations are arrays, not hand histories",
+                    reveal_all=reveal_all)  # fmt: skip
+        exact_synth(leduc, expert=expert, opponent=opponent, hands=hands, seed=seed, out=out)
+        return
+    if given(ctx, expert=expert, opponent=opponent):
+        raise UsageError("--expert and --opponent apply to --game leduc only")
 
     if hands > MAX_HANDS:
         raise UsageError(f"--hands must be at most {MAX_HANDS:,} (one month), got {hands:,}")
@@ -193,6 +236,7 @@ def synth(
 
 @app.command()
 def match(
+    ctx: typer.Context,
     agent_a: str = typer.Argument(
         ...,
         metavar="AGENT_A",
@@ -221,11 +265,16 @@ def match(
         metavar=ENCODING_CHOICES,
         help=AGENTS_ENCODING_HELP,
     ),
+    game: GameName = GAME_OPTION,
+    rules: RuleSet | None = RULES_OPTION,
 ) -> None:
     """Play A against B and print A's result in milli-big-blinds per hand.
 
     Beside the raw result, the AIVAT-corrected one: chance corrections at the flop, turn and
     river give an unbiased estimate of the same payoff, usually with a smaller error.
+
+    With --game leduc nothing is dealt: A's exact expected value against B over every deal,
+    from both seats, in chips and milli-chips per hand (agents: docs/leduc.md).
     """
     from pokerirl.agents import resolve_agent
     from pokerirl.game import check_match_size
@@ -233,6 +282,15 @@ def match(
 
     if output_format not in ("text", "json"):
         raise UsageError(f"unknown --format {output_format!r} (text or json)")
+    leduc = leduc_rules(game, rules)
+    if leduc is not None:
+        from pokerirl.cli.leduc import exact_match
+
+        holdem_only(ctx, "a Leduc match is exact: every deal, both seats", hands=hands,
+                    seed=seed, duplicate=duplicate, encoding=encoding)  # fmt: skip
+        exact_match(agent_a, agent_b, leduc, as_json=output_format == "json")
+        return
+    _refuse_leduc_agents([agent_a, agent_b])
     settings_from_options(check_match_size, hands, duplicate=duplicate)
     players = resolve_agent(agent_a), resolve_agent(agent_b)
     if encoding is not None:
@@ -268,6 +326,7 @@ def match(
 @app.command()
 @on_error(interrupted=INTERRUPTED)
 def tournament(
+    ctx: typer.Context,
     agents: list[str] = typer.Argument(
         None,
         help="A B (one matchup, A's payoff), or with --vs the agents to play against BASE. "
@@ -320,6 +379,8 @@ def tournament(
         help=AGENTS_ENCODING_HELP,
     ),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bar, no report."),
+    game: GameName = GAME_OPTION,
+    rules: RuleSet | None = RULES_OPTION,
 ) -> None:
     """Multi-seed head-to-head evaluation: mbb/h, duplicate deals, Bonferroni and Holm.
 
@@ -345,7 +406,19 @@ def tournament(
     A DIR that holds a tournament of other matchups is refused (--overwrite
     replaces its report; its saved seeds stay).
     pokerirl report DIR prints it again.
+
+    With --game leduc: AGENTS (two or more) in a round-robin of exact expected values
+    (every deal, both seats) and each one's exploitability; DIR/report.md and report.json.
     """
+    leduc = leduc_rules(game, rules)
+    if leduc is not None:
+        from pokerirl.cli.leduc import exact_tournament
+
+        holdem_only(ctx, "a Leduc tournament is an exact round-robin", vs=vs, cross=cross,
+                    hands=hands, seeds=seeds, duplicate=duplicate, jobs=jobs, ray=ray,
+                    alpha=alpha, batch_size=batch_size, encoding=encoding)  # fmt: skip
+        exact_tournament(agents or [], leduc, out=out, overwrite=overwrite, quiet=quiet)
+        return
     from pokerirl.game import check_match_size
     from pokerirl.seeds import parse_seeds
     from pokerirl.tournaments import render_report, run_tournament
@@ -371,6 +444,8 @@ def tournament(
             f"--hands must be at least 4 with duplicate deals (two pairs), got {hands}"
         )
     settings_from_options(check_match_size, hands, duplicate=duplicate, batch_size=batch_size)
+    _refuse_leduc_agents([spec for pair in matchups for side in pair
+                          for spec in ([side] if isinstance(side, str) else side)])  # fmt: skip
     if encoding is not None:
         specs = [spec for pair in matchups for side in pair
                  for spec in ([side] if isinstance(side, str) else side)]  # fmt: skip
@@ -459,6 +534,11 @@ def train(
         help="Online: the fixed opponent the policy plays (default random; tight, loose: the "
         "synthetic months' TightBot, LooseBot).",
     ),
+    game: GameName | None = typer.Option(
+        None, "--game", metavar=GAME_CHOICES,
+        help="Check that TABLE holds this game's decisions (the game is read from the data: "
+        "holdem for a Parquet table, leduc for demonstrations).",
+    ),
 ) -> None:
     """Learn a reward function with AIRL, Hybrid-AIRL or GAIL from an expert decision table.
 
@@ -467,9 +547,14 @@ def train(
     A finished OUT is replaced only with --overwrite, and only once the new run is complete.
     With --mode online the same folder, its config.json saying data.mode = online.
     """
+    from pokerirl.datasets.decisions import data_game
     from pokerirl.irl import load_config
     from pokerirl.irl.adversarial import resolve_device
     from pokerirl.poker.train import train_em, train_runs
+
+    if game is not None and Path(table).is_file() and data_game(table) is not game:
+        raise InputError(f"{table}: {GAME_WORDS[data_game(table)]}, not {GAME_WORDS[game]} "
+                         "(the game is read from the data)")  # fmt: skip
 
     both = () if hidden is None else ("reward_hidden", "policy_hidden")
     nets = dict.fromkeys(both, widths(hidden or ""))
@@ -635,12 +720,19 @@ def reward_card_command(
     actions by street and equity, its agreement with the expert and the legal-majority rule,
     and what a DQN is predicted to learn. Writes OUT/reward_card.json and reward_card.png.
     """
+    from pokerirl.agents.leduc_specs import leduc_spec_reason
     from pokerirl.poker.reward_card import CardStates, reward_card, write_card
     from pokerirl.poker.reward_sources import RewardSource
     from pokerirl.poker.rewards import TRANSFORMS, TransformedReward
 
     if transform not in TRANSFORMS:
         raise UsageError(f"unknown --transform {transform!r} ({', '.join(TRANSFORMS)})")
+    if leduc_spec_reason("reward:" + reward) is not None:
+        raise InputError(  # the words of run_encoding's refusal, and what to use instead
+            f"{reward}: a reward learned on the game 'leduc', not on heads-up limit hold'em "
+            f"(on Leduc: pokerirl exploit reward:{reward} --game leduc, match --game leduc, "
+            "leduc agreement)"
+        )
     resolved = RewardSource.resolve(reward)
     if encoding is not None:
         _check_encoding(resolved, _encoding(encoding))
@@ -706,6 +798,13 @@ def agent_train(
     dqn: Settings = NO_SETTINGS,  # DQNConfig's options: --hidden, --lr, --train-every, ...
     log_dir: Path | None = LOG_DIR,
     quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bar."),
+    game: GameName = GAME_OPTION,
+    rules: RuleSet | None = RULES_OPTION,
+    rl: LeducRL | None = typer.Option(
+        None, "--rl", metavar=LEDUC_RL_CHOICES,
+        help="With --game leduc: dqn (the Leduc DQN, the default) or tabular (the tabular "
+        "Monte-Carlo learner), as the Leduc study's --rl.",
+    ),
 ) -> None:
     """Train a DQN agent (or one per seed) on the sparse payoff or a learned reward.
 
@@ -714,7 +813,19 @@ def agent_train(
     written beside the old and swapped in at the end, so a killed run loses nothing.
     With --seeds, seeds run as units (--jobs or --ray); a rerun resumes the set.
     Every setting: --preset, then --config FILE, then the flags (docs/agents.md).
+
+    With --game leduc: the Leduc DQN (or --rl tabular: the tabular learner) against
+    --opponent (a Leduc agent, default random) for --hands (default 100,000) on the sparse reward or
+    --reward learned --reward-run RUN (a Leduc run's g); OUT/strategy.json (its greedy
+    strategy, a Leduc agent) and summary.json with its exact exploitability and value.
     """
+    leduc = leduc_rules(game, rules)
+    if leduc is not None:
+        _leduc_agent_train(ctx, leduc, out, train, dqn, rl=rl or LeducRL.DQN, seed=seed,
+                           overwrite=overwrite)  # fmt: skip
+        return
+    if rl is not None:
+        raise UsageError("--rl applies to --game leduc only (hold'em's agents are DQNs)")
     from pokerirl.agents.config import AgentOverrides, load_agent_config
     from pokerirl.agents.train import train_agent, train_seeds
     from pokerirl.seeds import parse_seeds
@@ -734,6 +845,33 @@ def agent_train(
     for agent_seed, line in lines.items():
         _echo_agent(out if seeds is None else out / f"seed-{agent_seed}", line, config.play)
     write_logs(out, log_dir)
+
+
+LEDUC_TRAIN = ("hands", "opponent", "reward", "reward_run")  # the settings a Leduc DQN takes
+LEDUC_HANDS = 100_000  # the Leduc study's quick preset
+
+
+def _leduc_agent_train(ctx: typer.Context, rules: Any, out: Path, train: Settings, dqn: Settings,
+                       *, rl: LeducRL, seed: int, overwrite: bool) -> None:  # fmt: skip
+    """``agent train --game leduc``: one line for a hold'em setting, then
+    :func:`pokerirl.cli.leduc.exact_agent_train`."""
+    from pokerirl.cli.leduc import exact_agent_train
+
+    why = "a Leduc agent takes --rl, --hands, --opponent, --reward, --reward-run, --seed"
+    holdem_only(ctx, why, **{k: v for k, v in {**train, **dqn}.items() if k not in LEDUC_TRAIN})
+    holdem_only(ctx, why, preset=ctx.params.get("preset"), config_file=ctx.params.get(
+        "config_file"), seeds=ctx.params.get("seeds"), jobs=ctx.params.get("jobs"),
+        ray=ctx.params.get("ray"), threads=ctx.params.get("threads"),
+        log_dir=ctx.params.get("log_dir"))  # fmt: skip
+    learned = str(train.get("reward", "sparse")) == "learned"
+    run = train.get("reward_run")
+    if learned != (run is not None):
+        raise UsageError("--reward learned and --reward-run RUN go together")
+    exact_agent_train(
+        rules, out=out, rl=rl, opponent=str(train.get("opponent", "random")),
+        hands=int(train.get("hands", LEDUC_HANDS)), seed=seed,
+        reward_run=None if run is None else str(run), overwrite=overwrite,
+    )  # fmt: skip
 
 
 def _echo_agent(folder: Path, line: MetricsLine | None, play: str) -> None:
@@ -827,3 +965,13 @@ def _resolve_lineup(specs: Sequence[str]) -> dict[str, object]:
         for member in [str(folder) for folder in seeds] or [spec]:
             found[member] = resolve_agent(member)
     return found
+
+
+def _refuse_leduc_agents(specs: Sequence[str]) -> None:
+    """Refuse, in one line naming it, a Leduc agent given to hold'em."""
+    from pokerirl.agents.leduc_specs import leduc_spec_reason
+
+    for spec in specs:
+        reason = leduc_spec_reason(spec)
+        if reason is not None:
+            raise InputError(f"{spec}: {reason}, not a hold'em agent (give --game leduc)")

@@ -16,9 +16,9 @@ from enum import StrEnum
 
 import numpy as np
 
-from pokerirl.game.leduc.batch import ACTIONS
+from pokerirl.agents.leduc_specs import policy_table, reward_table
 from pokerirl.game.leduc.demos import Demonstrations
-from pokerirl.game.leduc.infosets import InfoSets, info_sets
+from pokerirl.game.leduc.infosets import info_sets
 
 SPLIT_SEED = 0  # one train/validation split of the hands for every run
 
@@ -83,25 +83,6 @@ def learn(
                 val_alignment=float(Metric.VAL_ALIGNMENT.of(run.metrics[-1])),
             ))  # fmt: skip
     return found
-
-
-def reward_table(reward, sets: InfoSets) -> np.ndarray:  # type: ignore[no-untyped-def]
-    """g(s, a) at every information set and action (rows x 4; -inf where illegal)."""
-    import torch
-
-    obs = torch.as_tensor(sets.observations, dtype=torch.float32)
-    actions = torch.eye(len(ACTIONS))[:, None, :].expand(len(ACTIONS), len(obs), len(ACTIONS))
-    values = reward.transferable(obs, actions).T.double().numpy()
-    return np.where(sets.legal, values, -np.inf)
-
-
-def policy_table(policy, sets: InfoSets) -> np.ndarray:  # type: ignore[no-untyped-def]
-    """π(a | s) at every information set (rows x 4, 0 where illegal)."""
-    import torch
-
-    obs = torch.as_tensor(sets.observations, dtype=torch.float32)
-    log_p = policy(obs, torch.as_tensor(sets.legal))
-    return np.where(sets.legal, log_p.exp().double().numpy(), 0.0)
 
 
 def counted_policy(demos: Demonstrations) -> np.ndarray:
