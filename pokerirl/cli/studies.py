@@ -13,8 +13,8 @@ from pokerirl.cli.app import app
 from pokerirl.cli.data import MONTHS_HELP, months
 from pokerirl.cli.errors import INTERRUPTED, echo, on_error, settings_from_options
 from pokerirl.cli.fanout import RAY_HELP, command_backend
+from pokerirl.cli.leduc import LeducRL
 from pokerirl.cli.leduc import StudyPreset as LeducPreset
-from pokerirl.cli.leduc import StudyRL
 from pokerirl.cli.options import ENCODING_CHOICES, LOG_DIR, Default, choices, write_logs
 from pokerirl.cli.seeds import MAX_SEEDS, SEED_OPTION, seed_list
 from pokerirl.errors import MissingExtra, UsageError
@@ -211,7 +211,7 @@ def study(
         None, "--rules", metavar=choices(RuleSet), help="Leduc: the rule set (default rlcard)."
     ),
     rl: str | None = typer.Option(
-        None, "--rl", metavar=choices(StudyRL),
+        None, "--rl", metavar=choices(LeducRL),
         help="Leduc: the RL agents, dqn (the default) or tabular.",
     ),
     overwrite: bool = typer.Option(
@@ -320,7 +320,7 @@ def _leduc_study(
 ) -> None:
     """``study --game leduc``: the Leduc study, as ``pokerirl leduc study`` runs it."""
     for option, value, allowed in (("--preset", preset_name, LeducPreset),
-                                   ("--rules", rules, RuleSet), ("--rl", rl, StudyRL)):  # fmt: skip
+                                   ("--rules", rules, RuleSet), ("--rl", rl, LeducRL)):  # fmt: skip
         if value is not None and value not in tuple(allowed):
             raise UsageError(f"--game leduc: {option} must be one of {', '.join(allowed)}, "
                              f"got {value!r}")  # fmt: skip
@@ -328,7 +328,7 @@ def _leduc_study(
     from pokerirl.studies.leduc.study import run_leduc_study
 
     config = settings_from_options(leduc_preset, preset_name, rules=rules or RuleSet.RLCARD,
-                                   rl=rl or StudyRL.DQN)  # fmt: skip
+                                   rl=rl or LeducRL.DQN)  # fmt: skip
     run_leduc_study(config, out, overwrite=overwrite, echo=echo)
 
 
