@@ -1,5 +1,7 @@
 """Vectorized heads-up limit hold'em with RLCard 1.2.0's rules: deals, hand strength, engine,
-agents and matches. See ``docs/rules.md`` for how the rules differ from ACPC's."""
+agents and matches; Leduc hold'em in :mod:`pokerirl.game.leduc`; the :class:`Game` protocol both
+implement (:mod:`pokerirl.game.games`). See ``docs/rules.md`` for how the rules differ from
+ACPC's."""
 
 from __future__ import annotations
 
@@ -22,6 +24,7 @@ from pokerirl.game.engine import (
     LimitHoldemBatch,
 )
 from pokerirl.game.evaluator import HAND_CATEGORIES, category, hand_strength
+from pokerirl.game.games import HOLDEM, Game, Hands, LeducGame, play_out
 from pokerirl.game.match import (
     DecisionLog,
     MatchResult,
@@ -36,11 +39,15 @@ __all__ = [
     "BUILT_IN_AGENTS",
     "DEAL_SIZE",
     "HAND_CATEGORIES",
+    "HOLDEM",
     "SMALL_BLIND",
     "Agent",
     "CallAgent",
     "DecisionLog",
+    "Game",
+    "Hands",
     "IllegalActionError",
+    "LeducGame",
     "LimitHoldemBatch",
     "MatchResult",
     "RaiseAgent",
@@ -54,6 +61,7 @@ __all__ = [
     "make_agent",
     "play_batch",
     "play_match",
+    "play_out",
     "seat_cards",
     "turn_cards",
 ]

@@ -268,6 +268,20 @@ def irl_phase(settings: Mapping[str, Any], epochs: int | None) -> str:
 
 def render_markdown(report: StudyReport) -> str:
     """``report.md``: the paper's numbers beside ours, and what the paper leaves open."""
+    return "\n".join([
+        *_header_markdown(report),
+        *_table1_markdown(report),
+        *_irl_markdown(report),
+        *_rl_markdown(report),
+        *authors_markdown(report),
+        *cards_markdown(report),
+        *_panel_markdown(report),
+        *lbr_markdown(report.panel, len(report.seeds)),
+    ])  # fmt: skip
+
+
+def _header_markdown(report: StudyReport) -> list[str]:
+    """The title, the plain verdict, the data and the sizes against the paper's."""
     settings = report.settings
     seeds = report.seeds
     n_seeds = len(seeds)
@@ -295,7 +309,13 @@ def render_markdown(report: StudyReport) -> str:
             "**Reduced sizes**: the paper's protocol is 10 IRL runs, 20 seeds of 50,000 hands and "
             "20 x 1,000,000 tournament hands (`--preset paper`); these numbers are noisier."
         )
-    lines += [
+    return lines
+
+
+def _table1_markdown(report: StudyReport) -> list[str]:
+    """Table 1: each learned-reward DQN against the sparse one, beside the paper's."""
+    n_seeds = len(report.seeds)
+    lines = [
         "",
         "## Table 1: against the sparse-reward DQN (mbb/hand, "
         f"{'across training seeds' if n_seeds > 1 else 'one agent per side'})",
@@ -329,6 +349,13 @@ def render_markdown(report: StudyReport) -> str:
         "different play. The panel below answers that: every agent against every other and "
         "against fixed strategies.",
         "",
+    ]
+    return lines
+
+
+def _irl_markdown(report: StudyReport) -> list[str]:
+    """The IRL stage: validation alignment and discriminator accuracy, with the figures."""
+    lines = [
         "## IRL (validation alignment: share of held-out expert actions the policy picks)",
         "",
         "| | ours (mean ± std over runs) | the paper |",
@@ -377,6 +404,15 @@ def render_markdown(report: StudyReport) -> str:
         "",
         "The BC action distribution is not drawn: the IRL core records only BC's alignment.",
         "",
+    ]
+    return lines
+
+
+def _rl_markdown(report: StudyReport) -> list[str]:
+    """The DQNs against random, how closely they follow their rewards, training length."""
+    n_seeds = len(report.seeds)
+    figures = report.figures
+    lines = [
         f"## RL against random (mbb/hand of {rl_measured(report)}, mean ± std over seeds)",
         "",
         "| agent | ours | per-seed range | the paper (about) |",
@@ -422,9 +458,14 @@ def render_markdown(report: StudyReport) -> str:
             f"{long.hands:,}.",
             "",
         ]
-    lines += authors_markdown(report)
-    lines += cards_markdown(report)
-    lines += [
+    return lines
+
+
+def _panel_markdown(report: StudyReport) -> list[str]:
+    """Every agent against every other, with its replication."""
+    n_seeds = len(report.seeds)
+    figures = report.figures
+    lines = [
         "## Panel: row agent against column agent (mbb/hand ± SE over seeds)",
         "",
     ]
@@ -447,8 +488,7 @@ def render_markdown(report: StudyReport) -> str:
         f"![panel]({figures['panel_heatmap']})",
         "",
     ]
-    lines += lbr_markdown(report.panel, n_seeds)
-    return "\n".join(lines)
+    return lines
 
 
 TRAINING_SEEDS = "training seeds"  # the tournament's Replication values, as written
