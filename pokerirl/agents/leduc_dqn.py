@@ -32,7 +32,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pokerirl.agents.leduc_q import MAX_HANDS, opponent_table, play_batch
+from pokerirl.agents.leduc_q import MAX_HANDS, opponent_table, play_batch, reward_sets
 from pokerirl.errors import ConfigError
 from pokerirl.game.leduc.batch import node_arrays
 from pokerirl.game.leduc.infosets import InfoSets, info_sets
@@ -111,9 +111,7 @@ def train_leduc_dqn(
     from pokerirl.agents.dqn import QNetwork, double_dqn_targets
     from pokerirl.execution import pinned_threads
 
-    sets = info_sets(rules)
-    if reward is not None and reward.shape != sets.legal.shape:
-        raise ConfigError(f"a reward table must be {sets.legal.shape}, got {reward.shape}")
+    sets = reward_sets(rules, reward)
     # Returns within [-1, 1], where the Huber loss is the squared error: fitted to the mean
     # return, not (as |error| far out would) to the median of chips that swing by ±13.
     if reward is None:

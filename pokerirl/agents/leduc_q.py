@@ -77,9 +77,7 @@ def train_q(
 ) -> TabularAgent:
     """Train against ``opponent`` (the agent sits in position ``hand % 2``) on the sparse
     reward (``reward`` None) or on ``reward[row, action]`` per decision."""
-    sets = info_sets(rules)
-    if reward is not None and reward.shape != sets.legal.shape:
-        raise ConfigError(f"a reward table must be {sets.legal.shape}, got {reward.shape}")
+    sets = reward_sets(rules, reward)
     cumulative = opponent_table(rules, opponent)
     rng = np.random.default_rng(config.seed)
     q = np.zeros(sets.legal.shape)
@@ -117,6 +115,15 @@ def train_q(
         q[seen] += (sums[seen] - counts[seen] * q[seen]) / visits[seen]  # running means
         played += hands
     return TabularAgent(sets=sets, q=np.where(sets.legal, q, -np.inf), visits=visits)
+
+
+def reward_sets(rules: LeducRules, reward: np.ndarray | None) -> InfoSets:
+    """The information sets of ``rules``; a ``ConfigError`` if ``reward`` (a per-decision
+    table, or None for the sparse reward) is not one value per set and action."""
+    sets = info_sets(rules)
+    if reward is not None and reward.shape != sets.legal.shape:
+        raise ConfigError(f"a reward table must be {sets.legal.shape}, got {reward.shape}")
+    return sets
 
 
 def opponent_table(rules: LeducRules, opponent: Strategy) -> np.ndarray:

@@ -47,7 +47,8 @@ from pokerirl.errors import UsageError
 from pokerirl.game.encodings import EncodingName  # numpy only: the values help lists
 from pokerirl.game.leduc.rules import LeducRules, RuleSet, get_rules
 from pokerirl.game.spec import GameName
-from pokerirl.settings import MAX_LAYERS, MAX_WIDTH
+from pokerirl.irl.config import MAX_EPOCHS  # torch-free
+from pokerirl.settings import MAX_LAYERS, MAX_STEPS, MAX_WIDTH
 
 T = TypeVar("T")
 Settings = Mapping[str, Any]
@@ -117,6 +118,17 @@ LOG_DIR = typer.Option(
     help="Also write each run's scalars into DIR as TensorBoard event files and progress.csv "
     "(SB3's layout; needs pip install 'pokerirl[logs]'). metrics.jsonl stays the record.",
 )
+
+
+# The online IRL options of `train` and `study` (poker; gym's in cli/gym.py).
+POKER_ROUNDS = typer.Option(
+    None, "--rounds", min=1, max=MAX_EPOCHS,
+    help="Online: rounds of generator hands, discriminator pass, policy update (default 20).",
+)  # fmt: skip
+POKER_GENERATOR_STEPS = typer.Option(
+    None, "--generator-steps", min=1, max=MAX_STEPS,
+    help="Online: the policy's decisions on the engine per round (default 2048).",
+)  # fmt: skip
 
 
 def write_logs(out: Path, log_dir: Path | None) -> None:

@@ -24,6 +24,8 @@ from pokerirl.cli.options import (
     GAME_OPTION,
     LOG_DIR,
     NO_SETTINGS,
+    POKER_GENERATOR_STEPS,
+    POKER_ROUNDS,
     RULES_OPTION,
     Default,
     Settings,
@@ -39,11 +41,10 @@ from pokerirl.cli.seeds import MAX_SEEDS, SEED_OPTION, seed_list
 from pokerirl.errors import InputError, UsageError
 from pokerirl.game.leduc.rules import RuleSet
 from pokerirl.game.spec import GameName
-from pokerirl.irl.config import MAX_EPOCHS, AIRLConfig, Algo, IRLMode  # torch-free
+from pokerirl.irl.config import AIRLConfig, Algo, IRLMode  # torch-free
 from pokerirl.jsonio import read_json
 from pokerirl.poker.folds import FoldsMode
 from pokerirl.poker.rewards import Transform
-from pokerirl.settings import MAX_STEPS
 
 if TYPE_CHECKING:
     from pokerirl.agents.train import MetricsLine
@@ -521,14 +522,8 @@ def train(
         help="offline: the policy acts at the expert's states (the paper's); online: it plays "
         "hands on the engine against --opponent on the current learned reward.",
     ),
-    rounds: int | None = typer.Option(
-        None, "--rounds", min=1, max=MAX_EPOCHS,
-        help="Online: rounds of generator hands, discriminator pass, policy update (default 20).",
-    ),
-    generator_steps: int | None = typer.Option(
-        None, "--generator-steps", min=1, max=MAX_STEPS,
-        help="Online: the policy's decisions on the engine per round (default 2048).",
-    ),
+    rounds: int | None = POKER_ROUNDS,
+    generator_steps: int | None = POKER_GENERATOR_STEPS,
     opponent: str | None = typer.Option(
         None, "--opponent", metavar="random|call|raise|tight|loose",
         help="Online: the fixed opponent the policy plays (default random; tight, loose: the "

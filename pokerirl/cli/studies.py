@@ -15,14 +15,21 @@ from pokerirl.cli.errors import INTERRUPTED, echo, on_error, settings_from_optio
 from pokerirl.cli.fanout import RAY_HELP, command_backend
 from pokerirl.cli.leduc import LeducRL
 from pokerirl.cli.leduc import StudyPreset as LeducPreset
-from pokerirl.cli.options import ENCODING_CHOICES, LOG_DIR, Default, choices, write_logs
+from pokerirl.cli.options import (
+    ENCODING_CHOICES,
+    LOG_DIR,
+    POKER_GENERATOR_STEPS,
+    POKER_ROUNDS,
+    Default,
+    choices,
+    write_logs,
+)
 from pokerirl.cli.seeds import MAX_SEEDS, SEED_OPTION, seed_list
 from pokerirl.errors import MissingExtra, UsageError
 from pokerirl.game.leduc.rules import RuleSet
 from pokerirl.game.spec import GameName
-from pokerirl.irl.config import MAX_EPOCHS, IRLMode  # torch-free
+from pokerirl.irl.config import IRLMode  # torch-free
 from pokerirl.jsonio import read_json
-from pokerirl.settings import MAX_STEPS
 from pokerirl.studies.poker.config import (
     AGENT_PRESETS,
     FOLDS,
@@ -194,14 +201,8 @@ def study(
         help="The IRL runs: offline (the default; the paper's: the policy acts at the expert's "
         "states) or online (as train --mode online: the policy plays hands on the engine).",
     ),
-    rounds: int | None = typer.Option(
-        None, "--rounds", min=1, max=MAX_EPOCHS,
-        help="Online: rounds of generator hands, discriminator pass, policy update (default 20).",
-    ),
-    generator_steps: int | None = typer.Option(
-        None, "--generator-steps", min=1, max=MAX_STEPS,
-        help="Online: the policy's decisions on the engine per round (default 2048).",
-    ),
+    rounds: int | None = POKER_ROUNDS,
+    generator_steps: int | None = POKER_GENERATOR_STEPS,
     generator_opponent: str | None = typer.Option(
         None, "--generator-opponent", metavar="random|call|raise|tight|loose",
         help="Online: the fixed opponent the IRL policy plays (default random; --opponent is "
