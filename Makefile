@@ -27,10 +27,11 @@ demo: install
 	@echo "make: pokerirl is installed in $(VENV)/: run 'source $(VENV)/bin/activate' to put it on your PATH"
 	@echo "make: then, on real hands shipped with pokerirl: pokerirl study irc-199504 --preset quick --out study-real/"
 
-# pytest-xdist workers; the tests that share a module or session fixture run on one of them
-# (--dist loadgroup, groups set in tests/conftest.py), to build it once.
+# pytest-xdist workers; a test file runs on one of them (--dist loadfile), so that a module's
+# fixtures are built once (loadgroup's groups are not honoured by pytest 9.2 with
+# pytest-xdist 3.8, its issue 1386: module fixtures were built on both workers).
 TEST_WORKERS ?= 2
-PYTEST := $(BIN)/python -m pytest -q -n $(TEST_WORKERS) --dist loadgroup
+PYTEST := $(BIN)/python -m pytest -q -n $(TEST_WORKERS) --dist loadfile
 
 # Everything, slow tests included (CI: .ci/run); the timing-sensitive ones (serial) alone, last.
 test: install-dev

@@ -4,14 +4,13 @@ and the MountainCar gym study (``mountaincar_study``, built once per session). T
 behind them are in :mod:`testkit`, for module-scoped fixtures and module-level code.
 
 The suite runs in two tiers: ``make test-fast`` (``-m "not slow"``, the edit-test loop) and
-``make test`` (everything, over ``pytest-xdist`` workers with ``--dist loadgroup``). Tests
-stay isolated side by side: each writes in its own ``tmp_path``, starts its own processes on
-free ports, stops only those (by pid), and changes its folder or environment only through
-``monkeypatch`` (each xdist worker is a process of its own). The tests that share a session
-fixture carry its ``xdist_group`` (asking ``--dist loadgroup`` for one worker, to build it
-once). With pytest 9.2 and pytest-xdist 3.8 the groups are not honoured (pytest-xdist issue
-1386: it marks a group by rewriting ``item._nodeid``, which pytest 9.2 no longer reads), so
-each worker may build it: correct, only slower, until xdist's fix (PR 1388) is released.
+``make test`` (everything, over ``pytest-xdist`` workers with ``--dist loadfile``: a file's
+tests on one worker, so that its module fixtures are built once; a session fixture is built
+at most once per worker). Tests stay isolated side by side: each writes in its own
+``tmp_path``, starts its own processes on free ports, stops only those (by pid), and changes
+its folder or environment only through ``monkeypatch`` (each xdist worker is a process of its
+own). ``--dist loadgroup`` is not used: with pytest 9.2 and pytest-xdist 3.8 its groups are
+not honoured (pytest-xdist issue 1386), and the suite ran 36 s longer that way.
 """
 
 from __future__ import annotations
@@ -26,33 +25,6 @@ from testkit import TINY_GYM_STUDY, Cli, folder_bytes, folder_snapshot
 
 if TYPE_CHECKING:
     import pyarrow as pa
-
-# Costly session fixtures and the xdist group of their users (one worker, when honoured).
-SESSION_GROUPS = {"mountaincar_study": "mountaincar-study"}
-
-
-def _group(item: pytest.Item) -> str | None:
-    """The xdist group of a test that uses a fixture built once: a costly session fixture's
-    group, or its module's when it uses a module-scoped fixture (run or table built for the
-    module): without a group, xdist would build it on each worker that runs one of them."""
-    names = getattr(item, "fixturenames", ())
-    for fixture, group in SESSION_GROUPS.items():
-        if fixture in names:
-            return group
-    # pytest gives no public view of a test's fixture definitions at collection time.
-    info = getattr(item, "_fixtureinfo", None)
-    definitions = getattr(info, "name2fixturedefs", {})
-    if any(defs and defs[-1].scope == "module" for defs in definitions.values()):
-        return item.nodeid.split("::")[0]
-    return None
-
-
-def pytest_itemcollected(item: pytest.Item) -> None:
-    # Here, not in pytest_collection_modifyitems: pytest-xdist's reads the groups there.
-    group = _group(item)
-    if group is not None and not item.get_closest_marker("xdist_group"):
-        item.add_marker(pytest.mark.xdist_group(group))
-
 
 @pytest.fixture
 def cli() -> Cli:

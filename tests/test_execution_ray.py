@@ -27,9 +27,8 @@ from pokerirl.cli import app
 from pokerirl.execution import ray_head
 from pokerirl.execution.processes import _descendants
 
-# slow; one worker (once pytest-xdist honours groups again, its issue 1386): two Ray clusters
-# side by side would crowd two cores (each owns its ports and folders: correct, slower)
-pytestmark = [pytest.mark.slow, pytest.mark.xdist_group("ray")]
+# slow; the module's one cluster on one worker (make test: --dist loadfile)
+pytestmark = pytest.mark.slow
 
 SET = ["--hands", "1024", "--eval-every", "1024", "--eval-hands", "100"]
 SET += ["--concurrent-hands", "64", "-q"]
@@ -52,6 +51,14 @@ def cluster(tmp_path_factory: pytest.TempPathFactory) -> Iterator[str]:
 invoke = Cli().ok  # pokerirl ARGS in this process: its output, exit code 0 asserted
 
 
+@pytest.fixture(scope="module")
+def local_set(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """Seeds 0-3 of SET trained in local processes: what every Ray run of them must equal."""
+    out = tmp_path_factory.mktemp("local") / "set"
+    invoke("agent", "train", "--out", str(out), "--seeds", "0-3", "--jobs", "1", *SET)
+    return out
+
+
 def weights(folder: Path) -> dict[str, bytes]:
     return {p.parent.name: p.read_bytes() for p in sorted(folder.glob("seed-*/model.pt"))}
 
@@ -66,21 +73,16 @@ def per_seed(folder: Path) -> list[tuple[str, int, float, float, float]]:
 
 
 def test_agent_sets_and_tournaments_on_ray_equal_local_processes(
-    cluster: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+    cluster: str, local_set: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     # Relative paths from the driver's folder: Ray's workers run elsewhere and get bytes.
     monkeypatch.chdir(tmp_path)
     monkeypatch.delenv("RAY_ADDRESS", raising=False)
     invoke("agent", "train", "--out", "ray-set", "--seeds", "0-3", "--ray", cluster, *SET)
-    invoke("agent", "train", "--out", "local-set", "--seeds", "0-3", "--jobs", "1", *SET)
-    assert (
-        weights(Path("ray-set")) == weights(Path("local-set"))
-        and len(weights(Path("ray-set"))) == 4
-    )
+    assert weights(Path("ray-set")) == weights(local_set) and len(weights(local_set)) == 4
     for name in ("unit.json", "config.json", "metrics.jsonl"):
-        assert (
-            Path("ray-set/seed-2", name).read_bytes() == Path("local-set/seed-2", name).read_bytes()
-        )
+        ray_file, local_file = Path("ray-set/seed-2", name), local_set / "seed-2" / name
+        assert ray_file.read_bytes() == local_file.read_bytes()
 
     games = ["--vs", "random", "ray-set", "raise", "--hands", "20000", "--seeds", "0-3", "-q"]
     invoke("tournament", *games, "--out", "t-ray", "--ray", cluster)
@@ -103,7 +105,7 @@ def test_agent_sets_and_tournaments_on_ray_equal_local_processes(
 
 
 def test_a_ray_worker_killed_mid_run_is_retried_with_identical_results(
-    cluster: str, tmp_path: Path
+    cluster: str, local_set: Path, tmp_path: Path
 ) -> None:
     root = str(Path(__file__).resolve().parents[1])
     environment = {**os.environ, "PYTHONPATH": root, "RAY_ADDRESS": cluster}
@@ -134,8 +136,7 @@ def test_a_ray_worker_killed_mid_run_is_retried_with_identical_results(
     stdout, stderr = driver.communicate(timeout=300)
     assert driver.returncode == 0, stderr
     assert stdout.count("1,024 hands") == 4 and not list(out.glob("seed-*/.*"))
-    invoke("agent", "train", "--out", str(tmp_path / "local"), "--seeds", "0-3", *SET)
-    assert weights(out) == weights(tmp_path / "local")
+    assert weights(out) == weights(local_set)
 
 
 def test_gym_study_on_ray_equals_local_processes(

@@ -352,8 +352,12 @@ def _writing(out: Path) -> bool:
 @pytest.mark.slow
 @pytest.mark.serial  # waits for the run to be writing, within a time: run alone
 def test_a_killed_gym_irl_leaves_nothing_the_next_run_does_not_remove(tmp_path: Path) -> None:
-    out = tmp_path / "irl"
-    args = ["gym", "irl", "MountainCar-v0", "--out", str(out), "--preset", "quick", "--runs", "1"]
+    out, data = tmp_path / "irl", tmp_path / "expert.parquet"
+    # Collected once (2,000 rows, not the preset's 10,000): each of the three runs reads it.
+    collect = ["gym", "collect", "MountainCar-v0", "--expert", "shipped", "-n", "2000"]
+    assert run_cli(*collect, "--out", str(data), "--seed", "0")[0] == 0
+    args = ["gym", "irl", "MountainCar-v0", "--out", str(out), "--preset", "quick", "--runs", "1",
+            "--data", str(data)]  # fmt: skip
     assert run_cli(*args, "--epochs", "1")[0] == 0
     before = folder_bytes(out)
     legacy = out / ".irl.abcd1234.tmp" / "run-0"  # what an earlier version's kill left
