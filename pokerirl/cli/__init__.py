@@ -11,6 +11,7 @@ from pokerirl.cli import (
     exploit,  # noqa: F401  (pokerirl exploit: local best response)
     gym,  # noqa: F401
     leduc,  # noqa: F401  (pokerirl leduc: CFR+, exact best response)
+    play,  # noqa: F401  (pokerirl match, tournament)
     poker,  # noqa: F401
     studies,  # noqa: F401
     sweep,  # noqa: F401  (pokerirl sweep: the poker sweep)

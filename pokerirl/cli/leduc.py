@@ -224,8 +224,8 @@ def _strategy_path(path: Path) -> Path:
 
 
 # ------------------------------------------------- the main commands with --game leduc
-# match, tournament, exploit, synth and agent train call these (pokerirl/cli/poker.py,
-# pokerirl/cli/exploit.py): agents by the specs of pokerirl/agents/leduc_specs.py, every
+# match, tournament, exploit, synth and agent train call these (pokerirl/cli/play.py,
+# poker.py, exploit.py): agents by the specs of pokerirl/agents/leduc_specs.py, every
 # figure exact.
 
 

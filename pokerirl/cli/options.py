@@ -44,7 +44,7 @@ import typer
 from pokerirl.cli.errors import echo
 from pokerirl.cli.seeds import SEED_OPTION
 from pokerirl.errors import UsageError
-from pokerirl.game.encodings import EncodingName  # numpy only: the values help lists
+from pokerirl.game.encodings import Encoding, EncodingName  # numpy only: the values help lists
 from pokerirl.game.leduc.rules import LeducRules, RuleSet, get_rules
 from pokerirl.game.spec import GameName
 from pokerirl.irl.config import MAX_EPOCHS  # torch-free
@@ -118,6 +118,16 @@ LOG_DIR = typer.Option(
     help="Also write each run's scalars into DIR as TensorBoard event files and progress.csv "
     "(SB3's layout; needs pip install 'pokerirl[logs]'). metrics.jsonl stays the record.",
 )
+
+
+def parse_encoding(name: str) -> Encoding:
+    """``--encoding NAME``: the one place the name is checked (a usage error naming the known
+    ones) and becomes the encoding every layer below is given."""
+    from pokerirl.game.encodings import ENCODINGS
+
+    if name not in ENCODINGS:
+        raise UsageError(f"unknown --encoding {name!r} ({', '.join(ENCODINGS)})")
+    return ENCODINGS[name]
 
 
 # The online IRL options of `train` and `study` (poker; gym's in cli/gym.py).
