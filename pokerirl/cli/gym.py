@@ -18,7 +18,7 @@ from pokerirl.cli.errors import (
     settings_from_options,
 )
 from pokerirl.cli.fanout import RAY_HELP, command_backend
-from pokerirl.cli.options import LOG_DIR, choices, write_logs
+from pokerirl.cli.options import LOG_DIR, choices, online_mode, write_logs
 from pokerirl.cli.seeds import MAX_SEED, MAX_SEEDS, SEED_OPTION
 from pokerirl.errors import InputError, UsageError
 from pokerirl.gym.presets import MAX_TRANSITIONS
@@ -387,14 +387,8 @@ def _online_settings(
     offline is a usage error (exit 2), checked before any work."""
     from dataclasses import replace
 
-    if mode not in tuple(IRLMode):
-        raise UsageError(f"--mode must be one of {', '.join(IRLMode)}, got {mode!r}")
-    online_options = {"--rounds": rounds, "--generator-steps": generator_steps,
-                      "--generator-envs": generator_envs}  # fmt: skip
-    given = [name for name, value in online_options.items() if value is not None]
-    if mode == IRLMode.OFFLINE:
-        if given:
-            raise UsageError(f"{given[0]} applies to --mode online only")
+    if not online_mode(mode, {"--rounds": rounds, "--generator-steps": generator_steps,
+                              "--generator-envs": generator_envs}):  # fmt: skip
         return None
     from pokerirl.gym.online import OnlineSettings
 

@@ -47,7 +47,7 @@ from pokerirl.errors import UsageError
 from pokerirl.game.encodings import Encoding, EncodingName  # numpy only: the values help lists
 from pokerirl.game.leduc.rules import LeducRules, RuleSet, get_rules
 from pokerirl.game.spec import GameName
-from pokerirl.irl.config import MAX_EPOCHS  # torch-free
+from pokerirl.irl.config import MAX_EPOCHS, IRLMode  # torch-free
 from pokerirl.settings import MAX_LAYERS, MAX_STEPS, MAX_WIDTH
 
 T = TypeVar("T")
@@ -128,6 +128,20 @@ def parse_encoding(name: str) -> Encoding:
     if name not in ENCODINGS:
         raise UsageError(f"unknown --encoding {name!r} ({', '.join(ENCODINGS)})")
     return ENCODINGS[name]
+
+
+def online_mode(mode: str | None, online_only: Mapping[str, object]) -> bool:
+    """Whether ``--mode`` (None: not given, offline) is online, as ``train``, ``study``, ``gym
+    irl`` and ``gym study`` read it: a usage error for an unknown mode, or for an online-only
+    option (``online_only``: flag -> value, None when not given) given offline."""
+    if mode is not None and mode not in tuple(IRLMode):
+        raise UsageError(f"--mode must be one of {', '.join(IRLMode)}, got {mode!r}")
+    if mode == IRLMode.ONLINE:
+        return True
+    given = [name for name, value in online_only.items() if value is not None]
+    if given:
+        raise UsageError(f"{given[0]} applies to --mode online only")
+    return False
 
 
 # The online IRL options of `train` and `study` (poker; gym's in cli/gym.py).

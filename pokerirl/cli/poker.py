@@ -34,6 +34,7 @@ from pokerirl.cli.options import (
     given,
     holdem_only,
     leduc_rules,
+    online_mode,
     parse_encoding,
     settings_options,
     widths,
@@ -347,13 +348,8 @@ def _online_settings(
 ) -> Any:
     """``train --mode``: None offline, else the online settings (a usage error for an
     online-only option offline, or an offline-only one given online: ``offline_only``)."""
-    if mode not in tuple(IRLMode):
-        raise UsageError(f"--mode must be one of {', '.join(IRLMode)}, got {mode!r}")
-    options = {"--rounds": rounds, "--generator-steps": steps, "--opponent": opponent}
-    given = [name for name, value in options.items() if value is not None]
-    if mode == IRLMode.OFFLINE:
-        if given:
-            raise UsageError(f"{given[0]} applies to --mode online only")
+    if not online_mode(mode, {"--rounds": rounds, "--generator-steps": steps,
+                              "--opponent": opponent}):  # fmt: skip
         return None
     refused = [name for name, given_online in offline_only.items() if given_online]
     if refused:  # online runs train one after another, on the CPU, without EM

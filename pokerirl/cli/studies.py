@@ -22,6 +22,7 @@ from pokerirl.cli.options import (
     POKER_ROUNDS,
     Default,
     choices,
+    online_mode,
     write_logs,
 )
 from pokerirl.cli.seeds import MAX_SEEDS, SEED_OPTION, seed_list
@@ -304,13 +305,8 @@ def _study_mode(
 ) -> dict[str, object]:
     """``study --mode`` and its online options as the study config's overrides (a usage
     error for an online option offline, or an unknown mode)."""
-    if mode is not None and mode not in tuple(IRLMode):
-        raise UsageError(f"--mode must be one of {', '.join(IRLMode)}, got {mode!r}")
-    options = {"--rounds": rounds, "--generator-steps": steps, "--generator-opponent": opponent}
-    given = [name for name, value in options.items() if value is not None]
-    if mode != IRLMode.ONLINE:
-        if given:
-            raise UsageError(f"{given[0]} applies to --mode online only")
+    if not online_mode(mode, {"--rounds": rounds, "--generator-steps": steps,
+                              "--generator-opponent": opponent}):  # fmt: skip
         return {}
     return {"irl_mode": mode, "online_rounds": rounds, "online_generator_steps": steps,
             "online_opponent": opponent}  # fmt: skip

@@ -394,7 +394,8 @@ def task_summary(
 
 
 def online_record(online: OnlineSettings) -> dict[str, Any]:
-    """What a summary says of an online study's generator (its config.json, all of it)."""
+    """What a summary says of an online study's generator: the settings its command takes
+    (each run's config.json records the rest: PPO's, the initial log-std)."""
     return {"rounds": online.rounds, "generator_steps": online.generator_steps,
             "envs": online.envs}  # fmt: skip
 
