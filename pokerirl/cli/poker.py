@@ -358,9 +358,7 @@ def _online_settings(
 
     if opponent is not None and opponent not in tuple(Opponent):
         raise UsageError(f"--opponent must be one of {', '.join(Opponent)}, got {opponent!r}")
-    found = PokerOnlineSettings()  # the defaults, each option given replacing its own
-    return PokerOnlineSettings(rounds=rounds or found.rounds, opponent=opponent or found.opponent,
-                               generator_steps=steps or found.generator_steps)  # fmt: skip
+    return PokerOnlineSettings.given(rounds=rounds, generator_steps=steps, opponent=opponent)
 
 
 def _train_online(table: str, out: str, *, online: Any, **kwargs: Any) -> RunSummary:

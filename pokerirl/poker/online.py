@@ -128,6 +128,16 @@ class PokerOnlineSettings:
         if not 0 < self.clip < 1:
             raise ConfigError(f"the PPO clip must lie in (0, 1), got {self.clip}")
 
+    @classmethod
+    def given(
+        cls, *, rounds: int | None, generator_steps: int | None, opponent: str | None
+    ) -> PokerOnlineSettings:
+        """The defaults, each setting given (not None or 0) replacing its own: what ``train
+        --mode online`` and a study's online IRL stage ask for."""
+        found = cls()
+        return cls(rounds=rounds or found.rounds, opponent=opponent or found.opponent,
+                   generator_steps=generator_steps or found.generator_steps)  # fmt: skip
+
     def record(self) -> dict[str, object]:
         """What a run's ``config.json`` says of its generator."""
         return {"rounds": self.rounds, "generator_steps": self.generator_steps,

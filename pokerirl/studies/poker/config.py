@@ -282,13 +282,10 @@ class StudyConfig:
             return None
         from pokerirl.poker.online import PokerOnlineSettings
 
-        found = PokerOnlineSettings()
         try:
-            return PokerOnlineSettings(
-                rounds=self.online_rounds or found.rounds,
-                generator_steps=self.online_generator_steps or found.generator_steps,
-                opponent=self.online_opponent or found.opponent,
-            )
+            return PokerOnlineSettings.given(rounds=self.online_rounds,
+                                             generator_steps=self.online_generator_steps,
+                                             opponent=self.online_opponent)  # fmt: skip
         except ValueError as error:  # ConfigError: an unknown opponent, a count < 1
             raise StudyError(
                 f"bad study settings, the online IRL mode's generator: {error}"
