@@ -210,6 +210,14 @@ def study(
     reward; the exact agreement with the expert, exploitability and expected values in
     OUT/report.md and report.json (mean ± std over runs or seeds), and OUT/agreement.png.
     A rerun skips the stages whose files are present."""
+    run_study(out, preset, rules=rules, rl=rl, expert=expert, overwrite=overwrite)
+
+
+def run_study(
+    out: Path, preset: str, *, rules: str, rl: str, expert: Path | None, overwrite: bool
+) -> None:
+    """``leduc study`` and ``study --game leduc``: the preset's study with these settings
+    (checked by the command), into ``out``."""
     from pokerirl.studies.leduc.study import preset as get_preset
     from pokerirl.studies.leduc.study import run_leduc_study
 

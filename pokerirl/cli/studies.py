@@ -15,6 +15,7 @@ from pokerirl.cli.errors import INTERRUPTED, echo, on_error, settings_from_optio
 from pokerirl.cli.fanout import RAY_HELP, command_backend
 from pokerirl.cli.leduc import LeducRL
 from pokerirl.cli.leduc import StudyPreset as LeducPreset
+from pokerirl.cli.leduc import run_study as run_leduc_study
 from pokerirl.cli.options import (
     ENCODING_CHOICES,
     LOG_DIR,
@@ -321,12 +322,8 @@ def _leduc_study(
         if value is not None and value not in tuple(allowed):
             raise UsageError(f"--game leduc: {option} must be one of {', '.join(allowed)}, "
                              f"got {value!r}")  # fmt: skip
-    from pokerirl.studies.leduc.study import preset as leduc_preset
-    from pokerirl.studies.leduc.study import run_leduc_study
-
-    config = settings_from_options(leduc_preset, preset_name, rules=rules or RuleSet.RLCARD,
-                                   rl=rl or LeducRL.DQN)  # fmt: skip
-    run_leduc_study(config, out, overwrite=overwrite, echo=echo)
+    run_leduc_study(out, preset_name, rules=rules or RuleSet.RLCARD, rl=rl or LeducRL.DQN,
+                    expert=None, overwrite=overwrite)  # fmt: skip
 
 
 def _period(text: str) -> tuple[float, float]:
