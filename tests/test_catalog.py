@@ -19,6 +19,7 @@ import pytest
 from typer.testing import CliRunner
 
 from irc_fixtures import SHARED_SAMPLE, real_month
+from pokerirl.cache import DATA_VARIABLE
 from pokerirl.cli import app
 from pokerirl.datasets import catalog
 from pokerirl.datasets.ingest import ingest_table
@@ -32,7 +33,7 @@ def fresh(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
     monkeypatch.chdir(work)
     monkeypatch.setenv("HOME", str(tmp_path / "home"))
     monkeypatch.delenv("XDG_CACHE_HOME", raising=False)
-    monkeypatch.setenv(catalog.DATA_VARIABLE, str(tmp_path / "cache"))
+    monkeypatch.setenv(DATA_VARIABLE, str(tmp_path / "cache"))
     assert not (work.parent / "shared").exists() and not (work / ".." / ".." / "shared").exists()
     return work
 

@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 from equity_reference import engine_flop_count, eval7_cards, eval7_count
 
+from pokerirl.errors import InputError
 from pokerirl.game.cases import PREFLOP_DENOMINATOR
 from pokerirl.game.encodings import (
     STRENGTH,
@@ -26,9 +27,13 @@ from pokerirl.game.equity import (
     FLOP_CLASSES,
     FLOP_DENOMINATOR,
     RIVER_DENOMINATOR,
+    TURN_CLASSES,
     TURN_DENOMINATOR,
-    _flop_classes,
+    _class_counts,
     _flop_code,
+    _set_code,
+    all_pairs_turn_counts,
+    board_classes,
     exact_equity,
     flop_counts,
     flop_table,
@@ -73,13 +78,21 @@ def test_turn_counts_equal_an_eval7_enumeration() -> None:
     assert (np.array(expected) <= TURN_DENOMINATOR).all()
 
 
-def test_the_flop_classes_cover_every_flop_by_a_suit_permutation() -> None:
-    by_code, perm, representatives = _flop_classes()
-    assert len(representatives) == FLOP_CLASSES == 1_755
-    flops = np.random.default_rng(3).random((500, 52)).argsort(axis=1)[:, :3]
-    code = _flop_code(flops)
-    mapped = _PERMUTED_CARD[perm[code].astype(np.int64)[:, None], flops]
-    assert np.array_equal(_flop_code(mapped), _flop_code(representatives[by_code[code]]))
+@pytest.mark.parametrize(("size", "classes"), [(3, FLOP_CLASSES), (4, TURN_CLASSES)])
+def test_the_board_classes_cover_every_board_by_a_suit_permutation(
+    size: int, classes: int
+) -> None:
+    found = board_classes(size)
+    assert len(found.representatives) == classes and classes in (1_755, 16_432)
+    assert len(found.codes) == len(found.class_of) == [22_100, 270_725][size - 3]
+    boards = np.random.default_rng(3).random((500, 52)).argsort(axis=1)[:, :size]
+    k, perm = found.find(boards[:, ::-1])  # any order of the board
+    mapped = _PERMUTED_CARD[perm[:, None], boards]
+    assert np.array_equal(_flop_code(mapped) if size == 3 else _set_code(mapped),
+                          _set_code(found.representatives[k]))  # fmt: skip
+    # Each representative is its class's smallest board, mapped to itself.
+    own_k, own_perm = found.find(found.representatives)
+    assert np.array_equal(own_k, np.arange(classes)) and not own_perm.any()
 
 
 def test_the_shipped_flop_table_is_the_one_recorded_and_equals_an_enumeration() -> None:
@@ -199,3 +212,77 @@ def test_turn_counts_of_every_pair_equal_the_sorted_rivers(board: str) -> None:
     found = turn_counts(pairs, np.broadcast_to(cards, (len(pairs), 4)))
     every = all_pairs_turn_counts(cards)
     assert found.tolist() == every[pair_index(pairs[:, 0], pairs[:, 1])].tolist()
+
+
+def _turn_states_of_classes(classes: np.ndarray, seed: int) -> tuple[np.ndarray, np.ndarray]:
+    """Turn states (holes, boards) on boards of the given classes: each representative under
+    a random suit permutation, with random hole cards off it."""
+    rng = np.random.default_rng(seed)
+    representatives = board_classes(4).representatives[classes]
+    boards = _PERMUTED_CARD[rng.integers(0, 24, len(classes))[:, None], representatives]
+    holes = np.array([rng.choice(np.setdiff1d(np.arange(52), b), 2, replace=False)
+                      for b in boards])  # fmt: skip
+    return holes, boards
+
+
+def test_the_turn_table_read_by_class_equals_the_counted_turn() -> None:
+    """A table's row per turn class, read through the board's suit permutation (the pair
+    mapped by the same one), gives every state's own count."""
+    picked = np.random.default_rng(7).choice(TURN_CLASSES, 12, replace=False)
+    table = np.zeros((TURN_CLASSES, NUM_PAIRS), dtype=np.uint32)
+    for k in picked:
+        table[k] = all_pairs_turn_counts(board_classes(4).representatives[k])
+    holes, boards = _turn_states_of_classes(np.repeat(picked, 5), seed=8)
+    assert _class_counts(table, board_classes(4), holes, boards).tolist() == turn_counts(
+        holes, boards
+    ).tolist()
+
+
+def test_a_built_turn_table_is_read_checked_and_refused_when_not_it(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The build writes the file (nothing left beside it), ``turn_equity`` reads it once its
+    digest is the recorded one and gives the counted values; a file that is not the table is
+    one line (exit 1 from the command). Three classes stand for the 16,432 (two minutes)."""
+    from typer.testing import CliRunner
+
+    from pokerirl.cli import app
+    from pokerirl.game import equity
+
+    monkeypatch.setenv("POKERIRL_DATA", str(tmp_path / "cache"))
+    monkeypatch.setattr(equity, "_turn_table", {})
+    assert equity.turn_table() is None  # not built: turn states are counted
+    real = board_classes(4)
+    few = real._replace(representatives=real.representatives[:3])
+    monkeypatch.setattr(equity, "board_classes", lambda size: few if size == 4 else real)
+    monkeypatch.setattr(equity, "TURN_CLASSES", 3)
+    table = equity.build_turn_table(equity.turn_table_path())
+    assert [p.name for p in (tmp_path / "cache").iterdir()] == ["turn_equity_v1.npy"]
+    assert np.array_equal(table, [all_pairs_turn_counts(b) for b in few.representatives])
+    with pytest.raises(InputError, match="is not the turn table this version builds"):
+        equity.turn_table()  # another digest than the recorded one
+    result = CliRunner().invoke(app, ["data", "turn-table"])
+    assert result.exit_code == 1 and "not the turn table" in result.output
+    monkeypatch.setattr(equity, "TURN_TABLE_SHA256", table_digest(table))
+    holes, boards = _turn_states_of_classes(np.array([0, 1, 2, 2]), seed=9)
+    expected = turn_counts(holes, boards) / TURN_DENOMINATOR
+    equity.use_turn_table(False)  # counted, then read from the table: the same values
+    assert np.array_equal(equity.turn_equity(holes, boards), expected)
+    assert equity.turn_table() is None
+    equity.use_turn_table(True)
+    monkeypatch.setattr(equity, "turn_counts", None)  # the table alone now
+    monkeypatch.setattr(equity, "_TURN_ROWS", None)
+    assert equity.turn_table() is not None
+    assert np.array_equal(equity.turn_equity(holes, boards), expected)
+
+
+def test_the_built_turn_table_where_there_is_one_equals_counting() -> None:
+    """On a machine where ``pokerirl data turn-table`` ran: 400 random turn states read from
+    it equal their count (its digest already pins every byte; this reads it end to end)."""
+    from pokerirl.game import equity
+
+    if equity.turn_table() is None:
+        pytest.skip("the turn table is not built here (pokerirl data turn-table)")
+    holes, boards = _random_states(400, seed=12, board=4)
+    assert np.array_equal(equity.turn_equity(holes, boards),
+                          turn_counts(holes, boards) / TURN_DENOMINATOR)  # fmt: skip

@@ -46,6 +46,7 @@ USAGE: dict[str, str] = {  # a command line that cannot be run: exit 2
     "version": "version --bogus",
     "data list": "data list --bogus",
     "data fetch": "data fetch irc --sha256 nope",
+    "data turn-table": "data turn-table --bogus",
     "ingest": "ingest {G}",  # no --out
     "synth": "synth --out {O} --hands lots",
     "match": "match random call --hands lots",
@@ -77,6 +78,7 @@ MISSING: dict[str, str | None] = {  # an input that is not there: exit 1, naming
     "version": None,  # reads nothing
     "data list": None,  # reads the catalog and the cache's listing
     "data fetch": "data fetch irc --url {F}",
+    "data turn-table": None,  # reads nothing but its own cache file
     "ingest": "ingest {F} --out {O}/t.parquet",
     "synth": None,
     "match": "match {F} random --hands 10",
@@ -108,6 +110,7 @@ REFUSED: dict[str, str | None] = {  # a setting or a file the library refuses: e
     "version": None,
     "data list": None,
     "data fetch": "data fetch irc --url {E}",  # a folder: nothing to copy
+    "data turn-table": None,  # no input; a corrupt cache file: tests/test_equity.py
     "ingest": "ingest {G} --out {O}/t.parquet",
     "synth": "synth --out {A}/x",  # an OSError: the path, and why
     "match": "match random nope --hands 10",

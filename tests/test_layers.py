@@ -29,7 +29,7 @@ PACKAGE = Path(__file__).resolve().parents[1] / "pokerirl"
 # Lowest first. A component may import those of its own layer and of lower ones.
 LAYERS: tuple[tuple[str, ...], ...] = (
     ("holdem", "atomic", "seeds", "versions", "errors", "jsonio", "parquet", "meanstd", "figures",
-     "scalars", "serial", "stacking", "settings"),
+     "scalars", "serial", "stacking", "settings", "cache"),
     ("execution",),
     ("store",),
     ("parsers", "datasets", "game"),

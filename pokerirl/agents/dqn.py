@@ -441,10 +441,13 @@ def _learner_decides(
     state, the new ones open with f's share of their reward, and the engine steps."""
     encoding = shaping.encoding
     legal = game.legal_mask(hands)
-    plain_obs = game.observe(hands)  # RLCard's: what rewards get
+    rewarded_now = shaping.reward is not None and pending.staged is None
+    # RLCard's observation: what rewards get (another encoding's sparse learner needs none).
+    plain_obs = game.observe(hands) if shaping.plain or rewarded_now else None
     cards = turn_cards(game, hands) if shaping.needs_cards else None
     encoded: dict[str, np.ndarray] = {}
     if shaping.plain:
+        assert plain_obs is not None
         obs = plain_obs
     else:
         assert cards is not None  # a non-RLCard encoding reads the cards
@@ -468,6 +471,7 @@ def _learner_decides(
         assert cards is not None  # staging needs the cards (needs_cards)
         pending.staged.note(hands, cards, legal, actions)
     elif shaping.reward is not None:
+        assert plain_obs is not None  # rewarded_now
         decisions = ObservedDecisions(obs=plain_obs, legal_mask=legal, cards=cards,
                                       encoded=encoded)  # fmt: skip
         rewards = shaping.decision_weight * shaping.reward(decisions, actions)

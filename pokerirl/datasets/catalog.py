@@ -43,9 +43,9 @@ from enum import StrEnum
 from pathlib import Path
 from typing import IO
 
+from pokerirl.cache import cache_folder
 from pokerirl.errors import ConfigError, InputError
 
-DATA_VARIABLE = "POKERIRL_DATA"  # moves the cache folder
 SAMPLE_NAME = "irc-199504"
 ARCHIVE_NAME = "irc"
 SHIPPED_FOLDER = Path(__file__).resolve().parent / "data"
@@ -156,15 +156,6 @@ def find(name: str) -> Dataset | None:
             return dataset
     match = _MONTH.fullmatch(name)
     return month_dataset(match["channel"], match["month"]) if match else None
-
-
-def cache_folder() -> Path:
-    """``$POKERIRL_DATA``, else ``$XDG_CACHE_HOME/pokerirl/data``, else ``~/.cache/...``."""
-    given = os.environ.get(DATA_VARIABLE)
-    if given:
-        return Path(given).expanduser()
-    base = os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache"
-    return Path(base) / "pokerirl" / "data"
 
 
 class NotFetched(InputError):

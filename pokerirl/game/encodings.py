@@ -177,6 +177,14 @@ _EDGES = [0, *itertools.accumulate(STRENGTH_FEATURES.values())]
 _COLUMNS: Mapping[str, tuple[int, int]] = dict(
     zip(STRENGTH_FEATURES, itertools.pairwise(_EDGES), strict=True)
 )
+# Where each one-hot block's first column is (the nine columns from "hole_pairs_board" to
+# "pot_odds" are written as one (N, 9) block); a card's column is its own plus its block's,
+# a round's raise count's its own plus the round's.
+_ONE_HOT_AT: Mapping[str, int] = {
+    name: _COLUMNS[name][0] for name in ("street", "high_rank", "low_rank", "category")
+}
+_CARD_COLUMN = np.array([_COLUMNS["hole"][0]] * 2 + [_COLUMNS["board"][0]] * 5)
+_RAISE_COLUMN = _COLUMNS["raises"][0] + (MAX_RAISES + 1) * np.arange(NUM_ROUNDS)
 
 
 class StrengthEncoding(Encoding):
@@ -205,24 +213,12 @@ class StrengthEncoding(Encoding):
         return f"{self.name}-v{self.version}"
 
     def encode(self, states: RawStates) -> np.ndarray:
-        # Each block is cast as it is written into its columns of one array: no per-block
-        # float32 copies and no concatenation (a DQN encodes ~120 rows a call, so these
-        # per-call copies were a tenth of the encoding's time). The same values as
-        # ``astype(np.float32)`` of each block, bit for bit.
-        found = np.empty((len(states), self.width), dtype=np.float32)
-        for (start, stop), block in zip(_COLUMNS.values(), self._blocks(states), strict=True):
-            found[:, start:stop] = block
-        return found
-
-    def features(self, states: RawStates) -> dict[str, np.ndarray]:
-        """Each block of :data:`STRENGTH_FEATURES` as an (N, width) float32 array (views of
-        :meth:`encode`'s row)."""
-        found = self.encode(states)
-        return {name: found[:, start:stop] for name, (start, stop) in _COLUMNS.items()}
-
-    def _blocks(self, states: RawStates) -> tuple[np.ndarray, ...]:
-        """The blocks of :data:`STRENGTH_FEATURES`, in its order, as computed (any dtype)."""
+        # Written into one zeroed array: every one-hot block by one scatter of ones (a DQN
+        # encodes ~120 rows a call, where each block's own array and copy cost more than its
+        # values), the flags and numbers as columns. The same values as each block cast to
+        # float32, bit for bit.
         cards = np.asarray(states.cards, dtype=np.int64)
+        n = len(cards)
         street = states.street
         hole, board = cards[:, :2], cards[:, 2:]
         shown = board >= 0
@@ -236,28 +232,43 @@ class StrengthEncoding(Encoding):
         flush_draw, straight_draw = _draws(cards, rank, street, masks)
         facing = np.asarray(states.legal_mask, dtype=bool)[:, CALL]
         pot, to_call = pot_and_call(street, np.asarray(states.raise_nums), facing)
-        found = {  # by name, so that the order is checked against STRENGTH_FEATURES
-            "hole": _one_hot_cards(hole),
-            "board": _one_hot_cards(board),
-            "raises": _raise_one_hot(states.raise_nums),
-            "street": _one_hot(street, NUM_ROUNDS),
-            "high_rank": _one_hot(high, NUM_RANKS),
-            "low_rank": _one_hot(low, NUM_RANKS),
-            "pocket_pair": pocket[:, None],
-            "suited": (hole[:, 0] // NUM_RANKS == hole[:, 1] // NUM_RANKS)[:, None],
-            "category": _one_hot(_category(cards, masks) - 1, 9),
-            "hole_pairs_board": on_board.sum(axis=1)[:, None] / 2,
-            "top_pair": (on_board & (hole_rank == top_board[:, None])).any(axis=1)[:, None],
-            "overpair": (pocket & (street > 0) & (high > top_board))[:, None],
-            "flush_draw": flush_draw[:, None],
-            "straight_draw": straight_draw[:, None],
-            "equity": self.equity(cards)[:, None],
-            "facing_bet": facing[:, None],
-            "pot": (pot / MAX_POT)[:, None],
-            "pot_odds": np.where(facing, to_call / np.maximum(pot + to_call, 1), 0.0)[:, None],
-        }
-        assert tuple(found) == tuple(STRENGTH_FEATURES)
-        return tuple(found.values())
+        raises = np.minimum(np.asarray(states.raise_nums, dtype=np.int64), MAX_RAISES)
+        ones = np.concatenate(  # (N, 15) the column of each one-hot block's 1 (-1: none)
+            [
+                np.where(cards >= 0, cards + _CARD_COLUMN, -1),  # hole, then board
+                raises + _RAISE_COLUMN,
+                np.stack([street + _ONE_HOT_AT["street"], high + _ONE_HOT_AT["high_rank"],
+                          low + _ONE_HOT_AT["low_rank"],
+                          _category(cards, masks) - 1 + _ONE_HOT_AT["category"]], axis=1),
+            ],
+            axis=1,
+        )  # fmt: skip
+        found = np.zeros((n, self.width), dtype=np.float32)
+        rows, columns = np.nonzero(ones >= 0)
+        found[rows, ones[rows, columns]] = 1.0
+        found[:, _COLUMNS["pocket_pair"][0]] = pocket
+        found[:, _COLUMNS["suited"][0]] = hole[:, 0] // NUM_RANKS == hole[:, 1] // NUM_RANKS
+        found[:, _COLUMNS["hole_pairs_board"][0] : _COLUMNS["pot_odds"][1]] = np.stack(
+            [
+                on_board.sum(axis=1) / 2,
+                (on_board & (hole_rank == top_board[:, None])).any(axis=1),
+                pocket & (street > 0) & (high > top_board),
+                flush_draw,
+                straight_draw,
+                self.equity(cards),
+                facing,
+                pot / MAX_POT,
+                np.where(facing, to_call / np.maximum(pot + to_call, 1), 0.0),
+            ],
+            axis=1,
+        )
+        return found
+
+    def features(self, states: RawStates) -> dict[str, np.ndarray]:
+        """Each block of :data:`STRENGTH_FEATURES` as an (N, width) float32 array (views of
+        :meth:`encode`'s row)."""
+        found = self.encode(states)
+        return {name: found[:, start:stop] for name, (start, stop) in _COLUMNS.items()}
 
     def equity(self, cards: np.ndarray) -> np.ndarray:
         """(N,) equity against a uniformly random hand, the board rolled out. Version 2:
@@ -375,25 +386,25 @@ def visible_category(cards: np.ndarray) -> np.ndarray:
 
 
 def _category(cards: np.ndarray, masks: np.ndarray) -> np.ndarray:
-    n = len(cards)
-    shown = cards >= 0
-    rank = np.where(shown, (cards % NUM_RANKS + NUM_RANKS - 1) % NUM_RANKS, 0)
-    where = (np.arange(n)[:, None] * NUM_RANKS + rank)[shown]
-    counts = np.bincount(where, minlength=n * NUM_RANKS).reshape(n, NUM_RANKS)
-    largest = counts.max(axis=1)
-    pairs_or_more = (counts >= 2).sum(axis=1)
+    """The category from the suits' rank masks alone: the ranks held in two, three and four
+    suits are ANDs of the masks (a pair, trips, quads), without counting card by card."""
+    m0, m1, m2, m3 = masks.T
+    two = (m0 & m1) | (m0 & m2) | (m0 & m3) | (m1 & m2) | (m1 & m3) | (m2 & m3)
+    three = (m0 & m1 & (m2 | m3)) | (m2 & m3 & (m0 | m1))
+    four = m0 & m1 & m2 & m3
+    pairs_or_more = _POPCOUNT[two]  # ranks held at least twice
     flush_suits = _POPCOUNT[masks] >= 5
-    straight = _STRAIGHT[np.bitwise_or.reduce(masks, axis=1)]
+    straight = _STRAIGHT[m0 | m1 | m2 | m3]
     straight_flush = (flush_suits & _STRAIGHT[masks]).any(axis=1)
-    category = np.ones(n, dtype=np.int64)
+    category = np.ones(len(cards), dtype=np.int64)
     for applies, value in (
-        (largest == 2, 2),
+        (two != 0, 2),  # a pair (or more: overwritten below)
         (pairs_or_more >= 2, 3),
-        (largest == 3, 4),
+        (three != 0, 4),
         (straight, 5),
         (flush_suits.any(axis=1), 6),
-        ((largest == 3) & (pairs_or_more >= 2), 7),
-        (largest == 4, 8),
+        ((three != 0) & (pairs_or_more >= 2), 7),
+        (four != 0, 8),
         (straight_flush, 9),
     ):
         category[applies] = value

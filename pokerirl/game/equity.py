@@ -36,9 +36,12 @@ import itertools
 from collections.abc import Callable
 from functools import cache, lru_cache
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 
+from pokerirl.cache import cache_folder
+from pokerirl.errors import InputError
 from pokerirl.game.cases import (
     FLOP_DENOMINATOR,
     RIVER_DENOMINATOR,
@@ -70,6 +73,7 @@ from pokerirl.holdem import NUM_CARDS, NUM_PAIRS, PAIRS
 
 NUM_RANKS = 13
 FLOP_CLASSES = 1_755  # flops up to a permutation of the suits
+TURN_CLASSES = 16_432  # turn boards up to a permutation of the suits
 FLOP_TABLE_FILE = Path(__file__).parent / "data" / "flop_equity.npz"
 FLOP_TABLE_SHA256 = "7b69bc3c318aff63cb2a07a0ee442f5b5d5d021c3cd99921406ff725288eae8c"
 CHUNK_BOARDS = 512  # boards ranked at once: (512, 1326) int32 arrays stay small
@@ -390,9 +394,14 @@ def turn_counts(holes: np.ndarray, boards: np.ndarray) -> np.ndarray:
 
 
 def turn_equity(holes: np.ndarray, boards: np.ndarray) -> np.ndarray:
-    """(N,) exact equity of hole cards (N, 2) on four-card boards (N, 4)."""
-    every = lambda board: _cached_turn_counts(tuple(board.tolist()))  # noqa: E731
-    shared = _by_board(_TURN_ROWS, every, holes, boards, ALL_PAIRS_TURN_ROWS)
+    """(N,) exact equity of hole cards (N, 2) on four-card boards (N, 4): read from the turn
+    table where it is built (:func:`turn_table`), else counted; the same integers."""
+    table = turn_table()
+    if table is not None:
+        shared = _class_counts(table, board_classes(4), holes, boards)
+    else:
+        every = lambda board: _cached_turn_counts(tuple(board.tolist()))  # noqa: E731
+        shared = _by_board(_TURN_ROWS, every, holes, boards, ALL_PAIRS_TURN_ROWS)
     return shared / TURN_DENOMINATOR
 
 
@@ -493,32 +502,54 @@ def forget_recent_states() -> None:
     _cached_turn_counts.cache_clear()
 
 
+def _set_code(boards: np.ndarray) -> np.ndarray:
+    """A number for each set of cards (any order; the last axis): sorted, base 52, the
+    smallest card the most significant digit (so that itertools' combinations ascend)."""
+    ordered = np.sort(np.asarray(boards, dtype=np.int64), axis=-1)
+    size = ordered.shape[-1]
+    return ordered @ (NUM_CARDS ** np.arange(size - 1, -1, -1, dtype=np.int64))
+
+
 def _flop_code(flops: np.ndarray) -> np.ndarray:
     """A number for each set of three cards (any order): sorted, base 52."""
-    ordered = np.sort(np.asarray(flops, dtype=np.int64), axis=-1)
-    return (ordered[..., 0] * NUM_CARDS + ordered[..., 1]) * NUM_CARDS + ordered[..., 2]
+    return _set_code(flops)
+
+
+class BoardClasses(NamedTuple):
+    """The k-card boards up to a permutation of the suits (which changes no equity).
+
+    A class's representative is the permuted board with the smallest code; a board's
+    permutation is the first of the 24 (itertools order) that takes it there."""
+
+    codes: np.ndarray  # (C(52, k),) every board's code, ascending
+    class_of: np.ndarray  # (C(52, k),) its class
+    perm: np.ndarray  # (C(52, k),) the suit permutation taking it to its representative
+    representatives: np.ndarray  # (classes, k)
+
+    def find(self, boards: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(class, suit permutation) of each board (N, k): the hole pair is mapped through
+        ``_PERMUTED_PAIR[perm]`` to read the class's row."""
+        at = np.searchsorted(self.codes, _set_code(boards))
+        return self.class_of[at].astype(np.int64), self.perm[at].astype(np.int64)
 
 
 @cache
-def _flop_classes() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(class of each flop code, suit permutation taking it to its class, the classes'
-    representative flops (1755, 3)). A class's representative is the permuted flop with the
-    smallest code; its permutation is the first of the 24 (itertools order) that gives it."""
-    flops = np.array(list(itertools.combinations(range(NUM_CARDS), 3)), dtype=np.int64)
-    codes = _flop_code(_PERMUTED_CARD[:, flops])  # (24, 22100)
-    perm = codes.argmin(axis=0)
-    smallest = codes[perm, np.arange(len(flops))]
+def board_classes(size: int) -> BoardClasses:
+    """:class:`BoardClasses` of the ``size``-card boards: 1,755 flops, 16,432 turns."""
+    boards = np.array(list(itertools.combinations(range(NUM_CARDS), size)), dtype=np.int64)
+    codes = _set_code(boards)
+    smallest, perm = codes.copy(), np.zeros(len(boards), dtype=np.int8)
+    for k in range(1, len(_SUIT_PERMS)):  # one permutation at a time: bounded memory
+        permuted = _set_code(_PERMUTED_CARD[k, boards])
+        better = permuted < smallest  # strictly: the first permutation wins a tie
+        smallest[better], perm[better] = permuted[better], k
     classes, class_of = np.unique(smallest, return_inverse=True)
-    if classes.size != FLOP_CLASSES:
-        raise AssertionError(f"{classes.size} flop classes, expected {FLOP_CLASSES}")
-    by_code = np.full(NUM_CARDS**3, -1, dtype=np.int16)
-    perm_by_code = np.zeros(NUM_CARDS**3, dtype=np.int8)
-    own = _flop_code(flops)
-    by_code[own], perm_by_code[own] = class_of, perm
-    representatives = np.stack(
-        [classes // NUM_CARDS**2, classes // NUM_CARDS % NUM_CARDS, classes % NUM_CARDS], axis=1
-    )
-    return by_code, perm_by_code, representatives
+    expected = {3: FLOP_CLASSES, 4: TURN_CLASSES}.get(size)
+    if expected is not None and classes.size != expected:
+        raise AssertionError(f"{classes.size} {size}-card classes, expected {expected}")
+    digits = NUM_CARDS ** np.arange(size - 1, -1, -1, dtype=np.int64)
+    representatives = classes[:, None] // digits % NUM_CARDS
+    return BoardClasses(codes, class_of.astype(np.int16), perm, representatives)
 
 
 def flop_class_counts(flop: np.ndarray) -> np.ndarray:
@@ -534,7 +565,7 @@ def flop_class_counts(flop: np.ndarray) -> np.ndarray:
 def build_flop_table(*, on_class: Callable[[int], None] | None = None) -> np.ndarray:
     """(1755, 1326) uint32: :func:`flop_class_counts` of each flop class's representative
     (``on_class(k)`` after class k: a progress hook)."""
-    _by_code, _perm, representatives = _flop_classes()
+    representatives = board_classes(3).representatives
     table = np.zeros((FLOP_CLASSES, NUM_PAIRS), dtype=np.uint32)
     for k, flop in enumerate(representatives):
         table[k] = flop_class_counts(flop)
@@ -558,14 +589,80 @@ def flop_table() -> np.ndarray:
     return table
 
 
+# The turn table: every turn class's :func:`all_pairs_turn_counts` (16,432 x 1,326 uint32,
+# 87 MB), built once into the data cache (about 90 s of one quiet core), not shipped.
+TURN_TABLE_NAME = "turn_equity_v1.npy"
+TURN_TABLE_SHA256 = "ee212a81133e23db8fe4f15ba7c099b6de6ed2cd6a16344efaadbbefa57d2b84"
+_turn_table: dict[str, np.ndarray | None] = {}  # the loaded table; "off": disabled
+
+
+def turn_table_path() -> Path:
+    """Where the turn table is built and read: the data cache (``$POKERIRL_DATA``)."""
+    return cache_folder() / TURN_TABLE_NAME
+
+
+def turn_table() -> np.ndarray | None:
+    """The turn table, memory-mapped and checked against :data:`TURN_TABLE_SHA256` once a
+    process; ``None`` where it is not built (or :func:`use_turn_table` turned it off).
+    :class:`InputError` for a file there that is not it."""
+    if "off" in _turn_table:
+        return None
+    if _turn_table.get("table") is None:
+        path = turn_table_path()
+        if not path.is_file():
+            return None
+        table = np.load(path, mmap_mode="r", allow_pickle=False)
+        if table.shape != (TURN_CLASSES, NUM_PAIRS) or table_digest(table) != TURN_TABLE_SHA256:
+            raise InputError(f"{path} is not the turn table this version builds: delete it")
+        _turn_table["table"] = table
+    return _turn_table["table"]
+
+
+def use_turn_table(enabled: bool) -> None:
+    """Read the turn table where it is built (the default), or count every turn state (a
+    benchmark's baseline, a test of both paths): the same integers either way."""
+    _turn_table.pop("off", None)
+    if not enabled:
+        _turn_table["off"] = None
+
+
+def build_turn_table(
+    path: Path, *, on_class: Callable[[int], None] | None = None
+) -> np.ndarray:
+    """Count every turn class's pairs (:func:`all_pairs_turn_counts` of its representative)
+    and write the table to ``path`` (a temporary file beside it, then renamed: an interrupted
+    build leaves nothing); ``on_class(k)`` after class k. Returns the table."""
+    representatives = board_classes(4).representatives
+    table = np.zeros((TURN_CLASSES, NUM_PAIRS), dtype="<u4")
+    for k, board in enumerate(representatives):
+        table[k] = all_pairs_turn_counts(board)
+        if on_class is not None:
+            on_class(k)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    partial = path.with_name(f".{path.name}.partial")
+    try:
+        with partial.open("wb") as out:
+            np.save(out, table, allow_pickle=False)
+        partial.replace(path)
+    finally:
+        partial.unlink(missing_ok=True)
+    _turn_table.pop("table", None)
+    return table
+
+
 def flop_counts(holes: np.ndarray, flops: np.ndarray) -> np.ndarray:
     """(N,) int64 ``2 x wins + ties`` over all runouts, from the table."""
+    return _class_counts(flop_table(), board_classes(3), holes, flops)
+
+
+def _class_counts(
+    table: np.ndarray, classes: BoardClasses, holes: np.ndarray, boards: np.ndarray
+) -> np.ndarray:
+    """(N,) int64: each state's count read from a table of (board class, hole pair)."""
     holes = np.asarray(holes, dtype=np.int64)
-    by_code, perm_by_code, _ = _flop_classes()
-    code = _flop_code(flops)
-    perm = perm_by_code[code].astype(np.int64)
+    k, perm = classes.find(boards)
     pair = _PERMUTED_PAIR[perm, pair_index(holes[:, 0], holes[:, 1])]
-    return flop_table()[by_code[code], pair].astype(np.int64)
+    return np.asarray(table[k, pair], dtype=np.int64)
 
 
 def flop_equity(holes: np.ndarray, flops: np.ndarray) -> np.ndarray:
@@ -575,15 +672,15 @@ def flop_equity(holes: np.ndarray, flops: np.ndarray) -> np.ndarray:
 
 def preflop_counts() -> np.ndarray:
     """(1326,) int64: each pair's count summed over every flop and runout (exact)."""
-    by_code, perm_by_code, _ = _flop_classes()
-    flops = np.array(list(itertools.combinations(range(NUM_CARDS), 3)), dtype=np.int64)
-    code = _flop_code(flops)
+    classes = board_classes(3)  # every flop, in code order
     table = flop_table()
     total = np.zeros(NUM_PAIRS, dtype=np.int64)
-    for first in range(0, len(flops), 1_000):
+    for first in range(0, len(classes.codes), 1_000):
         rows = slice(first, first + 1_000)
-        pairs = _PERMUTED_PAIR[perm_by_code[code[rows]].astype(np.int64)]  # (k, 1326)
-        total += table[by_code[code[rows]][:, None], pairs].sum(axis=0, dtype=np.int64)
+        pairs = _PERMUTED_PAIR[classes.perm[rows].astype(np.int64)]  # (k, 1326)
+        total += table[classes.class_of[rows].astype(np.int64)[:, None], pairs].sum(
+            axis=0, dtype=np.int64
+        )
     return total
 
 
