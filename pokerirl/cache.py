@@ -7,6 +7,7 @@ import os
 from pathlib import Path
 
 DATA_VARIABLE = "POKERIRL_DATA"  # moves the cache folder
+TURN_TABLE_NAME = "turn_equity_v1.npy"  # pokerirl data turn-table writes it there
 
 
 def cache_folder() -> Path:

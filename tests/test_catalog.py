@@ -117,6 +117,7 @@ def test_data_list_names_the_shipped_sample_and_the_archive(fresh: Path) -> None
     archive = next(line for line in lines if line.startswith("irc "))
     assert "17 channels" in archive and archive.endswith("not fetched")
     assert str(fresh.parent.parent / "cache") in lines[-1]
+    assert lines[-1].endswith("the turn-equity table: not built (pokerirl data turn-table)")
 
 
 # --------------------------------------------------------------------------- data fetch

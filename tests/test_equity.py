@@ -258,6 +258,11 @@ def test_a_built_turn_table_is_read_checked_and_refused_when_not_it(
     monkeypatch.setattr(equity, "TURN_CLASSES", 3)
     table = equity.build_turn_table(equity.turn_table_path())
     assert [p.name for p in (tmp_path / "cache").iterdir()] == ["turn_equity_v1.npy"]
+    counted: list[int] = []  # a place it cannot write: refused before any counting
+    with pytest.raises(OSError):
+        equity.build_turn_table(tmp_path / "cache" / "turn_equity_v1.npy" / "x.npy",
+                                on_class=counted.append)  # fmt: skip
+    assert counted == []
     assert np.array_equal(table, [all_pairs_turn_counts(b) for b in few.representatives])
     with pytest.raises(InputError, match="is not the turn table this version builds"):
         equity.turn_table()  # another digest than the recorded one

@@ -42,7 +42,7 @@ def _megabytes(size: int | None) -> str:
 def list_data() -> None:
     """The shipped sample, the downloadable archive and the fetched months: name, size, hands,
     channels, months, and where each is (the cache folder: $POKERIRL_DATA)."""
-    from pokerirl.cache import cache_folder
+    from pokerirl.cache import TURN_TABLE_NAME, cache_folder
     from pokerirl.datasets.catalog import listing
 
     cache = cache_folder()
@@ -63,8 +63,10 @@ def list_data() -> None:
     for row in rows:
         echo("  ".join(cell.ljust(width) for cell, width in zip(row, widths, strict=False))
              + "  " + row[-1])  # fmt: skip
+    built = (cache / TURN_TABLE_NAME).is_file()
+    table = "built" if built else "not built (pokerirl data turn-table)"
     echo(f"cache: {cache} (move it with $POKERIRL_DATA); irc-<channel>-<YYYYMM> fetches one "
-         "month out of IRCdata.tgz")  # fmt: skip
+         f"month out of IRCdata.tgz; the turn-equity table: {table}")  # fmt: skip
 
 
 @data_app.command()
@@ -162,7 +164,10 @@ def turn_table_command(
         try:
             table = build_turn_table(path, on_class=lambda _: bar.update())
         except OSError as error:
-            raise InputError(f"cannot write {path}: {error.strerror or error}") from None
+            where = error.filename if error.filename and Path(error.filename) != path else None
+            why = "not a folder" if isinstance(error, FileExistsError) else error.strerror
+            about = f" ({where}: {why})" if where else f": {why or error}"
+            raise InputError(f"cannot write {path}{about}") from None
     digest = table_digest(table)
     if digest != TURN_TABLE_SHA256:  # a bug, not the user's: the bytes are fixed
         path.unlink(missing_ok=True)

@@ -40,7 +40,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from pokerirl.cache import cache_folder
+from pokerirl.atomic import atomic_path
+from pokerirl.cache import TURN_TABLE_NAME, cache_folder
 from pokerirl.errors import InputError
 from pokerirl.game.cases import (
     FLOP_DENOMINATOR,
@@ -591,7 +592,6 @@ def flop_table() -> np.ndarray:
 
 # The turn table: every turn class's :func:`all_pairs_turn_counts` (16,432 x 1,326 uint32,
 # 87 MB), built once into the data cache (about 90 s of one quiet core), not shipped.
-TURN_TABLE_NAME = "turn_equity_v1.npy"
 TURN_TABLE_SHA256 = "ee212a81133e23db8fe4f15ba7c099b6de6ed2cd6a16344efaadbbefa57d2b84"
 _turn_table: dict[str, np.ndarray | None] = {}  # the loaded table; "off": disabled
 
@@ -630,22 +630,19 @@ def build_turn_table(
     path: Path, *, on_class: Callable[[int], None] | None = None
 ) -> np.ndarray:
     """Count every turn class's pairs (:func:`all_pairs_turn_counts` of its representative)
-    and write the table to ``path`` (a temporary file beside it, then renamed: an interrupted
-    build leaves nothing); ``on_class(k)`` after class k. Returns the table."""
+    and write the table to ``path`` (:func:`~pokerirl.atomic.atomic_path`: the temporary file
+    is made before the counting, so that a place it cannot write fails at once, and an
+    interrupted build leaves nothing); ``on_class(k)`` after class k. Returns the table."""
     representatives = board_classes(4).representatives
-    table = np.zeros((TURN_CLASSES, NUM_PAIRS), dtype="<u4")
-    for k, board in enumerate(representatives):
-        table[k] = all_pairs_turn_counts(board)
-        if on_class is not None:
-            on_class(k)
     path.parent.mkdir(parents=True, exist_ok=True)
-    partial = path.with_name(f".{path.name}.partial")
-    try:
-        with partial.open("wb") as out:
+    with atomic_path(path) as temporary:
+        table = np.zeros((TURN_CLASSES, NUM_PAIRS), dtype="<u4")
+        for k, board in enumerate(representatives):
+            table[k] = all_pairs_turn_counts(board)
+            if on_class is not None:
+                on_class(k)
+        with temporary.open("wb") as out:
             np.save(out, table, allow_pickle=False)
-        partial.replace(path)
-    finally:
-        partial.unlink(missing_ok=True)
     _turn_table.pop("table", None)
     return table
 
