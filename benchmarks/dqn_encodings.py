@@ -13,7 +13,7 @@ cases, and reading the table (the same values, bit for bit).
 
 It also prints each encoding's learner decisions per hand and the CPU ratio per decision:
 the two learners play differently (the strength one makes ~7% more decisions a hand, so
-~7% more gradient updates), a part of the hands/s ratio that no encoding speed removes.
+~7% more gradient updates): the hands/s ratio is the per-decision one divided by that.
 """
 
 from __future__ import annotations
