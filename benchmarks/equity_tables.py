@@ -35,7 +35,7 @@ def main() -> int:
     args = parser.parse_args()
     if args.check:
         shipped = equity.flop_table()
-        _, _, representatives = equity._flop_classes()
+        representatives = equity.board_classes(3).representatives
         picked = np.random.default_rng(0).choice(equity.FLOP_CLASSES, args.classes, False)
         started = time.perf_counter()
         for k in picked:

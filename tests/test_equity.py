@@ -30,7 +30,6 @@ from pokerirl.game.equity import (
     TURN_CLASSES,
     TURN_DENOMINATOR,
     _class_counts,
-    _flop_code,
     _set_code,
     all_pairs_turn_counts,
     board_classes,
@@ -88,8 +87,7 @@ def test_the_board_classes_cover_every_board_by_a_suit_permutation(
     boards = np.random.default_rng(3).random((500, 52)).argsort(axis=1)[:, :size]
     k, perm = found.find(boards[:, ::-1])  # any order of the board
     mapped = _PERMUTED_CARD[perm[:, None], boards]
-    assert np.array_equal(_flop_code(mapped) if size == 3 else _set_code(mapped),
-                          _set_code(found.representatives[k]))  # fmt: skip
+    assert np.array_equal(_set_code(mapped), _set_code(found.representatives[k]))
     # Each representative is its class's smallest board, mapped to itself.
     own_k, own_perm = found.find(found.representatives)
     assert np.array_equal(own_k, np.arange(classes)) and not own_perm.any()
@@ -250,7 +248,7 @@ def test_a_built_turn_table_is_read_checked_and_refused_when_not_it(
     from pokerirl.game import equity
 
     monkeypatch.setenv("POKERIRL_DATA", str(tmp_path / "cache"))
-    monkeypatch.setattr(equity, "_turn_table", {})
+    monkeypatch.setattr(equity, "_TURN_TABLE", equity._TurnTableUse())
     assert equity.turn_table() is None  # not built: turn states are counted
     real = board_classes(4)
     few = real._replace(representatives=real.representatives[:3])

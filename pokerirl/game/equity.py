@@ -6,7 +6,9 @@ divided once at the end, so the same cards give the same bytes on every platform
 
 * **river**: the 990 opponent hands (two of the 45 unseen cards), each ranked by
   :func:`~pokerirl.game.evaluator.board_strengths`;
-* **turn**: the same count summed over the 46 rivers (45,540 cases);
+* **turn**: the same count summed over the 46 rivers (45,540 cases), or read from the turn
+  table where ``pokerirl data turn-table`` built it (:func:`turn_table`: every turn board up
+  to a permutation of the suits by every pair, 87 MB in the data cache; the same integers);
 * **flop**: a shipped table (:data:`FLOP_TABLE_FILE`): for each of the 1,755 flops up to a
   permutation of the suits, and each of the 1,326 hole pairs, the count summed over the
   1,081 turn-river runouts (1,070,190 cases). :func:`build_flop_table` makes it (about two
@@ -34,6 +36,7 @@ from __future__ import annotations
 import hashlib
 import itertools
 from collections.abc import Callable
+from dataclasses import dataclass
 from functools import cache, lru_cache
 from pathlib import Path
 from typing import NamedTuple
@@ -511,11 +514,6 @@ def _set_code(boards: np.ndarray) -> np.ndarray:
     return ordered @ (NUM_CARDS ** np.arange(size - 1, -1, -1, dtype=np.int64))
 
 
-def _flop_code(flops: np.ndarray) -> np.ndarray:
-    """A number for each set of three cards (any order): sorted, base 52."""
-    return _set_code(flops)
-
-
 class BoardClasses(NamedTuple):
     """The k-card boards up to a permutation of the suits (which changes no equity).
 
@@ -593,7 +591,17 @@ def flop_table() -> np.ndarray:
 # The turn table: every turn class's :func:`all_pairs_turn_counts` (16,432 x 1,326 uint32,
 # 87 MB), built once into the data cache (about 90 s of one quiet core), not shipped.
 TURN_TABLE_SHA256 = "ee212a81133e23db8fe4f15ba7c099b6de6ed2cd6a16344efaadbbefa57d2b84"
-_turn_table: dict[str, np.ndarray | None] = {}  # the loaded table; "off": disabled
+
+
+@dataclass
+class _TurnTableUse:
+    """Whether turn states read the table (:func:`use_turn_table`), and the table once loaded."""
+
+    enabled: bool = True
+    table: np.ndarray | None = None
+
+
+_TURN_TABLE = _TurnTableUse()
 
 
 def turn_table_path() -> Path:
@@ -605,25 +613,23 @@ def turn_table() -> np.ndarray | None:
     """The turn table, memory-mapped and checked against :data:`TURN_TABLE_SHA256` once a
     process; ``None`` where it is not built (or :func:`use_turn_table` turned it off).
     :class:`InputError` for a file there that is not it."""
-    if "off" in _turn_table:
+    if not _TURN_TABLE.enabled:
         return None
-    if _turn_table.get("table") is None:
+    if _TURN_TABLE.table is None:
         path = turn_table_path()
         if not path.is_file():
             return None
         table = np.load(path, mmap_mode="r", allow_pickle=False)
         if table.shape != (TURN_CLASSES, NUM_PAIRS) or table_digest(table) != TURN_TABLE_SHA256:
             raise InputError(f"{path} is not the turn table this version builds: delete it")
-        _turn_table["table"] = table
-    return _turn_table["table"]
+        _TURN_TABLE.table = table
+    return _TURN_TABLE.table
 
 
 def use_turn_table(enabled: bool) -> None:
     """Read the turn table where it is built (the default), or count every turn state (a
     benchmark's baseline, a test of both paths): the same integers either way."""
-    _turn_table.pop("off", None)
-    if not enabled:
-        _turn_table["off"] = None
+    _TURN_TABLE.enabled = enabled
 
 
 def build_turn_table(
@@ -643,7 +649,7 @@ def build_turn_table(
                 on_class(k)
         with temporary.open("wb") as out:
             np.save(out, table, allow_pickle=False)
-    _turn_table.pop("table", None)
+    _TURN_TABLE.table = None  # the next read loads (and checks) the new file
     return table
 
 
