@@ -428,25 +428,6 @@ def _draws(
     return flush_draw & to_come, draw & ~_STRAIGHT[present] & to_come
 
 
-def _one_hot(index: np.ndarray, width: int) -> np.ndarray:
-    return np.eye(width, dtype=np.float32)[np.asarray(index, dtype=np.int64)]
-
-
-def _one_hot_cards(cards: np.ndarray) -> np.ndarray:
-    found = np.zeros((len(cards), NUM_CARDS), dtype=np.float32)
-    rows, columns = np.nonzero(cards >= 0)
-    found[rows, cards[rows, columns]] = 1.0
-    return found
-
-
-def _raise_one_hot(raise_nums: np.ndarray) -> np.ndarray:
-    capped = np.minimum(np.asarray(raise_nums, dtype=np.int64), MAX_RAISES)
-    slots = (MAX_RAISES + 1) * np.arange(NUM_ROUNDS) + capped  # (N, 4)
-    found = np.zeros((len(capped), NUM_ROUNDS * (MAX_RAISES + 1)), dtype=np.float32)
-    found[np.arange(len(capped))[:, None], slots] = 1.0
-    return found
-
-
 RLCARD = RLCardEncoding()
 STRENGTH = StrengthEncoding()
 STRENGTH_V1 = StrengthEncoding(version=1)
