@@ -239,9 +239,10 @@ def test_the_turn_table_read_by_class_equals_the_counted_turn() -> None:
 def test_a_built_turn_table_is_read_checked_and_refused_when_not_it(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    """The build writes the file (nothing left beside it), ``turn_equity`` reads it once its
-    digest is the recorded one and gives the counted values; a file that is not the table is
-    one line (exit 1 from the command). Three classes stand for the 16,432 (two minutes)."""
+    """The build writes the file (nothing left beside it) only when its bytes are the
+    recorded ones, ``turn_equity`` reads it and gives the counted values; a file that is not
+    the table is one line (exit 1 from the command). Three classes stand for the 16,432 (two
+    minutes)."""
     from typer.testing import CliRunner
 
     from pokerirl.cli import app
@@ -254,6 +255,11 @@ def test_a_built_turn_table_is_read_checked_and_refused_when_not_it(
     few = real._replace(representatives=real.representatives[:3])
     monkeypatch.setattr(equity, "board_classes", lambda size: few if size == 4 else real)
     monkeypatch.setattr(equity, "TURN_CLASSES", 3)
+    rows = np.array([all_pairs_turn_counts(b) for b in few.representatives], dtype="<u4")
+    with pytest.raises(RuntimeError, match="not the recorded one"):  # the real digest
+        equity.build_turn_table(equity.turn_table_path())
+    assert list((tmp_path / "cache").iterdir()) == []  # a wrong build publishes nothing
+    monkeypatch.setattr(equity, "TURN_TABLE_SHA256", table_digest(rows))
     table = equity.build_turn_table(equity.turn_table_path())
     assert [p.name for p in (tmp_path / "cache").iterdir()] == ["turn_equity_v1.npy"]
     counted: list[int] = []  # a place it cannot write: refused before any counting
@@ -261,12 +267,15 @@ def test_a_built_turn_table_is_read_checked_and_refused_when_not_it(
         equity.build_turn_table(tmp_path / "cache" / "turn_equity_v1.npy" / "x.npy",
                                 on_class=counted.append)  # fmt: skip
     assert counted == []
-    assert np.array_equal(table, [all_pairs_turn_counts(b) for b in few.representatives])
+    assert np.array_equal(table, rows)
+    wrong = rows.copy()
+    wrong[0, 0] += 1  # a file there that is not the table
+    np.save(equity.turn_table_path(), wrong, allow_pickle=False)
     with pytest.raises(InputError, match="is not the turn table this version builds"):
         equity.turn_table()  # another digest than the recorded one
     result = CliRunner().invoke(app, ["data", "turn-table"])
     assert result.exit_code == 1 and "not the turn table" in result.output
-    monkeypatch.setattr(equity, "TURN_TABLE_SHA256", table_digest(table))
+    np.save(equity.turn_table_path(), rows, allow_pickle=False)
     holes, boards = _turn_states_of_classes(np.array([0, 1, 2, 2]), seed=9)
     expected = turn_counts(holes, boards) / TURN_DENOMINATOR
     equity.use_turn_table(False)  # counted, then read from the table: the same values

@@ -638,7 +638,9 @@ def build_turn_table(
     """Count every turn class's pairs (:func:`all_pairs_turn_counts` of its representative)
     and write the table to ``path`` (:func:`~pokerirl.atomic.atomic_path`: the temporary file
     is made before the counting, so that a place it cannot write fails at once, and an
-    interrupted build leaves nothing); ``on_class(k)`` after class k. Returns the table."""
+    interrupted build leaves nothing); ``on_class(k)`` after class k. Returns the table.
+    A table whose SHA-256 is not :data:`TURN_TABLE_SHA256` is a bug: ``RuntimeError``, and
+    nothing is written."""
     representatives = board_classes(4).representatives
     path.parent.mkdir(parents=True, exist_ok=True)
     with atomic_path(path) as temporary:
@@ -647,6 +649,9 @@ def build_turn_table(
             table[k] = all_pairs_turn_counts(board)
             if on_class is not None:
                 on_class(k)
+        digest = table_digest(table)
+        if digest != TURN_TABLE_SHA256:
+            raise RuntimeError(f"the turn table built has SHA-256 {digest}, not the recorded one")
         with temporary.open("wb") as out:
             np.save(out, table, allow_pickle=False)
     _TURN_TABLE.table = None  # the next read loads (and checks) the new file
