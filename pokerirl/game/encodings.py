@@ -45,14 +45,16 @@ import numpy as np
 
 from pokerirl.errors import ConfigError
 from pokerirl.game.equity import exact_equity
-from pokerirl.game.evaluator import hand_strength
+from pokerirl.game.evaluator import hand_strength, pair_index
 from pokerirl.game.preflop import sampled_preflop_equity
 from pokerirl.holdem import (
     CALL,
     MAX_RAISES,
     NUM_CARDS,
+    NUM_PAIRS,
     NUM_ROUNDS,
     OBS_SIZE,
+    PAIRS,
     encode_obs,
 )
 
@@ -133,6 +135,17 @@ class Encoding:
     def encode(self, states: RawStates) -> np.ndarray:
         raise NotImplementedError
 
+    def encode_pairs(self, pairs: np.ndarray, states: RawStates, of: np.ndarray) -> np.ndarray:
+        """(R, ``width``) rows of hypothetical states: row r is state ``of[r]`` of ``states``
+        with hole pair ``pairs[r]`` (a number of :data:`~pokerirl.holdem.PAIRS`) in place of
+        its hole cards; the rows :meth:`encode` gives those states. Local best response
+        encodes every pair of a range this way."""
+        of = np.asarray(of, dtype=np.int64)
+        cards = np.array(np.asarray(states.cards)[of], dtype=np.int8)
+        cards[:, :2] = PAIRS[np.asarray(pairs, dtype=np.int64)]
+        return self.encode(RawStates(cards=cards, raise_nums=np.asarray(states.raise_nums)[of],
+                                     legal_mask=np.asarray(states.legal_mask)[of]))  # fmt: skip
+
     def __repr__(self) -> str:
         return f"Encoding({self.spec!r}, width={self.width})"
 
@@ -177,14 +190,16 @@ _EDGES = [0, *itertools.accumulate(STRENGTH_FEATURES.values())]
 _COLUMNS: Mapping[str, tuple[int, int]] = dict(
     zip(STRENGTH_FEATURES, itertools.pairwise(_EDGES), strict=True)
 )
-# Where each one-hot block's first column is (the nine columns from "hole_pairs_board" to
-# "pot_odds" are written as one (N, 9) block); a card's column is its own plus its block's,
-# a round's raise count's its own plus the round's.
+# Where each one-hot block's first column is: a round's raise count's column is its own plus
+# the round's; a card's its own plus its block's.
 _ONE_HOT_AT: Mapping[str, int] = {
-    name: _COLUMNS[name][0] for name in ("street", "high_rank", "low_rank", "category")
+    name: _COLUMNS[name][0] for name in ("board", "street", "high_rank", "low_rank", "category")
 }
-_CARD_COLUMN = np.array([_COLUMNS["hole"][0]] * 2 + [_COLUMNS["board"][0]] * 5)
 _RAISE_COLUMN = _COLUMNS["raises"][0] + (MAX_RAISES + 1) * np.arange(NUM_ROUNDS)
+# A state's own columns apart from its hole cards: the board, raises and street blocks (side
+# by side), and the last three (facing a bet, pot, pot odds).
+_STATE_COLUMNS = slice(_COLUMNS["board"][0], _COLUMNS["street"][1])
+_BETTING_AT = _COLUMNS["facing_bet"][0]
 
 
 class StrengthEncoding(Encoding):
@@ -213,52 +228,38 @@ class StrengthEncoding(Encoding):
         return f"{self.name}-v{self.version}"
 
     def encode(self, states: RawStates) -> np.ndarray:
-        # Written into one zeroed array: every one-hot block by one scatter of ones (a DQN
-        # encodes ~120 rows a call, where each block's own array and copy cost more than its
-        # values), the flags and numbers as columns. The same values as each block cast to
-        # float32, bit for bit.
         cards = np.asarray(states.cards, dtype=np.int64)
-        n = len(cards)
-        street = states.street
-        hole, board = cards[:, :2], cards[:, 2:]
-        shown = board >= 0
-        rank = (cards % NUM_RANKS + NUM_RANKS - 1) % NUM_RANKS  # 2 .. A as 0 .. 12
-        hole_rank, board_rank = rank[:, :2], np.where(shown, rank[:, 2:], -1)
-        high, low = hole_rank.max(axis=1), hole_rank.min(axis=1)
-        top_board = board_rank.max(axis=1)
-        pocket = hole_rank[:, 0] == hole_rank[:, 1]
-        on_board = (hole_rank[:, :, None] == board_rank[:, None, :]).any(axis=2)  # (N, 2)
-        masks = _suit_masks(cards)  # once for the category and the draws
-        flush_draw, straight_draw = _draws(cards, rank, street, masks)
-        facing = np.asarray(states.legal_mask, dtype=bool)[:, CALL]
-        pot, to_call = pot_and_call(street, np.asarray(states.raise_nums), facing)
-        raises = np.minimum(np.asarray(states.raise_nums, dtype=np.int64), MAX_RAISES)
-        ones = np.concatenate(  # (N, 15) the column of each one-hot block's 1 (-1: none)
-            [
-                np.where(cards >= 0, cards + _CARD_COLUMN, -1),  # hole, then board
-                raises + _RAISE_COLUMN,
-                np.stack([street + _ONE_HOT_AT["street"], high + _ONE_HOT_AT["high_rank"],
-                          low + _ONE_HOT_AT["low_rank"],
-                          _category(cards, masks) - 1 + _ONE_HOT_AT["category"]], axis=1),
-            ],
-            axis=1,
-        )  # fmt: skip
-        found = np.zeros((n, self.width), dtype=np.float32)
-        rows, columns = np.nonzero(ones >= 0)
-        found[rows, ones[rows, columns]] = 1.0
-        found[:, _COLUMNS["pocket_pair"][0]] = pocket
-        found[:, _COLUMNS["suited"][0]] = hole[:, 0] // NUM_RANKS == hole[:, 1] // NUM_RANKS
-        found[:, _COLUMNS["hole_pairs_board"][0] : _COLUMNS["pot_odds"][1]] = np.stack(
+        if len(cards) and cards[:, :2].min() < 0:
+            raise ValueError("the strength encoding needs both hole cards of every state")
+        pairs = pair_index(cards[:, 0], cards[:, 1])
+        return self.encode_pairs(pairs, states, np.arange(len(cards)))
+
+    def encode_pairs(self, pairs: np.ndarray, states: RawStates, of: np.ndarray) -> np.ndarray:
+        # A row is the pair's own columns (a table of the 1,326 pairs), the state's (its
+        # board and betting, computed once a state: local best response encodes ~1,000 pairs
+        # of each), and the columns of both, from the two's suit and rank masks. The same
+        # values as each block cast to float32, bit for bit.
+        pairs, of = np.asarray(pairs, dtype=np.int64), np.asarray(of, dtype=np.int64)
+        own, board = _PAIR_FEATURES, _BoardFeatures.of(states)
+        found = np.take(own.rows, pairs, axis=0)
+        found[:, _STATE_COLUMNS] = np.take(board.rows, of, axis=0)
+        found[:, _COLUMNS["facing_bet"][0] :] = np.take(board.betting, of, axis=0)
+        masks = own.suit_masks[pairs] | board.suit_masks[of]
+        street = board.street[of]
+        hole_rank, top = own.rank[pairs], board.top_rank[of]
+        on_board = ((board.rank_bits[of, None] >> hole_rank) & 1).astype(bool)  # (R, 2)
+        category = _category(masks) - 1 + _ONE_HOT_AT["category"]
+        found[np.arange(len(pairs)), category] = 1.0
+        flush_draw, straight_draw = _draws(masks, own.suits[pairs], own.rank_bits[pairs], street)
+        cards = np.concatenate([PAIRS[pairs], board.cards[of]], axis=1)
+        found[:, _COLUMNS["hole_pairs_board"][0] : _COLUMNS["equity"][1]] = np.stack(
             [
                 on_board.sum(axis=1) / 2,
-                (on_board & (hole_rank == top_board[:, None])).any(axis=1),
-                pocket & (street > 0) & (high > top_board),
+                (on_board & (hole_rank == top[:, None])).any(axis=1),
+                own.pocket[pairs] & (street > 0) & (own.high[pairs] > top),
                 flush_draw,
                 straight_draw,
                 self.equity(cards),
-                facing,
-                pot / MAX_POT,
-                np.where(facing, to_call / np.maximum(pot + to_call, 1), 0.0),
             ],
             axis=1,
         )
@@ -363,7 +364,8 @@ _STRAIGHT = ((np.arange(1 << NUM_RANKS)[:, None] & _WINDOWS) == _WINDOWS).any(ax
 _FOUR_OF_WINDOW = np.bitwise_or.reduce(
     np.where(_POPCOUNT[np.arange(1 << NUM_RANKS)[:, None] & _WINDOWS] == 4, _WINDOWS, 0), axis=1
 )
-_CARD_RANK_BIT = np.int64(1) << (np.arange(NUM_CARDS) % NUM_RANKS + NUM_RANKS - 1) % NUM_RANKS
+_RANK = (np.arange(NUM_CARDS) % NUM_RANKS + NUM_RANKS - 1) % NUM_RANKS  # 2 .. A as 0 .. 12
+_CARD_RANK_BIT = np.int64(1) << _RANK
 
 
 def _suit_masks(cards: np.ndarray) -> np.ndarray:
@@ -382,12 +384,13 @@ def visible_category(cards: np.ndarray) -> np.ndarray:
     :func:`pokerirl.game.evaluator.category`) of the visible cards, 2 to 7 of them
     (``-1`` pads)."""
     cards = np.asarray(cards, dtype=np.int64)
-    return _category(cards, _suit_masks(cards))
+    return _category(_suit_masks(cards))
 
 
-def _category(cards: np.ndarray, masks: np.ndarray) -> np.ndarray:
-    """The category from the suits' rank masks alone: the ranks held in two, three and four
-    suits are ANDs of the masks (a pair, trips, quads), without counting card by card."""
+def _category(masks: np.ndarray) -> np.ndarray:
+    """The category from the suits' rank masks (N, 4) alone: the ranks held in two, three
+    and four suits are ANDs of the masks (a pair, trips, quads), without counting card by
+    card."""
     m0, m1, m2, m3 = masks.T
     two = (m0 & m1) | (m0 & m2) | (m0 & m3) | (m1 & m2) | (m1 & m3) | (m2 & m3)
     three = (m0 & m1 & (m2 | m3)) | (m2 & m3 & (m0 | m1))
@@ -396,7 +399,7 @@ def _category(cards: np.ndarray, masks: np.ndarray) -> np.ndarray:
     flush_suits = _POPCOUNT[masks] >= 5
     straight = _STRAIGHT[m0 | m1 | m2 | m3]
     straight_flush = (flush_suits & _STRAIGHT[masks]).any(axis=1)
-    category = np.ones(len(cards), dtype=np.int64)
+    category = np.ones(len(masks), dtype=np.int64)
     for applies, value in (
         (two != 0, 2),  # a pair (or more: overwritten below)
         (pairs_or_more >= 2, 3),
@@ -412,22 +415,87 @@ def _category(cards: np.ndarray, masks: np.ndarray) -> np.ndarray:
 
 
 def _draws(
-    cards: np.ndarray, rank: np.ndarray, street: np.ndarray, masks: np.ndarray
+    masks: np.ndarray, hole_suits: np.ndarray, hole_bits: np.ndarray, street: np.ndarray
 ) -> tuple[np.ndarray, ...]:
     """(flush draw, straight draw) flags: four cards to a flush (or to five ranks in a row)
     among the visible cards, a hole card among them, no such hand made yet, and cards to come
-    (the flop or the turn). ``masks``: :func:`_suit_masks` of the cards."""
+    (the flop or the turn). ``masks`` (N, 4): :func:`_suit_masks` of the cards; ``hole_suits``
+    (N, 4): the suits of the hole cards; ``hole_bits`` (N,): their rank bits."""
     suit_counts = _POPCOUNT[masks]  # (N, 4)
-    hole_suits = (cards[:, :2, None] // NUM_RANKS == np.arange(4)).any(axis=1)
     to_come = (street >= 1) & (street <= 2)
     flush_draw = ((suit_counts == 4) & hole_suits).any(axis=1) & ~(suit_counts >= 5).any(axis=1)
     present = np.bitwise_or.reduce(masks, axis=1)
-    hole = (np.int64(1) << rank[:, 0]) | (np.int64(1) << rank[:, 1])
     # A window of four held ranks with a hole card in it: the hole meets their union.
-    draw = (_FOUR_OF_WINDOW[present] & hole) != 0
+    draw = (_FOUR_OF_WINDOW[present] & hole_bits) != 0
     return flush_draw & to_come, draw & ~_STRAIGHT[present] & to_come
 
 
+@dataclass(frozen=True, kw_only=True, eq=False)
+class _PairFeatures:
+    """What the strength encoding reads of a hole pair alone, for the 1,326 pairs."""
+
+    rows: np.ndarray  # (1326, width) float32: the hole, rank, pocket and suited columns
+    rank: np.ndarray  # (1326, 2) 2 .. A as 0 .. 12
+    rank_bits: np.ndarray  # (1326,) the two ranks' bits
+    high: np.ndarray
+    pocket: np.ndarray
+    suit_masks: np.ndarray  # (1326, 4) as :func:`_suit_masks`
+    suits: np.ndarray  # (1326, 4) bool: the suits held
+
+    @classmethod
+    def build(cls) -> _PairFeatures:
+        rank = _RANK[PAIRS]
+        high, low = rank.max(axis=1), rank.min(axis=1)
+        pocket = rank[:, 0] == rank[:, 1]
+        rows = np.zeros((NUM_PAIRS, StrengthEncoding.width), dtype=np.float32)
+        every = np.arange(NUM_PAIRS)[:, None]
+        rows[every, np.concatenate([PAIRS, (high + _ONE_HOT_AT["high_rank"])[:, None],
+                                    (low + _ONE_HOT_AT["low_rank"])[:, None]], axis=1)] = 1.0
+        rows[:, _COLUMNS["pocket_pair"][0]] = pocket
+        rows[:, _COLUMNS["suited"][0]] = PAIRS[:, 0] // NUM_RANKS == PAIRS[:, 1] // NUM_RANKS
+        return cls(rows=rows, rank=rank, rank_bits=_CARD_RANK_BIT[PAIRS[:, 0]] | _CARD_RANK_BIT[PAIRS[:, 1]],
+                   high=high, pocket=pocket, suit_masks=_suit_masks(PAIRS),
+                   suits=(PAIRS[:, :, None] // NUM_RANKS == np.arange(4)).any(axis=1))  # fmt: skip
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class _BoardFeatures:
+    """What the strength encoding reads of a batch of states apart from their hole cards."""
+
+    cards: np.ndarray  # (n, 5) the board, -1 beyond
+    rows: np.ndarray  # (n, _STATE_COLUMNS) float32: the board, raises and street one-hots
+    betting: np.ndarray  # (n, 3) float32: facing a bet, pot, pot odds
+    street: np.ndarray
+    suit_masks: np.ndarray  # (n, 4) as :func:`_suit_masks`
+    rank_bits: np.ndarray  # (n,) the ranks on the board
+    top_rank: np.ndarray  # (n,) the board's highest rank, -1 for none
+
+    @classmethod
+    def of(cls, states: RawStates) -> _BoardFeatures:
+        board = np.asarray(states.cards, dtype=np.int64)[:, 2:]
+        n = len(board)
+        street = states.street
+        shown = board >= 0
+        facing = np.asarray(states.legal_mask, dtype=bool)[:, CALL]
+        pot, to_call = pot_and_call(street, np.asarray(states.raise_nums), facing)
+        raises = np.minimum(np.asarray(states.raise_nums, dtype=np.int64), MAX_RAISES)
+        ones = np.concatenate(  # (n, 10) the column of each one-hot's 1 (-1: none)
+            [np.where(shown, board + _ONE_HOT_AT["board"], -1), raises + _RAISE_COLUMN,
+             (street + _ONE_HOT_AT["street"])[:, None]], axis=1,
+        ) - _STATE_COLUMNS.start  # fmt: skip
+        rows = np.zeros((n, _STATE_COLUMNS.stop - _STATE_COLUMNS.start), dtype=np.float32)
+        at, column = np.nonzero(ones >= 0)
+        rows[at, ones[at, column]] = 1.0
+        betting = np.stack([facing, pot / MAX_POT,
+                            np.where(facing, to_call / np.maximum(pot + to_call, 1), 0.0)],
+                           axis=1).astype(np.float32)  # fmt: skip
+        masks = _suit_masks(board)
+        return cls(cards=board, rows=rows, betting=betting, street=street, suit_masks=masks,
+                   rank_bits=np.bitwise_or.reduce(masks, axis=1),
+                   top_rank=np.where(shown, _RANK[board], -1).max(axis=1))  # fmt: skip
+
+
+_PAIR_FEATURES = _PairFeatures.build()
 RLCARD = RLCardEncoding()
 STRENGTH = StrengthEncoding()
 STRENGTH_V1 = StrengthEncoding(version=1)

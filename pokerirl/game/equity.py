@@ -331,7 +331,8 @@ def _pairwise_counts(holes: np.ndarray, boards: np.ndarray) -> np.ndarray:
 
 def river_equity(holes: np.ndarray, boards: np.ndarray) -> np.ndarray:
     """(N,) exact equity of hole cards (N, 2) on five-card boards (N, 5)."""
-    shared = _by_board(_RIVER_ROWS, _all_pairs_river_counts, holes, boards, ALL_PAIRS_RIVER_ROWS)
+    every = lambda board: _cached_river_counts(tuple(board.tolist()))  # noqa: E731
+    shared = _by_board(_RIVER_ROWS, every, holes, boards, ALL_PAIRS_RIVER_ROWS)
     return shared / RIVER_DENOMINATOR
 
 
@@ -428,13 +429,18 @@ def _cached_turn_counts(board: tuple[int, ...]) -> np.ndarray:
     return found
 
 
-def _all_pairs_river_counts(board: np.ndarray) -> np.ndarray:
-    return river_counts(np.asarray(board, dtype=np.int64)[None])[0].astype(np.int64)
+@lru_cache(maxsize=4096)
+def _cached_river_counts(board: tuple[int, ...]) -> np.ndarray:
+    """:func:`river_counts` of one board kept for recent boards, as the turn's: 4,096 boards,
+    about 40 MB."""
+    found = river_counts(np.array(board, dtype=np.int64)[None])[0].astype(np.int64)
+    found.flags.writeable = False
+    return found
 
 
 # Rows sharing a board from which every pair's count is computed at once, not row by row
 # (local best response encodes the live pairs of one state, and again at its next decision:
-# a turn board's counts are cached). Row by row a turn state costs about 1/60 of a board's
+# a board's counts are cached). Row by row a turn state costs about 1/60 of a board's
 # all pairs, a river state 1/50.
 ALL_PAIRS_TURN_ROWS = 16
 ALL_PAIRS_RIVER_ROWS = 64
@@ -499,11 +505,12 @@ _TURN_ROWS = _RecentCounts(turn_counts, size=1 << 16)
 
 
 def forget_recent_states() -> None:
-    """Empty the memory of recent states' counts (the rows' and the turn boards'): what a
+    """Empty the memory of recent states' counts (the rows' and the boards'): what a
     benchmark does between repeats of one seed, so that no repeat reads the one before."""
     _RIVER_ROWS.counts.clear()
     _TURN_ROWS.counts.clear()
     _cached_turn_counts.cache_clear()
+    _cached_river_counts.cache_clear()
 
 
 def _set_code(boards: np.ndarray) -> np.ndarray:

@@ -42,6 +42,7 @@ hand is checked down after its action, and ignores re-raises.
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass, field
 from enum import StrEnum
 
@@ -168,14 +169,20 @@ def range_policy(
     ``pairs[r]`` in hand ``hands[r]`` (a row of ``board``, ``raise_nums``, ``legal_mask``:
     (n, 5), (n, 4), (n, 4)), batched ``ROWS_PER_PASS`` rows to a call."""
     probs = np.empty((hands.size, NUM_ACTIONS))
+    no_hole = np.full((len(board), 2), -1)
+    states = RawStates(cards=np.concatenate([no_hole, board], axis=1).astype(np.int8),
+                       raise_nums=raise_nums, legal_mask=legal_mask)  # fmt: skip
     for start in range(0, hands.size, ROWS_PER_PASS):
         rows = slice(start, start + ROWS_PER_PASS)
-        at = hands[rows]
-        cards = np.concatenate([PAIRS[pairs[rows]], board[at]], axis=1).astype(np.int8)
-        legal = legal_mask[at]
-        states = RawStates(cards=cards, raise_nums=raise_nums[at], legal_mask=legal)
-        probs[rows] = agent_action_probs(agent, encoding.encode(states), legal, cards)
+        at, held = hands[rows], pairs[rows]
+        obs = encoding.encode_pairs(held, states, at)
+        cards = functools.partial(_cards_of, held, board[at])  # only for agents that see them
+        probs[rows] = agent_action_probs(agent, obs, legal_mask[at], cards)
     return probs
+
+
+def _cards_of(pairs: np.ndarray, board: np.ndarray) -> np.ndarray:
+    return np.concatenate([PAIRS[pairs], board], axis=1).astype(np.int8)
 
 
 def state_after_raise(raises: np.ndarray, street: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
