@@ -21,13 +21,14 @@ from pokerirl.game.encodings import (
     RLCARD,
     STRENGTH,
     STRENGTH_FEATURES,
+    STRENGTH_V1,
     RawStates,
     get_encoding,
     pot_and_call,
     sampled_equity,
     visible_category,
 )
-from pokerirl.game.evaluator import category, hand_strength
+from pokerirl.game.evaluator import category, hand_strength, pair_index
 from pokerirl.game.match import observe, turn_cards
 from pokerirl.game.preflop import PREFLOP_EQUITY, class_index, compute_preflop_table
 from pokerirl.holdem import CALL, cards_from_text, parse_card
@@ -120,6 +121,98 @@ def test_strength_features_of_a_known_hand() -> None:
     assert STRENGTH.encode(states).shape == (1, STRENGTH.width)
     again = STRENGTH.encode(states)
     assert np.array_equal(again, STRENGTH.encode(states))  # a function of the state alone
+
+
+def _reference_card_features(cards: list[int]) -> dict[str, float]:
+    """The strength encoding's card features of one state, card by card from their
+    definitions (docs/encodings.md), independent of the encoding's rank and suit masks."""
+    shown = [c for c in cards if c >= 0]
+    rank = [(c % 13 + 12) % 13 for c in shown]  # 2 .. A as 0 .. 12
+    suit = [c // 13 for c in shown]
+    hole_rank, board_rank = rank[:2], rank[2:]
+    street = {0: 0, 3: 1, 4: 2, 5: 3}[len(shown) - 2]
+    counts = {r: rank.count(r) for r in set(rank)}
+
+    def straight(ranks: set[int]) -> bool:
+        return any({(low + k) % 13 for k in range(5)} <= ranks for low in range(-1, 9))
+
+    by_suit = [{r for r, s in zip(rank, suit, strict=True) if s == t} for t in range(4)]
+    flush = any(len(ranks) >= 5 for ranks in by_suit)
+    trips = any(n >= 3 for n in counts.values())
+    held_twice = sum(n >= 2 for n in counts.values())
+    category = 1 + max([0, (held_twice >= 1), 2 * (held_twice >= 2), 3 * trips,
+                        4 * straight(set(rank)), 5 * flush, 6 * (trips and held_twice >= 2),
+                        7 * any(n == 4 for n in counts.values()),
+                        8 * any(len(r) >= 5 and straight(r) for r in by_suit)])  # fmt: skip
+    to_come = street in (1, 2)
+    windows = [{12, 0, 1, 2, 3}] + [set(range(low, low + 5)) for low in range(9)]
+    return {
+        "category": category,
+        "hole_pairs_board": sum(r in board_rank for r in hole_rank) / 2,
+        "top_pair": float(bool(board_rank) and max(board_rank) in hole_rank),
+        "overpair": float(bool(board_rank) and hole_rank[0] == hole_rank[1]
+                          and hole_rank[0] > max(board_rank)),  # fmt: skip
+        "flush_draw": float(to_come and not flush and any(
+            len(by_suit[s]) == 4 for s in suit[:2])),  # fmt: skip
+        "straight_draw": float(to_come and not straight(set(rank)) and any(
+            len(w & set(rank)) == 4 and w & set(hole_rank) for w in windows)),  # fmt: skip
+        "high_rank": max(hole_rank),
+        "low_rank": min(hole_rank),
+        "pocket_pair": float(hole_rank[0] == hole_rank[1]),
+        "suited": float(suit[0] == suit[1]),
+        "street": street,
+    }
+
+
+def _random_cards(rng: np.random.Generator, n: int) -> np.ndarray:
+    """(n, 7) states' cards on every street, a third from two suits (flushes and flush
+    draws) and a third from six ranks (straights, pairs, trips, quads)."""
+    found = np.empty((n, 7), dtype=np.int8)
+    narrow_suits = np.arange(26)
+    narrow_ranks = np.array([r + 13 * s for r in (0, 1, 2, 3, 4, 12) for s in range(4)])
+    for i in range(n):
+        deck = (np.arange(52), narrow_suits, narrow_ranks)[i % 3]
+        found[i] = rng.choice(deck, size=7, replace=False)
+        found[i, 2 + (0, 3, 4, 5)[rng.integers(4)] :] = -1
+    return found
+
+
+def test_strength_card_features_equal_a_card_by_card_reference() -> None:
+    rng = np.random.default_rng(3)
+    cards = _random_cards(rng, 3_000)
+    states = RawStates(cards=cards, raise_nums=rng.integers(0, 5, (len(cards), 4)),
+                       legal_mask=rng.random((len(cards), 4)) < 0.5)  # fmt: skip
+    found = STRENGTH.features(states)
+    one_hots = ("category", "street", "high_rank", "low_rank")
+    seen = {name: set() for name in ("category", "flush_draw", "straight_draw", "overpair")}
+    for i, row in enumerate(cards.tolist()):
+        for name, value in _reference_card_features(row).items():
+            got = found[name][i].argmax() + (name == "category") if name in one_hots else (
+                found[name][i, 0])  # fmt: skip
+            assert got == value, (name, row, got, value)
+            if name in seen:
+                seen[name].add(value)
+    assert seen["category"] == set(range(1, 10))  # every category, and both values of each flag
+    assert all(len(values) == 2 for name, values in seen.items() if name != "category")
+
+
+def test_a_range_encodes_as_the_states_it_stands_for() -> None:
+    """``encode_pairs`` (a state's board and betting with many pairs, as local best response
+    asks) gives the rows of the states it stands for, in every encoding."""
+    rng = np.random.default_rng(4)
+    boards = _random_cards(rng, 60)
+    states = RawStates(cards=boards, raise_nums=rng.integers(0, 5, (60, 4)),
+                       legal_mask=rng.random((60, 4)) < 0.5)  # fmt: skip
+    of = rng.integers(0, 60, 5_000)
+    taken = np.asarray(boards, dtype=np.int64)[of]
+    pairs = np.array([rng.choice(np.setdiff1d(np.arange(52), row), 2, replace=False)
+                      for row in taken])  # fmt: skip
+    whole = RawStates(cards=np.concatenate([pairs, taken[:, 2:]], axis=1).astype(np.int8),
+                      raise_nums=states.raise_nums[of], legal_mask=states.legal_mask[of])
+    for encoding in (RLCARD, STRENGTH, STRENGTH_V1):
+        expected = encoding.encode(whole)
+        found = encoding.encode_pairs(pair_index(pairs[:, 0], pairs[:, 1]), states, of)
+        assert found.dtype == expected.dtype and np.array_equal(found, expected), encoding
 
 
 def test_the_engine_builds_each_agents_own_encoding_as_a_log_would() -> None:

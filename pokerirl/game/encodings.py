@@ -244,25 +244,30 @@ class StrengthEncoding(Encoding):
         found = np.take(own.rows, pairs, axis=0)
         found[:, _STATE_COLUMNS] = np.take(board.rows, of, axis=0)
         found[:, _COLUMNS["facing_bet"][0] :] = np.take(board.betting, of, axis=0)
-        masks = own.suit_masks[pairs] | board.suit_masks[of]
-        street = board.street[of]
-        hole_rank, top = own.rank[pairs], board.top_rank[of]
-        on_board = ((board.rank_bits[of, None] >> hole_rank) & 1).astype(bool)  # (R, 2)
-        category = _category(masks) - 1 + _ONE_HOT_AT["category"]
-        found[np.arange(len(pairs)), category] = 1.0
-        flush_draw, straight_draw = _draws(masks, own.suits[pairs], own.rank_bits[pairs], street)
+        masks = own.suit_masks[:, pairs] | board.suit_masks[:, of]  # (4, R) suit by suit
+        present = masks[0] | masks[1] | masks[2] | masks[3]
+        flags = _SUIT_FLAGS[masks]
+        flush_made = ((flags[0] | flags[1] | flags[2] | flags[3]) & _FLUSH) != 0
+        found[np.arange(len(pairs)), _category(masks, present, flags) + _CATEGORY_AT] = 1.0
+        holding = own.suits[:, pairs]  # (4, R) _FOUR_SUITED where a hole card is of the suit
+        suited_four = (flags[0] & holding[0]) | (flags[1] & holding[1]) | (flags[2] & holding[2])
+        suited_four |= flags[3] & holding[3]
+        hole_bits, draws_possible = own.rank_bits[pairs], board.cards_to_come[of]
+        top_bit = board.top_bit[of]
+        paired = hole_bits & board.rank_bits[of]  # the hole ranks on the board
         cards = np.concatenate([PAIRS[pairs], board.cards[of]], axis=1)
         found[:, _COLUMNS["hole_pairs_board"][0] : _COLUMNS["equity"][1]] = np.stack(
             [
-                on_board.sum(axis=1) / 2,
-                (on_board & (hole_rank == top[:, None])).any(axis=1),
-                own.pocket[pairs] & (street > 0) & (own.high[pairs] > top),
-                flush_draw,
-                straight_draw,
+                _POPCOUNT[paired] * (1 + own.pocket[pairs]) / 2,  # a pocket pair: two cards
+                (paired & top_bit) != 0,
+                own.pocket[pairs] & (own.high_bit[pairs] > top_bit) & (top_bit > 0),
+                (suited_four != 0) & ~flush_made & draws_possible,
+                ((_FOUR_OF_WINDOW[present] & hole_bits) != 0) & ~_STRAIGHT[present]
+                & draws_possible,
                 self.equity(cards),
             ],
             axis=1,
-        )
+        )  # fmt: skip
         return found
 
     def features(self, states: RawStates) -> dict[str, np.ndarray]:
@@ -379,55 +384,47 @@ def _suit_masks(cards: np.ndarray) -> np.ndarray:
     return masks.astype(np.int64).reshape(-1, 4)
 
 
+# Flags of one suit's rank mask: exactly four cards of the suit, a flush, a straight flush.
+_FOUR_SUITED, _FLUSH, _STRAIGHT_FLUSH = np.uint8(1), np.uint8(2), np.uint8(4)
+_SUIT_FLAGS = (
+    np.where(_POPCOUNT == 4, _FOUR_SUITED, 0)
+    | np.where(_POPCOUNT >= 5, _FLUSH, 0)
+    | np.where((_POPCOUNT >= 5) & _STRAIGHT, _STRAIGHT_FLUSH, 0)
+).astype(np.uint8)
+_CATEGORY_AT = _ONE_HOT_AT["category"] - 1  # category 1 (high card) is the block's first column
+
+
 def visible_category(cards: np.ndarray) -> np.ndarray:
     """(N,) made-hand category (1 high card .. 9 straight flush, as
     :func:`pokerirl.game.evaluator.category`) of the visible cards, 2 to 7 of them
     (``-1`` pads)."""
-    cards = np.asarray(cards, dtype=np.int64)
-    return _category(_suit_masks(cards))
+    masks = _suit_masks(np.asarray(cards, dtype=np.int64)).T
+    return _category(masks, np.bitwise_or.reduce(masks, axis=0), _SUIT_FLAGS[masks])
 
 
-def _category(masks: np.ndarray) -> np.ndarray:
-    """The category from the suits' rank masks (N, 4) alone: the ranks held in two, three
-    and four suits are ANDs of the masks (a pair, trips, quads), without counting card by
-    card."""
-    m0, m1, m2, m3 = masks.T
-    two = (m0 & m1) | (m0 & m2) | (m0 & m3) | (m1 & m2) | (m1 & m3) | (m2 & m3)
-    three = (m0 & m1 & (m2 | m3)) | (m2 & m3 & (m0 | m1))
-    four = m0 & m1 & m2 & m3
+def _category(masks: np.ndarray, present: np.ndarray, flags: np.ndarray) -> np.ndarray:
+    """(N,) the category from the suits' rank masks (4, N) alone, their union ``present``
+    and their :data:`_SUIT_FLAGS` (4, N): the ranks held in two, three and four suits are
+    ANDs of the masks (a pair, trips, quads), without counting card by card."""
+    m0, m1, m2, m3 = masks
+    low, high = m0 | m1, m2 | m3
+    two = (m0 & m1) | (low & high) | (m2 & m3)
+    three = (m0 & m1 & high) | (m2 & m3 & low)
     pairs_or_more = _POPCOUNT[two]  # ranks held at least twice
-    flush_suits = _POPCOUNT[masks] >= 5
-    straight = _STRAIGHT[m0 | m1 | m2 | m3]
-    straight_flush = (flush_suits & _STRAIGHT[masks]).any(axis=1)
-    category = np.ones(len(masks), dtype=np.int64)
-    for applies, value in (
-        (two != 0, 2),  # a pair (or more: overwritten below)
+    suit_flags = flags[0] | flags[1] | flags[2] | flags[3]
+    category = np.ones(len(present), dtype=np.int64)
+    for applies, value in (  # each overrides those before it
+        (two != 0, 2),
         (pairs_or_more >= 2, 3),
         (three != 0, 4),
-        (straight, 5),
-        (flush_suits.any(axis=1), 6),
+        (_STRAIGHT[present], 5),
+        ((suit_flags & _FLUSH) != 0, 6),
         ((three != 0) & (pairs_or_more >= 2), 7),
-        (four != 0, 8),
-        (straight_flush, 9),
+        ((m0 & m1 & m2 & m3) != 0, 8),
+        ((suit_flags & _STRAIGHT_FLUSH) != 0, 9),
     ):
         category[applies] = value
     return category
-
-
-def _draws(
-    masks: np.ndarray, hole_suits: np.ndarray, hole_bits: np.ndarray, street: np.ndarray
-) -> tuple[np.ndarray, ...]:
-    """(flush draw, straight draw) flags: four cards to a flush (or to five ranks in a row)
-    among the visible cards, a hole card among them, no such hand made yet, and cards to come
-    (the flop or the turn). ``masks`` (N, 4): :func:`_suit_masks` of the cards; ``hole_suits``
-    (N, 4): the suits of the hole cards; ``hole_bits`` (N,): their rank bits."""
-    suit_counts = _POPCOUNT[masks]  # (N, 4)
-    to_come = (street >= 1) & (street <= 2)
-    flush_draw = ((suit_counts == 4) & hole_suits).any(axis=1) & ~(suit_counts >= 5).any(axis=1)
-    present = np.bitwise_or.reduce(masks, axis=1)
-    # A window of four held ranks with a hole card in it: the hole meets their union.
-    draw = (_FOUR_OF_WINDOW[present] & hole_bits) != 0
-    return flush_draw & to_come, draw & ~_STRAIGHT[present] & to_come
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -435,12 +432,11 @@ class _PairFeatures:
     """What the strength encoding reads of a hole pair alone, for the 1,326 pairs."""
 
     rows: np.ndarray  # (1326, width) float32: the hole, rank, pocket and suited columns
-    rank: np.ndarray  # (1326, 2) 2 .. A as 0 .. 12
-    rank_bits: np.ndarray  # (1326,) the two ranks' bits
-    high: np.ndarray
+    rank_bits: np.ndarray  # (1326,) the two ranks' bits (2 .. A as bits 0 .. 12)
+    high_bit: np.ndarray  # the higher rank's
     pocket: np.ndarray
-    suit_masks: np.ndarray  # (1326, 4) as :func:`_suit_masks`
-    suits: np.ndarray  # (1326, 4) bool: the suits held
+    suit_masks: np.ndarray  # (4, 1326) each suit's ranks, as :func:`_suit_masks`
+    suits: np.ndarray  # (4, 1326) uint8: _FOUR_SUITED where a hole card is of the suit
 
     @classmethod
     def build(cls) -> _PairFeatures:
@@ -453,9 +449,11 @@ class _PairFeatures:
                                     (low + _ONE_HOT_AT["low_rank"])[:, None]], axis=1)] = 1.0
         rows[:, _COLUMNS["pocket_pair"][0]] = pocket
         rows[:, _COLUMNS["suited"][0]] = PAIRS[:, 0] // NUM_RANKS == PAIRS[:, 1] // NUM_RANKS
-        return cls(rows=rows, rank=rank, rank_bits=_CARD_RANK_BIT[PAIRS[:, 0]] | _CARD_RANK_BIT[PAIRS[:, 1]],
-                   high=high, pocket=pocket, suit_masks=_suit_masks(PAIRS),
-                   suits=(PAIRS[:, :, None] // NUM_RANKS == np.arange(4)).any(axis=1))  # fmt: skip
+        held = (PAIRS[:, :, None] // NUM_RANKS == np.arange(4)).any(axis=1).T
+        return cls(rows=rows, rank_bits=_CARD_RANK_BIT[PAIRS[:, 0]] | _CARD_RANK_BIT[PAIRS[:, 1]],
+                   high_bit=np.int64(1) << high, pocket=pocket,
+                   suit_masks=np.ascontiguousarray(_suit_masks(PAIRS).T),
+                   suits=np.where(held, _FOUR_SUITED, 0).astype(np.uint8))  # fmt: skip
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -465,10 +463,10 @@ class _BoardFeatures:
     cards: np.ndarray  # (n, 5) the board, -1 beyond
     rows: np.ndarray  # (n, _STATE_COLUMNS) float32: the board, raises and street one-hots
     betting: np.ndarray  # (n, 3) float32: facing a bet, pot, pot odds
-    street: np.ndarray
-    suit_masks: np.ndarray  # (n, 4) as :func:`_suit_masks`
+    suit_masks: np.ndarray  # (4, n) each suit's ranks on the board
     rank_bits: np.ndarray  # (n,) the ranks on the board
-    top_rank: np.ndarray  # (n,) the board's highest rank, -1 for none
+    top_bit: np.ndarray  # (n,) the board's highest rank's bit, 0 for no board
+    cards_to_come: np.ndarray  # (n,) bool: the flop or the turn (a draw can come in)
 
     @classmethod
     def of(cls, states: RawStates) -> _BoardFeatures:
@@ -490,9 +488,12 @@ class _BoardFeatures:
                             np.where(facing, to_call / np.maximum(pot + to_call, 1), 0.0)],
                            axis=1).astype(np.float32)  # fmt: skip
         masks = _suit_masks(board)
-        return cls(cards=board, rows=rows, betting=betting, street=street, suit_masks=masks,
+        top = np.where(shown, _RANK[board], -1).max(axis=1)
+        return cls(cards=board, rows=rows, betting=betting,
+                   suit_masks=np.ascontiguousarray(masks.T),
                    rank_bits=np.bitwise_or.reduce(masks, axis=1),
-                   top_rank=np.where(shown, _RANK[board], -1).max(axis=1))  # fmt: skip
+                   top_bit=np.where(top >= 0, np.int64(1) << np.maximum(top, 0), 0),
+                   cards_to_come=(street >= 1) & (street <= 2))  # fmt: skip
 
 
 _PAIR_FEATURES = _PairFeatures.build()

@@ -31,13 +31,25 @@ from pokerirl.holdem import NUM_CARDS
 NUM_RANKS = 13
 
 
-def class_index(hole: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(row, column) of each hand's class in the 13 x 13 table."""
-    hole = np.asarray(hole, dtype=np.int64)
+def _class_of(hole: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     rank = (hole % NUM_RANKS + NUM_RANKS - 1) % NUM_RANKS  # 2 .. A as 0 .. 12
     high, low = rank.max(axis=1), rank.min(axis=1)
     suited = hole[:, 0] // NUM_RANKS == hole[:, 1] // NUM_RANKS
     return np.where(suited, high, low), np.where(suited, low, high)
+
+
+# The class of every two cards, looked up (local best response asks for ~1,000 pairs of a
+# range at each decision).
+_ROW, _COLUMN = (
+    found.reshape(NUM_CARDS, NUM_CARDS)
+    for found in _class_of(np.indices((NUM_CARDS, NUM_CARDS)).reshape(2, -1).T)
+)
+
+
+def class_index(hole: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(row, column) of each hand's class in the 13 x 13 table."""
+    hole = np.asarray(hole, dtype=np.int64)
+    return _ROW[hole[:, 0], hole[:, 1]], _COLUMN[hole[:, 0], hole[:, 1]]
 
 
 def sampled_preflop_equity(hole: np.ndarray) -> np.ndarray:
