@@ -244,7 +244,7 @@ class StrengthEncoding(Encoding):
         found = np.take(own.rows, pairs, axis=0)
         found[:, _STATE_COLUMNS] = np.take(board.rows, of, axis=0)
         found[:, _COLUMNS["facing_bet"][0] :] = np.take(board.betting, of, axis=0)
-        masks = own.suit_masks[:, pairs] | board.suit_masks[:, of]  # (4, R) suit by suit
+        masks = _suit_masks(own.packed[pairs] | board.packed[of])  # (4, R) suit by suit
         present = masks[0] | masks[1] | masks[2] | masks[3]
         flags = _SUIT_FLAGS[masks]
         flush_made = ((flags[0] | flags[1] | flags[2] | flags[3]) & _FLUSH) != 0
@@ -371,17 +371,23 @@ _FOUR_OF_WINDOW = np.bitwise_or.reduce(
 )
 _RANK = (np.arange(NUM_CARDS) % NUM_RANKS + NUM_RANKS - 1) % NUM_RANKS  # 2 .. A as 0 .. 12
 _CARD_RANK_BIT = np.int64(1) << _RANK
+# A set of cards as one int64: bit 16 x suit + rank. A card's bit; the extra last entry, 0,
+# is what index -1 (no card) reads.
+_SUIT_SHIFTS = 16 * np.arange(4, dtype=np.int64)[:, None]
+_CARD_BIT = np.append(_CARD_RANK_BIT << _SUIT_SHIFTS[np.arange(NUM_CARDS) // NUM_RANKS, 0], 0)
+_RANKS = (1 << NUM_RANKS) - 1
+# _TOP_BIT[mask]: the mask's highest bit (0 for none).
+_TOP_BIT = np.array([1 << (mask.bit_length() - 1) if mask else 0 for mask in range(_RANKS + 1)])
 
 
-def _suit_masks(cards: np.ndarray) -> np.ndarray:
-    """(N, 4) rank masks (bit r for rank r, 2 .. A as 0 .. 12) of each suit among cards
-    (N, 7) with ``-1`` pads: one bit per shown card, summed by suit in one bincount."""
-    cards = np.asarray(cards, dtype=np.int64)
-    shown = cards >= 0
-    bit = np.where(shown, _CARD_RANK_BIT[cards], 0)
-    place = np.arange(len(cards))[:, None] * 4 + np.where(shown, cards // NUM_RANKS, 0)
-    masks = np.bincount(place.reshape(-1), weights=bit.reshape(-1), minlength=4 * len(cards))
-    return masks.astype(np.int64).reshape(-1, 4)
+def _packed(cards: np.ndarray) -> np.ndarray:
+    """(N,) int64 the set of cards (N, k) with ``-1`` pads, packed as :data:`_CARD_BIT`."""
+    return np.bitwise_or.reduce(_CARD_BIT[cards], axis=1)
+
+
+def _suit_masks(packed: np.ndarray) -> np.ndarray:
+    """(4, N) each suit's rank mask (bit r for rank r, 2 .. A as 0 .. 12) of packed sets."""
+    return (packed[None] >> _SUIT_SHIFTS) & _RANKS
 
 
 # Flags of one suit's rank mask: exactly four cards of the suit, a flush, a straight flush.
@@ -398,8 +404,8 @@ def visible_category(cards: np.ndarray) -> np.ndarray:
     """(N,) made-hand category (1 high card .. 9 straight flush, as
     :func:`pokerirl.game.evaluator.category`) of the visible cards, 2 to 7 of them
     (``-1`` pads)."""
-    masks = _suit_masks(np.asarray(cards, dtype=np.int64)).T
-    return _category(masks, np.bitwise_or.reduce(masks, axis=0), _SUIT_FLAGS[masks])
+    masks = _suit_masks(_packed(np.asarray(cards, dtype=np.int64)))
+    return _category(masks, masks[0] | masks[1] | masks[2] | masks[3], _SUIT_FLAGS[masks])
 
 
 def _category(masks: np.ndarray, present: np.ndarray, flags: np.ndarray) -> np.ndarray:
@@ -435,7 +441,7 @@ class _PairFeatures:
     rank_bits: np.ndarray  # (1326,) the two ranks' bits (2 .. A as bits 0 .. 12)
     high_bit: np.ndarray  # the higher rank's
     pocket: np.ndarray
-    suit_masks: np.ndarray  # (4, 1326) each suit's ranks, as :func:`_suit_masks`
+    packed: np.ndarray  # (1326,) the two cards, as :data:`_CARD_BIT`
     suits: np.ndarray  # (4, 1326) uint8: _FOUR_SUITED where a hole card is of the suit
 
     @classmethod
@@ -452,7 +458,7 @@ class _PairFeatures:
         held = (PAIRS[:, :, None] // NUM_RANKS == np.arange(4)).any(axis=1).T
         return cls(rows=rows, rank_bits=_CARD_RANK_BIT[PAIRS[:, 0]] | _CARD_RANK_BIT[PAIRS[:, 1]],
                    high_bit=np.int64(1) << high, pocket=pocket,
-                   suit_masks=np.ascontiguousarray(_suit_masks(PAIRS).T),
+                   packed=_packed(PAIRS),
                    suits=np.where(held, _FOUR_SUITED, 0).astype(np.uint8))  # fmt: skip
 
 
@@ -463,7 +469,7 @@ class _BoardFeatures:
     cards: np.ndarray  # (n, 5) the board, -1 beyond
     rows: np.ndarray  # (n, _STATE_COLUMNS) float32: the board, raises and street one-hots
     betting: np.ndarray  # (n, 3) float32: facing a bet, pot, pot odds
-    suit_masks: np.ndarray  # (4, n) each suit's ranks on the board
+    packed: np.ndarray  # (n,) the board, as :data:`_CARD_BIT`
     rank_bits: np.ndarray  # (n,) the ranks on the board
     top_bit: np.ndarray  # (n,) the board's highest rank's bit, 0 for no board
     cards_to_come: np.ndarray  # (n,) bool: the flop or the turn (a draw can come in)
@@ -472,30 +478,50 @@ class _BoardFeatures:
     def of(cls, states: RawStates) -> _BoardFeatures:
         board = np.asarray(states.cards, dtype=np.int64)[:, 2:]
         n = len(board)
-        street = states.street
-        shown = board >= 0
-        facing = np.asarray(states.legal_mask, dtype=bool)[:, CALL]
-        pot, to_call = pot_and_call(street, np.asarray(states.raise_nums), facing)
+        street = _STREET_OF_SHOWN[(board >= 0).sum(axis=1)]
         raises = np.minimum(np.asarray(states.raise_nums, dtype=np.int64), MAX_RAISES)
-        ones = np.concatenate(  # (n, 10) the column of each one-hot's 1 (-1: none)
-            [np.where(shown, board + _ONE_HOT_AT["board"], -1), raises + _RAISE_COLUMN,
-             (street + _ONE_HOT_AT["street"])[:, None]], axis=1,
-        ) - _STATE_COLUMNS.start  # fmt: skip
-        rows = np.zeros((n, _STATE_COLUMNS.stop - _STATE_COLUMNS.start), dtype=np.float32)
-        at, column = np.nonzero(ones >= 0)
-        rows[at, ones[at, column]] = 1.0
-        betting = np.stack([facing, pot / MAX_POT,
+        facing = np.asarray(states.legal_mask, dtype=bool)[:, CALL]
+        betting = (street * (MAX_RAISES + 1) ** NUM_ROUNDS + raises @ _RAISE_PLACES) * 2 + facing
+        rows = np.zeros((n, _STATE_WIDTH + 1), dtype=np.float32)  # + a column for no card
+        rows[np.arange(n)[:, None], _BOARD_COLUMN[board]] = 1.0
+        rows[:, _BOARD_CARDS:_STATE_WIDTH] = _BETTING.one_hots[betting]
+        packed = _packed(board)
+        rank_bits = (packed | packed >> 16 | packed >> 32 | packed >> 48) & _RANKS
+        return cls(cards=board, rows=rows[:, :-1], betting=_BETTING.numbers[betting],
+                   packed=packed, rank_bits=rank_bits, top_bit=_TOP_BIT[rank_bits],
+                   cards_to_come=(street == 1) | (street == 2))  # fmt: skip
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class _BettingTable:
+    """Every betting state's columns, by (street, raises per round, facing a bet): the raises
+    and street one-hots (side by side in the row) and the facing, pot and pot-odds columns."""
+
+    one_hots: np.ndarray  # (5,000, 24) float32
+    numbers: np.ndarray  # (5,000, 3) float32
+
+    @classmethod
+    def build(cls) -> _BettingTable:
+        street, *raises, facing = np.indices((NUM_ROUNDS,) + (MAX_RAISES + 1,) * NUM_ROUNDS + (2,))
+        street, facing = street.reshape(-1), facing.reshape(-1).astype(bool)
+        raises = np.stack([r.reshape(-1) for r in raises], axis=1)
+        pot, to_call = pot_and_call(street, raises, facing)
+        ones = np.concatenate([raises + _RAISE_COLUMN, (street + _ONE_HOT_AT["street"])[:, None]],
+                              axis=1) - _COLUMNS["raises"][0]  # fmt: skip
+        one_hots = np.zeros((len(street), _STATE_WIDTH - _BOARD_CARDS), dtype=np.float32)
+        one_hots[np.arange(len(street))[:, None], ones] = 1.0
+        numbers = np.stack([facing, pot / MAX_POT,
                             np.where(facing, to_call / np.maximum(pot + to_call, 1), 0.0)],
                            axis=1).astype(np.float32)  # fmt: skip
-        masks = _suit_masks(board)
-        top = np.where(shown, _RANK[board], -1).max(axis=1)
-        return cls(cards=board, rows=rows, betting=betting,
-                   suit_masks=np.ascontiguousarray(masks.T),
-                   rank_bits=np.bitwise_or.reduce(masks, axis=1),
-                   top_bit=np.where(top >= 0, np.int64(1) << np.maximum(top, 0), 0),
-                   cards_to_come=(street >= 1) & (street <= 2))  # fmt: skip
+        return cls(one_hots=one_hots, numbers=numbers)
 
 
+_STREET_OF_SHOWN = np.array([0, -1, -1, 1, 2, 3])  # board cards shown -> street
+_RAISE_PLACES = (MAX_RAISES + 1) ** np.arange(NUM_ROUNDS - 1, -1, -1)  # as np.indices orders
+_STATE_WIDTH = _STATE_COLUMNS.stop - _STATE_COLUMNS.start
+_BOARD_CARDS = NUM_CARDS  # the board one-hot's columns, first in the state's
+_BOARD_COLUMN = np.append(np.arange(NUM_CARDS), _STATE_WIDTH)  # index -1: the spare column
+_BETTING = _BettingTable.build()
 _PAIR_FEATURES = _PairFeatures.build()
 RLCARD = RLCardEncoding()
 STRENGTH = StrengthEncoding()
