@@ -247,7 +247,6 @@ class StrengthEncoding(Encoding):
         masks = _suit_masks(own.packed[pairs] | board.packed[of])  # (4, R) suit by suit
         present = masks[0] | masks[1] | masks[2] | masks[3]
         flags = _SUIT_FLAGS[masks]
-        flush_made = ((flags[0] | flags[1] | flags[2] | flags[3]) & _FLUSH) != 0
         found[np.arange(len(pairs)), _category(masks, present, flags) + _CATEGORY_AT] = 1.0
         holding = own.suits[:, pairs]  # (4, R) _FOUR_SUITED where a hole card is of the suit
         suited_four = (flags[0] & holding[0]) | (flags[1] & holding[1]) | (flags[2] & holding[2])
@@ -261,7 +260,7 @@ class StrengthEncoding(Encoding):
                 _POPCOUNT[paired] * (1 + own.pocket[pairs]) / 2,  # a pocket pair: two cards
                 (paired & top_bit) != 0,
                 own.pocket[pairs] & (own.high_bit[pairs] > top_bit) & (top_bit > 0),
-                (suited_four != 0) & ~flush_made & draws_possible,
+                (suited_four != 0) & draws_possible,  # four of a suit: no flush in 7 cards
                 ((_FOUR_OF_WINDOW[present] & hole_bits) != 0) & ~_STRAIGHT[present]
                 & draws_possible,
                 self.equity(cards),
