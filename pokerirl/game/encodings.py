@@ -196,10 +196,6 @@ _ONE_HOT_AT: Mapping[str, int] = {
     name: _COLUMNS[name][0] for name in ("board", "street", "high_rank", "low_rank", "category")
 }
 _RAISE_COLUMN = _COLUMNS["raises"][0] + (MAX_RAISES + 1) * np.arange(NUM_ROUNDS)
-# A state's own columns apart from its hole cards: the board, raises and street blocks (side
-# by side), and the last three (facing a bet, pot, pot odds).
-_STATE_COLUMNS = slice(_COLUMNS["board"][0], _COLUMNS["street"][1])
-_BETTING_AT = _COLUMNS["facing_bet"][0]
 
 
 class StrengthEncoding(Encoding):
@@ -235,31 +231,36 @@ class StrengthEncoding(Encoding):
         return self.encode_pairs(pairs, states, np.arange(len(cards)))
 
     def encode_pairs(self, pairs: np.ndarray, states: RawStates, of: np.ndarray) -> np.ndarray:
-        # A row is the pair's own columns (a table of the 1,326 pairs), the state's (its
-        # board and betting, computed once a state: local best response encodes ~1,000 pairs
-        # of each), and the columns of both, from the two's suit and rank masks. The same
-        # values as each block cast to float32, bit for bit.
+        # A row's ones come from the pair (a table of the 1,326 pairs), the state (its board
+        # and betting, computed once a state: local best response encodes ~1,000 pairs of
+        # each) and the category of both, in one scatter; then the numbers, those of both
+        # from the two's packed cards. The same values as each block cast to float32, bit for
+        # bit.
         pairs, of = np.asarray(pairs, dtype=np.int64), np.asarray(of, dtype=np.int64)
         own, board = _PAIR_FEATURES, _BoardFeatures.of(states)
-        found = np.take(own.rows, pairs, axis=0)
-        found[:, _STATE_COLUMNS] = np.take(board.rows, of, axis=0)
-        found[:, _COLUMNS["facing_bet"][0] :] = np.take(board.betting, of, axis=0)
         masks = _suit_masks(own.packed[pairs] | board.packed[of])  # (4, R) suit by suit
         present = masks[0] | masks[1] | masks[2] | masks[3]
         flags = _SUIT_FLAGS[masks]
-        found[np.arange(len(pairs)), _category(masks, present, flags) + _CATEGORY_AT] = 1.0
+        category = _category(masks, present, flags) + _CATEGORY_AT
+        found = np.zeros((len(pairs), self.width), dtype=np.float32)
+        ones = np.concatenate([own.ones[pairs], board.ones[of], category[:, None]], axis=1)
+        ones += (np.arange(len(pairs)) * self.width)[:, None]  # flat: the fastest scatter
+        found.reshape(-1)[ones.reshape(-1)] = 1.0  # a card not shown: _SPARE
+        found[:, _COLUMNS["pocket_pair"][0] : _COLUMNS["suited"][1]] = own.flags[pairs]
+        found[:, _COLUMNS["facing_bet"][0] :] = board.numbers[of]
         holding = own.suits[:, pairs]  # (4, R) _FOUR_SUITED where a hole card is of the suit
         suited_four = (flags[0] & holding[0]) | (flags[1] & holding[1]) | (flags[2] & holding[2])
         suited_four |= flags[3] & holding[3]
         hole_bits, draws_possible = own.rank_bits[pairs], board.cards_to_come[of]
         top_bit = board.top_bit[of]
         paired = hole_bits & board.rank_bits[of]  # the hole ranks on the board
+        pocket = own.flags[pairs, 0] > 0
         cards = np.concatenate([PAIRS[pairs], board.cards[of]], axis=1)
         found[:, _COLUMNS["hole_pairs_board"][0] : _COLUMNS["equity"][1]] = np.stack(
             [
-                _POPCOUNT[paired] * (1 + own.pocket[pairs]) / 2,  # a pocket pair: two cards
+                _POPCOUNT[paired] * (1 + pocket) / 2,  # a pocket pair: two cards
                 (paired & top_bit) != 0,
-                own.pocket[pairs] & (own.high_bit[pairs] > top_bit) & (top_bit > 0),
+                pocket & (own.high_bit[pairs] > top_bit) & (top_bit > 0),
                 (suited_four != 0) & draws_possible,  # four of a suit: no flush in 7 cards
                 ((_FOUR_OF_WINDOW[present] & hole_bits) != 0) & ~_STRAIGHT[present]
                 & draws_possible,
@@ -436,10 +437,10 @@ def _category(masks: np.ndarray, present: np.ndarray, flags: np.ndarray) -> np.n
 class _PairFeatures:
     """What the strength encoding reads of a hole pair alone, for the 1,326 pairs."""
 
-    rows: np.ndarray  # (1326, width) float32: the hole, rank, pocket and suited columns
+    ones: np.ndarray  # (1326, 4) the columns of its ones: the two cards, high and low rank
+    flags: np.ndarray  # (1326, 2) float32: the pocket-pair and suited columns
     rank_bits: np.ndarray  # (1326,) the two ranks' bits (2 .. A as bits 0 .. 12)
     high_bit: np.ndarray  # the higher rank's
-    pocket: np.ndarray
     packed: np.ndarray  # (1326,) the two cards, as :data:`_CARD_BIT`
     suits: np.ndarray  # (4, 1326) uint8: _FOUR_SUITED where a hole card is of the suit
 
@@ -447,18 +448,17 @@ class _PairFeatures:
     def build(cls) -> _PairFeatures:
         rank = _RANK[PAIRS]
         high, low = rank.max(axis=1), rank.min(axis=1)
-        pocket = rank[:, 0] == rank[:, 1]
-        rows = np.zeros((NUM_PAIRS, StrengthEncoding.width), dtype=np.float32)
-        every = np.arange(NUM_PAIRS)[:, None]
-        rows[every, np.concatenate([PAIRS, (high + _ONE_HOT_AT["high_rank"])[:, None],
-                                    (low + _ONE_HOT_AT["low_rank"])[:, None]], axis=1)] = 1.0
-        rows[:, _COLUMNS["pocket_pair"][0]] = pocket
-        rows[:, _COLUMNS["suited"][0]] = PAIRS[:, 0] // NUM_RANKS == PAIRS[:, 1] // NUM_RANKS
         held = (PAIRS[:, :, None] // NUM_RANKS == np.arange(4)).any(axis=1).T
-        return cls(rows=rows, rank_bits=_CARD_RANK_BIT[PAIRS[:, 0]] | _CARD_RANK_BIT[PAIRS[:, 1]],
-                   high_bit=np.int64(1) << high, pocket=pocket,
-                   packed=_packed(PAIRS),
-                   suits=np.where(held, _FOUR_SUITED, 0).astype(np.uint8))  # fmt: skip
+        return cls(
+            ones=np.concatenate([PAIRS + _COLUMNS["hole"][0], (high + _ONE_HOT_AT["high_rank"])[:, None],
+                                 (low + _ONE_HOT_AT["low_rank"])[:, None]], axis=1),
+            flags=np.stack([rank[:, 0] == rank[:, 1],
+                            PAIRS[:, 0] // NUM_RANKS == PAIRS[:, 1] // NUM_RANKS],
+                           axis=1).astype(np.float32),
+            rank_bits=_CARD_RANK_BIT[PAIRS[:, 0]] | _CARD_RANK_BIT[PAIRS[:, 1]],
+            high_bit=np.int64(1) << high, packed=_packed(PAIRS),
+            suits=np.where(held, _FOUR_SUITED, 0).astype(np.uint8),
+        )  # fmt: skip
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -466,8 +466,8 @@ class _BoardFeatures:
     """What the strength encoding reads of a batch of states apart from their hole cards."""
 
     cards: np.ndarray  # (n, 5) the board, -1 beyond
-    rows: np.ndarray  # (n, _STATE_COLUMNS) float32: the board, raises and street one-hots
-    betting: np.ndarray  # (n, 3) float32: facing a bet, pot, pot odds
+    ones: np.ndarray  # (n, 10) the columns of its ones: the board's cards, raises, street
+    numbers: np.ndarray  # (n, 3) float32: facing a bet, pot, pot odds
     packed: np.ndarray  # (n,) the board, as :data:`_CARD_BIT`
     rank_bits: np.ndarray  # (n,) the ranks on the board
     top_bit: np.ndarray  # (n,) the board's highest rank's bit, 0 for no board
@@ -476,27 +476,24 @@ class _BoardFeatures:
     @classmethod
     def of(cls, states: RawStates) -> _BoardFeatures:
         board = np.asarray(states.cards, dtype=np.int64)[:, 2:]
-        n = len(board)
         street = _STREET_OF_SHOWN[(board >= 0).sum(axis=1)]
         raises = np.minimum(np.asarray(states.raise_nums, dtype=np.int64), MAX_RAISES)
         facing = np.asarray(states.legal_mask, dtype=bool)[:, CALL]
         betting = (street * (MAX_RAISES + 1) ** NUM_ROUNDS + raises @ _RAISE_PLACES) * 2 + facing
-        rows = np.zeros((n, _STATE_WIDTH + 1), dtype=np.float32)  # + a column for no card
-        rows[np.arange(n)[:, None], _BOARD_COLUMN[board]] = 1.0
-        rows[:, _BOARD_CARDS:_STATE_WIDTH] = _BETTING.one_hots[betting]
         packed = _packed(board)
         rank_bits = (packed | packed >> 16 | packed >> 32 | packed >> 48) & _RANKS
-        return cls(cards=board, rows=rows[:, :-1], betting=_BETTING.numbers[betting],
-                   packed=packed, rank_bits=rank_bits, top_bit=_TOP_BIT[rank_bits],
-                   cards_to_come=(street == 1) | (street == 2))  # fmt: skip
+        return cls(cards=board,
+                   ones=np.concatenate([_BOARD_COLUMN[board], _BETTING.ones[betting]], axis=1),
+                   numbers=_BETTING.numbers[betting], packed=packed, rank_bits=rank_bits,
+                   top_bit=_TOP_BIT[rank_bits], cards_to_come=(street == 1) | (street == 2))  # fmt: skip
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
 class _BettingTable:
-    """Every betting state's columns, by (street, raises per round, facing a bet): the raises
-    and street one-hots (side by side in the row) and the facing, pot and pot-odds columns."""
+    """Every betting state's columns, by (street, raises per round, facing a bet): where its
+    ones are (the raise counts' and the street's) and its numbers (facing, pot, pot odds)."""
 
-    one_hots: np.ndarray  # (5,000, 24) float32
+    ones: np.ndarray  # (5,000, 5)
     numbers: np.ndarray  # (5,000, 3) float32
 
     @classmethod
@@ -505,21 +502,20 @@ class _BettingTable:
         street, facing = street.reshape(-1), facing.reshape(-1).astype(bool)
         raises = np.stack([r.reshape(-1) for r in raises], axis=1)
         pot, to_call = pot_and_call(street, raises, facing)
-        ones = np.concatenate([raises + _RAISE_COLUMN, (street + _ONE_HOT_AT["street"])[:, None]],
-                              axis=1) - _COLUMNS["raises"][0]  # fmt: skip
-        one_hots = np.zeros((len(street), _STATE_WIDTH - _BOARD_CARDS), dtype=np.float32)
-        one_hots[np.arange(len(street))[:, None], ones] = 1.0
         numbers = np.stack([facing, pot / MAX_POT,
                             np.where(facing, to_call / np.maximum(pot + to_call, 1), 0.0)],
                            axis=1).astype(np.float32)  # fmt: skip
-        return cls(one_hots=one_hots, numbers=numbers)
+        ones = np.concatenate([raises + _RAISE_COLUMN, (street + _ONE_HOT_AT["street"])[:, None]],
+                              axis=1)  # fmt: skip
+        return cls(ones=ones, numbers=numbers)
 
 
 _STREET_OF_SHOWN = np.array([0, -1, -1, 1, 2, 3])  # board cards shown -> street
 _RAISE_PLACES = (MAX_RAISES + 1) ** np.arange(NUM_ROUNDS - 1, -1, -1)  # as np.indices orders
-_STATE_WIDTH = _STATE_COLUMNS.stop - _STATE_COLUMNS.start
-_BOARD_CARDS = NUM_CARDS  # the board one-hot's columns, first in the state's
-_BOARD_COLUMN = np.append(np.arange(NUM_CARDS), _STATE_WIDTH)  # index -1: the spare column
+# Where a board card's 1 goes; a card not shown (index -1) puts its 1 in the equity column,
+# which is written after the ones.
+_SPARE = _COLUMNS["equity"][0]
+_BOARD_COLUMN = np.append(np.arange(NUM_CARDS) + _COLUMNS["board"][0], _SPARE)
 _BETTING = _BettingTable.build()
 _PAIR_FEATURES = _PairFeatures.build()
 RLCARD = RLCardEncoding()
