@@ -146,16 +146,17 @@ def _reference_card_features(cards: list[int]) -> dict[str, float]:
                         8 * any(len(r) >= 5 and straight(r) for r in by_suit)])  # fmt: skip
     to_come = street in (1, 2)
     windows = [{12, 0, 1, 2, 3}] + [set(range(low, low + 5)) for low in range(9)]
+    pocket = hole_rank[0] == hole_rank[1]
+    top = max(board_rank, default=-1)
+    four_suited = any(len(by_suit[s]) == 4 for s in suit[:2])
+    four_in_row = any(len(w & set(rank)) == 4 and w & set(hole_rank) for w in windows)
     return {
         "category": category,
         "hole_pairs_board": sum(r in board_rank for r in hole_rank) / 2,
-        "top_pair": float(bool(board_rank) and max(board_rank) in hole_rank),
-        "overpair": float(bool(board_rank) and hole_rank[0] == hole_rank[1]
-                          and hole_rank[0] > max(board_rank)),  # fmt: skip
-        "flush_draw": float(to_come and not flush and any(
-            len(by_suit[s]) == 4 for s in suit[:2])),  # fmt: skip
-        "straight_draw": float(to_come and not straight(set(rank)) and any(
-            len(w & set(rank)) == 4 and w & set(hole_rank) for w in windows)),  # fmt: skip
+        "top_pair": float(top in hole_rank),
+        "overpair": float(pocket and bool(board_rank) and hole_rank[0] > top),
+        "flush_draw": float(to_come and not flush and four_suited),
+        "straight_draw": float(to_come and not straight(set(rank)) and four_in_row),
         "high_rank": max(hole_rank),
         "low_rank": min(hole_rank),
         "pocket_pair": float(hole_rank[0] == hole_rank[1]),

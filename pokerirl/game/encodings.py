@@ -51,7 +51,6 @@ from pokerirl.holdem import (
     CALL,
     MAX_RAISES,
     NUM_CARDS,
-    NUM_PAIRS,
     NUM_ROUNDS,
     OBS_SIZE,
     PAIRS,
@@ -449,9 +448,9 @@ class _PairFeatures:
         rank = _RANK[PAIRS]
         high, low = rank.max(axis=1), rank.min(axis=1)
         held = (PAIRS[:, :, None] // NUM_RANKS == np.arange(4)).any(axis=1).T
+        ranks = np.stack([high + _ONE_HOT_AT["high_rank"], low + _ONE_HOT_AT["low_rank"]], axis=1)
         return cls(
-            ones=np.concatenate([PAIRS + _COLUMNS["hole"][0], (high + _ONE_HOT_AT["high_rank"])[:, None],
-                                 (low + _ONE_HOT_AT["low_rank"])[:, None]], axis=1),
+            ones=np.concatenate([PAIRS + _COLUMNS["hole"][0], ranks], axis=1),
             flags=np.stack([rank[:, 0] == rank[:, 1],
                             PAIRS[:, 0] // NUM_RANKS == PAIRS[:, 1] // NUM_RANKS],
                            axis=1).astype(np.float32),
@@ -482,10 +481,15 @@ class _BoardFeatures:
         betting = (street * (MAX_RAISES + 1) ** NUM_ROUNDS + raises @ _RAISE_PLACES) * 2 + facing
         packed = _packed(board)
         rank_bits = (packed | packed >> 16 | packed >> 32 | packed >> 48) & _RANKS
-        return cls(cards=board,
-                   ones=np.concatenate([_BOARD_COLUMN[board], _BETTING.ones[betting]], axis=1),
-                   numbers=_BETTING.numbers[betting], packed=packed, rank_bits=rank_bits,
-                   top_bit=_TOP_BIT[rank_bits], cards_to_come=(street == 1) | (street == 2))  # fmt: skip
+        return cls(
+            cards=board,
+            ones=np.concatenate([_BOARD_COLUMN[board], _BETTING.ones[betting]], axis=1),
+            numbers=_BETTING.numbers[betting],
+            packed=packed,
+            rank_bits=rank_bits,
+            top_bit=_TOP_BIT[rank_bits],
+            cards_to_come=(street == 1) | (street == 2),
+        )
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -498,9 +502,8 @@ class _BettingTable:
 
     @classmethod
     def build(cls) -> _BettingTable:
-        street, *raises, facing = np.indices((NUM_ROUNDS,) + (MAX_RAISES + 1,) * NUM_ROUNDS + (2,))
-        street, facing = street.reshape(-1), facing.reshape(-1).astype(bool)
-        raises = np.stack([r.reshape(-1) for r in raises], axis=1)
+        every = np.indices((NUM_ROUNDS,) + (MAX_RAISES + 1,) * NUM_ROUNDS + (2,)).reshape(6, -1)
+        street, raises, facing = every[0], every[1:5].T, every[5].astype(bool)
         pot, to_call = pot_and_call(street, raises, facing)
         numbers = np.stack([facing, pot / MAX_POT,
                             np.where(facing, to_call / np.maximum(pot + to_call, 1), 0.0)],
