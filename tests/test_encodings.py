@@ -28,6 +28,7 @@ from pokerirl.game.encodings import (
     sampled_equity,
     visible_category,
 )
+from pokerirl.game.equity import use_turn_table
 from pokerirl.game.evaluator import category, hand_strength, pair_index
 from pokerirl.game.match import observe, turn_cards
 from pokerirl.game.preflop import PREFLOP_EQUITY, class_index, compute_preflop_table
@@ -210,9 +211,14 @@ def test_a_range_encodes_as_the_states_it_stands_for() -> None:
                       for row in taken])  # fmt: skip
     whole = RawStates(cards=np.concatenate([pairs, taken[:, 2:]], axis=1).astype(np.int8),
                       raise_nums=states.raise_nums[of], legal_mask=states.legal_mask[of])
-    for encoding in (RLCARD, STRENGTH, STRENGTH_V1):
-        expected = encoding.encode(whole)
-        found = encoding.encode_pairs(pair_index(pairs[:, 0], pairs[:, 1]), states, of)
+    for encoding, table in ((RLCARD, True), (STRENGTH, True), (STRENGTH, False),
+                            (STRENGTH_V1, True)):  # fmt: skip
+        use_turn_table(table)  # where it is built: turn equity read, or counted
+        try:
+            expected = encoding.encode(whole)
+            found = encoding.encode_pairs(pair_index(pairs[:, 0], pairs[:, 1]), states, of)
+        finally:
+            use_turn_table(True)
         assert found.dtype == expected.dtype and np.array_equal(found, expected), encoding
 
 

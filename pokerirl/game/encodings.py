@@ -44,7 +44,7 @@ from typing import ClassVar
 import numpy as np
 
 from pokerirl.errors import ConfigError
-from pokerirl.game.equity import exact_equity
+from pokerirl.game.equity import exact_equity, range_equity
 from pokerirl.game.evaluator import hand_strength, pair_index
 from pokerirl.game.preflop import sampled_preflop_equity
 from pokerirl.holdem import (
@@ -254,7 +254,10 @@ class StrengthEncoding(Encoding):
         top_bit = board.top_bit[of]
         paired = hole_bits & board.rank_bits[of]  # the hole ranks on the board
         pocket = own.flags[pairs, 0] > 0
-        cards = np.concatenate([PAIRS[pairs], board.cards[of]], axis=1)
+        if self.version >= 2:  # each board's work once for all its rows
+            equity = range_equity(pairs, board.cards, of)
+        else:
+            equity = self.equity(np.concatenate([PAIRS[pairs], board.cards[of]], axis=1))
         found[:, _COLUMNS["hole_pairs_board"][0] : _COLUMNS["equity"][1]] = np.stack(
             [
                 _POPCOUNT[paired] * (1 + pocket) / 2,  # a pocket pair: two cards
@@ -263,7 +266,7 @@ class StrengthEncoding(Encoding):
                 (suited_four != 0) & draws_possible,  # four of a suit: no flush in 7 cards
                 ((_FOUR_OF_WINDOW[present] & hole_bits) != 0) & ~_STRAIGHT[present]
                 & draws_possible,
-                self.equity(cards),
+                equity,
             ],
             axis=1,
         )  # fmt: skip

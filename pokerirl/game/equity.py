@@ -699,6 +699,54 @@ def preflop_counts() -> np.ndarray:
     return total
 
 
+# Rows of one board from which a range's equities are read from the board's counts of every
+# pair (computed once and cached), not counted row by row (see ALL_PAIRS_RIVER_ROWS).
+RANGE_ROWS = 16
+
+
+def range_equity(pairs: np.ndarray, boards: np.ndarray, of: np.ndarray) -> np.ndarray:
+    """(R,) exact equity of hole pair ``pairs[r]`` (a number of ``PAIRS``) on board
+    ``boards[of[r]]`` (boards (n, 5), ``-1`` beyond the cards shown): what
+    :func:`exact_equity` gives those states, with each board's work done once for all its
+    rows (its class and suit permutation, or its counts of every pair) where it has at least
+    :data:`RANGE_ROWS` of them, as the many pairs of a range in local best response.
+
+    >>> board = np.array([[0, 14, 28, -1, -1]])  # A, 2, 3 of three suits
+    >>> cards = np.concatenate([PAIRS[[5, 900]], np.repeat(board, 2, axis=0)], axis=1)
+    >>> bool((range_equity(np.array([5, 900]), board, np.array([0, 0]))
+    ...       == exact_equity(cards)).all())
+    True
+    """
+    pairs, of = np.asarray(pairs, dtype=np.int64), np.asarray(of, dtype=np.int64)
+    boards = np.asarray(boards, dtype=np.int64)
+    found = np.empty(len(pairs))
+    shared = np.bincount(of, minlength=len(boards))[of] >= RANGE_ROWS
+    alone = np.flatnonzero(~shared)
+    if alone.size:
+        found[alone] = exact_equity(np.concatenate([PAIRS[pairs[alone]], boards[of[alone]]], 1))
+    rows = np.flatnonzero(shared)
+    shown = (boards >= 0).sum(axis=1)[of[rows]]
+    for count in (0, 3, 4, 5):
+        at = rows[shown == count]
+        if at.size == 0:
+            continue
+        states, row_state = np.unique(of[at], return_inverse=True)
+        board = np.sort(boards[states, :count], axis=1)  # a board is a set
+        table = flop_table() if count == 3 else turn_table() if count == 4 else None
+        if count == 0:
+            found[at] = preflop_equity(PAIRS[pairs[at]])
+        elif table is not None:
+            k, perm = board_classes(count).find(board)
+            pair = _PERMUTED_PAIR[perm[row_state], pairs[at]]
+            found[at] = table[k[row_state], pair] / (FLOP_DENOMINATOR, TURN_DENOMINATOR)[count - 3]
+        else:  # every pair's counts of each board, kept for its next decision
+            every = _cached_turn_counts if count == 4 else _cached_river_counts
+            counts = np.stack([every(tuple(b)) for b in board.tolist()])
+            denominator = TURN_DENOMINATOR if count == 4 else RIVER_DENOMINATOR
+            found[at] = counts[row_state, pairs[at]] / denominator
+    return found
+
+
 def exact_equity(cards: np.ndarray) -> np.ndarray:
     """(N,) exact equity of states' cards (N, 7): hole cards, then the board shown (``-1``
     beyond, 0, 3, 4 or 5 cards)."""
