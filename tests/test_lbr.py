@@ -37,7 +37,14 @@ from pokerirl.tournaments.equity import (
     showdown_shares,
     win_share,
 )
-from pokerirl.tournaments.exploit import ExploitConfig, lbr_of, load_lbr_report, run_lbr
+from pokerirl.tournaments.exploit import (
+    ExploitConfig,
+    LBRRun,
+    lbr_of,
+    load_lbr_report,
+    run_lbr,
+    run_lbr_many,
+)
 from pokerirl.tournaments.lbr import (
     LBRSettings,
     _LBRHands,
@@ -371,6 +378,24 @@ def test_same_bytes_on_any_backend_and_a_rerun_reuses_the_units(tmp_path: Path) 
     timing = json.loads((tmp_path / "one" / "timings.json").read_text())
     assert timing["units_reused"] == 3 and timing["hands_played"] == 0
 
+
+
+def test_runs_in_one_fan_out_are_the_runs_alone(tmp_path: Path) -> None:
+    """``run_lbr_many`` (a study's panel: every agent and seed at once) writes each run's
+    report as ``run_lbr`` alone writes it, whatever the order its units are played in."""
+    settings = LBRSettings(check_until="turn")
+    runs = [LBRRun(spec=spec, config=ExploitConfig(hands=80, seed=seed, lbr=settings,
+                                                   unit_hands=40),
+                   out=tmp_path / "many" / f"{spec}-{seed}")
+            for spec, seed in (("loosebot", 1), ("call", 1), ("loosebot", 4))]  # fmt: skip
+    many = run_lbr_many(runs, backend=Backend(jobs=2))
+    for run, report in zip(runs, many, strict=True):
+        alone = run_lbr(run.spec, run.config, tmp_path / "alone" / run.out.name)
+        assert report == alone
+        assert (run.out / "report.md").read_bytes() == (
+            tmp_path / "alone" / run.out.name / "report.md").read_bytes()  # fmt: skip
+        assert json.loads((run.out / "timings.json").read_text())["runs_in_fan_out"] == 3
+    assert many[0] != many[2]  # other seeds, other hands
 
 def test_other_settings_in_the_same_folder_are_refused(tmp_path: Path) -> None:
     config = ExploitConfig(hands=20, lbr=LBRSettings(check_until="river"))

@@ -21,7 +21,14 @@ from pokerirl.tournaments.authors import (
     load_authors_tournament,
     run_authors_tournament,
 )
-from pokerirl.tournaments.exploit import ExploitConfig, LBRReport, lbr_of, run_lbr
+from pokerirl.tournaments.exploit import (
+    ExploitConfig,
+    LBRReport,
+    LBRRun,
+    lbr_of,
+    run_lbr,
+    run_lbr_many,
+)
 from pokerirl.tournaments.lbr import LBRSettings, Street
 from pokerirl.tournaments.lineup import Side, TournamentError
 from pokerirl.tournaments.report import (
@@ -55,6 +62,7 @@ __all__ = [
     "Estimate",
     "ExploitConfig",
     "LBRReport",
+    "LBRRun",
     "LBRSettings",
     "Line",
     "MatchupReport",
@@ -77,6 +85,7 @@ __all__ = [
     "render_report",
     "run_authors_tournament",
     "run_lbr",
+    "run_lbr_many",
     "run_tournament",
     "write_report",
 ]

@@ -698,29 +698,42 @@ def panel_stage(study: Study, agents: AgentsResult) -> Panel:
         mbb[i][j], mbb[j][i] = line.mbb_per_hand, -line.mbb_per_hand
         se[i][j] = se[j][i] = line.std_error
         unit[i][j] = unit[j][i] = str(comparison.replication)
-    lbr = [lbr_pooled(study, name, spec) for name, spec in members]
+    lbr = lbr_panel(study, members)
     return Panel(agents=[name for name, _ in members], mbb_per_hand=mbb, std_error=se,
                  lbr_mbb_per_hand=[m for m, _ in lbr],
                  lbr_std_error=[e for _, e in lbr], replicated_over=unit)  # fmt: skip
 
 
-def lbr_pooled(study: Study, name: str, spec: str) -> tuple[float | None, float | None]:
-    """LBR against ``spec`` on every seed (resumable units under ``panel/lbr/NAME/seed-S``):
-    the mean of the seeds' win rates and its SE from theirs (equal hands per seed)."""
-    from pokerirl.tournaments.exploit import lbr_of
+def lbr_panel(
+    study: Study, members: list[tuple[str, str]]
+) -> list[tuple[float | None, float | None]]:
+    """LBR against each member on every seed, all in one fan-out (a run is one unit: run one
+    by one they would leave all workers but one idle; resumable units under
+    ``panel/lbr/NAME/seed-S``): per member, the mean of the seeds' win rates and its SE from
+    theirs (equal hands per seed)."""
+    from pokerirl.tournaments.exploit import ExploitConfig, LBRRun, run_lbr_many
+    from pokerirl.tournaments.lbr import LBRSettings, parse_street
     from pokerirl.tournaments.lineup import agent_spec_for_seed
 
-    hands = study.config.lbr_hands
+    hands, seeds = study.config.lbr_hands, study.config.seeds
     if not hands:
-        return None, None
-    study.say(f"      LBR against {name}: {hands:,} hands x {len(study.config.seeds)} seeds")
-    found = [
-        lbr_of(agent_spec_for_seed(spec, seed), hands=hands, seed=seed,
-               check_until=LBR_CHECK_UNTIL, backend=study.execution.backend,
-               out=study.root / "panel" / "lbr" / name / f"seed-{seed}",
-               overwrite=study.overwrite, progress=study.execution.progress)
-        for seed in study.config.seeds
+        return [(None, None)] * len(members)
+    for name, _ in members:
+        study.say(f"      LBR against {name}: {hands:,} hands x {len(seeds)} seeds")
+    settings = LBRSettings(check_until=parse_street(LBR_CHECK_UNTIL))
+    runs = [
+        LBRRun(spec=agent_spec_for_seed(spec, seed),
+               config=ExploitConfig(hands=hands, seed=seed, lbr=settings),
+               out=study.root / "panel" / "lbr" / name / f"seed-{seed}")
+        for name, spec in members
+        for seed in seeds
     ]  # fmt: skip
-    mean = sum(r.lbr_mbb_per_hand for r in found) / len(found)
-    error = math.sqrt(sum(r.lbr_std_error**2 for r in found)) / len(found)
-    return mean, error
+    reports = run_lbr_many(runs, backend=study.execution.backend, overwrite=study.overwrite,
+                           progress=study.execution.progress)  # fmt: skip
+    pooled: list[tuple[float | None, float | None]] = []
+    for first in range(0, len(reports), len(seeds)):
+        found = reports[first : first + len(seeds)]
+        mean = sum(r.lbr_mbb_per_hand for r in found) / len(found)
+        error = math.sqrt(sum(r.lbr_std_error**2 for r in found)) / len(found)
+        pooled.append((mean, error))
+    return pooled
