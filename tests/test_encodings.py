@@ -196,6 +196,15 @@ def test_strength_card_features_equal_a_card_by_card_reference() -> None:
                 seen[name].add(value)
     assert seen["category"] == set(range(1, 10))  # every category, and both values of each flag
     assert all(len(values) == 2 for name, values in seen.items() if name != "category")
+    # The betting columns (read from a table of the betting states) against their definitions.
+    raises = found["raises"].reshape(-1, 4, 5)
+    assert np.array_equal(raises.argmax(axis=2), states.raise_nums) and raises.sum() == 4 * 3_000
+    facing = states.legal_mask[:, CALL]
+    pot, to_call = pot_and_call(states.street, states.raise_nums, facing)
+    assert np.array_equal(found["facing_bet"][:, 0], facing)
+    assert np.array_equal(found["pot"][:, 0], (pot / 100).astype(np.float32))
+    odds = np.where(facing, to_call / np.maximum(pot + to_call, 1), 0.0).astype(np.float32)
+    assert np.array_equal(found["pot_odds"][:, 0], odds) and found["pot_odds"].max() > 0
 
 
 def test_a_range_encodes_as_the_states_it_stands_for() -> None:
