@@ -45,7 +45,7 @@ import numpy as np
 
 from pokerirl.errors import ConfigError
 from pokerirl.game.equity import exact_equity, range_equity
-from pokerirl.game.evaluator import hand_strength, pair_index
+from pokerirl.game.evaluator import _RANK, _SUIT, hand_strength, pair_index
 from pokerirl.game.preflop import sampled_preflop_equity
 from pokerirl.holdem import (
     CALL,
@@ -65,6 +65,9 @@ MAX_POT = 100  # 50 chips a player: 2 + 2·4 preflop, + 2·4 flop, + 4·4 turn, 
 EQUITY_SAMPLES = 64  # version 1: Monte Carlo runouts per state after the flop
 _SAMPLE_SEED = 20_261_204  # version 1's fixed sample bank: the same state, the same features
 STRENGTH_VERSION = 2  # the current version: exact equity on every street
+
+# Board cards shown (0 .. 5) -> street (0 preflop .. 3 river).
+_STREET_OF_SHOWN = np.searchsorted(np.array(BOARD_CARDS_BY_STREET), np.arange(6))
 
 
 class EncodingName(StrEnum):
@@ -103,8 +106,7 @@ class RawStates:
     @property
     def street(self) -> np.ndarray:
         """(N,) 0 preflop .. 3 river, from how many board cards are shown."""
-        shown = (np.asarray(self.cards)[:, 2:] >= 0).sum(axis=1)
-        return np.searchsorted(np.array(BOARD_CARDS_BY_STREET), shown).astype(np.int64)
+        return _STREET_OF_SHOWN[(np.asarray(self.cards)[:, 2:] >= 0).sum(axis=1)]
 
     def take(self, rows: np.ndarray) -> RawStates:
         rows = np.asarray(rows)
@@ -371,20 +373,19 @@ _STRAIGHT = ((np.arange(1 << NUM_RANKS)[:, None] & _WINDOWS) == _WINDOWS).any(ax
 _FOUR_OF_WINDOW = np.bitwise_or.reduce(
     np.where(_POPCOUNT[np.arange(1 << NUM_RANKS)[:, None] & _WINDOWS] == 4, _WINDOWS, 0), axis=1
 )
-_RANK = (np.arange(NUM_CARDS) % NUM_RANKS + NUM_RANKS - 1) % NUM_RANKS  # 2 .. A as 0 .. 12
 _CARD_RANK_BIT = np.int64(1) << _RANK
 # A set of cards as one int64: bit 16 x suit + rank. A card's bit; the extra last entry, 0,
 # is what index -1 (no card) reads.
 _SUIT_SHIFTS = 16 * np.arange(4, dtype=np.int64)[:, None]
-_CARD_BIT = np.append(_CARD_RANK_BIT << _SUIT_SHIFTS[np.arange(NUM_CARDS) // NUM_RANKS, 0], 0)
+_PACKED_CARD = np.append(_CARD_RANK_BIT << _SUIT_SHIFTS[_SUIT, 0], 0)
 _RANKS = (1 << NUM_RANKS) - 1
 # _TOP_BIT[mask]: the mask's highest bit (0 for none).
 _TOP_BIT = np.array([1 << (mask.bit_length() - 1) if mask else 0 for mask in range(_RANKS + 1)])
 
 
 def _packed(cards: np.ndarray) -> np.ndarray:
-    """(N,) int64 the set of cards (N, k) with ``-1`` pads, packed as :data:`_CARD_BIT`."""
-    return np.bitwise_or.reduce(_CARD_BIT[cards], axis=1)
+    """(N,) int64 the set of cards (N, k) with ``-1`` pads, packed as :data:`_PACKED_CARD`."""
+    return np.bitwise_or.reduce(_PACKED_CARD[cards], axis=1)
 
 
 def _suit_masks(packed: np.ndarray) -> np.ndarray:
@@ -443,19 +444,19 @@ class _PairFeatures:
     flags: np.ndarray  # (1326, 2) float32: the pocket-pair and suited columns
     rank_bits: np.ndarray  # (1326,) the two ranks' bits (2 .. A as bits 0 .. 12)
     high_bit: np.ndarray  # the higher rank's
-    packed: np.ndarray  # (1326,) the two cards, as :data:`_CARD_BIT`
+    packed: np.ndarray  # (1326,) the two cards, as :data:`_PACKED_CARD`
     suits: np.ndarray  # (4, 1326) uint8: _FOUR_SUITED where a hole card is of the suit
 
     @classmethod
     def build(cls) -> _PairFeatures:
         rank = _RANK[PAIRS]
         high, low = rank.max(axis=1), rank.min(axis=1)
-        held = (PAIRS[:, :, None] // NUM_RANKS == np.arange(4)).any(axis=1).T
+        held = (_SUIT[PAIRS][:, :, None] == np.arange(4)).any(axis=1).T
         ranks = np.stack([high + _ONE_HOT_AT["high_rank"], low + _ONE_HOT_AT["low_rank"]], axis=1)
         return cls(
             ones=np.concatenate([PAIRS + _COLUMNS["hole"][0], ranks], axis=1),
             flags=np.stack([rank[:, 0] == rank[:, 1],
-                            PAIRS[:, 0] // NUM_RANKS == PAIRS[:, 1] // NUM_RANKS],
+                            _SUIT[PAIRS[:, 0]] == _SUIT[PAIRS[:, 1]]],
                            axis=1).astype(np.float32),
             rank_bits=_CARD_RANK_BIT[PAIRS[:, 0]] | _CARD_RANK_BIT[PAIRS[:, 1]],
             high_bit=np.int64(1) << high, packed=_packed(PAIRS),
@@ -470,7 +471,7 @@ class _BoardFeatures:
     cards: np.ndarray  # (n, 5) the board, -1 beyond
     ones: np.ndarray  # (n, 10) the columns of its ones: the board's cards, raises, street
     numbers: np.ndarray  # (n, 3) float32: facing a bet, pot, pot odds
-    packed: np.ndarray  # (n,) the board, as :data:`_CARD_BIT`
+    packed: np.ndarray  # (n,) the board, as :data:`_PACKED_CARD`
     rank_bits: np.ndarray  # (n,) the ranks on the board
     top_bit: np.ndarray  # (n,) the board's highest rank's bit, 0 for no board
     cards_to_come: np.ndarray  # (n,) bool: the flop or the turn (a draw can come in)
@@ -478,7 +479,7 @@ class _BoardFeatures:
     @classmethod
     def of(cls, states: RawStates) -> _BoardFeatures:
         board = np.asarray(states.cards, dtype=np.int64)[:, 2:]
-        street = _STREET_OF_SHOWN[(board >= 0).sum(axis=1)]
+        street = states.street
         raises = np.minimum(np.asarray(states.raise_nums, dtype=np.int64), MAX_RAISES)
         facing = np.asarray(states.legal_mask, dtype=bool)[:, CALL]
         betting = (street * (MAX_RAISES + 1) ** NUM_ROUNDS + raises @ _RAISE_PLACES) * 2 + facing
@@ -516,7 +517,6 @@ class _BettingTable:
         return cls(ones=ones, numbers=numbers)
 
 
-_STREET_OF_SHOWN = np.array([0, -1, -1, 1, 2, 3])  # board cards shown -> street
 _RAISE_PLACES = (MAX_RAISES + 1) ** np.arange(NUM_ROUNDS - 1, -1, -1)  # as np.indices orders
 # Where a board card's 1 goes; a card not shown (index -1) puts its 1 in the equity column,
 # which is written after the ones.

@@ -25,16 +25,16 @@ from __future__ import annotations
 import numpy as np
 
 from pokerirl.game.cases import PREFLOP_DENOMINATOR
-from pokerirl.game.evaluator import hand_strength
+from pokerirl.game.evaluator import _RANK, _SUIT, hand_strength
 from pokerirl.holdem import NUM_CARDS
 
 NUM_RANKS = 13
 
 
 def _class_of(hole: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    rank = (hole % NUM_RANKS + NUM_RANKS - 1) % NUM_RANKS  # 2 .. A as 0 .. 12
+    rank = _RANK[hole]  # 2 .. A as 0 .. 12
     high, low = rank.max(axis=1), rank.min(axis=1)
-    suited = hole[:, 0] // NUM_RANKS == hole[:, 1] // NUM_RANKS
+    suited = _SUIT[hole[:, 0]] == _SUIT[hole[:, 1]]
     return np.where(suited, high, low), np.where(suited, low, high)
 
 
