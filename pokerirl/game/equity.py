@@ -675,9 +675,18 @@ def _class_counts(
 ) -> np.ndarray:
     """(N,) int64: each state's count read from a table of (board class, hole pair)."""
     holes = np.asarray(holes, dtype=np.int64)
+    pairs = pair_index(holes[:, 0], holes[:, 1])
+    return _pair_class_counts(table, classes, pairs, boards, slice(None))  # row r: board r
+
+
+def _pair_class_counts(
+    table: np.ndarray, classes: BoardClasses, pairs: np.ndarray, boards: np.ndarray,
+    of: np.ndarray | slice,
+) -> np.ndarray:  # fmt: skip
+    """(R,) int64: the count of pair ``pairs[r]`` on board ``boards[of[r]]`` read from a
+    table of (board class, hole pair); each board's class found once."""
     k, perm = classes.find(boards)
-    pair = _PERMUTED_PAIR[perm, pair_index(holes[:, 0], holes[:, 1])]
-    return np.asarray(table[k, pair], dtype=np.int64)
+    return np.asarray(table[k[of], _PERMUTED_PAIR[perm[of], pairs]], dtype=np.int64)
 
 
 def flop_equity(holes: np.ndarray, flops: np.ndarray) -> np.ndarray:
@@ -726,24 +735,23 @@ def range_equity(pairs: np.ndarray, boards: np.ndarray, of: np.ndarray) -> np.nd
         found[alone] = exact_equity(np.concatenate([PAIRS[pairs[alone]], boards[of[alone]]], 1))
     rows = np.flatnonzero(shared)
     shown = (boards >= 0).sum(axis=1)[of[rows]]
-    for count in (0, 3, 4, 5):
+    preflop = rows[shown == 0]
+    if preflop.size:
+        found[preflop] = preflop_equity(PAIRS[pairs[preflop]])
+    for count, denominator in ((3, FLOP_DENOMINATOR), (4, TURN_DENOMINATOR),
+                               (5, RIVER_DENOMINATOR)):  # fmt: skip
         at = rows[shown == count]
         if at.size == 0:
             continue
         states, row_state = np.unique(of[at], return_inverse=True)
         board = np.sort(boards[states, :count], axis=1)  # a board is a set
         table = flop_table() if count == 3 else turn_table() if count == 4 else None
-        if count == 0:
-            found[at] = preflop_equity(PAIRS[pairs[at]])
-        elif table is not None:
-            k, perm = board_classes(count).find(board)
-            pair = _PERMUTED_PAIR[perm[row_state], pairs[at]]
-            found[at] = table[k[row_state], pair] / (FLOP_DENOMINATOR, TURN_DENOMINATOR)[count - 3]
+        if table is not None:
+            counts = _pair_class_counts(table, board_classes(count), pairs[at], board, row_state)
         else:  # every pair's counts of each board, kept for its next decision
             every = _cached_turn_counts if count == 4 else _cached_river_counts
-            counts = np.stack([every(tuple(b)) for b in board.tolist()])
-            denominator = TURN_DENOMINATOR if count == 4 else RIVER_DENOMINATOR
-            found[at] = counts[row_state, pairs[at]] / denominator
+            counts = np.stack([every(tuple(b)) for b in board.tolist()])[row_state, pairs[at]]
+        found[at] = counts / denominator
     return found
 
 
