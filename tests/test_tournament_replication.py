@@ -16,7 +16,16 @@ from pokerirl.agents.config import DQNConfig, TrainConfig
 from pokerirl.agents.train import train_seeds
 from pokerirl.cli import app
 from pokerirl.tournaments import load_report, run_tournament
-from pokerirl.tournaments.report import REPORT_FILE, Design, Replication
+from pokerirl.tournaments.lineup import Group
+from pokerirl.tournaments.report import (
+    REPORT_FILE,
+    Design,
+    Line,
+    MatchupReport,
+    Replication,
+    SeedLine,
+    compare,
+)
 from pokerirl.tournaments.stats import across_agents
 
 runner = CliRunner()
@@ -179,3 +188,34 @@ def test_a_shipped_report_of_format_1_reads_as_agent_sets_paired_by_seed() -> No
         assert comparison.line.mbb_per_hand == pytest.approx(matchup.pooled.mbb_per_hand)
         assert comparison.line.std_error >= max(matchup.pooled.std_error,
                                                 comparison.deal_std_error)  # fmt: skip
+
+
+def _line(value: float, **seed: object) -> dict:
+    return dict(mbb_per_hand=value, std_error=1.0 + value / 7, ci95=(value - 2, value + 2),
+                p_value=0.5, n=10, p_value_bonferroni=1.0, p_value_holm=1.0,
+                significant_bonferroni=False, significant_holm=False, **seed)  # fmt: skip
+
+
+def test_a_comparison_reads_the_same_whatever_the_agents_fingerprints() -> None:
+    """The test across training seeds adds the agents' means in the order the matchups list
+    them, not by fingerprint: an agent's fingerprint covers its config, which names the run
+    it was trained from (a path), so the same study in another folder must give the same
+    bytes. Values chosen so that adding them in another order changes the last bits."""
+    values = np.array([[0.1, 0.7, 0.3], [1e16, 0.2, 3.3], [0.6, -1e16, 0.9]])
+
+    def matchups(names_a: list[str], names_b: list[str]) -> tuple[MatchupReport, ...]:
+        found = []
+        for i, j in np.ndindex(values.shape):
+            seeds = tuple(SeedLine(**_line(values[i, j] + s, seed=s, hands=100,
+                                           fingerprint_a=names_a[i], fingerprint_b=names_b[j]))
+                          for s in range(2))  # fmt: skip
+            found.append(MatchupReport(agent_a="a", agent_b="b", spec_a=f"a/seed-{i}",
+                                       spec_b=f"b/seed-{j}", pooled=Line(**_line(values[i, j])),
+                                       pooled_over="seeds", seeds=seeds))  # fmt: skip
+        return tuple(found)
+
+    group = [Group(agent_a="a", agent_b="b", matchups=tuple(range(values.size)))]
+    ascending = compare(matchups(["1", "2", "3"], ["4", "5", "6"]), group, 0.05)
+    descending = compare(matchups(["9", "8", "7"], ["6", "5", "4"]), group, 0.05)
+    assert ascending[0].design == Design.CROSSED
+    assert ascending == descending

@@ -212,8 +212,11 @@ def compare(
     estimates: list[Estimate] = []
     for group in groups:
         lines = [line for k in group.matchups for line in matchups[k].seeds]
-        rows = sorted({line.fingerprint_a for line in lines})
-        cols = sorted({line.fingerprint_b for line in lines})
+        # In the order the matchups list them, not by fingerprint: a fingerprint covers the
+        # agent's config, which names its run's folder, and sums taken in another order differ
+        # in their last bits (the same study elsewhere must give the same bytes).
+        rows = list(dict.fromkeys(line.fingerprint_a for line in lines))
+        cols = list(dict.fromkeys(line.fingerprint_b for line in lines))
         cells: dict[tuple[int, int], list[SeedLine]] = {}
         for line in lines:
             cell = rows.index(line.fingerprint_a), cols.index(line.fingerprint_b)
