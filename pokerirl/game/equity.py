@@ -457,6 +457,8 @@ def _by_board(
     ``all_pairs(board)`` once: the same integers either way."""
     holes = np.asarray(holes, dtype=np.int64)
     boards = np.sort(np.asarray(boards, dtype=np.int64), axis=1)  # a board is a set
+    if len(holes) < least:  # no board can have enough rows
+        return per_row(holes, boards)
     found = np.empty(len(holes), dtype=np.int64)
     code = boards @ (NUM_CARDS ** np.arange(boards.shape[1], dtype=np.int64))  # one int a set
     _, first, group, sizes = np.unique(code, return_index=True, return_inverse=True,
@@ -728,8 +730,11 @@ def range_equity(pairs: np.ndarray, boards: np.ndarray, of: np.ndarray) -> np.nd
     """
     pairs, of = np.asarray(pairs, dtype=np.int64), np.asarray(of, dtype=np.int64)
     boards = np.asarray(boards, dtype=np.int64)
+    rows_of_state = np.bincount(of, minlength=len(boards))
+    if len(pairs) < RANGE_ROWS or rows_of_state.max() < RANGE_ROWS:  # a DQN: a row a state
+        return exact_equity(np.concatenate([PAIRS[pairs], boards[of]], axis=1))
     found = np.empty(len(pairs))
-    shared = np.bincount(of, minlength=len(boards))[of] >= RANGE_ROWS
+    shared = rows_of_state[of] >= RANGE_ROWS
     alone = np.flatnonzero(~shared)
     if alone.size:
         found[alone] = exact_equity(np.concatenate([PAIRS[pairs[alone]], boards[of[alone]]], 1))
