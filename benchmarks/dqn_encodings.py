@@ -21,6 +21,9 @@ Two plays, each measured so:
   one makes ~7 % more decisions a hand, each a stored transition, so ~7 % more updates (one
   per ``train_every`` transitions), which are most of the CPU: the hands/s ratio is the
   per-decision one divided by that. Printed with the decisions a hand of each.
+
+A ratio moves by about ±0.04 between runs of the same code on a 2-core machine: compare means
+over several ``--seed`` (docs/results/strength-cost/README.md has seeds 0-4).
 """
 
 from __future__ import annotations
