@@ -23,6 +23,15 @@ NUM_PAIRS = NUM_CARDS * (NUM_CARDS - 1) // 2  # 1,326 hole-card pairs
 # Every pair (a, b), a < b, in itertools.combinations order: pair p's index everywhere.
 PAIRS = np.array([(a, b) for a in range(NUM_CARDS) for b in range(a + 1, NUM_CARDS)], np.int64)
 
+
+def pair_cards(pairs: np.ndarray, boards: np.ndarray) -> np.ndarray:
+    """(R, 2 + k) row r: the cards of pair number ``pairs[r]``, then ``boards[r]`` (R, k).
+
+    >>> pair_cards(np.array([0, 1325]), np.array([[7], [-1]])).tolist()
+    [[0, 1, 7], [50, 51, -1]]
+    """
+    return np.concatenate([PAIRS[np.asarray(pairs, dtype=np.int64)], boards], axis=1)
+
 ACTIONS: tuple[str, ...] = ("call", "raise", "fold", "check")
 CALL, RAISE, FOLD, CHECK = 0, 1, 2, 3
 NUM_ACTIONS = 4

@@ -55,6 +55,7 @@ from pokerirl.holdem import (
     OBS_SIZE,
     PAIRS,
     encode_obs,
+    pair_cards,
 )
 
 NUM_RANKS = 13
@@ -142,8 +143,7 @@ class Encoding:
         its hole cards; the rows :meth:`encode` gives those states. Local best response
         encodes every pair of a range this way."""
         of = np.asarray(of, dtype=np.int64)
-        cards = np.array(np.asarray(states.cards)[of], dtype=np.int8)
-        cards[:, :2] = PAIRS[np.asarray(pairs, dtype=np.int64)]
+        cards = pair_cards(pairs, np.asarray(states.cards)[of, 2:]).astype(np.int8)
         return self.encode(RawStates(cards=cards, raise_nums=np.asarray(states.raise_nums)[of],
                                      legal_mask=np.asarray(states.legal_mask)[of]))  # fmt: skip
 
@@ -259,7 +259,7 @@ class StrengthEncoding(Encoding):
         if self.version >= 2:  # each board's work once for all its rows
             equity = range_equity(pairs, board.cards, of)
         else:
-            equity = self.equity(np.concatenate([PAIRS[pairs], board.cards[of]], axis=1))
+            equity = self.equity(pair_cards(pairs, board.cards[of]))
         found[:, _COLUMNS["hole_pairs_board"][0] : _COLUMNS["equity"][1]] = np.stack(
             [
                 _POPCOUNT[paired] * (1 + pocket) / 2,  # a pocket pair: two cards

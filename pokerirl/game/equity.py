@@ -73,7 +73,7 @@ from pokerirl.game.evaluator import (
     seven_card_strengths,
 )
 from pokerirl.game.preflop import preflop_equity  # its table is summed from our flop table
-from pokerirl.holdem import NUM_CARDS, NUM_PAIRS, PAIRS
+from pokerirl.holdem import NUM_CARDS, NUM_PAIRS, PAIRS, pair_cards
 
 NUM_RANKS = 13
 FLOP_CLASSES = 1_755  # flops up to a permutation of the suits
@@ -732,12 +732,12 @@ def range_equity(pairs: np.ndarray, boards: np.ndarray, of: np.ndarray) -> np.nd
     boards = np.asarray(boards, dtype=np.int64)
     rows_of_state = np.bincount(of, minlength=len(boards))
     if len(pairs) < RANGE_ROWS or rows_of_state.max() < RANGE_ROWS:  # a DQN: a row a state
-        return exact_equity(np.concatenate([PAIRS[pairs], boards[of]], axis=1))
+        return exact_equity(pair_cards(pairs, boards[of]))
     found = np.empty(len(pairs))
     shared = rows_of_state[of] >= RANGE_ROWS
     alone = np.flatnonzero(~shared)
     if alone.size:
-        found[alone] = exact_equity(np.concatenate([PAIRS[pairs[alone]], boards[of[alone]]], 1))
+        found[alone] = exact_equity(pair_cards(pairs[alone], boards[of[alone]]))
     rows = np.flatnonzero(shared)
     shown = (boards >= 0).sum(axis=1)[of[rows]]
     preflop = rows[shown == 0]

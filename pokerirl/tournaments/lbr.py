@@ -53,11 +53,10 @@ from pokerirl.game.bots import Agent, agent_action_probs
 from pokerirl.game.encodings import Encoding, RawStates
 from pokerirl.game.engine import RAISE_SIZE_BY_ROUND, LimitHoldemBatch
 from pokerirl.game.match import agent_encoding
-from pokerirl.holdem import CALL, CHECK, FOLD, MAX_RAISES, NUM_ACTIONS, RAISE
+from pokerirl.holdem import CALL, CHECK, FOLD, MAX_RAISES, NUM_ACTIONS, RAISE, pair_cards
 from pokerirl.tournaments.equity import (
     CLASH,
     NUM_PAIRS,
-    PAIRS,
     board_strengths,
     pair_index,
 )
@@ -182,7 +181,7 @@ def range_policy(
 
 
 def _cards_of(pairs: np.ndarray, board: np.ndarray) -> np.ndarray:
-    return np.concatenate([PAIRS[pairs], board], axis=1).astype(np.int8)
+    return pair_cards(pairs, board).astype(np.int8)
 
 
 def state_after_raise(raises: np.ndarray, street: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
