@@ -1,28 +1,15 @@
 """Where a 20,000-hand DQN run's CPU goes (seed 0, own play, turn table on): time.process_time
 around the learner's updates, its decisions and the strength encoding. Output: parts.txt."""
-import os, sys
-os.environ["OMP_NUM_THREADS"]="1"
-import time, torch
-torch.set_num_threads(1)
 import pokerirl.agents.dqn as D
 import pokerirl.game.encodings as E
-from pokerirl.game import make_agent
-from pokerirl.game.equity import forget_recent_states, use_turn_table
+from _timing import acc, runs, wrap
+from pokerirl.game.equity import use_turn_table
+
 use_turn_table(True)
-acc = {}
-def wrap(owner, name, label):
-    orig = getattr(owner, name)
-    def f(*a, **k):
-        t = time.process_time(); r = orig(*a, **k); acc[label] = acc.get(label, 0) + time.process_time() - t; return r
-    setattr(owner, name, f)
 wrap(D.DQNLearner, "update", "update")
 wrap(E.StrengthEncoding, "encode", "encode")
 wrap(D, "_learner_decides", "decides")
 wrap(D, "_close_ended", "close_ended")
-for enc in ["rlcard", "strength"] * 2:
-    D.train_dqn(D.DQNConfig(), hands=1000, seed=1, opponent=make_agent("random"), encoding=enc)
-    forget_recent_states(); acc.clear()
-    t = time.process_time()
-    l = D.train_dqn(D.DQNConfig(), hands=20000, seed=0, opponent=make_agent("random"), encoding=enc)
-    tot = time.process_time() - t
-    print(enc, f"total {tot:.3f}", {k: round(v, 3) for k, v in acc.items()}, "rest", round(tot - acc["update"] - acc["decides"], 3), l.total_t, l.train_t)
+for enc, tot, l in runs(["rlcard", "strength"] * 2):
+    print(enc, f"total {tot:.3f}", {k: round(v, 3) for k, v in acc.items()}, "rest",
+          round(tot - acc["update"] - acc["decides"], 3), l.total_t, l.train_t)
