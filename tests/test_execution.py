@@ -9,6 +9,7 @@ import os
 import pickle
 import re
 import signal
+import sys
 from pathlib import Path
 
 import pytest
@@ -215,3 +216,25 @@ def test_the_processes_started_for_ray_import_this_pokerirl(
     assert Path(_pythonpath()) / "pokerirl" / "__init__.py" == here
     monkeypatch.setenv("PYTHONPATH", "/elsewhere")
     assert _pythonpath().split(os.pathsep) == [str(here.parents[1]), "/elsewhere"]
+
+
+def test_a_head_that_never_starts_is_one_error_with_each_attempts_reason(
+    monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from pokerirl.execution import ray_head, ray_private
+
+    folders: list[Path] = []
+
+    def failing(home: Path, num_cpus: int) -> tuple[list[str], int]:
+        folders.append(home)
+        return [sys.executable, "-c", f"print('head {len(folders)} did not register')"], 1
+
+    monkeypatch.setattr(ray_private, "_head_command", failing)
+    with pytest.raises(ExecutionError) as error, ray_head(num_cpus=1, attempts=3):
+        pytest.fail("a head that never started was yielded")
+    assert str(error.value) == (
+        "ray start --head failed 3 times: 1: head 1 did not register; "
+        "2: head 2 did not register; 3: head 3 did not register"
+    )
+    assert len(set(folders)) == 3 and not any(folder.exists() for folder in folders)
+    assert capsys.readouterr().err.count("; starting a fresh head\n") == 2

@@ -318,3 +318,35 @@ def test_a_units_progress_on_ray_moves_the_drivers_bar(cluster: str) -> None:
     assert done.returncode == 0, done.stderr[-2000:]
     shown = [float(n) for n in re.findall(r"steps: .*?\| (\d+\.\d\d)/2 ", done.stderr)]
     assert shown[-1] == 2.0 and [n for n in shown if 0 < n < 2 and n != 1], shown
+
+
+def test_a_head_that_fails_to_start_is_replaced_by_a_fresh_one(
+    monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # Ray gives its raylet 30 s to register and then gives up: on a loaded machine (CI, make
+    # test's other worker busy) the first head can fail where a second one starts.
+    import socket
+
+    from pokerirl.execution import ray_private
+
+    real, folders = ray_private._head_command, []
+
+    def first_fails(home: Path, num_cpus: int) -> tuple[list[str], int]:
+        folders.append(home)
+        if len(folders) == 1:
+            timed_out = "print('Exception: The current node timed out during startup.')"
+            return [sys.executable, "-c", f"{timed_out}; raise SystemExit(1)"], 1
+        return real(home, num_cpus)
+
+    monkeypatch.setattr(ray_private, "_head_command", first_fails)
+    before = _descendants(os.getpid())
+    with ray_head(num_cpus=1) as address:
+        host, port = address.rsplit(":", 1)
+        socket.create_connection((host, int(port)), timeout=10).close()  # the head answers
+        started = _descendants(os.getpid()) - before
+    assert len(folders) == 2 and not any(folder.exists() for folder in folders)
+    assert capsys.readouterr().err == (
+        "ray start --head: attempt 1 of 3 failed (Exception: The current node timed out during "
+        "startup.); starting a fresh head\n"
+    )
+    assert started and not [pid for pid in started if _running(pid)]

@@ -94,7 +94,7 @@ def _reap() -> None:
 
 
 @contextlib.contextmanager
-def ray_head(*, num_cpus: int = 2, timeout: float = 120.0) -> Iterator[str]:
+def ray_head(*, num_cpus: int = 2, timeout: float = 120.0, attempts: int = 3) -> Iterator[str]:
     """A private single-node Ray cluster, started with Ray's own ``ray start --head``; yields
     its address (for ``--ray``).
 
@@ -105,12 +105,47 @@ def ray_head(*, num_cpus: int = 2, timeout: float = 120.0) -> Iterator[str]:
     It stops only its own processes, by the process ids it recorded: never Ray's
     stop-everything command, which ends every Ray process on the machine.
 
+    A head that fails to start is stopped and started afresh (new folder, new ports), up to
+    ``attempts`` times in all, each given ``timeout`` seconds, with a line on standard error
+    for each failure: Ray gives its raylet a fixed 30 seconds to register, which a loaded
+    machine can exceed, and a free port can be taken between its choice and its use.
+
     Raises:
-        ExecutionError: Ray did not start (with the reason from its log).
+        ExecutionError: Ray did not start (with each attempt's reason, from its log).
     """
+    reasons: list[str] = []
+    for attempt in range(1, attempts + 1):
+        home = Path(tempfile.mkdtemp(prefix="ray", dir="/tmp" if os.path.isdir("/tmp") else None))
+        try:
+            head, port, reason = _start_head(home, num_cpus, timeout)
+            if reason is None:
+                try:
+                    yield f"127.0.0.1:{port}"
+                finally:
+                    _stop_head(head)
+                return
+            _stop_head(head)
+        finally:
+            shutil.rmtree(home, ignore_errors=True)
+        reasons.append(reason)
+        if attempt < attempts:
+            print(
+                f"ray start --head: attempt {attempt} of {attempts} failed ({reason}); "
+                "starting a fresh head", file=sys.stderr, flush=True,
+            )  # fmt: skip
+    raise ExecutionError(
+        f"ray start --head failed {attempts} times: "
+        + "; ".join(f"{n}: {reason}" for n, reason in enumerate(reasons, 1))
+    )
+
+
+def _start_head(
+    home: Path, num_cpus: int, timeout: float
+) -> tuple[subprocess.Popen[bytes], int, str | None]:
+    """``ray start --head --block`` in ``home``; the process, the head's port, and why it did
+    not start (the last lines of its log) or ``None`` once Ray says it has."""
     import subprocess
 
-    home = Path(tempfile.mkdtemp(prefix="ray", dir="/tmp" if os.path.isdir("/tmp") else None))
     command, port = _head_command(home, num_cpus)
     (home / "cwd").mkdir()
     log = home / "head.log"
@@ -119,17 +154,13 @@ def ray_head(*, num_cpus: int = 2, timeout: float = 120.0) -> Iterator[str]:
             command, cwd=home / "cwd", env=_head_environment(), stdout=stream,
             stderr=subprocess.STDOUT,
         )  # fmt: skip
-    try:
-        deadline = time.monotonic() + timeout
-        while b"Ray runtime started" not in log.read_bytes():
-            if head.poll() is not None or time.monotonic() > deadline:
-                tail = log.read_text(errors="replace").strip().splitlines()[-3:]
-                raise ExecutionError(f"ray start --head failed: {' | '.join(tail)}")
-            time.sleep(0.2)
-        yield f"127.0.0.1:{port}"
-    finally:
-        _stop_head(head)
-        shutil.rmtree(home, ignore_errors=True)
+    deadline = time.monotonic() + timeout
+    while b"Ray runtime started" not in log.read_bytes():
+        if head.poll() is not None or time.monotonic() > deadline:
+            tail = log.read_text(errors="replace").strip().splitlines()[-3:]
+            return head, port, " | ".join(line.strip() for line in tail) or "no output"
+        time.sleep(0.2)
+    return head, port, None
 
 
 def _head_command(home: Path, num_cpus: int) -> tuple[list[str], int]:
