@@ -238,3 +238,26 @@ def test_a_head_that_never_starts_is_one_error_with_each_attempts_reason(
     )
     assert len(set(folders)) == 3 and not any(folder.exists() for folder in folders)
     assert capsys.readouterr().err.count("; starting a fresh head\n") == 2
+
+
+def test_a_ray_that_fails_to_start_is_one_line() -> None:
+    # Ray raises a bare Exception when its raylet does not register within its fixed 30 s
+    # (a loaded machine): one line, not a traceback. A stand-in for `ray`, since no machine
+    # times Ray out on demand.
+    from types import SimpleNamespace
+
+    from pokerirl.execution import LOCAL_RAY
+    from pokerirl.execution.ray_connect import _ray_init
+
+    def init(**_: object) -> None:
+        raise Exception(
+            "The current node timed out during startup. This could happen because some of "
+            "the raylet failed to startup or the GCS has become overloaded.\nmore"
+        )
+
+    with pytest.raises(ExecutionError) as error:
+        _ray_init(SimpleNamespace(init=init), LOCAL_RAY, None)
+    assert str(error.value) == (
+        "cannot connect to Ray at local: The current node timed out during startup. This could "
+        "happen because some of the raylet failed to startup or the GCS has become overloaded."
+    )

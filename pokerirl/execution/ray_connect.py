@@ -53,7 +53,7 @@ def _ray_init(ray: Any, address: str, temp_dir: str | None) -> None:
     try:
         with _address_as_given():
             ray.init(address=address, **options)
-    except (ConnectionError, RuntimeError, ValueError) as error:
+    except Exception as error:  # Ray's own startup timeout is a bare Exception
         raise ExecutionError(f"cannot connect to Ray at {address}: {_why(error)}") from None
     finally:
         if callable(handler):
