@@ -1,6 +1,5 @@
 """Replays the recorded calls (rec.py: states.pkl) alone, three times, then once profiled."""
 import pickle, time, cProfile, pstats
-import numpy as np
 import pokerirl.game.encodings as E
 from pokerirl.game.equity import use_turn_table, forget_recent_states
 use_turn_table(True)
