@@ -261,3 +261,31 @@ def test_a_ray_that_fails_to_start_is_one_line() -> None:
         "cannot connect to Ray at local: The current node timed out during startup. This could "
         "happen because some of the raylet failed to startup or the GCS has become overloaded."
     )
+
+
+def test_a_head_interrupted_while_starting_is_stopped(monkeypatch: pytest.MonkeyPatch) -> None:
+    # A Ctrl-C (here another exception) while waiting for Ray stops the head, not only its folder.
+    import time
+    from types import SimpleNamespace
+
+    from pokerirl.execution import ray_head, ray_private
+    from pokerirl.execution.processes import _descendants, _running
+
+    before, started = _descendants(os.getpid()), set()
+
+    class Interrupted(BaseException):
+        pass
+
+    def still_starting(home: Path, num_cpus: int) -> tuple[list[str], int]:
+        return [sys.executable, "-c", "import time; time.sleep(120)"], 1
+
+    def interrupt(_: float) -> None:
+        started.update(p for p in _descendants(os.getpid()) - before if _running(p))
+        raise Interrupted
+
+    monkeypatch.setattr(ray_private, "_head_command", still_starting)
+    clock = SimpleNamespace(monotonic=time.monotonic, sleep=interrupt)
+    monkeypatch.setattr(ray_private, "time", clock)
+    with pytest.raises(Interrupted), ray_head(num_cpus=1):
+        pytest.fail("a head that never started was yielded")
+    assert started and not [pid for pid in started if _running(pid)]

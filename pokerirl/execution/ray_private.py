@@ -154,12 +154,16 @@ def _start_head(
             command, cwd=home / "cwd", env=_head_environment(), stdout=stream,
             stderr=subprocess.STDOUT,
         )  # fmt: skip
-    deadline = time.monotonic() + timeout
-    while b"Ray runtime started" not in log.read_bytes():
-        if head.poll() is not None or time.monotonic() > deadline:
-            tail = log.read_text(errors="replace").strip().splitlines()[-3:]
-            return head, port, " | ".join(line.strip() for line in tail) or "no output"
-        time.sleep(0.2)
+    try:
+        deadline = time.monotonic() + timeout
+        while b"Ray runtime started" not in log.read_bytes():
+            if head.poll() is not None or time.monotonic() > deadline:
+                tail = log.read_text(errors="replace").strip().splitlines()[-3:]
+                return head, port, " | ".join(line.strip() for line in tail) or "no output"
+            time.sleep(0.2)
+    except BaseException:  # a Ctrl-C while waiting: the head is stopped, not left running
+        _stop_head(head)
+        raise
     return head, port, None
 
 
