@@ -76,7 +76,7 @@ def main() -> None:
         backends = {"local --jobs 1": Backend(jobs=1), "local --jobs 2": Backend(jobs=2)}
         if not args.no_ray:
             started = time.perf_counter()
-            address = stack.enter_context(ray_head(num_cpus=2))
+            address = stack.enter_context(ray_head(num_cpus=2, say=print))
             print(f"ray start --head --num-cpus 2: up in {time.perf_counter() - started:.1f} s")
             backends["ray, 2 CPUs"] = Backend(kind="ray", address=address)
 

@@ -219,7 +219,7 @@ def test_the_processes_started_for_ray_import_this_pokerirl(
 
 
 def test_a_head_that_never_starts_is_one_error_with_each_attempts_reason(
-    monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+    monkeypatch: pytest.MonkeyPatch,
 ) -> None:
     from pokerirl.execution import ray_head, ray_private
 
@@ -230,14 +230,18 @@ def test_a_head_that_never_starts_is_one_error_with_each_attempts_reason(
         return [sys.executable, "-c", f"print('head {len(folders)} did not register')"], 1
 
     monkeypatch.setattr(ray_private, "_head_command", failing)
-    with pytest.raises(ExecutionError) as error, ray_head(num_cpus=1, attempts=3):
+    said: list[str] = []
+    with pytest.raises(ExecutionError) as error, ray_head(num_cpus=1, attempts=3, say=said.append):
         pytest.fail("a head that never started was yielded")
     assert str(error.value) == (
         "ray start --head failed 3 times: 1: head 1 did not register; "
         "2: head 2 did not register; 3: head 3 did not register"
     )
     assert len(set(folders)) == 3 and not any(folder.exists() for folder in folders)
-    assert capsys.readouterr().err.count("; starting a fresh head\n") == 2
+    assert said == [
+        f"ray start --head: attempt {n} of 3 failed (head {n} did not register); starting a "
+        "fresh head" for n in (1, 2)
+    ]
 
 
 def test_a_ray_that_fails_to_start_is_one_line() -> None:

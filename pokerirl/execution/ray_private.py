@@ -12,7 +12,7 @@ import signal
 import sys
 import tempfile
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -94,7 +94,13 @@ def _reap() -> None:
 
 
 @contextlib.contextmanager
-def ray_head(*, num_cpus: int = 2, timeout: float = 120.0, attempts: int = 3) -> Iterator[str]:
+def ray_head(
+    *,
+    num_cpus: int = 2,
+    timeout: float = 120.0,
+    attempts: int = 3,
+    say: Callable[[str], None] = lambda message: None,
+) -> Iterator[str]:
     """A private single-node Ray cluster, started with Ray's own ``ray start --head``; yields
     its address (for ``--ray``).
 
@@ -106,8 +112,8 @@ def ray_head(*, num_cpus: int = 2, timeout: float = 120.0, attempts: int = 3) ->
     stop-everything command, which ends every Ray process on the machine.
 
     A head that fails to start is stopped and started afresh (new folder, new ports), up to
-    ``attempts`` times in all, each given ``timeout`` seconds, with a line on standard error
-    for each failure: Ray gives its raylet a fixed 30 seconds to register, which a loaded
+    ``attempts`` times in all, each given ``timeout`` seconds, with a line to ``say`` for each
+    failure (silent by default): Ray gives its raylet a fixed 30 seconds to register, which a loaded
     machine can exceed, and a free port can be taken between its choice and its use.
 
     Raises:
@@ -129,10 +135,10 @@ def ray_head(*, num_cpus: int = 2, timeout: float = 120.0, attempts: int = 3) ->
             shutil.rmtree(home, ignore_errors=True)
         reasons.append(reason)
         if attempt < attempts:
-            print(
+            say(
                 f"ray start --head: attempt {attempt} of {attempts} failed ({reason}); "
-                "starting a fresh head", file=sys.stderr, flush=True,
-            )  # fmt: skip
+                "starting a fresh head"
+            )
     raise ExecutionError(
         f"ray start --head failed {attempts} times: "
         + "; ".join(f"{n}: {reason}" for n, reason in enumerate(reasons, 1))
