@@ -35,6 +35,7 @@ from __future__ import annotations
 
 import hashlib
 import itertools
+import math
 from collections.abc import Callable
 from dataclasses import dataclass
 from functools import cache, lru_cache
@@ -67,6 +68,7 @@ from pokerirl.game.evaluator import (
     CLASH,
     _card_sum,
     _dense,
+    _keyed_strengths,
     _non_flush,
     board_strengths,
     pair_index,
@@ -95,6 +97,13 @@ _WAYS = np.stack([(_LEFT // 5) * (_LEFT % 5), (_LEFT // 5) * (_LEFT // 5 - 1) //
 _WAYS = _WAYS.astype(np.int16)
 _SAME_RANK = (_COMBOS[:, 0] == _COMBOS[:, 1]).astype(np.int64)
 _WAYS_FLAT = _WAYS.reshape(-1)  # [2 * (5 * a + b) + same]: one 1-D gather
+# Where a rank combination reads _WAYS_FLAT with no card of its ranks seen, and what each seen
+# card of a rank takes off that place (10 for the first rank, 2 for the second).
+_WAYS_AT_NONE_SEEN = 2 * (5 * 4 + 4) + _SAME_RANK
+_WAYS_STEP = np.zeros((NUM_RANKS, len(_COMBOS)))
+np.add.at(_WAYS_STEP, (_COMBOS[:, 0], np.arange(len(_COMBOS))), 10)
+np.add.at(_WAYS_STEP, (_COMBOS[:, 1], np.arange(len(_COMBOS))), 2)
+_SUIT_FIELD_SHIFTS = 4 * np.arange(4)  # each suit's 4-bit count in packed suit counts
 _PAIR_CARD_BITS = (np.int64(1) << PAIRS[:, 0]) | (np.int64(1) << PAIRS[:, 1])
 # The pairs of two cards of suit s (4, 78): they alone complete its flush beside three of it.
 _TWO_SUITED = np.array([np.flatnonzero((_SUIT[PAIRS] == s).all(axis=1)) for s in range(4)])
@@ -191,39 +200,42 @@ def hole_counts(holes: np.ndarray, boards: np.ndarray) -> np.ndarray:
 
 
 def _combo_counts(holes: np.ndarray, boards: np.ndarray) -> np.ndarray:
-    n = len(holes)
-    suit_counts = (_card_sum(_CARD_SUIT, boards)[:, None] >> (4 * np.arange(4))) & 15
+    # Every row as if the board held no five of a suit, in few array operations (a DQN's
+    # river rows come a few at a time); the rows whose board does are then ranked pair by
+    # pair.
+    board_suits = _CARD_SUIT[boards].sum(axis=1)
+    suit_counts = (board_suits[:, None] >> _SUIT_FIELD_SHIFTS) & 15
     suit, most = suit_counts.argmax(axis=1), suit_counts.max(axis=1)
-    found = np.empty(n, dtype=np.int64)
+    board_key = _CARD_KEY[boards].sum(axis=1)
+    hand_key = board_key + _CARD_KEY[holes].sum(axis=1)
+    known = np.concatenate([holes, boards], axis=1)
+    mine = _keyed_strengths(known, hand_key, board_suits + _CARD_SUIT[holes].sum(axis=1))
+    plain, combo = _plain_counts(board_key, hand_key, mine)
+    found = plain + _flush_corrections(known, mine, combo, suit, most)
     many = np.flatnonzero(most >= 5)  # a flush on the board: every pair plays one
     if many.size:
         found[many] = _pairwise_counts(holes[many], boards[many])
-    rows = np.flatnonzero(most < 5)
-    if rows.size == 0:
-        return found
-    known = np.concatenate([holes[rows], boards[rows]], axis=1)
-    mine = seven_card_strengths(known)
-    plain, combo = _plain_counts(known, mine)
-    found[rows] = plain + _flush_corrections(known, mine, combo, suit[rows], most[rows])
     return found
 
 
-def _plain_counts(known: np.ndarray, mine: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _plain_counts(
+    board_key: np.ndarray, hand_key: np.ndarray, mine: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
     """(``2 x wins + ties`` against the 990 opponent hands as if no opponent held a flush,
-    the opponents' non-flush strengths (m, 91) by rank combination) of hole cards and
-    five-card boards ``known`` (m, 7) whose own strength is ``mine``.
+    the opponents' non-flush strengths (m, 91) by rank combination) of hands whose five-card
+    board has the rank key ``board_key`` (``_CARD_KEY`` summed), whose seven cards have
+    ``hand_key`` and whose own strength is ``mine``.
 
     Both depend on the cards' ranks alone (and ``mine``): rivers of one rank that leave
     ``mine`` as it is share them (:func:`turn_counts`)."""
-    m = len(known)
     keys, strengths = _board_combos()
-    combo = strengths[np.searchsorted(keys, _card_sum(_CARD_KEY, known[:, 2:]))]
-    seen = np.bincount((np.arange(m)[:, None] * NUM_RANKS + _RANK[known]).reshape(-1),
-                       minlength=m * NUM_RANKS).reshape(m, NUM_RANKS)  # fmt: skip
-    # Unseen pairs of each rank combination: C(left, 2) of a pair of ranks, else the product.
-    left = (4 - seen).astype(np.int16)
-    ways = _WAYS_FLAT[np.take(left, _COMBOS[:, 0], axis=1) * 10
-                      + np.take(left, _COMBOS[:, 1], axis=1) * 2 + _SAME_RANK]  # fmt: skip
+    combo = strengths[np.searchsorted(keys, board_key)]
+    # Unseen pairs of each rank combination (C(left, 2) of a pair of ranks, else the
+    # product), read at 2 x (5 x left_a + left_b) + same, where left = 4 - the rank's digit
+    # in the hand's key: one product of the digits (in float64, exact for these small
+    # integers, where numpy's integer product is several times slower).
+    digits = (hand_key[:, None] // _POW5_32 % 5).astype(np.float64)  # (m, 13) cards seen
+    ways = _WAYS_FLAT[_WAYS_AT_NONE_SEEN - (digits @ _WAYS_STEP).astype(np.int64)]
     # 2 x wins + ties of a strength x against mine: (x < mine) + (x <= mine).
     me = mine[:, None]
     score = (combo < me).view(np.int8) + (combo <= me).view(np.int8)
@@ -377,7 +389,9 @@ def turn_counts(holes: np.ndarray, boards: np.ndarray) -> np.ndarray:
     _, first, group, weight = np.unique(group_key, return_index=True, return_inverse=True,
                                         return_counts=True)  # fmt: skip
     rows = rest[first]
-    plain, combo = _plain_counts(known[rows], mine[first])
+    board_key = _card_sum(_CARD_KEY, five[rows])
+    hand_key = board_key + _card_sum(_CARD_KEY, holes[state[rows]])
+    plain, combo = _plain_counts(board_key, hand_key, mine[first])
     found += np.bincount(state[rows], plain * weight, minlength=n).astype(np.int64)
     # Opponents' flushes, where the board holds three or four of a suit. A river of that suit
     # changes who can flush: it is counted alone. The group's other rivers leave the board's
@@ -732,7 +746,7 @@ def range_equity(pairs: np.ndarray, boards: np.ndarray, of: np.ndarray) -> np.nd
     boards = np.asarray(boards, dtype=np.int64)
     rows_of_state = np.bincount(of, minlength=len(boards))
     if len(pairs) < RANGE_ROWS or rows_of_state.max() < RANGE_ROWS:  # a DQN: a row a state
-        return exact_equity(pair_cards(pairs, boards[of]))
+        return _row_equity(pairs, boards[of])
     found = np.empty(len(pairs))
     shared = rows_of_state[of] >= RANGE_ROWS
     alone = np.flatnonzero(~shared)
@@ -760,17 +774,63 @@ def range_equity(pairs: np.ndarray, boards: np.ndarray, of: np.ndarray) -> np.nd
     return found
 
 
+_PREFLOP_EQUITY = preflop_equity(PAIRS)  # (1326,) by pair number
+
+
 def exact_equity(cards: np.ndarray) -> np.ndarray:
     """(N,) exact equity of states' cards (N, 7): hole cards, then the board shown (``-1``
     beyond, 0, 3, 4 or 5 cards)."""
     cards = np.asarray(cards, dtype=np.int64)
-    shown = (cards[:, 2:] >= 0).sum(axis=1)
-    found = np.empty(len(cards))
-    for count, street_equity in ((3, flop_equity), (4, turn_equity), (5, river_equity)):
-        rows = np.flatnonzero(shown == count)
-        if rows.size:
-            found[rows] = street_equity(cards[rows, :2], cards[rows, 2 : 2 + count])
+    return _row_equity(pair_index(cards[:, 0], cards[:, 1]), cards[:, 2:])
+
+
+def _row_equity(pairs: np.ndarray, boards: np.ndarray) -> np.ndarray:
+    """(R,) exact equity of hole pair ``pairs[r]`` on board ``boards[r]`` (R, 5), ``-1``
+    beyond the cards shown: each row on its own, in as few array operations as a DQN's
+    small batches want (their cost is per call, not per row)."""
+    boards = np.sort(boards, axis=1)  # a board is a set: the cards shown last, ascending
+    shown = (boards >= 0).sum(axis=1)
+    found = np.empty(len(pairs))
     rows = np.flatnonzero(shown == 0)
     if rows.size:
-        found[rows] = preflop_equity(cards[rows, :2])
+        found[rows] = _PREFLOP_EQUITY[pairs[rows]]
+    for count, denominator in ((3, FLOP_DENOMINATOR), (4, TURN_DENOMINATOR)):
+        rows = np.flatnonzero(shown == count)
+        if rows.size == 0:
+            continue
+        table = flop_table() if count == 3 else turn_table()
+        if table is not None:  # the board's class and suit permutation by its colex number
+            at = _colex(boards[rows, 5 - count :])
+            class_of, perm = _colex_classes(count)
+            counts = table[class_of[at], _PERMUTED_PAIR[perm[at], pairs[rows]]]
+        else:
+            every = lambda board: _cached_turn_counts(tuple(board.tolist()))  # noqa: E731
+            counts = _by_board(_TURN_ROWS, every, PAIRS[pairs[rows]], boards[rows, 1:],
+                               ALL_PAIRS_TURN_ROWS)  # fmt: skip
+        found[rows] = counts / denominator
+    rows = np.flatnonzero(shown == 5)
+    if rows.size:
+        found[rows] = _RIVER_ROWS(PAIRS[pairs[rows]], boards[rows]) / RIVER_DENOMINATOR
     return found
+
+
+# _BINOMIAL[i * 52 + c] = C(c, i): the i-th smallest card c of a set adds C(c, i) to its colex
+# number, which numbers the k-card sets 0 .. C(52, k) - 1 (:func:`_colex_classes`).
+_BINOMIAL = np.array([math.comb(c, i) for i in range(6) for c in range(NUM_CARDS)], np.int64)
+
+
+def _colex(boards: np.ndarray) -> np.ndarray:
+    """(N,) the colex number of each set of cards (N, k), sorted ascending along each row."""
+    return _BINOMIAL[boards + NUM_CARDS * np.arange(1, boards.shape[1] + 1)].sum(axis=1)
+
+
+@cache
+def _colex_classes(size: int) -> tuple[np.ndarray, np.ndarray]:
+    """(class, suit permutation) of every ``size``-card board, by its colex number: what
+    :meth:`BoardClasses.find` gives, without its search."""
+    classes = board_classes(size)
+    digits = NUM_CARDS ** np.arange(size - 1, -1, -1, dtype=np.int64)
+    at = _colex(classes.codes[:, None] // digits % NUM_CARDS)  # a code's digits ascend
+    class_of, perm = np.empty_like(classes.class_of), np.empty_like(classes.perm)
+    class_of[at], perm[at] = classes.class_of, classes.perm
+    return class_of, perm

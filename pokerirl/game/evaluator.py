@@ -362,8 +362,14 @@ def seven_card_strengths(cards: np.ndarray) -> np.ndarray:
     """(N,) int32 strength of (N, 7) distinct cards (unchecked), as :func:`hand_strength`:
     a rank key summed from one table per card and a dense index instead of a search; the
     rows where a suit reaches five cards are ranked by the flush table."""
-    strength = _non_flush(_card_sum(_CARD_KEY, cards))
-    rows = np.flatnonzero(_flushable(_card_sum(_CARD_SUIT, cards)))
+    return _keyed_strengths(cards, _card_sum(_CARD_KEY, cards), _card_sum(_CARD_SUIT, cards))
+
+
+def _keyed_strengths(cards: np.ndarray, keys: np.ndarray, suit_counts: np.ndarray) -> np.ndarray:
+    """:func:`seven_card_strengths` of ``cards`` (N, 7) whose rank keys (``_CARD_KEY``
+    summed) and packed suit counts (``_CARD_SUIT`` summed) a caller already has."""
+    strength = _non_flush(keys)
+    rows = np.flatnonzero(_flushable(suit_counts))
     if rows.size:
         suits, ranks = _SUIT[cards[rows]], _RANK[cards[rows]]
         suit = (suits[:, :, None] == np.arange(4)).sum(axis=1).argmax(axis=1)
