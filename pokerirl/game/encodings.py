@@ -34,6 +34,7 @@ still loads, and says ``strength-v1``. A mismatch is refused in one line where i
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import itertools
 from collections.abc import Mapping
@@ -228,38 +229,40 @@ class StrengthEncoding(Encoding):
         cards = np.asarray(states.cards, dtype=np.int64)
         if len(cards) and cards[:, :2].min() < 0:
             raise ValueError("the strength encoding needs both hole cards of every state")
-        pairs = pair_index(cards[:, 0], cards[:, 1])
-        return self.encode_pairs(pairs, states, np.arange(len(cards)))
+        return self.encode_pairs(pair_index(cards[:, 0], cards[:, 1]), states)
 
-    def encode_pairs(self, pairs: np.ndarray, states: RawStates, of: np.ndarray) -> np.ndarray:
+    def encode_pairs(
+        self, pairs: np.ndarray, states: RawStates, of: np.ndarray | None = None
+    ) -> np.ndarray:
+        """(R, width) row r: hole pair ``pairs[r]`` (a number of ``PAIRS``) in state
+        ``of[r]`` of ``states`` (``of`` None: state r), as :meth:`encode` gives it."""
         # A row's ones come from the pair (a table of the 1,326 pairs), the state (its board
         # and betting, computed once a state: local best response encodes ~1,000 pairs of
         # each) and the category of both, in one scatter; then the numbers, those of both
         # from the two's packed cards. The same values as each block cast to float32, bit for
-        # bit.
-        pairs, of = np.asarray(pairs, dtype=np.int64), np.asarray(of, dtype=np.int64)
-        own, board = _PAIR_FEATURES, _BoardFeatures.of(states)
-        masks = _suit_masks(own.packed[pairs] | board.packed[of])  # (4, R) suit by suit
-        present = masks[0] | masks[1] | masks[2] | masks[3]
+        # bit. A DQN's batches are small and many: few array operations, whatever their size.
+        pairs = np.asarray(pairs, dtype=np.int64)
+        own, of_state = _PAIR_FEATURES, _BoardFeatures.of(states)
+        board = of_state if of is None else of_state.take(np.asarray(of, dtype=np.int64))
+        masks = _suit_masks(own.packed[pairs] | board.packed)  # (4, R) suit by suit
+        present = np.bitwise_or.reduce(masks, axis=0)
         flags = _SUIT_FLAGS[masks]
         category = _category(masks, present, flags) + _CATEGORY_AT
         found = np.zeros((len(pairs), self.width), dtype=np.float32)
-        ones = np.concatenate([own.ones[pairs], board.ones[of], category[:, None]], axis=1)
+        ones = np.concatenate([own.ones[pairs], board.ones, category[:, None]], axis=1)
         ones += (np.arange(len(pairs)) * self.width)[:, None]  # flat: the fastest scatter
         found.reshape(-1)[ones.reshape(-1)] = 1.0  # a card not shown: _SPARE
         found[:, _COLUMNS["pocket_pair"][0] : _COLUMNS["suited"][1]] = own.flags[pairs]
-        found[:, _COLUMNS["facing_bet"][0] :] = board.numbers[of]
-        holding = own.suits[:, pairs]  # (4, R) _FOUR_SUITED where a hole card is of the suit
-        suited_four = (flags[0] & holding[0]) | (flags[1] & holding[1]) | (flags[2] & holding[2])
-        suited_four |= flags[3] & holding[3]
-        hole_bits, draws_possible = own.rank_bits[pairs], board.cards_to_come[of]
-        top_bit = board.top_bit[of]
-        paired = hole_bits & board.rank_bits[of]  # the hole ranks on the board
-        pocket = own.flags[pairs, 0] > 0
+        found[:, _COLUMNS["facing_bet"][0] :] = board.numbers
+        # Four of a suit holding a hole card: _FOUR_SUITED where a hole card is of the suit.
+        suited_four = np.bitwise_or.reduce(flags & own.suits[:, pairs], axis=0)
+        hole_bits, draws_possible, top_bit = own.rank_bits[pairs], board.cards_to_come, board.top_bit
+        paired = hole_bits & board.rank_bits  # the hole ranks on the board
+        pocket = own.pocket[pairs]
         if self.version >= 2:  # each board's work once for all its rows
-            equity = range_equity(pairs, board.cards, of)
+            equity = range_equity(pairs, of_state.cards, of)
         else:
-            equity = self.equity(pair_cards(pairs, board.cards[of]))
+            equity = self.equity(pair_cards(pairs, board.cards))
         found[:, _COLUMNS["hole_pairs_board"][0] : _COLUMNS["equity"][1]] = np.stack(
             [
                 _POPCOUNT[paired] * (1 + pocket) / 2,  # a pocket pair: two cards
@@ -400,7 +403,7 @@ _SUIT_FLAGS = (
     | np.where(_POPCOUNT >= 5, _FLUSH, 0)
     | np.where((_POPCOUNT >= 5) & _STRAIGHT, _STRAIGHT_FLUSH, 0)
 ).astype(np.uint8)
-_CATEGORY_AT = _ONE_HOT_AT["category"] - 1  # category 1 (high card) is the block's first column
+_CATEGORY_AT = np.int64(_ONE_HOT_AT["category"] - 1)  # category 1 (high card) is the block's first column
 
 
 def visible_category(cards: np.ndarray) -> np.ndarray:
@@ -408,32 +411,54 @@ def visible_category(cards: np.ndarray) -> np.ndarray:
     :func:`pokerirl.game.evaluator.category`) of the visible cards, 2 to 7 of them
     (``-1`` pads)."""
     masks = _suit_masks(_packed(np.asarray(cards, dtype=np.int64)))
-    return _category(masks, masks[0] | masks[1] | masks[2] | masks[3], _SUIT_FLAGS[masks])
+    return _category(masks, np.bitwise_or.reduce(masks, axis=0), _SUIT_FLAGS[masks])
+
+
+def _category_of_code() -> np.ndarray:
+    """(96,) uint8: the category of each :func:`_category` code, each made hand overriding
+    those below it."""
+    paired, trips, straight, quads, flush = np.indices((3, 2, 2, 2, 4)).reshape(5, -1)
+    code = paired + 3 * trips + 6 * straight + 12 * quads + 24 * flush
+    category = np.ones(code.size, dtype=np.uint8)
+    for applies, value in (
+        (paired >= 1, 2),
+        (paired >= 2, 3),
+        (trips == 1, 4),
+        (straight == 1, 5),
+        ((flush & 1) != 0, 6),  # _FLUSH
+        ((trips == 1) & (paired >= 2), 7),  # trips and a pair of another rank
+        (quads == 1, 8),
+        ((flush & 2) != 0, 9),  # _STRAIGHT_FLUSH
+    ):
+        category[applies] = value
+    found = np.empty(code.size, dtype=np.uint8)
+    found[code] = category
+    return found
+
+
+# A category code adds, over rank masks: how many ranks are held twice (0, 1, 2 or more),
+# 3 x any held three times, 6 x a straight, 12 x any held four times, and over suit flags
+# 24 x (flush, straight flush) as two bits. Tables of uint8: small enough to stay in cache.
+_PAIRED_CODE = np.minimum(_POPCOUNT, 2).astype(np.uint8)
+_TRIPS_CODE = np.where(np.arange(_RANKS + 1) != 0, 3, 0).astype(np.uint8)
+_STRAIGHT_CODE = np.where(_STRAIGHT, 6, 0).astype(np.uint8)
+_QUADS_CODE = np.where(np.arange(_RANKS + 1) != 0, 12, 0).astype(np.uint8)
+_FLUSH_CODE = (24 * ((np.arange(256) >> 1) & 3)).astype(np.uint8)  # _FLUSH, _STRAIGHT_FLUSH
+_CATEGORY_OF_CODE = _category_of_code()
 
 
 def _category(masks: np.ndarray, present: np.ndarray, flags: np.ndarray) -> np.ndarray:
-    """(N,) the category from the suits' rank masks (4, N) alone, their union ``present``
-    and their :data:`_SUIT_FLAGS` (4, N): the ranks held in two, three and four suits are
-    ANDs of the masks (a pair, trips, quads), without counting card by card."""
+    """(N,) uint8 the category from the suits' rank masks (4, N) alone, their union
+    ``present`` and their :data:`_SUIT_FLAGS` (4, N): the ranks held in two, three and four
+    suits are ANDs of the masks (a pair, trips, quads), without counting card by card; a
+    code of what is made reads the category from a table."""
     m0, m1, m2, m3 = masks
-    low, high = m0 | m1, m2 | m3
-    two = (m0 & m1) | (low & high) | (m2 & m3)
-    three = (m0 & m1 & high) | (m2 & m3 & low)
-    pairs_or_more = _POPCOUNT[two]  # ranks held at least twice
-    suit_flags = flags[0] | flags[1] | flags[2] | flags[3]
-    category = np.ones(len(present), dtype=np.int64)
-    for applies, value in (  # each overrides those before it
-        (two != 0, 2),
-        (pairs_or_more >= 2, 3),
-        (three != 0, 4),
-        (_STRAIGHT[present], 5),
-        ((suit_flags & _FLUSH) != 0, 6),
-        ((three != 0) & (pairs_or_more >= 2), 7),
-        ((m0 & m1 & m2 & m3) != 0, 8),
-        ((suit_flags & _STRAIGHT_FLUSH) != 0, 9),
-    ):
-        category[applies] = value
-    return category
+    both_low, both_high, low, high = m0 & m1, m2 & m3, m0 | m1, m2 | m3
+    two = both_low | (low & high) | both_high
+    three = (both_low & high) | (both_high & low)
+    code = _PAIRED_CODE[two] + _TRIPS_CODE[three] + _STRAIGHT_CODE[present]
+    code += _QUADS_CODE[both_low & both_high] + _FLUSH_CODE[np.bitwise_or.reduce(flags, axis=0)]
+    return _CATEGORY_OF_CODE[code]
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -444,6 +469,7 @@ class _PairFeatures:
     flags: np.ndarray  # (1326, 2) float32: the pocket-pair and suited columns
     rank_bits: np.ndarray  # (1326,) the two ranks' bits (2 .. A as bits 0 .. 12)
     high_bit: np.ndarray  # the higher rank's
+    pocket: np.ndarray  # (1326,) bool: a pocket pair
     packed: np.ndarray  # (1326,) the two cards, as :data:`_PACKED_CARD`
     suits: np.ndarray  # (4, 1326) uint8: _FOUR_SUITED where a hole card is of the suit
 
@@ -459,7 +485,7 @@ class _PairFeatures:
                             _SUIT[PAIRS[:, 0]] == _SUIT[PAIRS[:, 1]]],
                            axis=1).astype(np.float32),
             rank_bits=_CARD_RANK_BIT[PAIRS[:, 0]] | _CARD_RANK_BIT[PAIRS[:, 1]],
-            high_bit=np.int64(1) << high, packed=_packed(PAIRS),
+            high_bit=np.int64(1) << high, pocket=rank[:, 0] == rank[:, 1], packed=_packed(PAIRS),
             suits=np.where(held, _FOUR_SUITED, 0).astype(np.uint8),
         )  # fmt: skip
 
@@ -479,21 +505,24 @@ class _BoardFeatures:
     @classmethod
     def of(cls, states: RawStates) -> _BoardFeatures:
         board = np.asarray(states.cards, dtype=np.int64)[:, 2:]
-        street = states.street
+        shown = (board >= 0).sum(axis=1)
         raises = np.minimum(np.asarray(states.raise_nums, dtype=np.int64), MAX_RAISES)
         facing = np.asarray(states.legal_mask, dtype=bool)[:, CALL]
-        betting = (street * (MAX_RAISES + 1) ** NUM_ROUNDS + raises @ _RAISE_PLACES) * 2 + facing
-        packed = _packed(board)
-        rank_bits = (packed | packed >> 16 | packed >> 32 | packed >> 48) & _RANKS
+        betting = _BETTING_OF_SHOWN[shown] + raises @ (2 * _RAISE_PLACES) + facing
+        rank_bits = np.bitwise_or.reduce(_BOARD_RANK_BIT[board], axis=1)
         return cls(
             cards=board,
             ones=np.concatenate([_BOARD_COLUMN[board], _BETTING.ones[betting]], axis=1),
             numbers=_BETTING.numbers[betting],
-            packed=packed,
+            packed=_packed(board),
             rank_bits=rank_bits,
             top_bit=_TOP_BIT[rank_bits],
-            cards_to_come=(street == 1) | (street == 2),
+            cards_to_come=(shown == 3) | (shown == 4),
         )
+
+    def take(self, rows: np.ndarray) -> _BoardFeatures:
+        """The features of states ``rows`` (a row per pair in local best response)."""
+        return _BoardFeatures(**{name: getattr(self, name)[rows] for name in _BOARD_FIELDS})
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -518,6 +547,11 @@ class _BettingTable:
 
 
 _RAISE_PLACES = (MAX_RAISES + 1) ** np.arange(NUM_ROUNDS - 1, -1, -1)  # as np.indices orders
+# A betting state's number (np.indices' order: street, raises per round, facing) without its
+# raises and facing, by the board cards shown.
+_BETTING_OF_SHOWN = _STREET_OF_SHOWN * (MAX_RAISES + 1) ** NUM_ROUNDS * 2
+_BOARD_FIELDS = tuple(field.name for field in dataclasses.fields(_BoardFeatures))
+_BOARD_RANK_BIT = np.append(_CARD_RANK_BIT, 0)  # index -1 (no card): no rank
 # Where a board card's 1 goes; a card not shown (index -1) puts its 1 in the equity column,
 # which is written after the ones.
 _SPARE = _COLUMNS["equity"][0]

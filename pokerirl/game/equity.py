@@ -729,7 +729,7 @@ def preflop_counts() -> np.ndarray:
 RANGE_ROWS = 16
 
 
-def range_equity(pairs: np.ndarray, boards: np.ndarray, of: np.ndarray) -> np.ndarray:
+def range_equity(pairs: np.ndarray, boards: np.ndarray, of: np.ndarray | None) -> np.ndarray:
     """(R,) exact equity of hole pair ``pairs[r]`` (a number of ``PAIRS``) on board
     ``boards[of[r]]`` (boards (n, 5), ``-1`` beyond the cards shown): what
     :func:`exact_equity` gives those states, with each board's work done once for all its
@@ -742,8 +742,10 @@ def range_equity(pairs: np.ndarray, boards: np.ndarray, of: np.ndarray) -> np.nd
     ...       == exact_equity(cards)).all())
     True
     """
-    pairs, of = np.asarray(pairs, dtype=np.int64), np.asarray(of, dtype=np.int64)
-    boards = np.asarray(boards, dtype=np.int64)
+    pairs, boards = np.asarray(pairs, dtype=np.int64), np.asarray(boards, dtype=np.int64)
+    if of is None:
+        return _row_equity(pairs, boards)
+    of = np.asarray(of, dtype=np.int64)
     rows_of_state = np.bincount(of, minlength=len(boards))
     if len(pairs) < RANGE_ROWS or rows_of_state.max() < RANGE_ROWS:  # a DQN: a row a state
         return _row_equity(pairs, boards[of])
