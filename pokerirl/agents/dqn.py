@@ -184,7 +184,10 @@ class ReplayMemory:
         done: bool | np.ndarray,
     ) -> None:
         """Store n transitions (n may exceed what is left before wrapping, not the capacity)."""
-        slots = (self.position + np.arange(len(actions))) % self.capacity
+        stop = self.position + len(actions)
+        # A slice where the rows do not wrap (most adds): a copy, not a scatter.
+        slots = (slice(self.position, stop) if stop <= self.capacity else
+                 np.arange(self.position, stop) % self.capacity)  # fmt: skip
         self.obs[slots], self.actions[slots], self.rewards[slots] = obs, actions, rewards
         self.next_obs[slots], self.next_legal[slots], self.done[slots] = next_obs, next_legal, done
         self.position = int((self.position + len(actions)) % self.capacity)
