@@ -343,8 +343,10 @@ def _pairwise_counts(holes: np.ndarray, boards: np.ndarray) -> np.ndarray:
 
 def river_equity(holes: np.ndarray, boards: np.ndarray) -> np.ndarray:
     """(N,) exact equity of hole cards (N, 2) on five-card boards (N, 5)."""
+    holes = np.asarray(holes, dtype=np.int64)
     every = lambda board: _cached_river_counts(tuple(board.tolist()))  # noqa: E731
-    shared = _by_board(_RIVER_ROWS, every, holes, boards, ALL_PAIRS_RIVER_ROWS)
+    shared = _by_board(_RIVER_ROWS, every, pair_index(holes[:, 0], holes[:, 1]), boards,
+                       ALL_PAIRS_RIVER_ROWS)  # fmt: skip
     return shared / RIVER_DENOMINATOR
 
 
@@ -419,8 +421,10 @@ def turn_equity(holes: np.ndarray, boards: np.ndarray) -> np.ndarray:
     if table is not None:
         shared = _class_counts(table, board_classes(4), holes, boards)
     else:
+        holes = np.asarray(holes, dtype=np.int64)
         every = lambda board: _cached_turn_counts(tuple(board.tolist()))  # noqa: E731
-        shared = _by_board(_TURN_ROWS, every, holes, boards, ALL_PAIRS_TURN_ROWS)
+        shared = _by_board(_TURN_ROWS, every, pair_index(holes[:, 0], holes[:, 1]), boards,
+                           ALL_PAIRS_TURN_ROWS)  # fmt: skip
     return shared / TURN_DENOMINATOR
 
 
@@ -463,17 +467,16 @@ ALL_PAIRS_RIVER_ROWS = 64
 def _by_board(
     per_row: Callable[[np.ndarray, np.ndarray], np.ndarray],
     all_pairs: Callable[[np.ndarray], np.ndarray],
-    holes: np.ndarray,
+    pairs: np.ndarray,
     boards: np.ndarray,
     least: int,
 ) -> np.ndarray:
-    """``per_row(holes, boards)``, with the boards shared by at least ``least`` rows done by
+    """``per_row(pairs, boards)``, with the boards shared by at least ``least`` rows done by
     ``all_pairs(board)`` once: the same integers either way."""
-    holes = np.asarray(holes, dtype=np.int64)
     boards = np.sort(np.asarray(boards, dtype=np.int64), axis=1)  # a board is a set
-    if len(holes) < least:  # no board can have enough rows
-        return per_row(holes, boards)
-    found = np.empty(len(holes), dtype=np.int64)
+    if len(pairs) < least:  # no board can have enough rows
+        return per_row(pairs, boards)
+    found = np.empty(len(pairs), dtype=np.int64)
     code = boards @ (NUM_CARDS ** np.arange(boards.shape[1], dtype=np.int64))  # one int a set
     _, first, group, sizes = np.unique(code, return_index=True, return_inverse=True,
                                        return_counts=True)  # fmt: skip
@@ -481,15 +484,15 @@ def _by_board(
     shared = sizes[group] >= least
     for k in np.flatnonzero(sizes >= least):
         rows = np.flatnonzero(group == k)
-        found[rows] = all_pairs(boards[first[k]])[pair_index(holes[rows, 0], holes[rows, 1])]
+        found[rows] = all_pairs(boards[first[k]])[pairs[rows]]
     rows = np.flatnonzero(~shared)
     if rows.size:
-        found[rows] = per_row(holes[rows], boards[rows])
+        found[rows] = per_row(pairs[rows], boards[rows])
     return found
 
 
 class _RecentCounts:
-    """``per_row(holes, boards)`` remembered for recent states (hole pair and sorted board):
+    """``per_row(pairs, boards)`` remembered for recent states (hole pair and sorted board):
     a player who acts again on the same street (checks, then calls a raise) is the same
     state again, at a later lock-step (about a quarter of a DQN's turn states). The same
     integers either way; at most ``size`` states are kept (then it starts afresh)."""
@@ -499,25 +502,25 @@ class _RecentCounts:
         self.size = size
         self.counts: dict[int, int] = {}
 
-    def __call__(self, holes: np.ndarray, boards: np.ndarray) -> np.ndarray:
-        """``per_row`` of ``holes`` (n, 2) on ``boards`` (n, k) sorted along each row."""
-        places = NUM_CARDS ** np.arange(boards.shape[1], dtype=np.int64)
-        code = (pair_index(holes[:, 0], holes[:, 1]) * NUM_CARDS ** boards.shape[1]
-                + boards @ places).tolist()  # fmt: skip
+    def __call__(self, pairs: np.ndarray, boards: np.ndarray) -> np.ndarray:
+        """``per_row`` of pair numbers ``pairs`` (n,) on ``boards`` (n, k) sorted along each
+        row."""
+        size = boards.shape[1]
+        code = (pairs * NUM_CARDS**size + boards @ _PLACES[size]).tolist()
         known = [self.counts.get(key, -1) for key in code]
+        missing = [i for i, count in enumerate(known) if count < 0]
         found = np.array(known, dtype=np.int64)
-        missing = np.flatnonzero(found < 0)
-        if missing.size:
-            found[missing] = self.per_row(holes[missing], boards[missing])
-            if len(self.counts) + missing.size > self.size:
+        if missing:
+            found[missing] = counted = self.per_row(pairs[missing], boards[missing])
+            if len(self.counts) + len(missing) > self.size:
                 self.counts.clear()
-            self.counts.update(zip([code[i] for i in missing.tolist()],
-                                   found[missing].tolist(), strict=True))  # fmt: skip
+            self.counts.update(zip([code[i] for i in missing], counted.tolist(), strict=True))
         return found
 
 
-_RIVER_ROWS = _RecentCounts(hole_counts, size=1 << 16)
-_TURN_ROWS = _RecentCounts(turn_counts, size=1 << 16)
+_PLACES = {size: NUM_CARDS ** np.arange(size, dtype=np.int64) for size in (4, 5)}
+_RIVER_ROWS = _RecentCounts(lambda pairs, boards: hole_counts(PAIRS[pairs], boards), 1 << 16)
+_TURN_ROWS = _RecentCounts(lambda pairs, boards: turn_counts(PAIRS[pairs], boards), 1 << 16)
 
 
 def forget_recent_states() -> None:
@@ -807,12 +810,12 @@ def _row_equity(pairs: np.ndarray, boards: np.ndarray) -> np.ndarray:
             counts = table[class_of[at], _PERMUTED_PAIR[perm[at], pairs[rows]]]
         else:
             every = lambda board: _cached_turn_counts(tuple(board.tolist()))  # noqa: E731
-            counts = _by_board(_TURN_ROWS, every, PAIRS[pairs[rows]], boards[rows, 1:],
+            counts = _by_board(_TURN_ROWS, every, pairs[rows], boards[rows, 1:],
                                ALL_PAIRS_TURN_ROWS)  # fmt: skip
         found[rows] = counts / denominator
     rows = np.flatnonzero(shown == 5)
     if rows.size:
-        found[rows] = _RIVER_ROWS(PAIRS[pairs[rows]], boards[rows]) / RIVER_DENOMINATOR
+        found[rows] = _RIVER_ROWS(pairs[rows], boards[rows]) / RIVER_DENOMINATOR
     return found
 
 
