@@ -256,7 +256,8 @@ class StrengthEncoding(Encoding):
         found[:, _COLUMNS["facing_bet"][0] :] = board.numbers
         # Four of a suit holding a hole card: _FOUR_SUITED where a hole card is of the suit.
         suited_four = np.bitwise_or.reduce(flags & own.suits[:, pairs], axis=0)
-        hole_bits, draws_possible, top_bit = own.rank_bits[pairs], board.cards_to_come, board.top_bit
+        hole_bits, draws_possible = own.rank_bits[pairs], board.cards_to_come
+        top_bit = board.top_bit
         paired = hole_bits & board.rank_bits  # the hole ranks on the board
         pocket = own.pocket[pairs]
         if self.version >= 2:  # each board's work once for all its rows
@@ -403,7 +404,8 @@ _SUIT_FLAGS = (
     | np.where(_POPCOUNT >= 5, _FLUSH, 0)
     | np.where((_POPCOUNT >= 5) & _STRAIGHT, _STRAIGHT_FLUSH, 0)
 ).astype(np.uint8)
-_CATEGORY_AT = np.int64(_ONE_HOT_AT["category"] - 1)  # category 1 (high card) is the block's first column
+# Category 1 (high card) is the block's first column (an int64: the category is uint8).
+_CATEGORY_AT = np.int64(_ONE_HOT_AT["category"] - 1)
 
 
 def visible_category(cards: np.ndarray) -> np.ndarray:

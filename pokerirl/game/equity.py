@@ -75,7 +75,7 @@ from pokerirl.game.evaluator import (
     seven_card_strengths,
 )
 from pokerirl.game.preflop import preflop_equity  # its table is summed from our flop table
-from pokerirl.holdem import NUM_CARDS, NUM_PAIRS, PAIRS, pair_cards
+from pokerirl.holdem import NUM_CARDS, NUM_PAIRS, PAIRS
 
 NUM_RANKS = 13
 FLOP_CLASSES = 1_755  # flops up to a permutation of the suits
@@ -544,18 +544,36 @@ class BoardClasses(NamedTuple):
     """The k-card boards up to a permutation of the suits (which changes no equity).
 
     A class's representative is the permuted board with the smallest code; a board's
-    permutation is the first of the 24 (itertools order) that takes it there."""
+    permutation is the first of the 24 (itertools order) that takes it there. A board is
+    found by its colex number (:func:`_colex`), which numbers the k-card sets without a
+    search."""
 
     codes: np.ndarray  # (C(52, k),) every board's code, ascending
     class_of: np.ndarray  # (C(52, k),) its class
     perm: np.ndarray  # (C(52, k),) the suit permutation taking it to its representative
     representatives: np.ndarray  # (classes, k)
+    colex_class: np.ndarray  # (C(52, k),) class_of, by the board's colex number
+    colex_perm: np.ndarray  # (C(52, k),) perm, by the board's colex number
 
     def find(self, boards: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """(class, suit permutation) of each board (N, k): the hole pair is mapped through
-        ``_PERMUTED_PAIR[perm]`` to read the class's row."""
-        at = np.searchsorted(self.codes, _set_code(boards))
-        return self.class_of[at].astype(np.int64), self.perm[at].astype(np.int64)
+        """(class, suit permutation) of each board (N, k), its cards in any order: the hole
+        pair is mapped through ``_PERMUTED_PAIR[perm]`` to read the class's row."""
+        return self.find_sorted(np.sort(np.asarray(boards, dtype=np.int64), axis=-1))
+
+    def find_sorted(self, boards: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`find` of boards whose cards ascend along each row."""
+        at = _colex(boards)
+        return self.colex_class[at], self.colex_perm[at]
+
+
+# _BINOMIAL[i * 52 + c] = C(c, i): the i-th smallest card c of a set adds C(c, i) to its colex
+# number, which numbers the k-card sets 0 .. C(52, k) - 1.
+_BINOMIAL = np.array([math.comb(c, i) for i in range(6) for c in range(NUM_CARDS)], np.int64)
+
+
+def _colex(boards: np.ndarray) -> np.ndarray:
+    """(N,) the colex number of each set of cards (N, k), sorted ascending along each row."""
+    return _BINOMIAL[boards + NUM_CARDS * np.arange(1, boards.shape[1] + 1)].sum(axis=1)
 
 
 @cache
@@ -574,7 +592,11 @@ def board_classes(size: int) -> BoardClasses:
         raise AssertionError(f"{classes.size} {size}-card classes, expected {expected}")
     digits = NUM_CARDS ** np.arange(size - 1, -1, -1, dtype=np.int64)
     representatives = classes[:, None] // digits % NUM_CARDS
-    return BoardClasses(codes, class_of.astype(np.int16), perm, representatives)
+    colex_class, colex_perm = np.empty_like(class_of, np.int16), np.empty_like(perm)
+    at = _colex(boards)  # itertools' combinations ascend along each row
+    colex_class[at], colex_perm[at] = class_of, perm
+    return BoardClasses(codes, class_of.astype(np.int16), perm, representatives, colex_class,
+                        colex_perm)  # fmt: skip
 
 
 def flop_class_counts(flop: np.ndarray) -> np.ndarray:
@@ -756,7 +778,7 @@ def range_equity(pairs: np.ndarray, boards: np.ndarray, of: np.ndarray | None) -
     shared = rows_of_state[of] >= RANGE_ROWS
     alone = np.flatnonzero(~shared)
     if alone.size:
-        found[alone] = exact_equity(pair_cards(pairs[alone], boards[of[alone]]))
+        found[alone] = _row_equity(pairs[alone], boards[of[alone]])
     rows = np.flatnonzero(shared)
     shown = (boards >= 0).sum(axis=1)[of[rows]]
     preflop = rows[shown == 0]
@@ -804,10 +826,9 @@ def _row_equity(pairs: np.ndarray, boards: np.ndarray) -> np.ndarray:
         if rows.size == 0:
             continue
         table = flop_table() if count == 3 else turn_table()
-        if table is not None:  # the board's class and suit permutation by its colex number
-            at = _colex(boards[rows, 5 - count :])
-            class_of, perm = _colex_classes(count)
-            counts = table[class_of[at], _PERMUTED_PAIR[perm[at], pairs[rows]]]
+        if table is not None:
+            k, perm = board_classes(count).find_sorted(boards[rows, 5 - count :])
+            counts = table[k, _PERMUTED_PAIR[perm, pairs[rows]]]
         else:
             every = lambda board: _cached_turn_counts(tuple(board.tolist()))  # noqa: E731
             counts = _by_board(_TURN_ROWS, every, pairs[rows], boards[rows, 1:],
@@ -817,25 +838,3 @@ def _row_equity(pairs: np.ndarray, boards: np.ndarray) -> np.ndarray:
     if rows.size:
         found[rows] = _RIVER_ROWS(pairs[rows], boards[rows]) / RIVER_DENOMINATOR
     return found
-
-
-# _BINOMIAL[i * 52 + c] = C(c, i): the i-th smallest card c of a set adds C(c, i) to its colex
-# number, which numbers the k-card sets 0 .. C(52, k) - 1 (:func:`_colex_classes`).
-_BINOMIAL = np.array([math.comb(c, i) for i in range(6) for c in range(NUM_CARDS)], np.int64)
-
-
-def _colex(boards: np.ndarray) -> np.ndarray:
-    """(N,) the colex number of each set of cards (N, k), sorted ascending along each row."""
-    return _BINOMIAL[boards + NUM_CARDS * np.arange(1, boards.shape[1] + 1)].sum(axis=1)
-
-
-@cache
-def _colex_classes(size: int) -> tuple[np.ndarray, np.ndarray]:
-    """(class, suit permutation) of every ``size``-card board, by its colex number: what
-    :meth:`BoardClasses.find` gives, without its search."""
-    classes = board_classes(size)
-    digits = NUM_CARDS ** np.arange(size - 1, -1, -1, dtype=np.int64)
-    at = _colex(classes.codes[:, None] // digits % NUM_CARDS)  # a code's digits ascend
-    class_of, perm = np.empty_like(classes.class_of), np.empty_like(classes.perm)
-    class_of[at], perm[at] = classes.class_of, classes.perm
-    return class_of, perm
