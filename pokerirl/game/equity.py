@@ -343,11 +343,7 @@ def _pairwise_counts(holes: np.ndarray, boards: np.ndarray) -> np.ndarray:
 
 def river_equity(holes: np.ndarray, boards: np.ndarray) -> np.ndarray:
     """(N,) exact equity of hole cards (N, 2) on five-card boards (N, 5)."""
-    holes = np.asarray(holes, dtype=np.int64)
-    every = lambda board: _cached_river_counts(tuple(board.tolist()))  # noqa: E731
-    shared = _by_board(_RIVER_ROWS, every, pair_index(holes[:, 0], holes[:, 1]), boards,
-                       ALL_PAIRS_RIVER_ROWS)  # fmt: skip
-    return shared / RIVER_DENOMINATOR
+    return _street_equity(_pair_numbers(holes), boards)
 
 
 def _unseen(known: np.ndarray) -> np.ndarray:
@@ -417,15 +413,7 @@ def turn_counts(holes: np.ndarray, boards: np.ndarray) -> np.ndarray:
 def turn_equity(holes: np.ndarray, boards: np.ndarray) -> np.ndarray:
     """(N,) exact equity of hole cards (N, 2) on four-card boards (N, 4): read from the turn
     table where it is built (:func:`turn_table`), else counted; the same integers."""
-    table = turn_table()
-    if table is not None:
-        shared = _class_counts(table, board_classes(4), holes, boards)
-    else:
-        holes = np.asarray(holes, dtype=np.int64)
-        every = lambda board: _cached_turn_counts(tuple(board.tolist()))  # noqa: E731
-        shared = _by_board(_TURN_ROWS, every, pair_index(holes[:, 0], holes[:, 1]), boards,
-                           ALL_PAIRS_TURN_ROWS)  # fmt: skip
-    return shared / TURN_DENOMINATOR
+    return _street_equity(_pair_numbers(holes), boards)
 
 
 def all_pairs_turn_counts(board: np.ndarray) -> np.ndarray:
@@ -558,11 +546,7 @@ class BoardClasses(NamedTuple):
     def find(self, boards: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(class, suit permutation) of each board (N, k), its cards in any order: the hole
         pair is mapped through ``_PERMUTED_PAIR[perm]`` to read the class's row."""
-        return self.find_sorted(np.sort(np.asarray(boards, dtype=np.int64), axis=-1))
-
-    def find_sorted(self, boards: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """:meth:`find` of boards whose cards ascend along each row."""
-        at = _colex(boards)
+        at = _colex(np.sort(np.asarray(boards, dtype=np.int64), axis=-1))
         return self.colex_class[at], self.colex_perm[at]
 
 
@@ -715,14 +699,12 @@ def _class_counts(
     table: np.ndarray, classes: BoardClasses, holes: np.ndarray, boards: np.ndarray
 ) -> np.ndarray:
     """(N,) int64: each state's count read from a table of (board class, hole pair)."""
-    holes = np.asarray(holes, dtype=np.int64)
-    pairs = pair_index(holes[:, 0], holes[:, 1])
-    return _pair_class_counts(table, classes, pairs, boards, slice(None))  # row r: board r
+    return _pair_class_counts(table, classes, _pair_numbers(holes), boards, slice(None))
 
 
 def _pair_class_counts(
     table: np.ndarray, classes: BoardClasses, pairs: np.ndarray, boards: np.ndarray,
-    of: np.ndarray | slice,
+    of: np.ndarray | slice = slice(None),
 ) -> np.ndarray:  # fmt: skip
     """(R,) int64: the count of pair ``pairs[r]`` on board ``boards[of[r]]`` read from a
     table of (board class, hole pair); each board's class found once."""
@@ -732,7 +714,7 @@ def _pair_class_counts(
 
 def flop_equity(holes: np.ndarray, flops: np.ndarray) -> np.ndarray:
     """(N,) exact equity of hole cards (N, 2) on flops (N, 3)."""
-    return flop_counts(holes, flops) / FLOP_DENOMINATOR
+    return _street_equity(_pair_numbers(holes), flops)
 
 
 def preflop_counts() -> np.ndarray:
@@ -808,33 +790,42 @@ def exact_equity(cards: np.ndarray) -> np.ndarray:
     """(N,) exact equity of states' cards (N, 7): hole cards, then the board shown (``-1``
     beyond, 0, 3, 4 or 5 cards)."""
     cards = np.asarray(cards, dtype=np.int64)
-    return _row_equity(pair_index(cards[:, 0], cards[:, 1]), cards[:, 2:])
+    return _row_equity(_pair_numbers(cards[:, :2]), cards[:, 2:])
 
 
 def _row_equity(pairs: np.ndarray, boards: np.ndarray) -> np.ndarray:
     """(R,) exact equity of hole pair ``pairs[r]`` on board ``boards[r]`` (R, 5), ``-1``
-    beyond the cards shown: each row on its own, in as few array operations as a DQN's
-    small batches want (their cost is per call, not per row)."""
+    beyond the cards shown: each street's rows at once, in few array operations (a DQN's
+    batches are small and many: their cost is per call, not per row)."""
     boards = np.sort(boards, axis=1)  # a board is a set: the cards shown last, ascending
     shown = (boards >= 0).sum(axis=1)
     found = np.empty(len(pairs))
-    rows = np.flatnonzero(shown == 0)
-    if rows.size:
-        found[rows] = _PREFLOP_EQUITY[pairs[rows]]
-    for count, denominator in ((3, FLOP_DENOMINATOR), (4, TURN_DENOMINATOR)):
+    for count in (0, 3, 4, 5):
         rows = np.flatnonzero(shown == count)
-        if rows.size == 0:
-            continue
-        table = flop_table() if count == 3 else turn_table()
-        if table is not None:
-            k, perm = board_classes(count).find_sorted(boards[rows, 5 - count :])
-            counts = table[k, _PERMUTED_PAIR[perm, pairs[rows]]]
-        else:
-            every = lambda board: _cached_turn_counts(tuple(board.tolist()))  # noqa: E731
-            counts = _by_board(_TURN_ROWS, every, pairs[rows], boards[rows, 1:],
-                               ALL_PAIRS_TURN_ROWS)  # fmt: skip
-        found[rows] = counts / denominator
-    rows = np.flatnonzero(shown == 5)
-    if rows.size:
-        found[rows] = _RIVER_ROWS(pairs[rows], boards[rows]) / RIVER_DENOMINATOR
+        if rows.size:
+            found[rows] = _street_equity(pairs[rows], boards[rows, 5 - count :])
     return found
+
+
+def _street_equity(pairs: np.ndarray, boards: np.ndarray) -> np.ndarray:
+    """(R,) exact equity of hole pair ``pairs[r]`` on board ``boards[r]`` (R, k), k = 0, 3,
+    4 or 5 cards, in any order: preflop and flop from their tables, the turn from its table
+    where built, else counted, the river counted (rows of a board shared by many at once)."""
+    count = boards.shape[1]
+    if count == 0:
+        return _PREFLOP_EQUITY[pairs]
+    if count == 3:
+        return _pair_class_counts(flop_table(), board_classes(3), pairs, boards) / FLOP_DENOMINATOR
+    if count == 4 and (table := turn_table()) is not None:
+        return _pair_class_counts(table, board_classes(4), pairs, boards) / TURN_DENOMINATOR
+    if count == 4:
+        every = lambda board: _cached_turn_counts(tuple(board.tolist()))  # noqa: E731
+        return _by_board(_TURN_ROWS, every, pairs, boards, ALL_PAIRS_TURN_ROWS) / TURN_DENOMINATOR
+    every = lambda board: _cached_river_counts(tuple(board.tolist()))  # noqa: E731
+    return _by_board(_RIVER_ROWS, every, pairs, boards, ALL_PAIRS_RIVER_ROWS) / RIVER_DENOMINATOR
+
+
+def _pair_numbers(holes: np.ndarray) -> np.ndarray:
+    """(N,) the pair number of each row of hole cards (N, 2)."""
+    holes = np.asarray(holes, dtype=np.int64)
+    return pair_index(holes[:, 0], holes[:, 1])
