@@ -13,6 +13,7 @@ from torch import nn
 from pokerirl.agents.dqn import (
     DQNConfig,
     DQNLearner,
+    ReplayMemory,
     double_dqn_targets,
     epsilon_at,
     train_dqn,
@@ -22,6 +23,27 @@ from pokerirl.holdem import NUM_ACTIONS, OBS_SIZE
 
 torch.set_num_threads(1)
 SMALL = DQNConfig(concurrent_hands=64, replay_init=32)
+
+
+def test_the_replay_memory_is_a_ring_buffer_across_its_wrap() -> None:
+    """Adds that fit before the end and adds that wrap put each transition where a ring
+    buffer does (slot = its number modulo the capacity): the last ``capacity`` are kept."""
+    memory = ReplayMemory(capacity=10)
+    number = 0
+    for count in (4, 5, 3, 8, 10, 1):  # the third wraps, the fifth fills it exactly
+        numbers = np.arange(number, number + count)
+        obs = np.broadcast_to(numbers[:, None] % 256, (count, OBS_SIZE)).astype(np.uint8)
+        memory.add(obs, numbers, numbers.astype(np.float32), obs, np.ones((count, 4), bool),
+                   numbers % 2 == 0)  # fmt: skip
+        number += count
+        kept = np.arange(max(0, number - 10), number)
+        assert memory.size == kept.size and memory.position == number % 10
+        slots = kept % 10
+        assert memory.actions[slots].tolist() == kept.tolist()
+        assert (memory.obs[slots] == (kept % 256)[:, None]).all()
+        assert (memory.next_obs[slots] == (kept % 256)[:, None]).all()
+        assert memory.rewards[slots].tolist() == kept.tolist()
+        assert memory.done[slots].tolist() == (kept % 2 == 0).tolist()
 
 
 def test_double_dqn_targets_match_hand_computed_values() -> None:
