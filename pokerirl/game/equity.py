@@ -738,7 +738,7 @@ RANGE_ROWS = 16
 
 def range_equity(pairs: np.ndarray, boards: np.ndarray, of: np.ndarray | None) -> np.ndarray:
     """(R,) exact equity of hole pair ``pairs[r]`` (a number of ``PAIRS``) on board
-    ``boards[of[r]]`` (boards (n, 5), ``-1`` beyond the cards shown): what
+    ``boards[of[r]]`` (boards (n, 5), ``-1`` beyond the cards shown; ``of`` None: board r): what
     :func:`exact_equity` gives those states, with each board's work done once for all its
     rows (its class and suit permutation, or its counts of every pair) where it has at least
     :data:`RANGE_ROWS` of them, as the many pairs of a range in local best response.
@@ -765,7 +765,7 @@ def range_equity(pairs: np.ndarray, boards: np.ndarray, of: np.ndarray | None) -
     shown = (boards >= 0).sum(axis=1)[of[rows]]
     preflop = rows[shown == 0]
     if preflop.size:
-        found[preflop] = preflop_equity(PAIRS[pairs[preflop]])
+        found[preflop] = _PREFLOP_EQUITY[pairs[preflop]]
     for count, denominator in ((3, FLOP_DENOMINATOR), (4, TURN_DENOMINATOR),
                                (5, RIVER_DENOMINATOR)):  # fmt: skip
         at = rows[shown == count]
