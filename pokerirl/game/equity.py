@@ -811,6 +811,7 @@ def _street_equity(pairs: np.ndarray, boards: np.ndarray) -> np.ndarray:
     """(R,) exact equity of hole pair ``pairs[r]`` on board ``boards[r]`` (R, k), k = 0, 3,
     4 or 5 cards, in any order: preflop and flop from their tables, the turn from its table
     where built, else counted, the river counted (rows of a board shared by many at once)."""
+    boards = np.asarray(boards, dtype=np.int64)
     count = boards.shape[1]
     if count == 0:
         return _PREFLOP_EQUITY[pairs]
