@@ -766,20 +766,19 @@ def range_equity(pairs: np.ndarray, boards: np.ndarray, of: np.ndarray | None) -
     preflop = rows[shown == 0]
     if preflop.size:
         found[preflop] = _PREFLOP_EQUITY[pairs[preflop]]
-    for count, denominator in ((3, FLOP_DENOMINATOR), (4, TURN_DENOMINATOR),
-                               (5, RIVER_DENOMINATOR)):  # fmt: skip
+    for count in (3, 4, 5):
         at = rows[shown == count]
         if at.size == 0:
             continue
         states, row_state = np.unique(of[at], return_inverse=True)
         board = np.sort(boards[states, :count], axis=1)  # a board is a set
-        table = flop_table() if count == 3 else turn_table() if count == 4 else None
+        table = _street_table(count)
         if table is not None:
             counts = _pair_class_counts(table, board_classes(count), pairs[at], board, row_state)
         else:  # every pair's counts of each board, kept for its next decision
-            every = _cached_turn_counts if count == 4 else _cached_river_counts
-            counts = np.stack([every(tuple(b)) for b in board.tolist()])[row_state, pairs[at]]
-        found[at] = counts / denominator
+            every = np.stack([_every_pair_counts(tuple(b)) for b in board.tolist()])
+            counts = every[row_state, pairs[at]]
+        found[at] = counts / _DENOMINATOR[count]
     return found
 
 
@@ -815,15 +814,36 @@ def _street_equity(pairs: np.ndarray, boards: np.ndarray) -> np.ndarray:
     count = boards.shape[1]
     if count == 0:
         return _PREFLOP_EQUITY[pairs]
-    if count == 3:
-        return _pair_class_counts(flop_table(), board_classes(3), pairs, boards) / FLOP_DENOMINATOR
-    if count == 4 and (table := turn_table()) is not None:
-        return _pair_class_counts(table, board_classes(4), pairs, boards) / TURN_DENOMINATOR
+    table = _street_table(count)
+    if table is not None:
+        counts = _pair_class_counts(table, board_classes(count), pairs, boards)
+    else:  # row by row, or every pair's counts of a board many rows share
+        recent, least = _counted(count)
+        every = lambda board: _every_pair_counts(tuple(board.tolist()))  # noqa: E731
+        counts = _by_board(recent, every, pairs, boards, least)
+    return counts / _DENOMINATOR[count]
+
+
+_DENOMINATOR = {3: FLOP_DENOMINATOR, 4: TURN_DENOMINATOR, 5: RIVER_DENOMINATOR}  # by cards shown
+
+
+def _street_table(count: int) -> np.ndarray | None:
+    """The (board class, hole pair) counts of the street with ``count`` board cards: the
+    flop's (shipped), the turn's where built; ``None``: counted."""
+    return flop_table() if count == 3 else turn_table() if count == 4 else None
+
+
+def _counted(count: int) -> tuple[_RecentCounts, int]:
+    """A counted street's memory of recent rows, and how many rows share a board before it
+    is counted whole (read when called: the tests stand in for them)."""
     if count == 4:
-        every = lambda board: _cached_turn_counts(tuple(board.tolist()))  # noqa: E731
-        return _by_board(_TURN_ROWS, every, pairs, boards, ALL_PAIRS_TURN_ROWS) / TURN_DENOMINATOR
-    every = lambda board: _cached_river_counts(tuple(board.tolist()))  # noqa: E731
-    return _by_board(_RIVER_ROWS, every, pairs, boards, ALL_PAIRS_RIVER_ROWS) / RIVER_DENOMINATOR
+        return _TURN_ROWS, ALL_PAIRS_TURN_ROWS
+    return _RIVER_ROWS, ALL_PAIRS_RIVER_ROWS
+
+
+def _every_pair_counts(board: tuple[int, ...]) -> np.ndarray:
+    """(1326,) every pair's count on a turn or river board (its sorted cards), cached."""
+    return _cached_turn_counts(board) if len(board) == 4 else _cached_river_counts(board)
 
 
 def _pair_numbers(holes: np.ndarray) -> np.ndarray:
