@@ -50,8 +50,10 @@ def _deal_blocks(seed: int, first: int, last: int) -> np.ndarray:
     deals = np.empty_like(draws)  # the card step j puts at position j
     for j in range(DEAL_SIZE):
         held, taken = np.full_like(draws[j], j), draws[j].copy()
+        last = j == DEAL_SIZE - 1  # no later step reads what the last position held
         for i in range(j):  # ascending: the last earlier swap of a position decides its card
-            np.copyto(held, before[i], where=draws[i] == j)
+            if not last:
+                np.copyto(held, before[i], where=draws[i] == j)
             np.copyto(taken, before[i], where=draws[i] == draws[j])
         before[j], deals[j] = held, taken
     return np.ascontiguousarray(deals.T)  # rows of nine cards, as the engine reads them

@@ -39,7 +39,7 @@ import numpy as np
 
 from pokerirl.errors import PokerIRLError
 from pokerirl.game.deals import DEAL_SIZE, deal_cards
-from pokerirl.game.evaluator import seven_card_strengths
+from pokerirl.game.evaluator import showdown_strengths
 from pokerirl.holdem import (
     BOARD_SIZE_BY_ROUND,
     CALL,
@@ -66,7 +66,6 @@ _LEGAL_BY_SITUATION[[0, 2], CHECK] = True
 _LEGAL_BY_SITUATION[[2, 3], RAISE] = True
 _LEGAL = _LEGAL_BY_SITUATION.reshape(-1)
 _LEGAL_WORDS = _LEGAL_BY_SITUATION.view(np.uint32).reshape(-1)  # a row's 4 bytes as a word
-_BOTH_SEATS = np.array([0, 1])
 _MATCHES = np.zeros(NUM_ACTIONS, dtype=np.int16)  # actions that first match the opponent
 _MATCHES[[CALL, RAISE]] = 1
 # _UNRAISED_AFTER[4 * before + action]: actions in a row without a raise, after the action
@@ -171,12 +170,19 @@ class LimitHoldemBatch:
         self._chips = self.chips.reshape(-1)
         self._round_chips = self.round_chips.reshape(-1)
         self._raises = self.raises.reshape(-1)
-        # Row hand * 2 + seat: that seat's hole cards and the whole board, for observations
-        # (filled by slices: a third cheaper than a gather, a repeat and a concatenation).
-        views = np.empty((n, 2, 7), dtype=np.int8)
-        views[:, 0, :2], views[:, 1, :2] = self.cards[:, 0:2], self.cards[:, 2:4]
-        views[:, :, 2:] = self.cards[:, None, 4:]
-        self._views = views.reshape(2 * n, 7)
+        self._seat_views: np.ndarray | None = None  # built by the first observation
+
+    @property
+    def _views(self) -> np.ndarray:
+        """Row hand * 2 + seat: that seat's hole cards and the whole board, for observations
+        (built when first read: a match of agents that read none never needs them)."""
+        if self._seat_views is None:
+            # Filled by slices: a third cheaper than a gather, a repeat and a concatenation.
+            views = np.empty((self.size, 2, 7), dtype=np.int8)
+            views[:, 0, :2], views[:, 1, :2] = self.cards[:, 0:2], self.cards[:, 2:4]
+            views[:, :, 2:] = self.cards[:, None, 4:]
+            self._seat_views = views.reshape(2 * self.size, 7)
+        return self._seat_views
 
     @property
     def size(self) -> int:
@@ -285,11 +291,17 @@ class LimitHoldemBatch:
         self._round_chips[mine_at[close_at]] = 0
         self._round_chips[mine_at[close_at] ^ 1] = 0
         self._unraised[closed] = 0
-        showdowns = closed[np.flatnonzero(next_round == SHOWDOWN)]
-        self._settle(folds, seat[fold_at], showdowns)
+        showdown_at = close_at[np.flatnonzero(next_round == SHOWDOWN)]
+        self._settle(folds, seat[fold_at], hands[showdown_at])
+        if hands is self._active:  # a match's step: the hands still in play are the others
+            keep = np.ones(hands.size, dtype=bool)
+            keep[fold_at], keep[showdown_at] = False, False
+            self._active = hands[np.flatnonzero(keep)]
+        elif fold_at.size or showdown_at.size:
+            self._active = self._active[np.flatnonzero(~self.done[self._active])]
 
     def _settle(self, folds: np.ndarray, loser: np.ndarray, showdowns: np.ndarray) -> None:
-        """Payoffs of hands that just ended (``loser``: the folding seats); drop them from play."""
+        """Payoffs of hands that just ended (``loser``: the folding seats), and done."""
         if folds.size:
             # Flat places: one 1-D gather at hand * 2 + seat beats 2-D fancy indexing.
             lost_at = 2 * folds + loser
@@ -300,15 +312,12 @@ class LimitHoldemBatch:
         if showdowns.size:
             # Both seats' seven cards in one pass of the evaluator (the engine's own cards:
             # no checks); (n, 2) strengths.
-            seen = self._views[(2 * showdowns)[:, None] + _BOTH_SEATS].reshape(-1, 7)
-            strength = seven_card_strengths(seen).reshape(-1, 2).astype(np.int64)
+            strength = showdown_strengths(self.cards[showdowns]).astype(np.int64)
             # Both seats have equal chips in at a showdown; a tie returns them.
             won = np.sign(strength[:, 0] - strength[:, 1]) * (
                 self._chips[2 * showdowns] / BIG_BLIND
             )
             self.payoffs[showdowns, 0] = won
             self.payoffs[showdowns, 1] = 0.0 - won  # not -won: no -0.0 for split pots
-        if folds.size or showdowns.size:
-            self.done[folds] = True
-            self.done[showdowns] = True
-            self._active = self._active[np.flatnonzero(~self.done[self._active])]
+        self.done[folds] = True
+        self.done[showdowns] = True

@@ -282,7 +282,9 @@ def _non_flush(keys: np.ndarray) -> np.ndarray:
     make (a fifth card of a rank: only a clashing pair gives one) gets some strength; callers
     mask those pairs."""
     dense = _dense()
-    index = dense.low_base[keys % _LOW] + dense.high_index[np.minimum(keys // _LOW, 5**6 - 1)]
+    high = keys // _LOW
+    low = keys - _LOW * high  # not keys % _LOW: numpy's remainder is several times a divide
+    index = dense.low_base[low] + dense.high_index[np.minimum(high, 5**6 - 1)]
     return dense.strength[np.minimum(index, dense.strength.size - 1)]
 
 
@@ -371,10 +373,43 @@ def _keyed_strengths(cards: np.ndarray, keys: np.ndarray, suit_counts: np.ndarra
     strength = _non_flush(keys)
     rows = np.flatnonzero(_flushable(suit_counts))
     if rows.size:
-        suits, ranks = _SUIT[cards[rows]], _RANK[cards[rows]]
-        suit = (suits[:, :, None] == np.arange(4)).sum(axis=1).argmax(axis=1)
-        bits = np.where(suits == suit[:, None], np.int64(1) << ranks, 0).sum(axis=1)
-        strength[rows] = _dense().flush[bits]
+        strength[rows] = _flush_strengths(cards[rows])
+    return strength
+
+
+def _flush_strengths(cards: np.ndarray) -> np.ndarray:
+    """Strengths of (N, 7) cards that hold five of a suit: the flush table of its ranks."""
+    suits, ranks = _SUIT[cards], _RANK[cards]
+    suit = (suits[:, :, None] == np.arange(4)).sum(axis=1).argmax(axis=1)
+    bits = np.where(suits == suit[:, None], np.int64(1) << ranks, 0).sum(axis=1)
+    return _dense().flush[bits]
+
+
+# A deal's columns that make each seat's seven cards: its hole cards, then the board.
+_SEAT_COLUMNS = np.array([[0, 1, 4, 5, 6, 7, 8], [2, 3, 4, 5, 6, 7, 8]])
+
+
+def showdown_strengths(deals: np.ndarray) -> np.ndarray:
+    """(N, 2) int32 strength of each seat's seven cards in (N, 9) deals (seat 0's hole
+    cards, seat 1's, the board; unchecked), as :func:`seven_card_strengths`: the board's
+    keys are summed once for both seats.
+
+    >>> rng = np.random.default_rng(0)
+    >>> deals = np.argsort(rng.random((1000, 52)), axis=1)[:, :9]
+    >>> both = showdown_strengths(deals)
+    >>> bool((both[:, 1] == seven_card_strengths(deals[:, [2, 3, 4, 5, 6, 7, 8]])).all())
+    True
+    """
+    deals = np.asarray(deals)
+    keys, suits = np.empty((deals.shape[0], 2), np.int32), np.empty((deals.shape[0], 2), np.int32)
+    for table, out in ((_CARD_KEY, keys), (_CARD_SUIT, suits)):
+        board = _card_sum(table, deals[:, 4:])
+        out[:, 0] = board + table[deals[:, 0]] + table[deals[:, 1]]
+        out[:, 1] = board + table[deals[:, 2]] + table[deals[:, 3]]
+    strength = _non_flush(keys)
+    rows, seats = np.nonzero(_flushable(suits))
+    if rows.size:
+        strength[rows, seats] = _flush_strengths(deals[rows[:, None], _SEAT_COLUMNS[seats]])
     return strength
 
 
