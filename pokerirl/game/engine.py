@@ -65,13 +65,24 @@ _LEGAL_BY_SITUATION[[1, 3], CALL] = True
 _LEGAL_BY_SITUATION[[0, 2], CHECK] = True
 _LEGAL_BY_SITUATION[[2, 3], RAISE] = True
 _LEGAL = _LEGAL_BY_SITUATION.reshape(-1)
-_LEGAL_WORDS = _LEGAL_BY_SITUATION.view(np.uint32).reshape(-1)  # a row's 4 bytes as a word
-_MATCHES = np.zeros(NUM_ACTIONS, dtype=np.int16)  # actions that first match the opponent
-_MATCHES[[CALL, RAISE]] = 1
-# _UNRAISED_AFTER[4 * before + action]: actions in a row without a raise, after the action
-# (RLCard's not_raise_num): a raise starts the count at 1, a fold leaves it.
-_UNRAISED_AFTER = np.array([[1 + before, 1, before, 1 + before] for before in range(3)],
-                           dtype=np.int8).reshape(-1)  # fmt: skip
+# A hot step reads these tables by arithmetic on small integers, not by gathers (a gather
+# from a four-entry table costs several times a few int8 operations): each situation's legal
+# actions as bits (bit a: action a) and as a word of four bytes (``legal_mask_of`` reads it),
+# both sums of a part for being level, one for being behind and one for a raise left.
+_LEGAL_BITS = (_LEGAL_BY_SITUATION << np.arange(NUM_ACTIONS)).sum(axis=1).astype(np.int8)
+_LEGAL_WORDS = _LEGAL_BY_SITUATION.view(np.int32).reshape(-1)
+
+
+def _by_parts(table: np.ndarray, situation: np.ndarray) -> np.ndarray:
+    """``table[situation]`` (four entries, in the table's dtype) for int8 situations: level +
+    behind part + raise part."""
+    level = table[0]
+    return level + (table[1] - level) * (situation & 1) + (table[2] - level) * (situation >> 1)
+
+
+def _raise_sizes(rnd: np.ndarray) -> np.ndarray:
+    """``RAISE_SIZE_BY_ROUND[rnd]`` (2, 2, 4, 4) by a shift of int8 rounds."""
+    return RAISE_SIZE_BY_ROUND[0] << (rnd >> 1)
 
 
 class IllegalActionError(PokerIRLError, ValueError):
@@ -109,9 +120,9 @@ class Turn:
 
     @property
     def legal_words(self) -> np.ndarray:
-        """(n,) uint32: each legal mask's four bytes as one word (``legal_mask_of`` reads
-        them back): one gather instead of a row gather, and cheap to split between agents."""
-        return _LEGAL_WORDS[self.situation]
+        """(n,) int32: each legal mask's four bytes as one word (``legal_mask_of`` reads
+        them back): no row gather, and cheap to split between agents."""
+        return _by_parts(_LEGAL_WORDS, self.situation)
 
     @property
     def legal_mask(self) -> np.ndarray:
@@ -226,8 +237,8 @@ class LimitHoldemBatch:
         raises_at = NUM_ROUNDS * hands + rnd
         mine, theirs = self._round_chips[mine_at], self._round_chips[mine_at ^ 1]
         raised = self._raises[raises_at]
-        # Legality by table: situation (behind?, may raise?) x action.
-        situation = (mine < theirs) + 2 * (raised < MAX_RAISES)
+        # Situation (behind?, may raise?) in int8: the legal actions are read from it.
+        situation = (mine < theirs).view(np.int8) + 2 * (raised < MAX_RAISES).view(np.int8)
         return Turn(hands=hands, seat=seat, mine_at=mine_at, rnd=rnd, raises_at=raises_at,
                     mine=mine, theirs=theirs, raised=raised, situation=situation)  # fmt: skip
 
@@ -254,11 +265,10 @@ class LimitHoldemBatch:
                 ``turn.hands``); nothing is applied then.
         """
         hands, situation = turn.hands, turn.situation
-        if actions.size and (actions.min() < 0 or actions.max() >= NUM_ACTIONS):
+        in_range = not actions.size or (actions.min() >= 0 and actions.max() < NUM_ACTIONS)
+        action = actions.astype(np.int8) if in_range else actions  # int8: a few times faster
+        if not in_range or not ((_by_parts(_LEGAL_BITS, situation) >> action) & 1).all():
             legal = (actions >= 0) & (actions < NUM_ACTIONS)
-        else:
-            legal = _LEGAL[NUM_ACTIONS * situation + actions]
-        if not legal.all():
             legal &= _LEGAL[NUM_ACTIONS * situation + np.clip(actions, 0, NUM_ACTIONS - 1)]
             bad = int(np.flatnonzero(~legal)[0])
             allowed = np.flatnonzero(_LEGAL_BY_SITUATION[situation[bad]]).tolist()
@@ -268,20 +278,22 @@ class LimitHoldemBatch:
             )
 
         seat, mine_at, mine = turn.seat, turn.mine_at, turn.mine
-        is_raise = actions == RAISE
-        # A call matches the opponent; a raise goes one raise size above them.
-        added = (turn.theirs - mine) * _MATCHES[actions] + RAISE_SIZE_BY_ROUND[turn.rnd] * is_raise
+        is_raise, not_fold = action == RAISE, action != FOLD
+        # A call or a check matches the opponent; a raise goes one raise size above them.
+        added = (turn.theirs - mine) * not_fold + _raise_sizes(turn.rnd) * is_raise
         self._chips[mine_at] += added
         self._round_chips[mine_at] = mine + added
         self._raises[turn.raises_at] = turn.raised + is_raise
-        # Actions in a row without a raise: a raise is the first, a fold ends the hand.
-        unraised = _UNRAISED_AFTER[NUM_ACTIONS * self._unraised[hands] + actions]
+        # Actions in a row without a raise (RLCard's not_raise_num): a raise is the first, a
+        # fold leaves the count (it ends the hand).
+        before = self._unraised[hands]
+        unraised = before + not_fold - before * is_raise
         self._unraised[hands] = unraised
         self.to_act[hands] = 1 - seat  # also the first to act next round: they did not close it
 
         # Indices, not boolean masks, to pick the few hands that fold or close a round: a
         # masked gather costs several times a gather by index.
-        fold_at = np.flatnonzero(actions == FOLD)
+        fold_at = np.flatnonzero(~not_fold)
         folds = hands[fold_at]
         self.folded[folds] = True
         close_at = np.flatnonzero(unraised >= 2)

@@ -400,7 +400,7 @@ def showdown_strengths(deals: np.ndarray) -> np.ndarray:
     >>> bool((both[:, 1] == seven_card_strengths(deals[:, [2, 3, 4, 5, 6, 7, 8]])).all())
     True
     """
-    deals = np.asarray(deals)
+    deals = np.asarray(deals, dtype=np.intp)  # gathers by int8 would convert each column
     keys, suits = np.empty((deals.shape[0], 2), np.int32), np.empty((deals.shape[0], 2), np.int32)
     for table, out in ((_CARD_KEY, keys), (_CARD_SUIT, suits)):
         board = _card_sum(table, deals[:, 4:])
