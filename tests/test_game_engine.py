@@ -160,3 +160,41 @@ def test_the_legality_table_in_every_situation() -> None:
             else:
                 with pytest.raises(IllegalActionError):
                     trial.step(np.array([action]))
+
+
+def test_the_step_reads_its_tables_by_arithmetic_as_the_tables_say() -> None:
+    """The hot step's int8 arithmetic (legal bits and words by parts, raise sizes by a shift)
+    gives each table's entry in every situation and round."""
+    from pokerirl.game.engine import (
+        _LEGAL_BITS,
+        _LEGAL_BY_SITUATION,
+        _LEGAL_WORDS,
+        RAISE_SIZE_BY_ROUND,
+        _by_parts,
+        _raise_sizes,
+    )
+
+    situations = np.arange(4, dtype=np.int8)
+    bits = _by_parts(_LEGAL_BITS, situations)
+    for action in range(NUM_ACTIONS):
+        legal = ((bits >> action) & 1).astype(bool)
+        assert legal.tolist() == _LEGAL_BY_SITUATION[:, action].tolist()
+    words = _by_parts(_LEGAL_WORDS, situations)
+    assert words.view(np.bool_).reshape(4, NUM_ACTIONS).tolist() == _LEGAL_BY_SITUATION.tolist()
+    assert _raise_sizes(np.arange(4, dtype=np.int8)).tolist() == RAISE_SIZE_BY_ROUND.tolist()
+
+
+def test_hands_leave_play_when_they_end_whether_all_or_some_are_stepped() -> None:
+    game = LimitHoldemBatch(deals=deal_cards(seed=6, start=0, count=4))
+    game.step(np.array([FOLD, CALL, CALL, RAISE]))  # all of them: hand 0 ends
+    assert game.active().tolist() == [1, 2, 3] and game.done.tolist() == [True, False, False, False]
+    game.step(np.array([FOLD]), hands=np.array([3]))  # some: hand 3 ends, 1 and 2 wait
+    assert game.active().tolist() == [1, 2]
+    game.step(np.array([CHECK, CHECK]))  # the big blind checks: both see the flop
+    assert game.active().tolist() == [1, 2] and game.round.tolist()[1:3] == [1, 1]
+    for _ in range(3):  # check the flop, turn and river down: two showdowns
+        game.step(np.array([CHECK, CHECK]))
+        game.step(np.array([CHECK, CHECK]))
+    assert game.active().size == 0 and game.done.all()
+    assert game.payoffs[[1, 2]].sum(axis=1).tolist() == [0.0, 0.0]
+    assert (np.abs(game.payoffs[[1, 2]]) <= 1.0).all()  # one big blind each, won, lost or split

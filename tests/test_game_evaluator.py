@@ -166,3 +166,18 @@ def test_every_five_card_class_is_ranked_as_eval7_ranks_it() -> None:
 def test_random_seven_card_hands_are_ranked_as_eval7_ranks_them() -> None:
     cards = np.random.default_rng(8).random((200_000, 52)).argsort(axis=1)[:, :7]
     assert _agree_in_order(hand_strength(cards), _eval7(cards)) > 3_000
+
+
+def test_showdown_strengths_rank_both_seats_as_seven_card_strengths() -> None:
+    """The engine's showdown (the board's keys summed once for both seats) on random deals
+    and on decks where flushes, boats and ties are common."""
+    from pokerirl.game.evaluator import seven_card_strengths, showdown_strengths
+
+    rng = np.random.default_rng(9)
+    decks = [np.arange(52), *_restricted_decks()]
+    for deck in decks:
+        deals = deck[rng.random((5_000, deck.size)).argsort(axis=1)[:, :9]].astype(np.int8)
+        both = showdown_strengths(deals)
+        for seat, hole in ((0, [0, 1]), (1, [2, 3])):
+            seven = deals[:, [*hole, 4, 5, 6, 7, 8]]
+            np.testing.assert_array_equal(both[:, seat], seven_card_strengths(seven))
