@@ -10,7 +10,10 @@ measured in one run are comparable; the machine may be shared.
 The gate (issue 41): the engine's raise vs random (alternating seats) must play at least
 :data:`MIN_RATIO` times RLCard's random-vs-random hands/s measured in the same run; below it
 the script says so and exits 1 (it was 158x, then 37x when `pokerirl match` began timing the
-AIVAT corrections and a match built observations no built-in agent reads). The ratio is
+AIVAT corrections and a match built observations no built-in agent reads; back over 300x, it
+hovered at 286-327x on an AVX-512 machine until a step's legality and chips were computed
+by int8 arithmetic rather than gathers from four-entry tables: 360-372x there,
+docs/results/strength-cost/runs6/engine.txt). The ratio is
 the median over ``--rounds`` rounds, each RLCard's run and then the engine's, back to back:
 on a shared machine a burst of load then hits one round's pair, not one side's best (a
 best of several short engine runs against a few long RLCard ones favoured the engine).
