@@ -267,6 +267,42 @@ def test_a_ray_that_fails_to_start_is_one_line() -> None:
     )
 
 
+def test_a_private_ray_that_fails_to_start_is_started_afresh() -> None:
+    # `--ray local`: Ray's startup timeout (a bare Exception after 30 s on a loaded machine)
+    # shuts the failed start down and tries again in a new folder; three failures are one
+    # line with each reason. A stand-in for `ray`, since no machine times Ray out on demand.
+    from types import SimpleNamespace
+
+    from pokerirl.execution.ray_connect import _private_ray
+
+    folders: list[Path] = []
+    calls: list[str] = []  # init and shutdown, in order
+
+    def failing(times: int) -> SimpleNamespace:
+        def init(**options: object) -> None:
+            folders.append(Path(str(options["_temp_dir"])))
+            assert folders[-1].is_dir()
+            calls.append("init")
+            if len(folders) <= times:
+                raise Exception(f"The current node timed out during startup ({len(folders)}).")
+
+        return SimpleNamespace(init=init, shutdown=lambda: calls.append("shutdown"))
+
+    with _private_ray(failing(2)):
+        assert calls == ["init", "shutdown", "init", "shutdown", "init"]
+        assert len(set(folders)) == 3 and [f.exists() for f in folders] == [False, False, True]
+    assert calls[-1] == "shutdown" and not folders[-1].exists()
+    folders.clear()
+    with pytest.raises(ExecutionError) as error, _private_ray(failing(3)):
+        pass
+    assert str(error.value) == (
+        "cannot start a private Ray (local) in 3 attempts: 1: The current node timed out during "
+        "startup (1).; 2: The current node timed out during startup (2).; 3: The current node "
+        "timed out during startup (3)."
+    )
+    assert not any(f.exists() for f in folders)
+
+
 def test_a_head_interrupted_while_starting_is_stopped(monkeypatch: pytest.MonkeyPatch) -> None:
     # A Ctrl-C (here another exception) while waiting for Ray stops the head, not only its folder.
     import time

@@ -16,6 +16,8 @@ from pokerirl.execution.backend import LOCAL_RAY, Backend, ExecutionError, _firs
 from pokerirl.execution.ray_private import _private_ray_folder
 from pokerirl.execution.scratch import sweep_leftovers
 
+LOCAL_ATTEMPTS = 3  # starts of a private instance (--ray local) before giving up
+
 
 @contextlib.contextmanager
 def _ray_session(backend: Backend) -> Iterator[Any]:
@@ -27,16 +29,44 @@ def _ray_session(backend: Backend) -> Iterator[Any]:
     connect_here = not ray.is_initialized()
     try:
         with contextlib.ExitStack() as stack:
-            private = None
             if connect_here and backend.address == LOCAL_RAY:
-                private = stack.enter_context(_private_ray_folder())
-                stack.enter_context(_private_token(ray))
-            if connect_here:
-                _ray_init(ray, backend.address or LOCAL_RAY, private)
+                stack.enter_context(_private_ray(ray))
+            elif connect_here:
+                _ray_init(ray, backend.address or LOCAL_RAY, None)
                 stack.callback(ray.shutdown)
             yield ray
     finally:
         sweep_leftovers()  # the scratch folders of Ray workers killed on this machine
+
+
+@contextlib.contextmanager
+def _private_ray(ray: Any, attempts: int = LOCAL_ATTEMPTS) -> Iterator[None]:
+    """``ray`` connected to a private instance of its own (``--ray local``). One that fails to
+    start (Ray gives its raylet a fixed 30 s to register, which a loaded machine can exceed)
+    is shut down and started afresh in a new folder, up to ``attempts`` times in all, as
+    :func:`~pokerirl.execution.ray_private.ray_head` does.
+
+    Raises:
+        ExecutionError: no attempt started (each one's reason in the line).
+    """
+    reasons: list[str] = []
+    for _ in range(attempts):
+        with contextlib.ExitStack() as stack:
+            private = stack.enter_context(_private_ray_folder())
+            stack.enter_context(_private_token(ray))
+            try:
+                _ray_init(ray, LOCAL_RAY, private)
+            except ExecutionError as error:
+                ray.shutdown()  # what a failed start left, before its folder goes
+                reasons.append(str(error).removeprefix(f"cannot connect to Ray at {LOCAL_RAY}: "))
+                continue
+            stack.callback(ray.shutdown)
+            yield
+            return
+    raise ExecutionError(
+        f"cannot start a private Ray ({LOCAL_RAY}) in {attempts} attempts: "
+        + "; ".join(f"{n}: {reason}" for n, reason in enumerate(reasons, 1))
+    )
 
 
 def _ray_init(ray: Any, address: str, temp_dir: str | None) -> None:
