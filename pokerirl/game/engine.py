@@ -313,7 +313,7 @@ class LimitHoldemBatch:
             self._active = self._active[np.flatnonzero(~self.done[self._active])]
 
     def _settle(self, folds: np.ndarray, loser: np.ndarray, showdowns: np.ndarray) -> None:
-        """Payoffs of hands that just ended (``loser``: the folding seats), and done."""
+        """Payoffs of hands that just ended (``loser``: the folding seats); marks them done."""
         if folds.size:
             # Flat places: one 1-D gather at hand * 2 + seat beats 2-D fancy indexing.
             lost_at = 2 * folds + loser
