@@ -52,7 +52,7 @@ def _deal_blocks(seed: int, first: int, last: int) -> np.ndarray:
         held, taken = np.full_like(draws[j], j), draws[j].copy()
         last = j == DEAL_SIZE - 1  # no later step reads what the last position held
         for i in range(j):  # ascending: the last earlier swap of a position decides its card
-            # x += (y - x) * mask: int8 arithmetic, a third of np.copyto(..., where=mask)'s time.
+            # x += (y - x) * mask: int8 arithmetic, half of np.copyto(..., where=mask)'s time.
             if not last:
                 held += (before[i] - held) * (draws[i] == j)
             taken += (before[i] - taken) * (draws[i] == draws[j])
