@@ -452,6 +452,10 @@ ALL_PAIRS_TURN_ROWS = 16
 ALL_PAIRS_RIVER_ROWS = 64
 
 
+# A sorted turn or river board's number (one int a set): its cards as base-52 digits.
+_PLACES = {size: NUM_CARDS ** np.arange(size, dtype=np.int64) for size in (4, 5)}
+
+
 def _by_board(
     per_row: Callable[[np.ndarray, np.ndarray], np.ndarray],
     all_pairs: Callable[[np.ndarray], np.ndarray],
@@ -465,7 +469,7 @@ def _by_board(
     if len(pairs) < least:  # no board can have enough rows
         return per_row(pairs, boards)
     found = np.empty(len(pairs), dtype=np.int64)
-    code = boards @ (NUM_CARDS ** np.arange(boards.shape[1], dtype=np.int64))  # one int a set
+    code = boards @ _PLACES[boards.shape[1]]  # one int a set
     _, first, group, sizes = np.unique(code, return_index=True, return_inverse=True,
                                        return_counts=True)  # fmt: skip
     group = group.reshape(-1)
@@ -506,7 +510,6 @@ class _RecentCounts:
         return found
 
 
-_PLACES = {size: NUM_CARDS ** np.arange(size, dtype=np.int64) for size in (4, 5)}
 _RIVER_ROWS = _RecentCounts(lambda pairs, boards: hole_counts(PAIRS[pairs], boards), 1 << 16)
 _TURN_ROWS = _RecentCounts(lambda pairs, boards: turn_counts(PAIRS[pairs], boards), 1 << 16)
 
